@@ -1,0 +1,178 @@
+//! The modal alignment chain M282 emits: `G51` scale → `G68` rotation → `G52` shift (SPEC §6).
+
+use nalgebra::{Matrix2, Point2, UnitComplex, Vector2};
+
+use crate::MathError;
+
+/// Decimals for X/Y words (machine units): rounding moves a point by at most 5·10⁻⁸.
+pub const POSITION_DECIMALS: usize = 7;
+/// Decimals for `G68 R` (degrees): rounding moves a point 1000 units away by < 10⁻⁷.
+pub const ANGLE_DECIMALS: usize = 9;
+/// Decimals for `G51` factors: rounding moves a point 1000 units away by ≤ 5·10⁻⁸.
+pub const SCALE_DECIMALS: usize = 10;
+
+/// The line that cancels any alignment: `G69 G50 G52 X0 Y0`.
+pub const CANCEL_LINE: &str = "G69 G50 G52 X0 Y0";
+
+/// The three alignment modals, in program units, exactly as they execute.
+///
+/// A programmed point `p` reaches the work frame as
+/// `R(rotation_deg)·(S·p − center) + center + shift` with `S = diag(scale)`: G51 scales about
+/// the local origin, G68 rotates about `center` (counter-clockwise seen from +Z), G52 adds
+/// `shift`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AlignmentChain {
+    /// `G51 X Y`: per-axis factors (dimensionless).
+    pub scale: Vector2<f64>,
+    /// `G68 X Y`: centre of rotation, program units.
+    pub center: Point2<f64>,
+    /// `G68 R`: rotation, degrees, counter-clockwise.
+    pub rotation_deg: f64,
+    /// `G52 X Y`: shift, program units.
+    pub shift: Vector2<f64>,
+}
+
+impl Default for AlignmentChain {
+    fn default() -> Self {
+        Self::IDENTITY
+    }
+}
+
+impl AlignmentChain {
+    /// No scale, no rotation, no shift.
+    pub const IDENTITY: AlignmentChain = AlignmentChain {
+        scale: Vector2::new(1.0, 1.0),
+        center: Point2::new(0.0, 0.0),
+        rotation_deg: 0.0,
+        shift: Vector2::new(0.0, 0.0),
+    };
+
+    /// The chain that maps `commanded_centroid` onto `observed_centroid` with linear part
+    /// `R·diag(scale)`, rotating about `center`. Lengths in program units.
+    #[must_use]
+    pub fn from_parts(
+        scale: Vector2<f64>,
+        center: Point2<f64>,
+        rotation: UnitComplex<f64>,
+        commanded_centroid: Point2<f64>,
+        observed_centroid: Point2<f64>,
+    ) -> AlignmentChain {
+        let rotation_deg = rotation.im.atan2(rotation.re).to_degrees();
+        let mut chain = AlignmentChain { scale, center, rotation_deg, shift: Vector2::zeros() };
+        // Choose the shift so that the centroid lands exactly: t = ō − chain_without_shift(n̄).
+        chain.shift = observed_centroid - chain.apply(commanded_centroid);
+        chain
+    }
+
+    /// The rotation matrix of `rotation_deg`.
+    #[must_use]
+    pub fn rotation_matrix(&self) -> Matrix2<f64> {
+        let (s, c) = self.rotation_deg.to_radians().sin_cos();
+        Matrix2::new(c, -s, s, c)
+    }
+
+    /// Program point → work point (program units): scale, rotate about the centre, shift.
+    #[must_use]
+    pub fn apply(&self, p: Point2<f64>) -> Point2<f64> {
+        let scaled = Vector2::new(self.scale.x * p.x, self.scale.y * p.y);
+        let rotated = self.rotation_matrix() * (scaled - self.center.coords) + self.center.coords;
+        Point2::from(rotated + self.shift)
+    }
+
+    /// Work point → program point: the inverse of [`AlignmentChain::apply`]; `None` when a scale
+    /// factor is zero.
+    #[must_use]
+    pub fn inverse(&self, w: Point2<f64>) -> Option<Point2<f64>> {
+        if self.scale.x == 0.0 || self.scale.y == 0.0 {
+            return None;
+        }
+        let v = self.rotation_matrix().transpose() * (w.coords - self.shift - self.center.coords) + self.center.coords;
+        Some(Point2::new(v.x / self.scale.x, v.y / self.scale.y))
+    }
+
+    /// The four lines M282 emits, with fixed decimals ([`POSITION_DECIMALS`],
+    /// [`ANGLE_DECIMALS`], [`SCALE_DECIMALS`]); never `NaN`, `inf` or `-0`:
+    ///
+    /// ```text
+    /// G69 G50 G52 X0 Y0
+    /// G52 X{tx} Y{ty}
+    /// G68 X{cx} Y{cy} R{theta_deg}
+    /// G51 X{sx} Y{sy}
+    /// ```
+    ///
+    /// # Errors
+    /// [`MathError::NonFinite`] if any field is NaN or infinite.
+    pub fn gcode(&self) -> Result<[String; 4], MathError> {
+        let all = [self.scale.x, self.scale.y, self.center.x, self.center.y, self.rotation_deg, self.shift.x, self.shift.y];
+        if !all.iter().all(|v| v.is_finite()) {
+            return Err(MathError::NonFinite { what: "the alignment chain" });
+        }
+        let p = |v: f64| fixed(v, POSITION_DECIMALS);
+        Ok([
+            CANCEL_LINE.to_string(),
+            format!("G52 X{} Y{}", p(self.shift.x), p(self.shift.y)),
+            format!("G68 X{} Y{} R{}", p(self.center.x), p(self.center.y), fixed(self.rotation_deg, ANGLE_DECIMALS)),
+            format!("G51 X{} Y{}", fixed(self.scale.x, SCALE_DECIMALS), fixed(self.scale.y, SCALE_DECIMALS)),
+        ])
+    }
+}
+
+/// Formats a finite `v` with `decimals` fixed decimals, writing a rounded negative zero as zero.
+#[must_use]
+pub fn fixed(v: f64, decimals: usize) -> String {
+    let s = format!("{v:.decimals$}");
+    if s.starts_with('-') && s[1..].bytes().all(|b| b == b'0' || b == b'.') {
+        s[1..].to_string()
+    } else {
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn order_is_scale_then_rotate_about_centre_then_shift() {
+        let chain = AlignmentChain {
+            scale: Vector2::new(2.0, 3.0),
+            center: Point2::new(1.0, 1.0),
+            rotation_deg: 90.0,
+            shift: Vector2::new(10.0, 20.0),
+        };
+        // (1, 1) -> scaled (2, 3) -> minus centre (1, 2) -> rotated 90° (-2, 1) -> plus centre
+        // (-1, 2) -> shifted (9, 22).
+        let w = chain.apply(Point2::new(1.0, 1.0));
+        assert_relative_eq!(w.x, 9.0, epsilon = 1e-12);
+        assert_relative_eq!(w.y, 22.0, epsilon = 1e-12);
+        let back = chain.inverse(w).expect("invertible");
+        assert_relative_eq!(back.x, 1.0, epsilon = 1e-12);
+        assert_relative_eq!(back.y, 1.0, epsilon = 1e-12);
+    }
+
+    #[test]
+    fn gcode_has_fixed_decimals_and_no_negative_zero() {
+        let chain = AlignmentChain {
+            scale: Vector2::new(1.0, 0.999_5),
+            center: Point2::new(3.0, -2.0),
+            rotation_deg: -0.000_000_000_01,
+            shift: Vector2::new(-0.000_000_01, 0.125),
+        };
+        let lines = chain.gcode().expect("finite");
+        assert_eq!(lines[0], "G69 G50 G52 X0 Y0");
+        assert_eq!(lines[1], "G52 X0.0000000 Y0.1250000");
+        assert_eq!(lines[2], "G68 X3.0000000 Y-2.0000000 R0.000000000");
+        assert_eq!(lines[3], "G51 X1.0000000000 Y0.9995000000");
+        let bad = AlignmentChain { rotation_deg: f64::NAN, ..chain };
+        assert!(bad.gcode().is_err());
+    }
+
+    #[test]
+    fn fixed_keeps_real_negatives() {
+        assert_eq!(fixed(-0.5, 2), "-0.50");
+        assert_eq!(fixed(-0.004, 2), "0.00");
+        assert_eq!(fixed(0.0, 0), "0");
+        assert_eq!(fixed(-0.0, 3), "0.000");
+    }
+}

@@ -1,0 +1,40 @@
+//! Pure 2D math for camera alignment on a CNC machine.
+//!
+//! * [`pixel`]: the pixel chain of SPEC §2, `O = C + K·R·(p − res/2 − PxCenterOffset)`, and its
+//!   inverse.
+//! * [`fit`]: closed-form least-squares fits from commanded to observed points — rigid,
+//!   similarity, rectangle (the true 5-parameter minimum) and affine — and the 2×2 solve
+//!   calibration needs.
+//! * [`chain`]: the `G51 → G68 → G52` modal chain M282 emits, its exact `apply`, and its text.
+//! * [`units`]: inch ↔ millimetre.
+//!
+//! No I/O, no allocation on the fit path, no NaN: every degenerate input is a [`MathError`].
+//!
+//! ```
+//! use vision_math::{fit_rectangle, Point2};
+//!
+//! // The manual's example 4: marks at the corners of a 6 × 4 in part, found slightly off.
+//! let commanded = [Point2::new(0.0, 0.0), Point2::new(6.0, 0.0), Point2::new(6.0, 4.0), Point2::new(0.0, 4.0)];
+//! let observed = [Point2::new(0.10, 0.05), Point2::new(6.10, 0.08), Point2::new(6.07, 4.08), Point2::new(0.07, 4.05)];
+//! let fit = fit_rectangle(&commanded, &observed)?;
+//! let chain = fit.chain().expect("a rectangle fit is expressible as G51/G68/G52");
+//! for (n, o) in commanded.iter().zip(&observed) {
+//!     assert!((chain.apply(*n) - o).norm() <= fit.max_residual + 1e-12);
+//! }
+//! let gcode = chain.gcode()?;
+//! assert_eq!(gcode[0], "G69 G50 G52 X0 Y0");
+//! # Ok::<(), vision_math::MathError>(())
+//! ```
+
+pub mod chain;
+mod error;
+pub mod fit;
+pub mod pixel;
+pub mod units;
+
+pub use chain::AlignmentChain;
+pub use error::MathError;
+pub use fit::{fit_affine, fit_rectangle, fit_rigid, fit_similarity, solve_linear, Fit, LinearFit, Model};
+pub use nalgebra::{Matrix2, Point2, UnitComplex, Vector2};
+pub use pixel::{PixelChain, Remap};
+pub use units::{inch_to_mm, mm_to_inch, LengthUnit, MM_PER_INCH};

@@ -1,0 +1,334 @@
+//! The pixel chain of SPEC §2: native pixels → machine-unit offset from the camera position.
+//!
+//! `O = C + K · R · (p − res/2 − PxCenterOffset)`
+//!
+//! * `p`: native pixels, origin top-left, +x right, +y **down**.
+//! * `R`: the discrete axis remap ([`Remap`]): swap, then invert X, then invert Y.
+//! * `K`: 2×2, machine units per pixel (inch or mm, whichever the calibration used).
+//!
+//! [`PixelChain`] folds `K · R` into one matrix when it is built, so a conversion costs four
+//! multiplications and six additions.
+
+use nalgebra::{Matrix2, Point2, Vector2};
+
+use crate::MathError;
+
+/// The discrete axis remap applied after the centre shift (SPEC §2 step 3).
+///
+/// Order: if `swap_xy` swap the components; then if `invert_x` negate x; then if `invert_y`
+/// negate y. Afterwards +x means machine +X and +y means machine +Y.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct Remap {
+    /// Swap the pixel x and y components first.
+    pub swap_xy: bool,
+    /// Then negate x.
+    pub invert_x: bool,
+    /// Then negate y.
+    pub invert_y: bool,
+}
+
+impl Remap {
+    /// No swap, no inversion.
+    pub const IDENTITY: Remap = Remap { swap_xy: false, invert_x: false, invert_y: false };
+
+    /// All eight remaps (4 rotations × mirror), in a fixed order.
+    #[must_use]
+    pub fn all() -> [Remap; 8] {
+        let mut out = [Remap::IDENTITY; 8];
+        for (i, r) in out.iter_mut().enumerate() {
+            *r = Remap { swap_xy: i & 4 != 0, invert_x: i & 2 != 0, invert_y: i & 1 != 0 };
+        }
+        out
+    }
+
+    /// Applies the remap to a centred pixel vector (pixels in, pixels out).
+    #[must_use]
+    pub fn apply(self, v: Vector2<f64>) -> Vector2<f64> {
+        let (mut x, mut y) = if self.swap_xy { (v.y, v.x) } else { (v.x, v.y) };
+        if self.invert_x {
+            x = -x;
+        }
+        if self.invert_y {
+            y = -y;
+        }
+        Vector2::new(x, y)
+    }
+
+    /// Undoes [`Remap::apply`] (pixels in, pixels out).
+    #[must_use]
+    pub fn unapply(self, v: Vector2<f64>) -> Vector2<f64> {
+        let x = if self.invert_x { -v.x } else { v.x };
+        let y = if self.invert_y { -v.y } else { v.y };
+        if self.swap_xy {
+            Vector2::new(y, x)
+        } else {
+            Vector2::new(x, y)
+        }
+    }
+
+    /// The remap as a signed permutation matrix, so that `apply(v) == matrix() * v`.
+    #[must_use]
+    pub fn matrix(self) -> Matrix2<f64> {
+        let sx = if self.invert_x { -1.0 } else { 1.0 };
+        let sy = if self.invert_y { -1.0 } else { 1.0 };
+        if self.swap_xy {
+            Matrix2::new(0.0, sx, sy, 0.0)
+        } else {
+            Matrix2::new(sx, 0.0, 0.0, sy)
+        }
+    }
+
+    /// The remap whose matrix is `m`, if `m` is a signed permutation matrix (entries −1, 0, 1).
+    #[must_use]
+    pub fn from_matrix(m: &Matrix2<f64>) -> Option<Remap> {
+        Remap::all().into_iter().find(|r| r.matrix() == *m)
+    }
+}
+
+/// Everything that turns native pixels into a machine-unit offset, validated and pre-folded.
+///
+/// Built with [`PixelChain::new`], which refuses a zero K ("not calibrated"), a singular K and a
+/// bad resolution, so every method after construction is total.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PixelChain {
+    k: Matrix2<f64>,
+    remap: Remap,
+    resolution: Vector2<f64>,
+    center_offset: Vector2<f64>,
+    /// Native pixel that maps to the optical axis: `res/2 + PxCenterOffset`.
+    origin: Vector2<f64>,
+    /// `K · R`.
+    kr: Matrix2<f64>,
+    /// `(K · R)⁻¹`.
+    kr_inv: Matrix2<f64>,
+}
+
+/// Relative determinant below which K counts as singular (`|det K| < 1e-12 · ‖K‖²`).
+const SINGULAR_K: f64 = 1e-12;
+
+impl PixelChain {
+    /// Builds the chain.
+    ///
+    /// * `k`: K, machine units per pixel (row-major `[[K11, K12], [K21, K22]]`).
+    /// * `remap`: the axis remap.
+    /// * `resolution`: `(ResX, ResY)` in pixels.
+    /// * `center_offset`: `(PxCenterOffsetX, PxCenterOffsetY)` in pixels.
+    ///
+    /// # Errors
+    /// [`MathError::NotCalibrated`] when K is all zero, [`MathError::SingularK`] when it cannot be
+    /// inverted, [`MathError::NonFinite`] for NaN/∞ and [`MathError::BadResolution`].
+    pub fn new(
+        k: Matrix2<f64>,
+        remap: Remap,
+        resolution: Vector2<f64>,
+        center_offset: Vector2<f64>,
+    ) -> Result<Self, MathError> {
+        if !k.iter().all(|v| v.is_finite()) {
+            return Err(MathError::NonFinite { what: "K" });
+        }
+        if !center_offset.iter().all(|v| v.is_finite()) {
+            return Err(MathError::NonFinite { what: "pixel centre offset" });
+        }
+        if !(resolution.x > 0.0 && resolution.y > 0.0 && resolution.x.is_finite() && resolution.y.is_finite()) {
+            return Err(MathError::BadResolution { x: resolution.x, y: resolution.y });
+        }
+        if k.iter().all(|v| *v == 0.0) {
+            return Err(MathError::NotCalibrated);
+        }
+        let norm2 = k.norm_squared();
+        let det = k.determinant();
+        if det.abs() < SINGULAR_K * norm2 {
+            return Err(MathError::SingularK);
+        }
+        let kr = k * remap.matrix();
+        let kr_inv = kr.try_inverse().ok_or(MathError::SingularK)?;
+        let origin = resolution * 0.5 + center_offset;
+        Ok(PixelChain { k, remap, resolution, center_offset, origin, kr, kr_inv })
+    }
+
+    /// K, machine units per pixel.
+    #[must_use]
+    pub fn k(&self) -> Matrix2<f64> {
+        self.k
+    }
+
+    /// The axis remap.
+    #[must_use]
+    pub fn remap(&self) -> Remap {
+        self.remap
+    }
+
+    /// `(ResX, ResY)`, pixels.
+    #[must_use]
+    pub fn resolution(&self) -> Vector2<f64> {
+        self.resolution
+    }
+
+    /// `(PxCenterOffsetX, PxCenterOffsetY)`, pixels.
+    #[must_use]
+    pub fn center_offset(&self) -> Vector2<f64> {
+        self.center_offset
+    }
+
+    /// Step 2: native pixel → pixel offset from the optical centre (pixels, native axes).
+    #[must_use]
+    pub fn centred(&self, native: Point2<f64>) -> Vector2<f64> {
+        native.coords - self.origin
+    }
+
+    /// Steps 2–4: native pixel → offset `d = K·R·c` from the camera position, machine units.
+    #[inline]
+    #[must_use]
+    pub fn delta(&self, native: Point2<f64>) -> Vector2<f64> {
+        self.kr * (native.coords - self.origin)
+    }
+
+    /// Step 5: the observed point `O = C + d`, with `commanded` the camera position `C` and the
+    /// result in the same machine units and frame as `C`.
+    #[inline]
+    #[must_use]
+    pub fn observed(&self, commanded: Point2<f64>, native: Point2<f64>) -> Point2<f64> {
+        commanded + self.delta(native)
+    }
+
+    /// The inverse of [`PixelChain::delta`]: a machine-unit offset from the camera position →
+    /// the native pixel where a mark at that offset appears.
+    #[inline]
+    #[must_use]
+    pub fn native_pixels(&self, delta: Vector2<f64>) -> Point2<f64> {
+        Point2::from(self.kr_inv * delta + self.origin)
+    }
+
+    /// Mark width and height in machine units from its size in pixels:
+    /// `(width_px · ‖K column 1‖, height_px · ‖K column 2‖)`.
+    #[must_use]
+    pub fn mark_size(&self, width_px: f64, height_px: f64) -> (f64, f64) {
+        (width_px * self.k.column(0).norm(), height_px * self.k.column(1).norm())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+    use proptest::prelude::*;
+
+    fn chain(k: Matrix2<f64>, remap: Remap) -> PixelChain {
+        PixelChain::new(k, remap, Vector2::new(1776.0, 1776.0), Vector2::zeros()).expect("valid chain")
+    }
+
+    #[test]
+    fn remap_matrix_matches_apply_for_all_eight() {
+        let v = Vector2::new(3.0, -7.0);
+        let all = Remap::all();
+        for r in all {
+            assert_eq!(r.apply(v), r.matrix() * v, "{r:?}");
+            assert_eq!(r.unapply(r.apply(v)), v, "{r:?}");
+            assert_eq!(Remap::from_matrix(&r.matrix()), Some(r));
+        }
+        // The eight are distinct.
+        for (i, a) in all.iter().enumerate() {
+            for b in &all[i + 1..] {
+                assert_ne!(a.matrix(), b.matrix());
+            }
+        }
+    }
+
+    #[test]
+    fn swap_happens_before_inversion() {
+        let r = Remap { swap_xy: true, invert_x: true, invert_y: false };
+        // swap (1, 2) -> (2, 1), then negate x -> (-2, 1)
+        assert_eq!(r.apply(Vector2::new(1.0, 2.0)), Vector2::new(-2.0, 1.0));
+    }
+
+    #[test]
+    fn seed_numbers_centre_and_scale() {
+        // Manual: 0.00203 in/px, 1776 px square image, camera looking down with image +y down.
+        let k = Matrix2::new(0.00203, 0.0, 0.0, 0.00203);
+        let c = chain(k, Remap { swap_xy: false, invert_x: false, invert_y: true });
+        // The centre pixel maps to the camera position.
+        let o = c.observed(Point2::new(1.0, 2.0), Point2::new(888.0, 888.0));
+        assert_eq!(o, Point2::new(1.0, 2.0));
+        // 100 px right and 100 px down is +0.203 in X and -0.203 in Y.
+        let d = c.delta(Point2::new(988.0, 988.0));
+        assert_relative_eq!(d.x, 0.203, epsilon = 1e-15);
+        assert_relative_eq!(d.y, -0.203, epsilon = 1e-15);
+        // The field of view is 1776 * 0.00203 = 3.605 in.
+        let edge = c.delta(Point2::new(1776.0, 888.0));
+        assert_relative_eq!(2.0 * edge.x, 3.60528, epsilon = 1e-12);
+        // A 0.5 in mark is about 246 px wide.
+        let (w, h) = c.mark_size(246.305, 246.305);
+        assert_relative_eq!(w, 0.5, epsilon = 1e-5);
+        assert_relative_eq!(h, 0.5, epsilon = 1e-5);
+    }
+
+    #[test]
+    fn centre_offset_shifts_the_optical_axis() {
+        let k = Matrix2::new(0.01, 0.0, 0.0, 0.01);
+        let c = PixelChain::new(k, Remap::IDENTITY, Vector2::new(640.0, 480.0), Vector2::new(5.0, -3.0)).expect("valid");
+        assert_eq!(c.delta(Point2::new(325.0, 237.0)), Vector2::zeros());
+        assert_eq!(c.centred(Point2::new(326.0, 237.0)), Vector2::new(1.0, 0.0));
+    }
+
+    #[test]
+    fn refuses_zero_singular_nonfinite_k_and_bad_resolution() {
+        let res = Vector2::new(1776.0, 1776.0);
+        let z = Vector2::zeros();
+        assert_eq!(PixelChain::new(Matrix2::zeros(), Remap::IDENTITY, res, z), Err(MathError::NotCalibrated));
+        assert_eq!(
+            PixelChain::new(Matrix2::new(1.0, 2.0, 2.0, 4.0), Remap::IDENTITY, res, z),
+            Err(MathError::SingularK)
+        );
+        assert_eq!(
+            PixelChain::new(Matrix2::new(f64::NAN, 0.0, 0.0, 1.0), Remap::IDENTITY, res, z),
+            Err(MathError::NonFinite { what: "K" })
+        );
+        assert!(matches!(
+            PixelChain::new(Matrix2::identity(), Remap::IDENTITY, Vector2::new(0.0, 10.0), z),
+            Err(MathError::BadResolution { .. })
+        ));
+        assert!(matches!(
+            PixelChain::new(Matrix2::identity(), Remap::IDENTITY, res, Vector2::new(f64::INFINITY, 0.0)),
+            Err(MathError::NonFinite { .. })
+        ));
+    }
+
+    fn well_conditioned_k() -> impl Strategy<Value = Matrix2<f64>> {
+        // Scale 1e-4..1e-1 units/px, any rotation, up to 5 % anisotropy and 2 % skew.
+        (-4.0f64..-1.0, -std::f64::consts::PI..std::f64::consts::PI, 0.95f64..1.05, -0.02f64..0.02)
+            .prop_map(|(log_s, th, aniso, skew)| {
+                let s = 10f64.powf(log_s);
+                let (sn, cs) = th.sin_cos();
+                let rot = Matrix2::new(cs, -sn, sn, cs);
+                rot * Matrix2::new(s, s * skew, 0.0, s * aniso)
+            })
+    }
+
+    proptest! {
+        #[test]
+        fn units_to_pixels_to_units_is_identity(
+            k in well_conditioned_k(),
+            remap_idx in 0usize..8,
+            res in (16.0f64..5000.0, 16.0f64..5000.0),
+            off in (-50.0f64..50.0, -50.0f64..50.0),
+            d in (-1.0f64..1.0, -1.0f64..1.0),
+        ) {
+            let remap = Remap::all()[remap_idx];
+            let chain = PixelChain::new(k, remap, Vector2::new(res.0, res.1), Vector2::new(off.0, off.1)).expect("valid");
+            // Offsets up to a half field of view.
+            let half_fov = k * Vector2::new(res.0, res.1) * 0.5;
+            let delta = Vector2::new(d.0 * half_fov.x.abs().max(1e-6), d.1 * half_fov.y.abs().max(1e-6));
+            let px = chain.native_pixels(delta);
+            let back = chain.delta(px);
+            let scale = delta.norm().max(k.norm());
+            prop_assert!((back - delta).norm() <= 1e-12 * scale, "{back:?} vs {delta:?}");
+            // And pixels -> units -> pixels.
+            let p = Point2::new(d.0 * res.0, d.1 * res.1);
+            let p2 = chain.native_pixels(chain.delta(p));
+            prop_assert!((p2 - p).norm() <= 1e-12 * (res.0 + res.1), "{p2:?} vs {p:?}");
+            // delta agrees with the unfolded chain K · R · (p − res/2 − off).
+            let direct = k * remap.apply(p.coords - Vector2::new(res.0, res.1) * 0.5 - Vector2::new(off.0, off.1));
+            prop_assert!((direct - chain.delta(p)).norm() <= 1e-12 * direct.norm().max(1e-12));
+        }
+    }
+}
