@@ -103,7 +103,8 @@ impl AlignmentChain {
     /// # Errors
     /// [`MathError::NonFinite`] if any field is NaN or infinite.
     pub fn gcode(&self) -> Result<[String; 4], MathError> {
-        let all = [self.scale.x, self.scale.y, self.center.x, self.center.y, self.rotation_deg, self.shift.x, self.shift.y];
+        let all =
+            [self.scale.x, self.scale.y, self.center.x, self.center.y, self.rotation_deg, self.shift.x, self.shift.y];
         if !all.iter().all(|v| v.is_finite()) {
             return Err(MathError::NonFinite { what: "the alignment chain" });
         }

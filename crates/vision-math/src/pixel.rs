@@ -265,7 +265,8 @@ mod tests {
     #[test]
     fn centre_offset_shifts_the_optical_axis() {
         let k = Matrix2::new(0.01, 0.0, 0.0, 0.01);
-        let c = PixelChain::new(k, Remap::IDENTITY, Vector2::new(640.0, 480.0), Vector2::new(5.0, -3.0)).expect("valid");
+        let c =
+            PixelChain::new(k, Remap::IDENTITY, Vector2::new(640.0, 480.0), Vector2::new(5.0, -3.0)).expect("valid");
         assert_eq!(c.delta(Point2::new(325.0, 237.0)), Vector2::zeros());
         assert_eq!(c.centred(Point2::new(326.0, 237.0)), Vector2::new(1.0, 0.0));
     }
@@ -295,13 +296,14 @@ mod tests {
 
     fn well_conditioned_k() -> impl Strategy<Value = Matrix2<f64>> {
         // Scale 1e-4..1e-1 units/px, any rotation, up to 5 % anisotropy and 2 % skew.
-        (-4.0f64..-1.0, -std::f64::consts::PI..std::f64::consts::PI, 0.95f64..1.05, -0.02f64..0.02)
-            .prop_map(|(log_s, th, aniso, skew)| {
+        (-4.0f64..-1.0, -std::f64::consts::PI..std::f64::consts::PI, 0.95f64..1.05, -0.02f64..0.02).prop_map(
+            |(log_s, th, aniso, skew)| {
                 let s = 10f64.powf(log_s);
                 let (sn, cs) = th.sin_cos();
                 let rot = Matrix2::new(cs, -sn, sn, cs);
                 rot * Matrix2::new(s, s * skew, 0.0, s * aniso)
-            })
+            },
+        )
     }
 
     proptest! {

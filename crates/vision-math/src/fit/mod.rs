@@ -241,7 +241,13 @@ impl Moments {
         if !(cn.x.is_finite() && cn.y.is_finite() && sxx.is_finite() && syy.is_finite() && sxy.is_finite()) {
             return Err(MathError::NonFinite { what: "a commanded point" });
         }
-        if !(co.x.is_finite() && co.y.is_finite() && pxx.is_finite() && pxy.is_finite() && pyx.is_finite() && pyy.is_finite()) {
+        if !(co.x.is_finite()
+            && co.y.is_finite()
+            && pxx.is_finite()
+            && pxy.is_finite()
+            && pyx.is_finite()
+            && pyy.is_finite())
+        {
             return Err(MathError::NonFinite { what: "an observed point" });
         }
         let spread2 = (sxx + syy) * inv;
@@ -275,7 +281,12 @@ impl Moments {
         commanded: &[Point2<f64>],
         observed: &[Point2<f64>],
     ) -> Result<Fit, MathError> {
-        if !(rotation.re.is_finite() && rotation.im.is_finite() && scale.x.is_finite() && scale.y.is_finite() && shear.is_finite()) {
+        if !(rotation.re.is_finite()
+            && rotation.im.is_finite()
+            && scale.x.is_finite()
+            && scale.y.is_finite()
+            && shear.is_finite())
+        {
             return Err(MathError::DegenerateObserved);
         }
         let (c, s) = (rotation.re, rotation.im);
