@@ -1,1 +1,325 @@
+//! Proof of the fits: exact recovery, least-squares optimality, ordering of models, errors.
 
+use super::*;
+use crate::chain::AlignmentChain;
+use nalgebra::{Matrix2, Point2, Vector2};
+use proptest::prelude::*;
+
+fn rot(theta: f64) -> Matrix2<f64> {
+    let (s, c) = theta.sin_cos();
+    Matrix2::new(c, -s, s, c)
+}
+
+/// A random, well-spread point set: a fat triangle plus `extra` random points, all scaled by
+/// `spread` about `centre`.
+fn points(spread: f64, centre: Vector2<f64>, turn: f64, extra: &[(f64, f64)]) -> Vec<Point2<f64>> {
+    let base = [(-1.0, -0.8), (1.0, -0.6), (0.1, 1.0)];
+    let r = rot(turn);
+    base.iter().chain(extra).map(|&(x, y)| Point2::from(centre + r * Vector2::new(x, y) * spread)).collect()
+}
+
+fn truth_map(theta: f64, sx: f64, sy: f64, shift: Vector2<f64>) -> impl Fn(&Point2<f64>) -> Point2<f64> {
+    let l = rot(theta) * Matrix2::new(sx, 0.0, 0.0, sy);
+    move |p| Point2::from(l * p.coords + shift)
+}
+
+fn angle_diff(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(std::f64::consts::TAU);
+    d.min(std::f64::consts::TAU - d)
+}
+
+/// Rectangle objective Σ‖R·S·nᵢ + b − oᵢ‖².
+fn objective(theta: f64, sx: f64, sy: f64, b: Vector2<f64>, n: &[Point2<f64>], o: &[Point2<f64>]) -> f64 {
+    let l = rot(theta) * Matrix2::new(sx, 0.0, 0.0, sy);
+    n.iter().zip(o).map(|(n, o)| (l * n.coords + b - o.coords).norm_squared()).sum()
+}
+
+type Case = (f64, f64, f64, Vector2<f64>, f64, Vector2<f64>, f64, Vec<(f64, f64)>);
+
+fn case() -> impl Strategy<Value = Case> {
+    (
+        -std::f64::consts::PI..std::f64::consts::PI,
+        0.5f64..2.0,
+        0.5f64..2.0,
+        (-1000.0f64..1000.0, -1000.0f64..1000.0).prop_map(|(x, y)| Vector2::new(x, y)),
+        -3.0f64..3.0, // log10 spread: 1e-3 .. 1e3
+        (-100.0f64..100.0, -100.0f64..100.0).prop_map(|(x, y)| Vector2::new(x, y)),
+        -3.2f64..3.2,
+        prop::collection::vec((-1.0f64..1.0, -1.0f64..1.0), 0..61),
+    )
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(512))]
+
+    #[test]
+    fn exact_data_is_recovered_by_every_model((theta, sx, sy, shift, log_spread, centre, turn, extra) in case()) {
+        let spread = 10f64.powf(log_spread);
+        let centre = centre * spread.min(1.0);
+        let n = points(spread, centre, turn, &extra);
+        let tol = 1e-9;
+        for model in Model::ALL {
+            let (sx, sy) = match model {
+                Model::Rigid => (1.0, 1.0),
+                Model::Similarity => (sx, sx),
+                Model::Rectangle | Model::Affine => (sx, sy),
+            };
+            let map = truth_map(theta, sx, sy, shift);
+            let o: Vec<_> = n.iter().map(&map).collect();
+            let fit = model.fit(&n, &o).expect("well-posed");
+            prop_assert!(angle_diff(fit.theta_rad(), theta) <= tol, "{model}: θ {} vs {theta}", fit.theta_rad());
+            prop_assert!((fit.scale.x - sx).abs() <= tol * sx, "{model}: sx {} vs {sx}", fit.scale.x);
+            prop_assert!((fit.scale.y - sy).abs() <= tol * sy, "{model}: sy {} vs {sy}", fit.scale.y);
+            prop_assert!(fit.shear.abs() <= tol, "{model}: shear {}", fit.shear);
+            let size = spread * sx.max(sy) + shift.norm() + centre.norm() * 2.0;
+            prop_assert!((fit.offset() - shift).norm() <= tol * size, "{model}: offset {:?} vs {shift:?}", fit.offset());
+            prop_assert!(fit.rms <= tol * spread * 2.0, "{model}: rms {}", fit.rms);
+            // The G51 → G68 → G52 chain lands every commanded point on its observed point.
+            if let Some(chain) = fit.chain() {
+                for (ni, oi) in n.iter().zip(&o) {
+                    let d = (chain.apply(*ni) - oi).norm();
+                    prop_assert!(d <= tol * size, "{model}: chain misses by {d}");
+                }
+            } else {
+                prop_assert_eq!(model, Model::Affine);
+            }
+        }
+    }
+
+    #[test]
+    fn noisy_rectangle_lies_between_affine_and_similarity_and_is_stationary(
+        (theta, sx, sy, shift, _log_spread, centre, turn, extra) in case(),
+        noise in prop::collection::vec((-1.0f64..1.0, -1.0f64..1.0), 64),
+        sigma in 1e-4f64..1e-1,
+    ) {
+        let spread = 10.0;
+        let n = points(spread, centre * 0.1, turn, &extra);
+        let map = truth_map(theta, sx, sy, shift);
+        let o: Vec<_> = n.iter().zip(&noise).map(|(p, e)| map(p) + Vector2::new(e.0, e.1) * sigma).collect();
+        let rect = fit_rectangle(&n, &o).expect("rectangle");
+        let aff = fit_affine(&n, &o).expect("affine");
+        let sim = fit_similarity(&n, &o).expect("similarity");
+        let slack = 1e-12 * spread;
+        prop_assert!(aff.rms <= rect.rms + slack, "affine {} > rectangle {}", aff.rms, rect.rms);
+        prop_assert!(rect.rms <= sim.rms + slack, "rectangle {} > similarity {}", rect.rms, sim.rms);
+        // Gradient of the rectangle objective at the solution, each component normalised by its
+        // Cauchy–Schwarz bound, is zero.
+        let (c, s) = (rect.rotation.re, rect.rotation.im);
+        let l = rect.linear();
+        let dr = Matrix2::new(-s, -c, c, -s) * Matrix2::new(rect.scale.x, 0.0, 0.0, rect.scale.y);
+        let (mut g_theta, mut g_sx, mut g_sy, mut g_b) = (0.0, 0.0, 0.0, Vector2::zeros());
+        let (mut r_norm2, mut a_norm2, mut ax2, mut ay2) = (0.0, 0.0, 0.0, 0.0);
+        for (ni, oi) in n.iter().zip(&o) {
+            let a = ni - rect.commanded_centroid;
+            let r = l * a - (oi - rect.observed_centroid);
+            g_theta += r.dot(&(dr * a));
+            g_sx += a.x * r.dot(&Vector2::new(c, s));
+            g_sy += a.y * r.dot(&Vector2::new(-s, c));
+            g_b += r;
+            r_norm2 += r.norm_squared();
+            a_norm2 += (dr * a).norm_squared();
+            ax2 += a.x * a.x;
+            ay2 += a.y * a.y;
+        }
+        let rn = r_norm2.sqrt();
+        prop_assert!(g_theta.abs() <= 1e-9 * rn * a_norm2.sqrt(), "dF/dθ = {g_theta}");
+        prop_assert!(g_sx.abs() <= 1e-9 * rn * ax2.sqrt(), "dF/dsx = {g_sx}");
+        prop_assert!(g_sy.abs() <= 1e-9 * rn * ay2.sqrt(), "dF/dsy = {g_sy}");
+        #[allow(clippy::cast_precision_loss)]
+        let root_n = (n.len() as f64).sqrt();
+        prop_assert!(g_b.norm() <= 1e-9 * rn * root_n + 1e-12 * spread, "dF/db = {g_b:?}");
+    }
+
+    #[test]
+    fn linear_solve_recovers_any_well_conditioned_matrix(
+        m in prop::array::uniform4(-2.0f64..2.0),
+        p in prop::collection::vec((-1.0f64..1.0, -1.0f64..1.0), 0..30),
+    ) {
+        let m = Matrix2::new(m[0], m[1], m[2], m[3]);
+        let mut ps = vec![Vector2::new(1.0, 0.1), Vector2::new(-0.2, 1.0)];
+        ps.extend(p.iter().map(|&(x, y)| Vector2::new(x, y)));
+        let qs: Vec<_> = ps.iter().map(|p| m * p).collect();
+        let fit = solve_linear(&ps, &qs).expect("spanning");
+        prop_assert!((fit.m - m).norm() <= 1e-12 * (1.0 + m.norm()), "{:?} vs {m:?}", fit.m);
+        prop_assert!(fit.rms <= 1e-12 * (1.0 + m.norm()));
+    }
+
+    #[test]
+    fn emitted_text_executes_within_a_micro_unit(
+        (theta, sx, sy, shift, _log_spread, centre, turn, extra) in case(),
+    ) {
+        // Parts up to ±1000 units: rounding the emitted words moves no point by more than 1e-6.
+        let n = points(300.0, centre, turn, &extra);
+        let map = truth_map(theta, sx, sy, shift);
+        let o: Vec<_> = n.iter().map(&map).collect();
+        let fit = fit_rectangle(&n, &o).expect("rectangle");
+        let lines = fit.chain().expect("chain").gcode().expect("finite");
+        let parsed = parse_chain(&lines);
+        for (ni, oi) in n.iter().zip(&o) {
+            let d = (parsed.apply(*ni) - oi).norm();
+            prop_assert!(d <= 1e-6, "rounded chain misses by {d}: {lines:?}");
+        }
+    }
+}
+
+/// Reads back the words of the four emitted lines (a tiny, independent reader).
+fn parse_chain(lines: &[String; 4]) -> AlignmentChain {
+    let word = |line: &str, letter: char| -> f64 {
+        line.split_whitespace()
+            .filter_map(|w| w.strip_prefix(letter))
+            .filter_map(|v| v.parse::<f64>().ok())
+            .next_back()
+            .expect("word present")
+    };
+    assert_eq!(lines[0], "G69 G50 G52 X0 Y0");
+    AlignmentChain {
+        shift: Vector2::new(word(&lines[1], 'X'), word(&lines[1], 'Y')),
+        center: Point2::new(word(&lines[2], 'X'), word(&lines[2], 'Y')),
+        rotation_deg: word(&lines[2], 'R'),
+        scale: Vector2::new(word(&lines[3], 'X'), word(&lines[3], 'Y')),
+    }
+}
+
+#[test]
+fn rectangle_is_the_global_minimum_over_theta() {
+    // Noisy, anisotropic data where "affine with the shear dropped" is visibly worse.
+    let n = [
+        Point2::new(0.0, 0.0),
+        Point2::new(6.0, 0.0),
+        Point2::new(6.0, 4.0),
+        Point2::new(0.0, 4.0),
+        Point2::new(3.0, 2.2),
+    ];
+    let o = [
+        Point2::new(0.11, 0.04),
+        Point2::new(6.13, 0.21),
+        Point2::new(5.99, 4.26),
+        Point2::new(-0.05, 4.09),
+        Point2::new(3.06, 2.31),
+    ];
+    let fit = fit_rectangle(&n, &o).expect("rectangle");
+    let best = objective(fit.theta_rad(), fit.scale.x, fit.scale.y, fit.offset(), &n, &o);
+    // For every θ on a fine grid, the best sx, sy, b (linear least squares) do no better.
+    let (cn, co) = (fit.commanded_centroid.coords, fit.observed_centroid.coords);
+    for i in 0..36_000 {
+        let theta = f64::from(i) * std::f64::consts::TAU / 36_000.0;
+        let r = rot(theta);
+        let (mut nx, mut ny, mut dx, mut dy) = (0.0, 0.0, 0.0, 0.0);
+        for (p, q) in n.iter().zip(&o) {
+            let a = p.coords - cn;
+            let u = r.transpose() * (q.coords - co);
+            nx += a.x * u.x;
+            ny += a.y * u.y;
+            dx += a.x * a.x;
+            dy += a.y * a.y;
+        }
+        let (sx, sy) = (nx / dx, ny / dy);
+        let b = co - r * Matrix2::new(sx, 0.0, 0.0, sy) * cn;
+        assert!(objective(theta, sx, sy, b, &n, &o) >= best - 1e-12, "θ = {theta} beats the closed form");
+    }
+    // Dropping the shear of the affine fit is not the rectangle minimum.
+    let aff = fit_affine(&n, &o).expect("affine");
+    let dropped = objective(aff.theta_rad(), aff.scale.x, aff.scale.y, aff.offset(), &n, &o);
+    assert!(dropped > best);
+}
+
+#[test]
+fn manual_example_4_geometry() {
+    // Marks at (0,0), (6,0), (6,4), (0,4); part shifted (0.1, 0.05), turned 0.5°, 0.1 % long in X.
+    let n = [Point2::new(0.0, 0.0), Point2::new(6.0, 0.0), Point2::new(6.0, 4.0), Point2::new(0.0, 4.0)];
+    let map = truth_map(0.5f64.to_radians(), 1.001, 1.0, Vector2::new(0.1, 0.05));
+    let o: Vec<_> = n.iter().map(&map).collect();
+    let fit = fit_rectangle(&n, &o).expect("rectangle");
+    assert!((fit.theta_deg() - 0.5).abs() < 1e-12);
+    assert!((fit.scale.x - 1.001).abs() < 1e-12 && (fit.scale.y - 1.0).abs() < 1e-12);
+    let chain = fit.chain().expect("chain");
+    assert!((chain.center - Point2::new(3.0, 2.0)).norm() < 1e-15, "G68 centre is the commanded centroid");
+    for (ni, oi) in n.iter().zip(&o) {
+        assert!((chain.apply(*ni) - oi).norm() < 1e-12);
+    }
+    assert_eq!(fit.residuals(&n, &o).len(), 4);
+    assert!(fit.residuals(&n, &o).iter().all(|r| r.norm() < 1e-12));
+}
+
+#[test]
+fn seed_sheet_1_under_a_small_rotation() {
+    // Calibration sheet 1 (inches): dots at (±2.5, ±4) and the centre, lying 0.3° off square.
+    let n = [
+        Point2::new(-2.5, -4.0),
+        Point2::new(-2.5, 4.0),
+        Point2::new(2.5, 4.0),
+        Point2::new(2.5, -4.0),
+        Point2::new(0.0, 0.0),
+    ];
+    let map = truth_map(0.3f64.to_radians(), 1.0, 1.0, Vector2::new(0.02, -0.01));
+    let o: Vec<_> = n.iter().map(&map).collect();
+    let rigid = fit_rigid(&n, &o).expect("rigid");
+    assert!((rigid.theta_deg() - 0.3).abs() < 1e-12);
+    assert!((rigid.apply(n[4]) - o[4]).norm() < 1e-14, "the centre dot lands");
+}
+
+#[test]
+fn every_error_is_typed_and_nothing_is_nan() {
+    let sq = [Point2::new(0.0, 0.0), Point2::new(1.0, 0.0), Point2::new(1.0, 1.0), Point2::new(0.0, 1.0)];
+    assert_eq!(
+        fit_rectangle(&sq[..2], &sq[..2]),
+        Err(MathError::TooFewPoints { model: "rectangle", needed: 3, got: 2 })
+    );
+    assert_eq!(
+        fit_similarity(&sq[..1], &sq[..1]),
+        Err(MathError::TooFewPoints { model: "similarity", needed: 2, got: 1 })
+    );
+    assert_eq!(fit_similarity(&sq, &sq[..3]), Err(MathError::LengthMismatch { commanded: 4, observed: 3 }));
+    let mut bad = sq;
+    bad[2].x = f64::NAN;
+    assert_eq!(fit_similarity(&bad, &sq), Err(MathError::NonFinite { what: "a commanded point" }));
+    assert_eq!(fit_rectangle(&sq, &bad), Err(MathError::NonFinite { what: "an observed point" }));
+    bad[2].x = f64::INFINITY;
+    assert_eq!(fit_affine(&sq, &bad), Err(MathError::NonFinite { what: "an observed point" }));
+    let same = [Point2::new(5.0, 5.0); 4];
+    for model in Model::ALL {
+        assert_eq!(model.fit(&same, &sq), Err(MathError::CoincidentPoints), "{model}");
+    }
+    let line = [Point2::new(0.0, 0.0), Point2::new(1.0, 1.0), Point2::new(2.0, 2.0), Point2::new(3.0, 3.0 + 1e-9)];
+    assert_eq!(fit_rectangle(&line, &sq), Err(MathError::CollinearPoints { model: "rectangle" }));
+    assert_eq!(fit_affine(&line, &sq), Err(MathError::CollinearPoints { model: "affine" }));
+    // Two marks determine a similarity; collinear marks are fine for it.
+    assert!(fit_similarity(&line, &line).is_ok());
+    // Observed points that collapse to one point carry no rotation.
+    assert_eq!(fit_similarity(&sq, &same), Err(MathError::DegenerateObserved));
+    assert_eq!(fit_rigid(&sq, &same), Err(MathError::DegenerateObserved));
+    assert_eq!(fit_rectangle(&sq, &same), Err(MathError::DegenerateObserved));
+    let v = [Vector2::new(1.0, 0.0), Vector2::new(2.0, 0.0)];
+    assert_eq!(solve_linear(&v, &v), Err(MathError::CollinearPoints { model: "2x2 linear" }));
+    assert_eq!(solve_linear(&v[..1], &v[..1]), Err(MathError::TooFewPoints { model: "2x2 linear", needed: 2, got: 1 }));
+    assert_eq!(solve_linear(&[Vector2::zeros(); 2], &v), Err(MathError::CoincidentPoints));
+}
+
+proptest! {
+    #[test]
+    fn arbitrary_input_gives_a_fit_or_an_error_never_nan(
+        n in prop::collection::vec((prop::num::f64::ANY, prop::num::f64::ANY), 0..8),
+        o in prop::collection::vec((prop::num::f64::ANY, prop::num::f64::ANY), 0..8),
+    ) {
+        let n: Vec<_> = n.into_iter().map(|(x, y)| Point2::new(x, y)).collect();
+        let o: Vec<_> = o.into_iter().map(|(x, y)| Point2::new(x, y)).collect();
+        for model in Model::ALL {
+            if let Ok(fit) = model.fit(&n, &o) {
+                prop_assert!(fit.rms.is_finite() && fit.max_residual.is_finite());
+                prop_assert!(fit.theta_rad().is_finite() && fit.scale.iter().all(|v| v.is_finite()));
+                if let Some(chain) = fit.chain() {
+                    prop_assert!(chain.gcode().is_ok());
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn model_names_round_trip() {
+    for m in Model::ALL {
+        assert_eq!(Model::from_name(m.name()), Some(m));
+        assert_eq!(Model::from_name(&m.name().to_uppercase()), Some(m));
+    }
+    assert_eq!(Model::from_name("projective"), None);
+}
