@@ -21,7 +21,8 @@ pub fn fit_affine(commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Result
     let cinv = Matrix2::new(m.syy, -m.sxy, -m.sxy, m.sxx) / det;
     let p = Matrix2::new(m.pxx, m.pyx, m.pxy, m.pyy);
     let l = p * cinv;
-    let rotation = unit(l[(0, 0)], l[(1, 0)], l.norm()).unwrap_or(UnitComplex::new_unchecked(Complex::new(1.0, 0.0)));
+    let rotation =
+        unit(l[(0, 0)], l[(1, 0)], l.norm()).map_or(UnitComplex::new_unchecked(Complex::new(1.0, 0.0)), |(r, _)| r);
     let (c, s) = (rotation.re, rotation.im);
     let sx = c * l[(0, 0)] + s * l[(1, 0)];
     let shear = c * l[(0, 1)] + s * l[(1, 1)];

@@ -215,29 +215,40 @@ impl Moments {
         if len < needed {
             return Err(MathError::TooFewPoints { model: model.name(), needed, got: len });
         }
-        let mut sn = Vector2::zeros();
-        let mut so = Vector2::zeros();
-        for (n, o) in commanded.iter().zip(observed) {
-            sn += n.coords;
-            so += o.coords;
-        }
-        #[allow(clippy::cast_precision_loss)] // point counts are far below 2^52
-        let inv = 1.0 / len as f64;
-        let cn = sn * inv;
-        let co = so * inv;
+        // One pass over the points, with sums taken relative to the first pair: as exact as a
+        // two-pass centring (the reference lies inside the cloud, so nothing cancels beyond the
+        // spread itself) but half the memory traffic.
+        let (n0, o0) = (commanded[0].coords, observed[0].coords);
+        let (mut sax, mut say, mut sqx, mut sqy) = (0.0, 0.0, 0.0, 0.0);
         let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
         let (mut pxx, mut pxy, mut pyx, mut pyy) = (0.0, 0.0, 0.0, 0.0);
         for (n, o) in commanded.iter().zip(observed) {
-            let a = n.coords - cn;
-            let q = o.coords - co;
-            sxx += a.x * a.x;
-            sxy += a.x * a.y;
-            syy += a.y * a.y;
-            pxx += a.x * q.x;
-            pxy += a.x * q.y;
-            pyx += a.y * q.x;
-            pyy += a.y * q.y;
+            let (ax, ay) = (n.x - n0.x, n.y - n0.y);
+            let (qx, qy) = (o.x - o0.x, o.y - o0.y);
+            sax += ax;
+            say += ay;
+            sqx += qx;
+            sqy += qy;
+            sxx += ax * ax;
+            sxy += ax * ay;
+            syy += ay * ay;
+            pxx += ax * qx;
+            pxy += ax * qy;
+            pyx += ay * qx;
+            pyy += ay * qy;
         }
+        #[allow(clippy::cast_precision_loss)] // point counts are far below 2^52
+        let inv = 1.0 / len as f64;
+        let (mx, my, mqx, mqy) = (sax * inv, say * inv, sqx * inv, sqy * inv);
+        let cn = Vector2::new(n0.x + mx, n0.y + my);
+        let co = Vector2::new(o0.x + mqx, o0.y + mqy);
+        sxx -= sax * mx;
+        sxy -= sax * my;
+        syy -= say * my;
+        pxx -= sax * mqx;
+        pxy -= sax * mqy;
+        pyx -= say * mqx;
+        pyy -= say * mqy;
         if !(cn.x.is_finite() && cn.y.is_finite() && sxx.is_finite() && syy.is_finite() && sxy.is_finite()) {
             return Err(MathError::NonFinite { what: "a commanded point" });
         }
@@ -252,7 +263,8 @@ impl Moments {
         }
         let spread2 = (sxx + syy) * inv;
         let magnitude = cn.x.abs().max(cn.y.abs());
-        if spread2 == 0.0 || spread2.sqrt() <= COINCIDENT * magnitude {
+        let floor = COINCIDENT * magnitude;
+        if spread2 == 0.0 || spread2 <= floor * floor {
             return Err(MathError::CoincidentPoints);
         }
         Ok(Moments { len, cn, co, sxx, sxy, syy, pxx, pxy, pyx, pyy })
@@ -297,7 +309,9 @@ impl Moments {
             let r = l * (n.coords - self.cn) - (o.coords - self.co);
             let r2 = r.norm_squared();
             sum2 += r2;
-            max2 = max2.max(r2);
+            if r2 > max2 {
+                max2 = r2;
+            }
         }
         #[allow(clippy::cast_precision_loss)]
         let rms = (sum2 / self.len as f64).sqrt();
@@ -315,14 +329,16 @@ impl Moments {
     }
 }
 
-/// A unit complex from an unnormalised `(re, im)`; `None` when it has no direction.
+/// A unit complex from an unnormalised `(re, im)`, with the length it had; `None` when it has
+/// no direction.
 #[inline]
-pub(crate) fn unit(re: f64, im: f64, reference: f64) -> Option<UnitComplex<f64>> {
+pub(crate) fn unit(re: f64, im: f64, reference: f64) -> Option<(UnitComplex<f64>, f64)> {
     let h = (re * re + im * im).sqrt();
     if !(h > 1e-14 * reference) || !h.is_finite() {
         return None;
     }
-    Some(UnitComplex::new_unchecked(nalgebra::Complex::new(re / h, im / h)))
+    let inv = 1.0 / h;
+    Some((UnitComplex::new_unchecked(nalgebra::Complex::new(re * inv, im * inv)), h))
 }
 
 #[cfg(test)]

@@ -35,7 +35,7 @@ pub fn fit_rectangle(commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Res
         // Equal eigenvalues: every rotation fits equally well.
         return Err(MathError::DegenerateObserved);
     }
-    let mut rotation = unit(vc, vs, reference).ok_or(MathError::DegenerateObserved)?;
+    let (mut rotation, _) = unit(vc, vs, reference).ok_or(MathError::DegenerateObserved)?;
     let (c, s) = (rotation.re, rotation.im);
     let mut sx = (c * m.pxx + s * m.pxy) * ix;
     let mut sy = (c * m.pyy - s * m.pyx) * iy;

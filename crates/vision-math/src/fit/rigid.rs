@@ -14,6 +14,6 @@ use crate::MathError;
 /// observed points that carry no rotation.
 pub fn fit_rigid(commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Result<Fit, MathError> {
     let m = Moments::new(Model::Rigid, commanded, observed)?;
-    let rotation = unit(m.pxx + m.pyy, m.pxy - m.pyx, m.sxx + m.syy).ok_or(MathError::DegenerateObserved)?;
+    let (rotation, _) = unit(m.pxx + m.pyy, m.pxy - m.pyx, m.sxx + m.syy).ok_or(MathError::DegenerateObserved)?;
     m.finish(Model::Rigid, rotation, Vector2::new(1.0, 1.0), 0.0, commanded, observed)
 }

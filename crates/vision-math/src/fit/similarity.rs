@@ -18,7 +18,7 @@ pub fn fit_similarity(commanded: &[nalgebra::Point2<f64>], observed: &[Point2<f6
     let d = m.sxx + m.syy;
     let a = m.pxx + m.pyy;
     let b = m.pxy - m.pyx;
-    let rotation = unit(a, b, d).ok_or(MathError::DegenerateObserved)?;
-    let s = (a * a + b * b).sqrt() / d;
+    let (rotation, h) = unit(a, b, d).ok_or(MathError::DegenerateObserved)?;
+    let s = h / d;
     m.finish(Model::Similarity, rotation, Vector2::new(s, s), 0.0, commanded, observed)
 }

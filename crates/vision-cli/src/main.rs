@@ -1,0 +1,48 @@
+//! `mach-vision`: camera alignment for CNC machines, from the command line.
+//!
+//! Every subcommand lives in its own module; this file only parses the command line and maps
+//! outcomes to exit codes (0 success, 1 a run that failed, 2 bad input).
+
+mod fit;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// Camera alignment for CNC machines.
+#[derive(Debug, Parser)]
+#[command(name = "mach-vision", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Fit a transform from commanded to observed mark positions (JSON from FILE or stdin).
+    Fit(fit::FitArgs),
+}
+
+/// A failure with the exit code it maps to.
+#[derive(Debug)]
+pub(crate) enum Failure {
+    /// Bad input (exit 2): unreadable file, malformed JSON, degenerate geometry.
+    Input(String),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let outcome = match cli.command {
+        Command::Fit(args) => fit::run(&args),
+    };
+    match outcome {
+        Ok(text) => {
+            print!("{text}");
+            ExitCode::SUCCESS
+        }
+        Err(Failure::Input(message)) => {
+            eprintln!("mach-vision: {message}");
+            ExitCode::from(2)
+        }
+    }
+}
