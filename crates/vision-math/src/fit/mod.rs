@@ -206,6 +206,7 @@ const COLLINEAR: f64 = 1e-9;
 
 impl Moments {
     /// Computes the moments, checking counts, lengths, finiteness and coincidence.
+    #[inline(always)]
     pub(crate) fn new(model: Model, commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Result<Self, MathError> {
         if commanded.len() != observed.len() {
             return Err(MathError::LengthMismatch { commanded: commanded.len(), observed: observed.len() });
@@ -284,6 +285,7 @@ impl Moments {
     }
 
     /// Builds the [`Fit`], with a second pass for the residuals.
+    #[inline(always)]
     pub(crate) fn finish(
         &self,
         model: Model,
@@ -302,12 +304,17 @@ impl Moments {
             return Err(MathError::DegenerateObserved);
         }
         let (c, s) = (rotation.re, rotation.im);
-        let l = Matrix2::new(c, -s, s, c) * Matrix2::new(scale.x, shear, 0.0, scale.y);
+        // L = R·[[sx, shear], [0, sy]], spelled out so the loop below stays in registers.
+        let (l11, l12) = (c * scale.x, c * shear - s * scale.y);
+        let (l21, l22) = (s * scale.x, s * shear + c * scale.y);
+        let (cnx, cny, cox, coy) = (self.cn.x, self.cn.y, self.co.x, self.co.y);
         let mut sum2 = 0.0;
         let mut max2: f64 = 0.0;
         for (n, o) in commanded.iter().zip(observed) {
-            let r = l * (n.coords - self.cn) - (o.coords - self.co);
-            let r2 = r.norm_squared();
+            let (ax, ay) = (n.x - cnx, n.y - cny);
+            let rx = l11 * ax + l12 * ay - (o.x - cox);
+            let ry = l21 * ax + l22 * ay - (o.y - coy);
+            let r2 = rx * rx + ry * ry;
             sum2 += r2;
             if r2 > max2 {
                 max2 = r2;
