@@ -8,7 +8,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use faer::linalg::solvers::SolveLstsq;
 use nalgebra::{Matrix2, Point2, Vector2};
 use vision_benches::marks;
-use vision_math::{fit_affine, fit_rectangle, fit_rigid, fit_similarity, PixelChain, Remap};
+use vision_math::{fit_affine, fit_rectangle, fit_rigid, fit_similarity, Model, PixelChain, Remap};
 
 const SIZES: [usize; 4] = [3, 4, 16, 1000];
 
@@ -24,6 +24,16 @@ fn fits(c: &mut Criterion) {
             let (cmd, obs) = marks(n);
             group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
                 b.iter(|| f(black_box(&cmd), black_box(&obs)));
+            });
+        }
+        group.finish();
+    }
+    for model in [Model::Similarity, Model::Rectangle] {
+        let mut group = c.benchmark_group(format!("transform/{}", model.name()));
+        for n in SIZES {
+            let (cmd, obs) = marks(n);
+            group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+                b.iter(|| model.transform(black_box(&cmd), black_box(&obs)));
             });
         }
         group.finish();

@@ -9,9 +9,14 @@ fn main() {
     let model = vision_math::Model::from_name(&model).expect("model name");
     let (c, o) = marks(n);
     let t = std::time::Instant::now();
+    let params_only = std::env::args().nth(4).is_some_and(|s| s == "transform");
     let mut acc = 0.0;
     for _ in 0..iters {
-        if let Ok(f) = model.fit(black_box(&c), black_box(&o)) {
+        if params_only {
+            if let Ok(t) = model.transform(black_box(&c), black_box(&o)) {
+                acc += t.scale.x;
+            }
+        } else if let Ok(f) = model.fit(black_box(&c), black_box(&o)) {
             acc += f.rms;
         }
     }

@@ -2,7 +2,7 @@
 
 use nalgebra::{Complex, Matrix2, Point2, UnitComplex, Vector2};
 
-use super::{unit, Fit, Model, Moments};
+use super::{unit, Fit, Model, Moments, Params};
 use crate::MathError;
 
 /// Least-squares affine fit `o ≈ L·n + b` (6 parameters), closed form on centred moments:
@@ -15,7 +15,11 @@ use crate::MathError;
 /// Too few points (< 3), length mismatch, non-finite input, coincident or collinear commanded
 /// points, or a fitted matrix with a zero first column.
 pub fn fit_affine(commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Result<Fit, MathError> {
-    let m = Moments::new(Model::Affine, commanded, observed)?;
+    Model::Affine.fit(commanded, observed)
+}
+
+#[inline(always)]
+pub(super) fn solve(m: &Moments) -> Result<Params, MathError> {
     m.require_area(Model::Affine)?;
     let det = m.sxx * m.syy - m.sxy * m.sxy;
     let cinv = Matrix2::new(m.syy, -m.sxy, -m.sxy, m.sxx) / det;
@@ -30,5 +34,5 @@ pub fn fit_affine(commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Result
     if !(sx > 0.0) {
         return Err(MathError::DegenerateObserved);
     }
-    m.finish(Model::Affine, rotation, Vector2::new(sx, sy), shear, commanded, observed)
+    Ok(Params { rotation, scale: Vector2::new(sx, sy), shear })
 }

@@ -73,16 +73,68 @@ impl Model {
         }
     }
 
-    /// Solves this model from `commanded` to `observed`.
+    /// Solves this model from `commanded` to `observed`, with residuals.
     ///
     /// # Errors
-    /// As the model's own fit function.
+    /// As the model's own fit function ([`fit_rectangle`], …).
     pub fn fit(self, commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Result<Fit, MathError> {
+        // One arm per model, each with a constant model, so that every arm keeps only the
+        // moments its closed form reads.
+        #[inline(always)]
+        fn fit_as(model: Model, commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Result<Fit, MathError> {
+            let m = Moments::new(model, commanded, observed)?;
+            let p = model.solve(&m)?;
+            m.finish(model, p, commanded, observed)
+        }
         match self {
-            Model::Rigid => fit_rigid(commanded, observed),
-            Model::Similarity => fit_similarity(commanded, observed),
-            Model::Rectangle => fit_rectangle(commanded, observed),
-            Model::Affine => fit_affine(commanded, observed),
+            Model::Rigid => fit_as(Model::Rigid, commanded, observed),
+            Model::Similarity => fit_as(Model::Similarity, commanded, observed),
+            Model::Rectangle => fit_as(Model::Rectangle, commanded, observed),
+            Model::Affine => fit_as(Model::Affine, commanded, observed),
+        }
+    }
+
+    /// Solves this model's parameters only: one pass over the points, no residual pass. For
+    /// tight loops that do not need the RMS; [`Model::fit`] gives the same parameters.
+    ///
+    /// # Errors
+    /// As [`Model::fit`].
+    pub fn transform(self, commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Result<Transform, MathError> {
+        #[inline(always)]
+        fn transform_as(
+            model: Model,
+            commanded: &[Point2<f64>],
+            observed: &[Point2<f64>],
+        ) -> Result<Transform, MathError> {
+            let m = Moments::new(model, commanded, observed)?;
+            let p = model.solve(&m)?;
+            if !p.is_finite() {
+                return Err(MathError::DegenerateObserved);
+            }
+            Ok(Transform {
+                model,
+                rotation: p.rotation,
+                scale: p.scale,
+                shear: p.shear,
+                commanded_centroid: Point2::from(m.cn),
+                observed_centroid: Point2::from(m.co),
+            })
+        }
+        match self {
+            Model::Rigid => transform_as(Model::Rigid, commanded, observed),
+            Model::Similarity => transform_as(Model::Similarity, commanded, observed),
+            Model::Rectangle => transform_as(Model::Rectangle, commanded, observed),
+            Model::Affine => transform_as(Model::Affine, commanded, observed),
+        }
+    }
+
+    #[inline(always)]
+    fn solve(self, m: &Moments) -> Result<Params, MathError> {
+        match self {
+            Model::Rigid => rigid::solve(m),
+            Model::Similarity => similarity::solve(m),
+            Model::Rectangle => rectangle::solve(m),
+            Model::Affine => affine::solve(m),
         }
     }
 }
@@ -90,6 +142,41 @@ impl Model {
 impl std::fmt::Display for Model {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(self.name())
+    }
+}
+
+/// A model's parameters without residuals (from [`Model::transform`]): `o ≈ L·(n − n̄) + ō`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Transform {
+    /// Which model was solved.
+    pub model: Model,
+    /// Rotation `R(θ)`, counter-clockwise seen from +Z.
+    pub rotation: UnitComplex<f64>,
+    /// `(sx, sy)`, dimensionless.
+    pub scale: Vector2<f64>,
+    /// Shear (dimensionless); 0 for every model but affine.
+    pub shear: f64,
+    /// Centroid `n̄` of the commanded points, machine units.
+    pub commanded_centroid: Point2<f64>,
+    /// Centroid `ō` of the observed points, machine units.
+    pub observed_centroid: Point2<f64>,
+}
+
+/// The model-specific part of a solution.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Params {
+    rotation: UnitComplex<f64>,
+    scale: Vector2<f64>,
+    shear: f64,
+}
+
+impl Params {
+    fn is_finite(&self) -> bool {
+        self.rotation.re.is_finite()
+            && self.rotation.im.is_finite()
+            && self.scale.x.is_finite()
+            && self.scale.y.is_finite()
+            && self.shear.is_finite()
     }
 }
 
@@ -250,16 +337,13 @@ impl Moments {
         pxy -= sax * mqy;
         pyx -= say * mqx;
         pyy -= say * mqy;
-        if !(cn.x.is_finite() && cn.y.is_finite() && sxx.is_finite() && syy.is_finite() && sxy.is_finite()) {
+        // Any NaN or infinite coordinate reaches the centroids (NaN and ∞ survive addition), so
+        // these two checks cover the whole input; overflow of the products is caught on the
+        // result in `finish`.
+        if !(cn.x.is_finite() && cn.y.is_finite()) {
             return Err(MathError::NonFinite { what: "a commanded point" });
         }
-        if !(co.x.is_finite()
-            && co.y.is_finite()
-            && pxx.is_finite()
-            && pxy.is_finite()
-            && pyx.is_finite()
-            && pyy.is_finite())
-        {
+        if !(co.x.is_finite() && co.y.is_finite()) {
             return Err(MathError::NonFinite { what: "an observed point" });
         }
         let spread2 = (sxx + syy) * inv;
@@ -289,20 +373,14 @@ impl Moments {
     pub(crate) fn finish(
         &self,
         model: Model,
-        rotation: UnitComplex<f64>,
-        scale: Vector2<f64>,
-        shear: f64,
+        p: Params,
         commanded: &[Point2<f64>],
         observed: &[Point2<f64>],
     ) -> Result<Fit, MathError> {
-        if !(rotation.re.is_finite()
-            && rotation.im.is_finite()
-            && scale.x.is_finite()
-            && scale.y.is_finite()
-            && shear.is_finite())
-        {
+        if !p.is_finite() {
             return Err(MathError::DegenerateObserved);
         }
+        let Params { rotation, scale, shear } = p;
         let (c, s) = (rotation.re, rotation.im);
         // L = R·[[sx, shear], [0, sy]], spelled out so the loop below stays in registers.
         let (l11, l12) = (c * scale.x, c * shear - s * scale.y);
@@ -322,6 +400,9 @@ impl Moments {
         }
         #[allow(clippy::cast_precision_loss)]
         let rms = (sum2 / self.len as f64).sqrt();
+        if !rms.is_finite() {
+            return Err(MathError::NonFinite { what: "a residual (coordinates too large)" });
+        }
         Ok(Fit {
             model,
             rotation,

@@ -2,7 +2,7 @@
 
 use nalgebra::{Point2, Vector2};
 
-use super::{unit, Fit, Model, Moments};
+use super::{unit, Fit, Model, Moments, Params};
 use crate::MathError;
 
 /// The true least-squares rectangle fit `o ≈ R(θ)·diag(sx, sy)·n + b` (5 parameters).
@@ -20,7 +20,11 @@ use crate::MathError;
 /// Too few points (< 3), length mismatch, non-finite input, coincident or collinear commanded
 /// points, or observed points that leave the rotation undetermined.
 pub fn fit_rectangle(commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Result<Fit, MathError> {
-    let m = Moments::new(Model::Rectangle, commanded, observed)?;
+    Model::Rectangle.fit(commanded, observed)
+}
+
+#[inline(always)]
+pub(super) fn solve(m: &Moments) -> Result<Params, MathError> {
     m.require_area(Model::Rectangle)?;
     let (ix, iy) = (1.0 / m.sxx, 1.0 / m.syy);
     let m11 = m.pxx * m.pxx * ix + m.pyy * m.pyy * iy;
@@ -44,5 +48,5 @@ pub fn fit_rectangle(commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Res
         sx = -sx;
         sy = -sy;
     }
-    m.finish(Model::Rectangle, rotation, Vector2::new(sx, sy), 0.0, commanded, observed)
+    Ok(Params { rotation, scale: Vector2::new(sx, sy), shear: 0.0 })
 }

@@ -2,7 +2,7 @@
 
 use nalgebra::{Point2, Vector2};
 
-use super::{unit, Fit, Model, Moments};
+use super::{unit, Fit, Model, Moments, Params};
 use crate::MathError;
 
 /// Least-squares rigid transform (rotation + shift) from `commanded` to `observed`.
@@ -13,7 +13,11 @@ use crate::MathError;
 /// Too few points (< 2), length mismatch, non-finite input, coincident commanded points, or
 /// observed points that carry no rotation.
 pub fn fit_rigid(commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Result<Fit, MathError> {
-    let m = Moments::new(Model::Rigid, commanded, observed)?;
+    Model::Rigid.fit(commanded, observed)
+}
+
+#[inline(always)]
+pub(super) fn solve(m: &Moments) -> Result<Params, MathError> {
     let (rotation, _) = unit(m.pxx + m.pyy, m.pxy - m.pyx, m.sxx + m.syy).ok_or(MathError::DegenerateObserved)?;
-    m.finish(Model::Rigid, rotation, Vector2::new(1.0, 1.0), 0.0, commanded, observed)
+    Ok(Params { rotation, scale: Vector2::new(1.0, 1.0), shear: 0.0 })
 }

@@ -2,7 +2,7 @@
 
 use nalgebra::{Point2, Vector2};
 
-use super::{unit, Fit, Model, Moments};
+use super::{unit, Fit, Model, Moments, Params};
 use crate::MathError;
 
 /// Least-squares similarity from `commanded` to `observed` (closed form, Umeyama without SVD).
@@ -13,12 +13,14 @@ use crate::MathError;
 /// # Errors
 /// Too few points (< 2), length mismatch, non-finite input, coincident commanded points, or
 /// observed points that collapse to one point.
-pub fn fit_similarity(commanded: &[nalgebra::Point2<f64>], observed: &[Point2<f64>]) -> Result<Fit, MathError> {
-    let m = Moments::new(Model::Similarity, commanded, observed)?;
+pub fn fit_similarity(commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Result<Fit, MathError> {
+    Model::Similarity.fit(commanded, observed)
+}
+
+#[inline(always)]
+pub(super) fn solve(m: &Moments) -> Result<Params, MathError> {
     let d = m.sxx + m.syy;
-    let a = m.pxx + m.pyy;
-    let b = m.pxy - m.pyx;
-    let (rotation, h) = unit(a, b, d).ok_or(MathError::DegenerateObserved)?;
+    let (rotation, h) = unit(m.pxx + m.pyy, m.pxy - m.pyx, d).ok_or(MathError::DegenerateObserved)?;
     let s = h / d;
-    m.finish(Model::Similarity, rotation, Vector2::new(s, s), 0.0, commanded, observed)
+    Ok(Params { rotation, scale: Vector2::new(s, s), shear: 0.0 })
 }

@@ -67,6 +67,9 @@ proptest! {
             let map = truth_map(theta, sx, sy, shift);
             let o: Vec<_> = n.iter().map(&map).collect();
             let fit = model.fit(&n, &o).expect("well-posed");
+            let t = model.transform(&n, &o).expect("well-posed");
+            prop_assert_eq!((t.model, t.rotation, t.scale, t.shear), (fit.model, fit.rotation, fit.scale, fit.shear));
+            prop_assert_eq!((t.commanded_centroid, t.observed_centroid), (fit.commanded_centroid, fit.observed_centroid));
             prop_assert!(angle_diff(fit.theta_rad(), theta) <= tol, "{model}: θ {} vs {theta}", fit.theta_rad());
             prop_assert!((fit.scale.x - sx).abs() <= tol * sx, "{model}: sx {} vs {sx}", fit.scale.x);
             prop_assert!((fit.scale.y - sy).abs() <= tol * sy, "{model}: sy {} vs {sy}", fit.scale.y);
@@ -304,6 +307,10 @@ proptest! {
         let n: Vec<_> = n.into_iter().map(|(x, y)| Point2::new(x, y)).collect();
         let o: Vec<_> = o.into_iter().map(|(x, y)| Point2::new(x, y)).collect();
         for model in Model::ALL {
+            match model.transform(&n, &o) {
+                Ok(t) => prop_assert!(t.scale.iter().all(|v| v.is_finite()) && t.rotation.re.is_finite()),
+                Err(e) => prop_assert!(model.fit(&n, &o).is_err(), "transform refused ({e}) what fit accepted"),
+            }
             if let Ok(fit) = model.fit(&n, &o) {
                 prop_assert!(fit.rms.is_finite() && fit.max_residual.is_finite());
                 prop_assert!(fit.theta_rad().is_finite() && fit.scale.iter().all(|v| v.is_finite()));
