@@ -26,7 +26,7 @@ pub fn fit_affine(commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Result
     let sx = c * l[(0, 0)] + s * l[(1, 0)];
     let shear = c * l[(0, 1)] + s * l[(1, 1)];
     let sy = -s * l[(0, 1)] + c * l[(1, 1)];
-    if !(sx > 0.0) {
+    if sx.is_nan() || sx <= 0.0 {
         return Err(MathError::DegenerateObserved);
     }
     m.finish(Model::Affine, rotation, Vector2::new(sx, sy), shear, commanded, observed)
