@@ -7,6 +7,7 @@
 //! * [`params`]: the OEM parameters under the manual's names; [`profile`]: their TOML file.
 //! * [`module`]: [`VisionModule`] with the typed entry points `m280` … `m284`.
 //! * [`pound`]: the pound-variable block; [`image_grab`]: M281 D1.
+//! * [`calibrate`]: M283's axis detect, quick calibration and sheet walk; [`sheets`]: `CAL_SHEETS`.
 //! * [`registry`]: drivers by name for the CLI.
 //!
 //! The crate depends on `vision-math` only (plus `thiserror`, `serde`, `toml`); it knows no
@@ -27,6 +28,7 @@
 //! # Ok::<(), VisionError>(())
 //! ```
 
+pub mod calibrate;
 pub mod driver;
 mod error;
 pub mod image_grab;
@@ -36,7 +38,9 @@ pub mod params;
 pub mod pound;
 pub mod profile;
 pub mod registry;
+pub mod sheets;
 
+pub use calibrate::{AxisReport, CalReport, Calibrate, DotVerify, QuickReport, SheetReport};
 pub use driver::{CameraDriver, Capabilities, DriverError, DriverErrorKind, Judgment, Reading};
 pub use error::VisionError;
 pub use machine::{Machine, MachineError, Timestamp};
@@ -45,3 +49,4 @@ pub use params::{Access, ParamKind, ParamSpec, ParamValue, Params, Section};
 pub use pound::{PoundBlock, SlotValues};
 pub use profile::{ProfileFs, ProfileStore, StdFs};
 pub use registry::{DriverFactory, DriverRegistry};
+pub use sheets::{cal_sheet, CalSheet, CAL_SHEETS};

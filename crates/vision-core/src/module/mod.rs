@@ -8,10 +8,11 @@
 //! Common checks, in order, for every entry point: `VisionEnabled` ("Vision is not enabled");
 //! for M280–M283 the camera-tool check (`VisionCameraToolNumber` ≠ 0 and another tool active).
 
-mod capture;
+pub(crate) mod capture;
 mod m280;
 mod m281;
 mod m282;
+mod m283;
 mod m284;
 
 #[cfg(test)]
