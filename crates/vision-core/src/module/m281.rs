@@ -21,9 +21,10 @@ impl VisionModule {
     /// grows; outside a run only slot 0 and the telemetry are written. Every success writes the
     /// `Last*` telemetry with `LastStatus` = `OK`.
     ///
-    /// `keep_image` (D1): when `VisionImageWatchDir` is set, the image the camera pushed for
-    /// this trigger is copied into the images folder; a missing image is a warning in
-    /// `LastStatus` and [`Capture::warning`], not a failed capture.
+    /// `keep_image` (D1): when `VisionImageWatchDir` is set and the driver advertises
+    /// `grab_image`, the image the camera pushed for this trigger is copied into the images
+    /// folder ([`crate::image_grab`]); a missing image is a warning in `LastStatus`
+    /// (`OK (warning: …)`) and [`Capture::warning`], not a failed capture.
     ///
     /// # Errors
     /// [`VisionError::NotEnabled`], [`VisionError::WrongTool`],
@@ -98,10 +99,17 @@ impl VisionModule {
         let mut warning = None;
         if keep_image {
             let watch = self.params.image_watch_dir().to_string();
+            let pushes = self.driver.as_deref().is_some_and(|d| d.capabilities().grab_image);
             if watch.is_empty() {
                 warning = Some("image not saved: VisionImageWatchDir is empty".to_string());
+            } else if !pushes {
+                warning = Some(format!(
+                    "image not saved: camera driver {} does not push images",
+                    self.driver.as_deref().map_or("?", |d| d.name())
+                ));
             } else {
-                let timeout = Duration::from_secs_f64(self.params.image_grab_timeout_s());
+                let timeout =
+                    Duration::try_from_secs_f64(self.params.image_grab_timeout_s()).unwrap_or(Duration::from_secs(2));
                 match image_grab::grab(
                     watch.as_ref(),
                     &self.images_dir,

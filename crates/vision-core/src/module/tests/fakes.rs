@@ -46,6 +46,9 @@ pub(crate) struct World {
     pub select_job: bool,
     pub jobs: Vec<u32>,
     pub triggers: usize,
+    /// Uniform pixel noise amplitude (±px) added to every reading.
+    pub noise_px: f64,
+    pub rng: u64,
 }
 
 impl Default for World {
@@ -74,6 +77,8 @@ impl Default for World {
             select_job: true,
             jobs: Vec::new(),
             triggers: 0,
+            noise_px: 0.0,
+            rng: 0x9E37_79B9_7F4A_7C15,
         }
     }
 }
@@ -95,7 +100,24 @@ impl World {
     pub(crate) fn camera_axis(&self) -> Point2<f64> {
         self.spindle + self.cam_offset
     }
-    fn see(&self) -> Reading {
+    /// Uniform in [−1, 1), deterministic (xorshift).
+    fn jitter(&mut self) -> f64 {
+        self.rng ^= self.rng << 13;
+        self.rng ^= self.rng >> 7;
+        self.rng ^= self.rng << 17;
+        #[allow(clippy::cast_precision_loss)]
+        let u = (self.rng >> 11) as f64 / (1u64 << 53) as f64;
+        2.0 * u - 1.0
+    }
+    fn see(&mut self) -> Reading {
+        let r = self.see_exact();
+        if self.noise_px > 0.0 && r.found() {
+            let (nx, ny) = (self.jitter() * self.noise_px, self.jitter() * self.noise_px);
+            return Reading { x_px: r.x_px + nx, y_px: r.y_px + ny, ..r };
+        }
+        r
+    }
+    fn see_exact(&self) -> Reading {
         let chain = PixelChain::new(self.cam_k, self.cam_remap, self.res, Vector2::zeros()).expect("true camera");
         let axis = self.camera_axis();
         let best = self

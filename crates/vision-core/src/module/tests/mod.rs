@@ -4,3 +4,4 @@ mod alignment;
 mod calibration;
 mod fakes;
 mod guards;
+mod persistence;
