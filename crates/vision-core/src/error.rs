@@ -201,6 +201,7 @@ fn driver_message(e: &DriverError) -> String {
              emitting unexpected fields"
         }
         DriverErrorKind::Unsupported => "the camera driver does not support this operation",
+        DriverErrorKind::Rejected => er_fix(&e.message).unwrap_or(""),
         _ => "",
     };
     if fix.is_empty() {
@@ -210,6 +211,28 @@ fn driver_message(e: &DriverError) -> String {
     } else {
         format!("{fix} ({})", e.message)
     }
+}
+
+/// The manual's fix for a Keyence `ER,<cmd>,<nn>` reply found in `message`.
+fn er_fix(message: &str) -> Option<&'static str> {
+    let at = message.find("ER,")?;
+    let code = message[at + 3..].split(',').nth(1)?.get(..2)?;
+    Some(match code {
+        "01" => "unknown command — the camera does not accept the command in its current mode (not in Run Mode)",
+        "02" => "wrong number of arguments — check the driver and the camera series",
+        "03" => "argument out of range — check the job number (0–999)",
+        "04" => "wrong argument type — check the driver and the camera series",
+        "05" => {
+            "command not acceptable now — the camera is loading a program or serving the command from another \
+             route; retry"
+        }
+        "06" => {
+            "command not executable — the camera is not in Run Mode or the trigger source is not set to \
+             Communication"
+        }
+        "07" => "camera-side timeout — the measurement did not complete within the camera's configured window",
+        _ => return None,
+    })
 }
 
 impl From<DriverError> for VisionError {
@@ -251,8 +274,21 @@ mod tests {
         assert!(e.to_string().starts_with("camera tool T98 is not the active tool"));
         let e = VisionError::from(DriverError::new(DriverErrorKind::Timeout, "no reply in 3 s"));
         assert!(e.to_string().starts_with("timeout — camera unreachable"), "{e}");
-        let e = VisionError::from(DriverError::new(DriverErrorKind::Rejected, "ER,TRG,06 not in Run mode"));
-        assert_eq!(e.to_string(), "ER,TRG,06 not in Run mode");
+        let e = VisionError::from(DriverError::new(DriverErrorKind::Rejected, "ER,TRG,06"));
+        assert_eq!(
+            e.to_string(),
+            "command not executable — the camera is not in Run Mode or the trigger source is not set to \
+             Communication (ER,TRG,06)"
+        );
+        let e = VisionError::from(DriverError::new(DriverErrorKind::Rejected, "camera replied ER,TRG,01"));
+        assert!(e.to_string().starts_with("unknown command"), "{e}");
+        let e = VisionError::from(DriverError::new(DriverErrorKind::Rejected, "ER,PL,07"));
+        assert!(e.to_string().starts_with("camera-side timeout"), "{e}");
+        let e = VisionError::from(DriverError::new(DriverErrorKind::Rejected, "ER,TRG,99 odd"));
+        assert_eq!(e.to_string(), "ER,TRG,99 odd");
+        let e = VisionError::from(DriverError::new(DriverErrorKind::Malformed, "reply \"abc\""));
+        assert!(e.to_string().starts_with("malformed response — the Data Output"), "{e}");
+        assert_eq!(VisionError::from(DriverError::new(DriverErrorKind::Rejected, "ER,")).to_string(), "ER,");
         assert!(VisionError::PoundBaseReserved { base: 5050, end: 5089 }
             .to_string()
             .starts_with("VisionPoundVarBase is in reserved range"));

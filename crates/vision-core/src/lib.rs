@@ -13,6 +13,36 @@
 //! The crate depends on `vision-math` only (plus `thiserror`, `serde`, `toml`); it knows no
 //! driver, no G-code interpreter and no CLI.
 //!
+//! # How a host uses it
+//!
+//! The M-code adapter parses `M280 P3`, `M281 D1`, … into typed calls
+//! ([`RunMode::from_p`], [`Pieces::from_p`], [`Calibrate::from_words`]), calls
+//! [`VisionModule::m280`] … [`VisionModule::m284`] with the host's [`Machine`], runs the
+//! [`Reply::gcode`] lines it gets back (M280's cancel line, M282's four modal lines) and shows
+//! the report. The CLI picks the driver by `VisionDriver` through a [`DriverRegistry`] and
+//! loads/saves parameters with a [`ProfileStore`].
+//!
+//! # Decisions where the spec is open
+//!
+//! * Failed triggers (driver error, NG / no mark) update `LastJudgment` and `LastStatus` only;
+//!   refusals before the trigger (disabled, wrong tool, reserved base, zero K) change nothing.
+//! * Mark width/height use the column of `K·R` for the camera's native axis (identical to the
+//!   manual's `width_px × ‖K column 1‖` unless `SwapXY`); `M283 Q` likewise divides by the size
+//!   along the remapped axes.
+//! * M282 `P1`/`P2`/`P3` emit the least-squares optimum of a shift-only / rotation-only (about
+//!   the commanded centroid) / scale-only (about the centroid) transform, always as the same four
+//!   lines with the other pieces at identity ([`Pieces`]). Quality gates judge the run's full fit;
+//!   the shift gate measures the centroid displacement.
+//! * M282 needs the run mode's 4 (rectangle) or 3 (similarity) captures; more are fitted by least
+//!   squares, slots keep the first four; the dot list stays until the next M280.
+//! * Pound fields 6–7 are never written. `Run_*` hold the **emitted** chain.
+//! * M283 refuses while an alignment is active, leaves the machine in G90, writes the offset to
+//!   `VisionCameraToolNumber` (or the active tool when that is 0), saves the profile, and undoes
+//!   everything on failure (including a failed save). See [`calibrate`] for the solve.
+//! * M284 with job 0 (stored or given) does not contact the camera; the tool check does not
+//!   apply to M284. M281 D1 needs a driver advertising `grab_image`.
+//! * The `VisionFitMax*` gates are in percent and inches (converted under G21).
+//!
 //! ```
 //! use vision_core::{Params, VisionError, VisionModule};
 //!
