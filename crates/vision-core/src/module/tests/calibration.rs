@@ -273,3 +273,24 @@ fn pixel_noise_averages_out_in_the_least_squares_solves() {
     assert!(rep.verify_rms < 0.005 && rep.verify_rms > 0.0, "{}", rep.verify_rms);
     assert!(rep.k_rms > 0.0);
 }
+
+#[test]
+fn manual_examples_one_and_two_calibrate_then_verify_at_the_centre() {
+    let marks = sheet_marks(0.3, Vector2::new(1.0, 1.0));
+    let mut rig = sheet_rig(true_k(), Remap::all()[6], LengthUnit::Inch, Vector2::zeros(), marks);
+    rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("example 1");
+    // Example 2: 4-point run over the corners, M282, then capture the centre in the aligned frame.
+    let cancel = rig.module.m280(&mut rig.machine, crate::module::RunMode::Rectangle).expect("M280").gcode;
+    rig.run(&cancel);
+    for (x, y) in [(-2.5, -4.0), (-2.5, 4.0), (2.5, 4.0), (2.5, -4.0)] {
+        rig.go(x, y);
+        rig.module.m281(&mut rig.machine, false).expect("M281");
+    }
+    let r = rig.module.m282(&mut rig.machine, crate::module::Pieces::All).expect("M282");
+    assert!((r.report.chain.rotation_deg - 0.3).abs() < 1e-9);
+    rig.world().alignment = Some(r.report.chain);
+    rig.go(0.0, 0.0);
+    rig.module.m281(&mut rig.machine, false).expect("centre");
+    let (x, y) = (rig.machine.pound(500).expect("#500"), rig.machine.pound(501).expect("#501"));
+    assert!(x.abs() < 1e-9 && y.abs() < 1e-9, "#500 = {x}, #501 = {y}");
+}
