@@ -163,6 +163,7 @@ pub trait CameraDriver: Send {
 }
 
 #[cfg(test)]
+#[allow(clippy::float_cmp)]
 mod tests {
     use super::*;
 

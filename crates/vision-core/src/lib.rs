@@ -1,14 +1,82 @@
 //! The Vision module of a CNC control: parameters, alignment runs (M280–M282), calibration
 //! (M283), job switching (M284), pound variables, and the traits a host implements:
-//! [`CameraDriver`] for the camera and (later) `Machine` for the CNC.
+//! [`CameraDriver`] for the camera and [`Machine`] for the CNC.
+//!
+//! * [`driver`]: the camera trait; drivers return native pixels, all math lives here.
+//! * [`machine`]: the host trait (positions, G-code, tools, units, pound variables, clock).
+//! * [`params`]: the OEM parameters under the manual's names; [`profile`]: their TOML file.
+//! * [`module`]: [`VisionModule`] with the typed entry points `m280` … `m284`.
+//! * [`pound`]: the pound-variable block; [`image_grab`]: M281 D1.
+//! * [`calibrate`]: M283's axis detect, quick calibration and sheet walk; [`sheets`]: `CAL_SHEETS`.
+//! * [`registry`]: drivers by name for the CLI.
+//!
+//! The crate depends on `vision-math` only (plus `thiserror`, `serde`, `toml`); it knows no
+//! driver, no G-code interpreter and no CLI.
+//!
+//! # How a host uses it
+//!
+//! The M-code adapter parses `M280 P3`, `M281 D1`, … into typed calls
+//! ([`RunMode::from_p`], [`Pieces::from_p`], [`Calibrate::from_words`]), calls
+//! [`VisionModule::m280`] … [`VisionModule::m284`] with the host's [`Machine`], runs the
+//! [`Reply::gcode`] lines it gets back (M280's cancel line, M282's four modal lines) and shows
+//! the report. The CLI picks the driver by `VisionDriver` through a [`DriverRegistry`] and
+//! loads/saves parameters with a [`ProfileStore`].
+//!
+//! # Decisions where the spec is open
+//!
+//! * Failed triggers (driver error, NG / no mark) update `LastJudgment` and `LastStatus` only;
+//!   refusals before the trigger (disabled, wrong tool, reserved base, zero K) change nothing.
+//! * Mark width/height use the column of `K·R` for the camera's native axis (identical to the
+//!   manual's `width_px × ‖K column 1‖` unless `SwapXY`); `M283 Q` likewise divides by the size
+//!   along the remapped axes.
+//! * M282 `P1`/`P2`/`P3` emit the least-squares optimum of a shift-only / rotation-only (about
+//!   the commanded centroid) / scale-only (about the centroid) transform, always as the same four
+//!   lines with the other pieces at identity ([`Pieces`]). Quality gates judge the run's full fit;
+//!   the shift gate measures the centroid displacement.
+//! * M282 needs the run mode's 4 (rectangle) or 3 (similarity) captures; more are fitted by least
+//!   squares, slots keep the first four; the dot list stays until the next M280.
+//! * Pound fields 6–7 are never written. `Run_*` hold the **emitted** chain.
+//! * M283 refuses while an alignment is active, leaves the machine in G90, writes the offset to
+//!   `VisionCameraToolNumber` (or the active tool when that is 0), saves the profile, and undoes
+//!   everything on failure (including a failed save). See [`calibrate`] for the solve.
+//! * M284 with job 0 (stored or given) does not contact the camera; the tool check does not
+//!   apply to M284. M281 D1 needs a driver advertising `grab_image`.
+//! * The `VisionFitMax*` gates are in percent and inches (converted under G21).
 //!
 //! ```
-//! use vision_core::{Judgment, Reading};
-//! let r = Reading::position(888.0, 888.0);
-//! assert_eq!(r.judgment, Judgment::Unknown);
-//! assert!(r.found());
+//! use vision_core::{Params, VisionError, VisionModule};
+//!
+//! let mut params = Params::default();
+//! assert!(!params.enabled());
+//! params.set("VisionEnabled", "Yes")?;
+//! params.set("VisionCal_K11", 0.00203)?;
+//! params.set("VisionCal_K22", 0.00203)?;
+//! // Telemetry is read-only from outside.
+//! assert!(matches!(params.set("VisionLastStatus", "OK"), Err(VisionError::ReadOnlyParam { .. })));
+//! let module = VisionModule::new(params);
+//! assert!(module.dots().is_empty());
+//! # Ok::<(), VisionError>(())
 //! ```
 
+pub mod calibrate;
 pub mod driver;
+mod error;
+pub mod image_grab;
+pub mod machine;
+pub mod module;
+pub mod params;
+pub mod pound;
+pub mod profile;
+pub mod registry;
+pub mod sheets;
 
+pub use calibrate::{AxisReport, CalReport, Calibrate, DotVerify, QuickReport, SheetReport};
 pub use driver::{CameraDriver, Capabilities, DriverError, DriverErrorKind, Judgment, Reading};
+pub use error::VisionError;
+pub use machine::{Machine, MachineError, Timestamp};
+pub use module::{AlignReport, Capture, Dot, JobReport, Pieces, Reply, RunMode, VisionModule};
+pub use params::{Access, ParamKind, ParamSpec, ParamValue, Params, Section};
+pub use pound::{PoundBlock, SlotValues};
+pub use profile::{ProfileFs, ProfileStore, StdFs};
+pub use registry::{DriverFactory, DriverRegistry};
+pub use sheets::{cal_sheet, CalSheet, CAL_SHEETS};

@@ -130,6 +130,7 @@ pub fn fixed(v: f64, decimals: usize) -> String {
 }
 
 #[cfg(test)]
+#[allow(clippy::float_cmp)]
 mod tests {
     use super::*;
     use approx::assert_relative_eq;

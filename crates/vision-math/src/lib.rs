@@ -34,7 +34,10 @@ pub mod units;
 
 pub use chain::AlignmentChain;
 pub use error::MathError;
-pub use fit::{fit_affine, fit_rectangle, fit_rigid, fit_similarity, solve_linear, Fit, LinearFit, Model, Transform};
+pub use fit::{
+    fit_affine, fit_piece, fit_rectangle, fit_rigid, fit_similarity, solve_linear, Fit, LinearFit, Model, PartialFit,
+    Piece, Transform,
+};
 pub use nalgebra::{Matrix2, Point2, UnitComplex, Vector2};
 pub use pixel::{PixelChain, Remap};
 pub use units::{inch_to_mm, mm_to_inch, LengthUnit, MM_PER_INCH};

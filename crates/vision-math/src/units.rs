@@ -66,6 +66,7 @@ pub fn mm_to_inch(mm: f64) -> f64 {
 }
 
 #[cfg(test)]
+#[allow(clippy::float_cmp)]
 mod tests {
     use super::*;
 

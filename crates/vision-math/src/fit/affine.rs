@@ -31,7 +31,7 @@ pub(super) fn solve(m: &Moments) -> Result<Params, MathError> {
     let sx = c * l[(0, 0)] + s * l[(1, 0)];
     let shear = c * l[(0, 1)] + s * l[(1, 1)];
     let sy = -s * l[(0, 1)] + c * l[(1, 1)];
-    if !(sx > 0.0) {
+    if sx.is_nan() || sx <= 0.0 {
         return Err(MathError::DegenerateObserved);
     }
     Ok(Params { rotation, scale: Vector2::new(sx, sy), shear })

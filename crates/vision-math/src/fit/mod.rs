@@ -16,12 +16,14 @@
 
 mod affine;
 mod linear;
+mod partial;
 mod rectangle;
 mod rigid;
 mod similarity;
 
 pub use affine::fit_affine;
 pub use linear::{solve_linear, LinearFit};
+pub use partial::{fit_piece, PartialFit, Piece};
 pub use rectangle::fit_rectangle;
 pub use rigid::fit_rigid;
 pub use similarity::fit_similarity;
@@ -422,7 +424,7 @@ impl Moments {
 #[inline]
 pub(crate) fn unit(re: f64, im: f64, reference: f64) -> Option<(UnitComplex<f64>, f64)> {
     let h = (re * re + im * im).sqrt();
-    if !(h > 1e-14 * reference) || !h.is_finite() {
+    if h.is_nan() || h <= 1e-14 * reference || !h.is_finite() {
         return None;
     }
     let inv = 1.0 / h;
@@ -430,4 +432,5 @@ pub(crate) fn unit(re: f64, im: f64, reference: f64) -> Option<(UnitComplex<f64>
 }
 
 #[cfg(test)]
+#[allow(clippy::float_cmp)]
 mod tests;

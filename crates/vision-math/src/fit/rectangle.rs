@@ -35,7 +35,7 @@ pub(super) fn solve(m: &Moments) -> Result<Params, MathError> {
     // Eigenvector of the larger eigenvalue (h + r ≥ 0 always); pick the better-conditioned form.
     let (vc, vs) = if h >= 0.0 { (h + r, m12) } else { (m12, r - h) };
     let reference = m11.abs() + m22.abs();
-    if !(r > 1e-13 * reference) {
+    if r.is_nan() || r <= 1e-13 * reference {
         // Equal eigenvalues: every rotation fits equally well.
         return Err(MathError::DegenerateObserved);
     }

@@ -1,0 +1,487 @@
+//! M283 calibration (SPEC §4): the axis-detect bump, quick calibration (`Qd`) and the sheet
+//! walk (`Cn`).
+//!
+//! # How the sheet walk solves K, the sheet pose and the camera offset
+//!
+//! For a capture with the camera tool commanded at `C` (current units), native pixel `p`:
+//! the optical axis is at `A = C − o₀ + a` (`o₀` = the camera tool's table offset now, `a` = the
+//! true camera-vs-spindle vector), and the mark is at `M = A + K·R·c(p)`. Two facts split the
+//! problem into two well-conditioned least-squares solves:
+//!
+//! 1. **K from motion whose pixel effect is known.** Between two captures of the same dot the
+//!    mark stays put, so `K·R·(c₂ − c₁) = −(C₂ − C₁)`. The axis-detect bumps and four probe
+//!    moves around every dot (±X, ±Y, about a fifth of the field of view) give 22 such pairs;
+//!    [`solve_linear`] returns the full 2×2 K. This never depends on the sheet, so a sheet lying
+//!    perfectly square, or printed at the wrong scale, cannot corrupt K (SPEC §4 note).
+//! 2. **Sheet pose and offset from the dot observations.** With K known, every capture gives
+//!    `D = C + K·R·c = M + (o₀ − a)`. The sheet's origin is where the operator zeroed the work
+//!    X/Y with the spindle, so `Mᵢ = L·nᵢ` with `L` the sheet's rotation and print scale, and
+//!    `Dᵢ = L·nᵢ + b` with `b = o₀ − a`. A rectangle fit (rotation, X and Y scale, shift) of the
+//!    nominal dots onto the mean `D` of each dot gives `L` (reported as the sheet rotation and
+//!    measured scale, so a mis-printed sheet is visible, not baked into K) and `b`.
+//!
+//! The camera offset written is `a = o₀ − b`: commanding `P` then puts the spindle at `P − a`
+//! and the optical axis at `P`. The routine then re-walks every dot in G90 at its nominal
+//! position with the new K and offset and reports each dot's residual against the fitted sheet.
+//!
+//! Moves between stations are incremental (`G91 G0 X.. Y..` followed by `G90`), stations are
+//! planned so each dot lands near the image centre, and `VisionTriggerSettleSec` is dwelt after
+//! every move. Decision: M283 leaves the machine in G90 (the manual's calibration programs run
+//! in G90), over the sheet's last dot on success and back at the start position on failure.
+
+use vision_math::chain::fixed;
+use vision_math::{fit_rectangle, solve_linear, LengthUnit, Matrix2, PixelChain, Point2, Remap, Vector2};
+
+use crate::driver::{CameraDriver, Reading};
+use crate::error::VisionError;
+use crate::machine::Machine;
+use crate::module::capture::{chain_with, mark_size, require_mark};
+use crate::params::Params;
+use crate::sheets::{cal_sheet, known_sheets};
+
+/// The axis-detect bump: 0.1 inch (2.54 mm under G21).
+pub const BUMP_IN: f64 = 0.1;
+/// Probe moves around each dot, as a fraction of the smaller field-of-view side.
+pub const PROBE_FOV_FRACTION: f64 = 0.2;
+/// Fewest pixels the mark must move during a bump for the axis detect to trust it.
+pub const MIN_BUMP_PX: f64 = 2.0;
+/// Largest sheet print-scale error accepted, as a fraction (10 %).
+pub const MAX_SHEET_SCALE_DEV: f64 = 0.10;
+/// Decimals of the coordinates in calibration moves.
+const MOVE_DECIMALS: usize = 7;
+
+/// Which calibration M283 runs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Calibrate {
+    /// `Qd`: K = diag(d/width_px, d/height_px) from one trigger over a dot of diameter `d`
+    /// (current units).
+    Quick {
+        /// The printed dot's diameter, current units.
+        diameter: f64,
+    },
+    /// `Cn`: walk calibration sheet `n` of [`crate::sheets::CAL_SHEETS`].
+    Sheet {
+        /// The sheet number.
+        n: u32,
+    },
+}
+
+impl Calibrate {
+    /// The calibration for M283's words: exactly one of `Q` (diameter) and `C` (sheet).
+    ///
+    /// # Errors
+    /// [`VisionError::BadWord`] for none or both, a non-positive diameter or a non-integer
+    /// sheet number.
+    pub fn from_words(q: Option<f64>, c: Option<f64>) -> Result<Calibrate, VisionError> {
+        let bad = |word: String, reason: &str| VisionError::BadWord { mcode: "M283", word, reason: reason.into() };
+        match (q, c) {
+            (Some(d), None) if d.is_finite() && d > 0.0 => Ok(Calibrate::Quick { diameter: d }),
+            (Some(d), None) => Err(bad(format!("Q{d}"), "Q is the dot diameter and must be positive")),
+            (None, Some(n)) => crate::module::integer_word(n)
+                .and_then(|n| u32::try_from(n).ok())
+                .map(|n| Calibrate::Sheet { n })
+                .ok_or_else(|| bad(format!("C{n}"), "C is a calibration sheet number (C1)")),
+            _ => Err(bad(String::new(), "give exactly one of Qd (quick, dot diameter d) or Cn (sheet n)")),
+        }
+    }
+}
+
+/// Result of the axis-detect bump.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AxisReport {
+    /// The remap written to `VisionCameraSwapXY` / `InvertX` / `InvertY`.
+    pub remap: Remap,
+    /// The bump length, current units.
+    pub bump: f64,
+    /// Native pixel motion of the mark during the +X bump.
+    pub pixels_for_x: Vector2<f64>,
+    /// Native pixel motion of the mark during the +Y bump.
+    pub pixels_for_y: Vector2<f64>,
+}
+
+/// What `M283 Qd` measured and wrote. Lengths in `unit`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct QuickReport {
+    /// The unit of every length (also the new `Cal_Units`).
+    pub unit: LengthUnit,
+    /// The axis detect.
+    pub axis: AxisReport,
+    /// The K written, units per pixel.
+    pub k: Matrix2<f64>,
+    /// The dot diameter given.
+    pub diameter: f64,
+    /// The mark size the camera reported, pixels (native width, height).
+    pub size_px: Vector2<f64>,
+    /// The confirming trigger's mark size with the new K (width, height).
+    pub confirm_size: Vector2<f64>,
+    /// Largest `|confirm size − diameter|`.
+    pub size_error: f64,
+    /// Largest disagreement between the bump moves and the mark motion K predicts for them
+    /// (shows rotation or anisotropy Q cannot represent).
+    pub bump_error: f64,
+    /// The `Cal_Date` written.
+    pub date: String,
+}
+
+/// One dot of the verify walk. Lengths in the report's unit, work frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DotVerify {
+    /// The dot's number on the sheet (1-based, walk order).
+    pub dot: usize,
+    /// Nominal position (the G90 target).
+    pub nominal: Point2<f64>,
+    /// Where the walk's sheet fit puts the dot.
+    pub expected: Point2<f64>,
+    /// Where the re-walk saw it with the new K and offset.
+    pub observed: Point2<f64>,
+    /// `observed − expected`.
+    pub residual: Vector2<f64>,
+}
+
+/// What `M283 Cn` measured and wrote: everything the manual's result popup shows. Lengths in
+/// `unit`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SheetReport {
+    /// The sheet walked.
+    pub sheet: u32,
+    /// The unit of every length (also the new `Cal_Units`).
+    pub unit: LengthUnit,
+    /// The axis detect.
+    pub axis: AxisReport,
+    /// The K written, units per pixel.
+    pub k: Matrix2<f64>,
+    /// Per-axis scale: units per pixel along machine X and Y (K's column norms).
+    pub scale: Vector2<f64>,
+    /// Camera rotation left in K after the remap, degrees counter-clockwise.
+    pub camera_rotation_deg: f64,
+    /// RMS disagreement of the probe moves with K, units.
+    pub k_rms: f64,
+    /// Sheet rotation on the table, degrees counter-clockwise.
+    pub sheet_rotation_deg: f64,
+    /// Measured print scale of the sheet along its X and Y (1 = true size).
+    pub sheet_scale: Vector2<f64>,
+    /// RMS residual of the sheet fit over the walk, units.
+    pub walk_rms: f64,
+    /// The camera tool whose offset was written.
+    pub tool: u32,
+    /// Its X/Y offset before.
+    pub offset_before: Vector2<f64>,
+    /// Its X/Y offset written.
+    pub offset_written: Vector2<f64>,
+    /// The verify walk, one entry per dot.
+    pub verify: Vec<DotVerify>,
+    /// RMS of the verify residuals.
+    pub verify_rms: f64,
+    /// Largest verify residual.
+    pub verify_max: f64,
+    /// Number of camera triggers used.
+    pub triggers: usize,
+    /// The `Cal_Date` written.
+    pub date: String,
+}
+
+/// M283's report.
+#[derive(Debug, Clone, PartialEq)]
+pub enum CalReport {
+    /// `Qd`.
+    Quick(QuickReport),
+    /// `Cn`.
+    Sheet(SheetReport),
+}
+
+/// What a successful calibration asks the module to write.
+pub(crate) struct Solution {
+    pub(crate) k: Matrix2<f64>,
+    pub(crate) remap: Remap,
+    pub(crate) report: CalReport,
+}
+
+fn fail(reason: impl Into<String>) -> VisionError {
+    VisionError::Calibration { reason: reason.into() }
+}
+
+/// A capture during calibration.
+#[derive(Debug, Clone, Copy)]
+struct Shot {
+    pos: Point2<f64>,
+    native: Point2<f64>,
+    reading: Reading,
+    dot: usize,
+}
+
+/// Moves, dwells and triggers.
+pub(crate) struct Walker<'a> {
+    machine: &'a mut dyn Machine,
+    driver: &'a mut dyn CameraDriver,
+    settle_s: f64,
+    unit: LengthUnit,
+    shots: Vec<Shot>,
+    triggers: usize,
+}
+
+impl<'a> Walker<'a> {
+    pub(crate) fn new(machine: &'a mut dyn Machine, driver: &'a mut dyn CameraDriver, settle_s: f64) -> Self {
+        let unit = machine.units();
+        Walker { machine, driver, settle_s, unit, shots: Vec::new(), triggers: 0 }
+    }
+
+    fn position(&self) -> Point2<f64> {
+        self.machine.program_position()
+    }
+
+    /// Incremental move to `target` (program frame), then back to G90, then settle.
+    fn move_to(&mut self, target: Point2<f64>) -> Result<(), VisionError> {
+        let d = target - self.position();
+        let x = fixed(d.x, MOVE_DECIMALS);
+        let y = fixed(d.y, MOVE_DECIMALS);
+        self.machine.run_gcode(&[format!("G91 G0 X{x} Y{y}"), "G90".to_string()])?;
+        self.machine.dwell(self.settle_s);
+        Ok(())
+    }
+
+    /// Absolute G90 move to `target`, then settle.
+    pub(crate) fn move_abs(&mut self, target: Point2<f64>) -> Result<(), VisionError> {
+        let x = fixed(target.x, MOVE_DECIMALS);
+        let y = fixed(target.y, MOVE_DECIMALS);
+        self.machine.run_gcode(&[format!("G90 G0 X{x} Y{y}")])?;
+        self.machine.dwell(self.settle_s);
+        Ok(())
+    }
+
+    /// Triggers and records a shot of walk dot `dot`; returns its index.
+    fn shoot(&mut self, dot: usize) -> Result<usize, VisionError> {
+        self.triggers += 1;
+        let reading = self.driver.trigger()?;
+        require_mark(&reading).map_err(|_| {
+            fail(format!(
+                "the camera lost the mark (NG / no mark) at X{} Y{} — keep the dot in view, check lighting and \
+                 the camera job",
+                fixed(self.position().x, 4),
+                fixed(self.position().y, 4)
+            ))
+        })?;
+        let pos = self.position();
+        self.shots.push(Shot { pos, native: Point2::new(reading.x_px, reading.y_px), reading, dot });
+        Ok(self.shots.len() - 1)
+    }
+
+    /// The axis-detect bump from the current position; returns the remap and the two pairs.
+    fn axis_detect(&mut self) -> Result<(AxisReport, [(usize, usize); 2]), VisionError> {
+        let bump = LengthUnit::Inch.convert(BUMP_IN, self.unit);
+        let start = self.position();
+        let s0 = self.shoot(0)?;
+        self.move_to(start + Vector2::new(bump, 0.0))?;
+        let s1 = self.shoot(0)?;
+        self.move_to(start + Vector2::new(bump, bump))?;
+        let s2 = self.shoot(0)?;
+        self.move_to(start)?;
+        let px = self.shots[s1].native - self.shots[s0].native;
+        let py = self.shots[s2].native - self.shots[s1].native;
+        let remap = detect_remap(px, py)?;
+        Ok((AxisReport { remap, bump, pixels_for_x: px, pixels_for_y: py }, [(s0, s1), (s1, s2)]))
+    }
+}
+
+/// The remap under which a +X camera move moves the mark towards −x and a +Y move towards −y
+/// (the mark stays put, so relative to the camera it moves against the motion).
+///
+/// # Errors
+/// The mark hardly moved, or both bumps moved it the same way.
+pub fn detect_remap(pixels_for_x: Vector2<f64>, pixels_for_y: Vector2<f64>) -> Result<Remap, VisionError> {
+    let (nx, ny) = (pixels_for_x.norm(), pixels_for_y.norm());
+    if !(nx.is_finite() && ny.is_finite()) || nx < MIN_BUMP_PX || ny < MIN_BUMP_PX {
+        return Err(fail(format!(
+            "axis detect: the mark moved only {nx:.1} px for the X bump and {ny:.1} px for the Y bump — keep a \
+             mark in view, and make sure the camera moves with the head"
+        )));
+    }
+    let (ux, uy) = (pixels_for_x / nx, pixels_for_y / ny);
+    if (ux.x * uy.y - ux.y * uy.x).abs() < 0.5 {
+        return Err(fail(
+            "axis detect: the X and Y bumps moved the mark in nearly the same direction — the mark may have \
+             moved or another mark was found; re-jog and retry",
+        ));
+    }
+    let score = |r: &Remap| -r.apply(ux).x - r.apply(uy).y;
+    let best = Remap::all().into_iter().max_by(|a, b| score(a).total_cmp(&score(b))).unwrap_or_default();
+    Ok(best)
+}
+
+/// `(K·R·(pᵢ − p_b), −(Cᵢ − C_b))` for every pair, ready for [`solve_linear`].
+fn motion_pairs(shots: &[Shot], pairs: &[(usize, usize)], remap: Remap) -> (Vec<Vector2<f64>>, Vec<Vector2<f64>>) {
+    pairs.iter().map(|(b, p)| (remap.apply(shots[*p].native - shots[*b].native), shots[*b].pos - shots[*p].pos)).unzip()
+}
+
+fn solve_k(shots: &[Shot], pairs: &[(usize, usize)], remap: Remap) -> Result<(Matrix2<f64>, f64), VisionError> {
+    let (p, q) = motion_pairs(shots, pairs, remap);
+    let fit = solve_linear(&p, &q).map_err(|e| fail(format!("K from the probe moves: {e}")))?;
+    Ok((fit.m, fit.rms))
+}
+
+/// `M283 Qd`.
+pub(crate) fn quick(walker: &mut Walker<'_>, params: &Params, diameter: f64) -> Result<Solution, VisionError> {
+    let (axis, pairs) = walker.axis_detect()?;
+    let remap = axis.remap;
+    let s = walker.shoot(0)?;
+    let r = walker.shots[s].reading;
+    let (w, h) = if remap.swap_xy { (r.height_px, r.width_px) } else { (r.width_px, r.height_px) };
+    if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0) {
+        return Err(fail(
+            "the camera job does not report the mark's width and height — M283 Q needs the full Data Output \
+             (judgment,count,x,y,width,height,angle,score); or use M283 C1",
+        ));
+    }
+    let k = Matrix2::new(diameter / w, 0.0, 0.0, diameter / h);
+    let chain = chain_with(params, k, remap)?;
+    let c = walker.shoot(0)?;
+    let (cw, ch) = mark_size(&chain, &walker.shots[c].reading);
+    let size_error = (cw - diameter).abs().max((ch - diameter).abs());
+    let (p, q) = motion_pairs(&walker.shots, &pairs, remap);
+    let bump_error = p.iter().zip(&q).map(|(p, q)| (k * p - q).norm()).fold(0.0, f64::max);
+    let report = QuickReport {
+        unit: walker.unit,
+        axis,
+        k,
+        diameter,
+        size_px: Vector2::new(r.width_px, r.height_px),
+        confirm_size: Vector2::new(cw, ch),
+        size_error,
+        bump_error,
+        date: walker.machine.now().iso_local(),
+    };
+    Ok(Solution { k, remap, report: CalReport::Quick(report) })
+}
+
+/// `M283 Cn`: walk, solve, write the tool offset, verify. The caller restores the offset on
+/// error.
+pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool: u32) -> Result<Solution, VisionError> {
+    let sheet = cal_sheet(n).ok_or_else(|| VisionError::UnknownSheet { sheet: n, known: known_sheets() })?;
+    let unit = walker.unit;
+    let nominal = sheet.dots(unit);
+    let offset_before = walker.machine.tool_offset(tool)?;
+
+    // 1. Axis detect: the remap and a first K from the two bumps.
+    let (axis, bumps) = walker.axis_detect()?;
+    let remap = axis.remap;
+    let mut pairs: Vec<(usize, usize)> = bumps.to_vec();
+    let (mut k, _) = solve_k(&walker.shots, &pairs, remap)?;
+    let res = crate::module::capture::resolution(params);
+    let pixel = k.determinant().abs().sqrt();
+    let probe = (PROBE_FOV_FRACTION * res.x.min(res.y) * pixel).max(axis.bump);
+    let probes =
+        [Vector2::new(probe, 0.0), Vector2::new(0.0, probe), Vector2::new(-probe, 0.0), Vector2::new(0.0, -probe)];
+
+    // 2. Walk: centre each dot, probe around it, refine K as pairs accumulate.
+    let d_of = |shot: &Shot, k: Matrix2<f64>| -> Result<Point2<f64>, VisionError> {
+        Ok(shot.pos + chain_with(params, k, remap)?.delta(shot.native))
+    };
+    let mut station = d_of(&walker.shots[0], k)?;
+    for (i, n_i) in nominal.iter().enumerate() {
+        if i > 0 {
+            station += n_i - nominal[i - 1];
+        }
+        walker.move_to(station)?;
+        let base = walker.shoot(i)?;
+        for m in probes {
+            walker.move_to(station + m)?;
+            let s = walker.shoot(i)?;
+            pairs.push((base, s));
+        }
+        k = solve_k(&walker.shots, &pairs, remap)?.0;
+        // Next station from where this dot really is.
+        station = d_of(&walker.shots[base], k)?;
+    }
+
+    // 3. The final K over every pair.
+    let (k, k_rms) = solve_k(&walker.shots, &pairs, remap)?;
+    let chain: PixelChain = chain_with(params, k, remap)
+        .map_err(|e| fail(format!("the solved K is unusable ({e}); check that the camera is rigidly mounted")))?;
+    if k.determinant() <= 0.0 {
+        return Err(fail("the solved K is mirrored against the axis detect — the mark moved during the walk; retry"));
+    }
+
+    // 4. Sheet pose and camera offset from the dots.
+    let mut sums = vec![(Vector2::zeros(), 0.0f64); nominal.len()];
+    for s in &walker.shots {
+        sums[s.dot].0 += (s.pos + chain.delta(s.native)).coords;
+        sums[s.dot].1 += 1.0;
+    }
+    let seen: Vec<Point2<f64>> = sums.iter().map(|(sum, count)| Point2::from(sum / *count)).collect();
+    let fit = fit_rectangle(&nominal, &seen).map_err(|e| fail(format!("sheet fit: {e}")))?;
+    let dev = (fit.scale.x - 1.0).abs().max((fit.scale.y - 1.0).abs());
+    if dev > MAX_SHEET_SCALE_DEV {
+        return Err(fail(format!(
+            "the sheet measures {:.4} x {:.4} of its nominal size — wrong sheet number, a sheet printed with \
+             'Fit to Page', or the camera found other marks",
+            fit.scale.x, fit.scale.y
+        )));
+    }
+    let b = fit.offset();
+    let offset_written = offset_before - b;
+    walker.machine.set_tool_offset(tool, offset_written)?;
+
+    // 5. Verify: every dot at its nominal position in G90 with the new K and offset.
+    let mut verify = Vec::with_capacity(nominal.len());
+    for (i, n_i) in nominal.iter().enumerate() {
+        walker.move_abs(*n_i)?;
+        let s = walker.shoot(i)?;
+        let shot = walker.shots[s];
+        let observed = shot.pos + chain.delta(shot.native);
+        let expected = fit.apply(*n_i) - b;
+        verify.push(DotVerify { dot: i + 1, nominal: *n_i, expected, observed, residual: observed - expected });
+    }
+    #[allow(clippy::cast_precision_loss)]
+    let verify_rms = (verify.iter().map(|v| v.residual.norm_squared()).sum::<f64>() / verify.len() as f64).sqrt();
+    let verify_max = verify.iter().map(|v| v.residual.norm()).fold(0.0, f64::max);
+    let report = SheetReport {
+        sheet: n,
+        unit,
+        axis,
+        k,
+        scale: Vector2::new(k.column(0).norm(), k.column(1).norm()),
+        camera_rotation_deg: (k[(1, 0)] - k[(0, 1)]).atan2(k[(0, 0)] + k[(1, 1)]).to_degrees(),
+        k_rms,
+        sheet_rotation_deg: fit.theta_deg(),
+        sheet_scale: fit.scale,
+        walk_rms: fit.rms,
+        tool,
+        offset_before,
+        offset_written,
+        verify,
+        verify_rms,
+        verify_max,
+        triggers: walker.triggers,
+        date: walker.machine.now().iso_local(),
+    };
+    Ok(Solution { k, remap, report: CalReport::Sheet(report) })
+}
+
+#[cfg(test)]
+#[allow(clippy::float_cmp)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn words_select_exactly_one_mode() {
+        assert_eq!(Calibrate::from_words(Some(0.5), None), Ok(Calibrate::Quick { diameter: 0.5 }));
+        assert_eq!(Calibrate::from_words(None, Some(1.0)), Ok(Calibrate::Sheet { n: 1 }));
+        for (q, c) in [(None, None), (Some(0.5), Some(1.0)), (Some(-1.0), None), (None, Some(1.5)), (None, Some(-1.0))]
+        {
+            assert!(matches!(Calibrate::from_words(q, c), Err(VisionError::BadWord { .. })), "{q:?} {c:?}");
+        }
+    }
+
+    #[test]
+    fn remap_detection_for_all_eight_mountings() {
+        for r in Remap::all() {
+            // Mark motion in machine-aligned pixels is −x for +X and −y for +Y; the camera
+            // reports it through R⁻¹, slightly rotated.
+            let px = r.unapply(Vector2::new(-50.0, 2.0));
+            let py = r.unapply(Vector2::new(-1.5, -49.0));
+            assert_eq!(detect_remap(px, py), Ok(r));
+        }
+        assert!(detect_remap(Vector2::new(0.5, 0.0), Vector2::new(0.0, 50.0)).is_err());
+        assert!(detect_remap(Vector2::new(50.0, 0.0), Vector2::new(49.0, 3.0)).is_err());
+        assert!(detect_remap(Vector2::new(f64::NAN, 0.0), Vector2::new(0.0, 50.0)).is_err());
+    }
+}

@@ -1,0 +1,297 @@
+//! The one error type of `vision-core`: every failure of M280–M284, the parameters and the
+//! profile, worded like the manual's error table — what went wrong, then what to do.
+
+use vision_math::MathError;
+
+use crate::driver::{DriverError, DriverErrorKind};
+use crate::machine::MachineError;
+
+/// Why a Vision operation was refused. A refused operation changes nothing (see each M-code).
+///
+/// Messages follow the manual's error table: the symptom first, then the likely cause and fix.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum VisionError {
+    /// `VisionEnabled` is No.
+    #[error("Vision is not enabled — set VisionEnabled to Yes in the Vision configuration")]
+    NotEnabled,
+
+    /// `VisionCameraToolNumber` is set and another tool is active.
+    #[error(
+        "camera tool T{camera} is not the active tool (T{active} is active) — issue T{camera} M6 \
+         for the camera tool first, or set VisionCameraToolNumber to 0 to disable the check"
+    )]
+    WrongTool {
+        /// `VisionCameraToolNumber`.
+        camera: u32,
+        /// The tool the machine reports as active.
+        active: u32,
+    },
+
+    /// K11..K22 are all zero.
+    #[error("K matrix is zero — run M283 to calibrate first (M283 C1 or M283 Q)")]
+    NotCalibrated,
+
+    /// K cannot be inverted or holds a non-finite number.
+    #[error("K matrix is unusable ({reason}) — re-run M283 C1 to calibrate")]
+    BadCalibration {
+        /// What is wrong with it.
+        reason: String,
+    },
+
+    /// The pound-variable block would overlap a reserved range or start below 100.
+    #[error(
+        "VisionPoundVarBase is in reserved range (base {base}, block #{base}..#{end}) — move the \
+         base out of 5061..5081 or 5201..5500; pick a value ≥ 100"
+    )]
+    PoundBaseReserved {
+        /// The configured base.
+        base: i64,
+        /// The last variable of the 40-variable block.
+        end: i64,
+    },
+
+    /// The camera judged NG or found no mark.
+    #[error(
+        "NG / no mark found — the camera job did not find a fiducial in the field of view; re-jog \
+         over the mark, check lighting, verify the camera job is locating the right feature"
+    )]
+    NoMark,
+
+    /// The driver failed; the message carries the driver's own words and the manual's fix.
+    #[error("{}", driver_message(.0))]
+    Driver(DriverError),
+
+    /// No camera driver is loaded.
+    #[error("no camera driver is loaded (VisionDriver = {name:?}) — check VisionDriver and restart the Vision module")]
+    NoDriver {
+        /// The configured driver name.
+        name: String,
+    },
+
+    /// `VisionDriver` names no registered driver.
+    #[error("unknown camera driver {name:?} — VisionDriver must be one of: {known}")]
+    UnknownDriver {
+        /// The requested name.
+        name: String,
+        /// The registered names, comma-separated.
+        known: String,
+    },
+
+    /// M282 with fewer captures than the run's fit needs.
+    #[error(
+        "{mode} fit needs at least {needed} captured marks, got {got} — run M280, then M281 over \
+         each mark, before M282"
+    )]
+    TooFewDots {
+        /// The run's fit name.
+        mode: &'static str,
+        /// Captures needed.
+        needed: usize,
+        /// Captures taken.
+        got: usize,
+    },
+
+    /// The math refused the input (degenerate marks, non-finite numbers).
+    #[error("{0}")]
+    Math(MathError),
+
+    /// A fit failed a quality gate (`VisionFitMax*`).
+    #[error(
+        "alignment refused: {reason} — likely causes: the camera found the wrong mark, the part \
+         moved during the run, a bad calibration (re-run M283 C1), or the marks were captured in \
+         the wrong order; nothing was applied"
+    )]
+    FitRejected {
+        /// Which gate tripped, with the numbers.
+        reason: String,
+    },
+
+    /// M284 on a driver that cannot switch jobs.
+    #[error("camera driver {driver} cannot select jobs — M284 needs a driver that advertises select_job")]
+    SelectJobUnsupported {
+        /// The driver's name.
+        driver: String,
+    },
+
+    /// An M-code word out of range (e.g. `M280 P5`, `M284 P1000`).
+    #[error("{mcode} {word} is invalid: {reason}")]
+    BadWord {
+        /// The M-code (`M280`, …).
+        mcode: &'static str,
+        /// The word as given (`P5`).
+        word: String,
+        /// What is allowed.
+        reason: String,
+    },
+
+    /// A parameter name that does not exist.
+    #[error("unknown parameter {name:?} — Vision parameter names start with Vision (e.g. VisionCal_K11)")]
+    UnknownParam {
+        /// The name given.
+        name: String,
+    },
+
+    /// A write to read-only telemetry.
+    #[error("{name} is read-only telemetry written by the Vision module; it cannot be set")]
+    ReadOnlyParam {
+        /// The parameter.
+        name: String,
+    },
+
+    /// A parameter value of the wrong type or out of range.
+    #[error("{name} = {value} is invalid: {reason}")]
+    InvalidParam {
+        /// The parameter.
+        name: String,
+        /// The value given, as text.
+        value: String,
+        /// What is allowed.
+        reason: String,
+    },
+
+    /// The profile could not be read, parsed or written.
+    #[error("Vision profile {path}: {reason}")]
+    Profile {
+        /// The profile file.
+        path: String,
+        /// What failed (the previous file is left intact on a failed save).
+        reason: String,
+    },
+
+    /// The host machine refused or failed a request.
+    #[error("{0}")]
+    Machine(MachineError),
+
+    /// `M283 Cn` with a sheet number not in `CAL_SHEETS`.
+    #[error("unknown calibration sheet {sheet} — known sheets: {known}")]
+    UnknownSheet {
+        /// The requested sheet.
+        sheet: u32,
+        /// The known sheet numbers.
+        known: String,
+    },
+
+    /// Calibration could not complete.
+    #[error("calibration failed: {reason}; K, the axis flags and the tool offsets were left unchanged")]
+    Calibration {
+        /// What went wrong and what to do.
+        reason: String,
+    },
+
+    /// An operation that needs the alignment modals cancelled found them active.
+    #[error(
+        "an alignment transform (G51/G68/G52) is active — cancel it with G69 G50 G52 X0 Y0 before \
+         calibrating"
+    )]
+    AlignmentActive,
+}
+
+fn driver_message(e: &DriverError) -> String {
+    let fix = match e.kind {
+        DriverErrorKind::Timeout => {
+            "timeout — camera unreachable, wrong IP/port, or no Data Output (Non-Procedural) tool \
+             configured to emit on TRG"
+        }
+        DriverErrorKind::Refused => {
+            "connection refused — camera not in Run Mode, or another client already holds the socket"
+        }
+        DriverErrorKind::Malformed => {
+            "malformed response — the Data Output (Non-Procedural) tool is missing, disabled, or \
+             emitting unexpected fields"
+        }
+        DriverErrorKind::Unsupported => "the camera driver does not support this operation",
+        DriverErrorKind::Rejected => er_fix(&e.message).unwrap_or(""),
+        _ => "",
+    };
+    if fix.is_empty() {
+        e.message.clone()
+    } else if e.message.is_empty() {
+        fix.to_string()
+    } else {
+        format!("{fix} ({})", e.message)
+    }
+}
+
+/// The manual's fix for a Keyence `ER,<cmd>,<nn>` reply found in `message`.
+fn er_fix(message: &str) -> Option<&'static str> {
+    let at = message.find("ER,")?;
+    let code = message[at + 3..].split(',').nth(1)?.get(..2)?;
+    Some(match code {
+        "01" => "unknown command — the camera does not accept the command in its current mode (not in Run Mode)",
+        "02" => "wrong number of arguments — check the driver and the camera series",
+        "03" => "argument out of range — check the job number (0–999)",
+        "04" => "wrong argument type — check the driver and the camera series",
+        "05" => {
+            "command not acceptable now — the camera is loading a program or serving the command from another \
+             route; retry"
+        }
+        "06" => {
+            "command not executable — the camera is not in Run Mode or the trigger source is not set to \
+             Communication"
+        }
+        "07" => "camera-side timeout — the measurement did not complete within the camera's configured window",
+        _ => return None,
+    })
+}
+
+impl From<DriverError> for VisionError {
+    fn from(e: DriverError) -> Self {
+        VisionError::Driver(e)
+    }
+}
+
+impl From<MachineError> for VisionError {
+    fn from(e: MachineError) -> Self {
+        VisionError::Machine(e)
+    }
+}
+
+impl From<MathError> for VisionError {
+    fn from(e: MathError) -> Self {
+        match e {
+            MathError::NotCalibrated => VisionError::NotCalibrated,
+            MathError::SingularK => VisionError::BadCalibration { reason: "singular".into() },
+            MathError::NonFinite { what: "K" } => VisionError::BadCalibration { reason: "not finite".into() },
+            other => VisionError::Math(other),
+        }
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::float_cmp)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn manual_wording() {
+        assert_eq!(
+            VisionError::NotCalibrated.to_string(),
+            "K matrix is zero — run M283 to calibrate first (M283 C1 or M283 Q)"
+        );
+        assert!(VisionError::NotEnabled.to_string().starts_with("Vision is not enabled"));
+        let e = VisionError::WrongTool { camera: 98, active: 1 };
+        assert!(e.to_string().starts_with("camera tool T98 is not the active tool"));
+        let e = VisionError::from(DriverError::new(DriverErrorKind::Timeout, "no reply in 3 s"));
+        assert!(e.to_string().starts_with("timeout — camera unreachable"), "{e}");
+        let e = VisionError::from(DriverError::new(DriverErrorKind::Rejected, "ER,TRG,06"));
+        assert_eq!(
+            e.to_string(),
+            "command not executable — the camera is not in Run Mode or the trigger source is not set to \
+             Communication (ER,TRG,06)"
+        );
+        let e = VisionError::from(DriverError::new(DriverErrorKind::Rejected, "camera replied ER,TRG,01"));
+        assert!(e.to_string().starts_with("unknown command"), "{e}");
+        let e = VisionError::from(DriverError::new(DriverErrorKind::Rejected, "ER,PL,07"));
+        assert!(e.to_string().starts_with("camera-side timeout"), "{e}");
+        let e = VisionError::from(DriverError::new(DriverErrorKind::Rejected, "ER,TRG,99 odd"));
+        assert_eq!(e.to_string(), "ER,TRG,99 odd");
+        let e = VisionError::from(DriverError::new(DriverErrorKind::Malformed, "reply \"abc\""));
+        assert!(e.to_string().starts_with("malformed response — the Data Output"), "{e}");
+        assert_eq!(VisionError::from(DriverError::new(DriverErrorKind::Rejected, "ER,")).to_string(), "ER,");
+        assert!(VisionError::PoundBaseReserved { base: 5050, end: 5089 }
+            .to_string()
+            .starts_with("VisionPoundVarBase is in reserved range"));
+        assert_eq!(VisionError::from(MathError::NotCalibrated), VisionError::NotCalibrated);
+    }
+}

@@ -1,0 +1,108 @@
+//! One trigger turned into an observed point (SPEC §2), shared by M281 and calibration.
+
+use std::path::PathBuf;
+
+use vision_math::{LengthUnit, Matrix2, PixelChain, Point2, Remap, Vector2};
+
+use crate::driver::{Judgment, Reading};
+use crate::error::VisionError;
+use crate::machine::Machine;
+use crate::params::Params;
+
+/// A capture as M281 reports it. Lengths in the machine's current units (`unit`), program frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Capture {
+    /// The machine unit every length below is in.
+    pub unit: LengthUnit,
+    /// Commanded camera position `C`, program frame.
+    pub commanded: Point2<f64>,
+    /// Observed mark centre `O`, program frame (mapped through the active alignment, SPEC §2).
+    pub observed: Point2<f64>,
+    /// Offset `d = K·R·c` from the camera to the mark, work-frame axes.
+    pub offset: Vector2<f64>,
+    /// Centred pixel offset `c` (after the centre shift, before remap and K), pixels.
+    pub centred_px: Vector2<f64>,
+    /// Mark width along the camera's native x axis.
+    pub width: f64,
+    /// Mark height along the camera's native y axis.
+    pub height: f64,
+    /// Mark angle, degrees (0 when not reported).
+    pub angle_deg: f64,
+    /// Match score (0 when not reported).
+    pub score: f64,
+    /// The camera's judgment (never NG here: NG is an error).
+    pub judgment: Judgment,
+    /// 1-based index in the run's dot list, `None` outside a run.
+    pub dot_index: Option<usize>,
+    /// Pound-variable slot written besides slot 0 (1–4), `None` outside a run or past the 4th.
+    pub slot: Option<u32>,
+    /// Where M281 D1 saved the image.
+    pub image: Option<PathBuf>,
+    /// A non-fatal problem (e.g. no image appeared); also in `VisionLastStatus`.
+    pub warning: Option<String>,
+}
+
+/// K converted from `Cal_Units` to `unit` (units per pixel).
+pub(crate) fn k_in(params: &Params, unit: LengthUnit) -> Matrix2<f64> {
+    params.cal_k() * params.cal_units().factor_to(unit)
+}
+
+/// The image resolution, pixels.
+pub(crate) fn resolution(params: &Params) -> Vector2<f64> {
+    #[allow(clippy::cast_precision_loss)] // validated ≤ 100000
+    Vector2::new(params.camera_res_x() as f64, params.camera_res_y() as f64)
+}
+
+/// The pixel centre offset, pixels.
+pub(crate) fn center_offset(params: &Params) -> Vector2<f64> {
+    Vector2::new(params.px_center_offset_x(), params.px_center_offset_y())
+}
+
+/// The pixel chain for the configured K (converted to `unit`), remap and resolution.
+pub(crate) fn pixel_chain(params: &Params, unit: LengthUnit) -> Result<PixelChain, VisionError> {
+    chain_with(params, k_in(params, unit), params.remap())
+}
+
+/// A pixel chain with an explicit K (units per pixel) and remap.
+pub(crate) fn chain_with(params: &Params, k: Matrix2<f64>, remap: Remap) -> Result<PixelChain, VisionError> {
+    Ok(PixelChain::new(k, remap, resolution(params), center_offset(params))?)
+}
+
+/// Mark size along the camera's native axes: `width_px · ‖(K·R) column 1‖`,
+/// `height_px · ‖(K·R) column 2‖`.
+///
+/// Decision: with `SwapXY` the native x axis is the remapped y axis, so the width uses K's
+/// second column; without a swap this is exactly the manual's `width_px × ‖K column 1‖`.
+pub(crate) fn mark_size(chain: &PixelChain, reading: &Reading) -> (f64, f64) {
+    if chain.remap().swap_xy {
+        let (h, w) = chain.mark_size(reading.height_px, reading.width_px);
+        (w, h)
+    } else {
+        chain.mark_size(reading.width_px, reading.height_px)
+    }
+}
+
+/// Checks that a reading carries a usable mark.
+pub(crate) fn require_mark(reading: &Reading) -> Result<(), VisionError> {
+    if reading.found() {
+        Ok(())
+    } else {
+        Err(VisionError::NoMark)
+    }
+}
+
+/// The observed point in the program frame: `C` through the active alignment to the work
+/// frame, plus `d`, and back through the inverse (SPEC §2, last paragraph).
+pub(crate) fn observe(machine: &dyn Machine, offset: Vector2<f64>) -> Result<(Point2<f64>, Point2<f64>), VisionError> {
+    let c = machine.program_position();
+    let observed = match machine.active_alignment() {
+        None => c + offset,
+        Some(chain) => chain.inverse(chain.apply(c) + offset).ok_or_else(|| VisionError::BadCalibration {
+            reason: "the active G51 scale has a zero factor, so the program frame cannot be recovered".into(),
+        })?,
+    };
+    if !(observed.x.is_finite() && observed.y.is_finite()) {
+        return Err(VisionError::Math(vision_math::MathError::NonFinite { what: "the observed point" }));
+    }
+    Ok((c, observed))
+}

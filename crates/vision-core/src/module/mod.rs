@@ -1,0 +1,220 @@
+//! The Vision module: the typed entry points behind M280–M284.
+//!
+//! The M-code adapter parses the words and calls [`VisionModule::m280`] … [`VisionModule::m284`];
+//! each returns a [`Reply`] with the G-code lines the adapter must run next (possibly none) and
+//! a typed report. A refused call returns a [`VisionError`] and changes nothing it promises to
+//! keep (see each entry point); the G-code of a refused call is never produced.
+//!
+//! Common checks, in order, for every entry point: `VisionEnabled` ("Vision is not enabled");
+//! for M280–M283 the camera-tool check (`VisionCameraToolNumber` ≠ 0 and another tool active).
+
+pub(crate) mod capture;
+mod m280;
+mod m281;
+mod m282;
+mod m283;
+mod m284;
+
+#[cfg(test)]
+#[allow(clippy::float_cmp)]
+mod tests;
+
+use std::path::{Path, PathBuf};
+
+use vision_math::{LengthUnit, Point2};
+
+use crate::driver::CameraDriver;
+use crate::error::VisionError;
+use crate::machine::Machine;
+use crate::params::{ParamValue, Params};
+use crate::profile::ProfileStore;
+use crate::registry::DriverRegistry;
+
+pub use capture::Capture;
+pub use m280::RunMode;
+pub use m282::{AlignReport, Pieces};
+pub use m284::{JobReport, MAX_JOB};
+
+/// What an entry point hands back: G-code for the adapter to run, then a report.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Reply<R> {
+    /// Lines the adapter must run, in order, after the call returns (empty when none).
+    pub gcode: Vec<String>,
+    /// What happened.
+    pub report: R,
+}
+
+/// One capture of the current run: where the camera was commanded and where the mark was seen.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Dot {
+    /// Commanded camera position, program frame, in `unit`.
+    pub commanded: Point2<f64>,
+    /// Observed mark centre, program frame, in `unit`.
+    pub observed: Point2<f64>,
+    /// The machine unit at capture time.
+    pub unit: LengthUnit,
+}
+
+impl Dot {
+    /// The dot converted to `to` (commanded, observed).
+    #[must_use]
+    pub fn in_unit(&self, to: LengthUnit) -> (Point2<f64>, Point2<f64>) {
+        let f = self.unit.factor_to(to);
+        (self.commanded * f, self.observed * f)
+    }
+}
+
+/// The Vision module: parameters, the current run's dot list, the camera driver and the
+/// profile it persists to.
+pub struct VisionModule {
+    pub(crate) params: Params,
+    pub(crate) driver: Option<Box<dyn CameraDriver>>,
+    pub(crate) dots: Vec<Dot>,
+    pub(crate) profile: Option<ProfileStore>,
+    pub(crate) images_dir: PathBuf,
+}
+
+impl std::fmt::Debug for VisionModule {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("VisionModule")
+            .field("params", &self.params)
+            .field("driver", &self.driver.as_ref().map(|d| d.name().to_string()))
+            .field("dots", &self.dots)
+            .field("profile", &self.profile)
+            .field("images_dir", &self.images_dir)
+            .finish()
+    }
+}
+
+/// Default folder M281 D1 copies images into (relative to the working directory).
+pub const DEFAULT_IMAGES_DIR: &str = "Images";
+
+impl VisionModule {
+    /// A module with `params`, no driver, no profile, images under [`DEFAULT_IMAGES_DIR`].
+    #[must_use]
+    pub fn new(params: Params) -> VisionModule {
+        VisionModule {
+            params,
+            driver: None,
+            dots: Vec::new(),
+            profile: None,
+            images_dir: PathBuf::from(DEFAULT_IMAGES_DIR),
+        }
+    }
+
+    /// A module whose driver comes from `registry` by `VisionDriver`, when Vision is enabled
+    /// (when disabled no driver is loaded, as the manual says).
+    ///
+    /// # Errors
+    /// [`VisionError::UnknownDriver`], or the factory's [`VisionError::Driver`].
+    pub fn from_registry(params: Params, registry: &DriverRegistry) -> Result<VisionModule, VisionError> {
+        let driver = if params.enabled() { Some(registry.create(params.driver(), &params)?) } else { None };
+        Ok(VisionModule { driver, ..VisionModule::new(params) })
+    }
+
+    /// Uses `driver` as the camera.
+    #[must_use]
+    pub fn with_driver(mut self, driver: Box<dyn CameraDriver>) -> VisionModule {
+        self.driver = Some(driver);
+        self
+    }
+
+    /// Replaces the camera driver (`None` unloads it).
+    pub fn set_driver(&mut self, driver: Option<Box<dyn CameraDriver>>) {
+        self.driver = driver;
+    }
+
+    /// The camera driver, if loaded.
+    #[must_use]
+    pub fn driver(&self) -> Option<&dyn CameraDriver> {
+        self.driver.as_deref()
+    }
+
+    /// Persists calibration and configuration to `store` (M283 and M284 save on success).
+    #[must_use]
+    pub fn with_profile(mut self, store: ProfileStore) -> VisionModule {
+        self.profile = Some(store);
+        self
+    }
+
+    /// The profile store, if any.
+    #[must_use]
+    pub fn profile(&self) -> Option<&ProfileStore> {
+        self.profile.as_ref()
+    }
+
+    /// Sets the folder M281 D1 copies images into.
+    pub fn set_images_dir(&mut self, dir: impl Into<PathBuf>) {
+        self.images_dir = dir.into();
+    }
+
+    /// The folder M281 D1 copies images into.
+    #[must_use]
+    pub fn images_dir(&self) -> &Path {
+        &self.images_dir
+    }
+
+    /// All parameters (read-only view; telemetry included).
+    #[must_use]
+    pub fn params(&self) -> &Params {
+        &self.params
+    }
+
+    /// Writes configuration parameter `name` (validated; telemetry refused). Call
+    /// [`VisionModule::save_profile`] to persist it.
+    ///
+    /// # Errors
+    /// As [`Params::set`].
+    pub fn set_param(&mut self, name: &str, value: impl Into<ParamValue>) -> Result<(), VisionError> {
+        self.params.set(name, value)
+    }
+
+    /// The current run's captures, in order (all of them, not only the four in the slots).
+    #[must_use]
+    pub fn dots(&self) -> &[Dot] {
+        &self.dots
+    }
+
+    /// Saves the configuration to the attached profile (atomically); no-op without a profile.
+    ///
+    /// # Errors
+    /// [`VisionError::Profile`]; the previous file is intact.
+    pub fn save_profile(&mut self) -> Result<(), VisionError> {
+        match self.profile.as_mut() {
+            Some(store) => store.save(&self.params),
+            None => Ok(()),
+        }
+    }
+
+    /// Refuses when Vision is disabled.
+    pub(crate) fn check_enabled(&self) -> Result<(), VisionError> {
+        if self.params.enabled() {
+            Ok(())
+        } else {
+            Err(VisionError::NotEnabled)
+        }
+    }
+
+    /// Refuses when the camera tool is set and another tool is active.
+    pub(crate) fn check_tool(&self, machine: &dyn Machine) -> Result<(), VisionError> {
+        match self.params.camera_tool() {
+            Some(camera) if machine.active_tool() != camera => {
+                Err(VisionError::WrongTool { camera, active: machine.active_tool() })
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// The loaded driver, or [`VisionError::NoDriver`].
+    pub(crate) fn driver_mut(&mut self) -> Result<&mut (dyn CameraDriver + 'static), VisionError> {
+        let name = self.params.driver().to_string();
+        self.driver.as_deref_mut().ok_or(VisionError::NoDriver { name })
+    }
+}
+
+/// An M-code word's value as an integer, `None` for a fraction or a non-finite number (and
+/// `Some(i64::MIN)` never occurs: out-of-range values are `None` too).
+pub(crate) fn integer_word(v: f64) -> Option<i64> {
+    #[allow(clippy::cast_possible_truncation)] // checked integral and in range
+    (v.is_finite() && v.fract() == 0.0 && v.abs() < 1e15).then_some(v as i64)
+}

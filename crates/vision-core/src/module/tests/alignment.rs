@@ -1,0 +1,330 @@
+//! M280, M281 and M282: runs, slots, units, the program frame, partial modes, gates.
+
+use vision_math::chain::CANCEL_LINE;
+use vision_math::{fit_rectangle, AlignmentChain, LengthUnit, Matrix2, Point2, Vector2};
+
+use super::fakes::{Rig, World};
+use crate::driver::{Judgment, Reading};
+use crate::error::VisionError;
+use crate::machine::Machine;
+use crate::module::{Pieces, RunMode};
+
+const PART: [(f64, f64); 4] = [(0.0, 0.0), (6.0, 0.0), (6.0, 4.0), (0.0, 4.0)];
+
+/// Where the part really lies: nominal → rotated 0.4° about (3, 2), scaled 1.001, shifted.
+fn true_part() -> AlignmentChain {
+    AlignmentChain {
+        scale: Vector2::new(1.001, 1.001),
+        center: Point2::new(3.0, 2.0),
+        rotation_deg: 0.4,
+        shift: Vector2::new(0.05, -0.03),
+    }
+}
+
+fn rig_with_part() -> Rig {
+    let part = true_part();
+    let world =
+        World { marks: PART.iter().map(|(x, y)| part.apply(Point2::new(*x, *y))).collect(), ..World::default() };
+    Rig::with_world(world)
+}
+
+fn capture_all(rig: &mut Rig, points: &[(f64, f64)]) {
+    for (x, y) in points {
+        rig.go(*x, *y);
+        rig.module.m281(&mut rig.machine, false).expect("capture");
+    }
+}
+
+fn slot(rig: &Rig, s: u32) -> [f64; 8] {
+    let w = rig.world();
+    std::array::from_fn(|f| {
+        w.pounds.get(&(500 + 8 * s + u32::try_from(f).expect("small"))).copied().unwrap_or(f64::NAN)
+    })
+}
+
+#[test]
+fn m280_starts_a_run_and_cancels_alignment() {
+    let mut rig = Rig::new();
+    rig.module.params.run_dot_count = 7;
+    let r = rig.module.m280(&mut rig.machine, RunMode::Similarity).expect("m280");
+    assert_eq!(r.gcode, vec![CANCEL_LINE.to_string()]);
+    assert_eq!(r.gcode[0], "G69 G50 G52 X0 Y0");
+    let p = rig.module.params();
+    assert_eq!((p.run_active(), p.run_mode(), p.run_dot_count()), (1, 3, 0));
+    assert_eq!(RunMode::from_p(None), Ok(RunMode::Rectangle));
+    assert_eq!(RunMode::from_p(Some(4.0)), Ok(RunMode::Rectangle));
+    assert_eq!(RunMode::from_p(Some(3.0)), Ok(RunMode::Similarity));
+    assert!(matches!(RunMode::from_p(Some(5.0)), Err(VisionError::BadWord { .. })));
+}
+
+#[test]
+fn m280_refuses_a_reserved_pound_base() {
+    let mut rig = Rig::new();
+    // Bypass set() validation to model a profile written by an older version.
+    rig.module.params.pound_var_base = 5070;
+    let before = rig.module.params().clone();
+    let e = rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect_err("reserved");
+    assert_eq!(e, VisionError::PoundBaseReserved { base: 5070, end: 5109 });
+    assert!(e.to_string().starts_with("VisionPoundVarBase is in reserved range"));
+    assert_eq!(rig.module.params(), &before);
+    assert!(matches!(rig.module.m281(&mut rig.machine, false), Err(VisionError::PoundBaseReserved { .. })));
+}
+
+#[test]
+fn m281_outside_a_run_writes_slot_zero_and_telemetry_only() {
+    let mut rig = Rig::new();
+    rig.world().marks = vec![Point2::new(1.1, 0.9)];
+    rig.go(1.0, 1.0);
+    let c = rig.module.m281(&mut rig.machine, false).expect("capture").report;
+    assert!((c.observed - Point2::new(1.1, 0.9)).norm() < 1e-12, "{c:?}");
+    assert_eq!(c.commanded, Point2::new(1.0, 1.0));
+    assert_eq!((c.dot_index, c.slot), (None, None));
+    assert!(rig.module.dots().is_empty());
+    let s0 = slot(&rig, 0);
+    assert!((s0[0] - 1.1).abs() < 1e-12 && (s0[1] - 0.9).abs() < 1e-12);
+    assert!((s0[2] - 0.5).abs() < 1e-12 && (s0[3] - 0.5).abs() < 1e-12, "{s0:?}");
+    assert_eq!((s0[4], s0[5]), (1.5, 0.97));
+    assert!(s0[6].is_nan() && s0[7].is_nan(), "reserved fields untouched");
+    assert!(slot(&rig, 1)[0].is_nan());
+    let p = rig.module.params();
+    assert_eq!(p.last_status(), "OK");
+    assert_eq!(p.last_judgment(), 1);
+    assert!((p.last_offset_x() - 0.1).abs() < 1e-12 && (p.last_offset_y() + 0.1).abs() < 1e-12);
+    // InvertY: the mark is 0.1 in below, i.e. +y pixels (down) in the native image.
+    assert!((p.last_offset_px_y() - 0.1 / 0.00203).abs() < 1e-9);
+    assert_eq!(p.run_dot_count(), 0);
+}
+
+#[test]
+fn a_run_fills_slots_in_order_and_mirrors_slot_zero() {
+    let mut rig = rig_with_part();
+    rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect("m280");
+    capture_all(&mut rig, &PART);
+    let part = true_part();
+    for (i, (x, y)) in PART.iter().enumerate() {
+        let s = slot(&rig, u32::try_from(i + 1).expect("small"));
+        let truth = part.apply(Point2::new(*x, *y));
+        assert!((s[0] - truth.x).abs() < 1e-12 && (s[1] - truth.y).abs() < 1e-12, "slot {}", i + 1);
+    }
+    assert_eq!(slot(&rig, 0)[..6], slot(&rig, 4)[..6]);
+    assert_eq!(rig.module.params().run_dot_count(), 4);
+    assert_eq!(rig.module.dots().len(), 4);
+    // A fifth capture feeds the fit and slot 0 but leaves slots 1–4 alone.
+    let before: Vec<_> = (1..=4).map(|s| slot(&rig, s)[..6].to_vec()).collect();
+    rig.go(6.0, 4.0);
+    let c = rig.module.m281(&mut rig.machine, false).expect("fifth").report;
+    assert_eq!((c.dot_index, c.slot), (Some(5), None));
+    assert_eq!((1..=4).map(|s| slot(&rig, s)[..6].to_vec()).collect::<Vec<_>>(), before);
+    assert_eq!(rig.module.params().run_dot_count(), 5);
+}
+
+#[test]
+fn a_three_mark_run_leaves_slot_four_untouched() {
+    let mut rig = rig_with_part();
+    rig.world().pounds.insert(532, 42.0);
+    rig.module.m280(&mut rig.machine, RunMode::Similarity).expect("m280");
+    capture_all(&mut rig, &PART[..3]);
+    assert_eq!(slot(&rig, 4)[0], 42.0);
+    let r = rig.module.m282(&mut rig.machine, Pieces::All).expect("m282");
+    assert_eq!(r.report.mode, RunMode::Similarity);
+    assert!(r.report.fit.max_residual < 1e-9);
+    assert_eq!(slot(&rig, 4)[0], 42.0);
+}
+
+#[test]
+fn m282_emits_the_chain_that_carries_commanded_onto_observed() {
+    let mut rig = rig_with_part();
+    rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect("m280");
+    capture_all(&mut rig, &PART);
+    let r = rig.module.m282(&mut rig.machine, Pieces::All).expect("m282");
+    let chain = r.report.chain;
+    assert_eq!(r.gcode.len(), 4);
+    assert_eq!(r.gcode, chain.gcode().expect("finite").to_vec());
+    assert_eq!(r.gcode[0], CANCEL_LINE);
+    assert!(r.gcode[1].starts_with("G52 X") && r.gcode[2].starts_with("G68 X") && r.gcode[3].starts_with("G51 X"));
+    let part = true_part();
+    for (x, y) in PART {
+        let n = Point2::new(x, y);
+        assert!((chain.apply(n) - part.apply(n)).norm() < 1e-9);
+    }
+    let p = rig.module.params();
+    assert_eq!(p.run_active(), 0);
+    assert!((p.run_theta() - 0.4f64.to_radians()).abs() < 1e-9);
+    assert!((p.run_sx() - 1.001).abs() < 1e-9 && (p.run_sy() - 1.001).abs() < 1e-9);
+    assert_eq!((p.run_tx(), p.run_ty()), (chain.shift.x, chain.shift.y));
+    assert_eq!((p.run_center_x(), p.run_center_y()), (3.0, 2.0));
+}
+
+#[test]
+fn captures_after_m282_are_in_the_program_frame() {
+    let mut rig = rig_with_part();
+    let centre = true_part().apply(Point2::new(3.0, 2.0));
+    rig.world().marks.push(centre);
+    rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect("m280");
+    capture_all(&mut rig, &PART);
+    let r = rig.module.m282(&mut rig.machine, Pieces::All).expect("m282");
+    // The host runs the emitted modals; the fake takes the chain directly.
+    rig.world().alignment = Some(r.report.chain);
+    rig.go(3.0, 2.0);
+    let c = rig.module.m281(&mut rig.machine, false).expect("verify").report;
+    assert!((c.observed - Point2::new(3.0, 2.0)).norm() < 1e-9, "{c:?}");
+    assert!((slot(&rig, 0)[0] - 3.0).abs() < 1e-9 && (slot(&rig, 0)[1] - 2.0).abs() < 1e-9);
+}
+
+#[test]
+fn more_marks_than_the_minimum_are_solved_by_least_squares() {
+    let mut rig = rig_with_part();
+    let part = true_part();
+    let extra = [(3.0, 0.0), (3.0, 4.0)];
+    for (x, y) in extra {
+        let m = part.apply(Point2::new(x, y)) + Vector2::new(0.002, -0.001);
+        rig.world().marks.push(m);
+    }
+    rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect("m280");
+    let all: Vec<_> = PART.iter().chain(extra.iter()).copied().collect();
+    capture_all(&mut rig, &all);
+    let r = rig.module.m282(&mut rig.machine, Pieces::All).expect("m282");
+    assert_eq!(r.report.fit.len, 6);
+    assert_eq!(r.report.residuals.len(), 6);
+    let (n, o): (Vec<_>, Vec<_>) = rig.module.dots().iter().map(|d| (d.commanded, d.observed)).unzip();
+    assert_eq!(r.report.fit, fit_rectangle(&n, &o).expect("fit"));
+    assert!(r.report.fit.rms > 0.0);
+}
+
+#[test]
+fn too_few_marks_emit_nothing_and_keep_the_run() {
+    let mut rig = rig_with_part();
+    rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect("m280");
+    capture_all(&mut rig, &PART[..3]);
+    let e = rig.module.m282(&mut rig.machine, Pieces::All).expect_err("3 of 4");
+    assert_eq!(e, VisionError::TooFewDots { mode: "rectangle", needed: 4, got: 3 });
+    assert_eq!(rig.module.params().run_active(), 1);
+    capture_all(&mut rig, &PART[3..]);
+    assert!(rig.module.m282(&mut rig.machine, Pieces::All).is_ok());
+    // Collinear marks are a math error, not NaN.
+    let mut line = Rig::new();
+    line.world().marks = (0..4).map(|i| Point2::new(f64::from(i), 0.0)).collect();
+    line.module.m280(&mut line.machine, RunMode::Rectangle).expect("m280");
+    capture_all(&mut line, &[(0.0, 0.0), (1.0, 0.0), (2.0, 0.0), (3.0, 0.0)]);
+    assert!(matches!(line.module.m282(&mut line.machine, Pieces::All), Err(VisionError::Math(_))));
+}
+
+#[test]
+fn partial_modes_emit_one_piece_in_the_same_four_lines() {
+    let mut rig = rig_with_part();
+    rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect("m280");
+    capture_all(&mut rig, &PART);
+    let shift = rig.module.m282(&mut rig.machine, Pieces::Shift).expect("P1").report.chain;
+    assert_eq!((shift.rotation_deg, shift.scale), (0.0, Vector2::new(1.0, 1.0)));
+    let part = true_part();
+    let centroid_shift = part.apply(Point2::new(3.0, 2.0)) - Point2::new(3.0, 2.0);
+    assert!((shift.shift - centroid_shift).norm() < 1e-12);
+    let rot = rig.module.m282(&mut rig.machine, Pieces::Rotation).expect("P2");
+    assert!((rot.report.chain.rotation_deg - 0.4).abs() < 1e-9);
+    assert_eq!(rot.report.chain.shift, Vector2::zeros());
+    assert_eq!(rot.gcode.len(), 4);
+    assert_eq!(rot.gcode[3], "G51 X1.0000000000 Y1.0000000000");
+    let scale = rig.module.m282(&mut rig.machine, Pieces::Scale).expect("P3").report.chain;
+    assert!((scale.scale.x - 1.001 * 0.4f64.to_radians().cos()).abs() < 1e-6);
+    assert!((scale.apply(Point2::new(3.0, 2.0)) - Point2::new(3.0, 2.0)).norm() < 1e-12);
+    assert_eq!(Pieces::from_p(Some(0.0)), Ok(Pieces::All));
+    assert_eq!(Pieces::from_p(Some(3.0)), Ok(Pieces::Scale));
+    assert!(Pieces::from_p(Some(4.0)).is_err());
+}
+
+#[test]
+fn quality_gates_refuse_bad_fits_and_zero_disables_them() {
+    // Scale 3 % off: refused by the default 2 % gate.
+    let scaled = AlignmentChain { scale: Vector2::new(1.03, 1.03), ..AlignmentChain::IDENTITY };
+    let world =
+        World { marks: PART.iter().map(|(x, y)| scaled.apply(Point2::new(*x, *y))).collect(), ..World::default() };
+    let mut rig = Rig::with_world(world);
+    rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect("m280");
+    capture_all(&mut rig, &PART);
+    let before = rig.module.params().clone();
+    let e = rig.module.m282(&mut rig.machine, Pieces::All).expect_err("scale gate");
+    assert!(e.to_string().contains("VisionFitMaxScaleDev"), "{e}");
+    assert!(e.to_string().contains("wrong mark"), "{e}");
+    assert_eq!(rig.module.params(), &before);
+    rig.module.set_param("VisionFitMaxScaleDev", 0.0).expect("disable");
+    assert!(rig.module.m282(&mut rig.machine, Pieces::All).is_ok());
+
+    // Shift 1.2 in: refused by the 1.0 in gate.
+    let shifted = AlignmentChain { shift: Vector2::new(1.2, 0.0), ..AlignmentChain::IDENTITY };
+    let world =
+        World { marks: PART.iter().map(|(x, y)| shifted.apply(Point2::new(*x, *y))).collect(), ..World::default() };
+    let mut rig = Rig::with_world(world);
+    rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect("m280");
+    capture_all(&mut rig, &PART);
+    let e = rig.module.m282(&mut rig.machine, Pieces::All).expect_err("shift gate");
+    assert!(e.to_string().contains("VisionFitMaxShift"), "{e}");
+
+    // One mark 0.05 in off: worst residual over 0.020 in.
+    let mut marks: Vec<_> = PART.iter().map(|(x, y)| Point2::new(*x, *y)).collect();
+    marks[2] += Vector2::new(0.05, 0.0);
+    let mut rig = Rig::with_world(World { marks, ..World::default() });
+    rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect("m280");
+    capture_all(&mut rig, &PART);
+    let e = rig.module.m282(&mut rig.machine, Pieces::All).expect_err("residual gate");
+    assert!(e.to_string().contains("VisionFitMaxResidual"), "{e}");
+    assert_eq!(rig.module.params().run_active(), 1);
+}
+
+#[test]
+fn k_in_inches_reports_millimetres_under_g21() {
+    let mut rig = Rig::new();
+    rig.world().marks = vec![Point2::new(1.1, 0.9)];
+    rig.run(&["G21".to_string()]);
+    rig.go(25.4, 25.4);
+    let c = rig.module.m281(&mut rig.machine, false).expect("capture").report;
+    assert_eq!(c.unit, LengthUnit::Millimetre);
+    assert!((c.observed - Point2::new(27.94, 22.86)).norm() < 1e-9, "{c:?}");
+    assert!((c.width - 12.7).abs() < 1e-9);
+    assert!((rig.module.params().last_offset_x() - 2.54).abs() < 1e-9);
+    // And K calibrated in mm, machine in inches.
+    let mut rig = Rig::new();
+    rig.world().marks = vec![Point2::new(1.1, 0.9)];
+    rig.module.params.set_cal_k(Matrix2::new(0.00203 * 25.4, 0.0, 0.0, 0.00203 * 25.4)).expect("k");
+    rig.module.set_param("VisionCal_Units", "mm").expect("mm");
+    rig.go(1.0, 1.0);
+    let c = rig.module.m281(&mut rig.machine, false).expect("capture").report;
+    assert!((c.observed - Point2::new(1.1, 0.9)).norm() < 1e-12);
+}
+
+#[test]
+fn failed_captures_change_nothing_but_the_last_status() {
+    let mut rig = rig_with_part();
+    rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect("m280");
+    capture_all(&mut rig, &PART[..2]);
+    let block = |rig: &Rig| (500..540).map(|a| rig.machine.pound(a).expect("read")).collect::<Vec<_>>();
+    let pounds = block(&rig);
+    let dots = rig.module.dots().to_vec();
+
+    // NG.
+    rig.world().script.push_back(Ok(Reading { judgment: Judgment::Ng, ..Reading::position(1.0, 1.0) }));
+    let e = rig.module.m281(&mut rig.machine, false).expect_err("NG");
+    assert_eq!(e, VisionError::NoMark);
+    assert!(e.to_string().starts_with("NG / no mark found"));
+    assert_eq!(rig.module.params().last_judgment(), 0);
+    assert_eq!(rig.module.params().last_status(), e.to_string());
+    // Count 0.
+    rig.world().script.push_back(Ok(Reading { count: Some(0), ..Reading::position(1.0, 1.0) }));
+    assert_eq!(rig.module.m281(&mut rig.machine, false).map(|_| ()), Err(VisionError::NoMark));
+    // A pound write fails half-way: the writes already made are undone.
+    rig.world().fail_pound = Some(500 + 8 * 3 + 2);
+    rig.go(6.0, 4.0);
+    assert!(matches!(rig.module.m281(&mut rig.machine, false), Err(VisionError::Machine(_))));
+    rig.world().fail_pound = None;
+    assert_eq!(block(&rig), pounds);
+    assert_eq!(rig.module.dots(), &dots[..]);
+    assert_eq!(rig.module.params().run_dot_count(), 2);
+
+    // Zero K: refused before the trigger.
+    let triggers = rig.world().triggers;
+    rig.module.params.set_cal_k(Matrix2::zeros()).expect("zero");
+    let e = rig.module.m281(&mut rig.machine, false).expect_err("zero K");
+    assert_eq!(e, VisionError::NotCalibrated);
+    assert_eq!(e.to_string(), "K matrix is zero — run M283 to calibrate first (M283 C1 or M283 Q)");
+    assert_eq!(rig.world().triggers, triggers);
+    assert_eq!(block(&rig), pounds);
+}

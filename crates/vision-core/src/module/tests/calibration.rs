@@ -1,0 +1,296 @@
+//! M283 against a fake camera with a known true geometry: every mounting, both units.
+
+use std::path::Path;
+
+use vision_math::{AlignmentChain, LengthUnit, Matrix2, Point2, Remap, Vector2};
+
+use super::fakes::{Rig, World};
+use crate::calibrate::{CalReport, Calibrate, SheetReport};
+use crate::driver::Reading;
+use crate::error::VisionError;
+use crate::machine::Machine;
+use crate::profile::{ProfileFs, ProfileStore, StdFs};
+use crate::sheets::cal_sheet;
+
+/// A camera rotated 1.5° with 1 % anisotropy and a little skew, inches per pixel.
+fn true_k() -> Matrix2<f64> {
+    let (s, c) = 1.5f64.to_radians().sin_cos();
+    Matrix2::new(c, -s, s, c) * Matrix2::new(0.00203, 0.00203 * 0.004, 0.0, 0.00203 * 1.01)
+}
+
+/// The sheet taped down rotated 0.3° (and optionally mis-printed) about the spindle zero.
+fn sheet_marks(rotation_deg: f64, print: Vector2<f64>) -> Vec<Point2<f64>> {
+    let pose = AlignmentChain { scale: print, rotation_deg, ..AlignmentChain::IDENTITY };
+    cal_sheet(1).expect("sheet 1").dots(LengthUnit::Inch).into_iter().map(|p| pose.apply(p)).collect()
+}
+
+const CAMERA: Vector2<f64> = Vector2::new(3.2, -1.7);
+
+/// A rig whose camera (true K `k`, mounting `remap`, 3.2/−1.7 in from the spindle) sits with
+/// dot 1 somewhere in view; the camera tool's table offset is `o0` (inches).
+fn sheet_rig(k: Matrix2<f64>, remap: Remap, units: LengthUnit, o0: Vector2<f64>, marks: Vec<Point2<f64>>) -> Rig {
+    let dot1 = marks[0];
+    let start = dot1 + Vector2::new(0.3, -0.2) + o0 - CAMERA;
+    let mut world =
+        World { cam_k: k, cam_remap: remap, cam_offset: CAMERA, units, program: start, marks, ..World::default() };
+    world.offsets.insert(98, o0);
+    let mut rig = Rig::with_world(world);
+    // Start uncalibrated with the default remap flags.
+    rig.module.params.set_cal_k(Matrix2::zeros()).expect("zero");
+    rig.module.params.set_remap(Remap::IDENTITY);
+    rig
+}
+
+fn sheet_report(r: CalReport) -> SheetReport {
+    match r {
+        CalReport::Sheet(s) => s,
+        CalReport::Quick(q) => panic!("expected a sheet report, got {q:?}"),
+    }
+}
+
+#[test]
+fn sheet_walk_recovers_k_and_offset_for_all_eight_mountings() {
+    for (i, remap) in Remap::all().into_iter().enumerate() {
+        let units = if i % 2 == 0 { LengthUnit::Inch } else { LengthUnit::Millimetre };
+        let f = LengthUnit::Inch.factor_to(units);
+        let o0 = if i % 3 == 0 { Vector2::zeros() } else { Vector2::new(3.0, -1.5) };
+        let mut rig = sheet_rig(true_k(), remap, units, o0, sheet_marks(0.3, Vector2::new(1.0, 1.0)));
+        let r = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("calibrates");
+        assert!(r.gcode.is_empty());
+        let rep = sheet_report(r.report);
+        let p = rig.module.params();
+        assert_eq!(p.remap(), remap, "mounting {i}");
+        assert!((p.cal_k() - true_k() * f).amax() < 1e-9, "mounting {i}: K {} vs {}", p.cal_k(), true_k() * f);
+        assert_eq!(p.cal_units(), units);
+        let offset = rig.machine.tool_offset(98).expect("tool");
+        assert!((offset - CAMERA * f).amax() < 1e-9, "mounting {i}: offset {offset:?}");
+        assert_eq!(rep.offset_written, offset);
+        assert!((rep.offset_before - o0 * f).amax() < 1e-12);
+        assert!((rep.sheet_rotation_deg - 0.3).abs() < 1e-9);
+        assert!((rep.sheet_scale - Vector2::new(1.0, 1.0)).amax() < 1e-9);
+        assert!(rep.verify_max < 1e-9 && rep.verify_rms < 1e-9 && rep.walk_rms < 1e-9 && rep.k_rms < 1e-9);
+        assert_eq!(rep.verify.len(), 5);
+        assert!((rep.camera_rotation_deg - 1.5).abs() < 0.3);
+        assert!((rep.scale.x - 0.00203 * f).abs() < 1e-5 * f);
+        assert_eq!(p.cal_date(), "2023-11-14T23:13:20+01:00");
+        assert_eq!(p.last_status(), "OK");
+        // With the new offset the camera lands on what it is commanded to: dot 5 at 0, 0.
+        assert!((rig.world().camera_axis() - Point2::origin()).norm() < 1e-9);
+        // The bump was 0.1 in (2.54 mm) and settling was dwelt after every move.
+        assert!((rep.axis.bump - 0.1 * f).abs() < 1e-12);
+        assert!(rig.world().dwell_s > 0.0);
+        assert!(rig.world().log.iter().any(|l| l.starts_with("G91 G0 X")));
+        assert!(rig.world().log.iter().any(|l| l == "G90 G0 X0.0000000 Y0.0000000"));
+    }
+}
+
+#[test]
+fn a_square_sheet_and_a_mis_printed_sheet_do_not_fool_k() {
+    // Square sheet, square camera: every dot lands on the same pixel; the probes carry K.
+    let square_k = Matrix2::new(0.00203, 0.0, 0.0, 0.00203);
+    let remap = Remap { swap_xy: false, invert_x: false, invert_y: true };
+    let mut rig =
+        sheet_rig(square_k, remap, LengthUnit::Inch, Vector2::zeros(), sheet_marks(0.0, Vector2::new(1.0, 1.0)));
+    rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("square sheet");
+    assert!((rig.module.params().cal_k() - square_k).amax() < 1e-12);
+
+    // Printed 1 % short in Y: K stays true, the sheet's scale shows the misprint.
+    let mut rig =
+        sheet_rig(true_k(), remap, LengthUnit::Inch, Vector2::zeros(), sheet_marks(-0.2, Vector2::new(1.0, 0.99)));
+    let rep = sheet_report(rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("cal").report);
+    assert!((rig.module.params().cal_k() - true_k()).amax() < 1e-12);
+    assert!((rep.sheet_scale - Vector2::new(1.0, 0.99)).amax() < 1e-9, "{:?}", rep.sheet_scale);
+    assert!((rep.sheet_rotation_deg + 0.2).abs() < 1e-9);
+    assert!((rig.machine.tool_offset(98).expect("tool") - CAMERA).amax() < 1e-9);
+}
+
+#[test]
+fn quick_calibration_for_plain_and_swapped_mountings() {
+    let k = Matrix2::new(0.00203, 0.0, 0.0, 0.00207);
+    for remap in [
+        Remap { swap_xy: false, invert_x: false, invert_y: true },
+        Remap { swap_xy: true, invert_x: true, invert_y: false },
+    ] {
+        let mut world = World { cam_k: k, cam_remap: remap, marks: vec![Point2::new(0.2, 0.1)], ..World::default() };
+        world.program = Point2::origin();
+        let mut rig = Rig::with_world(world);
+        rig.module.params.set_cal_k(Matrix2::zeros()).expect("zero");
+        let r = rig.module.m283(&mut rig.machine, Calibrate::Quick { diameter: 0.5 }).expect("quick");
+        let CalReport::Quick(q) = r.report else { panic!("quick report") };
+        assert_eq!(rig.module.params().remap(), remap);
+        assert!((rig.module.params().cal_k() - k).amax() < 1e-12, "{remap:?}: {}", rig.module.params().cal_k());
+        assert!(q.size_error < 1e-12 && q.bump_error < 1e-12);
+        assert!((q.confirm_size - Vector2::new(0.5, 0.5)).amax() < 1e-12);
+        // Moved back to where it started.
+        assert_eq!(rig.machine.program_position(), Point2::origin());
+        assert_eq!(rig.machine.tool_offset(98).expect("tool"), Vector2::zeros());
+    }
+    // A camera job without width/height cannot do Q.
+    let mut rig = Rig::with_world(World { marks: vec![Point2::new(0.2, 0.1)], ..World::default() });
+    let k_before = rig.module.params().cal_k();
+    for (x, y) in [(988.0, 938.0), (938.7, 938.0), (938.7, 987.3), (988.0, 938.0)] {
+        rig.world().script.push_back(Ok(Reading::position(x, y)));
+    }
+    let e = rig.module.m283(&mut rig.machine, Calibrate::Quick { diameter: 0.5 }).expect_err("no size");
+    assert!(e.to_string().contains("width and height"), "{e}");
+    assert_eq!(rig.module.params().cal_k(), k_before);
+}
+
+fn assert_untouched(rig: &Rig, start: Point2<f64>) {
+    let p = rig.module.params();
+    assert_eq!(p.cal_k(), Matrix2::zeros());
+    assert_eq!(p.remap(), Remap::IDENTITY);
+    assert_eq!(p.cal_date(), "");
+    assert_eq!(rig.machine.tool_offset(98).expect("tool"), Vector2::new(3.0, -1.5));
+    assert!((rig.machine.program_position() - start).norm() < 1e-6);
+}
+
+#[test]
+fn a_failed_walk_restores_k_flags_offset_and_position() {
+    let mut marks = sheet_marks(0.3, Vector2::new(1.0, 1.0));
+    marks.remove(2); // dot 3 is missing
+    let mut rig = sheet_rig(true_k(), Remap::IDENTITY, LengthUnit::Inch, Vector2::new(3.0, -1.5), marks);
+    let start = rig.machine.program_position();
+    let e = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect_err("lost dot 3");
+    assert!(matches!(e, VisionError::Calibration { .. }), "{e}");
+    assert!(e.to_string().contains("lost the mark"), "{e}");
+    assert!(e.to_string().ends_with("the tool offsets were left unchanged"), "{e}");
+    assert_untouched(&rig, start);
+    assert_eq!(rig.module.params().last_status(), e.to_string());
+}
+
+#[test]
+fn a_failed_verify_restores_the_offset_it_already_wrote() {
+    let mut rig = sheet_rig(
+        true_k(),
+        Remap::IDENTITY,
+        LengthUnit::Inch,
+        Vector2::new(3.0, -1.5),
+        sheet_marks(0.3, Vector2::new(1.0, 1.0)),
+    );
+    let start = rig.machine.program_position();
+    // 3 bumps + 5 × (5 + 5) walk moves = the verify's first move fails.
+    rig.world().fail_gcode_after = Some(3 + 25);
+    let e = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect_err("e-stop");
+    assert!(matches!(e, VisionError::Machine(_)), "{e}");
+    rig.world().fail_gcode_after = None;
+    // The restore move could not run while the machine refused G-code; run it now.
+    let p = rig.machine.program_position();
+    assert!((p - start).norm() > 1e-3);
+    let p = rig.module.params();
+    assert_eq!(p.cal_k(), Matrix2::zeros());
+    assert_eq!(rig.machine.tool_offset(98).expect("tool"), Vector2::new(3.0, -1.5));
+}
+
+/// Fails every save.
+struct BrokenDisk;
+impl ProfileFs for BrokenDisk {
+    fn write_synced(&mut self, _: &Path, _: &[u8]) -> std::io::Result<()> {
+        Err(std::io::Error::other("read-only file system"))
+    }
+    fn rename(&mut self, a: &Path, b: &Path) -> std::io::Result<()> {
+        StdFs.rename(a, b)
+    }
+    fn remove(&mut self, _: &Path) -> std::io::Result<()> {
+        Ok(())
+    }
+    fn sync_dir(&mut self, _: &Path) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+#[test]
+fn a_failed_save_undoes_the_calibration() {
+    let mut rig = sheet_rig(
+        true_k(),
+        Remap::IDENTITY,
+        LengthUnit::Inch,
+        Vector2::new(3.0, -1.5),
+        sheet_marks(0.3, Vector2::new(1.0, 1.0)),
+    );
+    let start = rig.machine.program_position();
+    let module = std::mem::replace(&mut rig.module, crate::module::VisionModule::new(Default::default()));
+    rig.module = module.with_profile(ProfileStore::with_fs("/nonexistent/vision.toml", Box::new(BrokenDisk)));
+    let e = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect_err("save fails");
+    assert!(matches!(e, VisionError::Profile { .. }), "{e}");
+    assert_untouched(&rig, start);
+}
+
+#[test]
+fn refusals_before_any_motion() {
+    let marks = sheet_marks(0.0, Vector2::new(1.0, 1.0));
+    let mut rig = sheet_rig(true_k(), Remap::IDENTITY, LengthUnit::Inch, Vector2::new(3.0, -1.5), marks);
+    let m = &mut rig.machine;
+    assert_eq!(
+        rig.module.m283(m, Calibrate::Sheet { n: 7 }).map(|_| ()),
+        Err(VisionError::UnknownSheet { sheet: 7, known: "1".into() })
+    );
+    rig.world().alignment = Some(AlignmentChain { rotation_deg: 0.5, ..AlignmentChain::IDENTITY });
+    assert_eq!(
+        rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).map(|_| ()),
+        Err(VisionError::AlignmentActive)
+    );
+    rig.world().alignment = Some(AlignmentChain::IDENTITY);
+    rig.world().tool = 1;
+    assert_eq!(
+        rig.module.m283(&mut rig.machine, Calibrate::Quick { diameter: 0.5 }).map(|_| ()),
+        Err(VisionError::WrongTool { camera: 98, active: 1 })
+    );
+    rig.module.params.enabled = false;
+    assert_eq!(rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).map(|_| ()), Err(VisionError::NotEnabled));
+    assert_eq!(rig.world().triggers, 0);
+    assert!(rig.world().log.is_empty());
+}
+
+#[test]
+fn a_mark_that_does_not_move_fails_the_axis_detect() {
+    let mut rig = sheet_rig(
+        true_k(),
+        Remap::IDENTITY,
+        LengthUnit::Inch,
+        Vector2::new(3.0, -1.5),
+        sheet_marks(0.0, Vector2::new(1.0, 1.0)),
+    );
+    let start = rig.machine.program_position();
+    for _ in 0..3 {
+        rig.world().script.push_back(Ok(Reading::position(900.0, 900.0)));
+    }
+    let e = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect_err("stuck mark");
+    assert!(e.to_string().contains("axis detect"), "{e}");
+    assert_untouched(&rig, start);
+}
+
+#[test]
+fn pixel_noise_averages_out_in_the_least_squares_solves() {
+    let marks = sheet_marks(0.3, Vector2::new(1.0, 1.0));
+    let mut rig = sheet_rig(true_k(), Remap::all()[5], LengthUnit::Inch, Vector2::zeros(), marks);
+    rig.world().noise_px = 0.5;
+    let rep = sheet_report(rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("noisy").report);
+    let k = rig.module.params().cal_k();
+    // ±0.5 px on 355 px probes: K within 0.2 %, offset and verify within a few thousandths.
+    assert!((k - true_k()).amax() < 2e-3 * 0.00203, "{k}");
+    assert!((rig.machine.tool_offset(98).expect("tool") - CAMERA).amax() < 0.003);
+    assert!(rep.verify_rms < 0.005 && rep.verify_rms > 0.0, "{}", rep.verify_rms);
+    assert!(rep.k_rms > 0.0);
+}
+
+#[test]
+fn manual_examples_one_and_two_calibrate_then_verify_at_the_centre() {
+    let marks = sheet_marks(0.3, Vector2::new(1.0, 1.0));
+    let mut rig = sheet_rig(true_k(), Remap::all()[6], LengthUnit::Inch, Vector2::zeros(), marks);
+    rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("example 1");
+    // Example 2: 4-point run over the corners, M282, then capture the centre in the aligned frame.
+    let cancel = rig.module.m280(&mut rig.machine, crate::module::RunMode::Rectangle).expect("M280").gcode;
+    rig.run(&cancel);
+    for (x, y) in [(-2.5, -4.0), (-2.5, 4.0), (2.5, 4.0), (2.5, -4.0)] {
+        rig.go(x, y);
+        rig.module.m281(&mut rig.machine, false).expect("M281");
+    }
+    let r = rig.module.m282(&mut rig.machine, crate::module::Pieces::All).expect("M282");
+    assert!((r.report.chain.rotation_deg - 0.3).abs() < 1e-9);
+    rig.world().alignment = Some(r.report.chain);
+    rig.go(0.0, 0.0);
+    rig.module.m281(&mut rig.machine, false).expect("centre");
+    let (x, y) = (rig.machine.pound(500).expect("#500"), rig.machine.pound(501).expect("#501"));
+    assert!(x.abs() < 1e-9 && y.abs() < 1e-9, "#500 = {x}, #501 = {y}");
+}

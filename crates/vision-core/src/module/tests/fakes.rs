@@ -1,0 +1,333 @@
+//! Tiny in-test fakes: a machine that tracks position under `G0/G1 G90/G91 G20/G21 X Y`, and a
+//! camera that computes native pixels from a true camera geometry with
+//! `PixelChain::native_pixels`. The world (marks, spindle, camera) is kept in inches.
+
+use std::collections::{BTreeMap, VecDeque};
+use std::sync::{Arc, Mutex, MutexGuard};
+
+use vision_math::chain::CANCEL_LINE;
+use vision_math::{AlignmentChain, LengthUnit, Matrix2, PixelChain, Point2, Remap, Vector2};
+
+use crate::driver::{CameraDriver, Capabilities, DriverError, DriverErrorKind, Judgment, Reading};
+use crate::machine::{Machine, MachineError, Timestamp};
+use crate::module::VisionModule;
+use crate::params::Params;
+
+/// Everything the fakes share. Lengths in inches.
+#[derive(Debug, Clone)]
+pub(crate) struct World {
+    pub units: LengthUnit,
+    pub absolute: bool,
+    pub program: Point2<f64>,
+    /// Alignment modals, inches.
+    pub alignment: Option<AlignmentChain>,
+    pub tool: u32,
+    pub offsets: BTreeMap<u32, Vector2<f64>>,
+    pub pounds: BTreeMap<u32, f64>,
+    /// Physical spindle position, updated on every move.
+    pub spindle: Point2<f64>,
+    pub now_s: u64,
+    pub log: Vec<String>,
+    pub dwell_s: f64,
+    /// `set_pound` fails for this address.
+    pub fail_pound: Option<u32>,
+    /// `run_gcode` fails after this many more calls.
+    pub fail_gcode_after: Option<usize>,
+
+    pub marks: Vec<Point2<f64>>,
+    pub mark_size: f64,
+    /// True camera geometry: `d = K·R·c`, inches per pixel.
+    pub cam_k: Matrix2<f64>,
+    pub cam_remap: Remap,
+    pub res: Vector2<f64>,
+    /// Optical axis minus spindle, inches.
+    pub cam_offset: Vector2<f64>,
+    pub script: VecDeque<Result<Reading, DriverError>>,
+    pub select_job: bool,
+    pub jobs: Vec<u32>,
+    pub triggers: usize,
+    /// Uniform pixel noise amplitude (±px) added to every reading.
+    pub noise_px: f64,
+    pub rng: u64,
+}
+
+impl Default for World {
+    fn default() -> Self {
+        World {
+            units: LengthUnit::Inch,
+            absolute: true,
+            program: Point2::origin(),
+            alignment: None,
+            tool: 98,
+            offsets: BTreeMap::from([(1, Vector2::zeros()), (98, Vector2::zeros())]),
+            pounds: BTreeMap::new(),
+            spindle: Point2::origin(),
+            now_s: 1_700_000_000,
+            log: Vec::new(),
+            dwell_s: 0.0,
+            fail_pound: None,
+            fail_gcode_after: None,
+            marks: Vec::new(),
+            mark_size: 0.5,
+            cam_k: Matrix2::new(0.00203, 0.0, 0.0, 0.00203),
+            cam_remap: Remap { swap_xy: false, invert_x: false, invert_y: true },
+            res: Vector2::new(1776.0, 1776.0),
+            cam_offset: Vector2::zeros(),
+            script: VecDeque::new(),
+            select_job: true,
+            jobs: Vec::new(),
+            triggers: 0,
+            noise_px: 0.0,
+            rng: 0x9E37_79B9_7F4A_7C15,
+        }
+    }
+}
+
+impl World {
+    fn to_inch(&self, v: f64) -> f64 {
+        self.units.convert(v, LengthUnit::Inch)
+    }
+    fn inch_to_cur(&self, v: f64) -> f64 {
+        LengthUnit::Inch.convert(v, self.units)
+    }
+    /// Recomputes the spindle from the commanded position (a move happened).
+    pub(crate) fn settle(&mut self) {
+        let work = self.alignment.map_or(self.program, |a| a.apply(self.program));
+        let off = self.offsets.get(&self.tool).copied().unwrap_or_default();
+        self.spindle = work - off;
+    }
+    /// The optical axis, inches.
+    pub(crate) fn camera_axis(&self) -> Point2<f64> {
+        self.spindle + self.cam_offset
+    }
+    /// Uniform in [−1, 1), deterministic (xorshift).
+    fn jitter(&mut self) -> f64 {
+        self.rng ^= self.rng << 13;
+        self.rng ^= self.rng >> 7;
+        self.rng ^= self.rng << 17;
+        #[allow(clippy::cast_precision_loss)]
+        let u = (self.rng >> 11) as f64 / (1u64 << 53) as f64;
+        2.0 * u - 1.0
+    }
+    fn see(&mut self) -> Reading {
+        let r = self.see_exact();
+        if self.noise_px > 0.0 && r.found() {
+            let (nx, ny) = (self.jitter() * self.noise_px, self.jitter() * self.noise_px);
+            return Reading { x_px: r.x_px + nx, y_px: r.y_px + ny, ..r };
+        }
+        r
+    }
+    fn see_exact(&self) -> Reading {
+        let chain = PixelChain::new(self.cam_k, self.cam_remap, self.res, Vector2::zeros()).expect("true camera");
+        let axis = self.camera_axis();
+        let best = self
+            .marks
+            .iter()
+            .map(|m| chain.native_pixels(m - axis))
+            .filter(|p| p.x >= 0.0 && p.y >= 0.0 && p.x < self.res.x && p.y < self.res.y)
+            .min_by(|a, b| {
+                let c = Point2::from(self.res * 0.5);
+                (a - c).norm().total_cmp(&(b - c).norm())
+            });
+        match best {
+            None => Reading { judgment: Judgment::Ng, count: Some(0), ..Reading::position(0.0, 0.0) },
+            Some(p) => {
+                let kr = self.cam_k * self.cam_remap.matrix();
+                Reading {
+                    judgment: Judgment::Ok,
+                    count: Some(1),
+                    x_px: p.x,
+                    y_px: p.y,
+                    width_px: self.mark_size / kr.column(0).norm(),
+                    height_px: self.mark_size / kr.column(1).norm(),
+                    angle_deg: 1.5,
+                    score: 0.97,
+                }
+            }
+        }
+    }
+}
+
+pub(crate) type Shared = Arc<Mutex<World>>;
+
+fn lock(s: &Shared) -> MutexGuard<'_, World> {
+    s.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+/// The fake machine.
+pub(crate) struct FakeMachine(pub Shared);
+
+impl FakeMachine {
+    pub(crate) fn world(&self) -> MutexGuard<'_, World> {
+        lock(&self.0)
+    }
+}
+
+impl Machine for FakeMachine {
+    fn program_position(&self) -> Point2<f64> {
+        let w = self.world();
+        Point2::new(w.inch_to_cur(w.program.x), w.inch_to_cur(w.program.y))
+    }
+    fn active_alignment(&self) -> Option<AlignmentChain> {
+        let w = self.world();
+        w.alignment.map(|a| AlignmentChain {
+            center: Point2::new(w.inch_to_cur(a.center.x), w.inch_to_cur(a.center.y)),
+            shift: Vector2::new(w.inch_to_cur(a.shift.x), w.inch_to_cur(a.shift.y)),
+            ..a
+        })
+    }
+    fn run_gcode(&mut self, lines: &[String]) -> Result<(), MachineError> {
+        let mut w = self.world();
+        if let Some(n) = w.fail_gcode_after {
+            if n == 0 {
+                return Err(MachineError::new("emergency stop"));
+            }
+            w.fail_gcode_after = Some(n - 1);
+        }
+        for line in lines {
+            w.log.push(line.clone());
+            if line == CANCEL_LINE {
+                w.alignment = None;
+                continue;
+            }
+            let (mut x, mut y) = (None, None);
+            for word in line.split_whitespace() {
+                let (letter, num) = word.split_at(1);
+                let bad = || MachineError::new(format!("bad word {word}"));
+                match (letter, num) {
+                    ("G", "0" | "00" | "1" | "01") => {}
+                    ("G", "90") => w.absolute = true,
+                    ("G", "91") => w.absolute = false,
+                    ("G", "20") => w.units = LengthUnit::Inch,
+                    ("G", "21") => w.units = LengthUnit::Millimetre,
+                    ("X", v) => x = Some(w.to_inch(v.parse().map_err(|_| bad())?)),
+                    ("Y", v) => y = Some(w.to_inch(v.parse().map_err(|_| bad())?)),
+                    _ => return Err(MachineError::new(format!("unsupported word {word} in {line:?}"))),
+                }
+            }
+            if x.is_some() || y.is_some() {
+                let p = w.program;
+                w.program = if w.absolute {
+                    Point2::new(x.unwrap_or(p.x), y.unwrap_or(p.y))
+                } else {
+                    Point2::new(p.x + x.unwrap_or(0.0), p.y + y.unwrap_or(0.0))
+                };
+                w.settle();
+            }
+        }
+        Ok(())
+    }
+    fn active_tool(&self) -> u32 {
+        self.world().tool
+    }
+    fn tool_offset(&self, tool: u32) -> Result<Vector2<f64>, MachineError> {
+        let w = self.world();
+        let o = w.offsets.get(&tool).copied().ok_or_else(|| MachineError::new(format!("no tool {tool}")))?;
+        Ok(o * w.inch_to_cur(1.0))
+    }
+    fn set_tool_offset(&mut self, tool: u32, offset: Vector2<f64>) -> Result<(), MachineError> {
+        let mut w = self.world();
+        let f = w.to_inch(1.0);
+        match w.offsets.get_mut(&tool) {
+            Some(o) => {
+                *o = offset * f;
+                Ok(())
+            }
+            None => Err(MachineError::new(format!("no tool {tool}"))),
+        }
+    }
+    fn units(&self) -> LengthUnit {
+        self.world().units
+    }
+    fn pound(&self, index: u32) -> Result<f64, MachineError> {
+        Ok(self.world().pounds.get(&index).copied().unwrap_or(0.0))
+    }
+    fn set_pound(&mut self, index: u32, value: f64) -> Result<(), MachineError> {
+        let mut w = self.world();
+        if w.fail_pound == Some(index) {
+            return Err(MachineError::new(format!("#{index} is read-only")));
+        }
+        w.pounds.insert(index, value);
+        Ok(())
+    }
+    fn dwell(&mut self, seconds: f64) {
+        self.world().dwell_s += seconds;
+    }
+    fn now(&self) -> Timestamp {
+        Timestamp::from_unix(self.world().now_s, 3600)
+    }
+}
+
+/// The fake camera.
+pub(crate) struct FakeCamera(pub Shared);
+
+impl CameraDriver for FakeCamera {
+    fn name(&self) -> &str {
+        "Fake"
+    }
+    fn capabilities(&self) -> Capabilities {
+        Capabilities { select_job: lock(&self.0).select_job, grab_image: true }
+    }
+    fn trigger(&mut self) -> Result<Reading, DriverError> {
+        let mut w = lock(&self.0);
+        w.triggers += 1;
+        match w.script.pop_front() {
+            Some(r) => r,
+            None => Ok(w.see()),
+        }
+    }
+    fn select_job(&mut self, job: u32) -> Result<(), DriverError> {
+        let mut w = lock(&self.0);
+        if !w.select_job {
+            return Err(DriverError::new(DriverErrorKind::Unsupported, "no jobs"));
+        }
+        w.jobs.push(job);
+        Ok(())
+    }
+    fn test_connection(&mut self) -> Result<String, DriverError> {
+        Ok("FVR,fake".into())
+    }
+}
+
+/// A machine, a camera and a module sharing one world.
+pub(crate) struct Rig {
+    pub machine: FakeMachine,
+    pub module: VisionModule,
+    pub shared: Shared,
+}
+
+impl Rig {
+    /// Vision enabled, K = the true camera's K (0.00203 in/px, InvertY), camera tool 98 active.
+    pub(crate) fn new() -> Rig {
+        Rig::with_world(World::default())
+    }
+
+    pub(crate) fn with_world(world: World) -> Rig {
+        let shared: Shared = Arc::new(Mutex::new(world));
+        lock(&shared).settle();
+        let mut params = Params::default();
+        params.set("VisionEnabled", true).expect("set");
+        params.set("VisionCameraToolNumber", 98).expect("set");
+        {
+            let w = lock(&shared);
+            params.set_cal_k(w.cam_k).expect("k");
+            params.set_remap(w.cam_remap);
+        }
+        let module = VisionModule::new(params).with_driver(Box::new(FakeCamera(shared.clone())));
+        Rig { machine: FakeMachine(shared.clone()), module, shared }
+    }
+
+    pub(crate) fn world(&self) -> MutexGuard<'_, World> {
+        lock(&self.shared)
+    }
+
+    /// Runs G-code on the fake machine.
+    pub(crate) fn run(&mut self, lines: &[String]) {
+        self.machine.run_gcode(lines).expect("fake machine runs it");
+    }
+
+    /// `G90 G0 X.. Y..` in current units.
+    pub(crate) fn go(&mut self, x: f64, y: f64) {
+        self.run(&[format!("G90 G0 X{x} Y{y}")]);
+    }
+}

@@ -1,0 +1,84 @@
+//! The checks every entry point shares, and M284.
+
+use super::fakes::Rig;
+use crate::driver::{DriverError, DriverErrorKind};
+use crate::error::VisionError;
+use crate::module::{Pieces, RunMode};
+
+#[test]
+fn disabled_refuses_all_five_and_changes_nothing() {
+    let mut rig = Rig::new();
+    rig.module.params.enabled = false;
+    let before = rig.module.params().clone();
+    let m = &mut rig.machine;
+    assert_eq!(rig.module.m280(m, RunMode::Rectangle).map(|_| ()), Err(VisionError::NotEnabled));
+    assert_eq!(rig.module.m281(m, false).map(|_| ()), Err(VisionError::NotEnabled));
+    assert_eq!(rig.module.m282(m, Pieces::All).map(|_| ()), Err(VisionError::NotEnabled));
+    assert_eq!(rig.module.m284(Some(3)).map(|_| ()), Err(VisionError::NotEnabled));
+    assert_eq!(VisionError::NotEnabled.to_string().split(" —").next(), Some("Vision is not enabled"));
+    assert_eq!(rig.module.params(), &before);
+    assert_eq!(rig.world().triggers, 0);
+    assert!(rig.world().pounds.is_empty());
+}
+
+#[test]
+fn wrong_tool_refuses_m280_to_m282_but_not_m284() {
+    let mut rig = Rig::new();
+    rig.world().tool = 1;
+    let m = &mut rig.machine;
+    let wrong = Err(VisionError::WrongTool { camera: 98, active: 1 });
+    assert_eq!(rig.module.m280(m, RunMode::Rectangle).map(|_| ()), wrong);
+    assert_eq!(rig.module.m281(m, false).map(|_| ()), wrong);
+    assert_eq!(rig.module.m282(m, Pieces::All).map(|_| ()), wrong);
+    assert!(rig.module.m284(Some(2)).is_ok());
+    assert_eq!(rig.world().triggers, 0);
+    // 0 disables the check.
+    rig.module.set_param("VisionCameraToolNumber", 0).expect("set");
+    assert!(rig.module.m280(&mut rig.machine, RunMode::Rectangle).is_ok());
+}
+
+#[test]
+fn m284_switches_jobs_only_with_select_job() {
+    let mut rig = Rig::new();
+    let r = rig.module.m284(Some(5)).expect("switch");
+    assert_eq!((r.report.job, r.report.switched), (5, true));
+    assert_eq!(rig.module.params().active_job(), 5);
+    // Omitted or P0 re-applies the stored job.
+    let r = rig.module.m284(None).expect("re-apply");
+    assert_eq!(r.report.job, 5);
+    rig.module.m284(Some(0)).expect("P0");
+    assert_eq!(rig.world().jobs, vec![5, 5, 5]);
+    assert!(matches!(rig.module.m284(Some(1000)), Err(VisionError::BadWord { .. })));
+    // A camera-side refusal leaves ActiveJob alone.
+    rig.world().select_job = true;
+    let mut fresh = Rig::new();
+    fresh.world().select_job = false;
+    let e = fresh.module.m284(Some(2)).expect_err("unsupported");
+    assert_eq!(e, VisionError::SelectJobUnsupported { driver: "Fake".into() });
+    assert!(e.to_string().contains("select_job"));
+    assert_eq!(fresh.module.params().active_job(), 0);
+    // Stored job 0: nothing to apply, the camera is not contacted.
+    let mut idle = Rig::new();
+    let r = idle.module.m284(None).expect("nothing to do");
+    assert!(!r.report.switched);
+    assert!(idle.world().jobs.is_empty());
+}
+
+#[test]
+fn no_driver_is_a_clear_error() {
+    let mut rig = Rig::new();
+    rig.module.set_driver(None);
+    let e = rig.module.m281(&mut rig.machine, false).expect_err("no driver");
+    assert!(matches!(e, VisionError::NoDriver { .. }), "{e}");
+    assert!(matches!(rig.module.m284(Some(1)), Err(VisionError::NoDriver { .. })));
+}
+
+#[test]
+fn driver_errors_carry_the_manuals_fix() {
+    let mut rig = Rig::new();
+    rig.world().script.push_back(Err(DriverError::new(DriverErrorKind::Refused, "connect 192.168.208.80:8500")));
+    let e = rig.module.m281(&mut rig.machine, false).expect_err("refused");
+    assert!(e.to_string().starts_with("connection refused — camera not in Run Mode"), "{e}");
+    assert_eq!(rig.module.params().last_status(), e.to_string());
+    assert_eq!(rig.module.params().last_judgment(), -1);
+}
