@@ -34,5 +34,5 @@ pub(super) fn solve(m: &Moments) -> Result<Params, MathError> {
     if sx.is_nan() || sx <= 0.0 {
         return Err(MathError::DegenerateObserved);
     }
-    Ok(Params { rotation, scale: Vector2::new(sx, sy), shear })
+    Ok(Params { rotation, scale: Vector2::new(sx, sy), shear, linear: l })
 }

@@ -165,20 +165,34 @@ pub struct Transform {
 }
 
 /// The model-specific part of a solution.
+///
+/// `linear` is `L = R(θ)·[[sx, shear], [0, sy]]` as the residual pass needs it. A model may fill
+/// it straight from the moments (similarity does, with no square root), so the residual pass
+/// need not wait for the square root and divisions that split `L` into rotation and scales.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Params {
     rotation: UnitComplex<f64>,
     scale: Vector2<f64>,
     shear: f64,
+    linear: Matrix2<f64>,
 }
 
 impl Params {
+    /// Parameters whose `L` is built from the rotation and `U = [[sx, shear], [0, sy]]`.
+    #[inline(always)]
+    fn from_parts(rotation: UnitComplex<f64>, scale: Vector2<f64>, shear: f64) -> Params {
+        let (c, s) = (rotation.re, rotation.im);
+        let linear = Matrix2::new(c * scale.x, c * shear - s * scale.y, s * scale.x, s * shear + c * scale.y);
+        Params { rotation, scale, shear, linear }
+    }
+
     fn is_finite(&self) -> bool {
         self.rotation.re.is_finite()
             && self.rotation.im.is_finite()
             && self.scale.x.is_finite()
             && self.scale.y.is_finite()
             && self.shear.is_finite()
+            && self.linear.iter().all(|v| v.is_finite())
     }
 }
 
@@ -272,6 +286,8 @@ impl Fit {
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Moments {
     pub(crate) len: usize,
+    /// `1 / len`.
+    pub(crate) inv_len: f64,
     /// Commanded centroid n̄.
     pub(crate) cn: Vector2<f64>,
     /// Observed centroid ō.
@@ -354,7 +370,7 @@ impl Moments {
         if spread2 == 0.0 || spread2 <= floor * floor {
             return Err(MathError::CoincidentPoints);
         }
-        Ok(Moments { len, cn, co, sxx, sxy, syy, pxx, pxy, pyx, pyy })
+        Ok(Moments { len, inv_len: inv, cn, co, sxx, sxy, syy, pxx, pxy, pyx, pyy })
     }
 
     /// Refuses (nearly) collinear commanded points: the 2×2 second-moment matrix must have rank 2.
@@ -382,11 +398,9 @@ impl Moments {
         if !p.is_finite() {
             return Err(MathError::DegenerateObserved);
         }
-        let Params { rotation, scale, shear } = p;
-        let (c, s) = (rotation.re, rotation.im);
-        // L = R·[[sx, shear], [0, sy]], spelled out so the loop below stays in registers.
-        let (l11, l12) = (c * scale.x, c * shear - s * scale.y);
-        let (l21, l22) = (s * scale.x, s * shear + c * scale.y);
+        let Params { rotation, scale, shear, linear } = p;
+        // L spelled out so the loop below stays in registers.
+        let (l11, l12, l21, l22) = (linear[(0, 0)], linear[(0, 1)], linear[(1, 0)], linear[(1, 1)]);
         let (cnx, cny, cox, coy) = (self.cn.x, self.cn.y, self.co.x, self.co.y);
         let mut sum2 = 0.0;
         let mut max2: f64 = 0.0;
@@ -400,8 +414,7 @@ impl Moments {
                 max2 = r2;
             }
         }
-        #[allow(clippy::cast_precision_loss)]
-        let rms = (sum2 / self.len as f64).sqrt();
+        let rms = (sum2 * self.inv_len).sqrt();
         if !rms.is_finite() {
             return Err(MathError::NonFinite { what: "a residual (coordinates too large)" });
         }

@@ -48,5 +48,5 @@ pub(super) fn solve(m: &Moments) -> Result<Params, MathError> {
         sx = -sx;
         sy = -sy;
     }
-    Ok(Params { rotation, scale: Vector2::new(sx, sy), shear: 0.0 })
+    Ok(Params::from_parts(rotation, Vector2::new(sx, sy), 0.0))
 }

@@ -19,5 +19,5 @@ pub fn fit_rigid(commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Result<
 #[inline(always)]
 pub(super) fn solve(m: &Moments) -> Result<Params, MathError> {
     let (rotation, _) = unit(m.pxx + m.pyy, m.pxy - m.pyx, m.sxx + m.syy).ok_or(MathError::DegenerateObserved)?;
-    Ok(Params { rotation, scale: Vector2::new(1.0, 1.0), shear: 0.0 })
+    Ok(Params::from_parts(rotation, Vector2::new(1.0, 1.0), 0.0))
 }

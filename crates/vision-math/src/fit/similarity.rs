@@ -1,6 +1,6 @@
 //! Similarity: shift, rotation, one uniform scale.
 
-use nalgebra::{Point2, Vector2};
+use nalgebra::{Matrix2, Point2, Vector2};
 
 use super::{unit, Fit, Model, Moments, Params};
 use crate::MathError;
@@ -20,7 +20,12 @@ pub fn fit_similarity(commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Re
 #[inline(always)]
 pub(super) fn solve(m: &Moments) -> Result<Params, MathError> {
     let d = m.sxx + m.syy;
-    let (rotation, h) = unit(m.pxx + m.pyy, m.pxy - m.pyx, d).ok_or(MathError::DegenerateObserved)?;
-    let s = h / d;
-    Ok(Params { rotation, scale: Vector2::new(s, s), shear: 0.0 })
+    let (re, im) = (m.pxx + m.pyy, m.pxy - m.pyx);
+    // L = s·R(θ) = [[re, −im], [im, re]] / d needs no square root; only splitting it into s and
+    // θ does, and that runs beside the residual pass.
+    let inv_d = 1.0 / d;
+    let (a, b) = (re * inv_d, im * inv_d);
+    let (rotation, h) = unit(re, im, d).ok_or(MathError::DegenerateObserved)?;
+    let s = h * inv_d;
+    Ok(Params { rotation, scale: Vector2::new(s, s), shear: 0.0, linear: Matrix2::new(a, -b, b, a) })
 }
