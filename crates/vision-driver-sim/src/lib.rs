@@ -1,0 +1,51 @@
+//! A simulated CNC machine and smart camera with known truth: the world mach-vision's
+//! end-to-end proofs run in, and the CLI's built-in default.
+//!
+//! * [`World`]: the description (TOML) of what is physically true — the camera mount and
+//!   optics, pixel noise and its seed, detection, the machine, and the fixtures (parts with
+//!   fiducials, calibration sheets) with their true poses. Every field and its unit is documented
+//!   on the types in [`world`]; `default_world.toml` ([`World::default_world`]) is a complete,
+//!   commented example.
+//! * [`Sim`]: one running world (shared by the camera and the machine).
+//! * [`SimCamera`]: a [`vision_core::CameraDriver`] that sees the table from the head's true
+//!   position through the true optics ([`Optics`]).
+//! * Truth: [`Sim::true_k`], [`Sim::true_camera_offset`], [`Sim::calibration_error`].
+//!
+//! # Decisions
+//! * The camera reports the in-view mark nearest the image centre (count = marks in view).
+//! * A fixture's pose is `R·diag(scale)·(nominal − pivot) + pivot + shift` in the work frame of
+//!   the world's G54; a sheet pivots about its origin (where the operator zeroed the spindle),
+//!   so a sheet offset is an operator zeroing error that no calibration can see.
+//! * The true camera-tool offset is measured at the reference pixel `res/2 + PxCenterOffset`:
+//!   an optical-centre bias the profile does not know is absorbed into the offset, as on a real
+//!   machine.
+//! * Noise is Gaussian, two samples per trigger, from a SplitMix64 stream seeded by the world.
+//!
+//! ```
+//! use vision_core::CameraDriver;
+//! use vision_driver_sim::{Sim, World};
+//!
+//! let sim = Sim::new(World::default_world())?;
+//! let mut camera = sim.camera();
+//! // The default world starts with the camera over calibration-sheet dot 1.
+//! let reading = camera.trigger().expect("the simulated camera always answers");
+//! assert!(reading.found());
+//! # Ok::<(), vision_driver_sim::SimError>(())
+//! ```
+
+mod camera;
+mod error;
+mod fixture;
+mod optics;
+mod rng;
+mod sim;
+mod truth;
+pub mod world;
+
+pub use camera::SimCamera;
+pub use error::SimError;
+pub use fixture::TrueMark;
+pub use optics::Optics;
+pub use sim::Sim;
+pub use truth::CalibrationError;
+pub use world::{CameraMount, Fixture, Job, MachineSetup, Tool, World, WorldUnit, DEFAULT_WORLD_TOML};

@@ -1,0 +1,194 @@
+//! The shared simulated world: the truth, the head's position, the noise source and the camera
+//! job, behind one cheap-to-clone handle that the camera and the machine both hold.
+
+use std::sync::{Arc, Mutex, MutexGuard};
+
+use nalgebra::Point3;
+use vision_math::{LengthUnit, Point2, Vector2};
+
+use crate::error::SimError;
+use crate::fixture::TrueMark;
+use crate::optics::Optics;
+use crate::rng::Rng;
+use crate::world::{Fixture, Job, World};
+
+/// Everything the handle shares. Lengths in the world unit.
+#[derive(Debug)]
+pub(crate) struct State {
+    pub(crate) world: World,
+    pub(crate) optics: Optics,
+    /// Marks of every present fixture, machine coordinates.
+    pub(crate) marks: Vec<TrueMark>,
+    /// Spindle position, machine coordinates.
+    pub(crate) spindle: Point3<f64>,
+    pub(crate) rng: Rng,
+    /// The selected camera job (0 = the base settings).
+    pub(crate) job: u32,
+    pub(crate) triggers: u64,
+}
+
+impl State {
+    /// The settings of the selected job (noise σ, margin), pixels.
+    pub(crate) fn job_settings(&self) -> (f64, f64) {
+        let c = &self.world.camera;
+        let job: Option<&Job> = c.jobs.iter().find(|j| j.id == self.job);
+        (job.and_then(|j| j.noise_px).unwrap_or(c.noise_px), job.and_then(|j| j.margin_px).unwrap_or(c.margin_px))
+    }
+
+    /// The optical axis, machine coordinates.
+    pub(crate) fn camera_axis(&self) -> Point2<f64> {
+        Point2::new(self.spindle.x, self.spindle.y) + Vector2::from(self.world.camera.offset)
+    }
+}
+
+/// Machine coordinates of every mark of the present fixtures.
+fn place(world: &World) -> Vec<TrueMark> {
+    let unit = world.length_unit();
+    let zero = Vector2::new(world.machine.work_offset[0], world.machine.work_offset[1]);
+    world
+        .fixtures
+        .iter()
+        .filter(|f| f.present)
+        .flat_map(|f| f.true_marks(unit))
+        .map(|m| TrueMark { position: m.position + zero, ..m })
+        .collect()
+}
+
+/// A handle on one simulated world; clones share it.
+#[derive(Debug, Clone)]
+pub struct Sim {
+    shared: Arc<Mutex<State>>,
+}
+
+impl Sim {
+    /// A simulation of `world`, with the head at the world's start position.
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] when the world does not validate.
+    pub fn new(world: World) -> Result<Sim, SimError> {
+        world.validate()?;
+        let state = State {
+            optics: Optics::new(&world.camera),
+            marks: place(&world),
+            spindle: Point3::from(world.machine.start),
+            rng: Rng::new(world.seed),
+            job: 0,
+            triggers: 0,
+            world,
+        };
+        Ok(Sim { shared: Arc::new(Mutex::new(state)) })
+    }
+
+    pub(crate) fn lock(&self) -> MutexGuard<'_, State> {
+        // A panic while holding the lock cannot leave State inconsistent (every write is a
+        // single assignment), so a poisoned lock is still usable.
+        self.shared.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+
+    /// A copy of the world as it is now (fixtures included).
+    #[must_use]
+    pub fn world(&self) -> World {
+        self.lock().world.clone()
+    }
+
+    /// The world's length unit.
+    #[must_use]
+    pub fn unit(&self) -> LengthUnit {
+        self.lock().world.length_unit()
+    }
+
+    /// The true optics.
+    #[must_use]
+    pub fn optics(&self) -> Optics {
+        self.lock().optics
+    }
+
+    /// Spindle position, machine coordinates, world unit.
+    #[must_use]
+    pub fn spindle(&self) -> Point3<f64> {
+        self.lock().spindle
+    }
+
+    /// Moves the head: the spindle is now at `p` (machine coordinates, world unit). The
+    /// simulated machine calls this after every motion.
+    pub fn set_spindle(&self, p: Point3<f64>) {
+        self.lock().spindle = p;
+    }
+
+    /// The camera's optical axis, machine coordinates, world unit.
+    #[must_use]
+    pub fn camera_axis(&self) -> Point2<f64> {
+        self.lock().camera_axis()
+    }
+
+    /// Every mark on the table, machine coordinates, world unit.
+    #[must_use]
+    pub fn marks(&self) -> Vec<TrueMark> {
+        self.lock().marks.clone()
+    }
+
+    /// Number of camera triggers so far.
+    #[must_use]
+    pub fn triggers(&self) -> u64 {
+        self.lock().triggers
+    }
+
+    /// The selected camera job (0 = base settings).
+    #[must_use]
+    pub fn job(&self) -> u32 {
+        self.lock().job
+    }
+
+    /// Puts fixture `name` on the table or takes it off (the operator swapping a calibration
+    /// sheet for a part).
+    ///
+    /// # Errors
+    /// [`SimError::UnknownFixture`].
+    pub fn set_present(&self, name: &str, present: bool) -> Result<(), SimError> {
+        let mut st = self.lock();
+        let known = st.world.fixtures.iter().map(|f| f.name.clone()).collect::<Vec<_>>().join(", ");
+        let f = st
+            .world
+            .fixtures
+            .iter_mut()
+            .find(|f| f.name == name)
+            .ok_or_else(|| SimError::UnknownFixture { name: name.to_string(), known })?;
+        f.present = present;
+        st.marks = place(&st.world);
+        Ok(())
+    }
+
+    /// Replaces everything on the table.
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] when a fixture does not validate; the table is left unchanged.
+    pub fn set_fixtures(&self, fixtures: Vec<Fixture>) -> Result<(), SimError> {
+        let mut st = self.lock();
+        let mut world = st.world.clone();
+        world.fixtures = fixtures;
+        world.validate()?;
+        st.marks = place(&world);
+        st.world = world;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fixtures_come_and_go() {
+        let sim = Sim::new(World::default_world()).expect("sim");
+        assert_eq!(sim.marks().len(), 15);
+        // Work zero is G54 = (10, 8): dot 5 lies there in machine coordinates.
+        assert!((sim.marks()[4].position - Point2::new(10.0, 8.0)).norm() < 1e-12);
+        sim.set_present("demo target", false).expect("known");
+        assert!(sim.marks().is_empty());
+        assert!(matches!(sim.set_present("nope", true), Err(SimError::UnknownFixture { .. })));
+        let mut bad = sim.world().fixtures;
+        bad[0].scale = [-1.0, 1.0];
+        assert!(sim.set_fixtures(bad).is_err());
+        assert!(sim.marks().is_empty(), "a refused table leaves the old one");
+    }
+}

@@ -1,0 +1,125 @@
+//! What a perfect calibration would write, and how far a real one is from it.
+
+use vision_core::calibrate::detect_remap;
+use vision_core::{Params, VisionError};
+use vision_math::{LengthUnit, Matrix2, Remap, Vector2};
+
+use crate::sim::Sim;
+
+/// How far a calibration is from the truth.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CalibrationError {
+    /// `‖K − K_true‖ / ‖K_true‖` (Frobenius norms), dimensionless.
+    pub k_relative: f64,
+    /// Distance between the camera tool's X/Y tool-table offset and the true one, in `unit`.
+    pub offset: f64,
+    /// The unit of `offset`.
+    pub unit: LengthUnit,
+    /// True when the remap flags are the ones the axis detect should find.
+    pub remap_matches: bool,
+}
+
+impl Sim {
+    /// The remap the M283 axis detect finds for this camera (the signed permutation closest to
+    /// the true image orientation).
+    #[must_use]
+    pub fn true_remap(&self) -> Remap {
+        let o = self.optics();
+        let inv = o.kr().try_inverse().unwrap_or_else(Matrix2::identity);
+        // Pixel motion of a fixed mark when the camera moves +X, then +Y (100 px each).
+        let along = |v: Vector2<f64>| {
+            let p = inv * -v;
+            p * (100.0 / p.norm())
+        };
+        detect_remap(along(Vector2::x()), along(Vector2::y())).unwrap_or_default()
+    }
+
+    /// The K a perfect calibration writes for `remap`, in `unit` per pixel: `K = (K·R)·Rᵀ`.
+    #[must_use]
+    pub fn true_k(&self, remap: Remap, unit: LengthUnit) -> Matrix2<f64> {
+        self.optics().kr() * remap.matrix().transpose() * self.unit().factor_to(unit)
+    }
+
+    /// The camera tool's true X/Y tool-table offset in `unit`: the one that puts the reference
+    /// pixel `res/2 + px_center_offset` (pixels) over the commanded point.
+    #[must_use]
+    pub fn true_camera_offset(&self, px_center_offset: Vector2<f64>, unit: LengthUnit) -> Vector2<f64> {
+        let st = self.lock();
+        let v = Vector2::from(st.world.camera.offset) + st.optics.kr() * (px_center_offset - st.optics.bias());
+        v * st.world.length_unit().factor_to(unit)
+    }
+
+    /// `base` with Vision enabled, driver `Sim`, the camera tool number, and K, the remap flags
+    /// and `Cal_Units` (the world unit) as a perfect calibration would leave them.
+    ///
+    /// # Errors
+    /// Only if `base` holds a value the setters refuse (they do not for valid parameters).
+    pub fn calibrated_params(&self, base: &Params) -> Result<Params, VisionError> {
+        let mut p = base.clone();
+        let unit = self.unit();
+        let remap = self.true_remap();
+        p.set("VisionEnabled", true)?;
+        p.set("VisionDriver", "Sim")?;
+        p.set("VisionCameraToolNumber", i64::from(self.world().machine.camera_tool))?;
+        p.set("VisionCal_Units", unit.short_name())?;
+        p.set_remap(remap);
+        p.set_cal_k(self.true_k(remap, unit))?;
+        Ok(p)
+    }
+
+    /// Compares `params` (K in `Cal_Units`, remap, PxCenterOffset) and the camera tool's table
+    /// offset `table_offset` (in `unit`) with the truth.
+    #[must_use]
+    pub fn calibration_error(&self, params: &Params, table_offset: Vector2<f64>, unit: LengthUnit) -> CalibrationError {
+        let truth = self.true_k(params.remap(), params.cal_units());
+        let k_relative = (params.cal_k() - truth).norm() / truth.norm();
+        let px = Vector2::new(params.px_center_offset_x(), params.px_center_offset_y());
+        let offset = (table_offset - self.true_camera_offset(px, unit)).norm();
+        CalibrationError { k_relative, offset, unit, remap_matches: params.remap() == self.true_remap() }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::World;
+    use approx::assert_relative_eq;
+    use vision_math::PixelChain;
+
+    #[test]
+    fn the_true_k_makes_the_core_chain_invert_the_optics_for_all_eight_orientations() {
+        for rotation in [0.0, 90.0, 180.0, 270.0, 2.5, 92.9, -177.0] {
+            for mirror in [false, true] {
+                let mut w = World::default_world();
+                w.camera.rotation_deg = rotation;
+                w.camera.mirror = mirror;
+                w.camera.pixel_aspect = 1.003;
+                let sim = Sim::new(w).expect("sim");
+                let remap = sim.true_remap();
+                let k = sim.true_k(remap, LengthUnit::Millimetre);
+                // The remapped K is nearly diagonal with positive entries: the detect is right.
+                assert!(k[(0, 0)] > 0.0 && k[(1, 1)] > 0.0, "{rotation} {mirror}: {k}");
+                assert!(k[(0, 1)].abs() < 0.06 * k[(0, 0)], "{rotation} {mirror}: {k}");
+                let bias = sim.optics().bias();
+                let chain = PixelChain::new(k, remap, sim.optics().resolution(), bias).expect("chain");
+                let v = Vector2::new(0.4, -0.25);
+                let seen = chain.delta(sim.optics().pixel(v));
+                assert_relative_eq!(seen, v * 25.4, epsilon = 1e-9);
+            }
+        }
+    }
+
+    #[test]
+    fn calibrated_params_have_no_error() {
+        let sim = Sim::new(World::default_world()).expect("sim");
+        let p = sim.calibrated_params(&Params::default()).expect("params");
+        assert!(p.enabled());
+        let truth = sim.true_camera_offset(Vector2::zeros(), LengthUnit::Inch);
+        // The bias (3, −2) px moves the reference point off the optical axis.
+        assert!((truth - Vector2::new(-3.25, 1.75)).norm() > 0.004);
+        let e = sim.calibration_error(&p, truth, LengthUnit::Inch);
+        assert!(e.k_relative < 1e-15 && e.offset < 1e-15 && e.remap_matches, "{e:?}");
+        let mm = sim.calibration_error(&p, truth * 25.4, LengthUnit::Millimetre);
+        assert!(mm.offset < 1e-12, "{mm:?}");
+    }
+}

@@ -1,0 +1,440 @@
+//! The world description: everything that is physically true in a simulation, as TOML.
+//!
+//! Every length is in the world's [`World::unit`] (inch unless the file says `unit = "mm"`),
+//! every angle in degrees counter-clockwise seen from +Z, every pixel quantity in native camera
+//! pixels. Machine coordinates are the spindle's position; work coordinates are machine
+//! coordinates minus [`MachineSetup::work_offset`] (the G54 the world starts with).
+//!
+//! The built-in default world ([`World::default_world`]) is `default_world.toml` in this crate,
+//! a complete, commented example of the format.
+
+use serde::{Deserialize, Serialize};
+use vision_core::cal_sheet;
+use vision_math::LengthUnit;
+
+use crate::error::SimError;
+
+/// The length unit of a world file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+pub enum WorldUnit {
+    /// Inches (`"in"`).
+    #[default]
+    #[serde(rename = "in")]
+    Inch,
+    /// Millimetres (`"mm"`).
+    #[serde(rename = "mm")]
+    Millimetre,
+}
+
+impl WorldUnit {
+    /// The same unit as a [`LengthUnit`].
+    #[must_use]
+    pub fn length_unit(self) -> LengthUnit {
+        match self {
+            WorldUnit::Inch => LengthUnit::Inch,
+            WorldUnit::Millimetre => LengthUnit::Millimetre,
+        }
+    }
+}
+
+/// A simulated world: the camera, the machine, and what lies on the table.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct World {
+    /// Unit of every length in the world (default inch).
+    #[serde(default)]
+    pub unit: WorldUnit,
+    /// Seed of the pixel-noise generator: the same seed and the same program give the same run.
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// The camera and how it is mounted.
+    pub camera: CameraMount,
+    /// The machine.
+    pub machine: MachineSetup,
+    /// What lies on the table (parts and calibration sheets).
+    #[serde(default, rename = "fixture")]
+    pub fixtures: Vec<Fixture>,
+}
+
+fn default_seed() -> u64 {
+    1
+}
+
+/// The camera, its optics and its mount on the head.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraMount {
+    /// Optical axis minus spindle, machine X/Y axes, world unit. (The camera tool's true X/Y
+    /// tool-table offset when the reference pixel is the optical centre.)
+    pub offset: [f64; 2],
+    /// Rotation of the image about +Z, degrees counter-clockwise: 0 means image +x along machine
+    /// +X and image +y (down) along machine −Y. Any angle is allowed (90° multiples included).
+    #[serde(default)]
+    pub rotation_deg: f64,
+    /// The image is mirrored (image x flipped), e.g. a camera looking through a mirror.
+    #[serde(default)]
+    pub mirror: bool,
+    /// Size of one pixel's height on the table at `reference_working_distance`, world unit per
+    /// pixel.
+    pub units_per_pixel: f64,
+    /// Pixel width over pixel height (1 = square pixels).
+    #[serde(default = "one")]
+    pub pixel_aspect: f64,
+    /// Image size `[ResX, ResY]`, pixels.
+    #[serde(default = "default_resolution")]
+    pub resolution: [u32; 2],
+    /// Optical centre minus image centre `[x, y]`, native pixels (a lens not centred on the
+    /// sensor).
+    #[serde(default)]
+    pub center_bias_px: [f64; 2],
+    /// Lens-to-surface distance now, world unit. The scale on the table is proportional to it.
+    pub working_distance: f64,
+    /// The distance at which `units_per_pixel` holds, world unit (defaults to
+    /// `working_distance`).
+    #[serde(default)]
+    pub reference_working_distance: Option<f64>,
+    /// Standard deviation of the Gaussian noise added to each reported pixel coordinate, pixels.
+    #[serde(default)]
+    pub noise_px: f64,
+    /// A mark is found only when its centre lies at least this far inside the image, pixels.
+    #[serde(default = "default_margin")]
+    pub margin_px: f64,
+    /// Camera jobs selectable with M284; empty means every job 1–999 behaves like the base
+    /// settings.
+    #[serde(default, rename = "job")]
+    pub jobs: Vec<Job>,
+}
+
+fn one() -> f64 {
+    1.0
+}
+fn default_resolution() -> [u32; 2] {
+    [1776, 1776]
+}
+fn default_margin() -> f64 {
+    20.0
+}
+
+/// A camera job (inspection program) with its own settings.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Job {
+    /// Job number, 1–999.
+    pub id: u32,
+    /// What the job is (shown in reports).
+    #[serde(default)]
+    pub name: String,
+    /// This job's pixel noise σ, pixels (default: the camera's).
+    #[serde(default)]
+    pub noise_px: Option<f64>,
+    /// This job's detection margin, pixels (default: the camera's).
+    #[serde(default)]
+    pub margin_px: Option<f64>,
+}
+
+/// The machine: where it starts, its work offset, its tools.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MachineSetup {
+    /// Spindle position at start, machine coordinates `[X, Y, Z]`, world unit.
+    #[serde(default)]
+    pub start: [f64; 3],
+    /// G54: the machine position of work zero `[X, Y, Z]`, world unit. Fixture poses are given
+    /// in this work frame.
+    #[serde(default)]
+    pub work_offset: [f64; 3],
+    /// The camera's tool number (`VisionCameraToolNumber`).
+    #[serde(default = "default_camera_tool")]
+    pub camera_tool: u32,
+    /// The camera tool's X/Y in the control's tool table at start, world unit. Omitted: the true
+    /// offset, as a calibration would have left it.
+    #[serde(default)]
+    pub camera_table_offset: Option<[f64; 2]>,
+    /// The tool the machine starts with (0 = none).
+    #[serde(default)]
+    pub start_tool: u32,
+    /// The cutting tools: their true offsets, which the tool table also holds.
+    #[serde(default, rename = "tool")]
+    pub tools: Vec<Tool>,
+}
+
+fn default_camera_tool() -> u32 {
+    98
+}
+
+/// A cutting tool.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Tool {
+    /// Tool number (≥ 1, not the camera tool).
+    pub number: u32,
+    /// Tool tip minus spindle `[X, Y, Z]`, world unit (true, and what the table holds).
+    #[serde(default)]
+    pub offset: [f64; 3],
+}
+
+/// Something on the table with marks on it: a part with fiducials, a calibration sheet, or both
+/// on one print.
+///
+/// Where the marks really are, in work coordinates:
+/// `true = R(rotation_deg)·diag(scale)·(nominal − center) + center + shift`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Fixture {
+    /// Name (shown in reports).
+    #[serde(default)]
+    pub name: String,
+    /// A calibration sheet from `CAL_SHEETS` whose dots this fixture carries (in the world unit;
+    /// they come first, in walk order).
+    #[serde(default)]
+    pub sheet: Option<u32>,
+    /// Further marks, nominal work coordinates, world unit.
+    #[serde(default)]
+    pub marks: Vec<[f64; 2]>,
+    /// Printed mark diameter, world unit (default: the sheet's, else 0.25 in).
+    #[serde(default)]
+    pub diameter: Option<f64>,
+    /// True shift, world unit.
+    #[serde(default)]
+    pub shift: [f64; 2],
+    /// True rotation, degrees counter-clockwise.
+    #[serde(default)]
+    pub rotation_deg: f64,
+    /// True scale along the fixture's X and Y (a print scale error, or a part that grew).
+    #[serde(default = "unit_scale")]
+    pub scale: [f64; 2],
+    /// Pivot of the rotation and scale, nominal work coordinates (default: the sheet origin for
+    /// a sheet, else the centroid of the marks).
+    #[serde(default)]
+    pub center: Option<[f64; 2]>,
+    /// Whether the fixture is on the table (a world can hold fixtures that tests swap in).
+    #[serde(default = "yes")]
+    pub present: bool,
+}
+
+fn unit_scale() -> [f64; 2] {
+    [1.0, 1.0]
+}
+fn yes() -> bool {
+    true
+}
+
+/// The built-in default world's text.
+pub const DEFAULT_WORLD_TOML: &str = include_str!("default_world.toml");
+
+impl World {
+    /// The built-in default world: a calibrated camera and one printed demo target that carries
+    /// calibration sheet 1 and every fiducial the manual's example programs visit.
+    #[must_use]
+    pub fn default_world() -> World {
+        // The embedded file is checked by a test; a broken build would fail there first.
+        World::from_toml(DEFAULT_WORLD_TOML).unwrap_or_else(|e| unreachable!("built-in world: {e}"))
+    }
+
+    /// Parses and validates a world file.
+    ///
+    /// # Errors
+    /// [`SimError::Parse`] for TOML that does not match the schema (unknown fields included),
+    /// [`SimError::Invalid`] for values out of range.
+    pub fn from_toml(text: &str) -> Result<World, SimError> {
+        let world: World = toml::from_str(text).map_err(|e| SimError::Parse { reason: e.to_string() })?;
+        world.validate()?;
+        Ok(world)
+    }
+
+    /// The world as TOML.
+    ///
+    /// # Errors
+    /// [`SimError::Parse`] if serialisation fails (it does not for a validated world).
+    pub fn to_toml(&self) -> Result<String, SimError> {
+        toml::to_string_pretty(self).map_err(|e| SimError::Parse { reason: e.to_string() })
+    }
+
+    /// The world unit as a [`LengthUnit`].
+    #[must_use]
+    pub fn length_unit(&self) -> LengthUnit {
+        self.unit.length_unit()
+    }
+
+    /// Checks every value; the simulator relies on this.
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] naming the first bad field.
+    pub fn validate(&self) -> Result<(), SimError> {
+        let c = &self.camera;
+        finite("camera.offset", &c.offset)?;
+        finite("camera.rotation_deg", &[c.rotation_deg])?;
+        positive("camera.units_per_pixel", c.units_per_pixel)?;
+        positive("camera.pixel_aspect", c.pixel_aspect)?;
+        positive("camera.working_distance", c.working_distance)?;
+        if let Some(r) = c.reference_working_distance {
+            positive("camera.reference_working_distance", r)?;
+        }
+        for (i, r) in c.resolution.iter().enumerate() {
+            if !(2..=100_000).contains(r) {
+                return invalid(format!("camera.resolution[{i}]"), "must be 2..100000 pixels");
+            }
+        }
+        finite("camera.center_bias_px", &c.center_bias_px)?;
+        non_negative("camera.noise_px", c.noise_px)?;
+        let half = f64::from(c.resolution[0].min(c.resolution[1])) / 2.0;
+        let margin_ok = |m: f64| m.is_finite() && m >= 0.0 && m < half;
+        if !margin_ok(c.margin_px) {
+            return invalid("camera.margin_px", "must be ≥ 0 and less than half the smaller image side");
+        }
+        let mut ids = Vec::new();
+        for j in &c.jobs {
+            if !(1..=999).contains(&j.id) || ids.contains(&j.id) {
+                return invalid(format!("camera.job id {}", j.id), "job ids must be unique and 1..999");
+            }
+            ids.push(j.id);
+            if let Some(n) = j.noise_px {
+                non_negative("camera.job.noise_px", n)?;
+            }
+            if j.margin_px.is_some_and(|m| !margin_ok(m)) {
+                return invalid("camera.job.margin_px", "must be ≥ 0 and less than half the smaller image side");
+            }
+        }
+        let m = &self.machine;
+        finite("machine.start", &m.start)?;
+        finite("machine.work_offset", &m.work_offset)?;
+        if let Some(o) = &m.camera_table_offset {
+            finite("machine.camera_table_offset", o)?;
+        }
+        if m.camera_tool == 0 {
+            return invalid("machine.camera_tool", "the camera needs a tool number ≥ 1");
+        }
+        let mut numbers = vec![m.camera_tool];
+        for t in &m.tools {
+            if t.number == 0 || numbers.contains(&t.number) {
+                return invalid(
+                    format!("machine.tool {}", t.number),
+                    "tool numbers must be ≥ 1, unique, and not the camera tool",
+                );
+            }
+            numbers.push(t.number);
+            finite("machine.tool.offset", &t.offset)?;
+        }
+        if m.start_tool != 0 && !numbers.contains(&m.start_tool) {
+            return invalid("machine.start_tool", "must be 0, the camera tool or a listed tool");
+        }
+        for f in &self.fixtures {
+            f.validate()?;
+        }
+        Ok(())
+    }
+}
+
+impl Fixture {
+    fn validate(&self) -> Result<(), SimError> {
+        let at = |field: &str| format!("fixture {:?}: {field}", self.name);
+        if let Some(n) = self.sheet {
+            if cal_sheet(n).is_none() {
+                return invalid(at("sheet"), format!("no calibration sheet {n} in CAL_SHEETS"));
+            }
+        } else if self.marks.is_empty() {
+            return invalid(at("marks"), "a fixture needs marks or a sheet");
+        }
+        for m in &self.marks {
+            finite(&at("marks"), m)?;
+        }
+        if let Some(d) = self.diameter {
+            positive(&at("diameter"), d)?;
+        }
+        finite(&at("shift"), &self.shift)?;
+        finite(&at("rotation_deg"), &[self.rotation_deg])?;
+        positive(&at("scale[0]"), self.scale[0])?;
+        positive(&at("scale[1]"), self.scale[1])?;
+        if let Some(c) = &self.center {
+            finite(&at("center"), c)?;
+        }
+        Ok(())
+    }
+}
+
+fn invalid<T>(field: impl Into<String>, reason: impl Into<String>) -> Result<T, SimError> {
+    Err(SimError::Invalid { field: field.into(), reason: reason.into() })
+}
+
+fn finite(field: &str, values: &[f64]) -> Result<(), SimError> {
+    if values.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        invalid(field, "must be finite numbers")
+    }
+}
+
+fn positive(field: &str, v: f64) -> Result<(), SimError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        invalid(field, "must be a positive number")
+    }
+}
+
+fn non_negative(field: &str, v: f64) -> Result<(), SimError> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        invalid(field, "must be a number ≥ 0")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_default_world_parses_validates_and_round_trips() {
+        let w = World::from_toml(DEFAULT_WORLD_TOML).expect("built-in world");
+        assert_eq!(w, World::default_world());
+        let again = World::from_toml(&w.to_toml().expect("toml")).expect("round trip");
+        assert_eq!(again, w);
+    }
+
+    #[test]
+    fn bad_values_name_the_field() {
+        let bad = |edit: &dyn Fn(&mut World)| {
+            let mut w = World::default_world();
+            edit(&mut w);
+            match w.validate() {
+                Err(SimError::Invalid { field, .. }) => field,
+                other => panic!("expected Invalid, got {other:?}"),
+            }
+        };
+        assert_eq!(bad(&|w| w.camera.units_per_pixel = 0.0), "camera.units_per_pixel");
+        assert_eq!(bad(&|w| w.camera.pixel_aspect = f64::NAN), "camera.pixel_aspect");
+        assert_eq!(bad(&|w| w.camera.resolution = [0, 10]), "camera.resolution[0]");
+        assert_eq!(bad(&|w| w.camera.margin_px = 5000.0), "camera.margin_px");
+        assert_eq!(bad(&|w| w.camera.noise_px = -1.0), "camera.noise_px");
+        assert_eq!(bad(&|w| w.machine.camera_tool = 0), "machine.camera_tool");
+        assert_eq!(bad(&|w| w.machine.start[2] = f64::INFINITY), "machine.start");
+        assert!(bad(&|w| w.fixtures[0].sheet = Some(99)).contains("sheet"));
+        assert!(bad(&|w| w.fixtures[0].scale = [0.0, 1.0]).contains("scale[0]"));
+        assert!(bad(&|w| {
+            w.fixtures[0].sheet = None;
+            w.fixtures[0].marks.clear();
+        })
+        .contains("marks"));
+    }
+
+    #[test]
+    fn unknown_fields_and_bad_toml_are_refused() {
+        let text = DEFAULT_WORLD_TOML.replace("[camera]", "[camera]\nzoom = 2");
+        assert!(matches!(World::from_toml(&text), Err(SimError::Parse { .. })));
+        assert!(matches!(World::from_toml("camera = 3"), Err(SimError::Parse { .. })));
+        assert!(matches!(World::from_toml(""), Err(SimError::Parse { .. })));
+    }
+
+    #[test]
+    fn a_minimal_world_takes_the_defaults() {
+        let w = World::from_toml(
+            "[camera]\noffset = [1.0, 2.0]\nunits_per_pixel = 0.002\nworking_distance = 6.0\n[machine]\n",
+        )
+        .expect("minimal");
+        assert_eq!(w.unit, WorldUnit::Inch);
+        assert_eq!(w.camera.resolution, [1776, 1776]);
+        assert_eq!(w.machine.camera_tool, 98);
+        assert!(w.fixtures.is_empty());
+    }
+}
