@@ -87,15 +87,21 @@
 mod blend;
 mod curve;
 mod error;
+mod follower;
 mod input;
 mod limits;
 mod lookahead;
 mod profile;
 mod sampler;
 mod shaper;
+mod tools;
 mod vec3;
 
 pub use error::PathError;
+pub use follower::{
+    Axis, AxisMap, DrivePosition, FollowerConfig, MotionSink, Pace, PathFollower, PathStatus, RunState,
+};
 pub use input::{ArcShape, Event, Item, OutputCommand, PathMode, Segment, Shape, Speed, ToolState};
 pub use limits::{AxisLimits, Limits, PlanConfig};
 pub use sampler::{Setpoint, Setpoints, Step, Summary, TimedEvent};
+pub use tools::{DigitalOutput, OutputWrite, Tool, ToolTable};

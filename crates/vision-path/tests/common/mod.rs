@@ -57,6 +57,21 @@ impl Program {
         self
     }
 
+    /// A G2/G3 in the XY plane (G17) to `end` about `centre`, exactly as programmed.
+    pub fn g17_arc_to(&mut self, end: [f64; 3], centre: [f64; 3], clockwise: bool, speed: Speed) -> &mut Program {
+        let line = self.next_line();
+        self.items.push(Item::Move(Segment {
+            line,
+            start: self.pos,
+            end,
+            shape: Shape::Arc(ArcShape { centre, normal: [0.0, 0.0, 1.0], clockwise, turns: 1 }),
+            speed,
+            mode: self.mode,
+        }));
+        self.pos = end;
+        self
+    }
+
     pub fn item(&mut self, f: impl FnOnce(usize) -> Item) -> &mut Program {
         let line = self.next_line();
         self.items.push(f(line));
