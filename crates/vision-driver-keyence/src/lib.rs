@@ -2,6 +2,7 @@
 
 mod config;
 mod driver;
+pub mod emulator;
 mod error;
 pub mod protocol;
 mod transport;
