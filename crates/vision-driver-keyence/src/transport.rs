@@ -21,10 +21,8 @@ const MAX_DRAIN: usize = 64 * 1024;
 pub(crate) struct TcpLink {
     stream: TcpStream,
     deadline: Instant,
-    /// The read timeout currently set on the socket.
-    read_timeout: Option<Duration>,
-    /// The write timeout currently set on the socket.
-    write_timeout: Option<Duration>,
+    /// The read and write timeouts currently set on the socket.
+    timeouts: [Option<Duration>; 2],
 }
 
 impl TcpLink {
@@ -43,7 +41,7 @@ impl TcpLink {
                 break;
             }
             match connect_one(addr, remaining, config) {
-                Ok(stream) => return Ok(TcpLink { stream, deadline, read_timeout: None, write_timeout: None }),
+                Ok(stream) => return Ok(TcpLink { stream, deadline, timeouts: [None; 2] }),
                 Err(e) => last = Some(e),
             }
         }
@@ -51,10 +49,12 @@ impl TcpLink {
     }
 
     /// Every read and write from now on must finish by `deadline`.
+    ///
+    /// The socket timeouts already set are kept: a later deadline only means a socket timeout
+    /// may fire early, which [`Read::read`] treats as "wait again", so a steady stream of calls
+    /// with the same timeout costs no system call for it.
     pub(crate) fn set_deadline(&mut self, deadline: Instant) {
         self.deadline = deadline;
-        self.read_timeout = None;
-        self.write_timeout = None;
     }
 
     /// Checks an idle connection before reuse: drains stale bytes (they answer no command) and
@@ -103,20 +103,31 @@ fn timeout_update(current: Option<Duration>, left: Duration) -> Option<Duration>
     }
 }
 
-impl Read for TcpLink {
-    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+/// Which way a socket operation goes (indexes [`TcpLink::timeouts`]).
+#[derive(Clone, Copy)]
+enum Way {
+    Read = 0,
+    Write = 1,
+}
+
+impl TcpLink {
+    /// Runs one blocking socket operation so that it ends by the deadline: sets the socket's
+    /// timeout for `way` when the one in place could overrun it, and treats a socket timeout
+    /// that fires early (set for an earlier deadline) as "wait again".
+    fn bounded<T>(&mut self, way: Way, mut op: impl FnMut(&mut TcpStream) -> io::Result<T>) -> io::Result<T> {
         loop {
             let left = self.remaining()?;
-            if let Some(t) = timeout_update(self.read_timeout, left) {
-                self.stream.set_read_timeout(Some(t))?;
-                self.read_timeout = Some(t);
+            if let Some(t) = timeout_update(self.timeouts[way as usize], left) {
+                match way {
+                    Way::Read => self.stream.set_read_timeout(Some(t))?,
+                    Way::Write => self.stream.set_write_timeout(Some(t))?,
+                }
+                self.timeouts[way as usize] = Some(t);
             }
-            match self.stream.read(buf) {
-                // A socket timeout shorter than the time left (set for an earlier deadline) is
-                // not the call's timeout: wait again.
+            match op(&mut self.stream) {
                 Err(e) if matches!(e.kind(), io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut) => {
                     self.remaining()?;
-                    self.read_timeout = None;
+                    self.timeouts[way as usize] = None;
                 }
                 other => return other,
             }
@@ -124,14 +135,15 @@ impl Read for TcpLink {
     }
 }
 
+impl Read for TcpLink {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        self.bounded(Way::Read, |s| s.read(buf))
+    }
+}
+
 impl Write for TcpLink {
     fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
-        let left = self.remaining()?;
-        if let Some(t) = timeout_update(self.write_timeout, left) {
-            self.stream.set_write_timeout(Some(t))?;
-            self.write_timeout = Some(t);
-        }
-        self.stream.write(buf)
+        self.bounded(Way::Write, |s| s.write(buf))
     }
 
     fn flush(&mut self) -> io::Result<()> {

@@ -58,13 +58,22 @@ pub(crate) enum FrameError {
 ///
 /// A lone LF straight after a CR (a CRLF pair, even split across reads) is part of that line
 /// end, never a line of its own; other empty lines are returned empty and the caller skips them.
-#[derive(Debug)]
 pub(crate) struct LineReader {
     buf: Box<[u8]>,
     start: usize,
     end: usize,
     after_cr: bool,
     max_line_len: usize,
+}
+
+impl std::fmt::Debug for LineReader {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("LineReader")
+            .field("buffered", &(self.end - self.start))
+            .field("after_cr", &self.after_cr)
+            .field("max_line_len", &self.max_line_len)
+            .finish()
+    }
 }
 
 impl LineReader {

@@ -102,9 +102,7 @@ pub struct Session<S> {
 
 impl<S: Read + Write> Session<S> {
     /// A session over `stream`. `timeout` is only quoted in messages: the stream enforces it.
-    ///
-    /// # Panics
-    /// Never: out-of-range `limits` are clamped to [`Limits::validate`]'s bounds.
+    /// Out-of-range `limits` are clamped to [`Limits::validate`]'s bounds.
     #[must_use]
     pub fn new(stream: S, limits: Limits, timeout: Duration) -> Session<S> {
         let limits =
