@@ -1,4 +1,7 @@
-//! Deterministic inputs shared by the benchmarks (no RNG crate: a fixed LCG).
+//! Deterministic inputs shared by the benchmarks (no RNG crate: a fixed LCG), and the Keyence
+//! benchmarks' emulated camera, raw client and in-memory camera ([`keyence`]).
+
+pub mod keyence;
 
 use vision_math::{Point2, Vector2};
 
