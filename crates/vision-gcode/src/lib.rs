@@ -92,8 +92,10 @@
 //!   M-code's line; its own errors are numbered within that text and wrapped
 //!   ([`GcodeError::HandlerGcode`]); user M-codes and M2/M30 inside it are errors.
 //! * **Syntax** follows LinuxCNC: blanks are ignored everywhere outside comments (`G1 2` is
-//!   `G12`), `N` must come first, a letter may not repeat (G and M excepted), comments do not
-//!   nest. Any NaN or infinity in an expression is an error, never a coordinate.
+//!   `G12`), `N` must come first, a letter may not repeat (G and M excepted). Unlike LinuxCNC,
+//!   parentheses nest inside comments, because the manual's own programs write
+//!   `( ... (lower-left -2.5,-4.0) )`. Any NaN or infinity in an expression is an error, never a
+//!   coordinate.
 //! * Seed 002's G19 snippet as printed starts 353.6 mm from its arc centre and ends 250 mm from
 //!   it; it is refused like LinuxCNC refuses it (the test runs it with the start the other
 //!   plane snippets use).

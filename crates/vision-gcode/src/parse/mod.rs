@@ -286,12 +286,9 @@ impl Parser {
             let at = cur.pos;
             match b {
                 b'(' => {
-                    let close = cur.bytes[at + 1..]
-                        .iter()
-                        .position(|&c| c == b')')
-                        .ok_or((at, SyntaxProblem::UnclosedComment))?;
-                    self.comments.push(span(at + 1, at + 1 + close));
-                    cur.pos = at + close + 2;
+                    let close = comment_end(cur.bytes, at).ok_or((at, SyntaxProblem::UnclosedComment))?;
+                    self.comments.push(span(at + 1, close));
+                    cur.pos = close + 1;
                     continue;
                 }
                 b';' => {
@@ -382,6 +379,25 @@ impl Parser {
         f(self, cur)?;
         Ok(Expr { start: offset(start), end: offset(self.nodes.len()) })
     }
+}
+
+/// The `)` that closes the comment opened at `open`. Parentheses inside a comment nest (the
+/// manual's own programs write `( ... (lower-left -2.5,-4.0) )`).
+fn comment_end(bytes: &[u8], open: usize) -> Option<usize> {
+    let mut depth = 0usize;
+    for (i, &b) in bytes.iter().enumerate().skip(open) {
+        match b {
+            b'(' => depth += 1,
+            b')' => {
+                depth -= 1;
+                if depth == 0 {
+                    return Some(i);
+                }
+            }
+            _ => {}
+        }
+    }
+    None
 }
 
 fn span(start: usize, end: usize) -> Span {

@@ -51,11 +51,11 @@ fn words_numbers_case_and_blanks() {
 #[test]
 fn line_numbers_comments_and_delimiters() {
     let mut parser = Parser::new();
-    let block = parser.parse_line("N120 G0 X1 (move (to) ; the corner", 7).expect("parses");
+    let block = parser.parse_line("N120 G0 X1 (move (to) it) ; the corner", 7).expect("parses");
     assert_eq!(block.line(), 7);
     assert_eq!(block.line_number(), Some(120));
     assert_eq!(block.words().len(), 2);
-    assert_eq!(block.comments().collect::<Vec<_>>(), vec!["move (to", " the corner"]);
+    assert_eq!(block.comments().collect::<Vec<_>>(), vec!["move (to) it", " the corner"]);
     let block = parser.parse_line("G0 ; rest ( is ) comment", 1).expect("parses");
     assert_eq!(block.comments().collect::<Vec<_>>(), vec![" rest ( is ) comment"]);
     let block = parser.parse_line("(a)(b) M281 (c)", 1).expect("parses");
@@ -126,6 +126,8 @@ fn syntax_errors_say_where_and_what() {
     assert_eq!(syntax("G0 XY1"), (4, SyntaxProblem::MissingValue { letter: 'X' }));
     assert_eq!(syntax("G0 X1 X2"), (7, SyntaxProblem::DuplicateWord { letter: 'X' }));
     assert_eq!(syntax("G0 (open"), (4, SyntaxProblem::UnclosedComment));
+    assert_eq!(syntax("G0 (a (b)"), (4, SyntaxProblem::UnclosedComment));
+    assert_eq!(syntax("G0 (a) b)"), (8, SyntaxProblem::MissingValue { letter: 'B' }));
     assert_eq!(syntax("X[1+2"), (2, SyntaxProblem::UnclosedBracket));
     assert_eq!(syntax("X[1 2 +]"), (8, SyntaxProblem::ExpectedValue));
     assert_eq!(syntax("X[1 FOO 2]"), (5, SyntaxProblem::ExpectedOperator));
