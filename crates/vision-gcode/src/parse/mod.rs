@@ -345,6 +345,7 @@ impl Parser {
 
     /// A word's (or an assignment's) value: a literal on the fast path, else an expression.
     /// `letter_at` is where a missing value is reported (the word's letter).
+    #[inline(always)]
     fn value(&mut self, cur: &mut Cursor<'_>, letter: u8, letter_at: usize) -> PResult<Value> {
         cur.skip_blanks();
         let at = cur.pos;

@@ -24,7 +24,59 @@ pub(crate) fn is_blank(b: u8) -> bool {
 }
 
 /// Reads an unsigned number at the cursor (which must be at a digit or `.`).
+///
+/// The common shape — digits, an optional `.` and digits, not followed by more digits after a
+/// blank — is read by two tight loops; anything else (blanks inside, a second `.`, more than 19
+/// digits) goes through [`general`].
+#[inline]
 pub(super) fn number(cur: &mut Cursor<'_>) -> PResult<f64> {
+    let bytes = cur.bytes;
+    let start = cur.pos;
+    let mut i = start;
+    let mut mantissa: u64 = 0;
+    while let Some(d) = bytes.get(i).map(|c| c.wrapping_sub(b'0')).filter(|d| *d <= 9) {
+        mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
+        i += 1;
+    }
+    let mut digits = i - start;
+    let mut decimals = 0;
+    if bytes.get(i) == Some(&b'.') {
+        i += 1;
+        let frac = i;
+        while let Some(d) = bytes.get(i).map(|c| c.wrapping_sub(b'0')).filter(|d| *d <= 9) {
+            mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
+            i += 1;
+        }
+        decimals = i - frac;
+        digits += decimals;
+    }
+    // 19 digits always fit in a u64; more, a second `.`, or digits continuing after a blank
+    // need the general reader.
+    let continues = match bytes.get(i) {
+        Some(b'.') => true,
+        Some(&b) if is_blank(b) => {
+            let mut j = i + 1;
+            while bytes.get(j).is_some_and(|&b| is_blank(b)) {
+                j += 1;
+            }
+            bytes.get(j).is_some_and(|b| b.is_ascii_digit() || *b == b'.')
+        }
+        _ => false,
+    };
+    if digits == 0 || digits > 19 || continues {
+        return general(cur);
+    }
+    cur.pos = i;
+    if mantissa <= (1 << 53) && decimals < POW10.len() {
+        #[allow(clippy::cast_precision_loss)] // mantissa ≤ 2^53: exact.
+        return Ok(mantissa as f64 / POW10[decimals]);
+    }
+    slow(&bytes[start..i]).ok_or((start, SyntaxProblem::BadNumber))
+}
+
+/// Any number: blanks inside are ignored (`1 2 . 5` is 12.5).
+#[cold]
+fn general(cur: &mut Cursor<'_>) -> PResult<f64> {
     let bytes = cur.bytes;
     let start = cur.pos;
     let mut i = start;
@@ -102,6 +154,31 @@ mod tests {
     fn blanks_inside_are_ignored_and_stop_at_letters() {
         assert_eq!(num("1 2 . 5 Y").expect("spaces"), (12.5, 8));
         assert_eq!(num("7X").expect("letter").1, 1);
+        assert_eq!(num("7 X").expect("blank then letter"), (7.0, 1));
+        assert_eq!(num("1. 5").expect("blank inside the fraction"), (1.5, 4));
+        assert_eq!(num("12345678901234567890.5").expect("long").0, 12_345_678_901_234_567_890.5);
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn every_formatted_f64_reads_back_exactly(v in 0.0..1e12f64, decimals in 0usize..12) {
+            for text in [format!("{v}"), format!("{v:.decimals$}")] {
+                let expected: f64 = text.parse().expect("std");
+                proptest::prop_assert_eq!(num(&text).map(|r| r.0), Ok(expected), "{}", text);
+            }
+        }
+
+        #[test]
+        fn digits_dots_and_blanks_read_like_the_blank_free_text(text in "[0-9.][0-9. ]{0,30}") {
+            let compact: String = text.chars().filter(|c| *c != ' ').collect();
+            let well_formed = compact.chars().any(|c| c.is_ascii_digit()) && compact.matches('.').count() <= 1;
+            let got = num(&text).map(|r| r.0);
+            if well_formed {
+                proptest::prop_assert_eq!(got, Ok(compact.parse::<f64>().expect("std")), "{}", text);
+            } else {
+                proptest::prop_assert!(got.is_err(), "{}", text);
+            }
+        }
     }
 
     #[test]
