@@ -71,7 +71,9 @@
 //! * **Arcs** stay exact [`ArcMove`]s under any similarity in G17 (rotation, uniform or mirrored
 //!   scale); G18/G19 arcs only under a pure translation. Otherwise (non-uniform G51, or G68/G51
 //!   with a G18/G19 arc) an arc becomes feed segments whose distance from the true curve is at
-//!   most [`InterpreterConfig::chord_tolerance`]. Radius checks follow LinuxCNC
+//!   most [`InterpreterConfig::chord_tolerance`]; their interior vertices are not programmed
+//!   points, so those segments blend (G64 with the chord tolerance) and only the last one carries
+//!   the line's G61/G64. Radius checks follow LinuxCNC
 //!   ([`CENTRE_TOLERANCE_INCH`], [`RADIUS_TOLERANCE_INCH`]); under G90.1 both centre words are
 //!   required (seed 002). `P` on G2/G3 counts full turns.
 //! * **G28** follows LinuxCNC: with axis words, a rapid to that intermediate point, then those

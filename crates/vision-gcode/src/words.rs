@@ -115,11 +115,6 @@ impl Words {
     pub(crate) fn all(&self) -> impl Iterator<Item = (char, f64)> + '_ {
         (0..SLOTS).filter(|s| self.present & (1 << s) != 0).map(|s| (letter_of(s), self.values[s]))
     }
-
-    /// Marks every word claimed (a user M-code takes them all).
-    pub(crate) fn claim_all(&mut self) {
-        self.used = self.present;
-    }
 }
 
 /// Evaluates `block`'s words into `words` and its assignments into `assigns` (parameter number,

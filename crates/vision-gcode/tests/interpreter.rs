@@ -295,11 +295,15 @@ fn arcs_under_non_uniform_scale_become_polylines_within_tolerance() {
     };
     let events = run(
         &mut interp,
-        "G90 G20 F20\nG52 X0.2 Y0.1\nG68 X1 Y1 R3\nG51 X1.002 Y0.998\nG0 X3 Y0 Z1\nG3 X-3 Y0 Z0 I-3 J0",
+        "G90 G20 G61 F20\nG52 X0.2 Y0.1\nG68 X1 Y1 R3\nG51 X1.002 Y0.998\nG0 X3 Y0 Z1\nG3 X-3 Y0 Z0 I-3 J0",
     );
     let segments: Vec<LinearMove> = linears(&events).into_iter().filter(|m| m.line == 6).collect();
     assert!(segments.len() > 100, "{} segments", segments.len());
     assert!(segments.iter().all(|m| m.rate == Rate::Feed(20.0)));
+    // Interior vertices blend within the chord tolerance; the programmed end keeps G61.
+    let (last, interior) = segments.split_last().expect("segments");
+    assert_eq!(last.path, PathMode::ExactStop);
+    assert!(interior.iter().all(|m| m.path == PathMode::Blend { tolerance: Some(interp.config().chord_tolerance) }));
     // Consecutive segments chain, and the last one ends exactly at the mapped end.
     for pair in segments.windows(2) {
         assert_eq!(pair[0].end, pair[1].start);

@@ -42,24 +42,30 @@ pub(crate) struct Polyline {
     segments: u64,
     start: Xyz,
     feed: f64,
+    /// The line's path mode, for the last segment.
     path: PathMode,
+    /// The chord tolerance: interior vertices are not programmed points, so they blend within it.
+    chord_tolerance: f64,
 }
 
 impl Polyline {
-    /// Emits the segments; the last one ends exactly at the arc's mapped end point.
+    /// Emits the segments; the last one ends exactly at the arc's mapped end point and carries
+    /// the line's path mode, the others blend (G64 P chord tolerance) even under G61.
     pub(crate) fn emit(&self, sink: &mut dyn EventSink) {
         let mut from = self.start;
+        let interior = PathMode::Blend { tolerance: Some(self.chord_tolerance) };
         for k in 1..=self.segments {
             // k ≤ segments ≤ the configured limit (10⁷ by default): exact in f64.
             #[allow(clippy::cast_precision_loss)]
             let t = k as f64 / self.segments as f64;
             let to = self.placement.machine_of(self.arc.point_at(t));
+            let path = if k == self.segments { self.path } else { interior };
             sink.event(&Event::Linear(LinearMove {
                 line: self.line,
                 start: from,
                 end: to,
                 rate: Rate::Feed(self.feed),
-                path: self.path,
+                path,
             }));
             from = to;
         }
@@ -294,6 +300,11 @@ impl LineRun<'_> {
         Ok(self.w.take(letter, owner)?.map(|v| self.conv(v)))
     }
 
+    /// A word the code cannot do without.
+    fn require(&mut self, letter: u8, code: &'static str, hint: &'static str) -> Result<f64, RunProblem> {
+        self.w.take(letter, code)?.ok_or(RunProblem::MissingWord { code, letter: char::from(letter), hint })
+    }
+
     fn emit(&mut self, event: Event) {
         self.out.push(Pending::Event(event));
     }
@@ -383,11 +394,7 @@ impl LineRun<'_> {
     }
 
     fn dwell(&mut self) -> Result<(), RunProblem> {
-        let seconds = self.w.take(b'P', "G4")?.ok_or(RunProblem::MissingWord {
-            code: "G4",
-            letter: 'P',
-            hint: "the dwell time in seconds, e.g. G4 P0.5",
-        })?;
+        let seconds = self.require(b'P', "G4", "the dwell time in seconds, e.g. G4 P0.5")?;
         if seconds < 0.0 {
             return Err(RunProblem::Negative { code: "G4", letter: 'P', value: seconds });
         }
@@ -419,38 +426,39 @@ impl LineRun<'_> {
         Ok(t)
     }
 
-    /// The given axis words (absolute, program units converted), with the current program
-    /// coordinate for the others; and which were given.
-    fn absolute_point(&mut self, owner: &'static str) -> Result<(Xyz, [bool; 3]), RunProblem> {
-        let mut p = self.st.program;
-        let mut given = [false; 3];
-        for (axis, &letter) in AXIS_LETTERS.iter().enumerate() {
-            if let Some(v) = self.length(letter, owner)? {
-                p.set_axis(axis, v);
-                given[axis] = true;
-            }
-        }
+    /// Which axis words are on the line (without claiming them); at least one is required.
+    fn given_axes(&self, owner: &'static str) -> Result<[bool; 3], RunProblem> {
+        let given = AXIS_LETTERS.map(|l| self.w.has(l));
         if given.iter().any(|g| *g) {
-            Ok((p, given))
+            Ok(given)
         } else {
             Err(RunProblem::NoAxisWords { code: owner })
         }
     }
 
+    /// The given axis words (absolute, converted to machine units), with the current program
+    /// coordinate for the others; and which were given.
+    fn absolute_point(&mut self, owner: &'static str) -> Result<(Xyz, [bool; 3]), RunProblem> {
+        let given = self.given_axes(owner)?;
+        let mut p = self.st.program;
+        for (axis, &letter) in AXIS_LETTERS.iter().enumerate() {
+            if let Some(v) = self.length(letter, owner)? {
+                p.set_axis(axis, v);
+            }
+        }
+        Ok((p, given))
+    }
+
     fn g10(&mut self) -> Result<(), RunProblem> {
-        let l = self.w.take(b'L', "G10")?.ok_or(RunProblem::MissingWord {
-            code: "G10",
-            letter: 'L',
-            hint: "L2 sets a coordinate system's origin, L20 makes the current point read the given values",
-        })?;
+        let l = self.require(
+            b'L',
+            "G10",
+            "L2 sets a coordinate system's origin, L20 makes the current point read the given values",
+        )?;
         if l != 2.0 && l != 20.0 {
             return Err(RunProblem::G10Form { l });
         }
-        let p = self.w.take(b'P', "G10")?.ok_or(RunProblem::MissingWord {
-            code: "G10",
-            letter: 'P',
-            hint: "the coordinate system, P1 (G54) to P6 (G59), or P0 for the active one",
-        })?;
+        let p = self.require(b'P', "G10", "the coordinate system, P1 (G54) to P6 (G59), or P0 for the active one")?;
         let mut system = whole(b'P', p)?;
         if system > 6 {
             return Err(RunProblem::OutOfRange {
@@ -500,7 +508,7 @@ impl LineRun<'_> {
     }
 
     fn g92(&mut self) -> Result<(), RunProblem> {
-        let (_, given) = self.absolute_point_peek("G92")?;
+        let given = self.given_axes("G92")?;
         // Seed 002: an axis without a word gets a zero G92 offset. Do that first, so the given
         // axes are computed in the frame that will hold.
         for axis in (0..3).filter(|&a| !given[a]) {
@@ -523,16 +531,6 @@ impl LineRun<'_> {
         Ok(())
     }
 
-    /// Which axis words are on the line (without claiming them).
-    fn absolute_point_peek(&self, owner: &'static str) -> Result<(Xyz, [bool; 3]), RunProblem> {
-        let given = [self.w.has(b'X'), self.w.has(b'Y'), self.w.has(b'Z')];
-        if given.iter().any(|g| *g) {
-            Ok((self.st.program, given))
-        } else {
-            Err(RunProblem::NoAxisWords { code: owner })
-        }
-    }
-
     fn g52(&mut self) -> Result<(), RunProblem> {
         let (v, given) = self.absolute_point("G52")?;
         if given[0] {
@@ -549,7 +547,7 @@ impl LineRun<'_> {
     }
 
     fn g28(&mut self) -> Result<(), RunProblem> {
-        let given = [self.w.has(b'X'), self.w.has(b'Y'), self.w.has(b'Z')];
+        let given = AXIS_LETTERS.map(|l| self.w.has(l));
         let pl = self.placement();
         if given.iter().any(|g| *g) {
             let via = self.target("G28")?;
@@ -581,11 +579,7 @@ impl LineRun<'_> {
     }
 
     fn g68(&mut self) -> Result<(), RunProblem> {
-        let degrees = self.w.take(b'R', "G68")?.ok_or(RunProblem::MissingWord {
-            code: "G68",
-            letter: 'R',
-            hint: "the rotation in degrees, counter-clockwise, e.g. G68 X0 Y0 R30",
-        })?;
+        let degrees = self.require(b'R', "G68", "the rotation in degrees, counter-clockwise, e.g. G68 X0 Y0 R30")?;
         // An omitted centre coordinate is the current point's (in the scaled frame), so the
         // machine does not jump.
         let scale = self.st.frame.chain.scale;
@@ -765,6 +759,7 @@ impl LineRun<'_> {
                 start: machine_start,
                 feed,
                 path: self.st.path,
+                chord_tolerance: self.cfg.chord_tolerance,
             }));
         }
         self.st.program = target;

@@ -19,6 +19,15 @@ use crate::words::{evaluate, Words};
 use line::{is_builtin_m, Flow, LineRun, Pending};
 use modal::{work_offset_base, Modal};
 
+/// Where a line sits: its number in the text being run, the line its events are tagged with, and
+/// whether it is G-code run by a handler.
+#[derive(Debug, Clone, Copy)]
+struct At {
+    line: u32,
+    tag: u32,
+    nested: bool,
+}
+
 /// How a run ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum RunOutcome {
@@ -97,7 +106,8 @@ impl Interpreter {
         let mut lines = 0;
         for (i, raw) in text.split('\n').enumerate() {
             let line = u32::try_from(i + 1).unwrap_or(u32::MAX);
-            if let Flow::End(code) = self.exec_line(raw, line, line, handler.as_deref_mut(), sink, false)? {
+            let at = At { line, tag: line, nested: false };
+            if let Flow::End(code) = self.exec_line(raw, at, handler.as_deref_mut(), sink)? {
                 return Ok(RunOutcome::Ended { line, code });
             }
             lines = line;
@@ -129,7 +139,7 @@ impl Interpreter {
     pub(crate) fn run_nested(&mut self, text: &str, tag: u32, sink: &mut dyn EventSink) -> Result<(), GcodeError> {
         for (i, raw) in text.split('\n').enumerate() {
             let line = u32::try_from(i + 1).unwrap_or(u32::MAX);
-            self.exec_line(raw, line, line_tag(tag, line), None, sink, true)?;
+            self.exec_line(raw, At { line, tag: line_tag(tag, line), nested: true }, None, sink)?;
         }
         Ok(())
     }
@@ -138,12 +148,11 @@ impl Interpreter {
     fn exec_line<'h>(
         &mut self,
         text: &str,
-        line: u32,
-        tag: u32,
+        at: At,
         handler: Option<&mut (dyn MCodeHandler + 'h)>,
         sink: &mut dyn EventSink,
-        nested: bool,
     ) -> Result<Flow, GcodeError> {
+        let line = at.line;
         let block = self.parser.parse_line(text, line)?;
         if block.is_empty() {
             return Ok(Flow::Continue);
@@ -168,7 +177,15 @@ impl Interpreter {
             offsets_written |= affects_frame(n);
         }
         if let Some(code) = user {
-            return self.user_line(code, words, text, line, tag, handler, sink, nested, offsets_written);
+            if let Err(problem) = user_line_alone(code, &words, at.nested) {
+                self.params.rollback();
+                return Err(GcodeError::run(line, problem));
+            }
+            if offsets_written {
+                self.modal.rederive_program(&self.params);
+            }
+            self.refresh_mirrors();
+            return self.user_line(code, &words, text, at, handler, sink);
         }
         self.pending.clear();
         let mut st = self.modal;
@@ -182,8 +199,8 @@ impl Interpreter {
             st,
             out: &mut self.pending,
             w: words,
-            line: tag,
-            nested,
+            line: at.tag,
+            nested: at.nested,
         };
         let outcome = run.run();
         let st = run.st;
@@ -206,39 +223,18 @@ impl Interpreter {
         }
     }
 
-    /// A user M-code line: the call takes every word; its assignments are already written.
-    #[allow(clippy::too_many_arguments)]
+    /// A user M-code line (already checked by [`user_line_alone`]): the call takes every word;
+    /// its assignments are already written.
     fn user_line<'h>(
         &mut self,
         code: u32,
-        mut words: Words,
+        words: &Words,
         text: &str,
-        line: u32,
-        tag: u32,
+        at: At,
         handler: Option<&mut (dyn MCodeHandler + 'h)>,
         sink: &mut dyn EventSink,
-        nested: bool,
-        offsets_written: bool,
     ) -> Result<Flow, GcodeError> {
-        let refuse = |interp: &mut Interpreter, problem| {
-            interp.params.rollback();
-            Err(GcodeError::run(line, problem))
-        };
-        if nested {
-            return refuse(self, RunProblem::NestedUserMCode { code });
-        }
-        if let Some(&g) = words.g.as_slice().first() {
-            return refuse(self, RunProblem::UserMCodeNotAlone { code, other: crate::GCode(g).to_string() });
-        }
-        if words.m.as_slice().len() > 1 {
-            let other = words.m.as_slice().iter().copied().find(|&m| m != code).unwrap_or(code);
-            return refuse(self, RunProblem::UserMCodeNotAlone { code, other: format!("M{other}") });
-        }
-        words.claim_all();
-        if offsets_written {
-            self.modal.rederive_program(&self.params);
-        }
-        self.refresh_mirrors();
+        let At { line, tag, .. } = at;
         let comments: Vec<&str> =
             self.spans.iter().map(|s| text.get(s.start as usize..s.end as usize).unwrap_or("")).collect();
         let args: Vec<(char, f64)> = words.all().collect();
@@ -504,6 +500,22 @@ impl Interpreter {
         self.refresh_mirrors();
         Ok(())
     }
+}
+
+/// A user M-code must be alone on its line (its words are its arguments) and may not appear in
+/// G-code a handler runs.
+fn user_line_alone(code: u32, words: &Words, nested: bool) -> Result<(), RunProblem> {
+    if nested {
+        return Err(RunProblem::NestedUserMCode { code });
+    }
+    if let Some(&g) = words.g.as_slice().first() {
+        return Err(RunProblem::UserMCodeNotAlone { code, other: crate::GCode(g).to_string() });
+    }
+    if words.m.as_slice().len() > 1 {
+        let other = words.m.as_slice().iter().copied().find(|&m| m != code).unwrap_or(code);
+        return Err(RunProblem::UserMCodeNotAlone { code, other: format!("M{other}") });
+    }
+    Ok(())
 }
 
 /// Whether M`code` goes to the handler.
