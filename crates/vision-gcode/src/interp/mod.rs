@@ -1,7 +1,9 @@
 //! The interpreter: runs text line by line, keeps the modal state, streams events.
 
+mod frames;
 mod line;
 mod modal;
+mod motion;
 
 use vision_math::{AlignmentChain, LengthUnit, Point2, Vector2};
 
