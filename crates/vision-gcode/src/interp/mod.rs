@@ -438,7 +438,8 @@ impl Interpreter {
         Ok(())
     }
 
-    /// Writes `#n` (see [`Interpreter::write_param`]), reported at line 0.
+    /// Writes `#n` as a program would (read-only parameters refused). Offset parameters take
+    /// effect at once: the machine stays, the program position is re-derived.
     ///
     /// # Errors
     /// As [`Context::set_pound`].
