@@ -4,6 +4,7 @@
 //! outcomes to exit codes (0 success, 1 a run that failed, 2 bad input).
 
 mod fit;
+mod trace;
 
 use std::process::ExitCode;
 
@@ -21,6 +22,8 @@ struct Cli {
 enum Command {
     /// Fit a transform from commanded to observed mark positions (JSON from FILE or stdin).
     Fit(fit::FitArgs),
+    /// Run a G-code program with no vision handler and print the machine events it produces.
+    Trace(trace::TraceArgs),
 }
 
 /// A failure with the exit code it maps to.
@@ -28,12 +31,15 @@ enum Command {
 pub(crate) enum Failure {
     /// Bad input (exit 2): unreadable file, malformed JSON, degenerate geometry.
     Input(String),
+    /// A run that failed (exit 1): a program that stopped at a line.
+    Run(String),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let outcome = match cli.command {
         Command::Fit(args) => fit::run(&args),
+        Command::Trace(args) => trace::run(&args),
     };
     match outcome {
         Ok(text) => {
@@ -43,6 +49,10 @@ fn main() -> ExitCode {
         Err(Failure::Input(message)) => {
             eprintln!("mach-vision: {message}");
             ExitCode::from(2)
+        }
+        Err(Failure::Run(message)) => {
+            eprintln!("mach-vision: {message}");
+            ExitCode::from(1)
         }
     }
 }

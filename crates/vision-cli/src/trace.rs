@@ -1,0 +1,290 @@
+//! `mach-vision trace`: run a G-code program on the interpreter with no vision handler attached
+//! and print what the machine would do, event by event, in machine coordinates.
+//!
+//! User M-codes (M280–M284 and the rest of the user range) are reported, not executed. Output
+//! streams as the program runs: memory stays bounded however long the program is.
+
+use std::fmt::Write as _;
+use std::io::{BufWriter, Read as _, Write};
+use std::path::PathBuf;
+
+use clap::{Args, ValueEnum};
+use serde_json::{json, Value};
+use vision_gcode::{
+    ArcDirection, Event, GcodeError, Interpreter, InterpreterConfig, PathMode, Rate, RunOutcome, SpindleCommand, Xyz,
+};
+use vision_math::LengthUnit;
+
+use crate::Failure;
+
+/// Arguments of `mach-vision trace`.
+#[derive(Debug, Args)]
+pub(crate) struct TraceArgs {
+    /// Print one JSON object per line (one per event, then a summary) instead of text.
+    #[arg(long)]
+    json: bool,
+    /// The machine's coordinate unit (events are in it); the program's G20/G21 are converted.
+    #[arg(long, value_enum, default_value_t = UnitArg::In)]
+    machine_units: UnitArg,
+    /// The G-code program; standard input when `-`.
+    program: PathBuf,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum UnitArg {
+    /// Inches (the manual's router).
+    In,
+    /// Millimetres.
+    Mm,
+}
+
+/// Runs the subcommand, printing as it goes; returns nothing more to print.
+pub(crate) fn run(args: &TraceArgs) -> Result<String, Failure> {
+    let text = read_program(&args.program)?;
+    let unit = match args.machine_units {
+        UnitArg::In => LengthUnit::Inch,
+        UnitArg::Mm => LengthUnit::Millimetre,
+    };
+    let mut interp = Interpreter::new(InterpreterConfig::new(unit));
+    let stdout = std::io::stdout();
+    let mut out = Output { writer: BufWriter::new(stdout.lock()), json: args.json, broken: false };
+    if !args.json {
+        out.line(&format!("# {}: machine coordinates (spindle) in {}", args.program.display(), unit.short_name()));
+    }
+    let result = interp.run(&text, None, &mut |e: &Event| out.event(e));
+    match result {
+        Ok(outcome) => {
+            out.summary(&interp, outcome);
+            out.flush();
+            Ok(String::new())
+        }
+        Err(e) => {
+            out.failure(&e);
+            out.flush();
+            Err(Failure::Run(format!("{}: {e}", args.program.display())))
+        }
+    }
+}
+
+fn read_program(path: &PathBuf) -> Result<String, Failure> {
+    let bytes = if path.as_os_str() == "-" {
+        let mut b = Vec::new();
+        std::io::stdin().read_to_end(&mut b).map_err(|e| Failure::Input(format!("cannot read standard input: {e}")))?;
+        b
+    } else {
+        std::fs::read(path).map_err(|e| Failure::Input(format!("cannot read {}: {e}", path.display())))?
+    };
+    String::from_utf8(bytes).map_err(|e| {
+        Failure::Input(format!(
+            "{} is not UTF-8 text (invalid byte at offset {}); save the program as ASCII or UTF-8",
+            path.display(),
+            e.utf8_error().valid_up_to()
+        ))
+    })
+}
+
+/// The output stream: text or JSON lines. A closed pipe (`| head`) stops the printing quietly.
+struct Output<W: Write> {
+    writer: W,
+    json: bool,
+    broken: bool,
+}
+
+impl<W: Write> Output<W> {
+    fn line(&mut self, s: &str) {
+        if !self.broken && writeln!(self.writer, "{s}").is_err() {
+            self.broken = true;
+        }
+    }
+
+    fn flush(&mut self) {
+        if !self.broken {
+            let _ = self.writer.flush();
+        }
+    }
+
+    fn event(&mut self, e: &Event) {
+        let s = if self.json { event_json(e).to_string() } else { event_text(e) };
+        self.line(&s);
+    }
+
+    fn summary(&mut self, interp: &Interpreter, outcome: RunOutcome) {
+        let m = interp.machine_position();
+        let (what, line, code) = match outcome {
+            RunOutcome::Completed { lines } => ("completed", lines, None),
+            RunOutcome::Ended { line, code } => ("ended", line, Some(code)),
+        };
+        if self.json {
+            let summary = json!({
+                "type": "summary",
+                "outcome": what,
+                "line": line,
+                "code": code,
+                "machine_unit": interp.machine_unit().short_name(),
+                "machine": xyz(m),
+                "program": xyz(interp.program_position()),
+                "program_unit": interp.units().short_name(),
+            });
+            self.line(&summary.to_string());
+        } else {
+            let end = match code {
+                Some(c) => format!("ended by M{c} at line {line}"),
+                None => format!("ran all {line} lines"),
+            };
+            self.line(&format!("# {end}; machine at {}", pos(m)));
+        }
+    }
+
+    fn failure(&mut self, e: &GcodeError) {
+        if self.json {
+            self.line(
+                &json!({"type": "error", "line": e.line(), "column": e.column(), "message": e.to_string()}).to_string(),
+            );
+        }
+    }
+}
+
+fn xyz(p: Xyz) -> [f64; 3] {
+    [p.x, p.y, p.z]
+}
+
+fn pos(p: Xyz) -> String {
+    format!("X{:.4} Y{:.4} Z{:.4}", p.x, p.y, p.z)
+}
+
+fn path_json(path: PathMode) -> Value {
+    match path {
+        PathMode::ExactStop => json!({"mode": "exact_stop"}),
+        PathMode::Blend { tolerance } => json!({"mode": "blend", "tolerance": tolerance}),
+    }
+}
+
+fn spindle_code(c: SpindleCommand) -> &'static str {
+    match c {
+        SpindleCommand::Clockwise => "M3",
+        SpindleCommand::CounterClockwise => "M4",
+        SpindleCommand::Stop => "M5",
+    }
+}
+
+fn event_json(e: &Event) -> Value {
+    match e {
+        Event::Linear(m) => {
+            let (rate, feed) = match m.rate {
+                Rate::Rapid => ("rapid", None),
+                Rate::Feed(f) => ("feed", Some(f)),
+            };
+            json!({"line": m.line, "type": "linear", "rate": rate, "feed": feed, "start": xyz(m.start),
+                   "end": xyz(m.end), "path": path_json(m.path)})
+        }
+        Event::Arc(a) => json!({
+            "line": a.line, "type": "arc", "start": xyz(a.start), "end": xyz(a.end), "center": xyz(a.center),
+            "plane": a.plane.gcode(),
+            "direction": if a.direction == ArcDirection::Clockwise { "cw" } else { "ccw" },
+            "angle_rad": a.angle, "extra_turns": a.extra_turns(), "feed": a.feed, "path": path_json(a.path),
+        }),
+        Event::Dwell { line, seconds } => json!({"line": line, "type": "dwell", "seconds": seconds}),
+        Event::ToolChange { line, tool, offset } => {
+            json!({"line": line, "type": "tool_change", "tool": tool, "offset": xyz(*offset)})
+        }
+        Event::Output(o) => json!({
+            "line": o.line, "type": "output", "command": spindle_code(o.command), "tool": o.tool,
+            "writes": o.writes.iter().map(|w| json!({"device": w.device, "port": w.port, "high": w.high})).collect::<Vec<_>>(),
+        }),
+        Event::Stop { line, optional } => json!({"line": line, "type": "stop", "optional": optional}),
+        Event::ProgramEnd { line, code } => json!({"line": line, "type": "program_end", "code": code}),
+        Event::UserMCode(c) => {
+            let words: serde_json::Map<String, Value> =
+                c.words.iter().map(|(l, v)| (l.to_string(), json!(v))).collect();
+            json!({"line": c.line, "type": "user_mcode", "code": c.code, "words": words, "comments": c.comments,
+                   "executed": false})
+        }
+    }
+}
+
+fn event_text(e: &Event) -> String {
+    let mut s = format!("{:>6}  ", e.line());
+    // Writing to a String cannot fail.
+    let _ = match e {
+        Event::Linear(m) => match m.rate {
+            Rate::Rapid => write!(s, "rapid  {}", pos(m.end)),
+            Rate::Feed(f) => write!(s, "feed   {}  F{f:.4}", pos(m.end)),
+        },
+        Event::Arc(a) => {
+            let dir = if a.direction == ArcDirection::Clockwise { "cw " } else { "ccw" };
+            write!(
+                s,
+                "arc    {}  {} {dir} centre {}  {:.4} deg  F{:.4}",
+                pos(a.end),
+                a.plane.gcode(),
+                pos(a.center),
+                a.angle.to_degrees(),
+                a.feed
+            )
+        }
+        Event::Dwell { seconds, .. } => write!(s, "dwell  {seconds} s"),
+        Event::ToolChange { tool, offset, .. } => write!(s, "tool   T{tool} loaded, offset {}", pos(*offset)),
+        Event::Output(o) => {
+            let target = o.tool.map_or_else(|| "explicit".to_string(), |t| format!("tool {t}"));
+            let writes: Vec<String> = o
+                .writes
+                .iter()
+                .map(|w| format!("device {} port {} {}", w.device, w.port, if w.high { "high" } else { "low" }))
+                .collect();
+            let writes = if writes.is_empty() { "no outputs wired".to_string() } else { writes.join(", ") };
+            write!(s, "{}     {target}: {writes}", spindle_code(o.command))
+        }
+        Event::Stop { optional, .. } => {
+            write!(s, "{}", if *optional { "M1     optional stop" } else { "M0     program stop" })
+        }
+        Event::ProgramEnd { code, .. } => write!(s, "M{code}    program end"),
+        Event::UserMCode(c) => {
+            let words: Vec<String> = c.words.iter().map(|(l, v)| format!("{l}{v}")).collect();
+            let comments: Vec<String> = c.comments.iter().map(|t| format!("({t})")).collect();
+            let call = [format!("M{}", c.code)].into_iter().chain(words).chain(comments).collect::<Vec<_>>().join(" ");
+            write!(s, "user   {call}  -- not executed (no vision handler)")
+        }
+    };
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn trace(program: &str, json: bool) -> (Vec<String>, Result<RunOutcome, GcodeError>) {
+        let mut interp = Interpreter::new(InterpreterConfig::default());
+        let mut out = Output { writer: Vec::new(), json, broken: false };
+        let result = interp.run(program, None, &mut |e: &Event| out.event(e));
+        let text = String::from_utf8(out.writer).expect("utf-8");
+        (text.lines().map(str::to_string).collect(), result)
+    }
+
+    #[test]
+    fn text_lines_name_the_line_and_the_machine_position() {
+        let (lines, result) =
+            trace("G90 G20 F10\nT2 M6\nG0 X1 Y2\nG2 X2 Y1 I1 J0\nG4 P0.5\nM281 D1 (cap)\nM3\nM30", false);
+        assert!(result.is_ok());
+        assert_eq!(lines[0], "     2  tool   T2 loaded, offset X0.0000 Y0.0000 Z0.0000");
+        assert_eq!(lines[1], "     3  rapid  X1.0000 Y2.0000 Z0.0000");
+        assert!(lines[2].starts_with("     4  arc    X2.0000 Y1.0000 Z0.0000  G17 cw  centre X2.0000 Y2.0000"));
+        assert_eq!(lines[3], "     5  dwell  0.5 s");
+        assert_eq!(lines[4], "     6  user   M281 D1 (cap)  -- not executed (no vision handler)");
+        assert_eq!(lines[5], "     7  M3     tool 2: no outputs wired");
+        assert_eq!(lines[6], "     8  M30    program end");
+    }
+
+    #[test]
+    fn json_lines_carry_every_field() {
+        let (lines, _) = trace("G90 F10\nG64 P0.01\nG1 X1\nM283 C1", true);
+        let v: Vec<Value> = lines.iter().map(|l| serde_json::from_str(l).expect("JSON")).collect();
+        assert_eq!(v[0]["type"], "linear");
+        assert_eq!(v[0]["rate"], "feed");
+        assert_eq!(v[0]["feed"], 10.0);
+        assert_eq!(v[0]["end"], json!([1.0, 0.0, 0.0]));
+        assert_eq!(v[0]["path"], json!({"mode": "blend", "tolerance": 0.01}));
+        assert_eq!(v[1]["type"], "user_mcode");
+        assert_eq!(v[1]["words"], json!({"C": 1.0}));
+        assert_eq!(v[1]["executed"], false);
+    }
+}

@@ -1,0 +1,146 @@
+//! What the driver needs to reach a camera, built from the `Vision*` parameters.
+
+use std::time::Duration;
+
+use vision_core::Params;
+
+use crate::error::KeyenceError;
+use crate::protocol::Limits;
+
+/// The Keyence Non-Procedural port (SPEC §7).
+pub const DEFAULT_PORT: u16 = 8500;
+/// `VisionTimeout`'s default, 3 s.
+pub const DEFAULT_TIMEOUT: Duration = Duration::from_secs(3);
+/// Longest `VisionTimeout` the driver accepts, 300 s (the parameter's own bound).
+pub const MAX_TIMEOUT: Duration = Duration::from_secs(300);
+
+/// How to reach the camera and how long to wait for it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct KeyenceConfig {
+    /// Camera IP address or host name (`VisionIP`).
+    pub ip: String,
+    /// TCP port of the Non-Procedural command channel (`VisionPort`, Keyence default 8500).
+    pub port: u16,
+    /// Time allowed for one whole driver call (`VisionTimeout`): connecting when needed, sending
+    /// the command and receiving the complete reply. Not per byte: a peer that dribbles bytes
+    /// cannot stretch it.
+    pub timeout: Duration,
+    /// Bounds on reply lines.
+    pub limits: Limits,
+    /// Memory device for job switches (1 or 2); `None` keeps the device the camera reports with
+    /// `PR` (default).
+    pub memory_device: Option<u8>,
+    /// Idle time before TCP keepalive probes start, so a camera that vanished while idle is
+    /// noticed (default 10 s; `None` disables).
+    pub keepalive: Option<Duration>,
+}
+
+impl KeyenceConfig {
+    /// A configuration for the camera at `ip:port` with the defaults: 3 s timeout, default
+    /// [`Limits`], the camera's current memory device, keepalive after 10 s idle.
+    #[must_use]
+    pub fn new(ip: impl Into<String>, port: u16) -> KeyenceConfig {
+        KeyenceConfig {
+            ip: ip.into(),
+            port,
+            timeout: DEFAULT_TIMEOUT,
+            limits: Limits::default(),
+            memory_device: None,
+            keepalive: Some(Duration::from_secs(10)),
+        }
+    }
+
+    /// The same configuration with `timeout`.
+    #[must_use]
+    pub fn with_timeout(mut self, timeout: Duration) -> KeyenceConfig {
+        self.timeout = timeout;
+        self
+    }
+
+    /// `VisionIP`, `VisionPort` and `VisionTimeout` from the parameters, defaults for the rest.
+    ///
+    /// # Errors
+    /// [`KeyenceError::Config`] when a value is out of the driver's range.
+    pub fn from_params(params: &Params) -> Result<KeyenceConfig, KeyenceError> {
+        let port = u16::try_from(params.port())
+            .map_err(|_| KeyenceError::Config { reason: format!("VisionPort {} is not a TCP port", params.port()) })?;
+        let seconds = params.timeout_s();
+        let timeout = Duration::try_from_secs_f64(seconds)
+            .map_err(|_| KeyenceError::Config { reason: format!("VisionTimeout {seconds} s is not a duration") })?;
+        let config = KeyenceConfig::new(params.ip(), port).with_timeout(timeout);
+        config.validate()?;
+        Ok(config)
+    }
+
+    /// Checks every field.
+    ///
+    /// # Errors
+    /// [`KeyenceError::Config`] naming the field.
+    pub fn validate(&self) -> Result<(), KeyenceError> {
+        let bad = |reason: String| Err(KeyenceError::Config { reason });
+        if self.ip.trim().is_empty() {
+            return bad("VisionIP is empty".into());
+        }
+        if self.port == 0 {
+            return bad("VisionPort 0 is not a TCP port".into());
+        }
+        if self.timeout.is_zero() || self.timeout > MAX_TIMEOUT {
+            return bad(format!("VisionTimeout {:?} must be more than 0 and at most 300 s", self.timeout));
+        }
+        if let Some(d) = self.memory_device.filter(|d| !(1..=2).contains(d)) {
+            return bad(format!("memory device {d} must be 1 or 2"));
+        }
+        if self.keepalive.is_some_and(|k| k < Duration::from_secs(1)) {
+            return bad("keepalive must be at least 1 s".into());
+        }
+        self.limits.validate().or_else(bad)
+    }
+
+    /// `ip:port` for messages.
+    #[must_use]
+    pub fn address(&self) -> String {
+        if self.ip.contains(':') {
+            format!("[{}]:{}", self.ip, self.port)
+        } else {
+            format!("{}:{}", self.ip, self.port)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn from_the_manual_defaults() {
+        let c = KeyenceConfig::from_params(&Params::default()).expect("defaults");
+        assert_eq!(c.ip, "192.168.208.80");
+        assert_eq!(c.port, DEFAULT_PORT);
+        assert_eq!(c.timeout, DEFAULT_TIMEOUT);
+        assert_eq!(c.address(), "192.168.208.80:8500");
+        let mut p = Params::default();
+        p.set("VisionTimeout", 0.25).expect("timeout");
+        p.set("VisionIP", "camera-1").expect("ip");
+        p.set("VisionPort", 8600).expect("port");
+        let c = KeyenceConfig::from_params(&p).expect("set");
+        assert_eq!((c.ip.as_str(), c.port, c.timeout), ("camera-1", 8600, Duration::from_millis(250)));
+    }
+
+    #[test]
+    fn every_field_is_checked() {
+        let ok = KeyenceConfig::new("127.0.0.1", 8500);
+        assert_eq!(ok.validate(), Ok(()));
+        for bad in [
+            KeyenceConfig { ip: " ".into(), ..ok.clone() },
+            KeyenceConfig { port: 0, ..ok.clone() },
+            ok.clone().with_timeout(Duration::ZERO),
+            ok.clone().with_timeout(Duration::from_secs(301)),
+            KeyenceConfig { memory_device: Some(3), ..ok.clone() },
+            KeyenceConfig { keepalive: Some(Duration::from_millis(10)), ..ok.clone() },
+            KeyenceConfig { limits: Limits { max_line_len: 4, max_lines: 8 }, ..ok.clone() },
+        ] {
+            assert!(matches!(bad.validate(), Err(KeyenceError::Config { .. })), "{bad:?}");
+        }
+        assert_eq!(KeyenceConfig::new("::1", 8500).address(), "[::1]:8500");
+    }
+}

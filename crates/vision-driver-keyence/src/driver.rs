@@ -1,0 +1,203 @@
+//! [`KeyenceDriver`]: one persistent connection, the reconnect rule, and the
+//! [`CameraDriver`] implementation.
+
+use std::time::{Duration, Instant};
+
+use vision_core::{CameraDriver, Capabilities, DriverError, DriverRegistry, Params, Reading};
+
+use crate::config::KeyenceConfig;
+use crate::error::KeyenceError;
+use crate::protocol::{JobCommand, Program, Session, MAX_JOB};
+use crate::transport::TcpLink;
+
+/// The driver's registry name (`VisionDriver = Keyence`).
+pub const DRIVER_NAME: &str = "Keyence";
+
+/// A Keyence VS-series camera over the Non-Procedural TCP command port.
+///
+/// The connection is opened on the first call and reused; it is dropped after any failure
+/// except a camera refusal (`ER,…`, a complete reply), and the next call reconnects.
+///
+/// **Never twice.** A call is retried (once, on a fresh connection, within the same timeout)
+/// only when the reused connection failed before the operating system accepted a single byte
+/// of the call's commands: then nothing can have reached the camera. Before reuse, the idle
+/// connection is checked (stale bytes drained, a closed or reset connection replaced) so a
+/// camera that dropped the link while idle costs a reconnect, not an error. Once any byte of a
+/// `TRG` may have left, a failure is returned as it is: the driver never re-sends a trigger the
+/// camera may have executed.
+#[derive(Debug)]
+pub struct KeyenceDriver {
+    config: KeyenceConfig,
+    session: Option<Session<TcpLink>>,
+    job_command: Option<JobCommand>,
+}
+
+impl KeyenceDriver {
+    /// A driver for `config`. Does not connect.
+    ///
+    /// # Errors
+    /// [`KeyenceError::Config`] when the configuration is unusable.
+    pub fn new(config: KeyenceConfig) -> Result<KeyenceDriver, KeyenceError> {
+        config.validate()?;
+        Ok(KeyenceDriver { config, session: None, job_command: None })
+    }
+
+    /// A driver from `VisionIP`, `VisionPort` and `VisionTimeout`. Does not connect.
+    ///
+    /// # Errors
+    /// As [`KeyenceConfig::from_params`].
+    pub fn from_params(params: &Params) -> Result<KeyenceDriver, KeyenceError> {
+        KeyenceDriver::new(KeyenceConfig::from_params(params)?)
+    }
+
+    /// The configuration.
+    #[must_use]
+    pub fn config(&self) -> &KeyenceConfig {
+        &self.config
+    }
+
+    /// True while a connection is open (it may still turn out dead at the next call).
+    #[must_use]
+    pub fn is_connected(&self) -> bool {
+        self.session.is_some()
+    }
+
+    /// Closes the connection; the next call reconnects.
+    pub fn disconnect(&mut self) {
+        self.session = None;
+    }
+
+    /// The job command this camera accepted (`PL` or `PW`), once a job switch has succeeded.
+    #[must_use]
+    pub fn job_command(&self) -> Option<JobCommand> {
+        self.job_command
+    }
+
+    /// `TRG`: one inspection's reading, in native pixels.
+    ///
+    /// # Errors
+    /// Any [`KeyenceError`]; see the crate documentation for what each means.
+    pub fn measure(&mut self) -> Result<Reading, KeyenceError> {
+        self.call(Session::trigger)
+    }
+
+    /// `FVR`: the camera's firmware version text.
+    ///
+    /// # Errors
+    /// As [`KeyenceDriver::measure`].
+    pub fn firmware_version(&mut self) -> Result<String, KeyenceError> {
+        self.call(Session::version)
+    }
+
+    /// `PR`: the job the camera runs.
+    ///
+    /// # Errors
+    /// As [`KeyenceDriver::measure`].
+    pub fn program(&mut self) -> Result<Program, KeyenceError> {
+        self.call(Session::program)
+    }
+
+    /// Switches the camera to job `job` (0–999): `PL` on a VS, `PW` when the camera answers
+    /// `ER,PL,01`. The memory device is [`KeyenceConfig::memory_device`], or the one `PR`
+    /// reports.
+    ///
+    /// # Errors
+    /// [`KeyenceError::InvalidJob`] before connecting, else as [`KeyenceDriver::measure`].
+    pub fn load_job(&mut self, job: u32) -> Result<(), KeyenceError> {
+        if job > MAX_JOB {
+            return Err(KeyenceError::InvalidJob { job });
+        }
+        let configured = self.config.memory_device;
+        let known = self.job_command;
+        let used = self.call(|s| {
+            let device = match configured {
+                Some(d) => d,
+                None => s.program()?.device,
+            };
+            s.select_job(known, device, job)
+        })?;
+        self.job_command = Some(used);
+        Ok(())
+    }
+
+    /// Runs `op` on the connection under one deadline, applying the reconnect rule.
+    fn call<T>(
+        &mut self,
+        mut op: impl FnMut(&mut Session<TcpLink>) -> Result<T, KeyenceError>,
+    ) -> Result<T, KeyenceError> {
+        let deadline = Instant::now() + self.config.timeout;
+        let mut reused = false;
+        if let Some(s) = self.session.as_mut() {
+            if s.get_mut().idle_check() {
+                s.discard_buffered();
+                reused = true;
+            } else {
+                self.session = None;
+            }
+        }
+        loop {
+            let session = match self.session.as_mut() {
+                Some(s) => s,
+                None => {
+                    let link = TcpLink::connect(&self.config, deadline)?;
+                    self.session.insert(Session::new(link, self.config.limits, self.config.timeout))
+                }
+            };
+            session.get_mut().set_deadline(deadline);
+            session.reset_bytes_written();
+            match op(session) {
+                Ok(v) => return Ok(v),
+                Err(e) => {
+                    let nothing_sent = session.bytes_written() == 0;
+                    if matches!(e, KeyenceError::Rejected { .. }) {
+                        return Err(e);
+                    }
+                    self.session = None;
+                    let link_failed = matches!(e, KeyenceError::Closed { .. } | KeyenceError::Io { .. });
+                    if reused && nothing_sent && link_failed {
+                        reused = false;
+                        continue;
+                    }
+                    return Err(e);
+                }
+            }
+        }
+    }
+}
+
+impl CameraDriver for KeyenceDriver {
+    fn name(&self) -> &str {
+        DRIVER_NAME
+    }
+
+    /// Job switching (`PL`/`PW`), and image grabbing: the camera FTP-pushes its images, the
+    /// core picks them up from `VisionImageWatchDir` (SPEC §7).
+    fn capabilities(&self) -> Capabilities {
+        Capabilities { select_job: true, grab_image: true }
+    }
+
+    fn trigger(&mut self) -> Result<Reading, DriverError> {
+        self.measure().map_err(DriverError::from)
+    }
+
+    fn select_job(&mut self, job: u32) -> Result<(), DriverError> {
+        self.load_job(job).map_err(DriverError::from)
+    }
+
+    fn test_connection(&mut self) -> Result<String, DriverError> {
+        self.firmware_version().map_err(DriverError::from)
+    }
+
+    fn timeout(&self) -> Duration {
+        self.config.timeout
+    }
+}
+
+/// Registers the driver under [`DRIVER_NAME`]; the factory reads `VisionIP`, `VisionPort` and
+/// `VisionTimeout` and does not connect.
+pub fn register(registry: &mut DriverRegistry) {
+    registry.register(DRIVER_NAME, |params: &Params| {
+        let driver = KeyenceDriver::from_params(params).map_err(DriverError::from)?;
+        Ok(Box::new(driver) as Box<dyn CameraDriver>)
+    });
+}

@@ -1,0 +1,336 @@
+//! The emulator's threads: one accepting connections, one serving the client of the moment.
+
+use std::collections::VecDeque;
+use std::io::{self, Read, Write};
+use std::net::{Shutdown, TcpListener, TcpStream};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
+use std::thread::{self, JoinHandle};
+use std::time::{Duration, Instant};
+
+use socket2::SockRef;
+
+use super::camera::{refusal, Answer, Camera};
+use super::source::Shot;
+use super::{EmulatorStats, Fault};
+use crate::protocol::{CR, LF, MAX_COMMAND_LEN};
+
+/// How often a waiting connection thread looks at the shutdown flag and its peer.
+const POLL: Duration = Duration::from_millis(2);
+/// How long an idle connection thread blocks in one read.
+const IDLE_READ: Duration = Duration::from_millis(50);
+/// Pause between the bytes of a [`Fault::ByteByByte`] reply.
+const BYTE_GAP: Duration = Duration::from_millis(1);
+
+/// State shared by the handle and the threads.
+pub(crate) struct Shared {
+    pub(crate) camera: Mutex<Camera>,
+    pub(crate) faults: Mutex<VecDeque<Fault>>,
+    pub(crate) stats: Mutex<EmulatorStats>,
+    pub(crate) shutdown: AtomicBool,
+    /// The connected client, to cut it off from the handle.
+    pub(crate) client: Mutex<Option<TcpStream>>,
+}
+
+/// Locks, ignoring poisoning (a panicking test thread must not wedge the emulator).
+pub(crate) fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+impl Shared {
+    fn stopping(&self) -> bool {
+        self.shutdown.load(Ordering::SeqCst)
+    }
+}
+
+/// Accepts clients one at a time until shutdown. A client that arrives while another is
+/// connected waits up to the handover grace for it to leave, then is reset (like a camera whose
+/// only command socket is taken).
+pub(crate) fn accept_loop(listener: TcpListener, shared: Arc<Shared>) {
+    let mut current: Option<JoinHandle<()>> = None;
+    for conn in listener.incoming() {
+        if shared.stopping() {
+            break;
+        }
+        let Ok(stream) = conn else { continue };
+        let grace = lock(&shared.camera).settings.handover_grace;
+        if let Some(h) = &current {
+            let until = Instant::now() + grace;
+            while !h.is_finished() && Instant::now() < until {
+                thread::sleep(POLL);
+            }
+        }
+        if current.as_ref().is_some_and(|h| !h.is_finished()) {
+            lock(&shared.stats).rejected += 1;
+            let _ = SockRef::from(&stream).set_linger(Some(Duration::ZERO));
+            drop(stream);
+            continue;
+        }
+        if let Some(h) = current.take() {
+            let _ = h.join();
+        }
+        lock(&shared.stats).connections += 1;
+        *lock(&shared.client) = stream.try_clone().ok();
+        let s = Arc::clone(&shared);
+        current = Some(thread::spawn(move || Connection::new(stream, s).serve()));
+    }
+    if let Some(c) = lock(&shared.client).take() {
+        let _ = c.shutdown(Shutdown::Both);
+    }
+    if let Some(h) = current {
+        let _ = h.join();
+    }
+}
+
+/// One client's connection.
+struct Connection {
+    stream: TcpStream,
+    shared: Arc<Shared>,
+    read_timeout: Option<Duration>,
+}
+
+impl Connection {
+    fn new(stream: TcpStream, shared: Arc<Shared>) -> Connection {
+        let _ = stream.set_nodelay(true);
+        Connection { stream, shared, read_timeout: None }
+    }
+
+    /// Reads commands (CR, LF or CRLF terminated) and answers them until the client leaves.
+    fn serve(mut self) {
+        let mut pending: Vec<u8> = Vec::with_capacity(MAX_COMMAND_LEN);
+        let mut started: Option<Instant> = None;
+        let mut overflow = false;
+        let mut after_cr = false;
+        let mut buf = [0u8; 1024];
+        let command_timeout = lock(&self.shared.camera).settings.command_timeout;
+        while !self.shared.stopping() {
+            let wait = started.map_or(IDLE_READ, |t| (t + command_timeout).saturating_duration_since(Instant::now()));
+            if self.set_read_timeout(wait.clamp(Duration::from_millis(1), IDLE_READ)).is_err() {
+                break;
+            }
+            match self.stream.read(&mut buf) {
+                Ok(0) => break,
+                Ok(n) => {
+                    for &b in &buf[..n] {
+                        if after_cr && b == LF {
+                            after_cr = false;
+                            continue;
+                        }
+                        after_cr = b == CR;
+                        if b == CR || b == LF {
+                            started = None;
+                            let keep_going = if std::mem::take(&mut overflow) {
+                                self.write_line(&refusal(&pending, 2)).is_ok()
+                            } else {
+                                self.command(&pending)
+                            };
+                            pending.clear();
+                            if !keep_going {
+                                return;
+                            }
+                        } else {
+                            started.get_or_insert_with(Instant::now);
+                            if pending.len() + 1 < MAX_COMMAND_LEN {
+                                pending.push(b);
+                            } else {
+                                overflow = true;
+                            }
+                        }
+                    }
+                }
+                Err(e) if matches!(e.kind(), io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut) => {
+                    if started.is_some_and(|t| t.elapsed() >= command_timeout) {
+                        started = None;
+                        overflow = false;
+                        let reply = refusal(&pending, 7);
+                        pending.clear();
+                        if self.write_line(&reply).is_err() {
+                            break;
+                        }
+                    }
+                }
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                Err(_) => break,
+            }
+        }
+    }
+
+    fn set_read_timeout(&mut self, t: Duration) -> io::Result<()> {
+        if self.read_timeout != Some(t) {
+            self.stream.set_read_timeout(Some(t))?;
+            self.read_timeout = Some(t);
+        }
+        Ok(())
+    }
+
+    /// Answers one command; false when the connection is to be closed.
+    fn command(&mut self, command: &[u8]) -> bool {
+        let answer = lock(&self.shared.camera).handle(command, Instant::now());
+        if !command.is_empty() {
+            lock(&self.shared.stats).commands += 1;
+        }
+        match answer {
+            Answer::Nothing => true,
+            Answer::Line(l) => self.write_line(&l).is_ok(),
+            Answer::Trigger(shot) => {
+                lock(&self.shared.stats).triggers += 1;
+                let fault = lock(&self.shared.faults).pop_front();
+                self.trigger(shot, fault).is_ok()
+            }
+        }
+    }
+
+    fn delimiter(&self) -> &'static [u8] {
+        lock(&self.shared.camera).settings.delimiter.bytes()
+    }
+
+    fn write_line(&mut self, line: &str) -> io::Result<()> {
+        let mut bytes = line.as_bytes().to_vec();
+        bytes.extend_from_slice(self.delimiter());
+        self.stream.write_all(&bytes)
+    }
+
+    /// Writes the answer to an accepted `TRG`, shaped by `fault`. `Err` closes the connection.
+    fn trigger(&mut self, shot: Shot, fault: Option<Fault>) -> io::Result<()> {
+        let (data, inspection) = {
+            let camera = lock(&self.shared.camera);
+            let data = match &shot {
+                Shot::Reading(r) => Some(camera.settings.data_line(r)),
+                Shot::Line(l) => Some(l.clone()),
+                Shot::Reject(_) | Shot::Silent => None,
+            };
+            (data, camera.settings.inspection_time)
+        };
+        let mut delim = self.delimiter();
+        let mut lines: Vec<Vec<u8>> = match shot {
+            Shot::Reject(code) => vec![format!("ER,TRG,{code:02}").into_bytes()],
+            _ => std::iter::once(b"TRG".to_vec()).chain(data.map(String::into_bytes)).collect(),
+        };
+        let echo_only = || vec![b"TRG".to_vec()];
+        match &fault {
+            None | Some(Fault::ByteByByte | Fault::OneSegment | Fault::Dribble(_)) => {}
+            Some(Fault::Delay(d)) => {
+                if !self.wait(*d) {
+                    return Err(closed());
+                }
+            }
+            Some(Fault::LateReply(d)) => {
+                // Written even when the client has gone: it then lands in the dead connection.
+                self.wait(*d);
+            }
+            Some(Fault::Close) => return Err(closed()),
+            Some(Fault::CloseAfterEcho) => {
+                self.send(&[b"TRG".to_vec()], delim)?;
+                return Err(closed());
+            }
+            Some(Fault::Garbage(g)) => lines = vec![b"TRG".to_vec(), g.clone()],
+            Some(Fault::Silence) => lines = echo_only(),
+            Some(Fault::Reject(code)) => lines = vec![format!("ER,TRG,{code:02}").into_bytes()],
+            Some(Fault::LongLine(n)) => lines = vec![b"TRG".to_vec(), vec![b'7'; *n]],
+            Some(Fault::ManyLines(n)) => {
+                let mut many = vec![b"1,0,0".to_vec(); *n];
+                many.append(&mut lines);
+                lines = many;
+            }
+            Some(Fault::StrayLf) => delim = b"\r\n",
+        }
+        let mut wire: Vec<Vec<u8>> = lines
+            .into_iter()
+            .map(|mut l| {
+                l.extend_from_slice(delim);
+                l
+            })
+            .collect();
+        match fault {
+            Some(Fault::OneSegment) => {
+                self.pause(inspection);
+                self.stream.write_all(&wire.concat())
+            }
+            Some(Fault::ByteByByte) => self.trickle(&wire.concat(), BYTE_GAP),
+            Some(Fault::Dribble(gap)) => self.trickle(&wire.concat(), gap),
+            Some(Fault::StrayLf) => {
+                wire.push(b"\n".to_vec());
+                self.send(&wire, b"")
+            }
+            _ => {
+                let data = wire.split_off(wire.len().min(1));
+                self.stream.write_all(&wire.concat())?;
+                if !data.is_empty() {
+                    self.pause(inspection);
+                    self.stream.write_all(&data.concat())?;
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// Writes each line in its own write.
+    fn send(&mut self, lines: &[Vec<u8>], delim: &[u8]) -> io::Result<()> {
+        for l in lines {
+            let mut bytes = l.clone();
+            bytes.extend_from_slice(delim);
+            self.stream.write_all(&bytes)?;
+        }
+        Ok(())
+    }
+
+    /// Writes `bytes` one per write, `gap` apart, until the client leaves.
+    fn trickle(&mut self, bytes: &[u8], gap: Duration) -> io::Result<()> {
+        for (i, b) in bytes.iter().enumerate() {
+            if i > 0 && !self.wait(gap) {
+                return Err(closed());
+            }
+            self.stream.write_all(std::slice::from_ref(b))?;
+        }
+        Ok(())
+    }
+
+    fn pause(&mut self, d: Duration) {
+        if !d.is_zero() {
+            self.wait(d);
+        }
+    }
+
+    /// Waits `d`, returning early on shutdown or when the client has gone (any reply is then
+    /// already later than the client's timeout). Returns whether the client is still there.
+    fn wait(&mut self, d: Duration) -> bool {
+        let until = Instant::now() + d;
+        loop {
+            let now = Instant::now();
+            if now >= until || self.shared.stopping() {
+                return true;
+            }
+            thread::sleep(POLL.min(until - now));
+            if self.peer_gone() {
+                return false;
+            }
+        }
+    }
+
+    /// True when the client has closed or reset the connection.
+    fn peer_gone(&mut self) -> bool {
+        if self.stream.set_nonblocking(true).is_err() {
+            return true;
+        }
+        let mut probe = [0u8; 1];
+        let gone = match self.stream.peek(&mut probe) {
+            Ok(0) => true,
+            Ok(_) => false,
+            Err(e) => e.kind() != io::ErrorKind::WouldBlock,
+        };
+        self.stream.set_nonblocking(false).is_err() || gone
+    }
+}
+
+impl Drop for Connection {
+    /// Closes the connection for good: the handle's clone of the stream would otherwise keep it
+    /// open.
+    fn drop(&mut self) {
+        let _ = self.stream.shutdown(Shutdown::Both);
+        lock(&self.shared.client).take();
+    }
+}
+
+fn closed() -> io::Error {
+    io::Error::new(io::ErrorKind::ConnectionAborted, "closed by a fault")
+}

@@ -1,0 +1,399 @@
+//! The driver's own error type: what went wrong in Keyence terms, what to do about it, and the
+//! common [`DriverErrorKind`] the core reacts to.
+
+use std::fmt;
+use std::time::Duration;
+
+use vision_core::{DriverError, DriverErrorKind};
+
+/// Why a Keyence command failed.
+///
+/// Each variant says what happened ([`KeyenceError::what`]) and what to do
+/// ([`KeyenceError::fix`]); `Display` prints both. [`KeyenceError::kind`] maps it to the core's
+/// [`DriverErrorKind`], and `From<KeyenceError> for DriverError` keeps the raw `ER,<cmd>,<nn>`
+/// reply in the message so the core can add the manual's fix without repeating ours.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum KeyenceError {
+    /// The configuration is unusable (nothing was sent).
+    Config {
+        /// What is wrong.
+        reason: String,
+    },
+
+    /// The camera host name does not resolve to an address.
+    Resolve {
+        /// `VisionIP` as given.
+        host: String,
+        /// `VisionPort`.
+        port: u16,
+        /// The resolver's words.
+        reason: String,
+    },
+
+    /// No TCP connection within the timeout (nothing answered the connection request).
+    ConnectTimeout {
+        /// The address tried.
+        addr: String,
+        /// The time allowed.
+        timeout: Duration,
+    },
+
+    /// The network says the camera cannot be reached (no route, host or network unreachable).
+    Unreachable {
+        /// The address tried.
+        addr: String,
+        /// The operating system's words.
+        reason: String,
+    },
+
+    /// The camera actively refused the connection.
+    Refused {
+        /// The address tried.
+        addr: String,
+        /// The operating system's words.
+        reason: String,
+    },
+
+    /// The camera did not complete its reply within the timeout. The connection was dropped,
+    /// so a late reply can never answer a later command.
+    Timeout {
+        /// The command sent (`TRG`, `FVR`, …).
+        command: String,
+        /// The time allowed for the whole exchange.
+        timeout: Duration,
+        /// What was still missing (`the TRG echo`, `the data line`, …).
+        waiting_for: String,
+        /// A line that arrived but belonged to no command (stale or foreign), if any.
+        ignored: Option<String>,
+    },
+
+    /// The camera closed the connection (or reset it) before its reply was complete.
+    Closed {
+        /// The command sent.
+        command: String,
+        /// What was still missing.
+        waiting_for: String,
+    },
+
+    /// Another socket error.
+    Io {
+        /// The command sent.
+        command: String,
+        /// The error's kind.
+        kind: std::io::ErrorKind,
+        /// The operating system's words.
+        message: String,
+    },
+
+    /// The camera answered with a line the driver cannot understand.
+    Malformed {
+        /// The command sent.
+        command: String,
+        /// The line received (escaped, shortened for display).
+        line: String,
+        /// What is wrong with it.
+        reason: String,
+    },
+
+    /// The camera refused the command with `ER,<cmd>,<nn>`.
+    Rejected {
+        /// The command the camera refused.
+        command: String,
+        /// The two-digit error code (`01`…`07`).
+        code: String,
+        /// The reply line as received, e.g. `ER,TRG,06`.
+        reply: String,
+        /// Earlier refusals in the same call, e.g. `ER,PL,01` before the `PW` fallback.
+        previous: Vec<String>,
+    },
+
+    /// A reply line is longer than the configured bound (a broken or hostile peer).
+    LineTooLong {
+        /// The command sent.
+        command: String,
+        /// The bound, bytes.
+        limit: usize,
+    },
+
+    /// A reply has more lines than the configured bound (a broken or hostile peer).
+    TooManyLines {
+        /// The command sent.
+        command: String,
+        /// The bound, lines.
+        limit: usize,
+    },
+
+    /// A job number outside 0–999 (nothing was sent).
+    InvalidJob {
+        /// The job asked for.
+        job: u32,
+    },
+}
+
+impl KeyenceError {
+    /// The common kind the core reacts to.
+    #[must_use]
+    pub fn kind(&self) -> DriverErrorKind {
+        match self {
+            KeyenceError::Config { .. } | KeyenceError::InvalidJob { .. } => DriverErrorKind::InvalidArgument,
+            KeyenceError::Resolve { .. } | KeyenceError::Io { .. } => DriverErrorKind::Other,
+            KeyenceError::ConnectTimeout { .. } | KeyenceError::Unreachable { .. } | KeyenceError::Timeout { .. } => {
+                DriverErrorKind::Timeout
+            }
+            KeyenceError::Refused { .. } | KeyenceError::Closed { .. } => DriverErrorKind::Refused,
+            KeyenceError::Malformed { .. } | KeyenceError::LineTooLong { .. } | KeyenceError::TooManyLines { .. } => {
+                DriverErrorKind::Malformed
+            }
+            KeyenceError::Rejected { .. } => DriverErrorKind::Rejected,
+        }
+    }
+
+    /// What happened, in one clause, without advice.
+    #[must_use]
+    pub fn what(&self) -> String {
+        match self {
+            KeyenceError::Config { reason } => format!("invalid Keyence driver configuration: {reason}"),
+            KeyenceError::Resolve { host, port, reason } => {
+                format!("camera address {host}:{port} does not resolve ({reason})")
+            }
+            KeyenceError::ConnectTimeout { addr, timeout } => {
+                format!("no connection to the camera at {addr} within {}", secs(*timeout))
+            }
+            KeyenceError::Unreachable { addr, reason } => format!("camera at {addr} is unreachable ({reason})"),
+            KeyenceError::Refused { addr, reason } => format!("camera at {addr} refused the connection ({reason})"),
+            KeyenceError::Timeout { command, timeout, waiting_for, ignored } => {
+                let mut s =
+                    format!("no complete reply to {command} within {}: {waiting_for} never came", secs(*timeout));
+                if let Some(line) = ignored {
+                    s.push_str(&format!("; ignored a line that answered no command: {line}"));
+                }
+                s
+            }
+            KeyenceError::Closed { command, waiting_for } => {
+                format!("camera closed the connection during {command} ({waiting_for} never came)")
+            }
+            KeyenceError::Io { command, message, .. } => format!("socket error during {command}: {message}"),
+            KeyenceError::Malformed { command, line, reason } => {
+                format!("reply to {command} not understood ({reason}): {line}")
+            }
+            KeyenceError::Rejected { command, reply, previous, .. } => {
+                let mut s = String::from("camera replied ");
+                for p in previous {
+                    s.push_str(p);
+                    s.push_str(" then ");
+                }
+                s.push_str(reply);
+                s.push_str(" to ");
+                s.push_str(command);
+                s
+            }
+            KeyenceError::LineTooLong { command, limit } => {
+                format!("a reply line to {command} is longer than {limit} bytes")
+            }
+            KeyenceError::TooManyLines { command, limit } => {
+                format!("the reply to {command} ran past {limit} lines without the expected answer")
+            }
+            KeyenceError::InvalidJob { job } => format!("camera job {job} is out of range (0–999)"),
+        }
+    }
+
+    /// What to do about it.
+    #[must_use]
+    pub fn fix(&self) -> String {
+        match self {
+            KeyenceError::Config { .. } => "check VisionIP, VisionPort and VisionTimeout".into(),
+            KeyenceError::Resolve { .. } => "set VisionIP to the camera's IP address (default 192.168.208.80)".into(),
+            KeyenceError::ConnectTimeout { .. } | KeyenceError::Unreachable { .. } => {
+                "check the camera is powered and cabled, that VisionIP and VisionPort match the camera, and that \
+                 the PC and the camera are on the same subnet"
+                    .into()
+            }
+            KeyenceError::Refused { .. } => {
+                "check VisionPort (Keyence default 8500), that the camera is in Run mode, and that no other client \
+                 holds the camera's command socket"
+                    .into()
+            }
+            KeyenceError::Timeout { waiting_for, .. } => {
+                if waiting_for.starts_with("the data line") {
+                    "the camera accepted the command but sent no data: add a Data Output (Non-Procedural) tool to \
+                     the job, or raise VisionTimeout if the inspection takes longer"
+                        .into()
+                } else {
+                    "check the camera is reachable and in Run mode, and that VisionIP and VisionPort point at its \
+                     Non-Procedural command port"
+                        .into()
+                }
+            }
+            KeyenceError::Closed { .. } => {
+                "another client may hold the camera's only command socket, or the camera left Run mode; the \
+                 next command reconnects"
+                    .into()
+            }
+            KeyenceError::Io { .. } => "check the network link to the camera; the next command reconnects".into(),
+            KeyenceError::Malformed { .. } | KeyenceError::LineTooLong { .. } | KeyenceError::TooManyLines { .. } => {
+                "the Data Output (Non-Procedural) tool must emit x,y or judgment,x,y or \
+                 judgment,count,x,y,width,height,angle,score, ending in CR"
+                    .into()
+            }
+            KeyenceError::Rejected { command, code, .. } => rejection_advice(command, code),
+            KeyenceError::InvalidJob { .. } => "use a camera job number 0–999".into(),
+        }
+    }
+
+    /// The `ER,<cmd>,<nn>` code when the camera refused the command.
+    #[must_use]
+    pub fn code(&self) -> Option<&str> {
+        match self {
+            KeyenceError::Rejected { code, .. } => Some(code),
+            _ => None,
+        }
+    }
+}
+
+impl fmt::Display for KeyenceError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} — {}", self.what(), self.fix())
+    }
+}
+
+/// The meaning of a VS-series `ER` code (SPEC §7), `None` for a code the manual does not list.
+#[must_use]
+pub fn er_meaning(code: &str) -> Option<&'static str> {
+    Some(match code {
+        "01" => "unknown command",
+        "02" => "wrong number of arguments",
+        "03" => "argument out of range",
+        "04" => "wrong argument type",
+        "05" => "not acceptable now (the camera is loading a program, or serving the command from another route)",
+        "06" => "not executable (the camera is not in Run mode, or the trigger source is not Communication)",
+        "07" => "camera-side timeout (the rest of the command did not arrive within 3 s)",
+        _ => return None,
+    })
+}
+
+fn rejection_advice(command: &str, code: &str) -> String {
+    let meaning = er_meaning(code).unwrap_or("an error code the VS manual does not list");
+    let todo = match (command, code) {
+        ("TRG", "01") => "switch the camera to Run mode; in Setup mode it does not accept TRG",
+        ("TRG", "06") => "switch the camera to Run mode and set the job's trigger source to Communication",
+        ("TRG", "07") => "the measurement did not complete in the camera's window; check the job and retry",
+        ("PL" | "PW", "01") => "this camera series knows neither PL (VS) nor PW (CV-X, IV) for job switching",
+        ("PL" | "PW", "03") => "the job number does not exist on the camera; check M284 P and VisionActiveJob",
+        (_, "05") => "wait for the camera to finish loading the job, then retry",
+        (_, "06") => "switch the camera to Run mode",
+        (_, "02" | "04") => "the camera series does not take this command's arguments; check the camera model",
+        _ => "see the camera's Non-Procedural command manual",
+    };
+    format!("{meaning}: {todo}")
+}
+
+fn secs(d: Duration) -> String {
+    let s = d.as_secs_f64();
+    if s >= 1.0 && (s - s.round()).abs() < 1e-9 {
+        format!("{} s", s.round())
+    } else {
+        format!("{:.3} s", s)
+    }
+}
+
+/// Whether the core adds the manual's fix for this error itself (see `vision-core`'s
+/// `VisionError::Driver`): then the driver sends only what happened, so the user does not read
+/// the advice twice.
+fn core_explains(e: &KeyenceError) -> bool {
+    match e {
+        KeyenceError::Rejected { code, .. } => er_meaning(code).is_some(),
+        _ => matches!(e.kind(), DriverErrorKind::Timeout | DriverErrorKind::Refused | DriverErrorKind::Malformed),
+    }
+}
+
+impl From<KeyenceError> for DriverError {
+    fn from(e: KeyenceError) -> Self {
+        let message = if core_explains(&e) { e.what() } else { e.to_string() };
+        DriverError::new(e.kind(), message)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use vision_core::VisionError;
+
+    fn rejected(command: &str, code: &str) -> KeyenceError {
+        KeyenceError::Rejected {
+            command: command.into(),
+            code: code.into(),
+            reply: format!("ER,{command},{code}"),
+            previous: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn rejected_reads_well_through_the_core() {
+        let e = rejected("TRG", "06");
+        assert_eq!(e.kind(), DriverErrorKind::Rejected);
+        assert_eq!(e.code(), Some("06"));
+        let standalone = e.to_string();
+        assert!(standalone.starts_with("camera replied ER,TRG,06 to TRG — not executable"), "{standalone}");
+        let user = VisionError::from(DriverError::from(e)).to_string();
+        assert_eq!(
+            user,
+            "command not executable — the camera is not in Run Mode or the trigger source is not set to \
+             Communication (camera replied ER,TRG,06 to TRG)"
+        );
+        // Every listed code: the raw reply survives, the advice appears once.
+        for code in ["01", "02", "03", "04", "05", "06", "07"] {
+            let user = VisionError::from(DriverError::from(rejected("TRG", code))).to_string();
+            assert_eq!(user.matches(&format!("ER,TRG,{code}")).count(), 1, "{user}");
+            assert!(!user.contains(" — ") || user.matches(" — ").count() == 1, "{user}");
+        }
+    }
+
+    #[test]
+    fn unknown_code_keeps_our_advice() {
+        let user = VisionError::from(DriverError::from(rejected("TRG", "42"))).to_string();
+        assert!(user.starts_with("camera replied ER,TRG,42 to TRG — an error code the VS manual"), "{user}");
+    }
+
+    #[test]
+    fn fallback_names_both_refusals() {
+        let e = KeyenceError::Rejected {
+            command: "PW".into(),
+            code: "01".into(),
+            reply: "ER,PW,01".into(),
+            previous: vec!["ER,PL,01".into()],
+        };
+        assert_eq!(e.what(), "camera replied ER,PL,01 then ER,PW,01 to PW");
+        assert!(e.fix().contains("neither PL"));
+    }
+
+    #[test]
+    fn timeout_and_closed_are_not_told_twice() {
+        let e = KeyenceError::Timeout {
+            command: "TRG".into(),
+            timeout: Duration::from_secs(3),
+            waiting_for: "the data line (the TRG echo arrived)".into(),
+            ignored: None,
+        };
+        assert!(e.fix().contains("Data Output"));
+        let user = VisionError::from(DriverError::from(e)).to_string();
+        assert_eq!(
+            user,
+            "timeout — camera unreachable, wrong IP/port, or no Data Output (Non-Procedural) tool configured to \
+             emit on TRG (no complete reply to TRG within 3 s: the data line (the TRG echo arrived) never came)"
+        );
+        let e = KeyenceError::Closed { command: "TRG".into(), waiting_for: "the TRG echo".into() };
+        assert_eq!(e.kind(), DriverErrorKind::Refused);
+        let user = VisionError::from(DriverError::from(e)).to_string();
+        assert!(user.starts_with("connection refused — "), "{user}");
+        assert_eq!(user.matches("Run").count(), 1, "{user}");
+    }
+
+    #[test]
+    fn invalid_arguments_carry_their_own_fix() {
+        let d = DriverError::from(KeyenceError::InvalidJob { job: 1000 });
+        assert_eq!(d.kind, DriverErrorKind::InvalidArgument);
+        assert_eq!(d.message, "camera job 1000 is out of range (0–999) — use a camera job number 0–999");
+        assert_eq!(secs(Duration::from_millis(250)), "0.250 s");
+    }
+}

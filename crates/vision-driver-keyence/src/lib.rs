@@ -1,0 +1,119 @@
+//! The Keyence VS-series smart camera, driven over its Non-Procedural command port (TCP 8500),
+//! and an emulator that behaves like one (SPEC §7).
+//!
+//! * [`KeyenceDriver`]: the [`vision_core::CameraDriver`] (`TRG`, `FVR`, `PR`, job switch with
+//!   `PL`, falling back to `PW`), one persistent connection, typed errors; [`register`] adds
+//!   it to a [`vision_core::DriverRegistry`] as `Keyence`.
+//! * [`KeyenceConfig`]: address, timeout and bounds, from the `Vision*` parameters.
+//! * [`protocol`]: the pure part — framing, reply parsing and the command/reply state machine
+//!   over any `Read + Write` ([`protocol::Session`]); the socket is a thin edge around it.
+//! * [`emulator`]: a TCP server that answers like a VS camera, with pluggable results and
+//!   fault injection.
+//!
+//! ```
+//! use vision_core::{DriverRegistry, Params};
+//! use vision_driver_keyence::emulator::Emulator;
+//!
+//! let camera = Emulator::builder().bind("127.0.0.1:0")?; // a mark at the image centre
+//! let mut registry = DriverRegistry::new();
+//! vision_driver_keyence::register(&mut registry);
+//! let mut params = Params::default();
+//! params.set("VisionIP", "127.0.0.1")?;
+//! params.set("VisionPort", i64::from(camera.addr().port()))?;
+//! let mut driver = registry.create("Keyence", &params)?;
+//! let reading = driver.trigger()?;
+//! assert_eq!((reading.x_px, reading.y_px), (888.0, 888.0));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! # What the camera may answer
+//!
+//! Lines end in CR, CRLF or LF (each one line end; a CRLF split across reads is still one, so a
+//! stray LF never shifts replies). To `TRG` the camera echoes `TRG`, then sends one Data Output
+//! line, in the same TCP segment or byte by byte. Accepted data lines:
+//!
+//! | format | example |
+//! | --- | --- |
+//! | `x,y` (judgment unknown) | `812.125,903.5` |
+//! | `judgment,x,y` | `OK,812.125,903.5` or `1,812.125,903.5` |
+//! | `judgment,count,x,y,width,height,angle,score` (recommended; count 0 = no mark) | `1,1,812.125,903.5,40.25,39.75,-12.5,97.25` |
+//!
+//! Numbers plain (`150.0`) or Keyence fixed width (`+0000000888.123000`); judgment `1`/`OK` or
+//! `0`/`NG`. NG and count 0 are readings (the core turns them into "NG / no mark").
+//!
+//! # Timeouts
+//!
+//! [`KeyenceConfig::timeout`] (`VisionTimeout`, 3 s) bounds a whole driver call: connecting when
+//! needed, sending, and receiving the complete reply — not each byte, so a peer that dribbles a
+//! byte every second cannot hold the driver. After a timeout the connection is dropped: a late
+//! reply lands in a dead socket and can never answer the next command.
+//!
+//! # Errors ([`KeyenceError`] → [`vision_core::DriverErrorKind`])
+//!
+//! | error | kind | means |
+//! | --- | --- | --- |
+//! | `ConnectTimeout`, `Unreachable` | Timeout | nothing answered at `VisionIP:VisionPort` |
+//! | `Timeout` | Timeout | connected, but the reply did not complete; says whether the echo came (no echo: camera not answering; echo but no data: no Data Output tool) |
+//! | `Refused` | Refused | nothing listens on the port |
+//! | `Closed` | Refused | the camera closed or reset the connection mid-command (another client holds the camera, or it left Run mode) |
+//! | `Rejected` | Rejected | `ER,<cmd>,<nn>`, with the manual's meaning and fix; the raw reply is kept in the message |
+//! | `Malformed`, `LineTooLong`, `TooManyLines` | Malformed | the reply is not one of the formats, or breaks the bounds (512 bytes a line, 8 lines a reply) |
+//! | `Config`, `InvalidJob` | InvalidArgument | refused before anything was sent |
+//! | `Resolve`, `Io` | Other | host name does not resolve; another socket error |
+//!
+//! Through `vision_core::VisionError::Driver` the core prefixes the manual's fix for Timeout,
+//! Refused, Malformed and the listed `ER` codes; the driver then sends only what happened, so
+//! the operator reads each piece of advice once.
+//!
+//! # Never twice
+//!
+//! The connection is reused across calls and dropped after any failure except a camera
+//! refusal. A call is retried — once, on a fresh connection, within the same timeout — only
+//! when the reused connection failed before the operating system accepted a single byte of the
+//! call's commands: then nothing can have reached the camera. Before reuse the idle connection
+//! is probed (stale bytes drained, a closed connection replaced before anything is sent). Once
+//! a byte of `TRG` may have left, a failure is returned as it is; the next call reconnects.
+//!
+//! # Decisions where the spec is open
+//!
+//! * `TRG`'s answer is the line after the `TRG` echo; lines before the echo (a stale data
+//!   output, an `ER` for another command) answer no command of ours and are skipped, counted
+//!   against the 8-line bound. Every line after the echo is the data line.
+//! * Range checks (|x|, |y|, width, height ≤ 10⁶ px, |angle| ≤ 360°, |score| ≤ 10⁶, count ≤
+//!   10⁶) apply to readings that claim a mark; an NG or count-0 reading keeps whatever finite
+//!   numbers the camera sent (cameras report sentinels when they find nothing). Exponents,
+//!   `inf` and `NaN` are always malformed.
+//! * Job switch: `PL,d,nnn` (job as three digits), `PW,d,nnn` after `ER,PL,01`; the command that
+//!   worked is remembered. `d` is the device `PR` reports unless [`KeyenceConfig::memory_device`]
+//!   is set. Job numbers above 999 are refused before connecting.
+//! * Capabilities: `select_job` and `grab_image` (the camera FTP-pushes images; the core grabs
+//!   them from `VisionImageWatchDir`), as SPEC §7 lists.
+//! * `test_connection` returns the text after `FVR,`.
+//!
+//! # Protocol facts: confirmed and assumed
+//!
+//! Confirmed by the manual seeds and by public client code for Keyence VS and CV-X cameras:
+//! commands and replies end in CR; `TRG` is echoed as `TRG`, then the Data Output line follows
+//! as its own line (possibly in the same segment); errors are `ER,<cmd>,<nn>` with codes 01–07;
+//! the VS switches jobs with `PL,<device>,<job>` (devices 1 and 2); CV-X uses `PW,<device>,<job>`
+//! answered by a bare `PW`; `PR` answers `PR,<device>,<job>`; `RUN` and `SET` switch Run/Setup
+//! mode and `MOR` answers `MOR,1` in Run mode, `MOR,0` in Setup mode.
+//!
+//! Assumed (no primary Keyence document at hand): `PL` is acknowledged by a bare `PL`; `FVR`
+//! answers `FVR,<version>`; IV-series `PW` takes the same `d,nnn` arguments as CV-X; `TRG` in
+//! Setup mode answers `06` (SPEC) rather than `01` (one line of the manual); the camera's 3 s
+//! command timeout counts from the command's first byte; a command over 500 bytes answers `02`;
+//! a second client is accepted then reset (the manual says "refused"); the order in which the
+//! emulator checks arguments (count, type, range, mode, busy).
+
+mod config;
+mod driver;
+pub mod emulator;
+mod error;
+pub mod protocol;
+mod transport;
+
+pub use config::{KeyenceConfig, DEFAULT_PORT, DEFAULT_TIMEOUT, MAX_TIMEOUT};
+pub use driver::{register, KeyenceDriver, DRIVER_NAME};
+pub use error::{er_meaning, KeyenceError};
+pub use protocol::{JobCommand, Limits, Program};

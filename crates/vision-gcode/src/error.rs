@@ -1,0 +1,446 @@
+//! The one error type of `vision-gcode` and the problems it names.
+//!
+//! Every message says what went wrong and what to do about it. A syntax error carries the line
+//! and the (1-based, character) column; a run-time error carries the line.
+
+use std::fmt;
+
+/// A G-code number as written, in tenths: `G90.1` is `GCode(901)`, `G1` is `GCode(10)`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct GCode(pub u16);
+
+impl fmt::Display for GCode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.0 % 10 == 0 {
+            write!(f, "G{}", self.0 / 10)
+        } else {
+            write!(f, "G{}.{}", self.0 / 10, self.0 % 10)
+        }
+    }
+}
+
+/// Why a program stopped. Nothing is ever silently ignored: an unknown code or an unused word
+/// is one of these, with its line.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum GcodeError {
+    /// The line does not parse.
+    #[error("line {line}, column {column}: {problem}")]
+    Syntax {
+        /// 1-based line number in the text being run.
+        line: u32,
+        /// 1-based column (characters) where the problem was found.
+        column: u32,
+        /// What is wrong.
+        problem: SyntaxProblem,
+    },
+    /// The line parses but cannot run; the line changed nothing.
+    #[error("line {line}: {problem}")]
+    Run {
+        /// 1-based line number in the text being run.
+        line: u32,
+        /// What is wrong.
+        problem: RunProblem,
+    },
+    /// A user M-code handler refused or failed.
+    #[error("line {line}: M{code} failed: {message}")]
+    Handler {
+        /// Line of the M-code.
+        line: u32,
+        /// The M number.
+        code: u32,
+        /// The handler's own message.
+        message: String,
+    },
+    /// G-code that a user M-code handler ran (or returned) failed; `inner` numbers its lines
+    /// from 1 within that text.
+    #[error("line {line}: G-code run by M{code} failed: {inner}")]
+    HandlerGcode {
+        /// Line of the M-code.
+        line: u32,
+        /// The M number.
+        code: u32,
+        /// The failure inside the handler's text.
+        inner: Box<GcodeError>,
+    },
+}
+
+impl GcodeError {
+    /// The line the error is reported at (for handler failures: the M-code's line).
+    #[must_use]
+    pub fn line(&self) -> u32 {
+        match self {
+            GcodeError::Syntax { line, .. }
+            | GcodeError::Run { line, .. }
+            | GcodeError::Handler { line, .. }
+            | GcodeError::HandlerGcode { line, .. } => *line,
+        }
+    }
+
+    /// The column of a syntax error, `None` for the other kinds.
+    #[must_use]
+    pub fn column(&self) -> Option<u32> {
+        match self {
+            GcodeError::Syntax { column, .. } => Some(*column),
+            _ => None,
+        }
+    }
+
+    pub(crate) fn run(line: u32, problem: RunProblem) -> GcodeError {
+        GcodeError::Run { line, problem }
+    }
+}
+
+/// Why a line does not parse.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum SyntaxProblem {
+    /// A character that cannot start or continue anything here.
+    #[error("unexpected `{found}`: expected a word (letter and value), `#n = value`, or a comment")]
+    Unexpected {
+        /// The character found.
+        found: char,
+    },
+    /// A word letter without a value.
+    #[error("`{letter}` has no value: write a number, `#n`, `[expression]` or a function after it")]
+    MissingValue {
+        /// The word letter.
+        letter: char,
+    },
+    /// Digits expected.
+    #[error("malformed number: expected digits with at most one `.`")]
+    BadNumber,
+    /// A `(` comment without its `)`.
+    #[error("comment `(` is not closed: add `)` before the end of the line")]
+    UnclosedComment,
+    /// A `[` without its `]`.
+    #[error("`[` is not closed: add `]`")]
+    UnclosedBracket,
+    /// A value was expected inside an expression.
+    #[error("expected a value: a number, `#n`, `[expression]`, `-value` or a function such as SIN[30]")]
+    ExpectedValue,
+    /// An operator or the closing bracket was expected.
+    #[error("expected an operator (** * / MOD + - EQ NE GT GE LT LE AND OR XOR) or `]`")]
+    ExpectedOperator,
+    /// A name that is neither a function nor (in operator position) an operator.
+    #[error("unknown function: expected one of ABS ACOS ASIN ATAN COS EXP FIX FUP LN ROUND SIN SQRT TAN")]
+    UnknownFunction,
+    /// A function name not followed by `[`.
+    #[error("`{name}` needs its argument in brackets, e.g. {name}[30]")]
+    FunctionNeedsBracket {
+        /// The function name.
+        name: &'static str,
+    },
+    /// ATAN written other than `ATAN[y]/[x]`.
+    #[error("ATAN takes two arguments written ATAN[y]/[x]")]
+    AtanForm,
+    /// Brackets, `#` or signs nested too deeply.
+    #[error("expression nested more than {limit} levels deep: simplify it")]
+    TooDeep {
+        /// The nesting limit.
+        limit: u32,
+    },
+    /// `#n` at the start of an item must be an assignment.
+    #[error("expected `=` after `#...`: a parameter at the start of an item is an assignment, `#1 = 2`")]
+    ExpectedEquals,
+    /// `N` after another item.
+    #[error("the line number `N` must be the first word of the line")]
+    LineNumberNotFirst,
+    /// `N` with a fraction, a sign or an expression.
+    #[error("the line number `N` must be a whole number, e.g. N10")]
+    BadLineNumber,
+    /// The same letter twice (G and M may repeat).
+    #[error("two `{letter}` words on one line: keep one")]
+    DuplicateWord {
+        /// The repeated letter.
+        letter: char,
+    },
+}
+
+/// Why a line that parses cannot run. The line changed nothing (for a user M-code line: see
+/// the crate documentation).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum RunProblem {
+    /// A G-code this interpreter does not implement.
+    #[error("{code} is not supported: this machine knows G0 G1 G2 G3 G4 G10 G17 G18 G19 G20 G21 G28 G28.1 G50 G51 G52 G54-G59 G61 G64 G68 G69 G90 G90.1 G91 G91.1 G92 G94")]
+    UnknownGCode {
+        /// The code.
+        code: GCode,
+    },
+    /// A G value that is not a whole number of tenths (e.g. `G1.25`) or is out of range.
+    #[error("G{value} is not a G-code: G numbers have at most one decimal")]
+    BadGCode {
+        /// The value written.
+        value: f64,
+    },
+    /// An M-code that is neither built in nor in the user range.
+    #[error(
+        "M{code} is not supported: built in are M0 M1 M2 M3 M4 M5 M6 M30, user M-codes are M{user_low}-M{user_high}"
+    )]
+    UnknownMCode {
+        /// The M number.
+        code: u32,
+        /// First user M-code.
+        user_low: u32,
+        /// Last user M-code.
+        user_high: u32,
+    },
+    /// An M value that is not a non-negative whole number.
+    #[error("M{value} is not an M-code: M numbers are whole and non-negative")]
+    BadMCode {
+        /// The value written.
+        value: f64,
+    },
+    /// Two codes of one modal group on a line.
+    #[error("{first} and {second} are in the same modal group: keep one of them on this line")]
+    ModalConflict {
+        /// The first code, as written (`G0`, `M3`).
+        first: String,
+        /// The second code.
+        second: String,
+    },
+    /// Two codes that both want the axis words.
+    #[error("{first} and {second} both use the axis words: put them on separate lines")]
+    AxisWordConflict {
+        /// The first code.
+        first: String,
+        /// The second code.
+        second: String,
+    },
+    /// One word claimed by two codes (e.g. `P` by both G4 and G64).
+    #[error("`{letter}` is used by both {first} and {second}: put them on separate lines")]
+    WordConflict {
+        /// The word letter.
+        letter: char,
+        /// The first code.
+        first: &'static str,
+        /// The second code.
+        second: &'static str,
+    },
+    /// A word no code on the line uses.
+    #[error("`{letter}` word is not used by any code on this line: remove it or add the code that uses it")]
+    UnusedWord {
+        /// The word letter.
+        letter: char,
+    },
+    /// A user M-code shares its line with G- or M-codes.
+    #[error("user M-code M{code} must be alone on its line with its own words; move {other} to its own line")]
+    UserMCodeNotAlone {
+        /// The user M-code.
+        code: u32,
+        /// The other code found.
+        other: String,
+    },
+    /// A user M-code in G-code that a handler runs.
+    #[error("user M-code M{code} inside G-code run by a handler: handlers cannot call user M-codes")]
+    NestedUserMCode {
+        /// The user M-code.
+        code: u32,
+    },
+    /// M2/M30 in G-code run by a handler.
+    #[error("M{code} inside G-code run by a handler: only the program itself can end the program")]
+    EndInHandler {
+        /// 2 or 30.
+        code: u32,
+    },
+    /// A word that must be a whole number.
+    #[error("`{letter}{value}` must be a whole number")]
+    NotWhole {
+        /// The word letter.
+        letter: char,
+        /// The value written.
+        value: f64,
+    },
+    /// A required word is missing.
+    #[error("{code} needs `{letter}`: {hint}")]
+    MissingWord {
+        /// The code.
+        code: &'static str,
+        /// The missing letter.
+        letter: char,
+        /// What to write.
+        hint: &'static str,
+    },
+    /// A word value out of its range.
+    #[error("{code}: `{letter}{value}` is out of range: {hint}")]
+    OutOfRange {
+        /// The code.
+        code: &'static str,
+        /// The letter.
+        letter: char,
+        /// The value.
+        value: f64,
+        /// The valid range.
+        hint: &'static str,
+    },
+    /// A code that needs at least one axis word got none.
+    #[error("{code} needs at least one of X, Y, Z")]
+    NoAxisWords {
+        /// The code.
+        code: &'static str,
+    },
+    /// A rotary or auxiliary axis word.
+    #[error("`{letter}` axis is not supported: this machine has X, Y and Z only")]
+    AxisNotSupported {
+        /// The axis letter.
+        letter: char,
+    },
+    /// G51 with an axis it cannot scale.
+    #[error("G51 scales X and Y only; remove `{letter}`")]
+    ScaleAxis {
+        /// The letter.
+        letter: char,
+    },
+    /// G51 with a zero factor.
+    #[error("G51 `{letter}0`: a zero scale factor collapses the axis; use a non-zero factor (1 = unscaled)")]
+    ZeroScale {
+        /// The axis.
+        letter: char,
+    },
+    /// Axis words with no motion mode active.
+    #[error("axis words but no motion mode: program G0, G1, G2 or G3 first")]
+    NoMotionMode,
+    /// A feed move with no feed rate.
+    #[error("{code} with no feed rate: program F (length units per minute) first")]
+    NoFeedRate {
+        /// The motion code.
+        code: &'static str,
+    },
+    /// G2/G3 with neither centre words nor R.
+    #[error("{code} needs centre words ({centre}) or R")]
+    ArcNoCentre {
+        /// The motion code.
+        code: &'static str,
+        /// The centre words of the active plane.
+        centre: &'static str,
+    },
+    /// G2/G3 with a centre word outside the active plane.
+    #[error(
+        "`{letter}` is not a centre word of the {plane} plane (use {centre}, or select the plane with G17/G18/G19)"
+    )]
+    ArcCentreWord {
+        /// The letter.
+        letter: char,
+        /// The plane code.
+        plane: &'static str,
+        /// The plane's centre words.
+        centre: &'static str,
+    },
+    /// G2/G3 with both R and centre words.
+    #[error("{code} has both R and centre words: use one form")]
+    ArcBothForms {
+        /// The motion code.
+        code: &'static str,
+    },
+    /// G2/G3 without an end point in the plane (and not a full circle form).
+    #[error("{code} needs at least one axis word; for a full circle repeat the start point, e.g. G2 X.. Y.. I..")]
+    ArcNoEnd {
+        /// The motion code.
+        code: &'static str,
+    },
+    /// The arc's centre coincides with its start.
+    #[error("arc centre coincides with the start point: check the centre words and G90.1/G91.1")]
+    ArcZeroRadius,
+    /// Start and end radii differ beyond tolerance.
+    #[error("radius to the arc end ({end_radius:.6}) differs from the radius to its start ({start_radius:.6}) by more than the tolerance: check the centre words, the end point and G90.1/G91.1")]
+    ArcRadiusMismatch {
+        /// Radius at the start, current units.
+        start_radius: f64,
+        /// Radius at the end, current units.
+        end_radius: f64,
+    },
+    /// R smaller than half the chord.
+    #[error("arc radius R{radius} is too small to reach the end point {half_chord:.6} away (half the chord): use a larger R")]
+    ArcRadiusTooSmall {
+        /// |R|, current units.
+        radius: f64,
+        /// Half the distance from start to end, current units.
+        half_chord: f64,
+    },
+    /// R-format arc whose end is its start.
+    #[error("R-format arc with its end at its start: a full circle needs the centre form (I/J/K)")]
+    ArcRFullCircle,
+    /// An arc that would need more polyline segments than allowed.
+    #[error("arc would need {segments} segments at the chord tolerance: raise the tolerance or split the arc")]
+    ArcTooManySegments {
+        /// The number needed.
+        segments: u64,
+    },
+    /// A tool number not in the tool table.
+    #[error("tool {tool} is not in the tool table: define it or use another T number")]
+    UnknownTool {
+        /// The tool number.
+        tool: u32,
+    },
+    /// M3/M4/M5 with no tool to act on.
+    #[error("{code} with no tool: load one with Tn M6, name it with $n, or use the explicit form A<device> P<port>")]
+    NoSpindleTool {
+        /// The M-code.
+        code: &'static str,
+    },
+    /// The explicit output form with A or P missing.
+    #[error("{code} explicit form needs both A<device> and P<port>")]
+    OutputForm {
+        /// The M-code.
+        code: &'static str,
+    },
+    /// A parameter number out of range or not whole.
+    #[error("#{index} is not a parameter: use a whole number from 1 to 9999")]
+    BadParameter {
+        /// The index as computed.
+        index: f64,
+    },
+    /// A write to a read-only parameter.
+    #[error("#{index} is read-only ({what}); write to another parameter")]
+    ReadOnlyParameter {
+        /// The parameter number.
+        index: u32,
+        /// What it reports.
+        what: &'static str,
+    },
+    /// Division by zero in an expression.
+    #[error("division by zero in an expression")]
+    DivisionByZero,
+    /// A function outside its domain.
+    #[error("{function}[{argument}] is undefined: {hint}")]
+    Domain {
+        /// The function or operator.
+        function: &'static str,
+        /// The argument.
+        argument: f64,
+        /// The valid domain.
+        hint: &'static str,
+    },
+    /// NaN or infinity from an expression or a computation.
+    #[error("{what} is not a finite number: check the expression and its parameters")]
+    NonFinite {
+        /// What produced it.
+        what: &'static str,
+    },
+    /// A numeric word (not an expression) that is not finite, e.g. a huge literal.
+    #[error("`{letter}` value is not a finite number")]
+    NonFiniteWord {
+        /// The letter.
+        letter: char,
+    },
+    /// A negative or non-finite time/feed/tolerance.
+    #[error("{code}: `{letter}{value}` must not be negative")]
+    Negative {
+        /// The code.
+        code: &'static str,
+        /// The letter.
+        letter: char,
+        /// The value.
+        value: f64,
+    },
+    /// A G10 form other than L2 / L20.
+    #[error("G10 L{l} is not supported: use G10 L2 (set offset) or G10 L20 (set offset from the current position)")]
+    G10Form {
+        /// The L value.
+        l: f64,
+    },
+    /// A computed machine position that is not finite (e.g. huge values through G51).
+    #[error("the move's machine position is not a finite number: check the values and the active G51 scale")]
+    NonFinitePosition,
+}

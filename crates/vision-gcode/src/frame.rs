@@ -1,0 +1,136 @@
+//! The frame chain of SPEC §6: program → (G51 → G68 → G52) → work → (+ work offset + G92
+//! − tool X/Y) → machine.
+//!
+//! The X/Y part of program → work is [`vision_math::AlignmentChain::apply`], operation for
+//! operation (the rotation matrix is cached, the arithmetic is the same), so it is bit-identical.
+
+use vision_math::{AlignmentChain, Matrix2, Point2, Vector2};
+
+use crate::geom::Xyz;
+
+/// The alignment modals in machine units, and the G52 Z shift.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Frame {
+    /// G51 / G68 / G52 (X/Y), machine units.
+    pub(crate) chain: AlignmentChain,
+    /// `chain.rotation_matrix()`, cached.
+    rotation: Matrix2<f64>,
+    /// G52 Z, machine units.
+    pub(crate) local_z: f64,
+}
+
+impl Default for Frame {
+    fn default() -> Self {
+        Frame::identity()
+    }
+}
+
+impl Frame {
+    /// No scale, rotation or shift.
+    pub(crate) fn identity() -> Frame {
+        Frame { chain: AlignmentChain::IDENTITY, rotation: AlignmentChain::IDENTITY.rotation_matrix(), local_z: 0.0 }
+    }
+
+    /// G68: rotate by `degrees` about `center` (machine units); G69 is `(origin, 0)`.
+    pub(crate) fn set_rotation(&mut self, center: Point2<f64>, degrees: f64) {
+        self.chain.center = center;
+        self.chain.rotation_deg = degrees;
+        self.rotation = self.chain.rotation_matrix();
+    }
+
+    /// Program X/Y → work X/Y, exactly as [`AlignmentChain::apply`].
+    #[inline]
+    pub(crate) fn apply(&self, p: Point2<f64>) -> Point2<f64> {
+        let c = &self.chain;
+        let scaled = Vector2::new(c.scale.x * p.x, c.scale.y * p.y);
+        let rotated = self.rotation * (scaled - c.center.coords) + c.center.coords;
+        Point2::from(rotated + c.shift)
+    }
+
+    /// Work X/Y → program X/Y, as [`AlignmentChain::inverse`] (scale factors are never zero:
+    /// G51 refuses them).
+    pub(crate) fn inverse(&self, w: Point2<f64>) -> Point2<f64> {
+        let c = &self.chain;
+        let v = self.rotation.transpose() * (w.coords - c.shift - c.center.coords) + c.center.coords;
+        Point2::new(v.x / c.scale.x, v.y / c.scale.y)
+    }
+
+    /// True when the X/Y map keeps circles circles (|sx| = |sy|).
+    pub(crate) fn is_similarity(&self) -> bool {
+        self.chain.scale.x.abs() == self.chain.scale.y.abs()
+    }
+
+    /// True when the X/Y map is a pure translation (no scale, no rotation).
+    pub(crate) fn is_translation(&self) -> bool {
+        self.chain.scale == Vector2::new(1.0, 1.0) && self.rotation == Matrix2::identity()
+    }
+
+    /// True when the X/Y map mirrors (reverses arc directions).
+    pub(crate) fn mirrors(&self) -> bool {
+        self.chain.scale.x * self.chain.scale.y < 0.0
+    }
+
+    /// The largest factor by which the map stretches a length in 3D (Z is never scaled).
+    pub(crate) fn stretch(&self) -> f64 {
+        self.chain.scale.x.abs().max(self.chain.scale.y.abs()).max(1.0)
+    }
+}
+
+/// The whole program → machine map at one moment: the frame and the summed offsets.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Placement {
+    pub(crate) frame: Frame,
+    /// `x = (work.x + g92.x) − tool.x`, `y` likewise, `z = (work.z + g92.z) + tool length`,
+    /// machine units.
+    pub(crate) offset: Xyz,
+}
+
+impl Placement {
+    /// The summed offset of a work offset, a G92 offset and a tool (offset and length).
+    pub(crate) fn offset(work: Xyz, g92: Xyz, tool: Xyz) -> Xyz {
+        Xyz { x: (work.x + g92.x) - tool.x, y: (work.y + g92.y) - tool.y, z: (work.z + g92.z) + tool.z }
+    }
+
+    /// Program point → work point.
+    pub(crate) fn work_of(&self, p: Xyz) -> Xyz {
+        let w = self.frame.apply(p.xy());
+        Xyz { x: w.x, y: w.y, z: p.z + self.frame.local_z }
+    }
+
+    /// Program point → machine point.
+    #[inline]
+    pub(crate) fn machine_of(&self, p: Xyz) -> Xyz {
+        let w = self.work_of(p);
+        Xyz { x: w.x + self.offset.x, y: w.y + self.offset.y, z: w.z + self.offset.z }
+    }
+
+    /// Machine point → program point.
+    pub(crate) fn program_of(&self, m: Xyz) -> Xyz {
+        let p = self.frame.inverse(Point2::new(m.x - self.offset.x, m.y - self.offset.y));
+        Xyz { x: p.x, y: p.y, z: (m.z - self.offset.z) - self.frame.local_z }
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::float_cmp)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn apply_is_bit_identical_to_the_alignment_chain() {
+        let mut frame = Frame::identity();
+        frame.chain.scale = Vector2::new(1.0003, 0.9991);
+        frame.set_rotation(Point2::new(3.1, 2.2), 0.731);
+        frame.chain.shift = Vector2::new(0.07, -0.11);
+        for p in [Point2::new(0.0, 0.0), Point2::new(6.0, 4.0), Point2::new(-123.456, 78.9)] {
+            assert_eq!(frame.apply(p), frame.chain.apply(p));
+            let back = frame.inverse(frame.apply(p));
+            assert!((back - p).norm() < 1e-12);
+        }
+        let placement = Placement { frame, offset: Placement::offset(Xyz::new(1.0, 2.0, 3.0), Xyz::ZERO, Xyz::ZERO) };
+        let p = Xyz::new(1.0, 1.0, 1.0);
+        let m = placement.machine_of(p);
+        assert!((placement.program_of(m) - p).norm() < 1e-12);
+        assert!(!frame.is_similarity() && !frame.is_translation() && !frame.mirrors());
+    }
+}

@@ -1,0 +1,166 @@
+//! The codes that move the program frame, never the machine: G10, G92, G52, G68, G51.
+
+use vision_math::Point2;
+
+use super::line::LineRun;
+use super::modal::work_offset_base;
+use crate::error::RunProblem;
+use crate::geom::{Xyz, AXIS_LETTERS};
+use crate::params::G92_OFFSET;
+use crate::words::whole;
+
+impl LineRun<'_> {
+    /// Which axis words are on the line (without claiming them); at least one is required.
+    pub(super) fn given_axes(&self, owner: &'static str) -> Result<[bool; 3], RunProblem> {
+        let given = AXIS_LETTERS.map(|l| self.w.has(l));
+        if given.iter().any(|g| *g) {
+            Ok(given)
+        } else {
+            Err(RunProblem::NoAxisWords { code: owner })
+        }
+    }
+
+    /// The given axis words (absolute, converted to machine units), with the current program
+    /// coordinate for the others; and which were given.
+    pub(super) fn absolute_point(&mut self, owner: &'static str) -> Result<(Xyz, [bool; 3]), RunProblem> {
+        let given = self.given_axes(owner)?;
+        let mut p = self.st.program;
+        for (axis, &letter) in AXIS_LETTERS.iter().enumerate() {
+            if let Some(v) = self.length(letter, owner)? {
+                p.set_axis(axis, v);
+            }
+        }
+        Ok((p, given))
+    }
+
+    pub(super) fn g10(&mut self) -> Result<(), RunProblem> {
+        let l = self.require(
+            b'L',
+            "G10",
+            "L2 sets a coordinate system's origin, L20 makes the current point read the given values",
+        )?;
+        if l != 2.0 && l != 20.0 {
+            return Err(RunProblem::G10Form { l });
+        }
+        let p = self.require(b'P', "G10", "the coordinate system, P1 (G54) to P6 (G59), or P0 for the active one")?;
+        let mut system = whole(b'P', p)?;
+        if system > 6 {
+            return Err(RunProblem::OutOfRange {
+                code: "G10",
+                letter: 'P',
+                value: p,
+                hint: "P0 (active system) to P6 (G59); G59.1-G59.3 are not supported",
+            });
+        }
+        if system == 0 {
+            system = self.st.system;
+        }
+        let base = work_offset_base(system);
+        let (v, given) = self.absolute_point("G10")?;
+        if l == 2.0 {
+            for axis in (0..3).filter(|&a| given[a]) {
+                self.params.set(base + axis as u32, v.axis(axis));
+            }
+        } else {
+            // The origin that makes the current machine point read `v`.
+            let pl = self.placement();
+            let w = pl.work_of(v);
+            let g92 = self.params.triple(G92_OFFSET);
+            let tool = self.st.tool_offset;
+            let m = self.st.machine;
+            let origin =
+                [((m.x - w.x) - g92[0]) + tool.x, ((m.y - w.y) - g92[1]) + tool.y, ((m.z - w.z) - g92[2]) - tool.z];
+            for axis in (0..3).filter(|&a| given[a]) {
+                self.params.set(base + axis as u32, origin[axis]);
+            }
+        }
+        if system == self.st.system {
+            self.st.rederive_program(self.params);
+            if l == 20.0 {
+                self.keep_given(v, given);
+            }
+        }
+        Ok(())
+    }
+
+    /// After an offset was computed to make the current point read `v` on the given axes, take
+    /// those coordinates exactly (the re-derived ones differ by rounding only).
+    pub(super) fn keep_given(&mut self, v: Xyz, given: [bool; 3]) {
+        for axis in (0..3).filter(|&a| given[a]) {
+            self.st.program.set_axis(axis, v.axis(axis));
+        }
+    }
+
+    pub(super) fn g92(&mut self) -> Result<(), RunProblem> {
+        let given = self.given_axes("G92")?;
+        // Seed 002: an axis without a word gets a zero G92 offset. Do that first, so the given
+        // axes are computed in the frame that will hold.
+        for axis in (0..3).filter(|&a| !given[a]) {
+            self.params.set(G92_OFFSET + axis as u32, 0.0);
+        }
+        self.st.rederive_program(self.params);
+        let (v, given) = self.absolute_point("G92")?;
+        let pl = self.placement();
+        let w = pl.work_of(v);
+        let work = self.params.triple(work_offset_base(self.st.system));
+        let tool = self.st.tool_offset;
+        let m = self.st.machine;
+        let g92 =
+            [((m.x - w.x) - work[0]) + tool.x, ((m.y - w.y) - work[1]) + tool.y, ((m.z - w.z) - work[2]) - tool.z];
+        for axis in (0..3).filter(|&a| given[a]) {
+            self.params.set(G92_OFFSET + axis as u32, g92[axis]);
+        }
+        self.st.rederive_program(self.params);
+        self.keep_given(v, given);
+        Ok(())
+    }
+
+    pub(super) fn g52(&mut self) -> Result<(), RunProblem> {
+        let (v, given) = self.absolute_point("G52")?;
+        if given[0] {
+            self.st.frame.chain.shift.x = v.x;
+        }
+        if given[1] {
+            self.st.frame.chain.shift.y = v.y;
+        }
+        if given[2] {
+            self.st.frame.local_z = v.z;
+        }
+        self.st.rederive_program(self.params);
+        Ok(())
+    }
+
+    pub(super) fn g68(&mut self) -> Result<(), RunProblem> {
+        let degrees = self.require(b'R', "G68", "the rotation in degrees, counter-clockwise, e.g. G68 X0 Y0 R30")?;
+        // An omitted centre coordinate is the current point's (in the scaled frame), so the
+        // machine does not jump.
+        let scale = self.st.frame.chain.scale;
+        let p = self.st.program;
+        let cx = self.length(b'X', "G68")?.unwrap_or(scale.x * p.x);
+        let cy = self.length(b'Y', "G68")?.unwrap_or(scale.y * p.y);
+        self.st.frame.set_rotation(Point2::new(cx, cy), degrees);
+        self.st.rederive_program(self.params);
+        Ok(())
+    }
+
+    pub(super) fn g51(&mut self) -> Result<(), RunProblem> {
+        if self.w.has(b'Z') {
+            return Err(RunProblem::ScaleAxis { letter: 'Z' });
+        }
+        let sx = self.w.take(b'X', "G51")?;
+        let sy = self.w.take(b'Y', "G51")?;
+        if sx.is_none() && sy.is_none() {
+            return Err(RunProblem::NoAxisWords { code: "G51" });
+        }
+        for (letter, factor) in [('X', sx), ('Y', sy)] {
+            if factor == Some(0.0) {
+                return Err(RunProblem::ZeroScale { letter });
+            }
+        }
+        let scale = &mut self.st.frame.chain.scale;
+        scale.x = sx.unwrap_or(scale.x);
+        scale.y = sy.unwrap_or(scale.y);
+        self.st.rederive_program(self.params);
+        Ok(())
+    }
+}

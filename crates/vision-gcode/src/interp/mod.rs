@@ -1,0 +1,542 @@
+//! The interpreter: runs text line by line, keeps the modal state, streams events.
+
+mod frames;
+mod line;
+mod modal;
+mod motion;
+
+use vision_math::{AlignmentChain, LengthUnit, Point2, Vector2};
+
+pub use modal::MotionMode;
+
+use crate::config::InterpreterConfig;
+use crate::error::{GcodeError, RunProblem};
+use crate::event::{Event, EventSink, PathMode, UserCall};
+use crate::geom::{Plane, Xyz};
+use crate::handler::{Context, HandlerError, MCodeHandler, UserMCode};
+use crate::params::{Params, ACTIVE_SYSTEM, G92_OFFSET, POSITION, TOOL_NUMBER, TOOL_OFFSET};
+use crate::parse::{Parser, Span};
+use crate::tools::{Tool, ToolTable};
+use crate::words::{evaluate, Words};
+use line::{is_builtin_m, Flow, LineRun, Pending};
+use modal::{work_offset_base, Modal};
+
+/// Where a line sits: its number in the text being run, the line its events are tagged with, and
+/// whether it is G-code run by a handler.
+#[derive(Debug, Clone, Copy)]
+struct At {
+    line: u32,
+    tag: u32,
+    nested: bool,
+}
+
+/// How a run ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RunOutcome {
+    /// Every line ran; `lines` is the number of lines in the text.
+    Completed {
+        /// Lines in the text.
+        lines: u32,
+    },
+    /// M2 or M30 ended the program at `line`; later lines were not run.
+    Ended {
+        /// The line of the M2/M30.
+        line: u32,
+        /// 2 or 30.
+        code: u32,
+    },
+}
+
+/// A G-code interpreter for one machine.
+///
+/// It owns the modal state, the parameters and the tool table, and runs G-code text
+/// ([`Interpreter::run`]) or single operations for a host ([`Interpreter::context`]). Events go
+/// to the sink given to each call; the interpreter keeps none of them.
+#[derive(Debug)]
+pub struct Interpreter {
+    config: InterpreterConfig,
+    tools: ToolTable,
+    params: Params,
+    modal: Modal,
+    parser: Parser,
+    stack: Vec<f64>,
+    assigns: Vec<(u32, f64)>,
+    pending: Vec<Pending>,
+    spans: Vec<Span>,
+}
+
+impl Interpreter {
+    /// An interpreter at machine position zero, in its start-up modes.
+    #[must_use]
+    pub fn new(config: InterpreterConfig) -> Interpreter {
+        let modal = Modal::initial(&config);
+        let mut interp = Interpreter {
+            tools: config.tools.clone(),
+            config,
+            params: Params::new(),
+            modal,
+            parser: Parser::new(),
+            stack: Vec::new(),
+            assigns: Vec::new(),
+            pending: Vec::new(),
+            spans: Vec::new(),
+        };
+        interp.refresh_mirrors();
+        interp
+    }
+
+    /// The set-up it was built with.
+    #[must_use]
+    pub fn config(&self) -> &InterpreterConfig {
+        &self.config
+    }
+
+    /// Runs `text` (lines separated by LF or CRLF, numbered from 1) until its end or an M2/M30.
+    ///
+    /// User M-codes go to `handler`; with `None` they are reported as [`Event::UserMCode`] and
+    /// not executed.
+    ///
+    /// # Errors
+    /// The first line that fails; it changed nothing (see the crate documentation for user
+    /// M-code lines) and no later line ran.
+    pub fn run(
+        &mut self,
+        text: &str,
+        mut handler: Option<&mut dyn MCodeHandler>,
+        sink: &mut dyn EventSink,
+    ) -> Result<RunOutcome, GcodeError> {
+        let mut lines = 0;
+        for (i, raw) in text.split('\n').enumerate() {
+            let line = u32::try_from(i + 1).unwrap_or(u32::MAX);
+            let at = At { line, tag: line, nested: false };
+            if let Flow::End(code) = self.exec_line(raw, at, handler.as_deref_mut(), sink)? {
+                return Ok(RunOutcome::Ended { line, code });
+            }
+            lines = line;
+        }
+        Ok(RunOutcome::Completed { lines })
+    }
+
+    /// Host-side access to the same operations a handler has (positions, parameters, tools,
+    /// synchronous G-code, dwell), outside any program. Events of `execute` and `dwell` go to
+    /// `sink` tagged with line 0.
+    pub fn context<'a>(&'a mut self, sink: &'a mut dyn EventSink) -> Context<'a> {
+        Context::new(self, sink, 0)
+    }
+
+    /// Restores the start-up modes as M2/M30 do: G54, G17, G90, G91.1, no motion mode, the
+    /// initial path mode, G51/G68/G52 cancelled, G92 zeroed. Units, feed, tools, parameters and
+    /// the machine position stay.
+    pub fn reset(&mut self) {
+        self.modal.reset(&self.config);
+        for axis in 0..3 {
+            self.params.set(G92_OFFSET + axis, 0.0);
+        }
+        self.params.begin();
+        self.modal.rederive_program(&self.params);
+        self.refresh_mirrors();
+    }
+
+    /// Runs `text` as G-code from a handler: no user M-codes, no M2/M30, events tagged `tag`.
+    pub(crate) fn run_nested(&mut self, text: &str, tag: u32, sink: &mut dyn EventSink) -> Result<(), GcodeError> {
+        for (i, raw) in text.split('\n').enumerate() {
+            let line = u32::try_from(i + 1).unwrap_or(u32::MAX);
+            self.exec_line(raw, At { line, tag: line_tag(tag, line), nested: true }, None, sink)?;
+        }
+        Ok(())
+    }
+
+    /// One line: parse, read, write the assignments, execute, commit or roll back.
+    fn exec_line<'h>(
+        &mut self,
+        text: &str,
+        at: At,
+        handler: Option<&mut (dyn MCodeHandler + 'h)>,
+        sink: &mut dyn EventSink,
+    ) -> Result<Flow, GcodeError> {
+        let line = at.line;
+        let block = self.parser.parse_line(text, line)?;
+        if block.is_empty() {
+            return Ok(Flow::Continue);
+        }
+        let mut words = Words::default();
+        self.params.begin();
+        let read = evaluate(&block, &self.params, &mut self.stack, &mut words, &mut self.assigns);
+        let range = &self.config.user_mcodes;
+        let user = words.m.as_slice().iter().copied().find(|&m| is_user_mcode(range, m));
+        if user.is_some() {
+            self.spans.clear();
+            self.spans.extend_from_slice(block.comment_spans());
+        }
+        read.map_err(|p| GcodeError::run(line, p))?;
+        let mut offsets_written = false;
+        for i in 0..self.assigns.len() {
+            let (n, v) = self.assigns[i];
+            if let Err(p) = self.params.write(n, v) {
+                self.params.rollback();
+                return Err(GcodeError::run(line, p));
+            }
+            offsets_written |= affects_frame(n);
+        }
+        if let Some(code) = user {
+            if let Err(problem) = user_line_alone(code, &words, at.nested) {
+                self.params.rollback();
+                return Err(GcodeError::run(line, problem));
+            }
+            if offsets_written {
+                self.modal.rederive_program(&self.params);
+            }
+            self.refresh_mirrors();
+            return self.user_line(code, &words, text, at, handler, sink);
+        }
+        self.pending.clear();
+        let mut st = self.modal;
+        if offsets_written {
+            st.rederive_program(&self.params);
+        }
+        let mut run = LineRun {
+            cfg: &self.config,
+            tools: &self.tools,
+            params: &mut self.params,
+            st,
+            out: &mut self.pending,
+            w: words,
+            line: at.tag,
+            nested: at.nested,
+        };
+        let outcome = run.run();
+        let st = run.st;
+        match outcome {
+            Ok(flow) => {
+                self.modal = st;
+                for pending in self.pending.drain(..) {
+                    match pending {
+                        Pending::Event(e) => sink.event(&e),
+                        Pending::Polyline(p) => p.emit(sink),
+                    }
+                }
+                self.refresh_mirrors();
+                Ok(flow)
+            }
+            Err(p) => {
+                self.params.rollback();
+                Err(GcodeError::run(line, p))
+            }
+        }
+    }
+
+    /// A user M-code line (already checked by [`user_line_alone`]): the call takes every word;
+    /// its assignments are already written.
+    fn user_line<'h>(
+        &mut self,
+        code: u32,
+        words: &Words,
+        text: &str,
+        at: At,
+        handler: Option<&mut (dyn MCodeHandler + 'h)>,
+        sink: &mut dyn EventSink,
+    ) -> Result<Flow, GcodeError> {
+        let At { line, tag, .. } = at;
+        let comments: Vec<&str> =
+            self.spans.iter().map(|s| text.get(s.start as usize..s.end as usize).unwrap_or("")).collect();
+        let args: Vec<(char, f64)> = words.all().collect();
+        let Some(handler) = handler else {
+            sink.event(&Event::UserMCode(UserCall {
+                line: tag,
+                code,
+                words: args,
+                comments: comments.iter().map(|c| (*c).to_string()).collect(),
+            }));
+            return Ok(Flow::Continue);
+        };
+        let call = UserMCode::new(code, tag, &args, &comments);
+        let reply = handler.call(&call, &mut Context::new(self, sink, tag));
+        let wrap = |e: GcodeError| GcodeError::HandlerGcode { line, code, inner: Box::new(e) };
+        match reply {
+            Ok(lines) => {
+                if !lines.is_empty() {
+                    self.run_nested(&lines.join("\n"), tag, sink).map_err(wrap)?;
+                }
+                Ok(Flow::Continue)
+            }
+            Err(HandlerError::Failed(message)) => Err(GcodeError::Handler { line, code, message }),
+            Err(HandlerError::Gcode(e)) => Err(wrap(e)),
+        }
+    }
+
+    /// Updates the read-only parameters that report the state (current units).
+    fn refresh_mirrors(&mut self) {
+        let st = self.modal;
+        self.params.set_mirror(ACTIVE_SYSTEM, f64::from(st.system));
+        self.params.set_mirror(TOOL_NUMBER, f64::from(st.tool));
+        let off = self.current(st.tool_offset);
+        let pos = self.current(st.program);
+        for (i, (o, p)) in [(off.x, pos.x), (off.y, pos.y), (off.z, pos.z)].into_iter().enumerate() {
+            let i = u32::try_from(i).unwrap_or(0);
+            self.params.set_mirror(TOOL_OFFSET + i, o);
+            self.params.set_mirror(POSITION + i, p);
+        }
+    }
+
+    /// A triple in machine units, in the current program units.
+    fn current(&self, v: Xyz) -> Xyz {
+        v.convert(self.config.machine_unit, self.modal.units)
+    }
+
+    // ---- readers -------------------------------------------------------------------------
+
+    /// The machine (spindle) position, machine units.
+    #[must_use]
+    pub fn machine_position(&self) -> Xyz {
+        self.modal.machine
+    }
+
+    /// The current point in the program frame (before G51/G68/G52), current units.
+    #[must_use]
+    pub fn program_position(&self) -> Xyz {
+        self.current(self.modal.program)
+    }
+
+    /// The current point in the work frame (after G51/G68/G52, before work, G92 and tool
+    /// offsets), current units.
+    #[must_use]
+    pub fn work_position(&self) -> Xyz {
+        self.current(self.modal.placement(&self.params).work_of(self.modal.program))
+    }
+
+    /// G20 (inch) or G21 (millimetre).
+    #[must_use]
+    pub fn units(&self) -> LengthUnit {
+        self.modal.units
+    }
+
+    /// The unit of machine coordinates and events.
+    #[must_use]
+    pub fn machine_unit(&self) -> LengthUnit {
+        self.config.machine_unit
+    }
+
+    /// The active motion mode, `None` before the first G0–G3.
+    #[must_use]
+    pub fn motion_mode(&self) -> Option<MotionMode> {
+        self.modal.motion
+    }
+
+    /// The arc plane.
+    #[must_use]
+    pub fn plane(&self) -> Plane {
+        self.modal.plane
+    }
+
+    /// True under G90, false under G91.
+    #[must_use]
+    pub fn is_absolute(&self) -> bool {
+        self.modal.absolute
+    }
+
+    /// True under G90.1 (absolute arc centres), false under G91.1.
+    #[must_use]
+    pub fn is_arc_absolute(&self) -> bool {
+        self.modal.arc_absolute
+    }
+
+    /// G61 / G64 (tolerance in machine units).
+    #[must_use]
+    pub fn path_mode(&self) -> PathMode {
+        self.modal.path
+    }
+
+    /// The active coordinate system, 1 (G54) … 6 (G59).
+    #[must_use]
+    pub fn coordinate_system(&self) -> u32 {
+        self.modal.system
+    }
+
+    /// Origin of coordinate system `system` (1 = G54 … 6 = G59), machine units.
+    #[must_use]
+    pub fn work_offset(&self, system: u32) -> Xyz {
+        let [x, y, z] = self.params.triple(work_offset_base(system));
+        Xyz::new(x, y, z)
+    }
+
+    /// The G92 offset, machine units.
+    #[must_use]
+    pub fn g92_offset(&self) -> Xyz {
+        let [x, y, z] = self.params.triple(G92_OFFSET);
+        Xyz::new(x, y, z)
+    }
+
+    /// The feed rate, machine units per minute (`None` before any `F` without a default).
+    #[must_use]
+    pub fn feed(&self) -> Option<f64> {
+        self.modal.feed
+    }
+
+    /// The tool loaded by the last M6 (0 = none).
+    #[must_use]
+    pub fn active_tool(&self) -> u32 {
+        self.modal.tool
+    }
+
+    /// The tool named by the last `T` (loaded by the next M6).
+    #[must_use]
+    pub fn selected_tool(&self) -> u32 {
+        self.modal.selected_tool
+    }
+
+    /// The tool table (machine units).
+    #[must_use]
+    pub fn tools(&self) -> &ToolTable {
+        &self.tools
+    }
+
+    /// Tool `tool`'s X/Y offset and Z length in current units, `None` when not in the table.
+    #[must_use]
+    pub fn tool_offset(&self, tool: u32) -> Option<Xyz> {
+        self.tools.get(tool).map(|t| self.current(t.offset))
+    }
+
+    /// The active G51/G68/G52 as one chain in current units; `None` when it is the identity
+    /// (all three cancelled).
+    #[must_use]
+    pub fn active_alignment(&self) -> Option<AlignmentChain> {
+        let chain = self.modal.frame.chain;
+        if chain == AlignmentChain::IDENTITY {
+            return None;
+        }
+        let (from, to) = (self.config.machine_unit, self.modal.units);
+        Some(AlignmentChain {
+            scale: chain.scale,
+            center: Point2::new(from.convert(chain.center.x, to), from.convert(chain.center.y, to)),
+            rotation_deg: chain.rotation_deg,
+            shift: Vector2::new(from.convert(chain.shift.x, to), from.convert(chain.shift.y, to)),
+        })
+    }
+
+    /// Parameter `#n` (0 for numbers outside 1–9999).
+    #[must_use]
+    pub fn param(&self, n: u32) -> f64 {
+        self.params.get(n)
+    }
+
+    // ---- host operations -----------------------------------------------------------------
+
+    /// Writes `#n` as a program would (read-only parameters refused). Offset parameters take
+    /// effect at once: the machine stays, the program position is re-derived.
+    ///
+    /// # Errors
+    /// [`RunProblem::ReadOnlyParameter`], [`RunProblem::BadParameter`], a non-finite value;
+    /// reported at `line`.
+    pub(crate) fn write_param(&mut self, n: u32, value: f64, line: u32) -> Result<(), GcodeError> {
+        self.params.begin();
+        self.params.write(n, value).map_err(|p| GcodeError::run(line, p))?;
+        self.params.begin();
+        if affects_frame(n) {
+            self.modal.rederive_program(&self.params);
+        }
+        self.refresh_mirrors();
+        Ok(())
+    }
+
+    /// Writes `#n` as a program would (read-only parameters refused). Offset parameters take
+    /// effect at once: the machine stays, the program position is re-derived.
+    ///
+    /// # Errors
+    /// As [`Context::set_pound`].
+    pub fn set_param(&mut self, n: u32, value: f64) -> Result<(), GcodeError> {
+        self.write_param(n, value, 0)
+    }
+
+    /// Sets tool `tool`'s X/Y offset (current units), keeping its length; for the active tool
+    /// the machine stays and the program position is re-derived.
+    ///
+    /// # Errors
+    /// [`RunProblem::UnknownTool`] for tool 0 or a tool not in the table; a non-finite value.
+    pub(crate) fn write_tool_offset(&mut self, tool: u32, x: f64, y: f64, line: u32) -> Result<(), GcodeError> {
+        if !(x.is_finite() && y.is_finite()) {
+            return Err(GcodeError::run(line, RunProblem::NonFinite { what: "the tool offset" }));
+        }
+        let (from, to) = (self.modal.units, self.config.machine_unit);
+        let entry = self.tools.get_mut(tool).ok_or(GcodeError::run(line, RunProblem::UnknownTool { tool }))?;
+        entry.offset.x = from.convert(x, to);
+        entry.offset.y = from.convert(y, to);
+        let offset = entry.offset;
+        self.after_tool_write(tool, offset);
+        Ok(())
+    }
+
+    /// Sets tool `tool`'s X/Y offset in current units (see [`Context::set_tool_offset`]).
+    ///
+    /// # Errors
+    /// As [`Context::set_tool_offset`].
+    pub fn set_tool_offset(&mut self, tool: u32, x: f64, y: f64) -> Result<(), GcodeError> {
+        self.write_tool_offset(tool, x, y, 0)
+    }
+
+    /// Adds or replaces a tool-table entry (machine units). Tool 0 is ignored.
+    pub fn set_tool(&mut self, number: u32, tool: Tool) {
+        self.tools.insert(number, tool);
+        if number != 0 {
+            self.after_tool_write(number, tool.offset);
+        }
+    }
+
+    fn after_tool_write(&mut self, tool: u32, offset: Xyz) {
+        if tool == self.modal.tool {
+            self.modal.tool_offset = offset;
+            self.modal.rederive_program(&self.params);
+            self.refresh_mirrors();
+        }
+    }
+
+    /// Puts the machine at `machine` (machine units) without a move event — where a host's
+    /// homing or jogging left it. The program position is re-derived.
+    ///
+    /// # Errors
+    /// [`RunProblem::NonFinitePosition`] for a NaN or infinite coordinate.
+    pub fn set_machine_position(&mut self, machine: Xyz) -> Result<(), GcodeError> {
+        if !machine.is_finite() {
+            return Err(GcodeError::run(0, RunProblem::NonFinitePosition));
+        }
+        self.modal.machine = machine;
+        self.modal.rederive_program(&self.params);
+        self.refresh_mirrors();
+        Ok(())
+    }
+}
+
+/// A user M-code must be alone on its line (its words are its arguments) and may not appear in
+/// G-code a handler runs.
+fn user_line_alone(code: u32, words: &Words, nested: bool) -> Result<(), RunProblem> {
+    if nested {
+        return Err(RunProblem::NestedUserMCode { code });
+    }
+    if let Some(&g) = words.g.as_slice().first() {
+        return Err(RunProblem::UserMCodeNotAlone { code, other: crate::GCode(g).to_string() });
+    }
+    if words.m.as_slice().len() > 1 {
+        let other = words.m.as_slice().iter().copied().find(|&m| m != code).unwrap_or(code);
+        return Err(RunProblem::UserMCodeNotAlone { code, other: format!("M{other}") });
+    }
+    Ok(())
+}
+
+/// Whether M`code` goes to the handler.
+fn is_user_mcode(range: &std::ops::RangeInclusive<u32>, code: u32) -> bool {
+    !is_builtin_m(code) && range.contains(&code)
+}
+
+/// Whether writing `#n` moves the program frame (G92 and work offsets).
+fn affects_frame(n: u32) -> bool {
+    (G92_OFFSET..G92_OFFSET + 3).contains(&n) || (crate::params::WORK_OFFSET_BASE..ACTIVE_SYSTEM + 200).contains(&n)
+}
+
+/// Events from handler G-code carry the M-code's line; outside a program (tag 0) they carry
+/// their own line in the text.
+fn line_tag(tag: u32, line: u32) -> u32 {
+    if tag == 0 {
+        line
+    } else {
+        tag
+    }
+}

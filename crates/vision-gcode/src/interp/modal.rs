@@ -1,0 +1,109 @@
+//! The modal state: everything a line can change except the parameters and the tool table.
+
+use vision_math::LengthUnit;
+
+use crate::config::InterpreterConfig;
+use crate::event::PathMode;
+use crate::frame::{Frame, Placement};
+use crate::geom::{ArcDirection, Plane, Xyz};
+use crate::params::{Params, G92_OFFSET, WORK_OFFSET_BASE, WORK_OFFSET_STRIDE};
+
+/// The active motion mode (modal group 1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MotionMode {
+    /// G0.
+    Rapid,
+    /// G1.
+    Linear,
+    /// G2 / G3.
+    Arc(ArcDirection),
+}
+
+/// The modal state. `Copy`, so a line works on a copy and commits it only when it succeeds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Modal {
+    pub(crate) motion: Option<MotionMode>,
+    pub(crate) plane: Plane,
+    /// G90 (true) / G91.
+    pub(crate) absolute: bool,
+    /// G90.1 (true) / G91.1.
+    pub(crate) arc_absolute: bool,
+    pub(crate) units: LengthUnit,
+    pub(crate) path: PathMode,
+    /// 1 (G54) … 6 (G59).
+    pub(crate) system: u32,
+    /// Machine units per minute.
+    pub(crate) feed: Option<f64>,
+    /// The last `T`.
+    pub(crate) selected_tool: u32,
+    /// The tool loaded by M6.
+    pub(crate) tool: u32,
+    /// Its offset and length, machine units (cached from the tool table).
+    pub(crate) tool_offset: Xyz,
+    pub(crate) frame: Frame,
+    /// Current point in the program frame, machine units.
+    pub(crate) program: Xyz,
+    /// Current machine position (the spindle), machine units.
+    pub(crate) machine: Xyz,
+}
+
+impl Modal {
+    /// The start-up state at machine position `machine`.
+    pub(crate) fn initial(config: &InterpreterConfig) -> Modal {
+        Modal {
+            motion: None,
+            plane: Plane::Xy,
+            absolute: true,
+            arc_absolute: false,
+            units: config.initial_units,
+            path: config.initial_path_mode,
+            system: 1,
+            feed: config.default_feed,
+            selected_tool: 0,
+            tool: 0,
+            tool_offset: Xyz::ZERO,
+            frame: Frame::identity(),
+            program: Xyz::ZERO,
+            machine: Xyz::ZERO,
+        }
+    }
+
+    /// What M2/M30 (and [`crate::Interpreter::reset`]) restore: G54, G17, G90, G91.1, G94, no
+    /// motion mode, the initial path mode, G51/G68/G52 cancelled. Units, feed, tools and
+    /// positions stay. The caller zeroes G92 and re-derives the program position.
+    pub(crate) fn reset(&mut self, config: &InterpreterConfig) {
+        self.motion = None;
+        self.plane = Plane::Xy;
+        self.absolute = true;
+        self.arc_absolute = false;
+        self.path = config.initial_path_mode;
+        self.system = 1;
+        self.frame = Frame::identity();
+    }
+
+    /// The program → machine map now.
+    pub(crate) fn placement(&self, params: &Params) -> Placement {
+        let [wx, wy, wz] = params.triple(work_offset_base(self.system));
+        let [gx, gy, gz] = params.triple(G92_OFFSET);
+        Placement {
+            frame: self.frame,
+            offset: Placement::offset(Xyz::new(wx, wy, wz), Xyz::new(gx, gy, gz), self.tool_offset),
+        }
+    }
+
+    /// Re-derives the program position from the machine position (after a frame change; the
+    /// machine does not move).
+    pub(crate) fn rederive_program(&mut self, params: &Params) {
+        self.program = self.placement(params).program_of(self.machine);
+    }
+
+    /// A length in program units, in machine units.
+    pub(crate) fn machine_len(&self, v: f64, machine_unit: LengthUnit) -> f64 {
+        self.units.convert(v, machine_unit)
+    }
+}
+
+/// First parameter of coordinate system `n` (1 = G54).
+pub(crate) fn work_offset_base(n: u32) -> u32 {
+    WORK_OFFSET_BASE + WORK_OFFSET_STRIDE * (n.clamp(1, 9) - 1)
+}

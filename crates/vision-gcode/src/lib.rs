@@ -1,0 +1,128 @@
+//! A G-code interpreter for the seed-002 dialect (MachineMotion path following) and the Mach
+//! alignment modals `G51` / `G68` / `G52` — the machine side of SPEC §6. It proves that the
+//! G-code M282 emits moves the tool onto the real part, and lets a whole program run against a
+//! simulated machine. It knows nothing of vision: user M-codes (M280–M284 among them) go to an
+//! [`MCodeHandler`].
+//!
+//! * [`parse`]: the hand-written line parser (words, `#` parameters, `[expressions]`, comments).
+//! * [`Interpreter`]: modal state, the frame chain, arcs, tools, outputs; streams [`Event`]s in
+//!   machine coordinates to an [`EventSink`], each tagged with its source line.
+//! * [`MCodeHandler`] / [`Context`]: the extension point; a handler reads and writes parameters,
+//!   reads positions, writes tool offsets and runs G-code synchronously.
+//!
+//! ```
+//! use vision_gcode::{Event, Interpreter, InterpreterConfig, Xyz};
+//!
+//! // An inch machine; M282's alignment: shift, rotate 90° about (3, 2), no scale.
+//! let mut interp = Interpreter::new(InterpreterConfig::default());
+//! let program = "G90 G20\nG52 X0.1 Y0.05\nG68 X3 Y2 R90\nG0 X6 Y4";
+//! let mut events = Vec::new();
+//! interp.run(program, None, &mut events)?;
+//! // (6, 4) − (3, 2) = (3, 2) → rotated (−2, 3) → + (3, 2) = (1, 5) → + (0.1, 0.05).
+//! let m = interp.machine_position();
+//! assert!((m - Xyz::new(1.1, 5.05, 0.0)).norm() < 1e-12);
+//! assert!(matches!(events.last(), Some(Event::Linear(mv)) if mv.line == 4 && mv.end == m));
+//! # Ok::<(), vision_gcode::GcodeError>(())
+//! ```
+//!
+//! # The frame chain
+//!
+//! A programmed point `p` (program frame, converted to machine units) reaches the machine as
+//!
+//! ```text
+//! w.xy = AlignmentChain::apply(p.xy)          G51 scale → G68 rotate about its centre → + G52
+//! w.z  = p.z + G52.z
+//! m.x  = w.x + ((work.x + g92.x) − tool.x)    work = G54…G59 origin, tool = tool-table X/Y offset
+//! m.y  = w.y + ((work.y + g92.y) − tool.y)
+//! m.z  = w.z + ((work.z + g92.z) + tool.length)
+//! ```
+//!
+//! evaluated in exactly this order; `m` is the machine (spindle) position. The X/Y part of
+//! program → work is bit-identical to [`vision_math::AlignmentChain::apply`] with the chain in
+//! machine units. `G91` increments are increments of `p`.
+//!
+//! # Decisions where the spec is open
+//!
+//! * **Units.** Machine coordinates, events, offset parameters and the tool table are in the
+//!   configured machine unit (default inch); G20/G21 convert the words. A line's G20/G21 applies
+//!   to every word of that line, `F` included. Start-up units default to the machine unit.
+//! * **A line is atomic.** Words and assignments are evaluated first (all reads before any
+//!   write, as in LinuxCNC), then the assignments are written, then the line executes on a copy
+//!   of the modal state with an undo log on the parameters; events are queued and reach the sink
+//!   only when the whole line succeeded. A failing line changes nothing and emits nothing.
+//!   Exception: a user M-code line writes its assignments before the call, and whatever G-code
+//!   the handler ran stays done (each of its lines atomic in turn).
+//! * **Order within a line:** G20/G21, F, T, M6, M3/M4/M5, G4, G17–G19, G54–G59, G61/G64,
+//!   G90/G91, G90.1/G91.1, G69/G50, G10/G28/G28.1/G52/G92, G68, G51, motion, M0/M1/M2/M30.
+//!   Only one code per line may own the axis words (motion, G10, G28, G52, G92, G68, G51).
+//! * **Frame changes never move the machine** (G54–G59, G10 on the active system, G92, G52,
+//!   G68/G69, G51/G50, M6, a tool-offset or offset-parameter write): the program position is
+//!   re-derived from the machine position, and the next move goes to the new frame.
+//! * **Tools.** A tool's X/Y offset is where its point lies relative to the spindle (commanding
+//!   P puts the tool at P, the spindle at P − offset); its Z value is a length, positive below
+//!   the spindle (commanding Z puts the tip at Z, the spindle at Z + length). Offsets apply from
+//!   M6 on (the dialect has no G43). The default table holds tools 1–254 with zero offsets.
+//! * **G92** with an axis word missing zeroes that axis's G92 offset (seed 002); G52, G51 and
+//!   G10 L2 leave unmentioned axes unchanged. G92 and G10 L20 make the current point read exactly
+//!   the given values.
+//! * **G68** needs `R` (degrees, counter-clockwise); an omitted `X`/`Y` centre is the current
+//!   point (in the scaled frame), so nothing jumps. **G51** takes `X`/`Y` factors only, refuses
+//!   zero, and allows negative factors (a mirror, which reverses arc directions).
+//! * **Arcs** stay exact [`ArcMove`]s under any similarity in G17 (rotation, uniform or mirrored
+//!   scale); G18/G19 arcs only under a pure translation. Otherwise (non-uniform G51, or G68/G51
+//!   with a G18/G19 arc) an arc becomes feed segments whose distance from the true curve is at
+//!   most [`InterpreterConfig::chord_tolerance`]; their interior vertices are not programmed
+//!   points, so those segments blend (G64 with the chord tolerance) and only the last one carries
+//!   the line's G61/G64. Radius checks follow LinuxCNC
+//!   ([`CENTRE_TOLERANCE_INCH`], [`RADIUS_TOLERANCE_INCH`]); under G90.1 both centre words are
+//!   required (seed 002). `P` on G2/G3 counts full turns.
+//! * **G28** follows LinuxCNC: with axis words, a rapid to that intermediate point, then those
+//!   axes (all, without words) go to the G28.1 position (#5161–#5163, machine coordinates).
+//! * **Parameters** `#1`–`#9999` (0 by default). The offsets live in LinuxCNC's addresses in
+//!   machine units (G28 #5161, G92 #5211, G54… #5221 + 20·(n − 1)); #5220, #5400–#5409 and
+//!   #5420–#5428 report the state in current units and are read-only.
+//! * **Program end.** M2/M30 emit [`Event::ProgramEnd`], stop the run, and reset G54, G17, G90,
+//!   G91.1, the path mode, the motion mode, G51/G68/G52 and G92; outputs are the host's to
+//!   switch off. At start no motion mode is active: axis words before G0–G3 are an error.
+//! * **Feed.** A feed move before any `F` is an error unless
+//!   [`InterpreterConfig::default_feed`] is set (the seed-002 snippets need one).
+//! * **Outputs.** M3/M4 first release the tool's other output, then drive the requested one; M5
+//!   releases both. A tool with no outputs wired still yields an [`Event::Output`] (no writes).
+//!   The explicit form needs both `A` and `P`. `S` is not supported: tools are outputs.
+//! * **User M-codes** (default M100–M999; built-ins win) must be alone on their line with their
+//!   argument words (any letter but G, M, N). G-code a handler runs or returns is tagged with the
+//!   M-code's line; its own errors are numbered within that text and wrapped
+//!   ([`GcodeError::HandlerGcode`]); user M-codes and M2/M30 inside it are errors.
+//! * **Syntax** follows LinuxCNC: blanks are ignored everywhere outside comments (`G1 2` is
+//!   `G12`), `N` must come first, a letter may not repeat (G and M excepted). Unlike LinuxCNC,
+//!   parentheses nest inside comments, because the manual's own programs write
+//!   `( ... (lower-left -2.5,-4.0) )`. Any NaN or infinity in an expression is an error, never a
+//!   coordinate.
+//! * Seed 002's G19 snippet as printed starts 353.6 mm from its arc centre and ends 250 mm from
+//!   it; it is refused like LinuxCNC refuses it (the test runs it with the start the other
+//!   plane snippets use).
+
+mod arc;
+pub mod config;
+pub mod error;
+pub mod event;
+pub mod expr;
+mod frame;
+pub mod geom;
+pub mod handler;
+mod interp;
+pub mod params;
+pub mod parse;
+pub mod tools;
+mod words;
+
+pub use arc::{CENTRE_TOLERANCE_INCH, CENTRE_TOLERANCE_MM, RADIUS_TOLERANCE_INCH, RADIUS_TOLERANCE_MM};
+pub use config::InterpreterConfig;
+pub use error::{GCode, GcodeError, RunProblem, SyntaxProblem};
+pub use event::{
+    ArcMove, Event, EventSink, LinearMove, OutputChange, OutputWrite, PathMode, Rate, SpindleCommand, UserCall,
+};
+pub use geom::{ArcDirection, Plane, Xyz};
+pub use handler::{Context, HandlerError, MCodeHandler, UserMCode};
+pub use interp::{Interpreter, MotionMode, RunOutcome};
+pub use tools::{DigitalOutput, Tool, ToolOutputs, ToolTable};

@@ -1,0 +1,171 @@
+//! Numbered parameters `#1`–`#9999` and the addresses that mirror the modal state.
+//!
+//! The addresses follow LinuxCNC where the state exists here. The offset parameters are the
+//! offsets' storage (writing `#5221` moves the G54 origin, effective from the next line); they
+//! hold **machine units**. The read-only parameters report the state in **current units** and
+//! are refreshed after every line.
+
+use crate::error::RunProblem;
+
+/// Highest parameter number.
+pub const MAX_PARAMETER: u32 = 9999;
+/// `#5161`–`#5163`: the G28 position (machine coordinates, machine units).
+pub const G28_POSITION: u32 = 5161;
+/// `#5211`–`#5213`: the G92 offset (machine units).
+pub const G92_OFFSET: u32 = 5211;
+/// `#5220`: the active coordinate system, 1 (G54) … 6 (G59). Read-only.
+pub const ACTIVE_SYSTEM: u32 = 5220;
+/// `#5221 + 20·(n − 1)` … `+ 2`: X, Y, Z origin of coordinate system n (G54 = 1), machine units.
+pub const WORK_OFFSET_BASE: u32 = 5221;
+/// Distance between two coordinate systems' blocks.
+pub const WORK_OFFSET_STRIDE: u32 = 20;
+/// `#5400`: the active tool number. Read-only.
+pub const TOOL_NUMBER: u32 = 5400;
+/// `#5401`–`#5403`: the active tool's X, Y offset and Z length, current units. Read-only.
+pub const TOOL_OFFSET: u32 = 5401;
+/// `#5420`–`#5422`: the current X, Y, Z in the program frame, current units. Read-only.
+pub const POSITION: u32 = 5420;
+
+/// Parameter numbers differing from a whole number by less than this are taken as that number.
+const INDEX_TOLERANCE: f64 = 1e-4;
+
+/// The parameter table with an undo log, so a failing line leaves no write behind.
+#[derive(Debug, Clone)]
+pub struct Params {
+    values: Box<[f64]>,
+    undo: Vec<(u32, f64)>,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Params::new()
+    }
+}
+
+impl Params {
+    /// All parameters zero.
+    #[must_use]
+    pub fn new() -> Params {
+        Params { values: vec![0.0; MAX_PARAMETER as usize + 1].into_boxed_slice(), undo: Vec::new() }
+    }
+
+    /// The parameter number `index` stands for.
+    ///
+    /// # Errors
+    /// [`RunProblem::BadParameter`] unless `index` is (within 1e-4) a whole number in 1–9999.
+    pub fn index(index: f64) -> Result<u32, RunProblem> {
+        let rounded = index.round();
+        if (index - rounded).abs() < INDEX_TOLERANCE && (1.0..=f64::from(MAX_PARAMETER)).contains(&rounded) {
+            // In range 1..=9999 and whole: the cast is exact.
+            #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+            Ok(rounded as u32)
+        } else {
+            Err(RunProblem::BadParameter { index })
+        }
+    }
+
+    /// Reads `#index` (the index as an expression computed it).
+    ///
+    /// # Errors
+    /// [`RunProblem::BadParameter`] for an index outside 1–9999.
+    pub fn read(&self, index: f64) -> Result<f64, RunProblem> {
+        Ok(self.get(Params::index(index)?))
+    }
+
+    /// The value of `#n` (0 for numbers outside the table).
+    #[must_use]
+    pub fn get(&self, n: u32) -> f64 {
+        self.values.get(n as usize).copied().unwrap_or(0.0)
+    }
+
+    /// What a read-only parameter reports, or `None` when `n` is writable.
+    #[must_use]
+    pub fn read_only(n: u32) -> Option<&'static str> {
+        match n {
+            ACTIVE_SYSTEM => Some("the active coordinate system"),
+            5400 => Some("the active tool number"),
+            5401..=5409 => Some("the active tool's offsets"),
+            5420..=5428 => Some("the current position"),
+            _ => None,
+        }
+    }
+
+    /// Writes `#n` as a program or a handler does: refuses read-only parameters.
+    ///
+    /// # Errors
+    /// [`RunProblem::ReadOnlyParameter`], [`RunProblem::BadParameter`] for `n` outside 1–9999,
+    /// [`RunProblem::NonFinite`] for a NaN or infinite value.
+    pub fn write(&mut self, n: u32, value: f64) -> Result<(), RunProblem> {
+        if n == 0 || n > MAX_PARAMETER {
+            return Err(RunProblem::BadParameter { index: f64::from(n) });
+        }
+        if let Some(what) = Params::read_only(n) {
+            return Err(RunProblem::ReadOnlyParameter { index: n, what });
+        }
+        if !value.is_finite() {
+            return Err(RunProblem::NonFinite { what: "the value written to a parameter" });
+        }
+        self.set(n, value);
+        Ok(())
+    }
+
+    /// Writes `#n` unconditionally, logging the old value (the interpreter's own writes).
+    pub(crate) fn set(&mut self, n: u32, value: f64) {
+        if let Some(slot) = self.values.get_mut(n as usize) {
+            self.undo.push((n, *slot));
+            *slot = value;
+        }
+    }
+
+    /// Writes a read-only mirror (not logged: mirrors are recomputed after every line).
+    pub(crate) fn set_mirror(&mut self, n: u32, value: f64) {
+        if let Some(slot) = self.values.get_mut(n as usize) {
+            *slot = value;
+        }
+    }
+
+    /// Three consecutive parameters `#n`, `#n+1`, `#n+2`.
+    #[must_use]
+    pub fn triple(&self, n: u32) -> [f64; 3] {
+        [self.get(n), self.get(n + 1), self.get(n + 2)]
+    }
+
+    /// Starts a line: forget the previous line's undo log.
+    pub(crate) fn begin(&mut self) {
+        self.undo.clear();
+    }
+
+    /// Undoes every write since [`Params::begin`], newest first.
+    pub(crate) fn rollback(&mut self) {
+        while let Some((n, old)) = self.undo.pop() {
+            if let Some(slot) = self.values.get_mut(n as usize) {
+                *slot = old;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::float_cmp)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn indices_reads_writes_and_rollback() {
+        let mut p = Params::new();
+        assert_eq!(Params::index(5.00001), Ok(5));
+        assert!(Params::index(0.0).is_err());
+        assert!(Params::index(10_000.0).is_err());
+        assert!(Params::index(1.5).is_err());
+        assert!(Params::index(f64::NAN).is_err());
+        p.begin();
+        p.write(7, 2.5).expect("writable");
+        p.write(G92_OFFSET, 1.0).expect("offsets are writable");
+        assert_eq!(p.read(7.0), Ok(2.5));
+        assert!(matches!(p.write(5420, 1.0), Err(RunProblem::ReadOnlyParameter { index: 5420, .. })));
+        assert!(p.write(8, f64::INFINITY).is_err());
+        p.rollback();
+        assert_eq!(p.get(7), 0.0);
+        assert_eq!(p.get(G92_OFFSET), 0.0);
+    }
+}

@@ -1,0 +1,447 @@
+//! The hand-written line parser: text → words, `#` assignments and comments.
+//!
+//! One [`Parser`] is reused for every line; its buffers grow to the longest line and are then
+//! reused, so parsing allocates nothing per line. Comments are borrowed from the source text.
+//! Literal values take a fast path; expressions are only built where `#`, `[`, a sign before
+//! either, or a function name appears.
+//!
+//! Blanks (space, tab, CR) are ignored everywhere outside comments, as in LinuxCNC: `G 1 X 1 . 5`
+//! is `G1 X1.5`. Letters are case-insensitive.
+
+mod expr;
+mod number;
+
+use crate::error::{GcodeError, SyntaxProblem};
+use crate::expr::Node;
+
+pub(crate) use number::is_blank;
+
+/// Internal parse result: the byte position of a problem and the problem.
+type PResult<T> = Result<T, (usize, SyntaxProblem)>;
+
+/// Brackets, `#`, signs and function calls nest at most this deep.
+pub const MAX_DEPTH: u32 = 64;
+
+/// A byte cursor over one line.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Cursor<'s> {
+    pub(crate) bytes: &'s [u8],
+    pub(crate) pos: usize,
+}
+
+impl<'s> Cursor<'s> {
+    fn new(text: &'s str) -> Cursor<'s> {
+        Cursor { bytes: text.as_bytes(), pos: 0 }
+    }
+
+    #[inline]
+    fn peek(&self) -> Option<u8> {
+        self.bytes.get(self.pos).copied()
+    }
+
+    #[inline]
+    fn skip_blanks(&mut self) {
+        while self.bytes.get(self.pos).is_some_and(|&b| is_blank(b)) {
+            self.pos += 1;
+        }
+    }
+}
+
+/// Where an expression lives in a [`Block`]'s node list.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Expr {
+    start: u32,
+    end: u32,
+}
+
+/// A word's value as written.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Value {
+    /// A literal number (with its sign).
+    Number(f64),
+    /// An expression, a parameter read or a function call; evaluated when the line runs.
+    Expr(Expr),
+}
+
+/// One word: a letter (`A`–`Z`, upper case, or `$`) and its value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Word {
+    letter: u8,
+    value: Value,
+    at: u32,
+}
+
+impl Word {
+    /// The letter, upper case (or `$`).
+    #[must_use]
+    pub fn letter(&self) -> char {
+        char::from(self.letter)
+    }
+
+    /// The letter as an ASCII byte.
+    #[must_use]
+    pub(crate) fn letter_byte(&self) -> u8 {
+        self.letter
+    }
+
+    /// The value as written.
+    #[must_use]
+    pub fn value(&self) -> Value {
+        self.value
+    }
+
+    /// Byte offset of the letter in the line.
+    #[must_use]
+    pub fn offset(&self) -> usize {
+        self.at as usize
+    }
+}
+
+/// `#target = value`: the parameter number is itself an expression.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Assignment {
+    target: Expr,
+    value: Value,
+    at: u32,
+}
+
+impl Assignment {
+    /// The expression that computes the parameter number.
+    #[must_use]
+    pub fn target(&self) -> Expr {
+        self.target
+    }
+
+    /// The value assigned.
+    #[must_use]
+    pub fn value(&self) -> Value {
+        self.value
+    }
+
+    /// Byte offset of the `#` in the line.
+    #[must_use]
+    pub fn offset(&self) -> usize {
+        self.at as usize
+    }
+}
+
+/// A comment's byte range in the line (the text inside `( )` or after `;`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Span {
+    pub(crate) start: u32,
+    pub(crate) end: u32,
+}
+
+/// One parsed line, borrowing the parser's buffers and the source text.
+#[derive(Debug, Clone, Copy)]
+pub struct Block<'p, 's> {
+    text: &'s str,
+    line: u32,
+    number: Option<u32>,
+    words: &'p [Word],
+    assignments: &'p [Assignment],
+    comments: &'p [Span],
+    nodes: &'p [Node],
+}
+
+impl<'p, 's> Block<'p, 's> {
+    /// The line number in the text (1-based).
+    #[must_use]
+    pub fn line(&self) -> u32 {
+        self.line
+    }
+
+    /// The `N` number, if the line has one.
+    #[must_use]
+    pub fn line_number(&self) -> Option<u32> {
+        self.number
+    }
+
+    /// The words in order of appearance.
+    #[must_use]
+    pub fn words(&self) -> &'p [Word] {
+        self.words
+    }
+
+    /// The `#n = value` assignments in order of appearance.
+    #[must_use]
+    pub fn assignments(&self) -> &'p [Assignment] {
+        self.assignments
+    }
+
+    /// The comments' text (inside `( )`, or after `;`), in order.
+    pub fn comments(&self) -> impl Iterator<Item = &'s str> + 'p
+    where
+        's: 'p,
+    {
+        let text = self.text;
+        self.comments.iter().map(move |s| text.get(s.start as usize..s.end as usize).unwrap_or(""))
+    }
+
+    /// The comment spans.
+    pub(crate) fn comment_spans(&self) -> &'p [Span] {
+        self.comments
+    }
+
+    /// The source text of the line.
+    #[must_use]
+    pub fn text(&self) -> &'s str {
+        self.text
+    }
+
+    /// True when the line has no words and no assignments (blank, comments only, or `%`).
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.words.is_empty() && self.assignments.is_empty()
+    }
+
+    /// The postfix nodes of `expr`.
+    pub(crate) fn nodes(&self, expr: Expr) -> &'p [Node] {
+        self.nodes.get(expr.start as usize..expr.end as usize).unwrap_or(&[])
+    }
+
+    /// The 1-based character column of byte `offset`.
+    #[must_use]
+    pub fn column(&self, offset: usize) -> u32 {
+        column(self.text, offset)
+    }
+}
+
+/// 1-based character column of byte `offset` in `text`.
+fn column(text: &str, offset: usize) -> u32 {
+    let mut end = offset.min(text.len());
+    while !text.is_char_boundary(end) {
+        end -= 1;
+    }
+    u32::try_from(text[..end].chars().count() + 1).unwrap_or(u32::MAX)
+}
+
+/// The reusable line parser.
+#[derive(Debug, Default)]
+pub struct Parser {
+    words: Vec<Word>,
+    assignments: Vec<Assignment>,
+    comments: Vec<Span>,
+    nodes: Vec<Node>,
+}
+
+/// Upper-cases an ASCII letter (other bytes unchanged).
+#[inline]
+fn upper(b: u8) -> u8 {
+    if b.is_ascii_lowercase() {
+        b - 32
+    } else {
+        b
+    }
+}
+
+/// The bit of a non-repeatable letter in the duplicate mask.
+#[inline]
+fn letter_bit(letter: u8) -> u32 {
+    if letter == b'$' {
+        1 << 26
+    } else {
+        1 << (letter - b'A')
+    }
+}
+
+impl Parser {
+    /// A parser with empty buffers.
+    #[must_use]
+    pub fn new() -> Parser {
+        Parser::default()
+    }
+
+    /// Parses one line of text (without its line break).
+    ///
+    /// # Errors
+    /// [`GcodeError::Syntax`] with `line` and the column of the problem.
+    pub fn parse_line<'p, 's>(&'p mut self, text: &'s str, line: u32) -> Result<Block<'p, 's>, GcodeError> {
+        self.words.clear();
+        self.assignments.clear();
+        self.comments.clear();
+        self.nodes.clear();
+        let mut cur = Cursor::new(text);
+        match self.items(&mut cur) {
+            Ok(number) => Ok(Block {
+                text,
+                line,
+                number,
+                words: &self.words,
+                assignments: &self.assignments,
+                comments: &self.comments,
+                nodes: &self.nodes,
+            }),
+            Err((at, problem)) => Err(GcodeError::Syntax { line, column: column(text, at), problem }),
+        }
+    }
+
+    fn items(&mut self, cur: &mut Cursor<'_>) -> PResult<Option<u32>> {
+        let mut number = None;
+        let mut seen: u32 = 0;
+        let mut first = true;
+        loop {
+            cur.skip_blanks();
+            let Some(b) = cur.peek() else { break };
+            let at = cur.pos;
+            match b {
+                b'(' => {
+                    let close = comment_end(cur.bytes, at).ok_or((at, SyntaxProblem::UnclosedComment))?;
+                    self.comments.push(span(at + 1, close));
+                    cur.pos = close + 1;
+                    continue;
+                }
+                b';' => {
+                    self.comments.push(span(at + 1, cur.bytes.len()));
+                    cur.pos = cur.bytes.len();
+                    break;
+                }
+                b'%' if first => {
+                    // Program delimiter: the line holds nothing else but comments.
+                    cur.pos += 1;
+                    first = false;
+                    continue;
+                }
+                b'#' => {
+                    cur.pos += 1;
+                    let target = self.expr_of(cur, |p, c| p.operand(c, 1))?;
+                    cur.skip_blanks();
+                    if cur.peek() != Some(b'=') {
+                        return Err((cur.pos, SyntaxProblem::ExpectedEquals));
+                    }
+                    cur.pos += 1;
+                    let value = self.value(cur, b'=', cur.pos)?;
+                    self.assignments.push(Assignment { target, value, at: offset(at) });
+                }
+                _ => {
+                    let letter = upper(b);
+                    if !(letter.is_ascii_uppercase() || letter == b'$') {
+                        return Err((at, unexpected(cur, at)));
+                    }
+                    cur.pos += 1;
+                    if letter == b'N' {
+                        if !first {
+                            return Err((at, SyntaxProblem::LineNumberNotFirst));
+                        }
+                        number = Some(line_number(cur)?);
+                        first = false;
+                        continue;
+                    }
+                    if letter != b'G' && letter != b'M' {
+                        let bit = letter_bit(letter);
+                        if seen & bit != 0 {
+                            return Err((at, SyntaxProblem::DuplicateWord { letter: char::from(letter) }));
+                        }
+                        seen |= bit;
+                    }
+                    let value = self.value(cur, letter, at)?;
+                    self.words.push(Word { letter, value, at: offset(at) });
+                }
+            }
+            first = false;
+        }
+        Ok(number)
+    }
+
+    /// A word's (or an assignment's) value: a literal on the fast path, else an expression.
+    /// `letter_at` is where a missing value is reported (the word's letter).
+    #[inline(always)]
+    fn value(&mut self, cur: &mut Cursor<'_>, letter: u8, letter_at: usize) -> PResult<Value> {
+        cur.skip_blanks();
+        let at = cur.pos;
+        match cur.peek() {
+            Some(b'0'..=b'9' | b'.') => Ok(Value::Number(number::number(cur)?)),
+            Some(sign @ (b'+' | b'-')) => {
+                cur.pos += 1;
+                cur.skip_blanks();
+                if matches!(cur.peek(), Some(b'0'..=b'9' | b'.')) {
+                    let v = number::number(cur)?;
+                    return Ok(Value::Number(if sign == b'-' { -v } else { v }));
+                }
+                cur.pos = at;
+                Ok(Value::Expr(self.expr_of(cur, |p, c| p.operand(c, 0))?))
+            }
+            Some(b'#' | b'[') => Ok(Value::Expr(self.expr_of(cur, |p, c| p.operand(c, 0))?)),
+            Some(c) if c.is_ascii_alphabetic() && expr::function_at(cur).is_some() => {
+                Ok(Value::Expr(self.expr_of(cur, |p, c| p.operand(c, 0))?))
+            }
+            _ if letter == b'=' => Err((at, SyntaxProblem::ExpectedValue)),
+            _ => Err((letter_at, SyntaxProblem::MissingValue { letter: char::from(letter) })),
+        }
+    }
+
+    /// Runs `f` and returns the range of nodes it pushed.
+    fn expr_of(
+        &mut self,
+        cur: &mut Cursor<'_>,
+        f: impl FnOnce(&mut Parser, &mut Cursor<'_>) -> PResult<()>,
+    ) -> PResult<Expr> {
+        let start = self.nodes.len();
+        f(self, cur)?;
+        Ok(Expr { start: offset(start), end: offset(self.nodes.len()) })
+    }
+}
+
+/// The `)` that closes the comment opened at `open`. Parentheses inside a comment nest (the
+/// manual's own programs write `( ... (lower-left -2.5,-4.0) )`).
+fn comment_end(bytes: &[u8], open: usize) -> Option<usize> {
+    let mut depth = 0usize;
+    for (i, &b) in bytes.iter().enumerate().skip(open) {
+        match b {
+            b'(' => depth += 1,
+            b')' => {
+                depth -= 1;
+                if depth == 0 {
+                    return Some(i);
+                }
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
+fn span(start: usize, end: usize) -> Span {
+    Span { start: offset(start), end: offset(end) }
+}
+
+/// Offsets and node counts fit in `u32` for any line shorter than 4 GiB; saturate beyond.
+fn offset(n: usize) -> u32 {
+    u32::try_from(n).unwrap_or(u32::MAX)
+}
+
+fn unexpected(cur: &Cursor<'_>, at: usize) -> SyntaxProblem {
+    let found = std::str::from_utf8(&cur.bytes[at..])
+        .ok()
+        .and_then(|s| s.chars().next())
+        .or_else(|| cur.bytes.get(at).map(|&b| char::from(b)))
+        .unwrap_or('?');
+    SyntaxProblem::Unexpected { found }
+}
+
+/// `N` digits: a whole, unsigned number.
+fn line_number(cur: &mut Cursor<'_>) -> PResult<u32> {
+    cur.skip_blanks();
+    let at = cur.pos;
+    let mut n: u32 = 0;
+    let mut digits = false;
+    while let Some(b) = cur.peek() {
+        if b.is_ascii_digit() {
+            n = n
+                .checked_mul(10)
+                .and_then(|n| n.checked_add(u32::from(b - b'0')))
+                .ok_or((at, SyntaxProblem::BadLineNumber))?;
+            digits = true;
+        } else if !is_blank(b) {
+            break;
+        }
+        cur.pos += 1;
+    }
+    if !digits || cur.peek() == Some(b'.') {
+        return Err((at, SyntaxProblem::BadLineNumber));
+    }
+    Ok(n)
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,153 @@
+//! Bad input is part of the product: the parser and the interpreter never panic on arbitrary
+//! text or bytes, or on mutated valid programs, and never emit a non-finite number.
+
+use proptest::prelude::*;
+use vision_gcode::parse::Parser;
+use vision_gcode::{Context, Event, HandlerError, Interpreter, InterpreterConfig, MCodeHandler, UserMCode};
+
+/// Panics if an event carries NaN or infinity.
+fn check_finite(event: &Event) {
+    let ok = match event {
+        Event::Linear(m) => m.start.is_finite() && m.end.is_finite() && rate_ok(m.rate),
+        Event::Arc(a) => {
+            a.start.is_finite()
+                && a.end.is_finite()
+                && a.center.is_finite()
+                && a.angle.is_finite()
+                && a.feed.is_finite()
+        }
+        Event::Dwell { seconds, .. } => seconds.is_finite(),
+        Event::ToolChange { offset, .. } => offset.is_finite(),
+        Event::UserMCode(c) => c.words.iter().all(|(_, v)| v.is_finite()),
+        Event::Output(_) | Event::Stop { .. } | Event::ProgramEnd { .. } => true,
+    };
+    assert!(ok, "non-finite event {event:?}");
+}
+
+fn rate_ok(rate: vision_gcode::Rate) -> bool {
+    match rate {
+        vision_gcode::Rate::Rapid => true,
+        vision_gcode::Rate::Feed(f) => f.is_finite(),
+    }
+}
+
+/// Runs its comments as G-code and pokes the context with its words: the nested paths get
+/// fuzzed too.
+struct Echo;
+
+impl MCodeHandler for Echo {
+    fn call(&mut self, call: &UserMCode<'_>, ctx: &mut Context<'_>) -> Result<Vec<String>, HandlerError> {
+        for &(letter, v) in call.words() {
+            match letter {
+                'P' => {
+                    let _ = ctx.set_pound(v.abs().min(1e6) as u32, v);
+                }
+                'Q' => {
+                    let _ = ctx.dwell(v);
+                }
+                'T' => {
+                    let _ = ctx.set_tool_offset(v.abs().min(1e6) as u32, v, -v);
+                }
+                _ => {}
+            }
+        }
+        if let Some(first) = call.comments().first() {
+            ctx.execute(first)?;
+        }
+        Ok(call.comments().iter().skip(1).map(|c| (*c).to_string()).collect())
+    }
+}
+
+fn exercise(text: &str) {
+    let mut parser = Parser::new();
+    for (i, line) in text.split('\n').enumerate() {
+        let _ = parser.parse_line(line, u32::try_from(i + 1).unwrap_or(u32::MAX));
+    }
+    let mut interp = Interpreter::new(InterpreterConfig { max_arc_segments: 100_000, ..InterpreterConfig::default() });
+    let _ = interp.run(text, Some(&mut Echo), &mut |e: &Event| check_finite(e));
+    assert!(interp.machine_position().is_finite());
+    assert!(interp.program_position().is_finite());
+    let _ = interp.run(text, None, &mut |e: &Event| check_finite(e));
+}
+
+const PROGRAMS: &[&str] = &[
+    include_str!("programs/example1_calibration.nc"),
+    include_str!("programs/example2_verify.nc"),
+    include_str!("programs/example4_rectangle_fit.nc"),
+    include_str!("programs/example6_pound_vars.nc"),
+    include_str!("programs/example7_job_switch.nc"),
+    "G90 G21 G61 G17 G90.1\nG0 X500 Y250 Z500\nG3 X0 Y250 I250 J250\nG3 X500 Y250 I250 J250",
+    "G90 G21 G61 G18 G90.1\nG0 X500 Y500 Z250\nG3 X0 Z250 I250 K250\nG2 X500 Z250 R-250 P2",
+    "G90 G20 F10\nG52 X0.1 Y0.2\nG68 X3 Y2 R0.5\nG51 X1.001 Y0.999\nG0 X6 Y4\nG2 X0 Y4 I-3 J0\nG69 G50 G52 X0 Y0",
+    "#1 = [2 * ATAN[1]/[2]] #2 = [#1 MOD 7 ** 2]\nG1 X[#1 / 3] Y-#2 Z[SQRT[ABS[#2]]] F[100 + #1]\nG10 L20 P0 X0\nG92 Y1\nG28.1\nG28 X2",
+    "T1 M6 M3\nG4 P0.5\nM4 $1\nM5 A1 P2\nM0\nM1\nM2",
+];
+
+/// 384 cases per property in CI; `FUZZ_CASES=100000 cargo test --release --test fuzz` for a
+/// deeper local run.
+fn cases() -> u32 {
+    std::env::var("FUZZ_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(384)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(cases()))]
+
+    #[test]
+    fn arbitrary_text_never_panics(text in "\\PC{0,300}") {
+        exercise(&text);
+    }
+
+    #[test]
+    fn arbitrary_bytes_never_panic(bytes in prop::collection::vec(any::<u8>(), 0..300)) {
+        exercise(&String::from_utf8_lossy(&bytes));
+    }
+
+    #[test]
+    fn gcode_shaped_text_never_panics(text in "[GMXYZIJKRPFTLNQS#$\\[\\]0-9.+*/ ()=;EQANDORSINMCOS\n-]{0,300}") {
+        exercise(&text);
+    }
+
+    #[test]
+    fn mutated_valid_programs_never_panic(
+        which in 0..PROGRAMS.len(),
+        edits in prop::collection::vec((any::<prop::sample::Index>(), 0u8..4, "[ -~\n]{1,6}"), 1..8),
+    ) {
+        let mut text: Vec<char> = PROGRAMS[which].chars().collect();
+        for (at, op, piece) in edits {
+            let i = if text.is_empty() { 0 } else { at.index(text.len()) };
+            match op {
+                0 => text.splice(i..i, piece.chars()).for_each(drop),
+                1 if !text.is_empty() => {
+                    let end = (i + piece.len()).min(text.len());
+                    text.drain(i..end).for_each(drop);
+                }
+                2 if !text.is_empty() => {
+                    let end = (i + piece.len()).min(text.len());
+                    text.splice(i..end, piece.chars()).for_each(drop);
+                }
+                _ => {
+                    // Duplicate a slice (repeats words, lines, brackets).
+                    let end = (i + 12).min(text.len());
+                    let copy: Vec<char> = text[i..end].to_vec();
+                    text.splice(i..i, copy).for_each(drop);
+                }
+            }
+        }
+        exercise(&text.into_iter().collect::<String>());
+    }
+}
+
+#[test]
+fn huge_and_degenerate_values_are_errors_not_numbers() {
+    for text in [
+        "G0 X1e308",
+        "G0 X99999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999999.0",
+        "G51 X1e300 Y1e300\nG0 X1e300",
+        "G1 F1 X[EXP[1000]]",
+        "G2 X1 Y0 I1e-300 J0 F1",
+        "G0 X[0/0]",
+        "#1=[-1] G0 X#1 Y#[#1]",
+    ] {
+        exercise(text);
+    }
+}

@@ -1,0 +1,177 @@
+//! M280–M284 words → a typed [`VisionCall`].
+
+use vision_core::{Calibrate, Pieces, RunMode, VisionError};
+
+use crate::error::McodeError;
+
+/// First and last Vision M-code.
+pub const VISION_MCODES: std::ops::RangeInclusive<u32> = 280..=284;
+
+/// One Vision M-code, parsed and range-checked.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum VisionCall {
+    /// `M280 [P3|P4]`: begin an alignment run.
+    Begin(RunMode),
+    /// `M281 [D0|D1]`: capture one mark; `true` keeps the camera's image.
+    Capture {
+        /// `D1`: keep the image.
+        keep_image: bool,
+    },
+    /// `M282 [P0..P3]`: solve the fit and emit the alignment modals.
+    Apply(Pieces),
+    /// `M283 Qd | Cn`: calibrate.
+    Calibrate(Calibrate),
+    /// `M284 [Pn]`: switch the camera job (`None` = the stored `VisionActiveJob`).
+    SelectJob(Option<u32>),
+}
+
+/// The letters each M-code takes.
+fn allowed(m: u32) -> &'static [char] {
+    match m {
+        280 | 282 | 284 => &['P'],
+        281 => &['D'],
+        283 => &['Q', 'C'],
+        _ => &[],
+    }
+}
+
+impl VisionCall {
+    /// Parses M-code `m` (280–284) with the words of its line (`letter`, value), letters in any
+    /// case. Every word must be one the M-code takes, at most once, with a finite value.
+    ///
+    /// # Errors
+    /// [`McodeError::NotVision`], [`McodeError::UnknownWord`], [`McodeError::RepeatedWord`],
+    /// [`McodeError::NotFinite`], or the core's [`VisionError::BadWord`] for a value out of range
+    /// (`M280 P5`, `M281 D2`, `M283` without exactly one of Q and C, `M284 P1.5`).
+    pub fn parse(m: u32, words: &[(char, f64)]) -> Result<VisionCall, McodeError> {
+        if !VISION_MCODES.contains(&m) {
+            return Err(McodeError::NotVision { m });
+        }
+        let letters = allowed(m);
+        let mut values: [Option<f64>; 2] = [None, None];
+        for &(letter, value) in words {
+            let letter = letter.to_ascii_uppercase();
+            let Some(slot) = letters.iter().position(|l| *l == letter) else {
+                return Err(McodeError::UnknownWord { m, letter, allowed: letters.iter().collect() });
+            };
+            if values[slot].is_some() {
+                return Err(McodeError::RepeatedWord { m, letter });
+            }
+            if !value.is_finite() {
+                return Err(McodeError::NotFinite { m, letter });
+            }
+            values[slot] = Some(value);
+        }
+        let [first, second] = values;
+        Ok(match m {
+            280 => VisionCall::Begin(RunMode::from_p(first)?),
+            281 => VisionCall::Capture { keep_image: d_word(first)? },
+            282 => VisionCall::Apply(Pieces::from_p(first)?),
+            283 => VisionCall::Calibrate(Calibrate::from_words(first, second)?),
+            _ => VisionCall::SelectJob(job_word(first)?),
+        })
+    }
+
+    /// The M number (280–284).
+    #[must_use]
+    pub fn mcode(&self) -> u32 {
+        match self {
+            VisionCall::Begin(_) => 280,
+            VisionCall::Capture { .. } => 281,
+            VisionCall::Apply(_) => 282,
+            VisionCall::Calibrate(_) => 283,
+            VisionCall::SelectJob(_) => 284,
+        }
+    }
+}
+
+fn d_word(d: Option<f64>) -> Result<bool, VisionError> {
+    match d {
+        None => Ok(false),
+        Some(0.0) => Ok(false),
+        Some(1.0) => Ok(true),
+        Some(v) => Err(VisionError::BadWord {
+            mcode: "M281",
+            word: format!("D{v}"),
+            reason: "D must be 0 / omitted (discard the image) or 1 (keep it)".into(),
+        }),
+    }
+}
+
+fn job_word(p: Option<f64>) -> Result<Option<u32>, VisionError> {
+    match p {
+        None => Ok(None),
+        Some(v) if v.fract() == 0.0 && (0.0..=999.0).contains(&v) => {
+            #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)] // checked: integral, 0..=999
+            Ok(Some(v as u32))
+        }
+        Some(v) => Err(VisionError::BadWord {
+            mcode: "M284",
+            word: format!("P{v}"),
+            reason: "P is the camera job and must be a whole number 0..999".into(),
+        }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn every_mcode_with_its_words() {
+        let p = VisionCall::parse;
+        assert_eq!(p(280, &[]), Ok(VisionCall::Begin(RunMode::Rectangle)));
+        assert_eq!(p(280, &[('p', 3.0)]), Ok(VisionCall::Begin(RunMode::Similarity)));
+        assert_eq!(p(281, &[]), Ok(VisionCall::Capture { keep_image: false }));
+        assert_eq!(p(281, &[('D', 1.0)]), Ok(VisionCall::Capture { keep_image: true }));
+        assert_eq!(p(282, &[('P', 2.0)]), Ok(VisionCall::Apply(Pieces::Rotation)));
+        assert_eq!(p(283, &[('C', 1.0)]), Ok(VisionCall::Calibrate(Calibrate::Sheet { n: 1 })));
+        assert_eq!(p(283, &[('Q', 0.5)]), Ok(VisionCall::Calibrate(Calibrate::Quick { diameter: 0.5 })));
+        assert_eq!(p(284, &[]), Ok(VisionCall::SelectJob(None)));
+        assert_eq!(p(284, &[('P', 2.0)]), Ok(VisionCall::SelectJob(Some(2))));
+        for m in VISION_MCODES {
+            let call = p(m, if m == 283 { &[('C', 1.0)] } else { &[] }).expect("valid");
+            assert_eq!(call.mcode(), m);
+        }
+    }
+
+    #[test]
+    fn bad_words_are_typed_errors_with_a_clear_message() {
+        let p = VisionCall::parse;
+        let e = p(281, &[('X', 1.0)]).expect_err("X");
+        assert_eq!(e, McodeError::UnknownWord { m: 281, letter: 'X', allowed: "D".into() });
+        assert_eq!(e.to_string(), "M281 does not take an X word (it takes: D) — put M281 on a line of its own");
+        assert_eq!(p(280, &[('P', 3.0), ('P', 4.0)]), Err(McodeError::RepeatedWord { m: 280, letter: 'P' }));
+        assert_eq!(p(282, &[('P', f64::NAN)]), Err(McodeError::NotFinite { m: 282, letter: 'P' }));
+        assert_eq!(p(279, &[]), Err(McodeError::NotVision { m: 279 }));
+        for (m, words) in [
+            (280, vec![('P', 5.0)]),
+            (281, vec![('D', 2.0)]),
+            (282, vec![('P', 4.0)]),
+            (283, vec![]),
+            (283, vec![('Q', 0.5), ('C', 1.0)]),
+            (283, vec![('Q', -0.5)]),
+            (284, vec![('P', 1.5)]),
+            (284, vec![('P', 1000.0)]),
+            (284, vec![('P', -1.0)]),
+        ] {
+            let e = p(m, &words).expect_err("out of range");
+            assert!(matches!(e, McodeError::Vision(VisionError::BadWord { .. })), "M{m} {words:?}: {e}");
+            assert!(e.to_string().starts_with(&format!("M{m} ")), "{e}");
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn arbitrary_words_never_panic(m in 270u32..295, words in proptest::collection::vec(
+            (proptest::char::range('A', 'z'), prop_oneof![any::<f64>(), -5.0f64..1500.0, (0u32..6).prop_map(f64::from)]),
+            0..4,
+        )) {
+            match VisionCall::parse(m, &words) {
+                Ok(call) => prop_assert_eq!(call.mcode(), m),
+                Err(e) => prop_assert!(!e.to_string().is_empty()),
+            }
+        }
+    }
+}

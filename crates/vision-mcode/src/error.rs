@@ -1,0 +1,44 @@
+//! The one error type of the M-code adapter.
+
+use vision_core::VisionError;
+
+/// Why a Vision M-code was refused. Nothing ran and nothing changed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum McodeError {
+    /// Not one of M280–M284.
+    #[error("M{m} is not a Vision M-code (M280-M284)")]
+    NotVision {
+        /// The M number.
+        m: u32,
+    },
+    /// A word the M-code does not take.
+    #[error("M{m} does not take an {letter} word (it takes: {allowed}) — put M{m} on a line of its own")]
+    UnknownWord {
+        /// The M number.
+        m: u32,
+        /// The letter given.
+        letter: char,
+        /// The letters it takes.
+        allowed: String,
+    },
+    /// The same letter twice.
+    #[error("M{m} has two {letter} words; give each word once")]
+    RepeatedWord {
+        /// The M number.
+        m: u32,
+        /// The letter.
+        letter: char,
+    },
+    /// A word whose value is NaN or infinite.
+    #[error("M{m} {letter} word is not a finite number; check the expression")]
+    NotFinite {
+        /// The M number.
+        m: u32,
+        /// The letter.
+        letter: char,
+    },
+    /// The Vision module refused (its message is the manual's).
+    #[error("{0}")]
+    Vision(#[from] VisionError),
+}
