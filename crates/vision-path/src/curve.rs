@@ -124,6 +124,7 @@ impl ArcCurve {
             q,
             kappa: (r_max * r_max + 4.0 * k_r * k_r).sqrt() / (rho * rho),
             cross: if k_r == 0.0 { 0.0 } else { (k_r.abs() / r_min).min(1.0) },
+            circle: k_r == 0.0 && k_z == 0.0,
         };
         ArcCurve { base, e1, e2, axis, r0, k_r, k_z, rho, phi_a: 0.0, phi_b: sweep, start, end, factors }
     }
@@ -282,9 +283,13 @@ impl Curve {
     /// The shape's bounds (see [`ShapeFactors`]).
     pub(crate) fn factors(&self) -> ShapeFactors {
         match self {
-            Curve::Line(l) => {
-                ShapeFactors { c: [l.dir.x.abs(), l.dir.y.abs(), l.dir.z.abs()], q: [0.0; 3], kappa: 0.0, cross: 0.0 }
-            }
+            Curve::Line(l) => ShapeFactors {
+                c: [l.dir.x.abs(), l.dir.y.abs(), l.dir.z.abs()],
+                q: [0.0; 3],
+                kappa: 0.0,
+                cross: 0.0,
+                circle: false,
+            },
             Curve::Arc(a) => a.factors,
         }
     }

@@ -256,6 +256,11 @@ impl PathFollower {
         Ok(())
     }
 
+    /// The configuration.
+    pub fn config(&self) -> &FollowerConfig {
+        &self.config
+    }
+
     /// The current status (the seed's `getPathStatus`).
     pub fn status(&self) -> PathStatus {
         self.shared.status().clone()
@@ -306,7 +311,7 @@ fn plan_config(config: &FollowerConfig, max_path_accel: f64) -> PlanConfig {
 }
 
 /// Refuse a move of an axis no drive is mapped to.
-fn check_axes(axes: &AxisMap, item: Item) -> Result<Item, PathError> {
+pub(crate) fn check_axes(axes: &AxisMap, item: Item) -> Result<Item, PathError> {
     if let Item::Move(seg) = &item {
         for axis in Axis::ALL {
             if axes.drive(axis).is_none() && moves(seg, axis.index()) {
@@ -338,7 +343,7 @@ struct Worker {
     tools: ToolTable,
     shared: Arc<Shared>,
     pace: Pace,
-    /// The tool a bare M3/M4/M5 controls.
+    /// The tool a bare M3/M4/M5 controls (the last `T… M6`).
     selected: Option<u32>,
     /// Last level written per (device, port), and its inactive level.
     driven: BTreeMap<(u32, u32), (bool, bool)>,
@@ -363,7 +368,7 @@ impl Worker {
                 Ok(Step::Setpoint(s)) => self.send(&s, began, &mut sink),
                 Ok(Step::Event(e)) => match e.event {
                     Event::ToolChange(n) => {
-                        self.selected = Some(n);
+                        self.selected = (n != 0).then_some(n);
                         Ok(())
                     }
                     Event::Output(command) => self.output(e.line, command, &mut sink),
@@ -421,9 +426,7 @@ impl Worker {
         command: crate::OutputCommand,
         sink: &mut S,
     ) -> Result<(), PathError> {
-        let (writes, selected) = self.tools.resolve(line, self.selected, command)?;
-        self.selected = selected;
-        for w in writes {
+        for w in self.tools.resolve(line, self.selected, command)? {
             self.write(w, sink)?;
         }
         Ok(())

@@ -88,6 +88,7 @@ mod blend;
 mod curve;
 mod error;
 mod follower;
+mod gcode;
 mod input;
 mod limits;
 mod lookahead;
@@ -101,6 +102,7 @@ pub use error::PathError;
 pub use follower::{
     Axis, AxisMap, DrivePosition, FollowerConfig, MotionSink, Pace, PathFollower, PathStatus, RunState,
 };
+pub use gcode::{item, GcodeItems};
 pub use input::{ArcShape, Event, Item, OutputCommand, PathMode, Segment, Shape, Speed, ToolState};
 pub use limits::{AxisLimits, Limits, PlanConfig};
 pub use sampler::{Setpoint, Setpoints, Step, Summary, TimedEvent};

@@ -112,30 +112,42 @@ fn positive(what: &'static str, value: f64) -> Result<(), PathError> {
 /// * `c[i]` bounds `|dp_i/ds|` (how much of the path speed and tangential acceleration
 ///   reaches axis `i`);
 /// * `q[i]` bounds `|d²p_i/ds²| / κ` (how much of the normal acceleration reaches axis `i`);
+///   for a circle it is the length of axis `i`'s projection on the circle's plane;
 /// * `kappa` bounds `|d²p/ds²|` (curvature);
-/// * `cross` bounds the cosine between `dp/ds` and `d²p/ds²` (0 except for spirals).
+/// * `cross` bounds the cosine between `dp/ds` and `d²p/ds²` (0 except for spirals);
+/// * `circle`: a planar circle, whose whole acceleration vector lies in its plane, so axis
+///   `i` sees at most `q[i]·|a|`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct ShapeFactors {
     pub(crate) c: [f64; 3],
     pub(crate) q: [f64; 3],
     pub(crate) kappa: f64,
     pub(crate) cross: f64,
+    pub(crate) circle: bool,
 }
 
 /// The fraction of the path acceleration a curve's centripetal part may use at its speed cap:
 /// `√3/2`, which leaves `1/2` for the tangential part (LinuxCNC's split for arcs).
 pub(crate) const NORMAL_SHARE: f64 = 0.866_025_403_784_438_6;
-/// The same for one axis's acceleration. An axis sees the normal and tangential parts added
-/// (not in quadrature), so it keeps half for each.
+/// The same for one axis's acceleration on helices and spirals, where an axis may see the
+/// normal and tangential parts added (not in quadrature): half for each.
 const AXIS_NORMAL_SHARE: f64 = 0.5;
 
 /// The speed cap (units/s, of `ṡ`) and the tangential acceleration (units/s², of `s̈`) of a
 /// piece with these factors, asked to move at `requested` (units/s, `INFINITY` for rapid).
 ///
 /// With `ṡ ≤ v_cap` and `|s̈| ≤ a_t`: `|v| ≤ ṡ`, `|v_i| ≤ c_i ṡ ≤ max_speed_i`,
-/// `|a|² ≤ κ²ṡ⁴ + s̈² + 2·cross·κṡ²|s̈| ≤ A²` and `|a_i| ≤ q_i κ ṡ² + c_i |s̈| ≤ max_accel_i`.
+/// `|a|² ≤ κ²ṡ⁴ + s̈² + 2·cross·κṡ²|s̈| ≤ A²`, and per axis either `|a_i| ≤ q_i·|a|` (circles)
+/// or `|a_i| ≤ q_i κ ṡ² + c_i |s̈|` (lines, helices, spirals), `≤ max_accel_i`.
 pub(crate) fn speed_and_accel(f: &ShapeFactors, requested: f64, limits: &Limits) -> (f64, f64) {
-    let a_path = limits.max_path_accel;
+    let mut a_path = limits.max_path_accel;
+    if f.circle {
+        for (i, axis) in limits.axes.iter().enumerate() {
+            if f.q[i] > 0.0 {
+                a_path = a_path.min(axis.max_accel / f.q[i]);
+            }
+        }
+    }
     let mut v = requested;
     for (i, axis) in limits.axes.iter().enumerate() {
         if f.c[i] > 0.0 {
@@ -144,17 +156,21 @@ pub(crate) fn speed_and_accel(f: &ShapeFactors, requested: f64, limits: &Limits)
     }
     if f.kappa > 0.0 {
         v = v.min((NORMAL_SHARE * a_path / f.kappa).sqrt());
-        for (i, axis) in limits.axes.iter().enumerate() {
-            if f.q[i] > 0.0 {
-                v = v.min((AXIS_NORMAL_SHARE * axis.max_accel / (f.q[i] * f.kappa)).sqrt());
+        if !f.circle {
+            for (i, axis) in limits.axes.iter().enumerate() {
+                if f.q[i] > 0.0 {
+                    v = v.min((AXIS_NORMAL_SHARE * axis.max_accel / (f.q[i] * f.kappa)).sqrt());
+                }
             }
         }
     }
     let a_n = f.kappa * v * v;
     let mut a_t = -f.cross * a_n + (a_path * a_path - a_n * a_n * (1.0 - f.cross * f.cross)).max(0.0).sqrt();
-    for (i, axis) in limits.axes.iter().enumerate() {
-        if f.c[i] > 0.0 {
-            a_t = a_t.min((axis.max_accel - f.q[i] * a_n) / f.c[i]);
+    if !f.circle {
+        for (i, axis) in limits.axes.iter().enumerate() {
+            if f.c[i] > 0.0 {
+                a_t = a_t.min((axis.max_accel - f.q[i] * a_n) / f.c[i]);
+            }
         }
     }
     (v, a_t)
@@ -165,7 +181,7 @@ mod tests {
     use super::*;
 
     fn line_factors(dir: [f64; 3]) -> ShapeFactors {
-        ShapeFactors { c: dir.map(f64::abs), q: [0.0; 3], kappa: 0.0, cross: 0.0 }
+        ShapeFactors { c: dir.map(f64::abs), q: [0.0; 3], kappa: 0.0, cross: 0.0, circle: false }
     }
 
     #[test]
@@ -187,7 +203,7 @@ mod tests {
     fn a_circle_at_its_cap_splits_the_path_acceleration_between_normal_and_tangential() {
         let limits = Limits::uniform(1000.0, 1e6, 1e6);
         let r = 10.0;
-        let f = ShapeFactors { c: [1.0, 1.0, 0.0], q: [1.0, 1.0, 0.0], kappa: 1.0 / r, cross: 0.0 };
+        let f = ShapeFactors { c: [1.0, 1.0, 0.0], q: [1.0, 1.0, 0.0], kappa: 1.0 / r, cross: 0.0, circle: true };
         let (v, a_t) = speed_and_accel(&f, f64::INFINITY, &limits);
         let a_n = v * v / r;
         assert!((a_n - 1000.0 * NORMAL_SHARE).abs() < 1e-9);

@@ -77,26 +77,24 @@ impl ToolTable {
     }
 
     /// The writes an output command makes, in order, with `selected` the tool chosen by the
-    /// last `T… M6` (or `M3/M4 $n`). Switching a tool on first drives its other direction
-    /// inactive, so both are never active together. Also returns the tool the command leaves
-    /// selected.
+    /// last `T… M6` (what a bare M3/M4/M5 controls; `M3 $n` does not change it). Switching a
+    /// tool on first drives its other direction inactive, so both are never active together.
     pub fn resolve(
         &self,
         line: usize,
         selected: Option<u32>,
         command: OutputCommand,
-    ) -> Result<(Vec<OutputWrite>, Option<u32>), PathError> {
+    ) -> Result<Vec<OutputWrite>, PathError> {
         match command {
-            OutputCommand::Port { device, port, on } => Ok((vec![OutputWrite { device, port, level: on }], selected)),
+            OutputCommand::Port { device, port, on } => Ok(vec![OutputWrite { device, port, level: on }]),
             OutputCommand::Tool { tool, state } => {
                 let number = tool.or(selected).ok_or(PathError::NoToolSelected { line })?;
                 let t = self.get(number).ok_or(PathError::UnknownTool { line, tool: number })?;
-                let writes = match state {
+                Ok(match state {
                     ToolState::Clockwise => vec![t.counter_clockwise.write(false), t.clockwise.write(true)],
                     ToolState::CounterClockwise => vec![t.clockwise.write(false), t.counter_clockwise.write(true)],
                     ToolState::Off => vec![t.clockwise.write(false), t.counter_clockwise.write(false)],
-                };
-                Ok((writes, Some(number)))
+                })
             }
         }
     }
@@ -129,13 +127,13 @@ mod tests {
     fn m3_m4_m5_drive_the_seed_tool_like_the_manual_says() {
         let t = seed_tool();
         let m3 = OutputCommand::Tool { tool: Some(1), state: ToolState::Clockwise };
-        assert_eq!(t.resolve(5, None, m3).unwrap(), (vec![w(1, 1, false), w(1, 0, true)], Some(1)));
+        assert_eq!(t.resolve(5, None, m3).unwrap(), vec![w(1, 1, false), w(1, 0, true)]);
         let m4 = OutputCommand::Tool { tool: None, state: ToolState::CounterClockwise };
-        assert_eq!(t.resolve(6, Some(1), m4).unwrap().0, vec![w(1, 0, false), w(1, 1, true)]);
+        assert_eq!(t.resolve(6, Some(1), m4).unwrap(), vec![w(1, 0, false), w(1, 1, true)]);
         let m5 = OutputCommand::Tool { tool: None, state: ToolState::Off };
-        assert_eq!(t.resolve(7, Some(1), m5).unwrap().0, vec![w(1, 0, false), w(1, 1, false)]);
+        assert_eq!(t.resolve(7, Some(1), m5).unwrap(), vec![w(1, 0, false), w(1, 1, false)]);
         let explicit = OutputCommand::Port { device: 2, port: 7, on: false };
-        assert_eq!(t.resolve(8, None, explicit).unwrap(), (vec![w(2, 7, false)], None));
+        assert_eq!(t.resolve(8, None, explicit).unwrap(), vec![w(2, 7, false)]);
     }
 
     #[test]
@@ -144,7 +142,7 @@ mod tests {
         let out = |port| DigitalOutput { device: 3, port, value: false };
         t.insert(2, Tool { clockwise: out(0), counter_clockwise: out(1) }).unwrap();
         let m3 = OutputCommand::Tool { tool: Some(2), state: ToolState::Clockwise };
-        assert_eq!(t.resolve(1, None, m3).unwrap().0, vec![w(3, 1, true), w(3, 0, false)]);
+        assert_eq!(t.resolve(1, None, m3).unwrap(), vec![w(3, 1, true), w(3, 0, false)]);
     }
 
     #[test]

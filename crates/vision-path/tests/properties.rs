@@ -191,17 +191,12 @@ fn check_end_events_dwells(run: &Run, items: &[Item], period: f64) -> Result<(),
     Ok(())
 }
 
-/// `PROPTEST_CASES` overrides the default case count (for deeper local runs).
-fn cases(default: u32) -> u32 {
-    std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(default)
-}
-
 fn config(limits: Limits, period: f64) -> PlanConfig {
     PlanConfig::new(limits, period, [1.0, 2.0, 3.0])
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: cases(160), ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: common::cases(160), ..ProptestConfig::default() })]
 
     #[test]
     fn exact_stop_programs_obey_the_limits_and_stop_at_every_corner(

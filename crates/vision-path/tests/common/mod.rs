@@ -5,6 +5,11 @@ use std::f64::consts::TAU;
 
 use vision_path::{ArcShape, Item, PathMode, PlanConfig, Segment, Setpoint, Setpoints, Shape, Speed, Step};
 
+/// `PROPTEST_CASES` overrides a property's default case count (for deeper local runs).
+pub fn cases(default: u32) -> u32 {
+    std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(default)
+}
+
 pub const PLANES: [[f64; 3]; 3] = [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]];
 
 /// Builds a continuous program segment by segment.
