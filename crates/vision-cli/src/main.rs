@@ -4,6 +4,7 @@
 //! outcomes to exit codes (0 success, 1 a run that failed, 2 bad input).
 
 mod fit;
+mod plan;
 mod trace;
 
 use std::process::ExitCode;
@@ -24,6 +25,9 @@ enum Command {
     Fit(fit::FitArgs),
     /// Run a G-code program with no vision handler and print the machine events it produces.
     Trace(trace::TraceArgs),
+    /// Plan a G-code program's motion (interpreter + path planner): the cycle time, and every
+    /// setpoint as CSV with --csv.
+    Plan(plan::PlanArgs),
 }
 
 /// A failure with the exit code it maps to.
@@ -40,6 +44,7 @@ fn main() -> ExitCode {
     let outcome = match cli.command {
         Command::Fit(args) => fit::run(&args),
         Command::Trace(args) => trace::run(&args),
+        Command::Plan(args) => plan::run(&args),
     };
     match outcome {
         Ok(text) => {

@@ -66,7 +66,8 @@ impl<T: AsRef<str>> GcodeItems<T> {
 
     /// Run the next line, queueing its items.
     fn step(&mut self) {
-        let Some(start) = self.next else {
+        // The end of the text (a final newline does not start another line).
+        let Some(start) = self.next.filter(|&start| start < self.text.as_ref().len()) else {
             self.queue.push_back(Ok(Item::End { line: self.line as usize }));
             self.done = true;
             return;

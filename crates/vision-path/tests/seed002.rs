@@ -250,7 +250,7 @@ fn start_gcode_follows_the_python_example_like_start_path() {
     let status = follower.wait();
     assert_eq!(status.state, RunState::Completed, "{:?}", status.error);
     assert_eq!(status.position, [1.0, 1.0, 0.0]);
-    assert_eq!(status.line, 18, "the end of the text");
+    assert_eq!(status.line, 17, "the last line of the text");
     let w = |port, level| OutputWrite { device: 1, port, level };
     assert_eq!(*writes.0.lock().unwrap(), vec![w(1, false), w(0, true), w(0, false), w(1, false)]);
 }
