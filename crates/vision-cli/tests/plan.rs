@@ -18,23 +18,6 @@ fn plan(args: &[&str], path: &PathBuf) -> Output {
     bin().arg("plan").args(args).arg(path).output().expect("run")
 }
 
-/// The seed-002 Python example's program.
-const SEED_EXAMPLE: &str = "G90 ; Absolute position mode
-G90.1 ; Absolute arc centre
-G21 ; Use millimeter units
-G17 ; XY plane arcs
-G64 P0.5 ; Blend move mode, 0.5 mm tolerance
-G0 X60 Y110 F1000 ; Travel move at 1000 mm/minute
-M3 $1 ; Start tool 1 in clockwise direction
-G1 X110 Y110
-G2 X110 Y10 I100 J60 ; Clockwise arc
-G1 X60 Y10
-G2 X60 Y110 I60 J60
-G4 P1.0 ; Dwell for 1 second
-M5 $1 ; Stop tool 1
-G0 X1 Y1
-";
-
 fn report_value(text: &str, key: &str) -> String {
     text.lines()
         .find_map(|l| l.strip_prefix(key))
@@ -56,7 +39,7 @@ fn the_g61_square_takes_four_trapezoids() {
 
 #[test]
 fn the_seed_example_writes_every_setpoint_and_its_tool_events_to_csv() {
-    let path = program("seed.nc", SEED_EXAMPLE);
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/path/seed002-example.nc");
     let csv = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("seed.csv");
     let csv_arg = csv.to_str().unwrap();
     let out = plan(&["--accel", "1000", "--machine-units", "mm", "--period", "2", "--csv", csv_arg], &path);
@@ -69,8 +52,8 @@ fn the_seed_example_writes_every_setpoint_and_its_tool_events_to_csv() {
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     let events: Vec<&Vec<&str>> = rows.iter().filter(|r| !r[8].is_empty()).collect();
     assert_eq!(events.len(), 2);
-    assert_eq!((events[0][1], events[0][8]), ("7", "M3 $1"));
-    assert_eq!((events[1][1], events[1][8]), ("13", "M5 $1"));
+    assert_eq!((events[0][1], events[0][8]), ("12", "M3 $1"));
+    assert_eq!((events[1][1], events[1][8]), ("18", "M5 $1"));
     assert_eq!(rows.len() - events.len(), setpoints);
     let last = rows.last().unwrap();
     assert_eq!(&last[2..5], &["1", "1", "0"]);

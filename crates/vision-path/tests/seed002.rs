@@ -169,31 +169,17 @@ fn tool_snippets_switch_at_rest_at_their_programmed_points() {
     assert_eq!(m4.events.len(), 2);
 }
 
-/// The Python example's program (`GCODE_STRING`).
-const SEED_EXAMPLE: &str = "(Operational mode commands)
-G90 ; Absolute position mode
-G90.1 ; Absolute arc centre
-G21 ; Use millimeter units
-G17 ; XY plane arcs
-G64 P0.5 ; Blend move mode, 0.5 mm tolerance
-
-(Movement and output commands)
-G0 X60 Y110 F1000 ; Travel move at 1000 mm/minute
-M3 $1 ; Start tool 1 in clockwise direction
-G1 X110 Y110
-G2 X110 Y10 I100 J60 ; Clockwise arc
-G1 X60 Y10
-G2 X60 Y110 I60 J60
-G4 P1.0 ; Dwell for 1 second
-M5 $1 ; Stop tool 1
-G0 X1 Y1
-";
+/// The Python example's program (`GCODE_STRING`), two header comment lines first.
+fn seed_example() -> String {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/path/seed002-example.nc");
+    std::fs::read_to_string(path).expect("examples/path/seed002-example.nc")
+}
 
 #[test]
 fn the_python_example_stays_within_half_a_millimetre_and_dwells_a_second() {
-    let p = plan(SEED_EXAMPLE);
+    let p = plan(&seed_example());
     // The corners it blends are line → arc and arc → line; every setpoint on the cut (lines
-    // 11–14) stays within P0.5 of the programmed contour.
+    // 13–16) stays within P0.5 of the programmed contour.
     let contour = |x: [f64; 3]| -> f64 {
         let (px, py) = (x[0], x[1]);
         let seg = |a: (f64, f64), b: (f64, f64)| {
@@ -210,12 +196,12 @@ fn the_python_example_stays_within_half_a_millimetre_and_dwells_a_second() {
         let left = if px <= 60.0 { ((px - 60.0).hypot(py - 60.0) - 50.0).abs() } else { f64::INFINITY };
         seg((60.0, 110.0), (110.0, 110.0)).min(seg((110.0, 10.0), (60.0, 10.0))).min(right).min(left)
     };
-    let cut: Vec<_> = p.setpoints.iter().filter(|s| (11..=14).contains(&s.line)).collect();
+    let cut: Vec<_> = p.setpoints.iter().filter(|s| (13..=16).contains(&s.line)).collect();
     assert!(cut.len() > 1000);
     for s in &cut {
         assert!(contour(s.position) <= 0.5 + 1e-9, "{:?} (line {}) is {} off", s.position, s.line, contour(s.position));
     }
-    let dwell = p.setpoints.iter().filter(|s| s.line == 15).count();
+    let dwell = p.setpoints.iter().filter(|s| s.line == 17).count();
     assert_eq!(dwell, 1000);
     assert_eq!(p.events.len(), 2);
 }
@@ -246,11 +232,11 @@ fn seed_follower() -> PathFollower {
 fn start_gcode_follows_the_python_example_like_start_path() {
     let mut follower = seed_follower();
     let writes = Writes::default();
-    follower.start_gcode(&machine_motion(), SEED_EXAMPLE, 1000.0, writes.clone(), Pace::Unpaced).unwrap();
+    follower.start_gcode(&machine_motion(), seed_example(), 1000.0, writes.clone(), Pace::Unpaced).unwrap();
     let status = follower.wait();
     assert_eq!(status.state, RunState::Completed, "{:?}", status.error);
     assert_eq!(status.position, [1.0, 1.0, 0.0]);
-    assert_eq!(status.line, 17, "the last line of the text");
+    assert_eq!(status.line, 19, "the last line of the text");
     let w = |port, level| OutputWrite { device: 1, port, level };
     assert_eq!(*writes.0.lock().unwrap(), vec![w(1, false), w(0, true), w(0, false), w(1, false)]);
 }
