@@ -3,8 +3,11 @@
 //! Every subcommand lives in its own module; this file only parses the command line and maps
 //! outcomes to exit codes (0 success, 1 a run that failed, 2 bad input).
 
+mod emulate;
 mod fit;
+mod run;
 mod trace;
+mod trigger;
 
 use std::process::ExitCode;
 
@@ -22,8 +25,14 @@ struct Cli {
 enum Command {
     /// Fit a transform from commanded to observed mark positions (JSON from FILE or stdin).
     Fit(fit::FitArgs),
+    /// Run G-code programs on the simulated machine with the Vision M-codes, and report.
+    Run(run::RunArgs),
     /// Run a G-code program with no vision handler and print the machine events it produces.
     Trace(trace::TraceArgs),
+    /// Serve an emulated Keyence VS camera (the simulated camera) on 127.0.0.1 until Ctrl-C.
+    Emulate(emulate::EmulateArgs),
+    /// Trigger a Keyence camera (real or emulated) once and print the decoded reading.
+    Trigger(trigger::TriggerArgs),
 }
 
 /// A failure with the exit code it maps to.
@@ -33,13 +42,23 @@ pub(crate) enum Failure {
     Input(String),
     /// A run that failed (exit 1): a program that stopped at a line.
     Run(String),
+    /// A run that failed (exit 1) after producing a report worth printing.
+    RunWithReport {
+        /// The report, to standard output.
+        output: String,
+        /// The failure, to standard error.
+        message: String,
+    },
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let outcome = match cli.command {
         Command::Fit(args) => fit::run(&args),
+        Command::Run(args) => run::run(&args),
         Command::Trace(args) => trace::run(&args),
+        Command::Emulate(args) => emulate::run(&args),
+        Command::Trigger(args) => trigger::run(&args),
     };
     match outcome {
         Ok(text) => {
@@ -51,6 +70,11 @@ fn main() -> ExitCode {
             ExitCode::from(2)
         }
         Err(Failure::Run(message)) => {
+            eprintln!("mach-vision: {message}");
+            ExitCode::from(1)
+        }
+        Err(Failure::RunWithReport { output, message }) => {
+            print!("{output}");
             eprintln!("mach-vision: {message}");
             ExitCode::from(1)
         }

@@ -181,7 +181,8 @@ impl SimMachine {
     /// unit): the distance, in the world unit, between where the active tool's point really goes
     /// when the program commands `nominal` (after `setup`, through the alignment modals) and
     /// where that point of the fixture really lies. The tool's point is the spindle plus the
-    /// tool's true offset (the camera tool's: its optical axis).
+    /// tool's true offset; for the camera tool, the point imaged at the image centre (what the
+    /// camera tool's table offset refers to with `PxCenterOffset` 0).
     ///
     /// # Errors
     /// [`SimError::UnknownFixture`], or [`SimError::Machine`] from the move.
@@ -196,7 +197,7 @@ impl SimMachine {
         let spindle = self.machine_point_for(setup, nominal * unit.factor_to(units))?;
         let tool = self.active_tool();
         let tool_offset = if tool == world.machine.camera_tool {
-            Vector2::from(world.camera.offset)
+            self.sim.true_camera_offset(Vector2::zeros(), unit)
         } else {
             world
                 .machine
