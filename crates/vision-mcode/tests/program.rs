@@ -142,3 +142,58 @@ fn calibration_moves_run_synchronously_on_the_interpreter() {
     let p = interp.program_position();
     assert!(p.xy().coords.norm() < 1e-12, "back at the start: {p:?}");
 }
+
+mod emitted {
+    use super::*;
+    use proptest::prelude::*;
+    use vision_math::Point2;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(96))]
+
+        /// Whatever the part's pose (inside the default quality gates), M282's text is finite
+        /// fixed-decimal G-code without `-0`, and once the interpreter runs it every mark lands
+        /// on its observation within the fit's residual + 1e-6 units.
+        #[test]
+        fn m282_text_is_clean_and_carries_the_marks(
+            theta in -10.0f64..10.0, sx in 0.99f64..1.01, sy in 0.99f64..1.01,
+            tx in -0.5f64..0.5, ty in -0.5f64..0.5,
+            noise in proptest::collection::vec((-0.002f64..0.002, -0.002f64..0.002), 4),
+            mm in any::<bool>(),
+        ) {
+            let unit = if mm { 25.4 } else { 1.0 };
+            let nominal = [(0.0, 0.0), (6.0, 0.0), (6.0, 4.0), (0.0, 4.0)].map(|(x, y)| Point2::new(x * unit, y * unit));
+            let (s, c) = theta.to_radians().sin_cos();
+            let observed: Vec<Point2<f64>> = nominal.iter().zip(&noise).map(|(n, (ex, ey))| {
+                let (px, py) = (sx * (n.x - 3.0 * unit), sy * (n.y - 2.0 * unit));
+                Point2::new(c * px - s * py + 3.0 * unit + tx * unit + ex * unit, s * px + c * py + 2.0 * unit + ty * unit + ey * unit)
+            }).collect();
+            // The camera reports observed − commanded; the scripted chain is in inches per pixel,
+            // so hand it offsets in inches.
+            let offsets: Vec<Vector2<f64>> = nominal.iter().zip(&observed).map(|(n, o)| (o - n) / unit).collect();
+            let (mut h, _) = handler(&offsets, true);
+            let units = if mm { "G21" } else { "G20" };
+            let program = format!(
+                "G90 {units}\nT98 M6\nM280\n{}M282",
+                nominal.iter().map(|n| format!("G0 X{} Y{}\nM281\n", n.x, n.y)).collect::<String>()
+            );
+            let mut interp = Interpreter::new(InterpreterConfig::default());
+            interp.run(&program, Some(&mut h), &mut Vec::new()).map_err(|e| TestCaseError::fail(e.to_string()))?;
+            let Some(Ok(Outcome::Apply(reply))) = h.records().last().map(|r| &r.result) else {
+                return Err(TestCaseError::fail("no M282"));
+            };
+            for line in &reply.gcode {
+                prop_assert!(!line.contains("NaN") && !line.contains("inf"), "{line}");
+                for word in line.split_whitespace() {
+                    let number = &word[1..];
+                    prop_assert!(!(number.starts_with("-0") && number.trim_start_matches(['-', '0', '.']).is_empty()), "{line}");
+                }
+            }
+            let chain = interp.active_alignment().ok_or_else(|| TestCaseError::fail("no alignment"))?;
+            for (n, o) in nominal.iter().zip(&observed) {
+                let miss = (chain.apply(*n) - o).norm();
+                prop_assert!(miss <= reply.report.max_residual + 1e-6, "{miss} vs {}", reply.report.max_residual);
+            }
+        }
+    }
+}
