@@ -3,9 +3,12 @@
 //! Every subcommand lives in its own module; this file only parses the command line and maps
 //! outcomes to exit codes (0 success, 1 a run that failed, 2 bad input).
 
+mod emulate;
 mod fit;
 mod plan;
+mod run;
 mod trace;
+mod trigger;
 
 use std::process::ExitCode;
 
@@ -23,11 +26,17 @@ struct Cli {
 enum Command {
     /// Fit a transform from commanded to observed mark positions (JSON from FILE or stdin).
     Fit(fit::FitArgs),
+    /// Run G-code programs on the simulated machine with the Vision M-codes, and report.
+    Run(run::RunArgs),
     /// Run a G-code program with no vision handler and print the machine events it produces.
     Trace(trace::TraceArgs),
     /// Plan a G-code program's motion (interpreter + path planner): the cycle time, and every
     /// setpoint as CSV with --csv.
     Plan(plan::PlanArgs),
+    /// Serve an emulated Keyence VS camera (the simulated camera) on 127.0.0.1 until Ctrl-C.
+    Emulate(emulate::EmulateArgs),
+    /// Trigger a Keyence camera (real or emulated) once and print the decoded reading.
+    Trigger(trigger::TriggerArgs),
 }
 
 /// A failure with the exit code it maps to.
@@ -37,14 +46,24 @@ pub(crate) enum Failure {
     Input(String),
     /// A run that failed (exit 1): a program that stopped at a line.
     Run(String),
+    /// A run that failed (exit 1) after producing a report worth printing.
+    RunWithReport {
+        /// The report, to standard output.
+        output: String,
+        /// The failure, to standard error.
+        message: String,
+    },
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let outcome = match cli.command {
         Command::Fit(args) => fit::run(&args),
+        Command::Run(args) => run::run(&args),
         Command::Trace(args) => trace::run(&args),
         Command::Plan(args) => plan::run(&args),
+        Command::Emulate(args) => emulate::run(&args),
+        Command::Trigger(args) => trigger::run(&args),
     };
     match outcome {
         Ok(text) => {
@@ -56,6 +75,11 @@ fn main() -> ExitCode {
             ExitCode::from(2)
         }
         Err(Failure::Run(message)) => {
+            eprintln!("mach-vision: {message}");
+            ExitCode::from(1)
+        }
+        Err(Failure::RunWithReport { output, message }) => {
+            print!("{output}");
             eprintln!("mach-vision: {message}");
             ExitCode::from(1)
         }

@@ -51,6 +51,20 @@ pub enum VisionError {
         end: i64,
     },
 
+    /// The 40-variable block does not exist on the host (it runs past its last variable).
+    #[error(
+        "VisionPoundVarBase {base} does not fit this machine: #{base}..#{end} must all exist ({reason}) — \
+         pick a base whose 40 variables exist, e.g. 500"
+    )]
+    PoundBlockMissing {
+        /// The configured base.
+        base: i64,
+        /// The last variable of the block.
+        end: i64,
+        /// What the host said.
+        reason: String,
+    },
+
     /// The camera judged NG or found no mark.
     #[error(
         "NG / no mark found — the camera job did not find a fiducial in the field of view; re-jog \

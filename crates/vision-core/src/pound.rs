@@ -8,6 +8,7 @@
 //! them without the module clobbering them.
 
 use crate::error::VisionError;
+use crate::machine::Machine;
 
 /// Number of slots (0 = latest, 1–4 = run captures).
 pub const SLOTS: u32 = 5;
@@ -69,6 +70,22 @@ impl PoundBlock {
             Ok(b) if base >= MIN_BASE && !overlaps && u32::try_from(end).is_ok() => Ok(PoundBlock { base: b }),
             _ => Err(VisionError::PoundBaseReserved { base, end }),
         }
+    }
+
+    /// [`PoundBlock::new`], then checks that the host has the block's first and last variable
+    /// (a base that passes the range rules can still run past the end of a machine's variables).
+    ///
+    /// # Errors
+    /// [`VisionError::PoundBaseReserved`], [`VisionError::PoundBlockMissing`].
+    pub fn on_machine(base: i64, machine: &dyn Machine) -> Result<PoundBlock, VisionError> {
+        let block = PoundBlock::new(base)?;
+        let last = block.base + BLOCK_LEN - 1;
+        for at in [block.base, last] {
+            if let Err(e) = machine.pound(at) {
+                return Err(VisionError::PoundBlockMissing { base, end: i64::from(last), reason: e.message });
+            }
+        }
+        Ok(block)
     }
 
     /// The base B.

@@ -26,4 +26,10 @@ pub enum SimError {
         /// The fixture names, comma-separated.
         known: String,
     },
+    /// The simulated machine refused a request (a G-code error, in its words).
+    #[error("simulated machine: {reason}")]
+    Machine {
+        /// What the interpreter said.
+        reason: String,
+    },
 }

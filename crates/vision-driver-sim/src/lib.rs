@@ -7,9 +7,12 @@
 //!   on the types in [`world`]; `default_world.toml` ([`World::default_world`]) is a complete,
 //!   commented example.
 //! * [`Sim`]: one running world (shared by the camera and the machine).
+//! * [`SimMachine`]: the G-code interpreter set up from the world as a CNC whose moves move the
+//!   head; a [`vision_core::Machine`], and it runs whole programs.
 //! * [`SimCamera`]: a [`vision_core::CameraDriver`] that sees the table from the head's true
 //!   position through the true optics ([`Optics`]).
-//! * Truth: [`Sim::true_k`], [`Sim::true_camera_offset`], [`Sim::calibration_error`].
+//! * Truth: [`Sim::true_k`], [`Sim::true_camera_offset`], [`Sim::calibration_error`],
+//!   [`SimMachine::cut_error`].
 //!
 //! # Decisions
 //! * The camera reports the in-view mark nearest the image centre (count = marks in view).
@@ -36,6 +39,7 @@
 mod camera;
 mod error;
 mod fixture;
+mod machine;
 mod optics;
 mod rng;
 mod sim;
@@ -45,6 +49,7 @@ pub mod world;
 pub use camera::SimCamera;
 pub use error::SimError;
 pub use fixture::TrueMark;
+pub use machine::SimMachine;
 pub use optics::Optics;
 pub use sim::Sim;
 pub use truth::CalibrationError;

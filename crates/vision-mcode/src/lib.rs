@@ -6,6 +6,10 @@
 //!   [`Outcome`]: the module's report, and the G-code it emits ([`Outcome::gcode`]), already
 //!   formatted by `vision_math::AlignmentChain::gcode` (fixed decimals that move no point by
 //!   more than 1e-6 units; never NaN, inf or `-0`).
+//! * [`VisionHandler`]: the interpreter's user M-code handler for M280–M284 (returns the emitted
+//!   G-code for the interpreter to run in place, keeps a [`Record`] of every call).
+//! * [`ContextMachine`]: the one [`vision_core::Machine`] over the interpreter — inside a handler,
+//!   or around a standalone interpreter — so the module's moves run synchronously on it.
 //!
 //! ```
 //! use vision_core::RunMode;
@@ -19,8 +23,12 @@
 
 mod call;
 mod error;
+mod handler;
+mod machine;
 mod outcome;
 
 pub use call::{VisionCall, VISION_MCODES};
 pub use error::McodeError;
+pub use handler::{Record, VisionHandler};
+pub use machine::{fixed_clock, system_clock, Clock, ContextMachine};
 pub use outcome::Outcome;

@@ -81,11 +81,11 @@ impl VisionModule {
     ///
     /// # Errors
     /// [`VisionError::NotEnabled`], [`VisionError::WrongTool`],
-    /// [`VisionError::PoundBaseReserved`]; nothing changes.
+    /// [`VisionError::PoundBaseReserved`], [`VisionError::PoundBlockMissing`]; nothing changes.
     pub fn m280(&mut self, machine: &mut dyn Machine, mode: RunMode) -> Result<Reply<RunMode>, VisionError> {
         self.check_enabled()?;
         self.check_tool(machine)?;
-        PoundBlock::new(self.params.pound_var_base())?;
+        PoundBlock::on_machine(self.params.pound_var_base(), machine)?;
         self.dots.clear();
         self.params.run_active = 1;
         self.params.run_mode = mode.code();

@@ -28,7 +28,7 @@ impl VisionModule {
     ///
     /// # Errors
     /// [`VisionError::NotEnabled`], [`VisionError::WrongTool`],
-    /// [`VisionError::PoundBaseReserved`], [`VisionError::NotCalibrated`] (all before the
+    /// [`VisionError::PoundBaseReserved`], [`VisionError::PoundBlockMissing`], [`VisionError::NotCalibrated`] (all before the
     /// trigger: nothing changes); [`VisionError::NoDriver`]; after the trigger
     /// [`VisionError::Driver`] or [`VisionError::NoMark`] (only `LastJudgment` and `LastStatus`
     /// change, recording the failed trigger); a failed pound-variable write (the variables
@@ -37,7 +37,7 @@ impl VisionModule {
     pub fn m281(&mut self, machine: &mut dyn Machine, keep_image: bool) -> Result<Reply<Capture>, VisionError> {
         self.check_enabled()?;
         self.check_tool(machine)?;
-        let block = PoundBlock::new(self.params.pound_var_base())?;
+        let block = PoundBlock::on_machine(self.params.pound_var_base(), machine)?;
         let unit = machine.units();
         let chain = pixel_chain(&self.params, unit)?;
         let trigger_time = machine.now();

@@ -51,8 +51,10 @@ pub enum RunOutcome {
 ///
 /// It owns the modal state, the parameters and the tool table, and runs G-code text
 /// ([`Interpreter::run`]) or single operations for a host ([`Interpreter::context`]). Events go
-/// to the sink given to each call; the interpreter keeps none of them.
-#[derive(Debug)]
+/// to the sink given to each call; the interpreter keeps none of them. A clone is a complete,
+/// independent copy of the machine state: a host can ask "where would this move go?" on a
+/// clone without disturbing the original.
+#[derive(Debug, Clone)]
 pub struct Interpreter {
     config: InterpreterConfig,
     tools: ToolTable,

@@ -217,7 +217,7 @@ fn column(text: &str, offset: usize) -> u32 {
 }
 
 /// The reusable line parser.
-#[derive(Debug, Default)]
+#[derive(Debug, Clone, Default)]
 pub struct Parser {
     words: Vec<Word>,
     assignments: Vec<Assignment>,

@@ -31,6 +31,8 @@ pub(crate) struct World {
     pub dwell_s: f64,
     /// `set_pound` fails for this address.
     pub fail_pound: Option<u32>,
+    /// The highest pound variable the machine has.
+    pub last_pound: u32,
     /// `run_gcode` fails after this many more calls.
     pub fail_gcode_after: Option<usize>,
 
@@ -66,6 +68,7 @@ impl Default for World {
             log: Vec::new(),
             dwell_s: 0.0,
             fail_pound: None,
+            last_pound: 9999,
             fail_gcode_after: None,
             marks: Vec::new(),
             mark_size: 0.5,
@@ -240,7 +243,11 @@ impl Machine for FakeMachine {
         self.world().units
     }
     fn pound(&self, index: u32) -> Result<f64, MachineError> {
-        Ok(self.world().pounds.get(&index).copied().unwrap_or(0.0))
+        let w = self.world();
+        if index > w.last_pound {
+            return Err(MachineError::new(format!("#{index} does not exist (the last is #{})", w.last_pound)));
+        }
+        Ok(w.pounds.get(&index).copied().unwrap_or(0.0))
     }
     fn set_pound(&mut self, index: u32, value: f64) -> Result<(), MachineError> {
         let mut w = self.world();

@@ -1,0 +1,202 @@
+//! `mach-vision run`: G-code programs on the simulated machine, with the Vision module as the
+//! M280–M284 handler, and a report of everything it did — and, because the simulator knows the
+//! truth, how far the result is from it.
+
+mod report;
+mod text;
+
+use std::path::{Path, PathBuf};
+
+use clap::{Args, ValueEnum};
+use vision_core::{DriverRegistry, Params, ProfileStore, VisionModule};
+use vision_driver_keyence::emulator::{DriverSource, Emulator, EmulatorHandle, NumberStyle, OutputFormat};
+use vision_driver_sim::{Sim, SimMachine, World};
+use vision_gcode::{Event, RunOutcome};
+use vision_mcode::{system_clock, VisionHandler};
+
+use crate::Failure;
+use report::{calibration_truth, pound, steps, telemetry, ProgramReport, Report, Step};
+
+/// Which camera answers the triggers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum CameraKind {
+    /// The simulated camera of the world, called directly.
+    Sim,
+    /// A Keyence VS camera over TCP: at `--ip`/`--port`, or (without `--ip`) an emulated VS
+    /// camera on loopback backed by the world's simulated camera.
+    Keyence,
+}
+
+/// Arguments of `mach-vision run`.
+#[derive(Debug, Args)]
+pub(crate) struct RunArgs {
+    /// G-code programs, run in order on the same machine (tool table, profile and pound
+    /// variables carry over from one to the next).
+    #[arg(required = true, value_name = "PROGRAM.nc")]
+    programs: Vec<PathBuf>,
+    /// The simulated world (TOML); default: the built-in world.
+    #[arg(long, value_name = "W.toml")]
+    world: Option<PathBuf>,
+    /// The Vision profile to load, and to save calibration (M283) and job changes (M284) to.
+    /// A missing file starts a fresh, uncalibrated profile. Default: the profile a perfect
+    /// calibration of the world would leave, not saved.
+    #[arg(long, value_name = "P.toml")]
+    profile: Option<PathBuf>,
+    /// The camera.
+    #[arg(long, value_enum, default_value_t = CameraKind::Sim)]
+    camera: CameraKind,
+    /// Keyence camera address (with `--camera keyence`).
+    #[arg(long)]
+    ip: Option<String>,
+    /// Keyence camera port (with `--camera keyence --ip`).
+    #[arg(long, default_value_t = 8500)]
+    port: u16,
+    /// Print the report as one JSON object.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Everything a run needs, set up.
+struct Session {
+    sim: Sim,
+    machine: SimMachine,
+    handler: VisionHandler,
+    camera: String,
+    /// Keeps the loopback emulator alive for the session.
+    _emulator: Option<EmulatorHandle>,
+}
+
+fn read(path: &Path, what: &str) -> Result<String, Failure> {
+    std::fs::read_to_string(path).map_err(|e| Failure::Input(format!("cannot read {what} {}: {e}", path.display())))
+}
+
+fn set(params: &mut Params, name: &str, value: impl Into<vision_core::ParamValue>) -> Result<(), Failure> {
+    params.set(name, value).map_err(|e| Failure::Input(e.to_string()))
+}
+
+impl Session {
+    fn new(args: &RunArgs) -> Result<Session, Failure> {
+        let world = match &args.world {
+            Some(path) => World::from_toml(&read(path, "world")?)
+                .map_err(|e| Failure::Input(format!("{}: {e}", path.display())))?,
+            None => World::default_world(),
+        };
+        let sim = Sim::new(world).map_err(|e| Failure::Input(e.to_string()))?;
+        let camera_tool = i64::from(sim.world().machine.camera_tool);
+
+        let mut params = match &args.profile {
+            Some(path) if path.exists() => ProfileStore::new(path).load().map_err(|e| Failure::Input(e.to_string()))?,
+            Some(_) => {
+                let mut p = Params::default();
+                set(&mut p, "VisionEnabled", true)?;
+                set(&mut p, "VisionCameraToolNumber", camera_tool)?;
+                p
+            }
+            None => sim.calibrated_params(&Params::default()).map_err(|e| Failure::Input(e.to_string()))?,
+        };
+
+        let mut registry = DriverRegistry::new();
+        sim.register(&mut registry);
+        vision_driver_keyence::register(&mut registry);
+        let (camera, emulator) = match (args.camera, &args.ip) {
+            (CameraKind::Sim, _) => {
+                set(&mut params, "VisionDriver", "Sim")?;
+                ("simulated camera".to_string(), None)
+            }
+            (CameraKind::Keyence, Some(ip)) => {
+                set(&mut params, "VisionDriver", "Keyence")?;
+                set(&mut params, "VisionIP", ip.as_str())?;
+                set(&mut params, "VisionPort", i64::from(args.port))?;
+                (format!("Keyence VS at {ip}:{}", args.port), None)
+            }
+            (CameraKind::Keyence, None) => {
+                let emulator = Emulator::builder()
+                    .source(DriverSource(Box::new(sim.camera())))
+                    .format(OutputFormat::Full)
+                    .numbers(NumberStyle::FixedWidth)
+                    .bind("127.0.0.1:0")
+                    .map_err(|e| Failure::Input(format!("cannot start the loopback camera emulator: {e}")))?;
+                set(&mut params, "VisionDriver", "Keyence")?;
+                set(&mut params, "VisionIP", "127.0.0.1")?;
+                set(&mut params, "VisionPort", i64::from(emulator.addr().port()))?;
+                (
+                    format!("Keyence driver -> emulated VS camera at {} (the simulated camera)", emulator.addr()),
+                    Some(emulator),
+                )
+            }
+        };
+
+        let mut module = VisionModule::from_registry(params, &registry).map_err(|e| Failure::Input(e.to_string()))?;
+        if let Some(path) = &args.profile {
+            module = module.with_profile(ProfileStore::new(path));
+        }
+        let clock = system_clock();
+        let machine = SimMachine::new(&sim, clock.clone()).map_err(|e| Failure::Input(e.to_string()))?;
+        Ok(Session { sim, machine, handler: VisionHandler::new(module, clock), camera, _emulator: emulator })
+    }
+
+    /// Runs one program and reports it.
+    fn run(&mut self, path: &Path) -> Result<ProgramReport, Failure> {
+        let text = read(path, "program")?;
+        let mut moves = 0u64;
+        let mut count = |e: &Event| {
+            if matches!(e, Event::Linear(_) | Event::Arc(_)) {
+                moves += 1;
+            }
+        };
+        let result = self.machine.run_program(&text, Some(&mut self.handler), &mut count);
+        let records = self.handler.take_records();
+        let steps = steps(&records, &self.sim, &self.machine);
+        let calibrated =
+            steps.iter().any(|s| matches!(s, Step::SheetCalibration { .. } | Step::QuickCalibration { .. }));
+        let calibration_truth =
+            if calibrated { calibration_truth(&self.sim, &self.machine, self.handler.module().params()) } else { None };
+        let (outcome, error) = match result {
+            Ok(RunOutcome::Completed { .. }) => ("completed".to_string(), None),
+            Ok(RunOutcome::Ended { line, code }) => (format!("ended by M{code} at line {line}"), None),
+            Err(e) => (format!("failed at line {}", e.line()), Some(e.to_string())),
+        };
+        Ok(ProgramReport { program: path.display().to_string(), outcome, moves, steps, calibration_truth, error })
+    }
+}
+
+/// Runs `mach-vision run`.
+pub(crate) fn run(args: &RunArgs) -> Result<String, Failure> {
+    if args.ip.is_some() && args.camera != CameraKind::Keyence {
+        return Err(Failure::Input("--ip needs --camera keyence".into()));
+    }
+    let mut session = Session::new(args)?;
+    let mut programs = Vec::with_capacity(args.programs.len());
+    let mut failure = None;
+    for path in &args.programs {
+        let report = session.run(path)?;
+        if let Some(e) = &report.error {
+            failure = Some(format!("{}: {e}", report.program));
+        }
+        programs.push(report);
+        if failure.is_some() {
+            break;
+        }
+    }
+    let params = session.handler.module().params();
+    let report = Report {
+        world: args.world.as_ref().map_or_else(|| "built-in".to_string(), |p| p.display().to_string()),
+        world_unit: session.sim.unit().short_name(),
+        camera: session.camera.clone(),
+        profile: args.profile.as_ref().map(|p| p.display().to_string()),
+        programs,
+        pound: pound(&session.machine, params),
+        telemetry: telemetry(params),
+    };
+    let output = if args.json {
+        let mut s = serde_json::to_string_pretty(&report).map_err(|e| Failure::Input(e.to_string()))?;
+        s.push('\n');
+        s
+    } else {
+        text::render(&report)
+    };
+    match failure {
+        None => Ok(output),
+        Some(message) => Err(Failure::RunWithReport { output, message }),
+    }
+}

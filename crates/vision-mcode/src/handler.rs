@@ -1,0 +1,107 @@
+//! [`VisionHandler`]: M280–M284 plugged into the interpreter.
+
+use vision_core::VisionModule;
+use vision_gcode::{Context, HandlerError, MCodeHandler, UserMCode};
+
+use crate::call::VisionCall;
+use crate::error::McodeError;
+use crate::machine::{Clock, ContextMachine};
+use crate::outcome::Outcome;
+
+/// One Vision M-code as it ran.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Record {
+    /// The program line.
+    pub line: u32,
+    /// The M number.
+    pub mcode: u32,
+    /// What it did, or why it was refused.
+    pub result: Result<Outcome, McodeError>,
+}
+
+/// The interpreter's handler for M280–M284: parses the words, runs the Vision module on the
+/// interpreter as its host ([`ContextMachine`]), hands back the G-code the module emits (run in
+/// place by the interpreter), and keeps a [`Record`] of every call for reports.
+///
+/// A refused call stops the program at its line with the module's message.
+pub struct VisionHandler {
+    module: VisionModule,
+    clock: Clock,
+    records: Vec<Record>,
+}
+
+impl std::fmt::Debug for VisionHandler {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("VisionHandler").field("module", &self.module).field("records", &self.records).finish()
+    }
+}
+
+impl VisionHandler {
+    /// A handler around `module`, telling time by `clock`.
+    #[must_use]
+    pub fn new(module: VisionModule, clock: Clock) -> VisionHandler {
+        VisionHandler { module, clock, records: Vec::new() }
+    }
+
+    /// The Vision module (parameters, dot list, driver).
+    #[must_use]
+    pub fn module(&self) -> &VisionModule {
+        &self.module
+    }
+
+    /// The Vision module, mutably (e.g. to change a parameter between programs).
+    pub fn module_mut(&mut self) -> &mut VisionModule {
+        &mut self.module
+    }
+
+    /// The module, handing the handler back.
+    #[must_use]
+    pub fn into_module(self) -> VisionModule {
+        self.module
+    }
+
+    /// The clock.
+    #[must_use]
+    pub fn clock(&self) -> &Clock {
+        &self.clock
+    }
+
+    /// Every call so far, in order.
+    #[must_use]
+    pub fn records(&self) -> &[Record] {
+        &self.records
+    }
+
+    /// Takes the records, leaving none.
+    pub fn take_records(&mut self) -> Vec<Record> {
+        std::mem::take(&mut self.records)
+    }
+
+    /// Runs one Vision M-code on the interpreter behind `ctx`.
+    ///
+    /// # Errors
+    /// The parse or the module's refusal (also recorded).
+    pub fn dispatch(
+        &mut self,
+        mcode: u32,
+        words: &[(char, f64)],
+        ctx: &mut Context<'_>,
+    ) -> Result<Outcome, McodeError> {
+        let line = ctx.line();
+        let result = VisionCall::parse(mcode, words).and_then(|call| {
+            let mut machine = ContextMachine::new(ctx, &self.clock);
+            call.run(&mut self.module, &mut machine).map_err(McodeError::from)
+        });
+        self.records.push(Record { line, mcode, result: result.clone() });
+        result
+    }
+}
+
+impl MCodeHandler for VisionHandler {
+    fn call(&mut self, call: &UserMCode<'_>, ctx: &mut Context<'_>) -> Result<Vec<String>, HandlerError> {
+        match self.dispatch(call.code(), call.words(), ctx) {
+            Ok(outcome) => Ok(outcome.gcode().to_vec()),
+            Err(e) => Err(HandlerError::Failed(e.to_string())),
+        }
+    }
+}
