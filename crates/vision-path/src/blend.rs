@@ -1,12 +1,15 @@
 //! G64 corner blending: replace the corner between two pieces by circular arcs tangent to
 //! both, passing within the tolerance of the programmed corner point.
 //!
+//! A blend is made as small as keeps the path at full speed — its radius `wanted`, the one at
+//! which its centripetal limit allows the neighbours' speed — and never larger than the
+//! tolerance and half of each neighbour allow: the path deviates no more than it must.
+//!
 //! * Two lines: one circular arc tangent to both at equal distances `ℓ` from the corner
-//!   (radius `ℓ / tan(θ/2)`, passing `ℓ·tan(θ/4)` from the corner), with `ℓ` as large as
-//!   the tolerance and half of each line allow.
+//!   (radius `ℓ / tan(θ/2)`, passing `ℓ·tan(θ/4)` from the corner).
 //! * Any arc involved: a biarc (two tangent-continuous circular arcs) between points at equal
-//!   path distance `s` before and after the corner, with `s` found by bisection as the largest
-//!   that keeps the blend within the tolerance of the corner.
+//!   path distance `s` before and after the corner, `s` found by bisection, then checked (and
+//!   shrunk) against the programmed path.
 
 use crate::curve::Curve;
 use crate::vec3::Vec3;
@@ -20,10 +23,23 @@ pub(crate) struct Blend {
     pub(crate) pieces: Vec<Curve>,
 }
 
+/// The smallest trim (machine units) a blend uses when the tolerance and the neighbours allow
+/// it, so that even a nearly tangent corner gets a blend long enough to keep.
+const MIN_TRIM: f64 = 1e-6;
+
 /// Blend the corner at `c1.end()` between `c1` and `c2`. `s1_max` and `s2_max` bound the
-/// trims (half of each neighbour); `tolerance` bounds the distance from the corner point
-/// (`None`: only the trims bound it). `None` when no useful blend exists (the caller stops).
-pub(crate) fn blend(c1: &Curve, s1_max: f64, c2: &Curve, s2_max: f64, tolerance: Option<f64>) -> Option<Blend> {
+/// trims (half of each neighbour); `tolerance` bounds the distance from the corner point and
+/// from the programmed path (`None`: only the trims bound it); `wanted` is the blend radius
+/// beyond which a larger blend would not be faster (machine units). `None` when no useful
+/// blend exists (the caller stops).
+pub(crate) fn blend(
+    c1: &Curve,
+    s1_max: f64,
+    c2: &Curve,
+    s2_max: f64,
+    tolerance: Option<f64>,
+    wanted: f64,
+) -> Option<Blend> {
     let s_max = s1_max.min(s2_max).min(c1.len()).min(c2.len());
     if !(s_max > 0.0) {
         return None;
@@ -32,73 +48,83 @@ pub(crate) fn blend(c1: &Curve, s1_max: f64, c2: &Curve, s2_max: f64, tolerance:
     if let (Curve::Line(_), Curve::Line(_)) = (c1, c2) {
         let (u1, u2) = (c1.end_tangent(), c2.start_tangent());
         let theta = u1.angle_to(u2);
-        let mut ell = s_max;
-        if let Some(p) = tolerance {
-            ell = ell.min(p / (theta / 4.0).tan());
+        let cap = tolerance.map_or(s_max, |p| s_max.min(p / (theta / 4.0).tan()));
+        let ell = (wanted * (theta / 2.0).tan()).min(cap).max(MIN_TRIM.min(cap));
+        if !(ell > 0.0) {
+            return None;
         }
-        let a = c1.point(c1.len() - ell);
-        let b = c2.point(ell);
-        let arc = Curve::from_tangent(a, u1, b)?;
-        return (ell > 0.0).then(|| Blend { s1: ell, s2: ell, pieces: vec![arc] });
+        let arc = Curve::from_tangent(c1.point(c1.len() - ell), u1, c2.point(ell))?;
+        return Some(Blend { s1: ell, s2: ell, pieces: vec![arc] });
     }
     if c1.is_helix() || c2.is_helix() {
         return None;
     }
-    let build = |lambda: f64| -> Option<(Vec<Curve>, f64)> {
+    let build = |lambda: f64| -> Option<Vec<Curve>> {
         let s = lambda * s_max;
         let (sa, sb) = (c1.len() - s, s);
-        let a = c1.point(sa);
-        let b = c2.point(sb);
-        let ta = c1.deriv(sa).unit()?;
-        let tb = c2.deriv(sb).unit()?;
-        let pieces = biarc(a, ta, b, tb)?;
-        let dev = pieces.iter().map(|p| p.distance_to(corner)).fold(f64::INFINITY, f64::min);
-        Some((pieces, dev))
+        biarc(c1.point(sa), c1.deriv(sa).unit()?, c2.point(sb), c2.deriv(sb).unit()?)
     };
-    let Some(p) = tolerance else {
-        // No tolerance: the largest trim that gives a proper biarc.
-        let mut lambda = 1.0;
-        for _ in 0..30 {
-            if let Some((pieces, _)) = build(lambda) {
-                return Some(Blend { s1: lambda * s_max, s2: lambda * s_max, pieces });
-            }
-            lambda *= 0.5;
-        }
-        return None;
-    };
-    // The largest trim whose blend passes within P of the corner (bisection) …
-    let near = |lambda: f64| build(lambda).is_some_and(|(_, dev)| dev <= p);
-    let mut lambda = if near(1.0) {
-        1.0
-    } else {
-        let (mut lo, mut hi) = (0.0, 1.0);
-        for _ in 0..30 {
-            let mid = 0.5 * (lo + hi);
-            if near(mid) {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        lo
-    };
-    // … shrunk until the whole blend also stays within P of the programmed path (a biarc
-    // between arcs can bulge slightly beyond the corner's distance).
+    let near_corner = |pieces: &[Curve]| pieces.iter().map(|p| p.distance_to(corner)).fold(f64::INFINITY, f64::min);
+    let radius = |pieces: &[Curve]| pieces.iter().map(Curve::radius).fold(f64::INFINITY, f64::min);
+    // The largest trim that gives a biarc within P of the corner …
+    let fits = |lambda: f64| build(lambda).is_some_and(|b| tolerance.map_or(true, |p| near_corner(&b) <= p));
+    let mut lambda = if fits(1.0) { 1.0 } else { largest(0.0, 1.0, fits) };
+    // … no larger than keeps the path at speed …
+    let floor = (MIN_TRIM / s_max).min(lambda);
+    if build(lambda).is_some_and(|b| radius(&b) > wanted) {
+        lambda = smallest(floor, lambda, |l| build(l).is_some_and(|b| radius(&b) >= wanted));
+    }
+    // … and shrunk until the whole blend also stays within P of the programmed path (a
+    // biarc between arcs can bulge slightly beyond the corner's distance).
     for _ in 0..20 {
         if !(lambda > 0.0) {
             return None;
         }
         let s = lambda * s_max;
-        let (pieces, _) = build(lambda)?;
-        let tail = c1.sub(c1.len() - s, c1.len());
-        let head = c2.sub(0.0, s);
-        let dev = path_deviation(&pieces, &tail, &head);
+        let pieces = build(lambda)?;
+        let Some(p) = tolerance else {
+            return Some(Blend { s1: s, s2: s, pieces });
+        };
+        let dev = path_deviation(&pieces, &c1.sub(c1.len() - s, c1.len()), &c2.sub(0.0, s));
         if dev <= p * (1.0 - DEVIATION_MARGIN) {
             return Some(Blend { s1: s, s2: s, pieces });
         }
         lambda *= 0.99 * p * (1.0 - DEVIATION_MARGIN) / dev;
     }
     None
+}
+
+/// Bisection steps of the trim searches.
+const SEARCH_STEPS: u32 = 30;
+
+/// The largest `x` in `(lo, hi]` with `ok(x)`, for `ok` true below some threshold (`lo` if
+/// none is found).
+fn largest(mut lo: f64, mut hi: f64, ok: impl Fn(f64) -> bool) -> f64 {
+    for _ in 0..SEARCH_STEPS {
+        let mid = 0.5 * (lo + hi);
+        if ok(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
+}
+
+/// The smallest `x` in `[lo, hi]` with `ok(x)`, for `ok` true above some threshold and at `hi`.
+fn smallest(mut lo: f64, mut hi: f64, ok: impl Fn(f64) -> bool) -> f64 {
+    if ok(lo) {
+        return lo;
+    }
+    for _ in 0..SEARCH_STEPS {
+        let mid = 0.5 * (lo + hi);
+        if ok(mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    hi
 }
 
 /// Samples along the blend when looking for its largest deviation from the path.
@@ -187,7 +213,7 @@ mod tests {
     fn a_square_corner_blend_passes_exactly_p_from_the_corner() {
         let c1 = line([0.0, 0.0, 0.0], [100.0, 0.0, 0.0]);
         let c2 = line([100.0, 0.0, 0.0], [100.0, 100.0, 0.0]);
-        let b = blend(&c1, 50.0, &c2, 50.0, Some(1.0)).unwrap();
+        let b = blend(&c1, 50.0, &c2, 50.0, Some(1.0), f64::INFINITY).unwrap();
         assert_eq!(b.pieces.len(), 1);
         let dev = b.pieces[0].distance_to(Vec3::new(100.0, 0.0, 0.0));
         assert!((dev - 1.0).abs() < 1e-9, "{dev}");
@@ -199,12 +225,26 @@ mod tests {
     }
 
     #[test]
-    fn without_p_a_line_blend_uses_half_of_the_shorter_neighbour() {
+    fn without_p_a_line_blend_uses_half_of_the_shorter_neighbour_at_most() {
         let c1 = line([0.0, 0.0, 0.0], [10.0, 0.0, 0.0]);
         let c2 = line([10.0, 0.0, 0.0], [10.0, 4.0, 0.0]);
-        let b = blend(&c1, 5.0, &c2, 2.0, None).unwrap();
+        let b = blend(&c1, 5.0, &c2, 2.0, None, f64::INFINITY).unwrap();
         assert_eq!(b.s1, 2.0);
         assert_eq!(b.s2, 2.0);
+    }
+
+    #[test]
+    fn a_blend_is_no_larger_than_keeps_the_speed() {
+        let c1 = line([0.0, 0.0, 0.0], [100.0, 0.0, 0.0]);
+        let c2 = line([100.0, 0.0, 0.0], [100.0, 100.0, 0.0]);
+        // A square corner: radius = ℓ, so wanting radius 3 trims 3 (P10 would allow 24).
+        let b = blend(&c1, 50.0, &c2, 50.0, Some(10.0), 3.0).unwrap();
+        assert!((b.s1 - 3.0).abs() < 1e-12);
+        assert!((b.pieces[0].arc_radius().unwrap() - 3.0).abs() < 1e-9);
+        // A nearly straight join still gets a blend of at least the minimum trim.
+        let c3 = line([100.0, 0.0, 0.0], [200.0, 1e-7, 0.0]);
+        let b = blend(&c1, 50.0, &c3, 50.0, None, 1.0).unwrap();
+        assert!(b.s1 >= MIN_TRIM && b.pieces[0].len() > 1e-7);
     }
 
     #[test]
@@ -222,7 +262,7 @@ mod tests {
             )
             .unwrap(),
         );
-        let b = blend(&c1, c1.len() / 2.0, &c2, c2.len() / 2.0, Some(0.5)).unwrap();
+        let b = blend(&c1, c1.len() / 2.0, &c2, c2.len() / 2.0, Some(0.5), f64::INFINITY).unwrap();
         assert_eq!(b.pieces.len(), 2);
         let corner = Vec3::new(110.0, 110.0, 0.0);
         let dev = b.pieces.iter().map(|p| p.distance_to(corner)).fold(f64::INFINITY, f64::min);

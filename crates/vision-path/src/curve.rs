@@ -294,6 +294,14 @@ impl Curve {
         }
     }
 
+    /// The radius of an arc (its start radius for spirals), infinity for a line, machine units.
+    pub(crate) fn radius(&self) -> f64 {
+        match self {
+            Curve::Line(_) => f64::INFINITY,
+            Curve::Arc(a) => a.r0,
+        }
+    }
+
     /// Whether this is a helical arc (its corners are not blended).
     pub(crate) fn is_helix(&self) -> bool {
         matches!(self, Curve::Arc(a) if a.is_helix())

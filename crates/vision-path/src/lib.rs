@@ -8,6 +8,12 @@
 //! * Output: [`Setpoints`], an iterator of [`Step`]s — one [`Setpoint`] per period
 //!   (time, position, velocity, line) with [`TimedEvent`]s in between — holding only a
 //!   bounded look-ahead window, so a million-line program streams in constant memory.
+//! * G-code: [`GcodeItems`] runs a program on the `vision-gcode` interpreter one line at a
+//!   time and turns its events into items (the table of what becomes what is on the type).
+//! * The seed's API: [`PathFollower`] — configure the axis → drive map ([`AxisMap`]) and the
+//!   tools ([`ToolTable`]), `start` / [`PathFollower::start_gcode`] with a maximum path
+//!   acceleration, poll [`PathFollower::status`], [`PathFollower::stop`]; setpoints (as drive
+//!   positions) and output writes go to a [`MotionSink`], in real time or scaled ([`Pace`]).
 //!
 //! Units: positions in the machine unit (mm or inch, whatever the machine runs in), feed `F`
 //! in machine units per minute (G94), speeds in units/s, accelerations in units/s² (the seed's
@@ -69,9 +75,10 @@
 //! * **G64 P** is "the path passes within P of the programmed corner point" (the seed's
 //!   wording) *and* stays within P of the programmed path. Two lines: one circular arc,
 //!   exact. A corner with an arc: a biarc, searched by bisection and checked against the
-//!   programmed path. A blend uses at most half of each neighbouring segment. G64 without P:
-//!   only the half-segment rule. `P0` behaves as G61. Corners sharper than π − 10⁻⁶ (reversals)
-//!   and corners touching a helix stop instead of blending.
+//!   programmed path. A blend is only as large as keeps the neighbours' speed (its centripetal
+//!   limit allows it), and never uses more than half of a neighbouring segment. G64 without P:
+//!   only those two rules. `P0` behaves as G61. Corners sharper than π − 10⁻⁶ (reversals) and
+//!   corners touching a helix stop instead of blending.
 //! * The mode that governs a corner is the one of the segment that *ends* there.
 //! * **Events** (M3/M4/M5, T/M6) and **dwells** are exact stops: the machine comes to rest at
 //!   the programmed point, the event is emitted right after that setpoint, motion resumes.
@@ -81,6 +88,14 @@
 //! * **Stop** ([`Setpoints::stop`]) brakes along the path at each piece's tangential limit
 //!   (so the full bounds still hold) and ends at rest; later events do not happen.
 //! * **Rapids** (G0) move at the axes' maximum speed (any F on the line is only remembered).
+//! * **M0/M1** and user M-codes the interpreter reports (no handler) are exact stops (a
+//!   zero-second dwell); the follower does not wait for an operator.
+//! * **Tools**: a bare M3/M4/M5 acts on the tool of the last `T… M6`; `M3 $n` acts on `n`
+//!   without selecting it (as the interpreter does). Switching a tool on first drives its
+//!   other direction inactive. When a followed path ends — completed, stopped or failed —
+//!   every output it drove active is driven inactive (as M2/M30 stop a spindle).
+//! * **Axes**: a move of an axis no drive is mapped to is an error at its line; the follower's
+//!   `start_gcode` checks the whole program (streaming, no handler) before anything moves.
 //! * Arcs whose start and end radius differ slightly (rounded G-code) are spirals with
 //!   linearly changing radius; start and end coincide (seen along the axis) = a full circle.
 

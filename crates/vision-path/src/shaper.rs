@@ -10,7 +10,7 @@ use std::f64::consts::PI;
 use crate::blend::blend;
 use crate::curve::{ArcCurve, ArcProblem, Curve, LineCurve};
 use crate::input::{Event, Item, PathMode, Segment, Shape, Speed};
-use crate::limits::{speed_and_accel, Limits};
+use crate::limits::{speed_and_accel, Limits, NORMAL_SHARE};
 use crate::vec3::Vec3;
 use crate::PathError;
 
@@ -205,7 +205,13 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Shaper<I> {
             PathMode::Blend { tolerance } if tolerance != Some(0.0) && theta < PI - REVERSAL_MARGIN => Some(tolerance),
             _ => None,
         };
-        let blended = tolerance.and_then(|tol| blend(&prev.curve, prev.half, &next.curve, next.half, tol));
+        // The blend radius at which the centripetal limit allows the neighbours' own speed: a
+        // larger blend would deviate more without being faster.
+        let speed = |c: &Curve, requested| speed_and_accel(&c.factors(), requested, &self.limits).0;
+        let target = speed(&prev.curve, prev.requested).min(speed(&next.curve, next.requested));
+        let weakest = self.limits.axes.iter().map(|a| a.max_accel).fold(self.limits.max_path_accel, f64::min);
+        let wanted = target * target / (NORMAL_SHARE * weakest);
+        let blended = tolerance.and_then(|tol| blend(&prev.curve, prev.half, &next.curve, next.half, tol, wanted));
         match blended {
             Some(b) => {
                 let len = prev.curve.len();
