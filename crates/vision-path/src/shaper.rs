@@ -23,6 +23,9 @@ const REVERSAL_MARGIN: f64 = 1e-6;
 const MIN_PIECE: f64 = 1e-12;
 /// The longest accepted dwell, seconds.
 const MAX_DWELL: f64 = 1e6;
+/// The largest accepted coordinate, feed and tolerance magnitude (machine units, units/min):
+/// far beyond any machine, well within the range where lengths and squares stay finite.
+const MAX_COORDINATE: f64 = 1e9;
 
 /// A stretch of path with its own speed cap and tangential acceleration.
 #[derive(Debug, Clone, PartialEq)]
@@ -141,8 +144,14 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Shaper<I> {
         let line = seg.line;
         let start = Vec3::from(seg.start);
         let end = Vec3::from(seg.end);
-        if !start.is_finite() || !end.is_finite() {
+        if !(start.is_finite() && end.is_finite()) {
             return Err(invalid(line, "a coordinate is not a finite number".into()));
+        }
+        if start.max_abs().max(end.max_abs()) > MAX_COORDINATE {
+            return Err(invalid(
+                line,
+                format!("a coordinate is beyond ±{MAX_COORDINATE:e} units; check the program's units"),
+            ));
         }
         let gap = (start - self.pos).norm();
         if gap > 1e-9 * (1.0 + self.pos.max_abs()) {
@@ -157,13 +166,13 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Shaper<I> {
         }
         let requested = match seg.speed {
             Speed::Rapid => f64::INFINITY,
-            Speed::Feed(f) if f.is_finite() && f > 0.0 => f / 60.0,
+            Speed::Feed(f) if f > 0.0 && f <= MAX_COORDINATE => f / 60.0,
             Speed::Feed(f) => {
                 return Err(invalid(line, format!("feed F{f} is invalid; program a feed greater than 0")))
             }
         };
         if let PathMode::Blend { tolerance: Some(p) } = seg.mode {
-            if !(p.is_finite() && p >= 0.0) {
+            if !(0.0..=MAX_COORDINATE).contains(&p) {
                 return Err(invalid(line, format!("G64 P{p} is invalid; the tolerance must be 0 or more")));
             }
         }
@@ -175,8 +184,8 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Shaper<I> {
             Shape::Arc(arc) => {
                 let centre = Vec3::from(arc.centre);
                 let normal = Vec3::from(arc.normal);
-                if !centre.is_finite() || !normal.is_finite() {
-                    return Err(invalid(line, "an arc centre or normal is not a finite number".into()));
+                if !(centre.is_finite() && normal.is_finite()) || centre.max_abs() > MAX_COORDINATE {
+                    return Err(invalid(line, "an arc centre or normal is not a finite number in range".into()));
                 }
                 match ArcCurve::program(self.pos, end, centre, normal, arc.clockwise, arc.turns) {
                     Ok(a) => Curve::Arc(a),

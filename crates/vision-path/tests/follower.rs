@@ -117,9 +117,9 @@ fn stop_brakes_to_rest_on_the_path_and_switches_the_tool_off() {
     let mut follower = seed_follower();
     let mut p = Program::new([0.0; 3], PathMode::ExactStop);
     p.item(tool(ToolState::Clockwise));
-    p.line_to([2000.0, 0.0, 0.0], Speed::Feed(24000.0));
+    p.line_to([20000.0, 0.0, 0.0], Speed::Feed(24000.0));
     let rec = Recorder::default();
-    // 20× real time: the 4-second move takes 0.2 s of wall clock.
+    // 20× real time: the 50-second move would take 2.5 s of wall clock; it is stopped early.
     follower.start(p.items.into_iter().map(Ok), 1000.0, rec.clone(), Pace::Scaled(20.0)).unwrap();
     let mut moving = false;
     for _ in 0..200 {
@@ -134,7 +134,7 @@ fn stop_brakes_to_rest_on_the_path_and_switches_the_tool_off() {
     assert_eq!(follower.start(Vec::new(), 1000.0, Recorder::default(), Pace::Unpaced), Err(PathError::AlreadyRunning));
     let status = follower.stop();
     assert_eq!(status.state, RunState::Stopped);
-    assert!(status.position[0] > 0.0 && status.position[0] < 2000.0, "{:?}", status.position);
+    assert!(status.position[0] > 0.0 && status.position[0] < 20000.0, "{:?}", status.position);
     let record = rec.0.lock().unwrap();
     let last = record.setpoints.last().unwrap().0;
     assert_eq!(last.velocity, [0.0; 3]);
