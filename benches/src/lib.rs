@@ -1,7 +1,9 @@
-//! Deterministic inputs shared by the benchmarks (no RNG crate: a fixed LCG), and the Keyence
-//! benchmarks' emulated camera, raw client and in-memory camera ([`keyence`]).
+//! Deterministic inputs shared by the benchmarks (no RNG crate: a fixed LCG), the Keyence
+//! benchmarks' emulated camera, raw client and in-memory camera ([`keyence`]), and the path
+//! planner's programs ([`path`]).
 
 pub mod keyence;
+pub mod path;
 
 use std::fmt::Write as _;
 

@@ -5,6 +5,7 @@
 
 mod emulate;
 mod fit;
+mod plan;
 mod run;
 mod trace;
 mod trigger;
@@ -29,6 +30,9 @@ enum Command {
     Run(run::RunArgs),
     /// Run a G-code program with no vision handler and print the machine events it produces.
     Trace(trace::TraceArgs),
+    /// Plan a G-code program's motion (interpreter + path planner): the cycle time, and every
+    /// setpoint as CSV with --csv.
+    Plan(plan::PlanArgs),
     /// Serve an emulated Keyence VS camera (the simulated camera) on 127.0.0.1 until Ctrl-C.
     Emulate(emulate::EmulateArgs),
     /// Trigger a Keyence camera (real or emulated) once and print the decoded reading.
@@ -57,6 +61,7 @@ fn main() -> ExitCode {
         Command::Fit(args) => fit::run(&args),
         Command::Run(args) => run::run(&args),
         Command::Trace(args) => trace::run(&args),
+        Command::Plan(args) => plan::run(&args),
         Command::Emulate(args) => emulate::run(&args),
         Command::Trigger(args) => trigger::run(&args),
     };

@@ -30,21 +30,28 @@ pub(crate) struct TraceArgs {
     program: PathBuf,
 }
 
+/// The machine unit on the command line (shared with `plan`).
 #[derive(Debug, Clone, Copy, ValueEnum)]
-enum UnitArg {
+pub(crate) enum UnitArg {
     /// Inches (the manual's router).
     In,
     /// Millimetres.
     Mm,
 }
 
+impl UnitArg {
+    pub(crate) fn unit(self) -> LengthUnit {
+        match self {
+            UnitArg::In => LengthUnit::Inch,
+            UnitArg::Mm => LengthUnit::Millimetre,
+        }
+    }
+}
+
 /// Runs the subcommand, printing as it goes; returns nothing more to print.
 pub(crate) fn run(args: &TraceArgs) -> Result<String, Failure> {
     let text = read_program(&args.program)?;
-    let unit = match args.machine_units {
-        UnitArg::In => LengthUnit::Inch,
-        UnitArg::Mm => LengthUnit::Millimetre,
-    };
+    let unit = args.machine_units.unit();
     let mut interp = Interpreter::new(InterpreterConfig::new(unit));
     let stdout = std::io::stdout();
     let mut out = Output { writer: BufWriter::new(stdout.lock()), json: args.json, broken: false };
@@ -66,7 +73,7 @@ pub(crate) fn run(args: &TraceArgs) -> Result<String, Failure> {
     }
 }
 
-fn read_program(path: &PathBuf) -> Result<String, Failure> {
+pub(crate) fn read_program(path: &PathBuf) -> Result<String, Failure> {
     let bytes = if path.as_os_str() == "-" {
         let mut b = Vec::new();
         std::io::stdin().read_to_end(&mut b).map_err(|e| Failure::Input(format!("cannot read standard input: {e}")))?;

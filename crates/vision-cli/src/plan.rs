@@ -1,0 +1,167 @@
+//! `mach-vision plan`: run a G-code program through the interpreter and the path planner and
+//! report its cycle time; optionally write every setpoint (and event) as CSV.
+//!
+//! Streams: the setpoints are never collected, so memory stays bounded however long the
+//! program is (the program text itself is read whole, as `trace` does).
+
+use std::fmt::Write as _;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::PathBuf;
+
+use clap::Args;
+use vision_gcode::{Interpreter, InterpreterConfig};
+use vision_math::{LengthUnit, MM_PER_INCH};
+use vision_path::{Event, GcodeItems, Limits, OutputCommand, PathError, PlanConfig, Setpoints, Step, ToolState};
+
+use crate::trace::{read_program, UnitArg};
+use crate::Failure;
+
+/// Arguments of `mach-vision plan`.
+#[derive(Debug, Args)]
+pub(crate) struct PlanArgs {
+    /// Maximum path acceleration, machine units/s² (the seed's `maxPathAcceleration`).
+    #[arg(long)]
+    accel: f64,
+    /// Setpoint period, milliseconds.
+    #[arg(long, default_value_t = 1.0)]
+    period: f64,
+    /// Write every setpoint (time, line, position, velocity) and event to this CSV file.
+    #[arg(long)]
+    csv: Option<PathBuf>,
+    /// Every axis's maximum speed, machine units/s [default: 500 mm/s in the machine unit].
+    #[arg(long)]
+    max_speed: Option<f64>,
+    /// Every axis's maximum acceleration, machine units/s² [default: --accel].
+    #[arg(long)]
+    axis_accel: Option<f64>,
+    /// Feed (machine units/min) for feed moves before any F [default: none, such a move is an
+    /// error].
+    #[arg(long)]
+    default_feed: Option<f64>,
+    /// The machine's coordinate unit; the program's G20/G21 are converted.
+    #[arg(long, value_enum, default_value_t = UnitArg::In)]
+    machine_units: UnitArg,
+    /// The G-code program; standard input when `-`.
+    program: PathBuf,
+}
+
+/// Runs the subcommand; returns the report.
+pub(crate) fn run(args: &PlanArgs) -> Result<String, Failure> {
+    let unit = args.machine_units.unit();
+    let max_speed = args.max_speed.unwrap_or(match unit {
+        LengthUnit::Millimetre => 500.0,
+        LengthUnit::Inch => 500.0 / MM_PER_INCH,
+    });
+    let limits = Limits::uniform(args.accel, max_speed, args.axis_accel.unwrap_or(args.accel));
+    let text = read_program(&args.program)?;
+    let mut config = InterpreterConfig::new(unit);
+    config.default_feed = args.default_feed;
+    let items = GcodeItems::new(Interpreter::new(config), text.as_str());
+    let plan = PlanConfig::new(limits, args.period / 1000.0, items.start_position());
+    let stream = Setpoints::new(&plan, items).map_err(|e| Failure::Input(e.to_string()))?;
+    let mut csv = match &args.csv {
+        Some(path) => Some(Csv::create(path)?),
+        None => None,
+    };
+    let name = args.program.display();
+    let (mut setpoints, mut events) = (0u64, 0u64);
+    let mut last = None;
+    for step in stream {
+        let step = step.map_err(|e| failure(&name.to_string(), &e))?;
+        if let Some(csv) = &mut csv {
+            csv.step(&step)?;
+        }
+        match step {
+            Step::Setpoint(s) => {
+                setpoints += 1;
+                last = Some(s);
+            }
+            Step::Event(_) => events += 1,
+        }
+    }
+    if let Some(csv) = csv {
+        csv.finish()?;
+    }
+    let u = unit.short_name();
+    let mut report = String::new();
+    // Writing to a String cannot fail.
+    let _ = writeln!(
+        report,
+        "# {name}: {} ms setpoints, path acceleration {} {u}/s², axes {} {u}/s and {} {u}/s²",
+        args.period, limits.max_path_accel, limits.axes[0].max_speed, limits.axes[0].max_accel
+    );
+    if let Some(s) = last {
+        let p = s.position;
+        let _ = writeln!(report, "cycle time  {:.3} s", s.time);
+        let _ = writeln!(report, "setpoints   {setpoints}");
+        let _ = writeln!(report, "events      {events}");
+        let _ = writeln!(report, "end         X{:.4} Y{:.4} Z{:.4} (line {})", p[0], p[1], p[2], s.line);
+    }
+    Ok(report)
+}
+
+/// A program that failed at a line is a failed run (exit 1); anything else is bad input.
+fn failure(name: &str, e: &PathError) -> Failure {
+    match e.line() {
+        Some(_) => Failure::Run(format!("{name}: {e}")),
+        None => Failure::Input(format!("{name}: {e}")),
+    }
+}
+
+/// The CSV writer: `time_s,line,x,y,z,vx,vy,vz,event`; events are rows of their own with the
+/// position columns empty.
+struct Csv {
+    path: PathBuf,
+    out: BufWriter<File>,
+}
+
+impl Csv {
+    fn create(path: &PathBuf) -> Result<Csv, Failure> {
+        let file = File::create(path).map_err(|e| Failure::Input(format!("cannot create {}: {e}", path.display())))?;
+        let mut csv = Csv { path: path.clone(), out: BufWriter::new(file) };
+        csv.write("time_s,line,x,y,z,vx,vy,vz,event\n")?;
+        Ok(csv)
+    }
+
+    fn write(&mut self, s: &str) -> Result<(), Failure> {
+        self.out
+            .write_all(s.as_bytes())
+            .map_err(|e| Failure::Input(format!("cannot write {}: {e}", self.path.display())))
+    }
+
+    fn step(&mut self, step: &Step) -> Result<(), Failure> {
+        let row = match step {
+            Step::Setpoint(s) => {
+                let (p, v) = (s.position, s.velocity);
+                format!("{:.6},{},{},{},{},{},{},{},\n", s.time, s.line, p[0], p[1], p[2], v[0], v[1], v[2])
+            }
+            Step::Event(e) => format!("{:.6},{},,,,,,,{}\n", e.time, e.line, event_text(e.event)),
+        };
+        self.write(&row)
+    }
+
+    fn finish(mut self) -> Result<(), Failure> {
+        self.out.flush().map_err(|e| Failure::Input(format!("cannot write {}: {e}", self.path.display())))
+    }
+}
+
+fn event_text(e: Event) -> String {
+    match e {
+        Event::ToolChange(t) => format!("M6 T{t}"),
+        Event::Output(OutputCommand::Tool { tool, state }) => {
+            let code = match state {
+                ToolState::Clockwise => "M3",
+                ToolState::CounterClockwise => "M4",
+                ToolState::Off => "M5",
+            };
+            match tool {
+                Some(t) => format!("{code} ${t}"),
+                None => code.to_string(),
+            }
+        }
+        Event::Output(OutputCommand::Port { device, port, on }) => {
+            format!("{} A{device} P{port}", if on { "M3" } else { "M5" })
+        }
+    }
+}

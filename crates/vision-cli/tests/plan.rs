@@ -1,0 +1,95 @@
+//! `mach-vision plan` through the built binary.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_mach-vision"))
+}
+
+/// Writes `text` to a file of the test's own in the target's scratch directory.
+fn program(name: &str, text: &str) -> PathBuf {
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    std::fs::write(&path, text).expect("write the program");
+    path
+}
+
+fn plan(args: &[&str], path: &PathBuf) -> Output {
+    bin().arg("plan").args(args).arg(path).output().expect("run")
+}
+
+fn report_value(text: &str, key: &str) -> String {
+    text.lines()
+        .find_map(|l| l.strip_prefix(key))
+        .map(|v| v.trim().to_string())
+        .unwrap_or_else(|| panic!("no {key} in\n{text}"))
+}
+
+#[test]
+fn the_g61_square_takes_four_trapezoids() {
+    let square = program("square.nc", "G91 G21 G61\nG0 X500\nY500\nX-500\nY-500\n");
+    let out = plan(&["--accel", "1000", "--max-speed", "500", "--machine-units", "mm"], &square);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout).unwrap();
+    // Each side: 0.5 s up, 0.5 s at 500 mm/s, 0.5 s down.
+    assert_eq!(report_value(&text, "cycle time"), "6.000 s");
+    assert_eq!(report_value(&text, "setpoints"), "6001");
+    assert_eq!(report_value(&text, "end"), "X0.0000 Y0.0000 Z0.0000 (line 5)");
+}
+
+#[test]
+fn the_seed_example_writes_every_setpoint_and_its_tool_events_to_csv() {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/path/seed002-example.nc");
+    let csv = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("seed.csv");
+    let csv_arg = csv.to_str().unwrap();
+    let out = plan(&["--accel", "1000", "--machine-units", "mm", "--period", "2", "--csv", csv_arg], &path);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let setpoints: usize = report_value(&text, "setpoints").parse().unwrap();
+    let rows = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = rows.lines();
+    assert_eq!(lines.next(), Some("time_s,line,x,y,z,vx,vy,vz,event"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let events: Vec<&Vec<&str>> = rows.iter().filter(|r| !r[8].is_empty()).collect();
+    assert_eq!(events.len(), 2);
+    assert_eq!((events[0][1], events[0][8]), ("12", "M3 $1"));
+    assert_eq!((events[1][1], events[1][8]), ("18", "M5 $1"));
+    assert_eq!(rows.len() - events.len(), setpoints);
+    let last = rows.last().unwrap();
+    assert_eq!(&last[2..5], &["1", "1", "0"]);
+    let times: Vec<f64> = rows.iter().filter(|r| r[8].is_empty()).map(|r| r[0].parse().unwrap()).collect();
+    assert!(times.windows(2).all(|w| (w[1] - w[0] - 0.002).abs() < 1e-9), "a fixed 2 ms period");
+    assert_eq!(report_value(&text, "cycle time"), format!("{:.3} s", times.last().unwrap()));
+}
+
+#[test]
+fn a_program_that_fails_at_a_line_exits_1_and_names_the_line() {
+    let path = program("bad.nc", "G21 G90\nG0 X10\nG1 X20 Q7 F100\n");
+    let out = plan(&["--accel", "1000", "--machine-units", "mm"], &path);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(err.contains("line 3") && err.contains("Q"), "{err}");
+    let path = program("no_feed.nc", "G21 G90\nG1 X10\n");
+    let out = plan(&["--accel", "1000", "--machine-units", "mm"], &path);
+    assert_eq!(out.status.code(), Some(1), "a feed move before any F");
+    let out = plan(&["--accel", "1000", "--machine-units", "mm", "--default-feed", "600"], &path);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(report_value(&String::from_utf8(out.stdout).unwrap(), "end"), "X10.0000 Y0.0000 Z0.0000 (line 2)");
+}
+
+#[test]
+fn bad_input_exits_2() {
+    let path = program("ok.nc", "G21 G0 X1\n");
+    for args in [
+        &["--accel", "-5"][..],
+        &["--accel", "1000", "--period", "0"],
+        &["--accel", "1000", "--max-speed", "nan"],
+        &["--accel", "1000", "--csv", "/nonexistent-dir/x.csv"],
+    ] {
+        let out = plan(args, &path);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+        assert!(!out.stderr.is_empty());
+    }
+    let out = plan(&["--accel", "1000"], &PathBuf::from("/nonexistent/program.nc"));
+    assert_eq!(out.status.code(), Some(2));
+}

@@ -1,0 +1,151 @@
+//! The planner's input: motion segments in machine coordinates and the non-motion items
+//! between them, in program order.
+//!
+//! Lengths are machine units (whatever unit the machine runs in, mm or inch), feeds are
+//! machine units per minute (G94), times are seconds.
+
+/// One item of a program, as the planner consumes it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Item {
+    /// A straight or circular move.
+    Move(Segment),
+    /// `G4 P…`: stay at rest for `seconds` (≥ 0). The path stops exactly before it.
+    Dwell {
+        /// Source line.
+        line: usize,
+        /// Dwell time, seconds.
+        seconds: f64,
+    },
+    /// A tool / output change or a tool selection. The path stops exactly at the programmed
+    /// point, the event is emitted there, and motion resumes.
+    Event {
+        /// Source line.
+        line: usize,
+        /// What happens.
+        event: Event,
+    },
+    /// End of program (`M2`/`M30` or the end of the text). Nothing after it is read.
+    End {
+        /// Source line.
+        line: usize,
+    },
+}
+
+impl Item {
+    /// The item's source line.
+    pub fn line(&self) -> usize {
+        match self {
+            Item::Move(s) => s.line,
+            Item::Dwell { line, .. } | Item::Event { line, .. } | Item::End { line } => *line,
+        }
+    }
+}
+
+/// One motion segment, start and end in machine coordinates (machine units).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Segment {
+    /// Source line.
+    pub line: usize,
+    /// Where the move starts (must be where the previous move ended), machine units.
+    pub start: [f64; 3],
+    /// Where the move ends, machine units.
+    pub end: [f64; 3],
+    /// Straight line or arc.
+    pub shape: Shape,
+    /// Programmed feed or rapid.
+    pub speed: Speed,
+    /// The path-control mode governing the corner at the *end* of this segment.
+    pub mode: PathMode,
+}
+
+/// The geometry between `start` and `end`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Shape {
+    /// A straight line (G0/G1).
+    Line,
+    /// A circular or helical arc (G2/G3).
+    Arc(ArcShape),
+}
+
+/// A G2/G3 arc: centre, plane normal, direction and turns. Any displacement along the normal
+/// between start and end makes it a helix; a start and end radius that differ slightly
+/// (rounded G-code) make it a spiral whose radius changes linearly with angle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArcShape {
+    /// The centre, machine units (its component along `normal` is ignored).
+    pub centre: [f64; 3],
+    /// The plane normal, any length: +Z for G17, +Y for G18, +X for G19. Counter-clockwise
+    /// (G3) is a positive rotation about it (right-hand rule).
+    pub normal: [f64; 3],
+    /// `true` for G2 (clockwise seen from the tip of `normal`), `false` for G3.
+    pub clockwise: bool,
+    /// LinuxCNC's `P` word: 1 = the plain arc, each extra count adds a full turn. When start
+    /// and end coincide (seen along the normal), the plain arc is a full circle.
+    pub turns: u32,
+}
+
+/// How fast a segment is asked to move.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Speed {
+    /// G1/G2/G3 at feed F, machine units per minute (G94).
+    Feed(f64),
+    /// G0: as fast as the axes allow.
+    Rapid,
+}
+
+/// The path-control mode at a corner (the end of a segment).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PathMode {
+    /// G61: stop exactly at every corner; tangent (e.g. co-linear) joins do not stop.
+    ExactStop,
+    /// G64: blend corners with circular arcs. `tolerance` (the `P` word, machine units) is the
+    /// largest distance the path may pass from the programmed corner point; `None` (G64
+    /// without `P`) limits the blend only by the neighbouring segments (at most half of each).
+    /// `Some(0.0)` behaves as G61.
+    Blend {
+        /// Maximum distance from the programmed corner, machine units.
+        tolerance: Option<f64>,
+    },
+}
+
+/// A non-motion event that happens at its place in the path.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Event {
+    /// M3/M4/M5: switch a tool or a digital output.
+    Output(OutputCommand),
+    /// `T<n> M6`: select tool `n` for later M3/M4/M5 without `$n`.
+    ToolChange(u32),
+}
+
+/// An output command as programmed (resolved to digital outputs by [`crate::ToolTable`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OutputCommand {
+    /// The implicit form `M3 [$n]`, `M4 [$n]`, `M5 [$n]`: drive a configured tool.
+    Tool {
+        /// `$n`; `None` means the tool selected by the last `T… M6`.
+        tool: Option<u32>,
+        /// What to do with it.
+        state: ToolState,
+    },
+    /// The explicit form `M3/M4 A<device> P<port>` (drive the port active) or `M5 A P`
+    /// (drive it inactive).
+    Port {
+        /// Digital I/O module device ID.
+        device: u32,
+        /// Port on the module.
+        port: u32,
+        /// `true` for M3/M4 (active), `false` for M5.
+        on: bool,
+    },
+}
+
+/// The state a tool is driven to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ToolState {
+    /// M3.
+    Clockwise,
+    /// M4.
+    CounterClockwise,
+    /// M5.
+    Off,
+}

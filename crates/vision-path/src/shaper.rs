@@ -1,0 +1,267 @@
+//! Program items → path pieces with their speed caps, and the stops between them.
+//!
+//! Each corner is decided here, with the next segment in hand: tangent joins pass, G61
+//! corners stop, G64 corners are blended (the neighbours are trimmed and blend arcs inserted).
+//! Dwells, events, the end and errors become stops that carry their payload.
+
+use std::collections::VecDeque;
+use std::f64::consts::PI;
+
+use crate::blend::blend;
+use crate::curve::{ArcCurve, ArcProblem, Curve, LineCurve};
+use crate::input::{Event, Item, PathMode, Segment, Shape, Speed};
+use crate::limits::{speed_and_accel, Limits, NORMAL_SHARE};
+use crate::vec3::Vec3;
+use crate::PathError;
+
+/// Two pieces whose tangents differ by at most this angle (radians) join without stopping;
+/// the velocity jump it allows (`v·θ`) is far below anything a drive can see.
+pub(crate) const TANGENT_TOLERANCE: f64 = 1e-9;
+/// Corners sharper than `π − this` (a reversal) stop instead of blending.
+const REVERSAL_MARGIN: f64 = 1e-6;
+/// Pieces shorter than this (machine units) are dropped.
+const MIN_PIECE: f64 = 1e-12;
+/// The longest accepted dwell, seconds.
+const MAX_DWELL: f64 = 1e6;
+/// The largest accepted coordinate, feed and tolerance magnitude (machine units, units/min):
+/// far beyond any machine, well within the range where lengths and squares stay finite.
+const MAX_COORDINATE: f64 = 1e9;
+
+/// A stretch of path with its own speed cap and tangential acceleration.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Piece {
+    pub(crate) curve: Curve,
+    pub(crate) line: usize,
+    /// Speed cap of the path parameter, units/s.
+    pub(crate) v_cap: f64,
+    /// Tangential acceleration, units/s².
+    pub(crate) accel: f64,
+}
+
+/// Why the path comes to rest between two pieces.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum Marker {
+    /// A corner that is not blended (G61, a reversal, or a blend that does not fit).
+    Corner,
+    /// G4.
+    Dwell { line: usize, seconds: f64 },
+    /// An output or tool change.
+    Event { line: usize, event: Event },
+    /// The end of the program.
+    End { line: usize },
+    /// The program failed here.
+    Error(PathError),
+}
+
+/// What the shaper produces.
+// Pieces are the common case; boxing them would allocate once per piece.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum Shaped {
+    Piece(Piece),
+    Stop(Marker),
+}
+
+struct Pending {
+    curve: Curve,
+    /// Half the untrimmed length: the most either corner may trim.
+    half: f64,
+    line: usize,
+    requested: f64,
+    mode: PathMode,
+}
+
+pub(crate) struct Shaper<I> {
+    input: I,
+    limits: Limits,
+    pos: Vec3,
+    last_line: usize,
+    pending: Option<Pending>,
+    out: VecDeque<Shaped>,
+    done: bool,
+}
+
+impl<I: Iterator<Item = Result<Item, PathError>>> Shaper<I> {
+    pub(crate) fn new(input: I, limits: Limits, start: Vec3) -> Shaper<I> {
+        Shaper { input, limits, pos: start, last_line: 0, pending: None, out: VecDeque::new(), done: false }
+    }
+
+    /// The next piece or stop; the stream always ends with `Stop(End)` or `Stop(Error)`.
+    pub(crate) fn next(&mut self) -> Option<Shaped> {
+        loop {
+            if let Some(s) = self.out.pop_front() {
+                return Some(s);
+            }
+            if self.done {
+                return None;
+            }
+            match self.input.next() {
+                None => self.finish(Marker::End { line: self.last_line }),
+                Some(Err(e)) => self.finish(Marker::Error(e)),
+                Some(Ok(item)) => {
+                    self.last_line = item.line();
+                    if let Err(e) = self.take(item) {
+                        self.finish(Marker::Error(e));
+                    }
+                }
+            }
+        }
+    }
+
+    fn finish(&mut self, marker: Marker) {
+        self.flush();
+        self.out.push_back(Shaped::Stop(marker));
+        self.done = true;
+    }
+
+    fn take(&mut self, item: Item) -> Result<(), PathError> {
+        match item {
+            Item::Move(seg) => self.take_move(&seg),
+            Item::Dwell { line, seconds } => {
+                if !(seconds.is_finite() && (0.0..=MAX_DWELL).contains(&seconds)) {
+                    return Err(invalid(
+                        line,
+                        format!("dwell of {seconds} s is invalid; use 0 to {MAX_DWELL} seconds"),
+                    ));
+                }
+                self.flush();
+                self.out.push_back(Shaped::Stop(Marker::Dwell { line, seconds }));
+                Ok(())
+            }
+            Item::Event { line, event } => {
+                self.flush();
+                self.out.push_back(Shaped::Stop(Marker::Event { line, event }));
+                Ok(())
+            }
+            Item::End { line } => {
+                self.finish(Marker::End { line });
+                Ok(())
+            }
+        }
+    }
+
+    fn take_move(&mut self, seg: &Segment) -> Result<(), PathError> {
+        let line = seg.line;
+        let start = Vec3::from(seg.start);
+        let end = Vec3::from(seg.end);
+        if !(start.is_finite() && end.is_finite()) {
+            return Err(invalid(line, "a coordinate is not a finite number".into()));
+        }
+        if start.max_abs().max(end.max_abs()) > MAX_COORDINATE {
+            return Err(invalid(
+                line,
+                format!("a coordinate is beyond ±{MAX_COORDINATE:e} units; check the program's units"),
+            ));
+        }
+        let gap = (start - self.pos).norm();
+        if gap > 1e-9 * (1.0 + self.pos.max_abs()) {
+            return Err(invalid(
+                line,
+                format!(
+                    "the move starts at {:?} but the previous one ended at {:?}; segments must be continuous",
+                    seg.start,
+                    <[f64; 3]>::from(self.pos)
+                ),
+            ));
+        }
+        let requested = match seg.speed {
+            Speed::Rapid => f64::INFINITY,
+            Speed::Feed(f) if f > 0.0 && f <= MAX_COORDINATE => f / 60.0,
+            Speed::Feed(f) => {
+                return Err(invalid(line, format!("feed F{f} is invalid; program a feed greater than 0")))
+            }
+        };
+        if let PathMode::Blend { tolerance: Some(p) } = seg.mode {
+            if !(0.0..=MAX_COORDINATE).contains(&p) {
+                return Err(invalid(line, format!("G64 P{p} is invalid; the tolerance must be 0 or more")));
+            }
+        }
+        let curve = match seg.shape {
+            Shape::Line => match LineCurve::new(self.pos, end) {
+                Some(l) => Curve::Line(l),
+                None => return Ok(()), // no motion
+            },
+            Shape::Arc(arc) => {
+                let centre = Vec3::from(arc.centre);
+                let normal = Vec3::from(arc.normal);
+                if !(centre.is_finite() && normal.is_finite()) || centre.max_abs() > MAX_COORDINATE {
+                    return Err(invalid(line, "an arc centre or normal is not a finite number in range".into()));
+                }
+                match ArcCurve::program(self.pos, end, centre, normal, arc.clockwise, arc.turns) {
+                    Ok(a) => Curve::Arc(a),
+                    Err(p) => return Err(invalid(line, arc_message(p).into())),
+                }
+            }
+        };
+        self.pos = end;
+        let next = Pending { half: curve.len() / 2.0, curve, line, requested, mode: seg.mode };
+        match self.pending.take() {
+            None => self.pending = Some(next),
+            Some(prev) => self.corner(prev, next),
+        }
+        Ok(())
+    }
+
+    /// Decide the corner between `prev` (ending) and `next` (starting), emit `prev`.
+    fn corner(&mut self, prev: Pending, mut next: Pending) {
+        let theta = prev.curve.end_tangent().angle_to(next.curve.start_tangent());
+        if theta <= TANGENT_TOLERANCE {
+            self.emit(prev.curve, prev.line, prev.requested);
+            self.pending = Some(next);
+            return;
+        }
+        let tolerance = match prev.mode {
+            PathMode::Blend { tolerance } if tolerance != Some(0.0) && theta < PI - REVERSAL_MARGIN => Some(tolerance),
+            _ => None,
+        };
+        // The blend radius at which the centripetal limit allows the neighbours' own speed: a
+        // larger blend would deviate more without being faster.
+        let speed = |c: &Curve, requested| speed_and_accel(&c.factors(), requested, &self.limits).0;
+        let target = speed(&prev.curve, prev.requested).min(speed(&next.curve, next.requested));
+        let weakest = self.limits.axes.iter().map(|a| a.max_accel).fold(self.limits.max_path_accel, f64::min);
+        let wanted = target * target / (NORMAL_SHARE * weakest);
+        let blended = tolerance.and_then(|tol| blend(&prev.curve, prev.half, &next.curve, next.half, tol, wanted));
+        match blended {
+            Some(b) => {
+                let len = prev.curve.len();
+                self.emit(prev.curve.sub(0.0, len - b.s1), prev.line, prev.requested);
+                let requested = prev.requested.min(next.requested);
+                for piece in b.pieces {
+                    self.emit(piece, prev.line, requested);
+                }
+                next.curve = next.curve.sub(b.s2, next.curve.len());
+            }
+            None => {
+                self.emit(prev.curve, prev.line, prev.requested);
+                self.out.push_back(Shaped::Stop(Marker::Corner));
+            }
+        }
+        self.pending = Some(next);
+    }
+
+    fn flush(&mut self) {
+        if let Some(p) = self.pending.take() {
+            self.emit(p.curve, p.line, p.requested);
+        }
+    }
+
+    fn emit(&mut self, curve: Curve, line: usize, requested: f64) {
+        if curve.len() < MIN_PIECE {
+            return;
+        }
+        let (v_cap, accel) = speed_and_accel(&curve.factors(), requested, &self.limits);
+        self.out.push_back(Shaped::Piece(Piece { curve, line, v_cap, accel }));
+    }
+}
+
+fn invalid(line: usize, reason: String) -> PathError {
+    PathError::InvalidItem { line, reason }
+}
+
+fn arc_message(p: ArcProblem) -> &'static str {
+    match p {
+        ArcProblem::NoPlane => "the arc's plane normal is zero; select a plane (G17, G18 or G19)",
+        ArcProblem::OnCentre => "the arc has zero radius (start or end on the centre); check I, J, K",
+        ArcProblem::NoTurns => "an arc needs at least 1 turn (P1); check the P word",
+    }
+}

@@ -1,0 +1,191 @@
+//! Shared helpers: program builders and an independent model of the programmed path.
+#![allow(dead_code, unreachable_pub)]
+
+use std::f64::consts::TAU;
+
+use vision_path::{ArcShape, Item, PathMode, PlanConfig, Segment, Setpoint, Setpoints, Shape, Speed, Step};
+
+/// `PROPTEST_CASES` overrides a property's default case count (for deeper local runs).
+pub fn cases(default: u32) -> u32 {
+    std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(default)
+}
+
+pub const PLANES: [[f64; 3]; 3] = [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]];
+
+/// Builds a continuous program segment by segment.
+pub struct Program {
+    pub items: Vec<Item>,
+    pub pos: [f64; 3],
+    pub line: usize,
+    pub mode: PathMode,
+}
+
+impl Program {
+    pub fn new(start: [f64; 3], mode: PathMode) -> Program {
+        Program { items: Vec::new(), pos: start, line: 0, mode }
+    }
+
+    fn next_line(&mut self) -> usize {
+        self.line += 1;
+        self.line
+    }
+
+    pub fn line_to(&mut self, end: [f64; 3], speed: Speed) -> &mut Program {
+        let line = self.next_line();
+        self.items.push(Item::Move(Segment { line, start: self.pos, end, shape: Shape::Line, speed, mode: self.mode }));
+        self.pos = end;
+        self
+    }
+
+    /// An arc about `centre` in the plane with normal `PLANES[plane]`, sweeping `angle`
+    /// radians (positive = counter-clockwise), rising `rise` along the normal.
+    pub fn arc(&mut self, plane: usize, centre: [f64; 3], angle: f64, rise: f64, speed: Speed) -> &mut Program {
+        let n = PLANES[plane];
+        let axis = if angle >= 0.0 { n } else { neg(n) };
+        let r = sub(self.pos, centre);
+        let r_par = dot(r, n);
+        let r_perp = sub(r, scale(n, r_par));
+        let e2 = cross(axis, r_perp);
+        let a = angle.abs();
+        let rotated = add(scale(r_perp, a.cos()), scale(e2, a.sin()));
+        let end = add(add(centre, rotated), scale(n, r_par + rise));
+        let line = self.next_line();
+        self.items.push(Item::Move(Segment {
+            line,
+            start: self.pos,
+            end,
+            shape: Shape::Arc(ArcShape { centre, normal: n, clockwise: angle < 0.0, turns: 1 }),
+            speed,
+            mode: self.mode,
+        }));
+        self.pos = end;
+        self
+    }
+
+    /// A G2/G3 in the XY plane (G17) to `end` about `centre`, exactly as programmed.
+    pub fn g17_arc_to(&mut self, end: [f64; 3], centre: [f64; 3], clockwise: bool, speed: Speed) -> &mut Program {
+        let line = self.next_line();
+        self.items.push(Item::Move(Segment {
+            line,
+            start: self.pos,
+            end,
+            shape: Shape::Arc(ArcShape { centre, normal: [0.0, 0.0, 1.0], clockwise, turns: 1 }),
+            speed,
+            mode: self.mode,
+        }));
+        self.pos = end;
+        self
+    }
+
+    pub fn item(&mut self, f: impl FnOnce(usize) -> Item) -> &mut Program {
+        let line = self.next_line();
+        self.items.push(f(line));
+        self
+    }
+}
+
+pub struct Run {
+    pub setpoints: Vec<Setpoint>,
+    pub events: Vec<vision_path::TimedEvent>,
+}
+
+pub fn run(config: &PlanConfig, items: &[Item]) -> Run {
+    let mut setpoints = Vec::new();
+    let mut events = Vec::new();
+    for step in Setpoints::from_items(config, items.to_vec()).expect("valid config") {
+        match step.expect("the program is valid") {
+            Step::Setpoint(s) => setpoints.push(s),
+            Step::Event(e) => events.push(e),
+        }
+    }
+    Run { setpoints, events }
+}
+
+pub fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+pub fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+pub fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+pub fn scale(a: [f64; 3], k: f64) -> [f64; 3] {
+    [a[0] * k, a[1] * k, a[2] * k]
+}
+pub fn neg(a: [f64; 3]) -> [f64; 3] {
+    scale(a, -1.0)
+}
+pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+pub fn norm(a: [f64; 3]) -> f64 {
+    dot(a, a).sqrt()
+}
+pub fn unit(a: [f64; 3]) -> [f64; 3] {
+    scale(a, 1.0 / norm(a))
+}
+
+/// The rotation axis (counter-clockwise positive) and sweep of a planar arc segment.
+fn arc_axis_sweep(seg: &Segment, arc: &ArcShape) -> ([f64; 3], [f64; 3], f64) {
+    let n = unit(arc.normal);
+    let axis = if arc.clockwise { neg(n) } else { n };
+    let rs = sub(seg.start, arc.centre);
+    let rs = sub(rs, scale(axis, dot(rs, axis)));
+    let re = sub(seg.end, arc.centre);
+    let re = sub(re, scale(axis, dot(re, axis)));
+    let e1 = unit(rs);
+    let e2 = cross(axis, e1);
+    let mut sweep = dot(re, e2).atan2(dot(re, e1));
+    if sweep <= 0.0 {
+        sweep += TAU;
+    }
+    (axis, rs, sweep)
+}
+
+/// The unit tangent of a segment at its start (`at_end = false`) or end.
+pub fn tangent(seg: &Segment, at_end: bool) -> [f64; 3] {
+    match seg.shape {
+        Shape::Line => unit(sub(seg.end, seg.start)),
+        Shape::Arc(arc) => {
+            let (axis, rs, sweep) = arc_axis_sweep(seg, &arc);
+            let r = if at_end { sub(seg.end, arc.centre) } else { rs };
+            let r = sub(r, scale(axis, dot(r, axis)));
+            let rise = dot(sub(seg.end, seg.start), axis);
+            let t = add(scale(cross(axis, unit(r)), norm(rs) * sweep), scale(axis, rise));
+            unit(t)
+        }
+    }
+}
+
+/// Distance from `p` to a line or a planar (non-helical) arc segment.
+pub fn distance(p: [f64; 3], seg: &Segment) -> f64 {
+    match seg.shape {
+        Shape::Line => {
+            let d = sub(seg.end, seg.start);
+            let t = (dot(sub(p, seg.start), d) / dot(d, d)).clamp(0.0, 1.0);
+            norm(sub(p, add(seg.start, scale(d, t))))
+        }
+        Shape::Arc(arc) => {
+            let (axis, rs, sweep) = arc_axis_sweep(seg, &arc);
+            let e1 = unit(rs);
+            let e2 = cross(axis, e1);
+            let v = sub(p, arc.centre);
+            let h = dot(sub(p, seg.start), axis);
+            let vp = sub(v, scale(axis, dot(v, axis)));
+            let mut phi = dot(vp, e2).atan2(dot(vp, e1));
+            if phi < 0.0 {
+                phi += TAU;
+            }
+            if phi <= sweep {
+                (h * h + (norm(vp) - norm(rs)).powi(2)).sqrt()
+            } else {
+                norm(sub(p, seg.start)).min(norm(sub(p, seg.end)))
+            }
+        }
+    }
+}
+
+pub fn segments(items: &[Item]) -> Vec<&Segment> {
+    items.iter().filter_map(|i| if let Item::Move(s) = i { Some(s) } else { None }).collect()
+}

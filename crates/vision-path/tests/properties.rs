@@ -1,0 +1,275 @@
+//! The planner's promises, checked on random programs against an independent model of the
+//! programmed path:
+//!
+//! * no step between setpoints exceeds speed × period (path speed per line, and per axis);
+//! * no second difference exceeds acceleration × period² (path and per axis), within the
+//!   stated tolerance `(1 + 1e-6)·a·T² + 1e-9` units;
+//! * G61 reaches every corner exactly (bitwise) with zero velocity;
+//! * G64 P never strays more than P from the programmed path;
+//! * the path ends exactly (bitwise) at the programmed end, at rest;
+//! * events happen at rest at their programmed point, dwells last their time;
+//! * a single straight move takes the analytic trapezoid (or triangle) time, rounded up to
+//!   the next period.
+
+mod common;
+
+use common::{distance, norm, segments, sub, tangent, Program, Run, PLANES};
+use proptest::prelude::*;
+use vision_path::{AxisLimits, Event, Item, Limits, OutputCommand, PathMode, PlanConfig, Speed, ToolState};
+
+const REL: f64 = 1e-6;
+const ABS: f64 = 1e-9;
+
+#[derive(Debug, Clone)]
+enum Op {
+    Line {
+        to: [f64; 3],
+        rapid: bool,
+    },
+    /// A short move relative to the current point (stresses blends and the look-ahead).
+    Nudge([f64; 3]),
+    Arc {
+        plane: usize,
+        dir: f64,
+        radius: f64,
+        angle: f64,
+        rise: f64,
+    },
+    Dwell(f64),
+    Tool(bool),
+}
+
+fn op(helix: bool) -> impl Strategy<Value = Op> {
+    let coord = -50.0..50.0f64;
+    prop_oneof![
+        6 => ([coord.clone(), coord.clone(), coord], prop::bool::weighted(0.2))
+            .prop_map(|(to, rapid)| Op::Line { to, rapid }),
+        3 => prop::array::uniform3(-1.0..1.0f64).prop_map(Op::Nudge),
+        3 => (0..3usize, 0.0..std::f64::consts::TAU, 1.0..30.0f64, -6.0..6.0f64, -5.0..5.0f64)
+            .prop_filter("arcs sweep at least 0.1 rad", |(_, _, _, a, _)| a.abs() > 0.1)
+            .prop_map(move |(plane, dir, radius, angle, rise)| Op::Arc {
+                plane, dir, radius, angle, rise: if helix { rise } else { 0.0 },
+            }),
+        1 => (0.0..0.05f64).prop_map(Op::Dwell),
+        1 => any::<bool>().prop_map(Op::Tool),
+    ]
+}
+
+fn limits() -> impl Strategy<Value = (Limits, f64)> {
+    (
+        200.0..5000.0f64,
+        prop::array::uniform3((50.0..800.0f64, 200.0..8000.0f64)),
+        prop::sample::select(vec![0.001, 0.002, 0.004]),
+    )
+        .prop_map(|(a, axes, period)| {
+            let axes = axes.map(|(max_speed, max_accel)| AxisLimits { max_speed, max_accel });
+            (Limits { max_path_accel: a, axes }, period)
+        })
+}
+
+fn build(ops: &[Op], mode: PathMode, feed: f64) -> Vec<Item> {
+    let mut p = Program::new([1.0, 2.0, 3.0], mode);
+    for op in ops {
+        match *op {
+            Op::Line { to, rapid } => {
+                p.line_to(to, if rapid { Speed::Rapid } else { Speed::Feed(feed) });
+            }
+            Op::Nudge(d) => {
+                p.line_to(common::add(p.pos, d), Speed::Feed(feed));
+            }
+            Op::Arc { plane, dir, radius, angle, rise } => {
+                // The centre lies `radius` away from the current point, in the arc's plane.
+                let (b1, b2) = match plane {
+                    0 => ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
+                    1 => ([0.0, 0.0, 1.0], [1.0, 0.0, 0.0]),
+                    _ => ([0.0, 1.0, 0.0], [0.0, 0.0, 1.0]),
+                };
+                let off = common::add(common::scale(b1, radius * dir.cos()), common::scale(b2, radius * dir.sin()));
+                let centre = common::add(p.pos, off);
+                debug_assert!(common::dot(off, PLANES[plane]).abs() < 1e-12);
+                p.arc(plane, centre, angle, rise, Speed::Feed(feed));
+            }
+            Op::Dwell(seconds) => {
+                p.item(|line| Item::Dwell { line, seconds });
+            }
+            Op::Tool(on) => {
+                let state = if on { ToolState::Clockwise } else { ToolState::Off };
+                p.item(|line| Item::Event { line, event: Event::Output(OutputCommand::Tool { tool: Some(1), state }) });
+            }
+        }
+    }
+    p.item(|line| Item::End { line });
+    p.items
+}
+
+/// The speed each line asks for, units/s (rapid and non-motion lines: unbounded here; the
+/// axis limits bound them).
+fn requested(items: &[Item], line: usize) -> f64 {
+    items.iter().find(|i| i.line() == line).map_or(f64::INFINITY, |i| match i {
+        Item::Move(s) => match s.speed {
+            Speed::Feed(f) => f / 60.0,
+            Speed::Rapid => f64::INFINITY,
+        },
+        _ => 0.0,
+    })
+}
+
+fn check_kinematics(run: &Run, items: &[Item], limits: &Limits, period: f64) -> Result<(), TestCaseError> {
+    let sp = &run.setpoints;
+    for w in sp.windows(2) {
+        prop_assert!((w[1].time - w[0].time - period).abs() < 1e-9, "fixed period");
+        let d = sub(w[1].position, w[0].position);
+        let v = requested(items, w[0].line).max(requested(items, w[1].line));
+        prop_assert!(
+            norm(d) <= v * period * (1.0 + REL) + ABS,
+            "step {} > {} at t = {}",
+            norm(d),
+            v * period,
+            w[1].time
+        );
+        for (i, axis) in limits.axes.iter().enumerate() {
+            prop_assert!(
+                d[i].abs() <= axis.max_speed * period * (1.0 + REL) + ABS,
+                "axis {i} step {} at t = {}",
+                d[i],
+                w[1].time
+            );
+        }
+    }
+    let t2 = period * period;
+    for w in sp.windows(3) {
+        let dd = sub(sub(w[2].position, w[1].position), sub(w[1].position, w[0].position));
+        let bound = limits.max_path_accel * t2;
+        prop_assert!(
+            norm(dd) <= bound * (1.0 + REL) + ABS,
+            "second difference {} > {} at t = {} (line {})",
+            norm(dd),
+            bound,
+            w[1].time,
+            w[1].line
+        );
+        for (i, axis) in limits.axes.iter().enumerate() {
+            prop_assert!(
+                dd[i].abs() <= axis.max_accel * t2 * (1.0 + REL) + ABS,
+                "axis {i} second difference {} at t = {}",
+                dd[i],
+                w[1].time
+            );
+        }
+    }
+    Ok(())
+}
+
+fn check_end_events_dwells(run: &Run, items: &[Item], period: f64) -> Result<(), TestCaseError> {
+    let last = run.setpoints.last().expect("at least one setpoint");
+    let end = segments(items).last().map_or([1.0, 2.0, 3.0], |s| s.end);
+    prop_assert_eq!(last.position, end, "the path ends exactly at the programmed end");
+    prop_assert_eq!(last.velocity, [0.0; 3]);
+    let mut pos = [1.0, 2.0, 3.0];
+    let mut events = run.events.iter();
+    for item in items {
+        match item {
+            Item::Move(s) => pos = s.end,
+            Item::Event { line, event } => {
+                let ev = events.next().expect("every event is emitted");
+                prop_assert_eq!(ev.line, *line);
+                prop_assert_eq!(ev.event, *event);
+                let at = run.setpoints.iter().find(|s| s.time == ev.time).expect("a setpoint at the event's time");
+                prop_assert_eq!(at.position, pos, "events happen at the programmed point");
+                prop_assert_eq!(at.velocity, [0.0; 3]);
+            }
+            Item::Dwell { line, seconds } if *seconds > 0.0 => {
+                let held: Vec<_> = run.setpoints.iter().filter(|s| s.line == *line).collect();
+                let span = held.last().unwrap().time + period - held[0].time;
+                prop_assert!(span >= seconds - 1e-9 && span <= seconds + period + 1e-9, "dwell {seconds} held {span}");
+                prop_assert!(held.iter().all(|s| s.position == pos));
+            }
+            _ => {}
+        }
+    }
+    prop_assert!(events.next().is_none());
+    Ok(())
+}
+
+fn config(limits: Limits, period: f64) -> PlanConfig {
+    PlanConfig::new(limits, period, [1.0, 2.0, 3.0])
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: common::cases(160), ..ProptestConfig::default() })]
+
+    #[test]
+    fn exact_stop_programs_obey_the_limits_and_stop_at_every_corner(
+        ops in prop::collection::vec(op(true), 1..16),
+        (limits, period) in limits(),
+        feed in 1200.0..30000.0f64,
+    ) {
+        let items = build(&ops, PathMode::ExactStop, feed);
+        let run = common::run(&config(limits, period), &items);
+        check_kinematics(&run, &items, &limits, period)?;
+        check_end_events_dwells(&run, &items, period)?;
+        for w in items.windows(2) {
+            if let (Item::Move(a), Item::Move(b)) = (&w[0], &w[1]) {
+                let turn = common::dot(tangent(a, true), tangent(b, false)).clamp(-1.0, 1.0).acos();
+                if turn > 1e-6 {
+                    let hit = run.setpoints.iter().any(|s| s.position == a.end && s.velocity == [0.0; 3]);
+                    prop_assert!(hit, "no rest setpoint at the G61 corner {:?} (line {})", a.end, a.line);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn blended_programs_obey_the_limits_and_stay_within_p(
+        ops in prop::collection::vec(op(false), 1..16),
+        (limits, period) in limits(),
+        feed in 1200.0..30000.0f64,
+        p in prop::option::weighted(0.8, 0.01..5.0f64),
+    ) {
+        let items = build(&ops, PathMode::Blend { tolerance: p }, feed);
+        let run = common::run(&config(limits, period), &items);
+        check_kinematics(&run, &items, &limits, period)?;
+        check_end_events_dwells(&run, &items, period)?;
+        if let Some(p) = p {
+            let segs = segments(&items);
+            for s in &run.setpoints {
+                let d = segs.iter().map(|g| distance(s.position, g)).fold(f64::INFINITY, f64::min);
+                prop_assert!(segs.is_empty() || d <= p + 1e-9, "{:?} (line {}) is {d} from the path, P = {p}", s.position, s.line);
+            }
+        }
+    }
+
+    #[test]
+    fn a_single_move_takes_the_analytic_trapezoid_time(
+        to in prop::array::uniform3(-300.0..300.0f64),
+        (limits, period) in limits(),
+        feed in prop::option::of(600.0..60000.0f64),
+    ) {
+        let start = [1.0, 2.0, 3.0];
+        let d = sub(to, start);
+        let len = norm(d);
+        prop_assume!(len > 1.0);
+        let mut v = feed.map_or(f64::INFINITY, |f| f / 60.0);
+        let mut a = limits.max_path_accel;
+        for (di, axis) in d.iter().zip(&limits.axes) {
+            let c = di.abs() / len;
+            if c > 0.0 {
+                v = v.min(axis.max_speed / c);
+                a = a.min(axis.max_accel / c);
+            }
+        }
+        let analytic = if len >= v * v / a { len / v + v / a } else { 2.0 * (len / a).sqrt() };
+        let mut p = Program::new(start, PathMode::ExactStop);
+        p.line_to(to, feed.map_or(Speed::Rapid, Speed::Feed));
+        let summary = vision_path::Setpoints::from_items(&config(limits, period), p.items.clone())
+            .unwrap()
+            .run_to_end()
+            .unwrap();
+        prop_assert!(summary.cycle_time >= analytic - 1e-9 && summary.cycle_time < analytic + period + 1e-9,
+            "planned {} vs analytic {analytic}", summary.cycle_time);
+        if analytic >= 100.0 * period {
+            prop_assert!((summary.cycle_time - analytic).abs() <= 0.01 * analytic);
+        }
+        prop_assert_eq!(summary.end, to);
+    }
+}
