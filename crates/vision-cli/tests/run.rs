@@ -59,6 +59,9 @@ fn all_seven_example_programs_run_on_the_built_in_world() {
     assert_eq!(cal["sheet"], 1);
     assert!((f(&cal["sheet_scale"][0]) - 1.0008).abs() < 3e-4 && (f(&cal["sheet_scale"][1]) - 1.0012).abs() < 3e-4);
     assert!(f(&cal["verify_max"]) < 0.005, "{cal}");
+    // The cycle time includes the VisionTriggerSettleSec (0.25 s) dwell after every move.
+    let moves = r["programs"][0]["moves"].as_u64().expect("moves");
+    assert!(f(&r["programs"][0]["cycle_time_s"]) > 0.25 * f64::from(u32::try_from(moves).expect("few")), "{r}");
     let truth = &r["programs"][0]["calibration_truth"];
     assert!(f(&truth["k_relative"]) < 2e-3 && f(&truth["offset_error"]) < 1e-3, "{truth}");
 

@@ -156,6 +156,28 @@ pub struct MachineSetup {
     /// The cutting tools: their true offsets, which the tool table also holds.
     #[serde(default, rename = "tool")]
     pub tools: Vec<Tool>,
+    /// Fastest speed of each axis (rapids), world unit per second (default 8 in/s =
+    /// 203.2 mm/s). Used for cycle times.
+    #[serde(default)]
+    pub max_speed: Option<f64>,
+    /// Largest acceleration, of the path and of each axis, world unit per second² (default
+    /// 20 in/s² = 508 mm/s²). Used for cycle times.
+    #[serde(default)]
+    pub max_accel: Option<f64>,
+}
+
+/// Default axis speed, inch per second.
+const DEFAULT_MAX_SPEED_IN: f64 = 8.0;
+/// Default acceleration, inch per second².
+const DEFAULT_MAX_ACCEL_IN: f64 = 20.0;
+
+impl MachineSetup {
+    /// `(max_speed, max_accel)` in `unit` per second and per second², defaults filled in.
+    #[must_use]
+    pub fn motion_limits(&self, unit: WorldUnit) -> (f64, f64) {
+        let f = LengthUnit::Inch.factor_to(unit.length_unit());
+        (self.max_speed.unwrap_or(DEFAULT_MAX_SPEED_IN * f), self.max_accel.unwrap_or(DEFAULT_MAX_ACCEL_IN * f))
+    }
 }
 
 fn default_camera_tool() -> u32 {
@@ -315,6 +337,12 @@ impl World {
             numbers.push(t.number);
             finite("machine.tool.offset", &t.offset)?;
         }
+        if let Some(v) = m.max_speed {
+            positive("machine.max_speed", v)?;
+        }
+        if let Some(v) = m.max_accel {
+            positive("machine.max_accel", v)?;
+        }
         if m.start_tool != 0 && !numbers.contains(&m.start_tool) {
             return invalid("machine.start_tool", "must be 0, the camera tool or a listed tool");
         }
@@ -409,6 +437,7 @@ mod tests {
         assert_eq!(bad(&|w| w.camera.noise_px = -1.0), "camera.noise_px");
         assert_eq!(bad(&|w| w.machine.camera_tool = 0), "machine.camera_tool");
         assert_eq!(bad(&|w| w.machine.start[2] = f64::INFINITY), "machine.start");
+        assert_eq!(bad(&|w| w.machine.max_accel = Some(0.0)), "machine.max_accel");
         assert!(bad(&|w| w.fixtures[0].sheet = Some(99)).contains("sheet"));
         assert!(bad(&|w| w.fixtures[0].scale = [0.0, 1.0]).contains("scale[0]"));
         assert!(bad(&|w| {
@@ -435,6 +464,7 @@ mod tests {
         assert_eq!(w.unit, WorldUnit::Inch);
         assert_eq!(w.camera.resolution, [1776, 1776]);
         assert_eq!(w.machine.camera_tool, 98);
+        assert_eq!(w.machine.motion_limits(WorldUnit::Millimetre), (8.0 * 25.4, 20.0 * 25.4));
         assert!(w.fixtures.is_empty());
     }
 }

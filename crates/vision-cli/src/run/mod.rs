@@ -13,9 +13,13 @@ use vision_driver_keyence::emulator::{DriverSource, Emulator, EmulatorHandle, Nu
 use vision_driver_sim::{Sim, SimMachine, World};
 use vision_gcode::{Event, RunOutcome};
 use vision_mcode::{system_clock, VisionHandler};
+use vision_path::{Limits, PlanConfig, Setpoints};
 
 use crate::Failure;
 use report::{calibration_truth, pound, steps, telemetry, ProgramReport, Report, Step};
+
+/// Setpoint period of the cycle-time planning, seconds.
+const CYCLE_PERIOD_S: f64 = 0.001;
 
 /// Which camera answers the triggers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -138,13 +142,17 @@ impl Session {
     /// Runs one program and reports it.
     fn run(&mut self, path: &Path) -> Result<ProgramReport, Failure> {
         let text = read(path, "program")?;
+        let start = self.machine.interpreter().machine_position();
         let mut moves = 0u64;
-        let mut count = |e: &Event| {
+        let mut items = Vec::new();
+        let mut collect = |e: &Event| {
             if matches!(e, Event::Linear(_) | Event::Arc(_)) {
                 moves += 1;
             }
+            items.push(vision_path::item(e, usize::try_from(e.line()).unwrap_or(usize::MAX)));
         };
-        let result = self.machine.run_program(&text, Some(&mut self.handler), &mut count);
+        let result = self.machine.run_program(&text, Some(&mut self.handler), &mut collect);
+        let cycle = self.cycle_time(items, [start.x, start.y, start.z]);
         let records = self.handler.take_records();
         let steps = steps(&records, &self.sim, &self.machine);
         let calibrated =
@@ -156,7 +164,26 @@ impl Session {
             Ok(RunOutcome::Ended { line, code }) => (format!("ended by M{code} at line {line}"), None),
             Err(e) => (format!("failed at line {}", e.line()), Some(e.to_string())),
         };
-        Ok(ProgramReport { program: path.display().to_string(), outcome, moves, steps, calibration_truth, error })
+        Ok(ProgramReport {
+            program: path.display().to_string(),
+            outcome,
+            moves,
+            cycle_time_s: cycle.as_ref().ok().copied(),
+            cycle_note: cycle.err(),
+            steps,
+            calibration_truth,
+            error,
+        })
+    }
+
+    /// The time the motion (moves, dwells, calibration settles) takes on the world's machine:
+    /// the path planner at a 1 ms period within `machine.max_speed` / `max_accel`.
+    fn cycle_time(&self, items: Vec<vision_path::Item>, start: [f64; 3]) -> Result<f64, String> {
+        let world = self.sim.world();
+        let (speed, accel) = world.machine.motion_limits(world.unit);
+        let config = PlanConfig::new(Limits::uniform(accel, speed, accel), CYCLE_PERIOD_S, start);
+        let stream = Setpoints::from_items(&config, items).map_err(|e| e.to_string())?;
+        stream.run_to_end().map(|s| s.cycle_time).map_err(|e| e.to_string())
     }
 }
 

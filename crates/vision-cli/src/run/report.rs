@@ -34,6 +34,10 @@ pub(crate) struct ProgramReport {
     pub outcome: String,
     /// Motion events (moves and arcs) the machine executed.
     pub moves: u64,
+    /// Cycle time of the motion and dwells on the world's machine (path planner), seconds.
+    pub cycle_time_s: Option<f64>,
+    /// Why there is no cycle time, if there is none.
+    pub cycle_note: Option<String>,
     /// Every Vision M-code, in order.
     pub steps: Vec<Step>,
     /// What the simulator knows about the calibration after the program, when it calibrated.

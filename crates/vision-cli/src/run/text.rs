@@ -54,7 +54,11 @@ pub(crate) fn render(r: &Report) -> String {
 }
 
 fn program(s: &mut String, p: &ProgramReport, world_unit: &str) {
-    let _ = writeln!(s, "\n== {}: {} ({} moves)", p.program, p.outcome, p.moves);
+    let cycle = p.cycle_time_s.map_or_else(|| "no cycle time".to_string(), |t| format!("cycle time {t:.3} s"));
+    let _ = writeln!(s, "\n== {}: {} ({} moves, {cycle})", p.program, p.outcome, p.moves);
+    if let Some(note) = &p.cycle_note {
+        let _ = writeln!(s, "  (cycle time: {note})");
+    }
     for step in &p.steps {
         self::step(s, step, world_unit);
     }
