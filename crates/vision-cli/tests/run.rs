@@ -232,8 +232,9 @@ fn bad_input_exits_2() {
     let dir = scratch("bad");
     let (code, err) = fails("missing", "", None);
     assert_eq!(code, Some(0), "an empty program runs: {err}");
-    let out = run(&[], &[&dir.join("nope.nc")]);
+    let out = run(&[], &[&example("01-calibrate-sheet.nc"), &dir.join("nope.nc")]);
     assert_eq!(out.status.code(), Some(2));
+    assert!(out.stdout.is_empty(), "nothing ran: every program is read first");
     assert!(String::from_utf8_lossy(&out.stderr).contains("cannot read program"));
     let world = write(&dir, "w.toml", "[camera]\nunits_per_pixel = -1\n");
     let out = run(&["--world", world.to_str().expect("utf-8")], &[&example("04-rectangle-fit.nc")]);

@@ -139,9 +139,8 @@ impl Session {
         Ok(Session { sim, machine, handler: VisionHandler::new(module, clock), camera, _emulator: emulator })
     }
 
-    /// Runs one program and reports it.
-    fn run(&mut self, path: &Path) -> Result<ProgramReport, Failure> {
-        let text = read(path, "program")?;
+    /// Runs one program (its text already read) and reports it.
+    fn run(&mut self, path: &Path, text: &str) -> ProgramReport {
         let start = self.machine.interpreter().machine_position();
         let mut moves = 0u64;
         let mut items = Vec::new();
@@ -151,7 +150,7 @@ impl Session {
             }
             items.push(vision_path::item(e, usize::try_from(e.line()).unwrap_or(usize::MAX)));
         };
-        let result = self.machine.run_program(&text, Some(&mut self.handler), &mut collect);
+        let result = self.machine.run_program(text, Some(&mut self.handler), &mut collect);
         let cycle = self.cycle_time(items, [start.x, start.y, start.z]);
         let records = self.handler.take_records();
         let steps = steps(&records, &self.sim, &self.machine);
@@ -164,7 +163,7 @@ impl Session {
             Ok(RunOutcome::Ended { line, code }) => (format!("ended by M{code} at line {line}"), None),
             Err(e) => (format!("failed at line {}", e.line()), Some(e.to_string())),
         };
-        Ok(ProgramReport {
+        ProgramReport {
             program: path.display().to_string(),
             outcome,
             moves,
@@ -173,7 +172,7 @@ impl Session {
             steps,
             calibration_truth,
             error,
-        })
+        }
     }
 
     /// The time the motion (moves, dwells, calibration settles) takes on the world's machine:
@@ -192,11 +191,14 @@ pub(crate) fn run(args: &RunArgs) -> Result<String, Failure> {
     if args.ip.is_some() && args.camera != CameraKind::Keyence {
         return Err(Failure::Input("--ip needs --camera keyence".into()));
     }
+    // Every program is read before anything runs: an unreadable file is bad input, not a
+    // session cut off halfway with its report lost.
+    let texts = args.programs.iter().map(|p| read(p, "program")).collect::<Result<Vec<_>, _>>()?;
     let mut session = Session::new(args)?;
     let mut programs = Vec::with_capacity(args.programs.len());
     let mut failure = None;
-    for path in &args.programs {
-        let report = session.run(path)?;
+    for (path, text) in args.programs.iter().zip(&texts) {
+        let report = session.run(path, text);
         if let Some(e) = &report.error {
             failure = Some(format!("{}: {e}", report.program));
         }
