@@ -65,7 +65,7 @@ fn newest_since(dir: &Path, since: SystemTime) -> Result<Option<PathBuf>, String
         if modified < since {
             continue;
         }
-        if best.as_ref().map_or(true, |(t, _)| modified > *t) {
+        if best.as_ref().is_none_or(|(t, _)| modified > *t) {
             best = Some((modified, entry.path()));
         }
     }

@@ -94,7 +94,7 @@ fn overlong_commands_get_02_and_are_discarded_whole() {
     let em = start(Emulator::builder());
     let mut c = Raw::connect(&em);
     let mut long = b"PL,1,".to_vec();
-    long.extend(std::iter::repeat(b'0').take(2000));
+    long.extend(std::iter::repeat_n(b'0', 2000));
     long.push(b'\r');
     c.send(&long);
     assert_eq!(c.line(), "ER,PL,02");

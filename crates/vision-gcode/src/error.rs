@@ -11,7 +11,7 @@ pub struct GCode(pub u16);
 
 impl fmt::Display for GCode {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        if self.0 % 10 == 0 {
+        if self.0.is_multiple_of(10) {
             write!(f, "G{}", self.0 / 10)
         } else {
             write!(f, "G{}.{}", self.0 / 10, self.0 % 10)

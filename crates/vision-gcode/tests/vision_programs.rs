@@ -150,7 +150,7 @@ fn run(name: &str, vision: &mut FakeVision) -> (Interpreter, Vec<Event>) {
     let mut events = Vec::new();
     let outcome = interp.run(&program(name), Some(vision), &mut events).unwrap_or_else(|e| panic!("{name}: {e}"));
     assert!(matches!(outcome, RunOutcome::Ended { code: 30, .. }), "{name}: {outcome:?}");
-    assert!(events.iter().all(|e| e.end().map_or(true, Xyz::is_finite)));
+    assert!(events.iter().all(|e| e.end().is_none_or(Xyz::is_finite)));
     (interp, events)
 }
 

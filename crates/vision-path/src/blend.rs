@@ -67,7 +67,7 @@ pub(crate) fn blend(
     let near_corner = |pieces: &[Curve]| pieces.iter().map(|p| p.distance_to(corner)).fold(f64::INFINITY, f64::min);
     let radius = |pieces: &[Curve]| pieces.iter().map(Curve::radius).fold(f64::INFINITY, f64::min);
     // The largest trim that gives a biarc within P of the corner …
-    let fits = |lambda: f64| build(lambda).is_some_and(|b| tolerance.map_or(true, |p| near_corner(&b) <= p));
+    let fits = |lambda: f64| build(lambda).is_some_and(|b| tolerance.is_none_or(|p| near_corner(&b) <= p));
     let mut lambda = if fits(1.0) { 1.0 } else { largest(0.0, 1.0, fits) };
     // … no larger than keeps the path at speed …
     let floor = (MIN_TRIM / s_max).min(lambda);
