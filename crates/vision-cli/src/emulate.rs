@@ -4,10 +4,9 @@ use std::io::Write as _;
 use std::path::PathBuf;
 
 use clap::Args;
-use vision_driver_keyence::emulator::{DriverSource, Emulator, NumberStyle, OutputFormat};
-use vision_driver_sim::{Sim, World};
+use vision_driver_sim::Sim;
 
-use crate::Failure;
+use crate::{world, Failure};
 
 /// Arguments of `mach-vision emulate`.
 #[derive(Debug, Args)]
@@ -23,20 +22,8 @@ pub(crate) struct EmulateArgs {
 
 /// Serves until the process is stopped (Ctrl-C). Prints one line with the address first.
 pub(crate) fn run(args: &EmulateArgs) -> Result<String, Failure> {
-    let world = match &args.world {
-        Some(path) => {
-            let text = std::fs::read_to_string(path)
-                .map_err(|e| Failure::Input(format!("cannot read world {}: {e}", path.display())))?;
-            World::from_toml(&text).map_err(|e| Failure::Input(format!("{}: {e}", path.display())))?
-        }
-        None => World::default_world(),
-    };
-    let sim = Sim::new(world).map_err(|e| Failure::Input(e.to_string()))?;
-    let emulator = Emulator::builder()
-        .source(DriverSource(Box::new(sim.camera())))
-        .format(OutputFormat::Full)
-        .numbers(NumberStyle::FixedWidth)
-        .bind(("127.0.0.1", args.port))
+    let sim = Sim::new(world::load(args.world.as_deref())?).map_err(|e| Failure::Input(e.to_string()))?;
+    let emulator = world::serve_camera(&sim, ("127.0.0.1", args.port))
         .map_err(|e| Failure::Input(format!("cannot listen on 127.0.0.1:{}: {e}", args.port)))?;
     let mut out = std::io::stdout();
     let _ = writeln!(out, "emulating a Keyence VS camera at {} (the simulated camera); Ctrl-C stops", emulator.addr());

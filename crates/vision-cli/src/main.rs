@@ -9,6 +9,7 @@ mod plan;
 mod run;
 mod trace;
 mod trigger;
+mod world;
 
 use std::process::ExitCode;
 
@@ -37,6 +38,11 @@ enum Command {
     Emulate(emulate::EmulateArgs),
     /// Trigger a Keyence camera (real or emulated) once and print the decoded reading.
     Trigger(trigger::TriggerArgs),
+}
+
+/// The text of file `path`; `what` names it in the error ("program", "world").
+pub(crate) fn read_text(path: &std::path::Path, what: &str) -> Result<String, Failure> {
+    std::fs::read_to_string(path).map_err(|e| Failure::Input(format!("cannot read {what} {}: {e}", path.display())))
 }
 
 /// A failure with the exit code it maps to.

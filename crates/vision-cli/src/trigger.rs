@@ -4,7 +4,7 @@ use std::time::Duration;
 
 use clap::Args;
 use serde_json::json;
-use vision_core::{Judgment, VisionError};
+use vision_core::VisionError;
 use vision_driver_keyence::{KeyenceConfig, KeyenceDriver};
 
 use crate::Failure;
@@ -36,11 +36,7 @@ pub(crate) fn run(args: &TriggerArgs) -> Result<String, Failure> {
     let mut driver = KeyenceDriver::new(config).map_err(|e| Failure::Input(e.to_string()))?;
     // Through VisionError, so the operator reads the manual's fix with the camera's words.
     let r = driver.measure().map_err(|e| Failure::Run(VisionError::Driver(e.into()).to_string()))?;
-    let judgment = match r.judgment {
-        Judgment::Ok => "OK",
-        Judgment::Ng => "NG",
-        Judgment::Unknown => "unknown",
-    };
+    let judgment = r.judgment.label();
     if args.json {
         let v = json!({
             "judgment": judgment, "count": r.count, "x_px": r.x_px, "y_px": r.y_px,

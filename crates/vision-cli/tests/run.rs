@@ -230,7 +230,7 @@ fn error_paths_exit_1_with_the_line_and_the_manuals_message() {
 #[test]
 fn bad_input_exits_2() {
     let dir = scratch("bad");
-    let (code, err) = fails("missing", "", None);
+    let (code, err) = fails("empty", "", None);
     assert_eq!(code, Some(0), "an empty program runs: {err}");
     let out = run(&[], &[&example("01-calibrate-sheet.nc"), &dir.join("nope.nc")]);
     assert_eq!(out.status.code(), Some(2));

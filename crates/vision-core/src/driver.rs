@@ -28,6 +28,16 @@ impl Judgment {
             Judgment::Unknown => -1,
         }
     }
+
+    /// How reports write it: `OK`, `NG` or `unknown`.
+    #[must_use]
+    pub fn label(self) -> &'static str {
+        match self {
+            Judgment::Ok => "OK",
+            Judgment::Ng => "NG",
+            Judgment::Unknown => "unknown",
+        }
+    }
 }
 
 /// One trigger's result in native camera pixels (origin top-left, +x right, +y down).
@@ -182,5 +192,6 @@ mod tests {
         assert_eq!(Judgment::Unknown.code(), -1);
         assert_eq!(Judgment::Ok.code(), 1);
         assert_eq!(Judgment::Ng.code(), 0);
+        assert_eq!([Judgment::Ok, Judgment::Ng, Judgment::Unknown].map(Judgment::label), ["OK", "NG", "unknown"]);
     }
 }

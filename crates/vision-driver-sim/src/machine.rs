@@ -4,15 +4,13 @@ use std::cell::RefCell;
 
 use nalgebra::Point3;
 use vision_core::{Machine, MachineError, Timestamp};
+use vision_gcode::params::WORK_OFFSET_BASE;
 use vision_gcode::{Event, EventSink, GcodeError, Interpreter, InterpreterConfig, MCodeHandler, RunOutcome, Tool, Xyz};
 use vision_math::{AlignmentChain, LengthUnit, Point2, Vector2};
 use vision_mcode::{Clock, ContextMachine};
 
 use crate::error::SimError;
 use crate::sim::Sim;
-
-/// The LinuxCNC parameter of G54's X (Y and Z follow).
-const G54_X_PARAM: u32 = 5221;
 
 /// Keeps the simulated head where the machine's motion left it.
 #[derive(Debug)]
@@ -104,7 +102,8 @@ impl SimMachine {
             .insert(world.machine.camera_tool, Tool { offset: Xyz::new(camera.x, camera.y, 0.0), outputs: None });
         let mut interp = Interpreter::new(config);
         for (i, v) in world.machine.work_offset.iter().enumerate() {
-            let n = G54_X_PARAM + u32::try_from(i).unwrap_or(0);
+            // G54's X, Y, Z at LinuxCNC's addresses.
+            let n = WORK_OFFSET_BASE + u32::try_from(i).unwrap_or(0);
             interp.set_param(n, *v).map_err(|e| gcode_error(&e))?;
         }
         let [x, y, z] = world.machine.start;
@@ -207,8 +206,7 @@ impl SimMachine {
                 .map_or(Vector2::zeros(), |t| Vector2::new(t.offset[0], t.offset[1]))
         };
         let point = spindle.xy() + tool_offset;
-        let zero = Vector2::new(world.machine.work_offset[0], world.machine.work_offset[1]);
-        let truth = f.true_point(nominal, unit) + zero;
+        let truth = world.work_to_machine(f.true_point(nominal, unit));
         Ok((point - truth).norm())
     }
 }

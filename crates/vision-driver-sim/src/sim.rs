@@ -44,13 +44,12 @@ impl State {
 /// Machine coordinates of every mark of the present fixtures.
 fn place(world: &World) -> Vec<TrueMark> {
     let unit = world.length_unit();
-    let zero = Vector2::new(world.machine.work_offset[0], world.machine.work_offset[1]);
     world
         .fixtures
         .iter()
         .filter(|f| f.present)
         .flat_map(|f| f.true_marks(unit))
-        .map(|m| TrueMark { position: m.position + zero, ..m })
+        .map(|m| TrueMark { position: world.work_to_machine(m.position), ..m })
         .collect()
 }
 

@@ -10,7 +10,7 @@
 
 use serde::{Deserialize, Serialize};
 use vision_core::cal_sheet;
-use vision_math::LengthUnit;
+use vision_math::{LengthUnit, Point2, Vector2};
 
 use crate::error::SimError;
 
@@ -276,6 +276,13 @@ impl World {
     #[must_use]
     pub fn length_unit(&self) -> LengthUnit {
         self.unit.length_unit()
+    }
+
+    /// Work point `p` (the frame of `machine.work_offset`, where fixtures are placed) in machine
+    /// coordinates; world unit.
+    #[must_use]
+    pub fn work_to_machine(&self, p: Point2<f64>) -> Point2<f64> {
+        p + Vector2::new(self.machine.work_offset[0], self.machine.work_offset[1])
     }
 
     /// Checks every value; the simulator relies on this.

@@ -196,10 +196,8 @@ fn random_world(case: u64, sigma: f64, print: f64) -> World {
     ];
     // Dot 1 anywhere in view: up to 0.8 in (≈ 400 px) off the optical axis, with the uncalibrated
     // camera tool (table offset 0) active, so the spindle is where the program position says.
-    let dot1 = w.fixtures[0].true_point(Point2::new(-2.5, -4.0), LengthUnit::Inch);
-    let axis = dot1
-        + Vector2::new(w.machine.work_offset[0], w.machine.work_offset[1])
-        + Vector2::new(rng.within(0.8), rng.within(0.8));
+    let dot1 = w.work_to_machine(w.fixtures[0].true_point(Point2::new(-2.5, -4.0), LengthUnit::Inch));
+    let axis = dot1 + Vector2::new(rng.within(0.8), rng.within(0.8));
     w.machine.start = [axis.x - w.camera.offset[0], axis.y - w.camera.offset[1], 0.0];
     w
 }

@@ -9,13 +9,13 @@ use std::path::{Path, PathBuf};
 
 use clap::{Args, ValueEnum};
 use vision_core::{DriverRegistry, Params, ProfileStore, VisionModule};
-use vision_driver_keyence::emulator::{DriverSource, Emulator, EmulatorHandle, NumberStyle, OutputFormat};
-use vision_driver_sim::{Sim, SimMachine, World};
+use vision_driver_keyence::emulator::EmulatorHandle;
+use vision_driver_sim::{Sim, SimMachine};
 use vision_gcode::{Event, RunOutcome};
 use vision_mcode::{system_clock, VisionHandler};
 use vision_path::{Limits, PlanConfig, Setpoints};
 
-use crate::Failure;
+use crate::{read_text, world, Failure};
 use report::{calibration_truth, pound, steps, telemetry, ProgramReport, Report, Step};
 
 /// Setpoint period of the cycle-time planning, seconds.
@@ -70,21 +70,13 @@ struct Session {
     _emulator: Option<EmulatorHandle>,
 }
 
-fn read(path: &Path, what: &str) -> Result<String, Failure> {
-    std::fs::read_to_string(path).map_err(|e| Failure::Input(format!("cannot read {what} {}: {e}", path.display())))
-}
-
 fn set(params: &mut Params, name: &str, value: impl Into<vision_core::ParamValue>) -> Result<(), Failure> {
     params.set(name, value).map_err(|e| Failure::Input(e.to_string()))
 }
 
 impl Session {
     fn new(args: &RunArgs) -> Result<Session, Failure> {
-        let world = match &args.world {
-            Some(path) => World::from_toml(&read(path, "world")?)
-                .map_err(|e| Failure::Input(format!("{}: {e}", path.display())))?,
-            None => World::default_world(),
-        };
+        let world = world::load(args.world.as_deref())?;
         let sim = Sim::new(world).map_err(|e| Failure::Input(e.to_string()))?;
         let camera_tool = i64::from(sim.world().machine.camera_tool);
 
@@ -114,11 +106,7 @@ impl Session {
                 (format!("Keyence VS at {ip}:{}", args.port), None)
             }
             (CameraKind::Keyence, None) => {
-                let emulator = Emulator::builder()
-                    .source(DriverSource(Box::new(sim.camera())))
-                    .format(OutputFormat::Full)
-                    .numbers(NumberStyle::FixedWidth)
-                    .bind("127.0.0.1:0")
+                let emulator = world::serve_camera(&sim, "127.0.0.1:0")
                     .map_err(|e| Failure::Input(format!("cannot start the loopback camera emulator: {e}")))?;
                 set(&mut params, "VisionDriver", "Keyence")?;
                 set(&mut params, "VisionIP", "127.0.0.1")?;
@@ -193,7 +181,7 @@ pub(crate) fn run(args: &RunArgs) -> Result<String, Failure> {
     }
     // Every program is read before anything runs: an unreadable file is bad input, not a
     // session cut off halfway with its report lost.
-    let texts = args.programs.iter().map(|p| read(p, "program")).collect::<Result<Vec<_>, _>>()?;
+    let texts = args.programs.iter().map(|p| read_text(p, "program")).collect::<Result<Vec<_>, _>>()?;
     let mut session = Session::new(args)?;
     let mut programs = Vec::with_capacity(args.programs.len());
     let mut failure = None;

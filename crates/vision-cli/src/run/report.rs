@@ -2,7 +2,7 @@
 //! truth. Serialised as-is for `--json`; [`super::text`] renders it for people.
 
 use serde::Serialize;
-use vision_core::{CalReport, Judgment, Machine, ParamValue, Params, Pieces, RunMode};
+use vision_core::{CalReport, Machine, ParamValue, Params, Pieces};
 use vision_driver_sim::{Sim, SimMachine};
 use vision_math::{LengthUnit, Point2, Vector2};
 use vision_mcode::{Outcome, Record};
@@ -189,14 +189,6 @@ fn v2(v: Vector2<f64>) -> [f64; 2] {
     [v.x, v.y]
 }
 
-fn judgment(j: Judgment) -> &'static str {
-    match j {
-        Judgment::Ok => "OK",
-        Judgment::Ng => "NG",
-        Judgment::Unknown => "unknown",
-    }
-}
-
 fn pieces(p: Pieces) -> &'static str {
     match p {
         Pieces::All => "all",
@@ -206,8 +198,11 @@ fn pieces(p: Pieces) -> &'static str {
     }
 }
 
-fn mode(m: RunMode) -> &'static str {
-    m.name()
+/// RMS length of `residuals` (0 for none).
+fn rms(residuals: &[Vector2<f64>]) -> f64 {
+    #[allow(clippy::cast_precision_loss)] // a handful of marks
+    let n = residuals.len().max(1) as f64;
+    (residuals.iter().map(Vector2::norm_squared).sum::<f64>() / n).sqrt()
 }
 
 /// The steps of one program's records, with the cut error of every fit.
@@ -220,7 +215,7 @@ pub(crate) fn steps(records: &[Record], sim: &Sim, machine: &SimMachine) -> Vec<
             Err(e) => Step::Refused { line, mcode: r.mcode, message: e.to_string() },
             Ok(Outcome::Begin(reply)) => {
                 run_marks.clear();
-                Step::Begin { line, mode: mode(reply.report) }
+                Step::Begin { line, mode: reply.report.name() }
             }
             Ok(Outcome::Capture(reply)) => {
                 let c = &reply.report;
@@ -238,7 +233,7 @@ pub(crate) fn steps(records: &[Record], sim: &Sim, machine: &SimMachine) -> Vec<
                     height: c.height,
                     angle_deg: c.angle_deg,
                     score: c.score,
-                    judgment: judgment(c.judgment),
+                    judgment: c.judgment.label(),
                     dot: c.dot_index,
                     slot: c.slot,
                     warning: c.warning.clone(),
@@ -249,7 +244,7 @@ pub(crate) fn steps(records: &[Record], sim: &Sim, machine: &SimMachine) -> Vec<
                 Step::Fit {
                     line,
                     unit: a.unit.short_name(),
-                    model: mode(a.mode),
+                    model: a.mode.name(),
                     pieces: pieces(a.pieces),
                     marks: a.fit.len,
                     theta_deg: a.chain.rotation_deg,
@@ -257,9 +252,7 @@ pub(crate) fn steps(records: &[Record], sim: &Sim, machine: &SimMachine) -> Vec<
                     shift: v2(a.chain.shift),
                     center: xy(a.chain.center),
                     residuals: a.residuals.iter().map(|r| v2(*r)).collect(),
-                    rms: (a.residuals.iter().map(Vector2::norm_squared).sum::<f64>()
-                        / f64::from(u32::try_from(a.residuals.len().max(1)).unwrap_or(u32::MAX)))
-                    .sqrt(),
+                    rms: rms(&a.residuals),
                     max_residual: a.max_residual,
                     gcode: reply.gcode.clone(),
                     cut_error: cut_error(sim, machine, &reply.gcode, &run_marks),

@@ -28,11 +28,11 @@ impl VisionModule {
     ///
     /// # Errors
     /// [`VisionError::NotEnabled`], [`VisionError::WrongTool`],
-    /// [`VisionError::PoundBaseReserved`], [`VisionError::PoundBlockMissing`], [`VisionError::NotCalibrated`] (all before the
-    /// trigger: nothing changes); [`VisionError::NoDriver`]; after the trigger
-    /// [`VisionError::Driver`] or [`VisionError::NoMark`] (only `LastJudgment` and `LastStatus`
-    /// change, recording the failed trigger); a failed pound-variable write (the variables
-    /// already written are restored). The dot list, the slots and `Run_DotCount` change only on
+    /// [`VisionError::PoundBaseReserved`], [`VisionError::PoundBlockMissing`],
+    /// [`VisionError::NotCalibrated`] (all before the trigger: nothing changes);
+    /// [`VisionError::NoDriver`]; after the trigger [`VisionError::Driver`] or
+    /// [`VisionError::NoMark`] (only `LastJudgment` and `LastStatus` change, recording the failed
+    /// trigger); a failed pound-variable write (the variables already written are restored). The dot list, the slots and `Run_DotCount` change only on
     /// success.
     pub fn m281(&mut self, machine: &mut dyn Machine, keep_image: bool) -> Result<Reply<Capture>, VisionError> {
         self.check_enabled()?;

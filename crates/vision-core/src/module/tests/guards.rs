@@ -85,8 +85,7 @@ fn driver_errors_carry_the_manuals_fix() {
 
 #[test]
 fn a_pound_block_past_the_machines_last_variable_is_refused_before_anything_changes() {
-    let mut rig = Rig::new();
-    rig.world().last_pound = 9999;
+    let mut rig = Rig::new(); // the fake machine's last variable is #9999
     rig.module.set_param("VisionPoundVarBase", 9970).expect("in range");
     let before = rig.module.params().clone();
     let e = rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect_err("runs past #9999");
