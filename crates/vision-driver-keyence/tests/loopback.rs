@@ -139,11 +139,18 @@ fn job_switch_on_a_vs_uses_pl_and_keeps_the_device() {
     let e = d.load_job(41).expect_err("no job 41");
     assert_eq!(e.code(), Some("03"));
     assert!(e.to_string().contains("does not exist"), "{e}");
+    // What the operator reads: the driver's advice for this command, through the core.
+    let user = VisionError::Driver(vision_core::DriverError::from(e)).to_string();
+    assert!(user.contains("ER,PL,03") && user.contains("does not exist on the camera"), "{user}");
     let t0 = Instant::now();
     assert_eq!(d.load_job(1000), Err(KeyenceError::InvalidJob { job: 1000 }));
     assert!(t0.elapsed() < SLACK);
     em.set_mode(Mode::Setup);
     assert_eq!(d.load_job(5).expect_err("setup").code(), Some("06"));
+    let e = d.measure().expect_err("setup");
+    let user = VisionError::Driver(vision_core::DriverError::from(e)).to_string();
+    assert!(user.contains("ER,TRG,06"), "{user}");
+    assert_eq!(user.matches("switch the camera to Run mode").count(), 1, "advice once: {user}");
 }
 
 #[test]
