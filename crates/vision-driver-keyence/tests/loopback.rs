@@ -356,7 +356,7 @@ fn the_registry_builds_it_from_the_parameters() {
     let mut params = Params::default();
     params.set("VisionIP", "127.0.0.1").expect("ip");
     params.set("VisionPort", i64::from(em.addr().port())).expect("port");
-    params.set("VisionTimeout", 0.3).expect("timeout");
+    params.set("VisionTimeout", T.as_secs_f64()).expect("timeout");
     let mut d = registry.create("Keyence", &params).expect("created without connecting");
     assert_eq!(d.name(), "Keyence");
     assert!(d.capabilities().select_job);
