@@ -71,11 +71,10 @@
 //! # Never twice
 //!
 //! The connection is reused across calls and dropped after any failure except a camera
-//! refusal. A call is retried — once, on a fresh connection, within the same timeout — only
-//! when the reused connection failed before the operating system accepted a single byte of the
-//! call's commands: then nothing can have reached the camera. Before reuse the idle connection
-//! is probed (stale bytes drained, a closed connection replaced before anything is sent). Once
-//! a byte of `TRG` may have left, a failure is returned as it is; the next call reconnects.
+//! refusal. Before reuse the idle connection is probed (stale bytes drained, a closed
+//! connection replaced) before anything is sent. Any failure after that is returned as it is,
+//! and the next call reconnects: the driver never sends a command again on its own, so a `TRG`
+//! the camera may have executed is never repeated.
 //!
 //! # Decisions where the spec is open
 //!

@@ -132,7 +132,8 @@ impl<S: Read + Write> Session<S> {
         self.written
     }
 
-    /// Restarts the [`Session::bytes_written`] count (at the start of each driver call).
+    /// Restarts the [`Session::bytes_written`] count (e.g. before an exchange whose failure a
+    /// caller wants to judge: zero bytes then means the camera cannot have seen it).
     pub fn reset_bytes_written(&mut self) {
         self.written = 0;
     }
