@@ -269,6 +269,7 @@ pub fn quote_bytes(line: &[u8]) -> String {
 #[cfg(test)]
 #[allow(clippy::float_cmp)]
 mod tests {
+    use super::super::generate::{data_line, edit};
     use super::*;
     use proptest::prelude::*;
 
@@ -366,16 +367,45 @@ mod tests {
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(512))]
 
-        /// Any text: never a panic; an accepted reading has finite numbers, and within range
-        /// when it claims a mark.
+        /// Structured lines in every format and number style read back exactly as written, or
+        /// are refused exactly when they claim a mark with a value out of range; after a random
+        /// edit, a line is still a reading with finite numbers (within range when it claims a
+        /// mark) or a reason, never a panic.
         #[test]
-        fn any_line_is_a_reading_or_a_reason(line in "[-+0-9.,OKNGok \\x00-\\x7f]{0,80}") {
+        fn lines_read_as_written_or_are_refused(
+            line in data_line(),
+            edit in proptest::option::weighted(0.25, edit()),
+        ) {
+            let text = edit.as_ref().map_or_else(|| line.text.clone(), |e| e.apply(&line.text));
+            let got = parse_data_line(&text);
+            if edit.is_none() {
+                match (&got, &line.expected) {
+                    (Ok(r), Some(want)) => prop_assert_eq!(r, want, "{}", text),
+                    (Err(_), None) => {}
+                    (got, want) => prop_assert!(false, "{text}: got {got:?}, want {want:?}"),
+                }
+            }
+            if let Ok(r) = &got {
+                for v in [r.x_px, r.y_px, r.width_px, r.height_px, r.angle_deg, r.score] {
+                    prop_assert!(v.is_finite(), "{}", text);
+                }
+                if r.found() {
+                    prop_assert!(r.x_px.abs() <= MAX_ABS_PIXELS && r.y_px.abs() <= MAX_ABS_PIXELS, "{}", text);
+                    prop_assert!((0.0..=MAX_ABS_PIXELS).contains(&r.width_px), "{}", text);
+                    prop_assert!(r.angle_deg.abs() <= MAX_ABS_ANGLE_DEG && r.score.abs() <= MAX_ABS_SCORE, "{}", text);
+                }
+            }
+            let _ = parse_error_reply(&text);
+            let _ = parse_program(&text);
+            let _ = parse_version(&text);
+        }
+
+        /// Arbitrary text, mostly not a data line: never a panic, and anything accepted is finite.
+        #[test]
+        fn arbitrary_text_never_panics(line in "[-+0-9.,OKNGok \\x00-\\x7f]{0,80}") {
             if let Ok(r) = parse_data_line(&line) {
                 for v in [r.x_px, r.y_px, r.width_px, r.height_px, r.angle_deg, r.score] {
                     prop_assert!(v.is_finite());
-                }
-                if r.found() {
-                    prop_assert!(r.x_px.abs() <= MAX_ABS_PIXELS && r.y_px.abs() <= MAX_ABS_PIXELS);
                 }
             }
             let _ = parse_error_reply(&line);

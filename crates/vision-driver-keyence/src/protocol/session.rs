@@ -364,6 +364,7 @@ fn io_error(e: io::Error, name: &str, waiting_for: String, timeout: Duration, ig
 #[cfg(test)]
 #[allow(clippy::float_cmp)]
 mod tests {
+    use super::super::generate::{data_line, DataLine};
     use super::super::mock::{bytewise, Script, Step};
     use super::*;
     use proptest::prelude::*;
@@ -607,35 +608,111 @@ mod tests {
         s.into_inner().done();
     }
 
+    /// What the camera sends after the lines that answer nothing.
+    #[derive(Debug, Clone)]
+    enum Answer {
+        /// The echo, then a data line.
+        Data(DataLine),
+        /// `ER,TRG,<nn>` instead of the echo.
+        Reject(u8),
+        /// The echo, then the connection closes.
+        EchoThenClose,
+        /// Arbitrary bytes, after the echo or not.
+        Bytes(bool, Vec<u8>),
+    }
+
+    fn answer() -> impl Strategy<Value = Answer> {
+        let byte = prop_oneof![Just(b'\r'), Just(b'\n'), Just(b','), any::<u8>(), b'0'..=b'9'];
+        prop_oneof![
+            6 => data_line().prop_map(Answer::Data),
+            1 => (1u8..=99).prop_map(Answer::Reject),
+            1 => Just(Answer::EchoThenClose),
+            2 => (any::<bool>(), proptest::collection::vec(byte, 0..1500)).prop_map(|(e, b)| Answer::Bytes(e, b)),
+        ]
+    }
+
+    /// A line before the echo that answers no command of ours: empty, a stale data output, a
+    /// reply to another command, a broken `ER`, or any printable text that is not `TRG`'s.
+    fn stray_line() -> impl Strategy<Value = String> {
+        prop_oneof![
+            Just(String::new()),
+            Just("1,9,9".to_string()),
+            Just("ER,PL,03".to_string()),
+            Just("PR,1,005".to_string()),
+            Just("ER,TRG".to_string()),
+            "[ -~]{1,40}".prop_filter("answers TRG", |l| l != "TRG" && !l.starts_with("ER,TRG,")),
+        ]
+    }
+
+    fn delimiter() -> impl Strategy<Value = &'static [u8]> {
+        prop_oneof![Just(&b"\r"[..]), Just(&b"\n"[..]), Just(&b"\r\n"[..])]
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(400))]
 
-        /// Arbitrary reply bytes, delivered in arbitrary pieces: never a panic, the buffer never
-        /// grows, and an accepted reading is finite.
+        /// Stray lines, then the camera's answer, each line with any delimiter, delivered in
+        /// arbitrary pieces: the session returns exactly what the answer says — the data line's
+        /// reading (or its refusal), the rejection, the closed connection — or `TooManyLines`
+        /// when the answer lies past the 8-line bound; arbitrary bytes never panic and anything
+        /// accepted from them is finite. (Memory is bounded by construction: tests/alloc_bound.rs.)
         #[test]
-        fn arbitrary_replies(
-            reply in proptest::collection::vec(
-                prop_oneof![Just(b'\r'), Just(b'\n'), Just(b','), any::<u8>(), b'0'..=b'9'], 0..1500),
+        fn replies_read_as_the_camera_meant_them(
+            strays in proptest::collection::vec((stray_line(), delimiter()), 0..9),
+            answer in answer(),
+            delims in (delimiter(), delimiter()),
             piece in 1usize..64,
-            echo in any::<bool>(),
         ) {
-            let mut bytes = if echo { b"TRG\r".to_vec() } else { Vec::new() };
-            bytes.extend(&reply);
+            let mut bytes = Vec::new();
+            for (line, delim) in &strays {
+                bytes.extend_from_slice(line.as_bytes());
+                // An empty line ends in CR: a bare LF straight after a CR is part of that line end.
+                bytes.extend_from_slice(if line.is_empty() { b"\r" } else { delim });
+            }
+            let mut line = |text: &[u8], delim: &[u8]| {
+                bytes.extend_from_slice(text);
+                bytes.extend_from_slice(delim);
+            };
+            match &answer {
+                Answer::Data(data) => {
+                    line(b"TRG", delims.0);
+                    line(data.text.as_bytes(), delims.1);
+                }
+                Answer::Reject(code) => line(format!("ER,TRG,{code:02}").as_bytes(), delims.0),
+                Answer::EchoThenClose => line(b"TRG", delims.0),
+                Answer::Bytes(echo, tail) => {
+                    if *echo {
+                        line(b"TRG", delims.0);
+                    }
+                    line(tail, b"");
+                }
+            }
             let mut steps = vec![Step::write(b"TRG\r")];
             steps.extend(bytes.chunks(piece).map(Step::read));
-            let mut s = session(steps);
-            let cap = s.reader.capacity();
-            match s.trigger() {
-                Ok(r) => {
+            let got = session(steps).trigger();
+            // Lines read when the answer is complete: the strays, then the echo and the data
+            // line, the rejection, or the echo and the end of the stream.
+            let needed = strays.len() + if matches!(answer, Answer::Reject(_)) { 1 } else { 2 };
+            let too_many = KeyenceError::TooManyLines { command: "TRG".into(), limit: 8 };
+            match (&answer, &got) {
+                (Answer::Bytes(..), Ok(r)) => {
                     for v in [r.x_px, r.y_px, r.width_px, r.height_px, r.angle_deg, r.score] {
                         prop_assert!(v.is_finite());
                     }
                 }
-                Err(e) => {
-                    prop_assert!(e.to_string().len() < 1200, "{e}");
+                (Answer::Bytes(..), Err(e)) => prop_assert!(e.to_string().len() < 1200, "{e}"),
+                (_, got) if needed > 8 => prop_assert_eq!(got, &Err(too_many)),
+                (Answer::Data(data), got) => match (&data.expected, got) {
+                    (Some(want), Ok(r)) => prop_assert_eq!(r, want),
+                    (None, Err(KeyenceError::Malformed { .. })) => {}
+                    (want, got) => prop_assert!(false, "{}: got {got:?}, want {want:?}", data.text),
+                },
+                (Answer::Reject(code), Err(KeyenceError::Rejected { code: c, .. })) => {
+                    prop_assert_eq!(c, &format!("{code:02}"));
                 }
+                (Answer::EchoThenClose, Err(KeyenceError::Closed { .. })) => {}
+                (answer, got) => prop_assert!(false, "{answer:?}: got {got:?}"),
             }
-            prop_assert_eq!(s.reader.capacity(), cap);
         }
     }
 }
