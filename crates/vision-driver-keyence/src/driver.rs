@@ -126,12 +126,8 @@ impl KeyenceDriver {
         op: impl FnOnce(&mut Session<TcpLink>) -> Result<T, KeyenceError>,
     ) -> Result<T, KeyenceError> {
         let deadline = Instant::now() + self.config.timeout;
-        if let Some(s) = self.session.as_mut() {
-            if s.get_mut().idle_check() {
-                s.discard_buffered();
-            } else {
-                self.session = None;
-            }
+        if self.session.as_mut().is_some_and(|s| !s.get_mut().idle_check()) {
+            self.session = None;
         }
         let session = match self.session.as_mut() {
             Some(s) => s,

@@ -138,11 +138,6 @@ impl<S: Read + Write> Session<S> {
         self.written = 0;
     }
 
-    /// Forgets bytes received but not yet read as lines (they answer no command).
-    pub fn discard_buffered(&mut self) {
-        self.reader.discard();
-    }
-
     /// `TRG`: triggers one inspection and reads its Data Output line.
     ///
     /// # Errors
@@ -280,7 +275,8 @@ impl<S: Read + Write> Session<S> {
         Err(KeyenceError::TooManyLines { command: name.to_string(), limit: self.limits.max_lines })
     }
 
-    /// Writes `command` and its CR, counting accepted bytes, then flushes.
+    /// Writes `command` and its CR, counting accepted bytes, then flushes. Bytes received but
+    /// not yet read as lines are forgotten first: they answer no command of ours.
     fn send(&mut self, command: &str, name: &str) -> Result<(), KeyenceError> {
         self.reader.discard();
         let mut buf = [0u8; MAX_COMMAND_LEN];
