@@ -105,8 +105,7 @@ impl<S: Read + Write> Session<S> {
     /// Out-of-range `limits` are clamped to [`Limits::validate`]'s bounds.
     #[must_use]
     pub fn new(stream: S, limits: Limits, timeout: Duration) -> Session<S> {
-        let limits =
-            Limits { max_line_len: limits.max_line_len.clamp(16, 65_536), max_lines: limits.max_lines.clamp(2, 64) };
+        let limits = limits.clamped();
         Session { stream, reader: LineReader::new(limits.max_line_len), limits, timeout, written: 0 }
     }
 
