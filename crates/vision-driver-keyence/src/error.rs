@@ -67,6 +67,9 @@ pub enum KeyenceError {
         timeout: Duration,
         /// What was still missing (`the TRG echo`, `the data line`, …).
         waiting_for: String,
+        /// Whether the command's echo had arrived: the camera accepted the command but sent no
+        /// data (for `TRG`: no Data Output tool, or an inspection longer than the timeout).
+        echoed: bool,
         /// A line that arrived but belonged to no command (stale or foreign), if any.
         ignored: Option<String>,
     },
@@ -165,7 +168,7 @@ impl KeyenceError {
             }
             KeyenceError::Unreachable { addr, reason } => format!("camera at {addr} is unreachable ({reason})"),
             KeyenceError::Refused { addr, reason } => format!("camera at {addr} refused the connection ({reason})"),
-            KeyenceError::Timeout { command, timeout, waiting_for, ignored } => {
+            KeyenceError::Timeout { command, timeout, waiting_for, ignored, .. } => {
                 let mut s =
                     format!("no complete reply to {command} within {}: {waiting_for} never came", secs(*timeout));
                 if let Some(line) = ignored {
@@ -217,8 +220,8 @@ impl KeyenceError {
                  holds the camera's command socket"
                     .into()
             }
-            KeyenceError::Timeout { waiting_for, .. } => {
-                if waiting_for.starts_with("the data line") {
+            KeyenceError::Timeout { echoed, .. } => {
+                if *echoed {
                     "the camera accepted the command but sent no data: add a Data Output (Non-Procedural) tool to \
                      the job, or raise VisionTimeout if the inspection takes longer"
                         .into()
@@ -396,13 +399,19 @@ mod tests {
 
     #[test]
     fn timeout_and_closed_are_not_told_twice() {
-        let e = KeyenceError::Timeout {
+        let timeout = |waiting_for: &str, echoed: bool| KeyenceError::Timeout {
             command: "TRG".into(),
             timeout: Duration::from_secs(3),
-            waiting_for: "the data line (the TRG echo arrived)".into(),
+            waiting_for: waiting_for.into(),
+            echoed,
             ignored: None,
         };
+        let e = timeout("the data line (the TRG echo arrived)", true);
         assert!(e.fix().contains("Data Output"));
+        // The advice follows whether the echo came, not the wording of what was missing.
+        let silent = timeout("the TRG echo", false);
+        assert!(silent.fix().starts_with("check the camera is reachable and in Run mode"), "{silent}");
+        assert_eq!(timeout("the data line (the TRG echo arrived)", false).fix(), silent.fix());
         let user = user_text(e);
         assert_eq!(
             user,

@@ -207,7 +207,7 @@ fn fault(fault: Fault, timeout: Duration) -> Result<Reading, KeyenceError> {
 #[test]
 fn fault_delay_past_the_timeout() {
     match fault(Fault::Delay(T * 3), T) {
-        Err(KeyenceError::Timeout { waiting_for, .. }) => assert_eq!(waiting_for, "the TRG echo"),
+        Err(KeyenceError::Timeout { waiting_for, echoed: false, .. }) => assert_eq!(waiting_for, "the TRG echo"),
         other => panic!("{other:?}"),
     }
 }
@@ -258,7 +258,7 @@ fn fault_byte_by_byte_one_segment_and_stray_lf_still_read() {
 #[test]
 fn fault_silence_after_the_echo_names_the_data_output() {
     match fault(Fault::Silence, T) {
-        Err(e @ KeyenceError::Timeout { .. }) => assert!(e.fix().contains("Data Output"), "{e}"),
+        Err(e @ KeyenceError::Timeout { echoed: true, .. }) => assert!(e.fix().contains("Data Output"), "{e}"),
         other => panic!("{other:?}"),
     }
 }

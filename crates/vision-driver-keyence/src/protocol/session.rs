@@ -300,10 +300,10 @@ impl<S: Read + Write> Session<S> {
                     self.written += n;
                 }
                 Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-                Err(e) => return Err(io_error(e, name, sending.into(), self.timeout, None)),
+                Err(e) => return Err(io_error(e, name, sending.into(), false, self.timeout, None)),
             }
         }
-        self.stream.flush().map_err(|e| io_error(e, name, sending.into(), self.timeout, None))
+        self.stream.flush().map_err(|e| io_error(e, name, sending.into(), false, self.timeout, None))
     }
 }
 
@@ -339,15 +339,22 @@ fn frame_error(
     match e {
         FrameError::TooLong => KeyenceError::LineTooLong { command: at.name.to_string(), limit: limits.max_line_len },
         FrameError::Eof => KeyenceError::Closed { command: at.name.to_string(), waiting_for: at.describe() },
-        FrameError::Io(e) => io_error(e, at.name, at.describe(), timeout, ignored),
+        FrameError::Io(e) => io_error(e, at.name, at.describe(), at.echoed, timeout, ignored),
     }
 }
 
-fn io_error(e: io::Error, name: &str, waiting_for: String, timeout: Duration, ignored: Option<String>) -> KeyenceError {
+fn io_error(
+    e: io::Error,
+    name: &str,
+    waiting_for: String,
+    echoed: bool,
+    timeout: Duration,
+    ignored: Option<String>,
+) -> KeyenceError {
     use io::ErrorKind as K;
     match e.kind() {
         K::TimedOut | K::WouldBlock => {
-            KeyenceError::Timeout { command: name.to_string(), timeout, waiting_for, ignored }
+            KeyenceError::Timeout { command: name.to_string(), timeout, waiting_for, echoed, ignored }
         }
         K::ConnectionReset | K::ConnectionAborted | K::BrokenPipe | K::UnexpectedEof | K::NotConnected => {
             KeyenceError::Closed { command: name.to_string(), waiting_for }
@@ -447,8 +454,9 @@ mod tests {
     fn timeout_says_what_was_missing() {
         let mut s = session(vec![Step::write(b"TRG\r"), Step::ReadErr(io::ErrorKind::WouldBlock)]);
         match s.trigger() {
-            Err(KeyenceError::Timeout { waiting_for, timeout, .. }) => {
+            Err(KeyenceError::Timeout { waiting_for, timeout, echoed, .. }) => {
                 assert_eq!(waiting_for, "the TRG echo");
+                assert!(!echoed);
                 assert_eq!(timeout, T);
             }
             other => panic!("{other:?}"),
@@ -456,8 +464,9 @@ mod tests {
         let mut s =
             session(vec![Step::write(b"TRG\r"), Step::read(b"7,7\rTRG\r"), Step::ReadErr(io::ErrorKind::TimedOut)]);
         match s.trigger() {
-            Err(KeyenceError::Timeout { waiting_for, ignored, .. }) => {
+            Err(KeyenceError::Timeout { waiting_for, ignored, echoed, .. }) => {
                 assert_eq!(waiting_for, "the data line (the TRG echo arrived)");
+                assert!(echoed);
                 assert_eq!(ignored.as_deref(), Some("7,7"));
             }
             other => panic!("{other:?}"),
