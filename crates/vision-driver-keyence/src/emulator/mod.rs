@@ -86,8 +86,9 @@ pub enum Fault {
     OneSegment,
     /// End the lines with CRLF and send a lone LF after the reply, in its own write.
     StrayLf,
-    /// Send the reply after this long even if the client has timed out and gone meanwhile
-    /// (the reply then lands in the dead connection).
+    /// Send the reply after this long, or as soon as the client has gone if it leaves first (a
+    /// client that timed out and closed): unlike [`Fault::Delay`], the reply is written either
+    /// way, into the dead connection in the second case.
     LateReply(Duration),
     /// Send the echo and no data line: [`Shot::Silent`] instead of the source's answer.
     Silence,

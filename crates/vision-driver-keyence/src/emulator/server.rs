@@ -235,7 +235,8 @@ impl Connection {
                 }
             }
             Some(Fault::LateReply(d)) => {
-                // Written even when the client has gone: it then lands in the dead connection.
+                // Written after `d`, or at once when the client has gone first: it then lands
+                // in the dead connection.
                 self.wait(*d);
             }
             Some(Fault::Close) => return Err(closed()),
