@@ -6,10 +6,17 @@ use std::io::{self, Read, Write};
 use vision_core::{Judgment, Reading};
 use vision_driver_keyence::emulator::{Emulator, EmulatorHandle, ListSource};
 
+/// [`FULL_LINE`] as a literal, so [`REPLY`] is built from the same text at compile time.
+macro_rules! full_line {
+    () => {
+        "+0000000001.000000,+0000000001.000000,+0000000812.125000,+0000000903.500000,\
+         +0000000040.250000,+0000000039.750000,-0000000012.500000,+0000000097.250000"
+    };
+}
+
 /// The Data Output line the benchmarks' camera sends: the recommended 8-field format in
 /// Keyence fixed-width numbers (the longest common line).
-pub const FULL_LINE: &str = "+0000000001.000000,+0000000001.000000,+0000000812.125000,+0000000903.500000,\
-                             +0000000040.250000,+0000000039.750000,-0000000012.500000,+0000000097.250000";
+pub const FULL_LINE: &str = full_line!();
 
 /// The reading [`FULL_LINE`] encodes.
 #[must_use]
@@ -68,8 +75,8 @@ pub struct InMemoryCamera {
     at: usize,
 }
 
-const REPLY: &[u8] = b"TRG\r+0000000001.000000,+0000000001.000000,+0000000812.125000,+0000000903.500000,\
-+0000000040.250000,+0000000039.750000,-0000000012.500000,+0000000097.250000\r";
+/// What [`InMemoryCamera`] answers to each command: the echo, then [`FULL_LINE`].
+const REPLY: &[u8] = concat!("TRG\r", full_line!(), "\r").as_bytes();
 
 impl Read for InMemoryCamera {
     fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {

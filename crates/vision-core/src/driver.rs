@@ -104,7 +104,8 @@ pub enum DriverErrorKind {
     Refused,
     /// The camera answered, but its reply could not be understood.
     Malformed,
-    /// The camera refused the command (an `ER,…` reply or equivalent).
+    /// The camera refused the command (an `ER,…` reply or equivalent). The core shows the
+    /// driver's message as it is, so it says what the refusal means and what to do.
     Rejected,
     /// The driver does not support the operation.
     Unsupported,

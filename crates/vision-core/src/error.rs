@@ -72,7 +72,9 @@ pub enum VisionError {
     )]
     NoMark,
 
-    /// The driver failed; the message carries the driver's own words and the manual's fix.
+    /// The driver failed: the manual's generic fix for a timeout, refused connection, malformed
+    /// reply or unsupported operation, then the driver's own words; any other kind (a camera
+    /// refusal, an invalid argument, …) in the driver's words only, which say what to do.
     #[error("{}", driver_message(.0))]
     Driver(DriverError),
 
@@ -201,6 +203,11 @@ pub enum VisionError {
     AlignmentActive,
 }
 
+/// A driver failure as the operator reads it. For the kinds whose cause and fix do not depend
+/// on the camera's protocol (timeout, refused connection, malformed reply, unsupported
+/// operation) the manual's generic fix comes first, the driver's words in parentheses; every
+/// other kind — a camera refusal ([`DriverErrorKind::Rejected`]) above all — is the driver's
+/// message as it is: only the driver knows what its camera's refusal means and what to do.
 fn driver_message(e: &DriverError) -> String {
     let fix = match e.kind {
         DriverErrorKind::Timeout => {
@@ -215,7 +222,6 @@ fn driver_message(e: &DriverError) -> String {
              emitting unexpected fields"
         }
         DriverErrorKind::Unsupported => "the camera driver does not support this operation",
-        DriverErrorKind::Rejected => er_fix(&e.message).unwrap_or(""),
         _ => "",
     };
     if fix.is_empty() {
@@ -225,28 +231,6 @@ fn driver_message(e: &DriverError) -> String {
     } else {
         format!("{fix} ({})", e.message)
     }
-}
-
-/// The manual's fix for a Keyence `ER,<cmd>,<nn>` reply found in `message`.
-fn er_fix(message: &str) -> Option<&'static str> {
-    let at = message.find("ER,")?;
-    let code = message[at + 3..].split(',').nth(1)?.get(..2)?;
-    Some(match code {
-        "01" => "unknown command — the camera does not accept the command in its current mode (not in Run Mode)",
-        "02" => "wrong number of arguments — check the driver and the camera series",
-        "03" => "argument out of range — check the job number (0–999)",
-        "04" => "wrong argument type — check the driver and the camera series",
-        "05" => {
-            "command not acceptable now — the camera is loading a program or serving the command from another \
-             route; retry"
-        }
-        "06" => {
-            "command not executable — the camera is not in Run Mode or the trigger source is not set to \
-             Communication"
-        }
-        "07" => "camera-side timeout — the measurement did not complete within the camera's configured window",
-        _ => return None,
-    })
 }
 
 impl From<DriverError> for VisionError {
@@ -288,18 +272,20 @@ mod tests {
         assert!(e.to_string().starts_with("camera tool T98 is not the active tool"));
         let e = VisionError::from(DriverError::new(DriverErrorKind::Timeout, "no reply in 3 s"));
         assert!(e.to_string().starts_with("timeout — camera unreachable"), "{e}");
-        let e = VisionError::from(DriverError::new(DriverErrorKind::Rejected, "ER,TRG,06"));
-        assert_eq!(
-            e.to_string(),
-            "command not executable — the camera is not in Run Mode or the trigger source is not set to \
-             Communication (ER,TRG,06)"
-        );
-        let e = VisionError::from(DriverError::new(DriverErrorKind::Rejected, "camera replied ER,TRG,01"));
-        assert!(e.to_string().starts_with("unknown command"), "{e}");
-        let e = VisionError::from(DriverError::new(DriverErrorKind::Rejected, "ER,PL,07"));
-        assert!(e.to_string().starts_with("camera-side timeout"), "{e}");
-        let e = VisionError::from(DriverError::new(DriverErrorKind::Rejected, "ER,TRG,99 odd"));
-        assert_eq!(e.to_string(), "ER,TRG,99 odd");
+        // A camera refusal is the driver's to explain: its message is shown as it is, with no
+        // protocol table of the core's in front of it.
+        for message in [
+            "ER,TRG,06",
+            "camera replied ER,TRG,01",
+            "ER,PL,07",
+            "ER,TRG,99 odd",
+            "camera replied ER,PL,03 to PL — argument out of range: the job number does not exist on the camera",
+        ] {
+            let e = VisionError::from(DriverError::new(DriverErrorKind::Rejected, message));
+            assert_eq!(e.to_string(), message);
+        }
+        let e = VisionError::from(DriverError::new(DriverErrorKind::Unsupported, "no PL"));
+        assert_eq!(e.to_string(), "the camera driver does not support this operation (no PL)");
         let e = VisionError::from(DriverError::new(DriverErrorKind::Malformed, "reply \"abc\""));
         assert!(e.to_string().starts_with("malformed response — the Data Output"), "{e}");
         assert_eq!(VisionError::from(DriverError::new(DriverErrorKind::Rejected, "ER,")).to_string(), "ER,");

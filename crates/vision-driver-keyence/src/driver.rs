@@ -18,13 +18,11 @@ pub const DRIVER_NAME: &str = "Keyence";
 /// The connection is opened on the first call and reused; it is dropped after any failure
 /// except a camera refusal (`ER,…`, a complete reply), and the next call reconnects.
 ///
-/// **Never twice.** A call is retried (once, on a fresh connection, within the same timeout)
-/// only when the reused connection failed before the operating system accepted a single byte
-/// of the call's commands: then nothing can have reached the camera. Before reuse, the idle
-/// connection is checked (stale bytes drained, a closed or reset connection replaced) so a
-/// camera that dropped the link while idle costs a reconnect, not an error. Once any byte of a
-/// `TRG` may have left, a failure is returned as it is: the driver never re-sends a trigger the
-/// camera may have executed.
+/// **Never twice.** Before reuse, the idle connection is probed (stale bytes drained, a closed
+/// or reset connection replaced) before anything is sent, so a camera that dropped the link
+/// while idle costs a reconnect, not an error. Any failure after that is returned as it is and
+/// the next call reconnects: the driver never sends a command again on its own, so it never
+/// re-sends a trigger the camera may have executed.
 #[derive(Debug)]
 pub struct KeyenceDriver {
     config: KeyenceConfig,
@@ -120,48 +118,30 @@ impl KeyenceDriver {
         Ok(())
     }
 
-    /// Runs `op` on the connection under one deadline, applying the reconnect rule.
+    /// Runs `op` on the connection under one deadline: probes an idle connection and replaces
+    /// a dead one before anything is sent, and drops the connection after any failure but a
+    /// camera refusal.
     fn call<T>(
         &mut self,
-        mut op: impl FnMut(&mut Session<TcpLink>) -> Result<T, KeyenceError>,
+        op: impl FnOnce(&mut Session<TcpLink>) -> Result<T, KeyenceError>,
     ) -> Result<T, KeyenceError> {
         let deadline = Instant::now() + self.config.timeout;
-        let mut reused = false;
-        if let Some(s) = self.session.as_mut() {
-            if s.get_mut().idle_check() {
-                s.discard_buffered();
-                reused = true;
-            } else {
-                self.session = None;
-            }
+        if self.session.as_mut().is_some_and(|s| !s.get_mut().idle_check()) {
+            self.session = None;
         }
-        loop {
-            let session = match self.session.as_mut() {
-                Some(s) => s,
-                None => {
-                    let link = TcpLink::connect(&self.config, deadline)?;
-                    self.session.insert(Session::new(link, self.config.limits, self.config.timeout))
-                }
-            };
-            session.get_mut().set_deadline(deadline);
-            session.reset_bytes_written();
-            match op(session) {
-                Ok(v) => return Ok(v),
-                Err(e) => {
-                    let nothing_sent = session.bytes_written() == 0;
-                    if matches!(e, KeyenceError::Rejected { .. }) {
-                        return Err(e);
-                    }
-                    self.session = None;
-                    let link_failed = matches!(e, KeyenceError::Closed { .. } | KeyenceError::Io { .. });
-                    if reused && nothing_sent && link_failed {
-                        reused = false;
-                        continue;
-                    }
-                    return Err(e);
-                }
+        let session = match self.session.as_mut() {
+            Some(s) => s,
+            None => {
+                let link = TcpLink::connect(&self.config, deadline)?;
+                self.session.insert(Session::new(link, self.config.limits, self.config.timeout))
             }
+        };
+        session.get_mut().set_deadline(deadline);
+        let result = op(session);
+        if matches!(&result, Err(e) if !matches!(e, KeyenceError::Rejected { .. })) {
+            self.session = None;
         }
+        result
     }
 }
 

@@ -10,8 +10,11 @@ use vision_core::{DriverError, DriverErrorKind};
 ///
 /// Each variant says what happened ([`KeyenceError::what`]) and what to do
 /// ([`KeyenceError::fix`]); `Display` prints both. [`KeyenceError::kind`] maps it to the core's
-/// [`DriverErrorKind`], and `From<KeyenceError> for DriverError` keeps the raw `ER,<cmd>,<nn>`
-/// reply in the message so the core can add the manual's fix without repeating ours.
+/// [`DriverErrorKind`]. `From<KeyenceError> for DriverError` sends the whole text for a
+/// camera refusal ([`KeyenceError::Rejected`]: the raw `ER,<cmd>,<nn>` reply, what the code means
+/// and what to do for that command), which the core shows as it is; for a timeout, a refused or
+/// closed connection and a malformed reply it sends only what happened, because the core puts its
+/// generic fix for those kinds in front.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[non_exhaustive]
 pub enum KeyenceError {
@@ -64,6 +67,9 @@ pub enum KeyenceError {
         timeout: Duration,
         /// What was still missing (`the TRG echo`, `the data line`, …).
         waiting_for: String,
+        /// Whether the command's echo had arrived: the camera accepted the command but sent no
+        /// data (for `TRG`: no Data Output tool, or an inspection longer than the timeout).
+        echoed: bool,
         /// A line that arrived but belonged to no command (stale or foreign), if any.
         ignored: Option<String>,
     },
@@ -162,7 +168,7 @@ impl KeyenceError {
             }
             KeyenceError::Unreachable { addr, reason } => format!("camera at {addr} is unreachable ({reason})"),
             KeyenceError::Refused { addr, reason } => format!("camera at {addr} refused the connection ({reason})"),
-            KeyenceError::Timeout { command, timeout, waiting_for, ignored } => {
+            KeyenceError::Timeout { command, timeout, waiting_for, ignored, .. } => {
                 let mut s =
                     format!("no complete reply to {command} within {}: {waiting_for} never came", secs(*timeout));
                 if let Some(line) = ignored {
@@ -214,8 +220,8 @@ impl KeyenceError {
                  holds the camera's command socket"
                     .into()
             }
-            KeyenceError::Timeout { waiting_for, .. } => {
-                if waiting_for.starts_with("the data line") {
+            KeyenceError::Timeout { echoed, .. } => {
+                if *echoed {
                     "the camera accepted the command but sent no data: add a Data Output (Non-Procedural) tool to \
                      the job, or raise VisionTimeout if the inspection takes longer"
                         .into()
@@ -267,7 +273,7 @@ pub fn er_meaning(code: &str) -> Option<&'static str> {
         "04" => "wrong argument type",
         "05" => "not acceptable now (the camera is loading a program, or serving the command from another route)",
         "06" => "not executable (the camera is not in Run mode, or the trigger source is not Communication)",
-        "07" => "camera-side timeout (the rest of the command did not arrive within 3 s)",
+        "07" => "camera-side timeout (the command, or the measurement it started, did not complete in time)",
         _ => return None,
     })
 }
@@ -277,11 +283,14 @@ fn rejection_advice(command: &str, code: &str) -> String {
     let todo = match (command, code) {
         ("TRG", "01") => "switch the camera to Run mode; in Setup mode it does not accept TRG",
         ("TRG", "06") => "switch the camera to Run mode and set the job's trigger source to Communication",
-        ("TRG", "07") => "the measurement did not complete in the camera's window; check the job and retry",
+        ("TRG", "07") => {
+            "the measurement did not complete within the camera's configured window; check the job and retry"
+        }
         ("PL" | "PW", "01") => "this camera series knows neither PL (VS) nor PW (CV-X, IV) for job switching",
         ("PL" | "PW", "03") => "the job number does not exist on the camera; check M284 P and VisionActiveJob",
         (_, "05") => "wait for the camera to finish loading the job, then retry",
         (_, "06") => "switch the camera to Run mode",
+        (_, "07") => "the rest of the command did not arrive within 3 s; check the network link and retry",
         (_, "02" | "04") => "the camera series does not take this command's arguments; check the camera model",
         _ => "see the camera's Non-Procedural command manual",
     };
@@ -297,14 +306,12 @@ fn secs(d: Duration) -> String {
     }
 }
 
-/// Whether the core adds the manual's fix for this error itself (see `vision-core`'s
-/// `VisionError::Driver`): then the driver sends only what happened, so the user does not read
-/// the advice twice.
+/// Whether the core puts its own generic fix in front of this error (see `vision-core`'s
+/// `VisionError::Driver`: timeout, refused, malformed): then the driver sends only what
+/// happened, so the user does not read the advice twice. A camera refusal is never among them:
+/// only the driver knows what an `ER` code means for the command it sent.
 fn core_explains(e: &KeyenceError) -> bool {
-    match e {
-        KeyenceError::Rejected { code, .. } => er_meaning(code).is_some(),
-        _ => matches!(e.kind(), DriverErrorKind::Timeout | DriverErrorKind::Refused | DriverErrorKind::Malformed),
-    }
+    matches!(e.kind(), DriverErrorKind::Timeout | DriverErrorKind::Refused | DriverErrorKind::Malformed)
 }
 
 impl From<KeyenceError> for DriverError {
@@ -328,6 +335,11 @@ mod tests {
         }
     }
 
+    /// What the operator reads: the driver error through the core's `VisionError::Driver`.
+    fn user_text(e: KeyenceError) -> String {
+        VisionError::Driver(DriverError::from(e)).to_string()
+    }
+
     #[test]
     fn rejected_reads_well_through_the_core() {
         let e = rejected("TRG", "06");
@@ -335,23 +347,41 @@ mod tests {
         assert_eq!(e.code(), Some("06"));
         let standalone = e.to_string();
         assert!(standalone.starts_with("camera replied ER,TRG,06 to TRG — not executable"), "{standalone}");
-        let user = VisionError::from(DriverError::from(e)).to_string();
-        assert_eq!(
-            user,
-            "command not executable — the camera is not in Run Mode or the trigger source is not set to \
-             Communication (camera replied ER,TRG,06 to TRG)"
-        );
+        let user = user_text(e);
+        assert_eq!(user, standalone, "the core shows a refusal as the driver words it");
+        assert_eq!(user.matches("switch the camera to Run mode").count(), 1, "{user}");
+        assert!(user.contains("set the job's trigger source to Communication"), "{user}");
         // Every listed code: the raw reply survives, the advice appears once.
         for code in ["01", "02", "03", "04", "05", "06", "07"] {
-            let user = VisionError::from(DriverError::from(rejected("TRG", code))).to_string();
+            let user = user_text(rejected("TRG", code));
             assert_eq!(user.matches(&format!("ER,TRG,{code}")).count(), 1, "{user}");
-            assert!(!user.contains(" — ") || user.matches(" — ").count() == 1, "{user}");
+            assert_eq!(user.matches(" — ").count(), 1, "{user}");
+            assert!(user.contains(er_meaning(code).unwrap_or("?")), "{user}");
         }
     }
 
     #[test]
+    fn the_manuals_fix_for_each_command_reaches_the_user() {
+        // ER,PL,03 for a job the camera does not have: the driver's command-specific advice,
+        // not a generic "check the job number (0–999)" for a job inside that range.
+        let user = user_text(rejected("PL", "03"));
+        assert!(user.contains("does not exist on the camera"), "{user}");
+        assert!(user.contains("check M284 P"), "{user}");
+        assert!(!user.contains("0–999"), "{user}");
+        // The manual's error table for TRG.
+        let user = user_text(rejected("TRG", "01"));
+        assert!(user.contains("switch the camera to Run mode; in Setup mode it does not accept TRG"), "{user}");
+        let user = user_text(rejected("TRG", "07"));
+        assert!(user.contains("did not complete within the camera's configured window"), "{user}");
+        let user = user_text(rejected("PL", "07"));
+        assert!(user.contains("did not arrive within 3 s"), "{user}");
+        let user = user_text(rejected("PR", "05"));
+        assert!(user.contains("wait for the camera to finish loading the job"), "{user}");
+    }
+
+    #[test]
     fn unknown_code_keeps_our_advice() {
-        let user = VisionError::from(DriverError::from(rejected("TRG", "42"))).to_string();
+        let user = user_text(rejected("TRG", "42"));
         assert!(user.starts_with("camera replied ER,TRG,42 to TRG — an error code the VS manual"), "{user}");
     }
 
@@ -369,14 +399,20 @@ mod tests {
 
     #[test]
     fn timeout_and_closed_are_not_told_twice() {
-        let e = KeyenceError::Timeout {
+        let timeout = |waiting_for: &str, echoed: bool| KeyenceError::Timeout {
             command: "TRG".into(),
             timeout: Duration::from_secs(3),
-            waiting_for: "the data line (the TRG echo arrived)".into(),
+            waiting_for: waiting_for.into(),
+            echoed,
             ignored: None,
         };
+        let e = timeout("the data line (the TRG echo arrived)", true);
         assert!(e.fix().contains("Data Output"));
-        let user = VisionError::from(DriverError::from(e)).to_string();
+        // The advice follows whether the echo came, not the wording of what was missing.
+        let silent = timeout("the TRG echo", false);
+        assert!(silent.fix().starts_with("check the camera is reachable and in Run mode"), "{silent}");
+        assert_eq!(timeout("the data line (the TRG echo arrived)", false).fix(), silent.fix());
+        let user = user_text(e);
         assert_eq!(
             user,
             "timeout — camera unreachable, wrong IP/port, or no Data Output (Non-Procedural) tool configured to \
@@ -384,7 +420,7 @@ mod tests {
         );
         let e = KeyenceError::Closed { command: "TRG".into(), waiting_for: "the TRG echo".into() };
         assert_eq!(e.kind(), DriverErrorKind::Refused);
-        let user = VisionError::from(DriverError::from(e)).to_string();
+        let user = user_text(e);
         assert!(user.starts_with("connection refused — "), "{user}");
         assert_eq!(user.matches("Run").count(), 1, "{user}");
     }

@@ -56,23 +56,25 @@
 //! | `Timeout` | Timeout | connected, but the reply did not complete; says whether the echo came (no echo: camera not answering; echo but no data: no Data Output tool) |
 //! | `Refused` | Refused | nothing listens on the port |
 //! | `Closed` | Refused | the camera closed or reset the connection mid-command (another client holds the camera, or it left Run mode) |
-//! | `Rejected` | Rejected | `ER,<cmd>,<nn>`, with the manual's meaning and fix; the raw reply is kept in the message |
+//! | `Rejected` | Rejected | `ER,<cmd>,<nn>`, with the code's meaning and the fix for that command; the raw reply is kept in the message |
 //! | `Malformed`, `LineTooLong`, `TooManyLines` | Malformed | the reply is not one of the formats, or breaks the bounds (512 bytes a line, 8 lines a reply) |
 //! | `Config`, `InvalidJob` | InvalidArgument | refused before anything was sent |
 //! | `Resolve`, `Io` | Other | host name does not resolve; another socket error |
 //!
-//! Through `vision_core::VisionError::Driver` the core prefixes the manual's fix for Timeout,
-//! Refused, Malformed and the listed `ER` codes; the driver then sends only what happened, so
-//! the operator reads each piece of advice once.
+//! Through `vision_core::VisionError::Driver` the core puts its generic fix in front of Timeout,
+//! Refused and Malformed errors (their causes do not depend on the protocol); for those the
+//! driver sends only what happened, so the operator reads each piece of advice once. A
+//! `Rejected` error carries the driver's whole text — the raw `ER,<cmd>,<nn>` reply, what the
+//! code means and what to do for that command (e.g. `ER,PL,03`: the job does not exist on the
+//! camera) — and the core shows it as it is.
 //!
 //! # Never twice
 //!
 //! The connection is reused across calls and dropped after any failure except a camera
-//! refusal. A call is retried — once, on a fresh connection, within the same timeout — only
-//! when the reused connection failed before the operating system accepted a single byte of the
-//! call's commands: then nothing can have reached the camera. Before reuse the idle connection
-//! is probed (stale bytes drained, a closed connection replaced before anything is sent). Once
-//! a byte of `TRG` may have left, a failure is returned as it is; the next call reconnects.
+//! refusal. Before reuse the idle connection is probed (stale bytes drained, a closed
+//! connection replaced) before anything is sent. Any failure after that is returned as it is,
+//! and the next call reconnects: the driver never sends a command again on its own, so a `TRG`
+//! the camera may have executed is never repeated.
 //!
 //! # Decisions where the spec is open
 //!

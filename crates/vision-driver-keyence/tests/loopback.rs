@@ -7,7 +7,7 @@ mod common;
 
 use std::time::{Duration, Instant};
 
-use common::{assert_within, counting, driver, start, SLACK, T};
+use common::{assert_within, counting, driver, start, T};
 use vision_core::{CameraDriver, DriverErrorKind, DriverRegistry, Judgment, Params, Reading, VisionError};
 use vision_driver_keyence::emulator::{
     Delimiter, Emulator, Fault, JudgmentStyle, ListSource, Mode, NumberStyle, OutputFormat, Series, Shot,
@@ -139,11 +139,18 @@ fn job_switch_on_a_vs_uses_pl_and_keeps_the_device() {
     let e = d.load_job(41).expect_err("no job 41");
     assert_eq!(e.code(), Some("03"));
     assert!(e.to_string().contains("does not exist"), "{e}");
-    let t0 = Instant::now();
+    // What the operator reads: the driver's advice for this command, through the core.
+    let user = VisionError::Driver(vision_core::DriverError::from(e)).to_string();
+    assert!(user.contains("ER,PL,03") && user.contains("does not exist on the camera"), "{user}");
+    let sent = em.stats().commands;
     assert_eq!(d.load_job(1000), Err(KeyenceError::InvalidJob { job: 1000 }));
-    assert!(t0.elapsed() < SLACK);
+    assert_eq!(em.stats().commands, sent, "refused before anything was sent");
     em.set_mode(Mode::Setup);
     assert_eq!(d.load_job(5).expect_err("setup").code(), Some("06"));
+    let e = d.measure().expect_err("setup");
+    let user = VisionError::Driver(vision_core::DriverError::from(e)).to_string();
+    assert!(user.contains("ER,TRG,06"), "{user}");
+    assert_eq!(user.matches("switch the camera to Run mode").count(), 1, "advice once: {user}");
 }
 
 #[test]
@@ -200,7 +207,7 @@ fn fault(fault: Fault, timeout: Duration) -> Result<Reading, KeyenceError> {
 #[test]
 fn fault_delay_past_the_timeout() {
     match fault(Fault::Delay(T * 3), T) {
-        Err(KeyenceError::Timeout { waiting_for, .. }) => assert_eq!(waiting_for, "the TRG echo"),
+        Err(KeyenceError::Timeout { waiting_for, echoed: false, .. }) => assert_eq!(waiting_for, "the TRG echo"),
         other => panic!("{other:?}"),
     }
 }
@@ -251,7 +258,7 @@ fn fault_byte_by_byte_one_segment_and_stray_lf_still_read() {
 #[test]
 fn fault_silence_after_the_echo_names_the_data_output() {
     match fault(Fault::Silence, T) {
-        Err(e @ KeyenceError::Timeout { .. }) => assert!(e.fix().contains("Data Output"), "{e}"),
+        Err(e @ KeyenceError::Timeout { echoed: true, .. }) => assert!(e.fix().contains("Data Output"), "{e}"),
         other => panic!("{other:?}"),
     }
 }
@@ -349,7 +356,7 @@ fn the_registry_builds_it_from_the_parameters() {
     let mut params = Params::default();
     params.set("VisionIP", "127.0.0.1").expect("ip");
     params.set("VisionPort", i64::from(em.addr().port())).expect("port");
-    params.set("VisionTimeout", 0.3).expect("timeout");
+    params.set("VisionTimeout", T.as_secs_f64()).expect("timeout");
     let mut d = registry.create("Keyence", &params).expect("created without connecting");
     assert_eq!(d.name(), "Keyence");
     assert!(d.capabilities().select_job);

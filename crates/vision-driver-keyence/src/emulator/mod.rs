@@ -77,7 +77,8 @@ pub enum Fault {
     Close,
     /// Send the echo, then close the connection.
     CloseAfterEcho,
-    /// Send the echo, then these bytes as the data line.
+    /// Send the echo, then these bytes as the data line (like [`Shot::Line`], but any bytes,
+    /// text or not).
     Garbage(Vec<u8>),
     /// Send every byte of the reply in its own write, 1 ms apart.
     ByteByByte,
@@ -85,12 +86,13 @@ pub enum Fault {
     OneSegment,
     /// End the lines with CRLF and send a lone LF after the reply, in its own write.
     StrayLf,
-    /// Send the reply after this long even if the client has timed out and gone meanwhile
-    /// (the reply then lands in the dead connection).
+    /// Send the reply after this long, or as soon as the client has gone if it leaves first (a
+    /// client that timed out and closed): unlike [`Fault::Delay`], the reply is written either
+    /// way, into the dead connection in the second case.
     LateReply(Duration),
-    /// Send the echo and no data line.
+    /// Send the echo and no data line: [`Shot::Silent`] instead of the source's answer.
     Silence,
-    /// Answer `ER,TRG,<code>`.
+    /// Answer `ER,TRG,<code>`: [`Shot::Reject`] instead of the source's answer.
     Reject(u8),
     /// Send the reply one byte per interval.
     Dribble(Duration),

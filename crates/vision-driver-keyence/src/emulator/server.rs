@@ -192,41 +192,58 @@ impl Connection {
 
     /// Writes the answer to an accepted `TRG`, shaped by `fault`. `Err` closes the connection.
     fn trigger(&mut self, shot: Shot, fault: Option<Fault>) -> io::Result<()> {
-        let (data, inspection) = {
+        // Faults that replace the answer: `Reject` and `Silence` are the shots of the same name;
+        // `Garbage` and `LongLine` send the echo and a data line of raw bytes (possibly not
+        // text, which a `Shot::Line` cannot carry). The other faults shape the delivery below.
+        let raw = match &fault {
+            Some(Fault::Garbage(bytes)) => Some(bytes.clone()),
+            Some(Fault::LongLine(n)) => Some(vec![b'7'; *n]),
+            _ => None,
+        };
+        let shot = match &fault {
+            Some(Fault::Reject(code)) => Shot::Reject(*code),
+            Some(Fault::Silence) => Shot::Silent,
+            _ => shot,
+        };
+        let echo = || b"TRG".to_vec();
+        let (mut lines, inspection) = {
             let camera = lock(&self.shared.camera);
-            let data = match &shot {
-                Shot::Reading(r) => Some(camera.settings.data_line(r)),
-                Shot::Line(l) => Some(l.clone()),
-                Shot::Reject(_) | Shot::Silent => None,
+            let lines = match (shot, raw) {
+                (_, Some(bytes)) => vec![echo(), bytes],
+                (Shot::Reject(code), None) => vec![format!("ER,TRG,{code:02}").into_bytes()],
+                (Shot::Silent, None) => vec![echo()],
+                (Shot::Line(line), None) => vec![echo(), line.into_bytes()],
+                (Shot::Reading(r), None) => vec![echo(), camera.settings.data_line(&r).into_bytes()],
             };
-            (data, camera.settings.inspection_time)
+            (lines, camera.settings.inspection_time)
         };
         let mut delim = self.delimiter();
-        let mut lines: Vec<Vec<u8>> = match shot {
-            Shot::Reject(code) => vec![format!("ER,TRG,{code:02}").into_bytes()],
-            _ => std::iter::once(b"TRG".to_vec()).chain(data.map(String::into_bytes)).collect(),
-        };
-        let echo_only = || vec![b"TRG".to_vec()];
         match &fault {
-            None | Some(Fault::ByteByByte | Fault::OneSegment | Fault::Dribble(_)) => {}
+            None
+            | Some(
+                Fault::ByteByByte
+                | Fault::OneSegment
+                | Fault::Dribble(_)
+                | Fault::Garbage(_)
+                | Fault::LongLine(_)
+                | Fault::Silence
+                | Fault::Reject(_),
+            ) => {}
             Some(Fault::Delay(d)) => {
                 if !self.wait(*d) {
                     return Err(closed());
                 }
             }
             Some(Fault::LateReply(d)) => {
-                // Written even when the client has gone: it then lands in the dead connection.
+                // Written after `d`, or at once when the client has gone first: it then lands
+                // in the dead connection.
                 self.wait(*d);
             }
             Some(Fault::Close) => return Err(closed()),
             Some(Fault::CloseAfterEcho) => {
-                self.send(&[b"TRG".to_vec()], delim)?;
+                self.send(&[echo()], delim)?;
                 return Err(closed());
             }
-            Some(Fault::Garbage(g)) => lines = vec![b"TRG".to_vec(), g.clone()],
-            Some(Fault::Silence) => lines = echo_only(),
-            Some(Fault::Reject(code)) => lines = vec![format!("ER,TRG,{code:02}").into_bytes()],
-            Some(Fault::LongLine(n)) => lines = vec![b"TRG".to_vec(), vec![b'7'; *n]],
             Some(Fault::ManyLines(n)) => {
                 let mut many = vec![b"1,0,0".to_vec(); *n];
                 many.append(&mut lines);

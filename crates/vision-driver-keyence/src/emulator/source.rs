@@ -99,8 +99,10 @@ impl<F: FnMut() -> Shot + Send> ResultSource for FnSource<F> {
 /// [`CameraDriver::select_job`]. Plug in the simulated camera to emulate a camera that sees
 /// a simulated part.
 ///
-/// A failed trigger answers with the `ER,TRG,<nn>` code in the driver's message when there is
-/// one, else `ER,TRG,07` (the measurement did not complete). A failed job switch answers `03`
+/// A failed trigger answers with the code of the first `ER,TRG,<nn>` word in the driver's
+/// message when there is one (a word being text between spaces, brackets and punctuation
+/// stripped, that reads as a whole `ER` reply), else `ER,TRG,07` (the measurement did not
+/// complete). A failed job switch answers `03`
 /// for an invalid argument, `01` when the driver cannot switch jobs, else `05`.
 pub struct DriverSource(pub Box<dyn CameraDriver>);
 
@@ -114,18 +116,7 @@ impl ResultSource for DriverSource {
     fn trigger(&mut self) -> Shot {
         match self.0.trigger() {
             Ok(r) => Shot::Reading(r),
-            Err(e) => {
-                let code = e
-                    .message
-                    .find("ER,")
-                    .and_then(|at| e.message[at..].get(..9))
-                    .and_then(|er| match parse_error_reply(er) {
-                        Some(Ok(r)) if r.command == "TRG" => r.code.parse().ok(),
-                        _ => None,
-                    })
-                    .unwrap_or(7);
-                Shot::Reject(code)
-            }
+            Err(e) => Shot::Reject(trigger_refusal(&e.message).unwrap_or(7)),
         }
     }
 
@@ -136,6 +127,16 @@ impl ResultSource for DriverSource {
             _ => 5,
         })
     }
+}
+
+/// The code of the first whole `ER,TRG,<nn>` reply quoted in `message`.
+fn trigger_refusal(message: &str) -> Option<u8> {
+    message.split_whitespace().find_map(|word| {
+        match parse_error_reply(word.trim_matches(|c: char| !c.is_ascii_alphanumeric())) {
+            Some(Ok(r)) if r.command == "TRG" => r.code.parse().ok(),
+            _ => None,
+        }
+    })
 }
 
 #[cfg(test)]
@@ -189,5 +190,29 @@ mod tests {
         assert_eq!(s.trigger(), Shot::Reject(7));
         assert_eq!(s.select_job(1), Err(3));
         assert_eq!(format!("{s:?}"), "DriverSource(Failing)");
+    }
+
+    #[test]
+    fn er_replies_are_read_whole_whatever_the_command_length() {
+        for (message, code) in [
+            ("camera replied ER,TRG,06 to TRG — not executable", Some(6)),
+            ("no mark (camera replied ER,TRG,05)", Some(5)),
+            ("ER,TRG,07: camera-side timeout", Some(7)),
+            // A two-letter command first: the TRG refusal after it is still found.
+            ("camera replied ER,PL,01 then ER,TRG,03 to TRG", Some(3)),
+            // Refusals of other commands, whatever their length, are not TRG's.
+            ("camera replied ER,PL,03 to PL", None),
+            ("camera replied ER,TRGX,06", None),
+            // Not a whole ER reply.
+            ("ER,TRG,06x", None),
+            ("ER,TRG,6", None),
+            ("ER,TRG", None),
+            ("ER,", None),
+            ("", None),
+        ] {
+            assert_eq!(trigger_refusal(message), code, "{message}");
+        }
+        let refusal = DriverError::new(DriverErrorKind::Rejected, "camera replied ER,PL,01 then ER,TRG,04");
+        assert_eq!(DriverSource(Box::new(Failing(refusal))).trigger(), Shot::Reject(4));
     }
 }

@@ -1,6 +1,7 @@
 //! Line framing of untrusted bytes: CR, LF and CRLF each end one line; memory is fixed.
 
 use std::io::{self, Read};
+use std::ops::RangeInclusive;
 
 /// Carriage return, the Keyence delimiter.
 pub const CR: u8 = b'\r';
@@ -24,19 +25,32 @@ impl Default for Limits {
     }
 }
 
+/// Usable [`Limits::max_line_len`], bytes.
+const LINE_LEN: RangeInclusive<usize> = 16..=65_536;
+/// Usable [`Limits::max_lines`].
+const LINES: RangeInclusive<usize> = 2..=64;
+
 impl Limits {
     /// Checks the bounds are usable: a line of 16 to 65 536 bytes, 2 to 64 lines.
     ///
     /// # Errors
     /// The reason, as text.
     pub fn validate(&self) -> Result<(), String> {
-        if !(16..=65_536).contains(&self.max_line_len) {
-            return Err(format!("max_line_len {} must be 16..=65536 bytes", self.max_line_len));
+        if !LINE_LEN.contains(&self.max_line_len) {
+            return Err(format!("max_line_len {} must be {LINE_LEN:?} bytes", self.max_line_len));
         }
-        if !(2..=64).contains(&self.max_lines) {
-            return Err(format!("max_lines {} must be 2..=64", self.max_lines));
+        if !LINES.contains(&self.max_lines) {
+            return Err(format!("max_lines {} must be {LINES:?}", self.max_lines));
         }
         Ok(())
+    }
+
+    /// These limits with each bound brought into the range [`Limits::validate`] accepts.
+    pub(crate) fn clamped(self) -> Limits {
+        Limits {
+            max_line_len: self.max_line_len.clamp(*LINE_LEN.start(), *LINE_LEN.end()),
+            max_lines: self.max_lines.clamp(*LINES.start(), *LINES.end()),
+        }
     }
 }
 
@@ -195,5 +209,17 @@ mod tests {
         assert_eq!(Limits::default().validate(), Ok(()));
         assert!(Limits { max_line_len: 8, max_lines: 8 }.validate().is_err());
         assert!(Limits { max_line_len: 512, max_lines: 1 }.validate().is_err());
+        assert_eq!(
+            Limits { max_line_len: 8, max_lines: 1 }.validate(),
+            Err("max_line_len 8 must be 16..=65536 bytes".into())
+        );
+        assert_eq!(Limits { max_line_len: 512, max_lines: 65 }.validate(), Err("max_lines 65 must be 2..=64".into()));
+        // Clamping lands exactly on what validate accepts, and leaves usable limits alone.
+        for (len, lines) in [(0, 0), (8, 1), (15, 2), (16, 64), (65_537, 65), (usize::MAX, usize::MAX)] {
+            let clamped = Limits { max_line_len: len, max_lines: lines }.clamped();
+            assert_eq!(clamped.validate(), Ok(()), "{clamped:?}");
+        }
+        assert_eq!(Limits { max_line_len: 1, max_lines: 100 }.clamped(), Limits { max_line_len: 16, max_lines: 64 });
+        assert_eq!(Limits::default().clamped(), Limits::default());
     }
 }

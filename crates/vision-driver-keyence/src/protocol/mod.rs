@@ -3,6 +3,8 @@
 
 mod framing;
 #[cfg(test)]
+mod generate;
+#[cfg(test)]
 mod mock;
 mod reply;
 mod session;

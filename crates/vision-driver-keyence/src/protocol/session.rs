@@ -105,8 +105,7 @@ impl<S: Read + Write> Session<S> {
     /// Out-of-range `limits` are clamped to [`Limits::validate`]'s bounds.
     #[must_use]
     pub fn new(stream: S, limits: Limits, timeout: Duration) -> Session<S> {
-        let limits =
-            Limits { max_line_len: limits.max_line_len.clamp(16, 65_536), max_lines: limits.max_lines.clamp(2, 64) };
+        let limits = limits.clamped();
         Session { stream, reader: LineReader::new(limits.max_line_len), limits, timeout, written: 0 }
     }
 
@@ -132,14 +131,10 @@ impl<S: Read + Write> Session<S> {
         self.written
     }
 
-    /// Restarts the [`Session::bytes_written`] count (at the start of each driver call).
+    /// Restarts the [`Session::bytes_written`] count (e.g. before an exchange whose failure a
+    /// caller wants to judge: zero bytes then means the camera cannot have seen it).
     pub fn reset_bytes_written(&mut self) {
         self.written = 0;
-    }
-
-    /// Forgets bytes received but not yet read as lines (they answer no command).
-    pub fn discard_buffered(&mut self) {
-        self.reader.discard();
     }
 
     /// `TRG`: triggers one inspection and reads its Data Output line.
@@ -279,7 +274,8 @@ impl<S: Read + Write> Session<S> {
         Err(KeyenceError::TooManyLines { command: name.to_string(), limit: self.limits.max_lines })
     }
 
-    /// Writes `command` and its CR, counting accepted bytes, then flushes.
+    /// Writes `command` and its CR, counting accepted bytes, then flushes. Bytes received but
+    /// not yet read as lines are forgotten first: they answer no command of ours.
     fn send(&mut self, command: &str, name: &str) -> Result<(), KeyenceError> {
         self.reader.discard();
         let mut buf = [0u8; MAX_COMMAND_LEN];
@@ -304,10 +300,10 @@ impl<S: Read + Write> Session<S> {
                     self.written += n;
                 }
                 Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-                Err(e) => return Err(io_error(e, name, sending.into(), self.timeout, None)),
+                Err(e) => return Err(io_error(e, name, sending.into(), false, self.timeout, None)),
             }
         }
-        self.stream.flush().map_err(|e| io_error(e, name, sending.into(), self.timeout, None))
+        self.stream.flush().map_err(|e| io_error(e, name, sending.into(), false, self.timeout, None))
     }
 }
 
@@ -343,15 +339,22 @@ fn frame_error(
     match e {
         FrameError::TooLong => KeyenceError::LineTooLong { command: at.name.to_string(), limit: limits.max_line_len },
         FrameError::Eof => KeyenceError::Closed { command: at.name.to_string(), waiting_for: at.describe() },
-        FrameError::Io(e) => io_error(e, at.name, at.describe(), timeout, ignored),
+        FrameError::Io(e) => io_error(e, at.name, at.describe(), at.echoed, timeout, ignored),
     }
 }
 
-fn io_error(e: io::Error, name: &str, waiting_for: String, timeout: Duration, ignored: Option<String>) -> KeyenceError {
+fn io_error(
+    e: io::Error,
+    name: &str,
+    waiting_for: String,
+    echoed: bool,
+    timeout: Duration,
+    ignored: Option<String>,
+) -> KeyenceError {
     use io::ErrorKind as K;
     match e.kind() {
         K::TimedOut | K::WouldBlock => {
-            KeyenceError::Timeout { command: name.to_string(), timeout, waiting_for, ignored }
+            KeyenceError::Timeout { command: name.to_string(), timeout, waiting_for, echoed, ignored }
         }
         K::ConnectionReset | K::ConnectionAborted | K::BrokenPipe | K::UnexpectedEof | K::NotConnected => {
             KeyenceError::Closed { command: name.to_string(), waiting_for }
@@ -363,6 +366,7 @@ fn io_error(e: io::Error, name: &str, waiting_for: String, timeout: Duration, ig
 #[cfg(test)]
 #[allow(clippy::float_cmp)]
 mod tests {
+    use super::super::generate::{data_line, DataLine};
     use super::super::mock::{bytewise, Script, Step};
     use super::*;
     use proptest::prelude::*;
@@ -450,8 +454,9 @@ mod tests {
     fn timeout_says_what_was_missing() {
         let mut s = session(vec![Step::write(b"TRG\r"), Step::ReadErr(io::ErrorKind::WouldBlock)]);
         match s.trigger() {
-            Err(KeyenceError::Timeout { waiting_for, timeout, .. }) => {
+            Err(KeyenceError::Timeout { waiting_for, timeout, echoed, .. }) => {
                 assert_eq!(waiting_for, "the TRG echo");
+                assert!(!echoed);
                 assert_eq!(timeout, T);
             }
             other => panic!("{other:?}"),
@@ -459,8 +464,9 @@ mod tests {
         let mut s =
             session(vec![Step::write(b"TRG\r"), Step::read(b"7,7\rTRG\r"), Step::ReadErr(io::ErrorKind::TimedOut)]);
         match s.trigger() {
-            Err(KeyenceError::Timeout { waiting_for, ignored, .. }) => {
+            Err(KeyenceError::Timeout { waiting_for, ignored, echoed, .. }) => {
                 assert_eq!(waiting_for, "the data line (the TRG echo arrived)");
+                assert!(echoed);
                 assert_eq!(ignored.as_deref(), Some("7,7"));
             }
             other => panic!("{other:?}"),
@@ -606,35 +612,111 @@ mod tests {
         s.into_inner().done();
     }
 
+    /// What the camera sends after the lines that answer nothing.
+    #[derive(Debug, Clone)]
+    enum Answer {
+        /// The echo, then a data line.
+        Data(DataLine),
+        /// `ER,TRG,<nn>` instead of the echo.
+        Reject(u8),
+        /// The echo, then the connection closes.
+        EchoThenClose,
+        /// Arbitrary bytes, after the echo or not.
+        Bytes(bool, Vec<u8>),
+    }
+
+    fn answer() -> impl Strategy<Value = Answer> {
+        let byte = prop_oneof![Just(b'\r'), Just(b'\n'), Just(b','), any::<u8>(), b'0'..=b'9'];
+        prop_oneof![
+            6 => data_line().prop_map(Answer::Data),
+            1 => (1u8..=99).prop_map(Answer::Reject),
+            1 => Just(Answer::EchoThenClose),
+            2 => (any::<bool>(), proptest::collection::vec(byte, 0..1500)).prop_map(|(e, b)| Answer::Bytes(e, b)),
+        ]
+    }
+
+    /// A line before the echo that answers no command of ours: empty, a stale data output, a
+    /// reply to another command, a broken `ER`, or any printable text that is not `TRG`'s.
+    fn stray_line() -> impl Strategy<Value = String> {
+        prop_oneof![
+            Just(String::new()),
+            Just("1,9,9".to_string()),
+            Just("ER,PL,03".to_string()),
+            Just("PR,1,005".to_string()),
+            Just("ER,TRG".to_string()),
+            "[ -~]{1,40}".prop_filter("answers TRG", |l| l != "TRG" && !l.starts_with("ER,TRG,")),
+        ]
+    }
+
+    fn delimiter() -> impl Strategy<Value = &'static [u8]> {
+        prop_oneof![Just(&b"\r"[..]), Just(&b"\n"[..]), Just(&b"\r\n"[..])]
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(400))]
 
-        /// Arbitrary reply bytes, delivered in arbitrary pieces: never a panic, the buffer never
-        /// grows, and an accepted reading is finite.
+        /// Stray lines, then the camera's answer, each line with any delimiter, delivered in
+        /// arbitrary pieces: the session returns exactly what the answer says — the data line's
+        /// reading (or its refusal), the rejection, the closed connection — or `TooManyLines`
+        /// when the answer lies past the 8-line bound; arbitrary bytes never panic and anything
+        /// accepted from them is finite. (Memory is bounded by construction: tests/alloc_bound.rs.)
         #[test]
-        fn arbitrary_replies(
-            reply in proptest::collection::vec(
-                prop_oneof![Just(b'\r'), Just(b'\n'), Just(b','), any::<u8>(), b'0'..=b'9'], 0..1500),
+        fn replies_read_as_the_camera_meant_them(
+            strays in proptest::collection::vec((stray_line(), delimiter()), 0..9),
+            answer in answer(),
+            delims in (delimiter(), delimiter()),
             piece in 1usize..64,
-            echo in any::<bool>(),
         ) {
-            let mut bytes = if echo { b"TRG\r".to_vec() } else { Vec::new() };
-            bytes.extend(&reply);
+            let mut bytes = Vec::new();
+            for (line, delim) in &strays {
+                bytes.extend_from_slice(line.as_bytes());
+                // An empty line ends in CR: a bare LF straight after a CR is part of that line end.
+                bytes.extend_from_slice(if line.is_empty() { b"\r" } else { delim });
+            }
+            let mut line = |text: &[u8], delim: &[u8]| {
+                bytes.extend_from_slice(text);
+                bytes.extend_from_slice(delim);
+            };
+            match &answer {
+                Answer::Data(data) => {
+                    line(b"TRG", delims.0);
+                    line(data.text.as_bytes(), delims.1);
+                }
+                Answer::Reject(code) => line(format!("ER,TRG,{code:02}").as_bytes(), delims.0),
+                Answer::EchoThenClose => line(b"TRG", delims.0),
+                Answer::Bytes(echo, tail) => {
+                    if *echo {
+                        line(b"TRG", delims.0);
+                    }
+                    line(tail, b"");
+                }
+            }
             let mut steps = vec![Step::write(b"TRG\r")];
             steps.extend(bytes.chunks(piece).map(Step::read));
-            let mut s = session(steps);
-            let cap = s.reader.capacity();
-            match s.trigger() {
-                Ok(r) => {
+            let got = session(steps).trigger();
+            // Lines read when the answer is complete: the strays, then the echo and the data
+            // line, the rejection, or the echo and the end of the stream.
+            let needed = strays.len() + if matches!(answer, Answer::Reject(_)) { 1 } else { 2 };
+            let too_many = KeyenceError::TooManyLines { command: "TRG".into(), limit: 8 };
+            match (&answer, &got) {
+                (Answer::Bytes(..), Ok(r)) => {
                     for v in [r.x_px, r.y_px, r.width_px, r.height_px, r.angle_deg, r.score] {
                         prop_assert!(v.is_finite());
                     }
                 }
-                Err(e) => {
-                    prop_assert!(e.to_string().len() < 1200, "{e}");
+                (Answer::Bytes(..), Err(e)) => prop_assert!(e.to_string().len() < 1200, "{e}"),
+                (_, got) if needed > 8 => prop_assert_eq!(got, &Err(too_many)),
+                (Answer::Data(data), got) => match (&data.expected, got) {
+                    (Some(want), Ok(r)) => prop_assert_eq!(r, want),
+                    (None, Err(KeyenceError::Malformed { .. })) => {}
+                    (want, got) => prop_assert!(false, "{}: got {got:?}, want {want:?}", data.text),
+                },
+                (Answer::Reject(code), Err(KeyenceError::Rejected { code: c, .. })) => {
+                    prop_assert_eq!(c, &format!("{code:02}"));
                 }
+                (Answer::EchoThenClose, Err(KeyenceError::Closed { .. })) => {}
+                (answer, got) => prop_assert!(false, "{answer:?}: got {got:?}"),
             }
-            prop_assert_eq!(s.reader.capacity(), cap);
         }
     }
 }

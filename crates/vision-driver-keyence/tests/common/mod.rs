@@ -10,17 +10,26 @@ use vision_driver_keyence::emulator::{EmulatorBuilder, EmulatorHandle, FnSource,
 use vision_driver_keyence::{KeyenceConfig, KeyenceDriver};
 
 /// The driver timeout the tests use.
-pub const T: Duration = Duration::from_millis(300);
+///
+/// Chosen with [`SLACK`] so that [`assert_within`]'s bound, `1.2·T + SLACK` = 850 ms, stays
+/// below `2·T` = 1000 ms: a driver that waited two timeouts (a doubled deadline, a retry on a
+/// fresh connection, a connect timeout and a reply timeout in sequence) fails the bound. With
+/// T = 300 ms the bound was 610 ms > 2·T and could not catch that. Larger T would widen the
+/// margin but lengthen every fault test (the slowest waits about 3·T).
+pub const T: Duration = Duration::from_millis(500);
 
 /// Absolute margin on top of "timeout + 20 %" for a loaded 2-core CI machine: thread wake-ups
 /// and scheduling there can take tens of milliseconds. The property tested is that no failure
-/// waits more than one timeout; this margin only absorbs scheduler noise.
+/// waits more than one timeout; this margin only absorbs scheduler noise, and must stay below
+/// `0.8·T` so the bound stays below two timeouts (checked in [`assert_within`]).
 pub const SLACK: Duration = Duration::from_millis(250);
 
-/// Panics unless `start` is at most timeout + 20 % (+ [`SLACK`]) ago.
+/// Panics unless `start` is at most timeout + 20 % (+ [`SLACK`]) ago, a bound that must itself
+/// be below two timeouts (else a doubled wait would pass).
 pub fn assert_within(start: Instant, timeout: Duration, what: &str) {
     let took = start.elapsed();
     let bound = timeout.mul_f64(1.2) + SLACK;
+    assert!(bound < timeout * 2, "{what}: the bound {bound:?} cannot tell one timeout {timeout:?} from two");
     assert!(took <= bound, "{what} took {took:?}, more than {bound:?}");
 }
 

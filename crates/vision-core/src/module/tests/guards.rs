@@ -81,6 +81,12 @@ fn driver_errors_carry_the_manuals_fix() {
     assert!(e.to_string().starts_with("connection refused — camera not in Run Mode"), "{e}");
     assert_eq!(rig.module.params().last_status(), e.to_string());
     assert_eq!(rig.module.params().last_judgment(), -1);
+    // A camera refusal reaches the operator in the driver's words, with nothing of the core's.
+    let refusal = "camera replied ER,TRG,06 to TRG — switch the camera to Run mode";
+    rig.world().script.push_back(Err(DriverError::new(DriverErrorKind::Rejected, refusal)));
+    let e = rig.module.m281(&mut rig.machine, false).expect_err("rejected");
+    assert_eq!(e.to_string(), refusal);
+    assert_eq!(rig.module.params().last_status(), refusal);
 }
 
 #[test]
