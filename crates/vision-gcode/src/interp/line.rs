@@ -225,10 +225,15 @@ impl LineRun<'_> {
         Ok(ms)
     }
 
-    /// The one code (other than motion) that owns the axis words, if any.
+    /// Whether a code other than motion owns the axis words. At most one code per line may
+    /// own them, a motion code included: as in LinuxCNC, `G0 G92 X1` is refused whether or not
+    /// the line has axis words, rather than one of the two codes silently doing nothing.
     fn axis_owner(&self, groups: &Groups) -> Result<bool, RunProblem> {
         let mut owner: Option<u16> = None;
-        for code in groups.0.iter().flatten().copied().filter(|&c| axis_consumer(c)) {
+        // The motion group comes first, so a motion code is always named first.
+        let owners =
+            groups.0.iter().flatten().copied().filter(|&c| axis_consumer(c) || group_of(c) == Some(Group::Motion));
+        for code in owners {
             if let Some(first) = owner {
                 return Err(RunProblem::AxisWordConflict {
                     first: GCode(first).to_string(),
@@ -237,7 +242,7 @@ impl LineRun<'_> {
             }
             owner = Some(code);
         }
-        Ok(owner.is_some())
+        Ok(owner.is_some_and(axis_consumer))
     }
 
     /// A length in program units, in machine units.
