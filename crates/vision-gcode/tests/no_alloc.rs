@@ -1,6 +1,6 @@
 //! Parsing and interpreting ordinary lines (moves, arcs, comments, parameters, expressions,
-//! modal codes) allocates nothing once the buffers have grown: a counting global allocator in
-//! this test binary checks it.
+//! modal codes, 17-digit literals) allocates nothing once the buffers have grown: a counting
+//! global allocator in this test binary checks it.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -48,6 +48,8 @@ G4 P0.01
 G54 G52 X0.1 Y0.1
 G68 X1 Y1 R5
 G51 X1.001 Y1.001
+G0 X1 Y1
+G0 X0.30000000000000004 Y1.0000 0000 0000 0002 (17 digits, as Rust prints an f64)
 G0 X1 Y1
 G2 X2 Y2 I0.5 J0.5
 G51 X1.001 Y0.999
