@@ -1,8 +1,9 @@
 //! The frame chain of SPEC §6: program → (G51 → G68 → G52) → work → (+ work offset + G92
 //! − tool X/Y) → machine.
 //!
-//! The X/Y part of program → work is [`vision_math::AlignmentChain::apply`], operation for
-//! operation (the rotation matrix is cached, the arithmetic is the same), so it is bit-identical.
+//! The X/Y part of program → work is [`vision_math::AlignmentChain::apply_with`] with the cached
+//! rotation matrix, the very arithmetic of [`vision_math::AlignmentChain::apply`], so it is
+//! bit-identical by construction.
 
 use vision_math::{AlignmentChain, Matrix2, Point2, Vector2};
 
@@ -38,21 +39,16 @@ impl Frame {
         self.rotation = self.chain.rotation_matrix();
     }
 
-    /// Program X/Y → work X/Y, exactly as [`AlignmentChain::apply`].
+    /// Program X/Y → work X/Y: [`AlignmentChain::apply`] with the cached rotation matrix.
     #[inline]
     pub(crate) fn apply(&self, p: Point2<f64>) -> Point2<f64> {
-        let c = &self.chain;
-        let scaled = Vector2::new(c.scale.x * p.x, c.scale.y * p.y);
-        let rotated = self.rotation * (scaled - c.center.coords) + c.center.coords;
-        Point2::from(rotated + c.shift)
+        self.chain.apply_with(&self.rotation, p)
     }
 
-    /// Work X/Y → program X/Y, as [`AlignmentChain::inverse`] (scale factors are never zero:
-    /// G51 refuses them).
+    /// Work X/Y → program X/Y: [`AlignmentChain::inverse`]. Its `None` (a zero scale factor)
+    /// cannot happen here, G51 refuses zero factors; `w` is returned unchanged if it did.
     pub(crate) fn inverse(&self, w: Point2<f64>) -> Point2<f64> {
-        let c = &self.chain;
-        let v = self.rotation.transpose() * (w.coords - c.shift - c.center.coords) + c.center.coords;
-        Point2::new(v.x / c.scale.x, v.y / c.scale.y)
+        self.chain.inverse(w).unwrap_or(w)
     }
 
     /// True when the X/Y map keeps circles circles (|sx| = |sy|).
