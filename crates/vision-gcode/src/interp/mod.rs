@@ -15,7 +15,7 @@ use crate::event::{Event, EventSink, PathMode, UserCall};
 use crate::geom::{Plane, Xyz};
 use crate::handler::{Context, HandlerError, MCodeHandler, UserMCode};
 use crate::params::{Params, ACTIVE_SYSTEM, G92_OFFSET, POSITION, TOOL_NUMBER, TOOL_OFFSET};
-use crate::parse::{Parser, Span};
+use crate::parse::Parser;
 use crate::tools::{Tool, ToolTable};
 use crate::words::{evaluate, Words};
 use line::{is_builtin_m, Flow, LineRun, Pending};
@@ -64,7 +64,6 @@ pub struct Interpreter {
     stack: Vec<f64>,
     assigns: Vec<(u32, f64)>,
     pending: Vec<Pending>,
-    spans: Vec<Span>,
 }
 
 impl Interpreter {
@@ -81,7 +80,6 @@ impl Interpreter {
             stack: Vec::new(),
             assigns: Vec::new(),
             pending: Vec::new(),
-            spans: Vec::new(),
         };
         interp.refresh_mirrors();
         interp
@@ -166,10 +164,8 @@ impl Interpreter {
         let read = evaluate(&block, &self.params, &mut self.stack, &mut words, &mut self.assigns);
         let range = &self.config.user_mcodes;
         let user = words.m.as_slice().iter().copied().find(|&m| is_user_mcode(range, m));
-        if user.is_some() {
-            self.spans.clear();
-            self.spans.extend_from_slice(block.comment_spans());
-        }
+        // A user M-code's handler gets the line's comments (the only lines that allocate).
+        let comments: Vec<&str> = if user.is_some() { block.comments().collect() } else { Vec::new() };
         read.map_err(|p| GcodeError::run(line, p))?;
         let mut offsets_written = false;
         for i in 0..self.assigns.len() {
@@ -189,7 +185,7 @@ impl Interpreter {
                 self.modal.rederive_program(&self.params);
             }
             self.refresh_mirrors();
-            return self.user_line(code, &words, text, at, handler, sink);
+            return self.user_line(code, &words, &comments, at, handler, sink);
         }
         self.pending.clear();
         let mut st = self.modal;
@@ -233,14 +229,12 @@ impl Interpreter {
         &mut self,
         code: u32,
         words: &Words,
-        text: &str,
+        comments: &[&str],
         at: At,
         handler: Option<&mut (dyn MCodeHandler + 'h)>,
         sink: &mut dyn EventSink,
     ) -> Result<Flow, GcodeError> {
         let At { line, tag, .. } = at;
-        let comments: Vec<&str> =
-            self.spans.iter().map(|s| text.get(s.start as usize..s.end as usize).unwrap_or("")).collect();
         let args: Vec<(char, f64)> = words.all().collect();
         let Some(handler) = handler else {
             sink.event(&Event::UserMCode(UserCall {
@@ -251,7 +245,7 @@ impl Interpreter {
             }));
             return Ok(Flow::Continue);
         };
-        let call = UserMCode::new(code, tag, &args, &comments);
+        let call = UserMCode::new(code, tag, &args, comments);
         let reply = handler.call(&call, &mut Context::new(self, sink, tag));
         let wrap = |e: GcodeError| GcodeError::HandlerGcode { line, code, inner: Box::new(e) };
         match reply {

@@ -127,9 +127,9 @@ impl Assignment {
 
 /// A comment's byte range in the line (the text inside `( )` or after `;`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) struct Span {
-    pub(crate) start: u32,
-    pub(crate) end: u32,
+struct Span {
+    start: u32,
+    end: u32,
 }
 
 /// One parsed line, borrowing the parser's buffers and the source text.
@@ -176,11 +176,6 @@ impl<'p, 's> Block<'p, 's> {
     {
         let text = self.text;
         self.comments.iter().map(move |s| text.get(s.start as usize..s.end as usize).unwrap_or(""))
-    }
-
-    /// The comment spans.
-    pub(crate) fn comment_spans(&self) -> &'p [Span] {
-        self.comments
     }
 
     /// The source text of the line.
