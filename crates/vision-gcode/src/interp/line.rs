@@ -10,7 +10,7 @@ use crate::event::{Event, OutputChange, OutputWrite, PathMode, SpindleCommand};
 use crate::frame::Placement;
 use crate::geom::Plane;
 use crate::interp::modal::Modal;
-use crate::params::{Params, G92_OFFSET};
+use crate::params::Params;
 use crate::tools::ToolTable;
 use crate::words::{whole, Words};
 use vision_math::{LengthUnit, Point2};
@@ -380,11 +380,7 @@ impl LineRun<'_> {
             Some(c) if self.nested => Err(RunProblem::EndInHandler { code: c }),
             Some(c) => {
                 self.emit(Event::ProgramEnd { line: self.line, code: c });
-                self.st.reset(self.cfg);
-                for axis in 0..3 {
-                    self.params.set(G92_OFFSET + axis, 0.0);
-                }
-                self.st.rederive_program(self.params);
+                self.st.end_program(self.cfg, self.params);
                 Ok(Flow::End(c))
             }
         }

@@ -128,12 +128,8 @@ impl Interpreter {
     /// initial path mode, G51/G68/G52 cancelled, G92 zeroed. Units, feed, tools, parameters and
     /// the machine position stay.
     pub fn reset(&mut self) {
-        self.modal.reset(&self.config);
-        for axis in 0..3 {
-            self.params.set(G92_OFFSET + axis, 0.0);
-        }
+        self.modal.end_program(&self.config, &mut self.params);
         self.params.begin();
-        self.modal.rederive_program(&self.params);
         self.refresh_mirrors();
     }
 

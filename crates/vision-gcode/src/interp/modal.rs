@@ -68,10 +68,11 @@ impl Modal {
         }
     }
 
-    /// What M2/M30 (and [`crate::Interpreter::reset`]) restore: G54, G17, G90, G91.1, G94, no
-    /// motion mode, the initial path mode, G51/G68/G52 cancelled. Units, feed, tools and
-    /// positions stay. The caller zeroes G92 and re-derives the program position.
-    pub(crate) fn reset(&mut self, config: &InterpreterConfig) {
+    /// What M2/M30 (and [`crate::Interpreter::reset`]) do: restore G54, G17, G90, G91.1, G94, no
+    /// motion mode, the initial path mode, G51/G68/G52 cancelled; zero the G92 offset (logged in
+    /// `params`' undo log, so a failing line takes it back); re-derive the program position.
+    /// Units, feed, tools and the machine position stay.
+    pub(crate) fn end_program(&mut self, config: &InterpreterConfig, params: &mut Params) {
         self.motion = None;
         self.plane = Plane::Xy;
         self.absolute = true;
@@ -79,6 +80,10 @@ impl Modal {
         self.path = config.initial_path_mode;
         self.system = 1;
         self.frame = Frame::identity();
+        for axis in 0..3 {
+            params.set(G92_OFFSET + axis, 0.0);
+        }
+        self.rederive_program(params);
     }
 
     /// The program → machine map now.
