@@ -87,6 +87,12 @@ impl Placement {
         Xyz { x: (work.x + g92.x) - tool.x, y: (work.y + g92.y) - tool.y, z: (work.z + g92.z) + tool.z }
     }
 
+    /// The inverse of [`Placement::offset`] for one summand: the work offset (or G92 offset)
+    /// that, with `other` (the G92 offset, or the work offset) and `tool`, sums to `total`.
+    pub(crate) fn offset_summand(total: Xyz, other: Xyz, tool: Xyz) -> Xyz {
+        Xyz { x: (total.x - other.x) + tool.x, y: (total.y - other.y) + tool.y, z: (total.z - other.z) - tool.z }
+    }
+
     /// Program point → work point.
     pub(crate) fn work_of(&self, p: Xyz) -> Xyz {
         let w = self.frame.apply(p.xy());
@@ -127,6 +133,10 @@ mod tests {
         let p = Xyz::new(1.0, 1.0, 1.0);
         let m = placement.machine_of(p);
         assert!((placement.program_of(m) - p).norm() < 1e-12);
+        let (work, g92, tool) = (Xyz::new(1.0, 2.0, 3.0), Xyz::new(0.5, -0.25, 0.125), Xyz::new(0.1, 0.2, 4.0));
+        let total = Placement::offset(work, g92, tool);
+        assert!((Placement::offset_summand(total, g92, tool) - work).norm() < 1e-12);
+        assert!((Placement::offset_summand(total, work, tool) - g92).norm() < 1e-12);
         assert!(!frame.is_similarity() && !frame.is_translation() && !frame.mirrors());
     }
 }
