@@ -13,6 +13,7 @@ mod number;
 
 use crate::error::{GcodeError, SyntaxProblem};
 use crate::expr::Node;
+use crate::words::slot;
 
 pub(crate) use number::is_blank;
 
@@ -220,26 +221,6 @@ pub struct Parser {
     nodes: Vec<Node>,
 }
 
-/// Upper-cases an ASCII letter (other bytes unchanged).
-#[inline]
-fn upper(b: u8) -> u8 {
-    if b.is_ascii_lowercase() {
-        b - 32
-    } else {
-        b
-    }
-}
-
-/// The bit of a non-repeatable letter in the duplicate mask.
-#[inline]
-fn letter_bit(letter: u8) -> u32 {
-    if letter == b'$' {
-        1 << 26
-    } else {
-        1 << (letter - b'A')
-    }
-}
-
 impl Parser {
     /// A parser with empty buffers.
     #[must_use]
@@ -309,7 +290,7 @@ impl Parser {
                     self.assignments.push(Assignment { target, value, at: offset(at) });
                 }
                 _ => {
-                    let letter = upper(b);
+                    let letter = b.to_ascii_uppercase();
                     if !(letter.is_ascii_uppercase() || letter == b'$') {
                         return Err((at, unexpected(cur, at)));
                     }
@@ -323,7 +304,7 @@ impl Parser {
                         continue;
                     }
                     if letter != b'G' && letter != b'M' {
-                        let bit = letter_bit(letter);
+                        let bit = 1u32 << slot(letter);
                         if seen & bit != 0 {
                             return Err((at, SyntaxProblem::DuplicateWord { letter: char::from(letter) }));
                         }
