@@ -6,6 +6,7 @@
 //! are refreshed after every line.
 
 use crate::error::RunProblem;
+use crate::words::whole_in;
 
 /// Highest parameter number.
 pub const MAX_PARAMETER: u32 = 9999;
@@ -54,14 +55,7 @@ impl Params {
     /// # Errors
     /// [`RunProblem::BadParameter`] unless `index` is (within 1e-4) a whole number in 1–9999.
     pub fn index(index: f64) -> Result<u32, RunProblem> {
-        let rounded = index.round();
-        if (index - rounded).abs() < INDEX_TOLERANCE && (1.0..=f64::from(MAX_PARAMETER)).contains(&rounded) {
-            // In range 1..=9999 and whole: the cast is exact.
-            #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
-            Ok(rounded as u32)
-        } else {
-            Err(RunProblem::BadParameter { index })
-        }
+        whole_in(index, INDEX_TOLERANCE, MAX_PARAMETER).filter(|&n| n >= 1).ok_or(RunProblem::BadParameter { index })
     }
 
     /// Reads `#index` (the index as an expression computed it).
