@@ -11,7 +11,6 @@ use crate::frame::Placement;
 use crate::geom::Plane;
 use crate::interp::modal::Modal;
 use crate::params::Params;
-use crate::tools::ToolTable;
 use crate::words::{whole, Words};
 use vision_math::{LengthUnit, Point2};
 
@@ -97,7 +96,6 @@ fn axis_consumer(code: u16) -> bool {
 /// One line at work.
 pub(crate) struct LineRun<'a> {
     pub(crate) cfg: &'a InterpreterConfig,
-    pub(crate) tools: &'a ToolTable,
     pub(crate) params: &'a mut Params,
     /// The working copy of the modal state.
     pub(crate) st: Modal,
@@ -281,7 +279,7 @@ impl LineRun<'_> {
     fn select_tool(&mut self) -> Result<(), RunProblem> {
         if let Some(t) = self.w.take(b'T', "T")? {
             let tool = whole(b'T', t)?;
-            if self.tools.get(tool).is_none() {
+            if self.cfg.tools.get(tool).is_none() {
                 return Err(RunProblem::UnknownTool { tool });
             }
             self.st.selected_tool = tool;
@@ -291,7 +289,7 @@ impl LineRun<'_> {
 
     fn change_tool(&mut self) -> Result<(), RunProblem> {
         let tool = self.st.selected_tool;
-        let entry = self.tools.get(tool).ok_or(RunProblem::UnknownTool { tool })?;
+        let entry = self.cfg.tools.get(tool).ok_or(RunProblem::UnknownTool { tool })?;
         self.st.tool = tool;
         self.st.tool_offset = entry.offset;
         self.st.rederive_program(self.params);
@@ -323,7 +321,7 @@ impl LineRun<'_> {
             if tool == 0 {
                 return Err(RunProblem::NoSpindleTool { code: name });
             }
-            let entry = self.tools.get(tool).ok_or(RunProblem::UnknownTool { tool })?;
+            let entry = self.cfg.tools.get(tool).ok_or(RunProblem::UnknownTool { tool })?;
             let writes = entry.outputs.map_or_else(Vec::new, |o| {
                 let on = |d: crate::tools::DigitalOutput| OutputWrite {
                     device: d.device,

@@ -56,8 +56,8 @@ pub enum RunOutcome {
 /// clone without disturbing the original.
 #[derive(Debug, Clone)]
 pub struct Interpreter {
+    /// The set-up; `config.tools` is the live tool table.
     config: InterpreterConfig,
-    tools: ToolTable,
     params: Params,
     modal: Modal,
     parser: Parser,
@@ -72,7 +72,6 @@ impl Interpreter {
     pub fn new(config: InterpreterConfig) -> Interpreter {
         let modal = Modal::initial(&config);
         let mut interp = Interpreter {
-            tools: config.tools.clone(),
             config,
             params: Params::new(),
             modal,
@@ -85,7 +84,8 @@ impl Interpreter {
         interp
     }
 
-    /// The set-up it was built with.
+    /// The set-up it was built with, except `tools`: the interpreter keeps its one, live tool
+    /// table there (the same as [`Interpreter::tools`]), so handler and host writes show in it.
     #[must_use]
     pub fn config(&self) -> &InterpreterConfig {
         &self.config
@@ -190,7 +190,6 @@ impl Interpreter {
         }
         let mut run = LineRun {
             cfg: &self.config,
-            tools: &self.tools,
             params: &mut self.params,
             st,
             out: &mut self.pending,
@@ -376,16 +375,17 @@ impl Interpreter {
         self.modal.selected_tool
     }
 
-    /// The tool table (machine units).
+    /// The tool table as it is now (machine units): the start-up table with every
+    /// [`Interpreter::set_tool`] and tool-offset write applied.
     #[must_use]
     pub fn tools(&self) -> &ToolTable {
-        &self.tools
+        &self.config.tools
     }
 
     /// Tool `tool`'s X/Y offset and Z length in current units, `None` when not in the table.
     #[must_use]
     pub fn tool_offset(&self, tool: u32) -> Option<Xyz> {
-        self.tools.get(tool).map(|t| self.current(t.offset))
+        self.config.tools.get(tool).map(|t| self.current(t.offset))
     }
 
     /// The active G51/G68/G52 as one chain in current units; `None` when it is the identity
@@ -449,7 +449,7 @@ impl Interpreter {
             return Err(GcodeError::run(line, RunProblem::NonFinite { what: "the tool offset" }));
         }
         let (from, to) = (self.modal.units, self.config.machine_unit);
-        let entry = self.tools.get_mut(tool).ok_or(GcodeError::run(line, RunProblem::UnknownTool { tool }))?;
+        let entry = self.config.tools.get_mut(tool).ok_or(GcodeError::run(line, RunProblem::UnknownTool { tool }))?;
         entry.offset.x = from.convert(x, to);
         entry.offset.y = from.convert(y, to);
         let offset = entry.offset;
@@ -467,7 +467,7 @@ impl Interpreter {
 
     /// Adds or replaces a tool-table entry (machine units). Tool 0 is ignored.
     pub fn set_tool(&mut self, number: u32, tool: Tool) {
-        self.tools.insert(number, tool);
+        self.config.tools.insert(number, tool);
         if number != 0 {
             self.after_tool_write(number, tool.offset);
         }
