@@ -245,7 +245,7 @@ impl LineRun<'_> {
 
     /// A length in program units, in machine units.
     pub(super) fn conv(&self, v: f64) -> f64 {
-        self.st.machine_len(v, self.cfg.machine_unit)
+        self.st.units.convert(v, self.cfg.machine_unit)
     }
 
     /// A length word in machine units.

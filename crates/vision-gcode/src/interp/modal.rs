@@ -101,11 +101,6 @@ impl Modal {
     pub(crate) fn rederive_program(&mut self, params: &Params) {
         self.program = self.placement(params).program_of(self.machine);
     }
-
-    /// A length in program units, in machine units.
-    pub(crate) fn machine_len(&self, v: f64, machine_unit: LengthUnit) -> f64 {
-        self.units.convert(v, machine_unit)
-    }
 }
 
 /// First parameter of coordinate system `n` (1 = G54).
