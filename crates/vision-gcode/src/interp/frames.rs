@@ -3,7 +3,7 @@
 use vision_math::Point2;
 
 use super::line::LineRun;
-use super::modal::work_offset_base;
+use super::modal::{work_offset_base, SYSTEMS};
 use crate::error::RunProblem;
 use crate::frame::Placement;
 use crate::geom::{Xyz, AXIS_LETTERS};
@@ -45,7 +45,7 @@ impl LineRun<'_> {
         }
         let p = self.require(b'P', "G10", "the coordinate system, P1 (G54) to P6 (G59), or P0 for the active one")?;
         let mut system = whole(b'P', p)?;
-        if system > 6 {
+        if system > SYSTEMS {
             return Err(RunProblem::OutOfRange {
                 code: "G10",
                 letter: 'P',

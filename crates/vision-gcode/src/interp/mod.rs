@@ -19,7 +19,7 @@ use crate::parse::Parser;
 use crate::tools::{Tool, ToolTable};
 use crate::words::{evaluate, Words};
 use line::{is_builtin_m, Flow, LineRun, Pending};
-use modal::{work_offset_base, Modal};
+use modal::{is_work_offset, work_offset_base, Modal};
 
 /// Where a line sits: its number in the text being run, the line its events are tagged with, and
 /// whether it is G-code run by a handler.
@@ -343,7 +343,8 @@ impl Interpreter {
         self.modal.system
     }
 
-    /// Origin of coordinate system `system` (1 = G54 … 6 = G59), machine units.
+    /// Origin of coordinate system `system` (1 = G54 … 6 = G59; 0 reads G54, above 6 G59),
+    /// machine units.
     #[must_use]
     pub fn work_offset(&self, system: u32) -> Xyz {
         let [x, y, z] = self.params.triple(work_offset_base(system));
@@ -520,7 +521,7 @@ fn is_user_mcode(range: &std::ops::RangeInclusive<u32>, code: u32) -> bool {
 
 /// Whether writing `#n` moves the program frame (G92 and work offsets).
 fn affects_frame(n: u32) -> bool {
-    (G92_OFFSET..G92_OFFSET + 3).contains(&n) || (crate::params::WORK_OFFSET_BASE..ACTIVE_SYSTEM + 200).contains(&n)
+    (G92_OFFSET..G92_OFFSET + 3).contains(&n) || is_work_offset(n)
 }
 
 /// Events from handler G-code carry the M-code's line; outside a program (tag 0) they carry

@@ -103,7 +103,31 @@ impl Modal {
     }
 }
 
-/// First parameter of coordinate system `n` (1 = G54).
+/// Number of coordinate systems: 1 (G54) … 6 (G59); G59.1–G59.3 are not supported.
+pub(crate) const SYSTEMS: u32 = 6;
+
+/// First parameter of coordinate system `n` (1 = G54 … 6 = G59; a number outside that range
+/// stands for the nearest system).
 pub(crate) fn work_offset_base(n: u32) -> u32 {
-    WORK_OFFSET_BASE + WORK_OFFSET_STRIDE * (n.clamp(1, 9) - 1)
+    WORK_OFFSET_BASE + WORK_OFFSET_STRIDE * (n.clamp(1, SYSTEMS) - 1)
+}
+
+/// Whether `#n` holds the X, Y or Z origin of one of the coordinate systems.
+pub(crate) fn is_work_offset(n: u32) -> bool {
+    (WORK_OFFSET_BASE..work_offset_base(SYSTEMS) + 3).contains(&n) && (n - WORK_OFFSET_BASE) % WORK_OFFSET_STRIDE < 3
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn work_offsets_are_the_xyz_of_g54_to_g59() {
+        assert_eq!(work_offset_base(1), 5221);
+        assert_eq!(work_offset_base(6), 5321);
+        assert_eq!(work_offset_base(9), 5321);
+        let offsets: Vec<u32> = (5000..5500).filter(|&n| is_work_offset(n)).collect();
+        let expected: Vec<u32> = (0..6).flat_map(|s| (0..3).map(move |a| 5221 + 20 * s + a)).collect();
+        assert_eq!(offsets, expected);
+    }
 }
