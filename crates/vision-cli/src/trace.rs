@@ -2,7 +2,8 @@
 //! and print what the machine would do, event by event, in machine coordinates.
 //!
 //! User M-codes (M280–M284 and the rest of the user range) are reported, not executed. Output
-//! streams as the program runs: memory stays bounded however long the program is.
+//! streams as the program runs and events are not kept: memory is the program text (read
+//! whole) plus a constant.
 
 use std::fmt::Write as _;
 use std::io::{BufWriter, Read as _, Write};

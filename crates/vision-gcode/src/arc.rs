@@ -62,10 +62,8 @@ impl Arc {
         tol: Tolerance,
     ) -> Result<Arc, RunProblem> {
         let (tolerance, to_user) = (tol.machine, tol.to_user);
-        let (sa, sb) = in_plane(plane, start);
-        let (ea, eb) = in_plane(plane, end);
-        let r0 = (sa - center.0).hypot(sb - center.1);
-        let r1 = (ea - center.0).hypot(eb - center.1);
+        let mut arc = Arc::through(plane, start, end, center, direction, 0.0);
+        let (r0, r1) = (arc.r0, arc.r1);
         if !(r0.is_finite() && r1.is_finite()) {
             return Err(RunProblem::NonFinite { what: "the arc radius" });
         }
@@ -75,8 +73,8 @@ impl Arc {
         if (r0 - r1).abs() > tolerance {
             return Err(RunProblem::ArcRadiusMismatch { start_radius: r0 * to_user, end_radius: r1 * to_user });
         }
-        let a0 = (sb - center.1).atan2(sa - center.0);
-        let a1 = (eb - center.1).atan2(ea - center.0);
+        let (ea, eb) = in_plane(plane, end);
+        let (a0, a1) = (arc.start_angle, (eb - center.1).atan2(ea - center.0));
         let mut sweep = match direction {
             ArcDirection::CounterClockwise => a1 - a0,
             ArcDirection::Clockwise => a0 - a1,
@@ -84,8 +82,26 @@ impl Arc {
         if sweep <= 0.0 {
             sweep += TAU;
         }
-        let angle = sweep + TAU * f64::from(turns.saturating_sub(1));
-        Ok(Arc { plane, start, end, center, direction, angle, start_angle: a0, r0, r1 })
+        arc.angle = sweep + TAU * f64::from(turns.saturating_sub(1));
+        Ok(arc)
+    }
+
+    /// The arc from `start` to `end` about `center` (in-plane) sweeping `angle` radians, its
+    /// radii and start angle measured from the points; no checks.
+    pub(crate) fn through(
+        plane: Plane,
+        start: Xyz,
+        end: Xyz,
+        center: (f64, f64),
+        direction: ArcDirection,
+        angle: f64,
+    ) -> Arc {
+        let (sa, sb) = in_plane(plane, start);
+        let (ea, eb) = in_plane(plane, end);
+        let r0 = (sa - center.0).hypot(sb - center.1);
+        let r1 = (ea - center.0).hypot(eb - center.1);
+        let start_angle = (sb - center.1).atan2(sa - center.0);
+        Arc { plane, start, end, center, direction, angle, start_angle, r0, r1 }
     }
 
     /// The centre of the `R`-format arc from `start` to `end` (LinuxCNC's construction: a
@@ -145,6 +161,12 @@ impl Arc {
         if t >= 1.0 {
             return self.end;
         }
+        self.point_along(t)
+    }
+
+    /// The point at fraction `t` of the swept angle, computed for any `t` (at `t = 1` within
+    /// rounding of `end`).
+    pub(crate) fn point_along(&self, t: f64) -> Xyz {
         let (a, b, n) = self.plane.axes();
         let theta = self.start_angle + self.direction.sign() * t * self.angle;
         let r = self.r0 + t * (self.r1 - self.r0);

@@ -36,7 +36,9 @@ pub struct InterpreterConfig {
     /// The M-codes passed to the handler. Default M100–M999. The built-in codes (M0–M6, M30)
     /// win over this range.
     pub user_mcodes: RangeInclusive<u32>,
-    /// The tool table at start. Default: tools 1–254 with zero offsets and no outputs.
+    /// The tool table at start. Default: tools 1–254 with zero offsets and no outputs. The
+    /// interpreter keeps this one copy up to date: its `config().tools` is the live table, the
+    /// same as [`crate::Interpreter::tools`].
     pub tools: ToolTable,
 }
 

@@ -1,6 +1,7 @@
 //! What the interpreter tells the machine: events in machine coordinates, each tagged with its
 //! source line, streamed to an [`EventSink`] (never collected by the interpreter).
 
+use crate::arc::Arc;
 use crate::geom::{ArcDirection, Plane, Xyz};
 
 /// How fast a linear move goes.
@@ -87,18 +88,9 @@ impl ArcMove {
     /// The machine position at fraction `t` (0 … 1) of the swept angle.
     #[must_use]
     pub fn point_at(&self, t: f64) -> Xyz {
-        let (a, b, n) = self.plane.axes();
-        let (sa, sb) = (self.start.axis(a) - self.center.axis(a), self.start.axis(b) - self.center.axis(b));
-        let (ea, eb) = (self.end.axis(a) - self.center.axis(a), self.end.axis(b) - self.center.axis(b));
-        let r0 = sa.hypot(sb);
-        let r1 = ea.hypot(eb);
-        let theta = sb.atan2(sa) + self.direction.sign() * t * self.angle;
-        let r = r0 + t * (r1 - r0);
-        let mut p = Xyz::ZERO;
-        p.set_axis(a, self.center.axis(a) + r * theta.cos());
-        p.set_axis(b, self.center.axis(b) + r * theta.sin());
-        p.set_axis(n, self.start.axis(n) + t * (self.end.axis(n) - self.start.axis(n)));
-        p
+        let (a, b, _) = self.plane.axes();
+        let center = (self.center.axis(a), self.center.axis(b));
+        Arc::through(self.plane, self.start, self.end, center, self.direction, self.angle).point_along(t)
     }
 }
 

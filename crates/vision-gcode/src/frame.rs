@@ -1,8 +1,9 @@
 //! The frame chain of SPEC §6: program → (G51 → G68 → G52) → work → (+ work offset + G92
 //! − tool X/Y) → machine.
 //!
-//! The X/Y part of program → work is [`vision_math::AlignmentChain::apply`], operation for
-//! operation (the rotation matrix is cached, the arithmetic is the same), so it is bit-identical.
+//! The X/Y part of program → work is [`vision_math::AlignmentChain::apply_with`] with the cached
+//! rotation matrix, the very arithmetic of [`vision_math::AlignmentChain::apply`], so it is
+//! bit-identical by construction.
 
 use vision_math::{AlignmentChain, Matrix2, Point2, Vector2};
 
@@ -38,21 +39,16 @@ impl Frame {
         self.rotation = self.chain.rotation_matrix();
     }
 
-    /// Program X/Y → work X/Y, exactly as [`AlignmentChain::apply`].
+    /// Program X/Y → work X/Y: [`AlignmentChain::apply`] with the cached rotation matrix.
     #[inline]
     pub(crate) fn apply(&self, p: Point2<f64>) -> Point2<f64> {
-        let c = &self.chain;
-        let scaled = Vector2::new(c.scale.x * p.x, c.scale.y * p.y);
-        let rotated = self.rotation * (scaled - c.center.coords) + c.center.coords;
-        Point2::from(rotated + c.shift)
+        self.chain.apply_with(&self.rotation, p)
     }
 
-    /// Work X/Y → program X/Y, as [`AlignmentChain::inverse`] (scale factors are never zero:
-    /// G51 refuses them).
+    /// Work X/Y → program X/Y: [`AlignmentChain::inverse`]. Its `None` (a zero scale factor)
+    /// cannot happen here, G51 refuses zero factors; `w` is returned unchanged if it did.
     pub(crate) fn inverse(&self, w: Point2<f64>) -> Point2<f64> {
-        let c = &self.chain;
-        let v = self.rotation.transpose() * (w.coords - c.shift - c.center.coords) + c.center.coords;
-        Point2::new(v.x / c.scale.x, v.y / c.scale.y)
+        self.chain.inverse(w).unwrap_or(w)
     }
 
     /// True when the X/Y map keeps circles circles (|sx| = |sy|).
@@ -89,6 +85,12 @@ impl Placement {
     /// The summed offset of a work offset, a G92 offset and a tool (offset and length).
     pub(crate) fn offset(work: Xyz, g92: Xyz, tool: Xyz) -> Xyz {
         Xyz { x: (work.x + g92.x) - tool.x, y: (work.y + g92.y) - tool.y, z: (work.z + g92.z) + tool.z }
+    }
+
+    /// The inverse of [`Placement::offset`] for one summand: the work offset (or G92 offset)
+    /// that, with `other` (the G92 offset, or the work offset) and `tool`, sums to `total`.
+    pub(crate) fn offset_summand(total: Xyz, other: Xyz, tool: Xyz) -> Xyz {
+        Xyz { x: (total.x - other.x) + tool.x, y: (total.y - other.y) + tool.y, z: (total.z - other.z) - tool.z }
     }
 
     /// Program point → work point.
@@ -131,6 +133,10 @@ mod tests {
         let p = Xyz::new(1.0, 1.0, 1.0);
         let m = placement.machine_of(p);
         assert!((placement.program_of(m) - p).norm() < 1e-12);
+        let (work, g92, tool) = (Xyz::new(1.0, 2.0, 3.0), Xyz::new(0.5, -0.25, 0.125), Xyz::new(0.1, 0.2, 4.0));
+        let total = Placement::offset(work, g92, tool);
+        assert!((Placement::offset_summand(total, g92, tool) - work).norm() < 1e-12);
+        assert!((Placement::offset_summand(total, work, tool) - g92).norm() < 1e-12);
         assert!(!frame.is_similarity() && !frame.is_translation() && !frame.mirrors());
     }
 }

@@ -54,7 +54,9 @@
 //!   the handler ran stays done (each of its lines atomic in turn).
 //! * **Order within a line:** G20/G21, F, T, M6, M3/M4/M5, G4, G17–G19, G54–G59, G61/G64,
 //!   G90/G91, G90.1/G91.1, G69/G50, G10/G28/G28.1/G52/G92, G68, G51, motion, M0/M1/M2/M30.
-//!   Only one code per line may own the axis words (motion, G10, G28, G52, G92, G68, G51).
+//!   Only one code per line may own the axis words (motion, G10, G28, G52, G92, G68, G51); as
+//!   in LinuxCNC, a motion code beside one of the others is refused even on a line without axis
+//!   words (`G0 G92 X1` is an error, not a silent G92).
 //! * **Frame changes never move the machine** (G54–G59, G10 on the active system, G92, G52,
 //!   G68/G69, G51/G50, M6, a tool-offset or offset-parameter write): the program position is
 //!   re-derived from the machine position, and the next move goes to the new frame.

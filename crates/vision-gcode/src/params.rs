@@ -6,6 +6,7 @@
 //! are refreshed after every line.
 
 use crate::error::RunProblem;
+use crate::words::whole_in;
 
 /// Highest parameter number.
 pub const MAX_PARAMETER: u32 = 9999;
@@ -31,7 +32,7 @@ const INDEX_TOLERANCE: f64 = 1e-4;
 
 /// The parameter table with an undo log, so a failing line leaves no write behind.
 #[derive(Debug, Clone)]
-pub struct Params {
+pub(crate) struct Params {
     values: Box<[f64]>,
     undo: Vec<(u32, f64)>,
 }
@@ -45,7 +46,7 @@ impl Default for Params {
 impl Params {
     /// All parameters zero.
     #[must_use]
-    pub fn new() -> Params {
+    pub(crate) fn new() -> Params {
         Params { values: vec![0.0; MAX_PARAMETER as usize + 1].into_boxed_slice(), undo: Vec::new() }
     }
 
@@ -53,34 +54,27 @@ impl Params {
     ///
     /// # Errors
     /// [`RunProblem::BadParameter`] unless `index` is (within 1e-4) a whole number in 1–9999.
-    pub fn index(index: f64) -> Result<u32, RunProblem> {
-        let rounded = index.round();
-        if (index - rounded).abs() < INDEX_TOLERANCE && (1.0..=f64::from(MAX_PARAMETER)).contains(&rounded) {
-            // In range 1..=9999 and whole: the cast is exact.
-            #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
-            Ok(rounded as u32)
-        } else {
-            Err(RunProblem::BadParameter { index })
-        }
+    pub(crate) fn index(index: f64) -> Result<u32, RunProblem> {
+        whole_in(index, INDEX_TOLERANCE, MAX_PARAMETER).filter(|&n| n >= 1).ok_or(RunProblem::BadParameter { index })
     }
 
     /// Reads `#index` (the index as an expression computed it).
     ///
     /// # Errors
     /// [`RunProblem::BadParameter`] for an index outside 1–9999.
-    pub fn read(&self, index: f64) -> Result<f64, RunProblem> {
+    pub(crate) fn read(&self, index: f64) -> Result<f64, RunProblem> {
         Ok(self.get(Params::index(index)?))
     }
 
     /// The value of `#n` (0 for numbers outside the table).
     #[must_use]
-    pub fn get(&self, n: u32) -> f64 {
+    pub(crate) fn get(&self, n: u32) -> f64 {
         self.values.get(n as usize).copied().unwrap_or(0.0)
     }
 
     /// What a read-only parameter reports, or `None` when `n` is writable.
     #[must_use]
-    pub fn read_only(n: u32) -> Option<&'static str> {
+    pub(crate) fn read_only(n: u32) -> Option<&'static str> {
         match n {
             ACTIVE_SYSTEM => Some("the active coordinate system"),
             5400 => Some("the active tool number"),
@@ -95,7 +89,7 @@ impl Params {
     /// # Errors
     /// [`RunProblem::ReadOnlyParameter`], [`RunProblem::BadParameter`] for `n` outside 1–9999,
     /// [`RunProblem::NonFinite`] for a NaN or infinite value.
-    pub fn write(&mut self, n: u32, value: f64) -> Result<(), RunProblem> {
+    pub(crate) fn write(&mut self, n: u32, value: f64) -> Result<(), RunProblem> {
         if n == 0 || n > MAX_PARAMETER {
             return Err(RunProblem::BadParameter { index: f64::from(n) });
         }
@@ -126,7 +120,7 @@ impl Params {
 
     /// Three consecutive parameters `#n`, `#n+1`, `#n+2`.
     #[must_use]
-    pub fn triple(&self, n: u32) -> [f64; 3] {
+    pub(crate) fn triple(&self, n: u32) -> [f64; 3] {
         [self.get(n), self.get(n + 1), self.get(n + 2)]
     }
 

@@ -175,27 +175,27 @@ fn too_many(code: &str) -> RunProblem {
     RunProblem::ModalConflict { first: code.to_string(), second: "the many other codes on this line".to_string() }
 }
 
+/// `value` as a whole number in `0..=max`, when it lies within `tolerance` of one (never for
+/// NaN).
+pub(crate) fn whole_in(value: f64, tolerance: f64, max: u32) -> Option<u32> {
+    let r = value.round();
+    if (value - r).abs() < tolerance && (0.0..=f64::from(max)).contains(&r) {
+        // Whole and in 0..=max: exact.
+        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+        Some(r as u32)
+    } else {
+        None
+    }
+}
+
 /// A G value in tenths (`90.1` → 901).
 fn g_code(v: f64) -> Result<u16, RunProblem> {
-    let tenths = (v * 10.0).round();
-    if (v * 10.0 - tenths).abs() < 1e-6 && (0.0..=9999.0).contains(&tenths) {
-        // Whole and in 0..=9999: exact.
-        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
-        Ok(tenths as u16)
-    } else {
-        Err(RunProblem::BadGCode { value: v })
-    }
+    whole_in(v * 10.0, 1e-6, 9999).and_then(|t| u16::try_from(t).ok()).ok_or(RunProblem::BadGCode { value: v })
 }
 
 /// An M value: a whole, non-negative number.
 fn m_code(v: f64) -> Result<u32, RunProblem> {
-    let r = v.round();
-    if (v - r).abs() < 1e-6 && (0.0..=999_999.0).contains(&r) {
-        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
-        Ok(r as u32)
-    } else {
-        Err(RunProblem::BadMCode { value: v })
-    }
+    whole_in(v, 1e-6, 999_999).ok_or(RunProblem::BadMCode { value: v })
 }
 
 /// A word value that must be a whole, non-negative number (tool, port, coordinate system).
@@ -203,13 +203,7 @@ fn m_code(v: f64) -> Result<u32, RunProblem> {
 /// # Errors
 /// [`RunProblem::NotWhole`].
 pub(crate) fn whole(letter: u8, v: f64) -> Result<u32, RunProblem> {
-    let r = v.round();
-    if (v - r).abs() < 1e-4 && (0.0..=f64::from(u32::MAX)).contains(&r) {
-        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
-        Ok(r as u32)
-    } else {
-        Err(RunProblem::NotWhole { letter: char::from(letter), value: v })
-    }
+    whole_in(v, 1e-4, u32::MAX).ok_or(RunProblem::NotWhole { letter: char::from(letter), value: v })
 }
 
 #[cfg(test)]
@@ -240,5 +234,10 @@ mod tests {
         assert!(m_code(-1.0).is_err());
         assert_eq!(whole(b'T', 98.00001), Ok(98));
         assert!(whole(b'T', 1.5).is_err());
+        assert_eq!(g_code(90.1), Ok(901));
+        assert_eq!(whole_in(f64::NAN, 0.5, 10), None);
+        assert_eq!(whole_in(10.4, 0.5, 10), Some(10));
+        assert_eq!(whole_in(10.6, 0.5, 10), None);
+        assert_eq!(whole_in(-0.4, 0.5, 10), Some(0));
     }
 }

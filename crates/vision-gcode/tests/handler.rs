@@ -99,6 +99,7 @@ fn tool_offsets_units_positions_and_alignment_in_current_units() {
     });
     interp.run("G21 G52 X2.54\nT98 M6\nG0 X25.4 Y0\nM283 C1", Some(&mut h), &mut Vec::new()).expect("runs");
     assert_eq!(interp.tools().get(98).map(|t| t.offset), Some(Xyz::new(2.0, 0.0, 0.0)));
+    assert_eq!(interp.config().tools.get(98), interp.tools().get(98), "one live tool table");
     // The machine stayed; the program point moved with the offset: 0.1 + 2 − 0.1 in = 50.8 mm.
     assert!((interp.machine_position() - Xyz::new(0.1, 0.0, 0.0)).norm() < 1e-12);
     assert!((interp.program_position().x - 50.8).abs() < 1e-9);

@@ -224,6 +224,29 @@ fn example4_and_5_fits_apply_and_are_cancelled() {
         assert_eq!(interp.active_alignment(), None, "{name}: cancelled before M30");
         assert_eq!(interp.active_tool(), 1);
         assert!(events.iter().any(|e| matches!(e, Event::ToolChange { tool: 1, .. })));
+
+        // The same program cut before its cancel line: M282's lines are in force, and every
+        // nominal mark, commanded with the cutter (tool 1, no offset), lands on the part.
+        let text = program(name);
+        let cut = text.rfind(&format!("\n{}", vision_math::chain::CANCEL_LINE)).expect("a cancel line");
+        let mut vision = FakeVision::new(part, &marks);
+        let mut interp = machine();
+        let outcome = interp.run(&text[..cut], Some(&mut vision), &mut Vec::new()).expect("runs");
+        assert!(matches!(outcome, RunOutcome::Completed { .. }), "{name}: {outcome:?}");
+        assert_eq!(interp.active_tool(), 1);
+        let emitted = vision.emitted.expect("M282 emitted a chain");
+        let active = interp.active_alignment().expect("M282's alignment is active");
+        // The emitted lines carry fixed decimals (lengths 1e-7, degrees 1e-9, factors 1e-10).
+        assert!((active.shift - emitted.shift).norm() <= 5e-8, "{name}: {active:?} vs {emitted:?}");
+        assert!((active.center - emitted.center).norm() <= 5e-8, "{name}: {active:?} vs {emitted:?}");
+        assert!((active.rotation_deg - emitted.rotation_deg).abs() <= 5e-10, "{name}: {active:?}");
+        assert!((active.scale - emitted.scale).norm() <= 5e-11, "{name}: {active:?} vs {emitted:?}");
+        for &(x, y) in &marks {
+            interp.run(&format!("G0 X{x} Y{y}"), None, &mut Vec::new()).expect("moves");
+            let real = part.apply(Point2::new(x, y));
+            let m = interp.machine_position();
+            assert!((m.xy() - real).norm() < 1e-6, "{name}: ({x}, {y}) went to {m:?}, the mark is at {real}");
+        }
     }
 }
 

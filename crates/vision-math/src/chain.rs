@@ -74,8 +74,18 @@ impl AlignmentChain {
     /// Program point → work point (program units): scale, rotate about the centre, shift.
     #[must_use]
     pub fn apply(&self, p: Point2<f64>) -> Point2<f64> {
+        self.apply_with(&self.rotation_matrix(), p)
+    }
+
+    /// [`AlignmentChain::apply`] with the rotation matrix given, for a caller that maps many
+    /// points through one chain and computes `rotation` once. `rotation` must be
+    /// [`AlignmentChain::rotation_matrix`] of this chain; then the result is bit-identical to
+    /// `apply` (it is the same arithmetic: `apply` calls this).
+    #[inline]
+    #[must_use]
+    pub fn apply_with(&self, rotation: &Matrix2<f64>, p: Point2<f64>) -> Point2<f64> {
         let scaled = Vector2::new(self.scale.x * p.x, self.scale.y * p.y);
-        let rotated = self.rotation_matrix() * (scaled - self.center.coords) + self.center.coords;
+        let rotated = rotation * (scaled - self.center.coords) + self.center.coords;
         Point2::from(rotated + self.shift)
     }
 
@@ -151,6 +161,18 @@ mod tests {
         let back = chain.inverse(w).expect("invertible");
         assert_relative_eq!(back.x, 1.0, epsilon = 1e-12);
         assert_relative_eq!(back.y, 1.0, epsilon = 1e-12);
+    }
+
+    #[test]
+    fn apply_with_its_own_rotation_matrix_is_apply() {
+        let chain = AlignmentChain {
+            scale: Vector2::new(1.0003, 0.9991),
+            center: Point2::new(3.1, 2.2),
+            rotation_deg: 0.731,
+            shift: Vector2::new(0.07, -0.11),
+        };
+        let p = Point2::new(-123.456, 78.9);
+        assert_eq!(chain.apply_with(&chain.rotation_matrix(), p), chain.apply(p));
     }
 
     #[test]

@@ -3,8 +3,9 @@
 use vision_math::Point2;
 
 use super::line::LineRun;
-use super::modal::work_offset_base;
+use super::modal::{work_offset_base, SYSTEMS};
 use crate::error::RunProblem;
+use crate::frame::Placement;
 use crate::geom::{Xyz, AXIS_LETTERS};
 use crate::params::G92_OFFSET;
 use crate::words::whole;
@@ -44,7 +45,7 @@ impl LineRun<'_> {
         }
         let p = self.require(b'P', "G10", "the coordinate system, P1 (G54) to P6 (G59), or P0 for the active one")?;
         let mut system = whole(b'P', p)?;
-        if system > 6 {
+        if system > SYSTEMS {
             return Err(RunProblem::OutOfRange {
                 code: "G10",
                 letter: 'P',
@@ -62,16 +63,9 @@ impl LineRun<'_> {
                 self.params.set(base + axis as u32, v.axis(axis));
             }
         } else {
-            // The origin that makes the current machine point read `v`.
-            let pl = self.placement();
-            let w = pl.work_of(v);
-            let g92 = self.params.triple(G92_OFFSET);
-            let tool = self.st.tool_offset;
-            let m = self.st.machine;
-            let origin =
-                [((m.x - w.x) - g92[0]) + tool.x, ((m.y - w.y) - g92[1]) + tool.y, ((m.z - w.z) - g92[2]) - tool.z];
+            let origin = self.offset_reading(v, G92_OFFSET);
             for axis in (0..3).filter(|&a| given[a]) {
-                self.params.set(base + axis as u32, origin[axis]);
+                self.params.set(base + axis as u32, origin.axis(axis));
             }
         }
         if system == self.st.system {
@@ -81,6 +75,15 @@ impl LineRun<'_> {
             }
         }
         Ok(())
+    }
+
+    /// The offset (G10 L20: the work offset; G92: the G92 offset) that makes the current
+    /// machine point read program point `v`, the other of the two kept at parameters
+    /// `other`–`other + 2`.
+    fn offset_reading(&self, v: Xyz, other: u32) -> Xyz {
+        let w = self.placement().work_of(v);
+        let [x, y, z] = self.params.triple(other);
+        Placement::offset_summand(self.st.machine - w, Xyz::new(x, y, z), self.st.tool_offset)
     }
 
     /// After an offset was computed to make the current point read `v` on the given axes, take
@@ -100,15 +103,9 @@ impl LineRun<'_> {
         }
         self.st.rederive_program(self.params);
         let (v, given) = self.absolute_point("G92")?;
-        let pl = self.placement();
-        let w = pl.work_of(v);
-        let work = self.params.triple(work_offset_base(self.st.system));
-        let tool = self.st.tool_offset;
-        let m = self.st.machine;
-        let g92 =
-            [((m.x - w.x) - work[0]) + tool.x, ((m.y - w.y) - work[1]) + tool.y, ((m.z - w.z) - work[2]) - tool.z];
+        let g92 = self.offset_reading(v, work_offset_base(self.st.system));
         for axis in (0..3).filter(|&a| given[a]) {
-            self.params.set(G92_OFFSET + axis as u32, g92[axis]);
+            self.params.set(G92_OFFSET + axis as u32, g92.axis(axis));
         }
         self.st.rederive_program(self.params);
         self.keep_given(v, given);

@@ -10,8 +10,7 @@ use crate::event::{Event, OutputChange, OutputWrite, PathMode, SpindleCommand};
 use crate::frame::Placement;
 use crate::geom::Plane;
 use crate::interp::modal::Modal;
-use crate::params::{Params, G92_OFFSET};
-use crate::tools::ToolTable;
+use crate::params::Params;
 use crate::words::{whole, Words};
 use vision_math::{LengthUnit, Point2};
 
@@ -97,7 +96,6 @@ fn axis_consumer(code: u16) -> bool {
 /// One line at work.
 pub(crate) struct LineRun<'a> {
     pub(crate) cfg: &'a InterpreterConfig,
-    pub(crate) tools: &'a ToolTable,
     pub(crate) params: &'a mut Params,
     /// The working copy of the modal state.
     pub(crate) st: Modal,
@@ -225,10 +223,15 @@ impl LineRun<'_> {
         Ok(ms)
     }
 
-    /// The one code (other than motion) that owns the axis words, if any.
+    /// Whether a code other than motion owns the axis words. At most one code per line may
+    /// own them, a motion code included: as in LinuxCNC, `G0 G92 X1` is refused whether or not
+    /// the line has axis words, rather than one of the two codes silently doing nothing.
     fn axis_owner(&self, groups: &Groups) -> Result<bool, RunProblem> {
         let mut owner: Option<u16> = None;
-        for code in groups.0.iter().flatten().copied().filter(|&c| axis_consumer(c)) {
+        // The motion group comes first, so a motion code is always named first.
+        let owners =
+            groups.0.iter().flatten().copied().filter(|&c| axis_consumer(c) || group_of(c) == Some(Group::Motion));
+        for code in owners {
             if let Some(first) = owner {
                 return Err(RunProblem::AxisWordConflict {
                     first: GCode(first).to_string(),
@@ -237,12 +240,12 @@ impl LineRun<'_> {
             }
             owner = Some(code);
         }
-        Ok(owner.is_some())
+        Ok(owner.is_some_and(axis_consumer))
     }
 
     /// A length in program units, in machine units.
     pub(super) fn conv(&self, v: f64) -> f64 {
-        self.st.machine_len(v, self.cfg.machine_unit)
+        self.st.units.convert(v, self.cfg.machine_unit)
     }
 
     /// A length word in machine units.
@@ -276,7 +279,7 @@ impl LineRun<'_> {
     fn select_tool(&mut self) -> Result<(), RunProblem> {
         if let Some(t) = self.w.take(b'T', "T")? {
             let tool = whole(b'T', t)?;
-            if self.tools.get(tool).is_none() {
+            if self.cfg.tools.get(tool).is_none() {
                 return Err(RunProblem::UnknownTool { tool });
             }
             self.st.selected_tool = tool;
@@ -286,7 +289,7 @@ impl LineRun<'_> {
 
     fn change_tool(&mut self) -> Result<(), RunProblem> {
         let tool = self.st.selected_tool;
-        let entry = self.tools.get(tool).ok_or(RunProblem::UnknownTool { tool })?;
+        let entry = self.cfg.tools.get(tool).ok_or(RunProblem::UnknownTool { tool })?;
         self.st.tool = tool;
         self.st.tool_offset = entry.offset;
         self.st.rederive_program(self.params);
@@ -318,7 +321,7 @@ impl LineRun<'_> {
             if tool == 0 {
                 return Err(RunProblem::NoSpindleTool { code: name });
             }
-            let entry = self.tools.get(tool).ok_or(RunProblem::UnknownTool { tool })?;
+            let entry = self.cfg.tools.get(tool).ok_or(RunProblem::UnknownTool { tool })?;
             let writes = entry.outputs.map_or_else(Vec::new, |o| {
                 let on = |d: crate::tools::DigitalOutput| OutputWrite {
                     device: d.device,
@@ -375,11 +378,7 @@ impl LineRun<'_> {
             Some(c) if self.nested => Err(RunProblem::EndInHandler { code: c }),
             Some(c) => {
                 self.emit(Event::ProgramEnd { line: self.line, code: c });
-                self.st.reset(self.cfg);
-                for axis in 0..3 {
-                    self.params.set(G92_OFFSET + axis, 0.0);
-                }
-                self.st.rederive_program(self.params);
+                self.st.end_program(self.cfg, self.params);
                 Ok(Flow::End(c))
             }
         }

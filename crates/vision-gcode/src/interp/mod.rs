@@ -15,11 +15,11 @@ use crate::event::{Event, EventSink, PathMode, UserCall};
 use crate::geom::{Plane, Xyz};
 use crate::handler::{Context, HandlerError, MCodeHandler, UserMCode};
 use crate::params::{Params, ACTIVE_SYSTEM, G92_OFFSET, POSITION, TOOL_NUMBER, TOOL_OFFSET};
-use crate::parse::{Parser, Span};
+use crate::parse::Parser;
 use crate::tools::{Tool, ToolTable};
 use crate::words::{evaluate, Words};
 use line::{is_builtin_m, Flow, LineRun, Pending};
-use modal::{work_offset_base, Modal};
+use modal::{is_work_offset, work_offset_base, Modal};
 
 /// Where a line sits: its number in the text being run, the line its events are tagged with, and
 /// whether it is G-code run by a handler.
@@ -56,15 +56,14 @@ pub enum RunOutcome {
 /// clone without disturbing the original.
 #[derive(Debug, Clone)]
 pub struct Interpreter {
+    /// The set-up; `config.tools` is the live tool table.
     config: InterpreterConfig,
-    tools: ToolTable,
     params: Params,
     modal: Modal,
     parser: Parser,
     stack: Vec<f64>,
     assigns: Vec<(u32, f64)>,
     pending: Vec<Pending>,
-    spans: Vec<Span>,
 }
 
 impl Interpreter {
@@ -73,7 +72,6 @@ impl Interpreter {
     pub fn new(config: InterpreterConfig) -> Interpreter {
         let modal = Modal::initial(&config);
         let mut interp = Interpreter {
-            tools: config.tools.clone(),
             config,
             params: Params::new(),
             modal,
@@ -81,13 +79,13 @@ impl Interpreter {
             stack: Vec::new(),
             assigns: Vec::new(),
             pending: Vec::new(),
-            spans: Vec::new(),
         };
         interp.refresh_mirrors();
         interp
     }
 
-    /// The set-up it was built with.
+    /// The set-up it was built with, except `tools`: the interpreter keeps its one, live tool
+    /// table there (the same as [`Interpreter::tools`]), so handler and host writes show in it.
     #[must_use]
     pub fn config(&self) -> &InterpreterConfig {
         &self.config
@@ -130,12 +128,8 @@ impl Interpreter {
     /// initial path mode, G51/G68/G52 cancelled, G92 zeroed. Units, feed, tools, parameters and
     /// the machine position stay.
     pub fn reset(&mut self) {
-        self.modal.reset(&self.config);
-        for axis in 0..3 {
-            self.params.set(G92_OFFSET + axis, 0.0);
-        }
+        self.modal.end_program(&self.config, &mut self.params);
         self.params.begin();
-        self.modal.rederive_program(&self.params);
         self.refresh_mirrors();
     }
 
@@ -166,10 +160,8 @@ impl Interpreter {
         let read = evaluate(&block, &self.params, &mut self.stack, &mut words, &mut self.assigns);
         let range = &self.config.user_mcodes;
         let user = words.m.as_slice().iter().copied().find(|&m| is_user_mcode(range, m));
-        if user.is_some() {
-            self.spans.clear();
-            self.spans.extend_from_slice(block.comment_spans());
-        }
+        // A user M-code's handler gets the line's comments (the only lines that allocate).
+        let comments: Vec<&str> = if user.is_some() { block.comments().collect() } else { Vec::new() };
         read.map_err(|p| GcodeError::run(line, p))?;
         let mut offsets_written = false;
         for i in 0..self.assigns.len() {
@@ -189,7 +181,7 @@ impl Interpreter {
                 self.modal.rederive_program(&self.params);
             }
             self.refresh_mirrors();
-            return self.user_line(code, &words, text, at, handler, sink);
+            return self.user_line(code, &words, &comments, at, handler, sink);
         }
         self.pending.clear();
         let mut st = self.modal;
@@ -198,7 +190,6 @@ impl Interpreter {
         }
         let mut run = LineRun {
             cfg: &self.config,
-            tools: &self.tools,
             params: &mut self.params,
             st,
             out: &mut self.pending,
@@ -233,14 +224,12 @@ impl Interpreter {
         &mut self,
         code: u32,
         words: &Words,
-        text: &str,
+        comments: &[&str],
         at: At,
         handler: Option<&mut (dyn MCodeHandler + 'h)>,
         sink: &mut dyn EventSink,
     ) -> Result<Flow, GcodeError> {
         let At { line, tag, .. } = at;
-        let comments: Vec<&str> =
-            self.spans.iter().map(|s| text.get(s.start as usize..s.end as usize).unwrap_or("")).collect();
         let args: Vec<(char, f64)> = words.all().collect();
         let Some(handler) = handler else {
             sink.event(&Event::UserMCode(UserCall {
@@ -251,7 +240,7 @@ impl Interpreter {
             }));
             return Ok(Flow::Continue);
         };
-        let call = UserMCode::new(code, tag, &args, &comments);
+        let call = UserMCode::new(code, tag, &args, comments);
         let reply = handler.call(&call, &mut Context::new(self, sink, tag));
         let wrap = |e: GcodeError| GcodeError::HandlerGcode { line, code, inner: Box::new(e) };
         match reply {
@@ -354,7 +343,8 @@ impl Interpreter {
         self.modal.system
     }
 
-    /// Origin of coordinate system `system` (1 = G54 … 6 = G59), machine units.
+    /// Origin of coordinate system `system` (1 = G54 … 6 = G59; 0 reads G54, above 6 G59),
+    /// machine units.
     #[must_use]
     pub fn work_offset(&self, system: u32) -> Xyz {
         let [x, y, z] = self.params.triple(work_offset_base(system));
@@ -386,16 +376,17 @@ impl Interpreter {
         self.modal.selected_tool
     }
 
-    /// The tool table (machine units).
+    /// The tool table as it is now (machine units): the start-up table with every
+    /// [`Interpreter::set_tool`] and tool-offset write applied.
     #[must_use]
     pub fn tools(&self) -> &ToolTable {
-        &self.tools
+        &self.config.tools
     }
 
     /// Tool `tool`'s X/Y offset and Z length in current units, `None` when not in the table.
     #[must_use]
     pub fn tool_offset(&self, tool: u32) -> Option<Xyz> {
-        self.tools.get(tool).map(|t| self.current(t.offset))
+        self.config.tools.get(tool).map(|t| self.current(t.offset))
     }
 
     /// The active G51/G68/G52 as one chain in current units; `None` when it is the identity
@@ -459,7 +450,7 @@ impl Interpreter {
             return Err(GcodeError::run(line, RunProblem::NonFinite { what: "the tool offset" }));
         }
         let (from, to) = (self.modal.units, self.config.machine_unit);
-        let entry = self.tools.get_mut(tool).ok_or(GcodeError::run(line, RunProblem::UnknownTool { tool }))?;
+        let entry = self.config.tools.get_mut(tool).ok_or(GcodeError::run(line, RunProblem::UnknownTool { tool }))?;
         entry.offset.x = from.convert(x, to);
         entry.offset.y = from.convert(y, to);
         let offset = entry.offset;
@@ -477,7 +468,7 @@ impl Interpreter {
 
     /// Adds or replaces a tool-table entry (machine units). Tool 0 is ignored.
     pub fn set_tool(&mut self, number: u32, tool: Tool) {
-        self.tools.insert(number, tool);
+        self.config.tools.insert(number, tool);
         if number != 0 {
             self.after_tool_write(number, tool.offset);
         }
@@ -530,7 +521,7 @@ fn is_user_mcode(range: &std::ops::RangeInclusive<u32>, code: u32) -> bool {
 
 /// Whether writing `#n` moves the program frame (G92 and work offsets).
 fn affects_frame(n: u32) -> bool {
-    (G92_OFFSET..G92_OFFSET + 3).contains(&n) || (crate::params::WORK_OFFSET_BASE..ACTIVE_SYSTEM + 200).contains(&n)
+    (G92_OFFSET..G92_OFFSET + 3).contains(&n) || is_work_offset(n)
 }
 
 /// Events from handler G-code carry the M-code's line; outside a program (tag 0) they carry

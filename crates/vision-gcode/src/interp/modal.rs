@@ -68,10 +68,11 @@ impl Modal {
         }
     }
 
-    /// What M2/M30 (and [`crate::Interpreter::reset`]) restore: G54, G17, G90, G91.1, G94, no
-    /// motion mode, the initial path mode, G51/G68/G52 cancelled. Units, feed, tools and
-    /// positions stay. The caller zeroes G92 and re-derives the program position.
-    pub(crate) fn reset(&mut self, config: &InterpreterConfig) {
+    /// What M2/M30 (and [`crate::Interpreter::reset`]) do: restore G54, G17, G90, G91.1, G94, no
+    /// motion mode, the initial path mode, G51/G68/G52 cancelled; zero the G92 offset (logged in
+    /// `params`' undo log, so a failing line takes it back); re-derive the program position.
+    /// Units, feed, tools and the machine position stay.
+    pub(crate) fn end_program(&mut self, config: &InterpreterConfig, params: &mut Params) {
         self.motion = None;
         self.plane = Plane::Xy;
         self.absolute = true;
@@ -79,6 +80,10 @@ impl Modal {
         self.path = config.initial_path_mode;
         self.system = 1;
         self.frame = Frame::identity();
+        for axis in 0..3 {
+            params.set(G92_OFFSET + axis, 0.0);
+        }
+        self.rederive_program(params);
     }
 
     /// The program → machine map now.
@@ -96,14 +101,33 @@ impl Modal {
     pub(crate) fn rederive_program(&mut self, params: &Params) {
         self.program = self.placement(params).program_of(self.machine);
     }
-
-    /// A length in program units, in machine units.
-    pub(crate) fn machine_len(&self, v: f64, machine_unit: LengthUnit) -> f64 {
-        self.units.convert(v, machine_unit)
-    }
 }
 
-/// First parameter of coordinate system `n` (1 = G54).
+/// Number of coordinate systems: 1 (G54) … 6 (G59); G59.1–G59.3 are not supported.
+pub(crate) const SYSTEMS: u32 = 6;
+
+/// First parameter of coordinate system `n` (1 = G54 … 6 = G59; a number outside that range
+/// stands for the nearest system).
 pub(crate) fn work_offset_base(n: u32) -> u32 {
-    WORK_OFFSET_BASE + WORK_OFFSET_STRIDE * (n.clamp(1, 9) - 1)
+    WORK_OFFSET_BASE + WORK_OFFSET_STRIDE * (n.clamp(1, SYSTEMS) - 1)
+}
+
+/// Whether `#n` holds the X, Y or Z origin of one of the coordinate systems.
+pub(crate) fn is_work_offset(n: u32) -> bool {
+    (WORK_OFFSET_BASE..work_offset_base(SYSTEMS) + 3).contains(&n) && (n - WORK_OFFSET_BASE) % WORK_OFFSET_STRIDE < 3
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn work_offsets_are_the_xyz_of_g54_to_g59() {
+        assert_eq!(work_offset_base(1), 5221);
+        assert_eq!(work_offset_base(6), 5321);
+        assert_eq!(work_offset_base(9), 5321);
+        let offsets: Vec<u32> = (5000..5500).filter(|&n| is_work_offset(n)).collect();
+        let expected: Vec<u32> = (0..6).flat_map(|s| (0..3).map(move |a| 5221 + 20 * s + a)).collect();
+        assert_eq!(offsets, expected);
+    }
 }

@@ -3,7 +3,7 @@
 //! Recursion is bounded: each bracket, `#`, sign or function call costs one level of
 //! [`MAX_DEPTH`], and a chain of operators on one level is a loop, not a recursion.
 
-use super::{number, upper, Cursor, PResult, Parser, MAX_DEPTH};
+use super::{number, Cursor, PResult, Parser, MAX_DEPTH};
 use crate::error::SyntaxProblem;
 use crate::expr::{BinOp, Func, Node};
 
@@ -21,7 +21,7 @@ fn keyword(cur: &Cursor<'_>, word: &[u8]) -> Option<usize> {
     let mut probe = *cur;
     for &w in word {
         probe.skip_blanks();
-        if probe.peek().map(upper) != Some(w) {
+        if probe.peek().map(|b| b.to_ascii_uppercase()) != Some(w) {
             return None;
         }
         probe.pos += 1;

@@ -13,6 +13,7 @@ mod number;
 
 use crate::error::{GcodeError, SyntaxProblem};
 use crate::expr::Node;
+use crate::words::slot;
 
 pub(crate) use number::is_blank;
 
@@ -127,9 +128,9 @@ impl Assignment {
 
 /// A comment's byte range in the line (the text inside `( )` or after `;`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) struct Span {
-    pub(crate) start: u32,
-    pub(crate) end: u32,
+struct Span {
+    start: u32,
+    end: u32,
 }
 
 /// One parsed line, borrowing the parser's buffers and the source text.
@@ -178,11 +179,6 @@ impl<'p, 's> Block<'p, 's> {
         self.comments.iter().map(move |s| text.get(s.start as usize..s.end as usize).unwrap_or(""))
     }
 
-    /// The comment spans.
-    pub(crate) fn comment_spans(&self) -> &'p [Span] {
-        self.comments
-    }
-
     /// The source text of the line.
     #[must_use]
     pub fn text(&self) -> &'s str {
@@ -223,26 +219,6 @@ pub struct Parser {
     assignments: Vec<Assignment>,
     comments: Vec<Span>,
     nodes: Vec<Node>,
-}
-
-/// Upper-cases an ASCII letter (other bytes unchanged).
-#[inline]
-fn upper(b: u8) -> u8 {
-    if b.is_ascii_lowercase() {
-        b - 32
-    } else {
-        b
-    }
-}
-
-/// The bit of a non-repeatable letter in the duplicate mask.
-#[inline]
-fn letter_bit(letter: u8) -> u32 {
-    if letter == b'$' {
-        1 << 26
-    } else {
-        1 << (letter - b'A')
-    }
 }
 
 impl Parser {
@@ -314,7 +290,7 @@ impl Parser {
                     self.assignments.push(Assignment { target, value, at: offset(at) });
                 }
                 _ => {
-                    let letter = upper(b);
+                    let letter = b.to_ascii_uppercase();
                     if !(letter.is_ascii_uppercase() || letter == b'$') {
                         return Err((at, unexpected(cur, at)));
                     }
@@ -328,7 +304,7 @@ impl Parser {
                         continue;
                     }
                     if letter != b'G' && letter != b'M' {
-                        let bit = letter_bit(letter);
+                        let bit = 1u32 << slot(letter);
                         if seen & bit != 0 {
                             return Err((at, SyntaxProblem::DuplicateWord { letter: char::from(letter) }));
                         }

@@ -71,7 +71,8 @@ pub(super) fn number(cur: &mut Cursor<'_>) -> PResult<f64> {
         #[allow(clippy::cast_precision_loss)] // mantissa ≤ 2^53: exact.
         return Ok(mantissa as f64 / POW10[decimals]);
     }
-    slow(&bytes[start..i]).ok_or((start, SyntaxProblem::BadNumber))
+    // Digits and at most one `.`, no blanks: the standard library reads the slice as it is.
+    parse(&bytes[start..i]).ok_or((start, SyntaxProblem::BadNumber))
 }
 
 /// Any number: blanks inside are ignored (`1 2 . 5` is 12.5).
@@ -112,14 +113,36 @@ fn general(cur: &mut Cursor<'_>) -> PResult<f64> {
         #[allow(clippy::cast_precision_loss)] // mantissa ≤ 2^53: exact.
         return Ok(mantissa as f64 / POW10[decimals as usize]);
     }
-    slow(&bytes[start..i]).ok_or((start, SyntaxProblem::BadNumber))
+    without_blanks(&bytes[start..i]).ok_or((start, SyntaxProblem::BadNumber))
 }
 
-/// The general case: strip blanks and let the standard library round.
+/// Digits and at most one `.` (no blanks), correctly rounded by the standard library.
+fn parse(digits: &[u8]) -> Option<f64> {
+    std::str::from_utf8(digits).ok()?.parse().ok()
+}
+
+/// Longest literal (blanks removed) read without allocating; a longer one with blanks inside is
+/// copied to the heap.
+const STACK_DIGITS: usize = 64;
+
+/// Digits, at most one `.` and blanks: the blanks removed, then [`parse`]. Allocates only for
+/// a literal with blanks inside and more than [`STACK_DIGITS`] other characters.
 #[cold]
-fn slow(raw: &[u8]) -> Option<f64> {
-    let text: String = raw.iter().filter(|b| !is_blank(**b)).map(|&b| char::from(b)).collect();
-    text.parse::<f64>().ok()
+fn without_blanks(raw: &[u8]) -> Option<f64> {
+    if !raw.iter().any(|&b| is_blank(b)) {
+        return parse(raw);
+    }
+    let mut buf = [0u8; STACK_DIGITS];
+    let mut len = 0;
+    for &b in raw.iter().filter(|&&b| !is_blank(b)) {
+        let Some(slot) = buf.get_mut(len) else {
+            let text: Vec<u8> = raw.iter().copied().filter(|&b| !is_blank(b)).collect();
+            return parse(&text);
+        };
+        *slot = b;
+        len += 1;
+    }
+    parse(&buf[..len])
 }
 
 #[cfg(test)]
@@ -157,6 +180,11 @@ mod tests {
         assert_eq!(num("7 X").expect("blank then letter"), (7.0, 1));
         assert_eq!(num("1. 5").expect("blank inside the fraction"), (1.5, 4));
         assert_eq!(num("12345678901234567890.5").expect("long").0, 12_345_678_901_234_567_890.5);
+        assert_eq!(num("0.3000 0000 0000 0000 4").expect("17 digits with blanks").0, 0.300_000_000_000_000_04);
+        // Longer than the stack buffer once the blanks are gone.
+        let long = format!("0.{}", "1234 5678 ".repeat(20));
+        let compact: String = long.chars().filter(|c| *c != ' ').collect();
+        assert_eq!(num(&long).expect("long with blanks").0, compact.parse::<f64>().expect("std"));
     }
 
     proptest::proptest! {
