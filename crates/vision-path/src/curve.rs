@@ -49,8 +49,15 @@ pub(crate) struct ArcCurve {
 pub(crate) enum ArcProblem {
     NoPlane,
     OnCentre,
-    NoTurns,
+    /// The sweep is zero, not finite, beyond [`MAX_SWEEP`], or so small that the arc's
+    /// length overflows.
+    BadSweep,
+    /// Turning by the sweep does not end at the end point.
+    MissesEnd,
 }
+
+/// The largest sweep an arc may have, radians (a million turns).
+pub(crate) const MAX_SWEEP: f64 = 1e6 * TAU;
 
 impl LineCurve {
     /// The line from `start` to `end`, or `None` when they coincide.
@@ -62,20 +69,21 @@ impl LineCurve {
 }
 
 impl ArcCurve {
-    /// A G2/G3 arc from `start` to `end` about `centre` (see [`crate::ArcShape`]).
+    /// A G2/G3 arc from `start` to `end` about `centre`, turning `sweep` radians about
+    /// `normal` (see [`crate::ArcShape`]). The sweep must take the arc to `end`.
     pub(crate) fn program(
         start: Vec3,
         end: Vec3,
         centre: Vec3,
         normal: Vec3,
-        clockwise: bool,
-        turns: u32,
+        sweep: f64,
     ) -> Result<ArcCurve, ArcProblem> {
         let n = normal.unit().ok_or(ArcProblem::NoPlane)?;
-        if turns == 0 {
-            return Err(ArcProblem::NoTurns);
+        if !(sweep.is_finite() && sweep != 0.0 && sweep.abs() <= MAX_SWEEP) {
+            return Err(ArcProblem::BadSweep);
         }
-        let axis = if clockwise { -n } else { n };
+        let axis = if sweep < 0.0 { -n } else { n };
+        let sweep = sweep.abs();
         let rs = start - centre;
         let re = end - centre;
         let rs_p = rs - axis * rs.dot(axis);
@@ -87,17 +95,20 @@ impl ArcCurve {
         }
         let e1 = rs_p * (1.0 / r0);
         let e2 = axis.cross(e1);
-        let mut sweep = re_p.dot(e2).atan2(re_p.dot(e1));
-        if (re_p * (r0 / r1) - rs_p).norm() <= 1e-9 * scale {
-            sweep = TAU; // start and end coincide seen along the axis: a full circle
-        } else if sweep <= 0.0 {
-            sweep += TAU;
-        }
-        sweep += f64::from(turns - 1) * TAU;
         let base = centre + axis * rs.dot(axis);
         let k_r = (r1 - r0) / sweep;
         let k_z = (end - start).dot(axis) / sweep;
-        Ok(ArcCurve::build(base, e1, e2, axis, r0, r1, k_r, k_z, sweep, start, end))
+        let arc = ArcCurve::build(base, e1, e2, axis, r0, r1, k_r, k_z, sweep, start, end);
+        // The end is returned exactly; the sweep must reach it (as closely as the continuity
+        // between segments is checked), or the path would jump there.
+        if !((arc.at_phi(sweep) - end).norm() <= 1e-9 * scale) {
+            return Err(ArcProblem::MissesEnd);
+        }
+        // A sweep so small that the rise along the axis makes the length overflow.
+        if !(arc.rho * sweep).is_finite() {
+            return Err(ArcProblem::BadSweep);
+        }
+        Ok(arc)
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -340,7 +351,7 @@ mod tests {
     #[test]
     fn a_quarter_circle_g3_in_xy_runs_counter_clockwise_with_exact_ends() {
         let (s, e, c) = (Vec3::new(10.0, 0.0, 0.0), Vec3::new(0.0, 10.0, 0.0), Vec3::ZERO);
-        let arc = Curve::Arc(ArcCurve::program(s, e, c, Vec3::new(0.0, 0.0, 1.0), false, 1).unwrap());
+        let arc = Curve::Arc(ArcCurve::program(s, e, c, Vec3::new(0.0, 0.0, 1.0), FRAC_PI_2).unwrap());
         assert!((arc.len() - 10.0 * FRAC_PI_2).abs() < 1e-12);
         assert_eq!(arc.point(arc.len()), e);
         assert_eq!(arc.point(0.0), s);
@@ -353,12 +364,12 @@ mod tests {
     #[test]
     fn g2_goes_the_other_way_round_and_equal_ends_make_a_full_circle() {
         let (s, e, c) = (Vec3::new(10.0, 0.0, 0.0), Vec3::new(0.0, 10.0, 0.0), Vec3::ZERO);
-        let cw = Curve::Arc(ArcCurve::program(s, e, c, Vec3::new(0.0, 0.0, 1.0), true, 1).unwrap());
+        let cw = Curve::Arc(ArcCurve::program(s, e, c, Vec3::new(0.0, 0.0, 1.0), -3.0 * FRAC_PI_2).unwrap());
         assert!((cw.len() - 10.0 * 3.0 * FRAC_PI_2).abs() < 1e-9);
         assert!(close(cw.point(cw.len() / 3.0), Vec3::new(0.0, -10.0, 0.0), 1e-9));
-        let full = Curve::Arc(ArcCurve::program(s, s, c, Vec3::new(0.0, 0.0, 1.0), false, 1).unwrap());
+        let full = Curve::Arc(ArcCurve::program(s, s, c, Vec3::new(0.0, 0.0, 1.0), TAU).unwrap());
         assert!((full.len() - 20.0 * PI).abs() < 1e-9);
-        let two = Curve::Arc(ArcCurve::program(s, s, c, Vec3::new(0.0, 0.0, 1.0), false, 2).unwrap());
+        let two = Curve::Arc(ArcCurve::program(s, s, c, Vec3::new(0.0, 0.0, 1.0), 2.0 * TAU).unwrap());
         assert!((two.len() - 40.0 * PI).abs() < 1e-9);
     }
 
@@ -371,8 +382,7 @@ mod tests {
                 Vec3::new(5.0, 0.0, 0.0),
                 Vec3::ZERO,
                 Vec3::new(0.0, 1.0, 0.0),
-                false,
-                1,
+                FRAC_PI_2,
             )
             .unwrap(),
         );
@@ -384,8 +394,7 @@ mod tests {
                 Vec3::new(0.0, 0.0, 5.0),
                 Vec3::ZERO,
                 Vec3::new(1.0, 0.0, 0.0),
-                false,
-                1,
+                FRAC_PI_2,
             )
             .unwrap(),
         );
@@ -396,7 +405,7 @@ mod tests {
     fn a_helix_rises_linearly_and_its_length_includes_the_rise() {
         let s = Vec3::new(10.0, 0.0, 0.0);
         let e = Vec3::new(-10.0, 0.0, 4.0);
-        let arc = Curve::Arc(ArcCurve::program(s, e, Vec3::ZERO, Vec3::new(0.0, 0.0, 1.0), false, 1).unwrap());
+        let arc = Curve::Arc(ArcCurve::program(s, e, Vec3::ZERO, Vec3::new(0.0, 0.0, 1.0), PI).unwrap());
         let expected = ((10.0 * PI).powi(2) + 16.0f64).sqrt();
         assert!((arc.len() - expected).abs() < 1e-9);
         assert!((arc.point(arc.len() / 2.0).z - 2.0).abs() < 1e-12);
@@ -409,7 +418,7 @@ mod tests {
     fn a_spiral_keeps_its_parameter_speed_at_most_one() {
         let s = Vec3::new(10.0, 0.0, 0.0);
         let e = Vec3::new(0.0, 10.01, 0.0);
-        let arc = Curve::Arc(ArcCurve::program(s, e, Vec3::ZERO, Vec3::new(0.0, 0.0, 1.0), false, 1).unwrap());
+        let arc = Curve::Arc(ArcCurve::program(s, e, Vec3::ZERO, Vec3::new(0.0, 0.0, 1.0), FRAC_PI_2).unwrap());
         for k in 0..=20 {
             let d = arc.deriv(arc.len() * f64::from(k) / 20.0).norm();
             assert!(d <= 1.0 + 1e-15 && d > 0.999, "{d}");
@@ -421,9 +430,35 @@ mod tests {
     fn degenerate_arcs_are_reported() {
         let s = Vec3::new(1.0, 0.0, 0.0);
         let z = Vec3::new(0.0, 0.0, 1.0);
-        assert_eq!(ArcCurve::program(s, s, s, z, false, 1), Err(ArcProblem::OnCentre));
-        assert_eq!(ArcCurve::program(s, s, Vec3::ZERO, Vec3::ZERO, false, 1), Err(ArcProblem::NoPlane));
-        assert_eq!(ArcCurve::program(s, s, Vec3::ZERO, z, false, 0), Err(ArcProblem::NoTurns));
+        assert_eq!(ArcCurve::program(s, s, s, z, TAU), Err(ArcProblem::OnCentre));
+        assert_eq!(ArcCurve::program(s, s, Vec3::ZERO, Vec3::ZERO, TAU), Err(ArcProblem::NoPlane));
+        for sweep in [0.0, -0.0, f64::NAN, f64::INFINITY, 2.0 * MAX_SWEEP] {
+            assert_eq!(ArcCurve::program(s, s, Vec3::ZERO, z, sweep), Err(ArcProblem::BadSweep), "{sweep}");
+        }
+        // A quarter turn does not reach the opposite point.
+        let e = Vec3::new(-1.0, 0.0, 0.0);
+        assert_eq!(ArcCurve::program(s, e, Vec3::ZERO, z, FRAC_PI_2), Err(ArcProblem::MissesEnd));
+        // A rise of 5 over next to no angle: the pitch or the length overflows.
+        let up = Vec3::new(1.0, 0.0, 5.0);
+        assert_eq!(ArcCurve::program(s, up, Vec3::ZERO, z, 1e-308), Err(ArcProblem::MissesEnd));
+        assert_eq!(ArcCurve::program(s, up, Vec3::ZERO, z, 1e-300), Err(ArcProblem::BadSweep));
+    }
+
+    #[test]
+    fn the_sweep_decides_the_arc_not_a_full_circle_rule() {
+        // The interpreter's `G0 X10 Y0 / G3 X10 Y0.00000001 I-10 J0`: a 1e-9 rad arc, not a
+        // full circle.
+        let (s, e) = (Vec3::new(10.0, 0.0, 0.0), Vec3::new(10.0, 1e-8, 0.0));
+        let z = Vec3::new(0.0, 0.0, 1.0);
+        let tiny = Curve::Arc(ArcCurve::program(s, e, Vec3::ZERO, z, 1e-9).unwrap());
+        assert!((tiny.len() - 1e-8).abs() < 1e-20, "{}", tiny.len());
+        // The same points with a sweep of one turn more: the full circle (plus the sliver).
+        let full = Curve::Arc(ArcCurve::program(s, e, Vec3::ZERO, z, TAU + 1e-9).unwrap());
+        assert!((full.len() - 10.0 * (TAU + 1e-9)).abs() < 1e-9);
+        // Clockwise the long way round.
+        let back = Curve::Arc(ArcCurve::program(s, e, Vec3::ZERO, z, 1e-9 - TAU).unwrap());
+        assert!((back.len() - 10.0 * (TAU - 1e-9)).abs() < 1e-9);
+        assert!(close(back.point(back.len() / 4.0), Vec3::new(0.0, -10.0, 0.0), 1e-6));
     }
 
     #[test]
@@ -447,8 +482,7 @@ mod tests {
                 Vec3::new(-10.0, 0.0, 0.0),
                 Vec3::ZERO,
                 Vec3::new(0.0, 0.0, 1.0),
-                false,
-                1,
+                PI,
             )
             .unwrap(),
         );

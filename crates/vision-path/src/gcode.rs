@@ -4,7 +4,7 @@
 //! | interpreter event | planner item |
 //! | --- | --- |
 //! | `Linear` (G0, G1, G28 legs, arc polylines) | a line [`Segment`]: rapid or feed, its G61/G64 |
-//! | `Arc` | an arc [`Segment`]: centre, plane normal (+Z G17, +Y G18, +X G19), direction, turns |
+//! | `Arc` | an arc [`Segment`]: centre, plane normal (+Z G17, +Y G18, +X G19), the interpreter's swept angle signed by the direction |
 //! | `Dwell` (G4) | [`Item::Dwell`] |
 //! | `ToolChange` (M6) | [`Event::ToolChange`] |
 //! | `Output` (M3/M4/M5) | [`Event::Output`]: the tool (or the explicit port) and the command |
@@ -19,8 +19,8 @@
 use std::collections::VecDeque;
 
 use vision_gcode::{
-    ArcDirection, Event as GEvent, GcodeError, Interpreter, InterpreterConfig, MCodeHandler, PathMode as GPathMode,
-    Plane, Rate, RunOutcome, SpindleCommand, Xyz,
+    Event as GEvent, GcodeError, Interpreter, InterpreterConfig, MCodeHandler, PathMode as GPathMode, Plane, Rate,
+    RunOutcome, SpindleCommand, Xyz,
 };
 
 use crate::follower::check_axes;
@@ -171,8 +171,7 @@ pub fn item(event: &GEvent, line: usize) -> Item {
                     Plane::Zx => [0.0, 1.0, 0.0],
                     Plane::Yz => [1.0, 0.0, 0.0],
                 },
-                clockwise: a.direction == ArcDirection::Clockwise,
-                turns: a.extra_turns().saturating_add(1),
+                sweep: a.direction.sign() * a.angle,
             }),
             speed: Speed::Feed(a.feed),
             mode: path_mode(a.path),

@@ -67,8 +67,8 @@ pub enum Shape {
     Arc(ArcShape),
 }
 
-/// A G2/G3 arc: centre, plane normal, direction and turns. Any displacement along the normal
-/// between start and end makes it a helix; a start and end radius that differ slightly
+/// A G2/G3 arc: centre, plane normal and the angle it sweeps. Any displacement along the
+/// normal between start and end makes it a helix; a start and end radius that differ slightly
 /// (rounded G-code) make it a spiral whose radius changes linearly with angle.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ArcShape {
@@ -77,11 +77,12 @@ pub struct ArcShape {
     /// The plane normal, any length: +Z for G17, +Y for G18, +X for G19. Counter-clockwise
     /// (G3) is a positive rotation about it (right-hand rule).
     pub normal: [f64; 3],
-    /// `true` for G2 (clockwise seen from the tip of `normal`), `false` for G3.
-    pub clockwise: bool,
-    /// LinuxCNC's `P` word: 1 = the plain arc, each extra count adds a full turn. When start
-    /// and end coincide (seen along the normal), the plain arc is a full circle.
-    pub turns: u32,
+    /// The angle the arc turns about `normal`, radians: positive counter-clockwise (G3),
+    /// negative clockwise (G2); beyond ±2π for multi-turn arcs (G2/G3 `P`), ±2π for a full
+    /// circle. It is what the interpreter reports (`ArcMove::angle` with the direction's
+    /// sign), and it must take the arc from `start` to `end` (within 10⁻⁹ relative to the
+    /// coordinates' size), or the segment is refused.
+    pub sweep: f64,
 }
 
 /// How fast a segment is asked to move.

@@ -187,7 +187,7 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Shaper<I> {
                 if !(centre.is_finite() && normal.is_finite()) || centre.max_abs() > MAX_COORDINATE {
                     return Err(invalid(line, "an arc centre or normal is not a finite number in range".into()));
                 }
-                match ArcCurve::program(self.pos, end, centre, normal, arc.clockwise, arc.turns) {
+                match ArcCurve::program(self.pos, end, centre, normal, arc.sweep) {
                     Ok(a) => Curve::Arc(a),
                     Err(p) => return Err(invalid(line, arc_message(p).into())),
                 }
@@ -262,6 +262,9 @@ fn arc_message(p: ArcProblem) -> &'static str {
     match p {
         ArcProblem::NoPlane => "the arc's plane normal is zero; select a plane (G17, G18 or G19)",
         ArcProblem::OnCentre => "the arc has zero radius (start or end on the centre); check I, J, K",
-        ArcProblem::NoTurns => "an arc needs at least 1 turn (P1); check the P word",
+        ArcProblem::BadSweep => "the arc's sweep is zero, not a finite number or over a million turns; check the arc",
+        ArcProblem::MissesEnd => {
+            "the arc's sweep does not turn it from its start to its end point; check the sweep and the centre"
+        }
     }
 }

@@ -25,13 +25,10 @@ fn item() -> impl Strategy<Value = Item> {
         prop::option::of(number()).prop_map(|tolerance| PathMode::Blend { tolerance })
     ];
     let speed = prop_oneof![Just(Speed::Rapid), number().prop_map(|f| Speed::Feed(f * 100.0))];
-    let shape =
-        prop_oneof![
-            Just(Shape::Line),
-            (xyz(), xyz(), any::<bool>(), 0..4u32).prop_map(|(centre, normal, clockwise, turns)| Shape::Arc(
-                ArcShape { centre, normal, clockwise, turns }
-            )),
-        ];
+    let shape = prop_oneof![
+        Just(Shape::Line),
+        (xyz(), xyz(), number()).prop_map(|(centre, normal, sweep)| Shape::Arc(ArcShape { centre, normal, sweep })),
+    ];
     prop_oneof![
         6 => (1..100usize, xyz(), xyz(), shape, speed, mode)
             .prop_map(|(line, start, end, shape, speed, mode)| Item::Move(Segment { line, start, end, shape, speed, mode })),

@@ -236,13 +236,27 @@ fn bad_items_are_refused_with_their_line_and_what_to_do() {
         shape: Shape::Arc(vision_path::ArcShape {
             centre: [0.0; 3],
             normal: [0.0, 0.0, 1.0],
-            clockwise: false,
-            turns: 1,
+            sweep: std::f64::consts::TAU,
         }),
         speed: Speed::Feed(100.0),
         mode: PathMode::ExactStop,
     })]);
     assert!(e.to_string().contains("zero radius"), "{e}");
+    // A quarter turn that is said to be a half turn does not reach its end.
+    let e = first_error(vec![Item::Move(Segment {
+        line: 6,
+        start: [0.0; 3],
+        end: [-1.0, 1.0, 0.0],
+        shape: Shape::Arc(vision_path::ArcShape {
+            centre: [-1.0, 0.0, 0.0],
+            normal: [0.0, 0.0, 1.0],
+            sweep: std::f64::consts::PI,
+        }),
+        speed: Speed::Feed(100.0),
+        mode: PathMode::ExactStop,
+    })]);
+    assert!(e.to_string().contains("sweep does not turn it"), "{e}");
+    assert!(e.to_string().contains("line 6: "), "{e}");
     let e = first_error(vec![Item::Dwell { line: 9, seconds: -1.0 }]);
     assert_eq!(e.line(), Some(9));
     let e = first_error(vec![Item::Move(Segment {

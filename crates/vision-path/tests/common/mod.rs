@@ -54,7 +54,7 @@ impl Program {
             line,
             start: self.pos,
             end,
-            shape: Shape::Arc(ArcShape { centre, normal: n, clockwise: angle < 0.0, turns: 1 }),
+            shape: Shape::Arc(ArcShape { centre, normal: n, sweep: angle }),
             speed,
             mode: self.mode,
         }));
@@ -62,14 +62,22 @@ impl Program {
         self
     }
 
-    /// A G2/G3 in the XY plane (G17) to `end` about `centre`, exactly as programmed.
+    /// A G2/G3 in the XY plane (G17) to `end` about `centre`, exactly as programmed: less
+    /// than a full turn (a full circle when the ends coincide), as the interpreter sweeps it.
     pub fn g17_arc_to(&mut self, end: [f64; 3], centre: [f64; 3], clockwise: bool, speed: Speed) -> &mut Program {
+        let a0 = (self.pos[1] - centre[1]).atan2(self.pos[0] - centre[0]);
+        let a1 = (end[1] - centre[1]).atan2(end[0] - centre[0]);
+        let mut sweep = if clockwise { a0 - a1 } else { a1 - a0 };
+        if sweep <= 0.0 {
+            sweep += TAU;
+        }
+        let sweep = if clockwise { -sweep } else { sweep };
         let line = self.next_line();
         self.items.push(Item::Move(Segment {
             line,
             start: self.pos,
             end,
-            shape: Shape::Arc(ArcShape { centre, normal: [0.0, 0.0, 1.0], clockwise, turns: 1 }),
+            shape: Shape::Arc(ArcShape { centre, normal: [0.0, 0.0, 1.0], sweep }),
             speed,
             mode: self.mode,
         }));
@@ -126,21 +134,14 @@ pub fn unit(a: [f64; 3]) -> [f64; 3] {
     scale(a, 1.0 / norm(a))
 }
 
-/// The rotation axis (counter-clockwise positive) and sweep of a planar arc segment.
+/// The rotation axis (counter-clockwise positive), the start radius vector (in the plane) and
+/// the sweep (radians, ≥ 0) of an arc segment.
 fn arc_axis_sweep(seg: &Segment, arc: &ArcShape) -> ([f64; 3], [f64; 3], f64) {
     let n = unit(arc.normal);
-    let axis = if arc.clockwise { neg(n) } else { n };
+    let axis = if arc.sweep < 0.0 { neg(n) } else { n };
     let rs = sub(seg.start, arc.centre);
     let rs = sub(rs, scale(axis, dot(rs, axis)));
-    let re = sub(seg.end, arc.centre);
-    let re = sub(re, scale(axis, dot(re, axis)));
-    let e1 = unit(rs);
-    let e2 = cross(axis, e1);
-    let mut sweep = dot(re, e2).atan2(dot(re, e1));
-    if sweep <= 0.0 {
-        sweep += TAU;
-    }
-    (axis, rs, sweep)
+    (axis, rs, arc.sweep.abs())
 }
 
 /// The unit tangent of a segment at its start (`at_end = false`) or end.
@@ -188,4 +189,17 @@ pub fn distance(p: [f64; 3], seg: &Segment) -> f64 {
 
 pub fn segments(items: &[Item]) -> Vec<&Segment> {
     items.iter().filter_map(|i| if let Item::Move(s) = i { Some(s) } else { None }).collect()
+}
+
+/// The largest `|Δ²p|` of consecutive setpoints (path, and per axis), machine units.
+pub fn worst_second_difference(setpoints: &[Setpoint]) -> (f64, [f64; 3]) {
+    let mut worst = (0.0f64, [0.0f64; 3]);
+    for w in setpoints.windows(3) {
+        let dd = sub(sub(w[2].position, w[1].position), sub(w[1].position, w[0].position));
+        worst.0 = worst.0.max(norm(dd));
+        for (w, d) in worst.1.iter_mut().zip(dd) {
+            *w = w.max(d.abs());
+        }
+    }
+    worst
 }
