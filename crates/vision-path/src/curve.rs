@@ -1,6 +1,8 @@
 //! The geometry of one piece of path: a straight line or a circular / helical / spiral arc,
-//! parameterised by `s ∈ [0, len]` (machine units) with `|dp/ds| ≤ 1` (equality except on
-//! spirals). Both ends are stored and returned exactly, so a path ends where it was told to.
+//! parameterised by `s ∈ [0, len]` (machine units) with `|dp/ds| ≤ 1`, and `|dp/ds| = 1` at
+//! both ends (everywhere except inside spirals), so the speed planned along `s` is the real
+//! speed wherever two pieces join. Both ends are stored and returned exactly, so a path ends
+//! where it was told to.
 
 use std::f64::consts::TAU;
 
@@ -24,8 +26,12 @@ pub(crate) struct LineCurve {
     len: f64,
 }
 
-/// `p(φ) = base + (r0 + k_r·φ)·(e1·cos φ + e2·sin φ) + axis·k_z·φ` for `φ ∈ [phi_a, phi_b]`,
-/// with `s = (φ − phi_a)·rho`.
+/// `p(φ) = base + (r0 + k_r·φ)·(e1·cos φ + e2·sin φ) + axis·k_z·φ` for `φ ∈ [phi_a, phi_b]`.
+///
+/// The parameter: `ds/dφ = h(φ)` goes linearly from `|dp/dφ|` at `phi_a` to `|dp/dφ|` at
+/// `phi_b`, so `|dp/ds| = 1` at both ends. In between `|dp/ds| = |dp/dφ| / h ≤ 1`, because
+/// `|dp/dφ| = √(r(φ)² + k_r² + k_z²)` with `r` linear in `φ` is convex and `h` is its chord.
+/// Circles and helices (`k_r = 0`) have `h` constant: `s` is the arc length.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct ArcCurve {
     base: Vec3,
@@ -35,10 +41,15 @@ pub(crate) struct ArcCurve {
     r0: f64,
     k_r: f64,
     k_z: f64,
-    /// `ds/dφ`: the largest `|dp/dφ|` over the whole arc, so `|dp/ds| ≤ 1`.
-    rho: f64,
+    /// Angle range, radians from `e1`.
     phi_a: f64,
     phi_b: f64,
+    /// `ds/dφ` at `phi_a`, machine units per radian.
+    h_a: f64,
+    /// `d²s/dφ²` (constant), machine units per radian².
+    dh: f64,
+    /// `s` at `phi_b`, machine units.
+    len: f64,
     start: Vec3,
     end: Vec3,
     factors: ShapeFactors,
@@ -98,19 +109,20 @@ impl ArcCurve {
         let base = centre + axis * rs.dot(axis);
         let k_r = (r1 - r0) / sweep;
         let k_z = (end - start).dot(axis) / sweep;
-        let arc = ArcCurve::build(base, e1, e2, axis, r0, r1, k_r, k_z, sweep, start, end);
+        let arc = ArcCurve::build(base, e1, e2, axis, r0, k_r, k_z, (0.0, sweep), start, end);
         // The end is returned exactly; the sweep must reach it (as closely as the continuity
         // between segments is checked), or the path would jump there.
         if !((arc.at_phi(sweep) - end).norm() <= 1e-9 * scale) {
             return Err(ArcProblem::MissesEnd);
         }
         // A sweep so small that the rise along the axis makes the length overflow.
-        if !(arc.rho * sweep).is_finite() {
+        if !arc.len.is_finite() {
             return Err(ArcProblem::BadSweep);
         }
         Ok(arc)
     }
 
+    /// The arc over `phi ∈ [range.0, range.1]` (radians from `e1`) with exact ends.
     #[allow(clippy::too_many_arguments)]
     fn build(
         base: Vec3,
@@ -118,26 +130,30 @@ impl ArcCurve {
         e2: Vec3,
         axis: Vec3,
         r0: f64,
-        r1: f64,
         k_r: f64,
         k_z: f64,
-        sweep: f64,
+        (phi_a, phi_b): (f64, f64),
         start: Vec3,
         end: Vec3,
     ) -> ArcCurve {
-        let (r_max, r_min) = (r0.max(r1), r0.min(r1));
-        let rho = (r_max * r_max + k_r * k_r + k_z * k_z).sqrt();
-        let in_plane = (k_r * k_r + r_max * r_max).sqrt() / rho;
-        let q = [axis.x, axis.y, axis.z].map(|a| (1.0 - a * a).max(0.0).sqrt());
-        let c = [0, 1, 2].map(|i| (q[i] * in_plane + axis.get(i).abs() * k_z.abs() / rho).min(1.0));
-        let factors = ShapeFactors {
-            c,
-            q,
-            kappa: (r_max * r_max + 4.0 * k_r * k_r).sqrt() / (rho * rho),
-            cross: if k_r == 0.0 { 0.0 } else { (k_r.abs() / r_min).min(1.0) },
-            circle: k_r == 0.0 && k_z == 0.0,
-        };
-        ArcCurve { base, e1, e2, axis, r0, k_r, k_z, rho, phi_a: 0.0, phi_b: sweep, start, end, factors }
+        let (r_a, r_b) = (r0 + k_r * phi_a, r0 + k_r * phi_b);
+        let side2 = k_r * k_r + k_z * k_z;
+        let (h_a, h_b) = ((r_a * r_a + side2).sqrt(), (r_b * r_b + side2).sqrt());
+        let span = phi_b - phi_a;
+        let dh = if h_a == h_b { 0.0 } else { (h_b - h_a) / span };
+        let len = 0.5 * (h_a + h_b) * span;
+        let factors = arc_factors(axis, (r_a, r_b), k_r, k_z, h_a.min(h_b), dh);
+        ArcCurve { base, e1, e2, axis, r0, k_r, k_z, phi_a, phi_b, h_a, dh, len, start, end, factors }
+    }
+
+    /// `(φ, ds/dφ)` at parameter `s ∈ [0, len]`: `s = h_a·Δ + dh·Δ²/2` with `Δ = φ − phi_a`,
+    /// solved without cancellation, and `h = √(h_a² + 2·dh·s)`.
+    fn phi_h(&self, s: f64) -> (f64, f64) {
+        if self.dh == 0.0 {
+            return (self.phi_a + s / self.h_a, self.h_a);
+        }
+        let h = (self.h_a * self.h_a + 2.0 * self.dh * s).max(0.0).sqrt();
+        (self.phi_a + 2.0 * s / (self.h_a + h), h)
     }
 
     fn radial(&self, phi: f64) -> (Vec3, Vec3) {
@@ -150,9 +166,10 @@ impl ArcCurve {
         self.base + radial * (self.r0 + self.k_r * phi) + self.axis * (self.k_z * phi)
     }
 
-    fn deriv_phi(&self, phi: f64) -> Vec3 {
+    /// `dp/ds` at angle `phi`, where `ds/dφ = h`.
+    fn deriv_phi(&self, phi: f64, h: f64) -> Vec3 {
         let (radial, tangential) = self.radial(phi);
-        (tangential * (self.r0 + self.k_r * phi) + radial * self.k_r + self.axis * self.k_z) * (1.0 / self.rho)
+        (tangential * (self.r0 + self.k_r * phi) + radial * self.k_r + self.axis * self.k_z) * (1.0 / h)
     }
 
     /// Distance from `p` to this arc: exact for circles; for spirals the radius at the
@@ -173,6 +190,35 @@ impl ArcCurve {
     /// Whether the arc rises along its axis (a helix).
     fn is_helix(&self) -> bool {
         (self.k_z * (self.phi_b - self.phi_a)).abs() > 1e-9 * (1.0 + self.base.max_abs())
+    }
+}
+
+/// The bounds of an arc whose radius goes linearly from `r_a` to `r_b` (see [`ShapeFactors`],
+/// and [`ArcCurve`] for the parameter), with `h_min` the smaller end of `ds/dφ` (the smallest
+/// anywhere: `h` is linear) and `dh` its slope.
+///
+/// With `p′ = dp/dφ = t·r + ρ̂·k_r + axis·k_z` (`|p′| = g ≤ h`) and `p″ = −ρ̂·r + 2·k_r·t`:
+/// `dp/ds = p′/h` and `d²p/ds² = p″/h² − p′·dh/h³`, so
+/// * `|d²p/ds²| ≤ (√(r_max² + 4k_r²) + |dh|) / h_min²` (`kappa`);
+/// * `dp/ds · d²p/ds² = k_r·r/h³ − g²·dh/h⁴`, at most `|k_r|·r_max/h_min³ + |dh|/h_min²` (`cross·kappa`);
+/// * axis `i` sees `p′_i ≤ q_i·√(r² + k_r²) + |axis_i|·|k_z|` with `q_i` the length of its
+///   projection on the plane, divided by `h ≥ g` (`c`), and `d²p_i/ds²` at most
+///   `q_i·kappa + |axis_i|·|k_z|·|dh|/h_min³` (the rise term only on spiral helices) (`q`).
+fn arc_factors(axis: Vec3, (r_a, r_b): (f64, f64), k_r: f64, k_z: f64, h_min: f64, dh: f64) -> ShapeFactors {
+    let (r_max, r_min) = (r_a.max(r_b), r_a.min(r_b));
+    let (kr2, kz2) = (k_r * k_r, k_z * k_z);
+    let in_plane = ((r_max * r_max + kr2) / (r_max * r_max + kr2 + kz2)).sqrt();
+    let axial = k_z.abs() / (r_min * r_min + kr2 + kz2).sqrt();
+    let kappa = ((r_max * r_max + 4.0 * kr2).sqrt() + dh.abs()) / (h_min * h_min);
+    let rise = k_z.abs() * dh.abs() / (h_min * h_min * h_min);
+    let a = [axis.x.abs(), axis.y.abs(), axis.z.abs()];
+    let proj = a.map(|a| (1.0 - a * a).max(0.0).sqrt());
+    ShapeFactors {
+        c: [0, 1, 2].map(|i| (proj[i] * in_plane + a[i] * axial).min(1.0)),
+        q: [0, 1, 2].map(|i| (proj[i] + a[i] * rise / kappa).min(1.0)),
+        kappa,
+        cross: ((k_r.abs() * r_max / h_min + dh.abs()) / (h_min * h_min * kappa)).min(1.0),
+        circle: k_r == 0.0 && k_z == 0.0,
     }
 }
 
@@ -202,7 +248,7 @@ impl Curve {
         if sweep <= 0.0 {
             sweep += TAU;
         }
-        Some(Curve::Arc(ArcCurve::build(base, e1, e2, axis, r, r, 0.0, 0.0, sweep, start, end)))
+        Some(Curve::Arc(ArcCurve::build(base, e1, e2, axis, r, 0.0, 0.0, (0.0, sweep), start, end)))
     }
 
     /// Length of the path parameter, machine units (the arc length except on spirals, where
@@ -210,7 +256,7 @@ impl Curve {
     pub(crate) fn len(&self) -> f64 {
         match self {
             Curve::Line(l) => l.len,
-            Curve::Arc(a) => (a.phi_b - a.phi_a) * a.rho,
+            Curve::Arc(a) => a.len,
         }
     }
 
@@ -248,15 +294,18 @@ impl Curve {
         }
         match self {
             Curve::Line(l) => l.start + l.dir * s,
-            Curve::Arc(a) => a.at_phi(a.phi_a + s / a.rho),
+            Curve::Arc(a) => a.at_phi(a.phi_h(s).0),
         }
     }
 
-    /// `dp/ds` at parameter `s` (a unit vector except on spirals, where `|dp/ds| ≤ 1`).
+    /// `dp/ds` at parameter `s` (a unit vector except inside spirals, where `|dp/ds| ≤ 1`).
     pub(crate) fn deriv(&self, s: f64) -> Vec3 {
         match self {
             Curve::Line(l) => l.dir,
-            Curve::Arc(a) => a.deriv_phi(a.phi_a + s.clamp(0.0, self.len()) / a.rho),
+            Curve::Arc(a) => {
+                let (phi, h) = a.phi_h(s.clamp(0.0, a.len));
+                a.deriv_phi(phi, h)
+            }
         }
     }
 
@@ -273,7 +322,8 @@ impl Curve {
     }
 
     /// The part of the curve between parameters `a < b` (clamped), keeping exact ends where
-    /// they are the original ends.
+    /// they are the original ends. An arc's part gets its own parameter, so `|dp/ds| = 1` at
+    /// its ends too (a spiral cut for a blend joins the blend at the same speed).
     pub(crate) fn sub(&self, a: f64, b: f64) -> Curve {
         let len = self.len();
         let (a, b) = (a.clamp(0.0, len), b.clamp(0.0, len));
@@ -281,13 +331,18 @@ impl Curve {
         let end = self.point(b);
         match self {
             Curve::Line(l) => Curve::Line(LineCurve { start, end, dir: l.dir, len: b - a }),
-            Curve::Arc(arc) => Curve::Arc(ArcCurve {
-                phi_a: arc.phi_a + a / arc.rho,
-                phi_b: arc.phi_a + b / arc.rho,
+            Curve::Arc(arc) => Curve::Arc(ArcCurve::build(
+                arc.base,
+                arc.e1,
+                arc.e2,
+                arc.axis,
+                arc.r0,
+                arc.k_r,
+                arc.k_z,
+                (arc.phi_h(a).0, arc.phi_h(b).0),
                 start,
                 end,
-                ..arc.clone()
-            }),
+            )),
         }
     }
 
@@ -309,7 +364,7 @@ impl Curve {
     pub(crate) fn radius(&self) -> f64 {
         match self {
             Curve::Line(_) => f64::INFINITY,
-            Curve::Arc(a) => a.r0,
+            Curve::Arc(a) => a.r0 + a.k_r * a.phi_a,
         }
     }
 
@@ -415,7 +470,7 @@ mod tests {
     }
 
     #[test]
-    fn a_spiral_keeps_its_parameter_speed_at_most_one() {
+    fn a_spiral_keeps_its_parameter_speed_at_most_one_and_exactly_one_at_its_ends() {
         let s = Vec3::new(10.0, 0.0, 0.0);
         let e = Vec3::new(0.0, 10.01, 0.0);
         let arc = Curve::Arc(ArcCurve::program(s, e, Vec3::ZERO, Vec3::new(0.0, 0.0, 1.0), FRAC_PI_2).unwrap());
@@ -423,7 +478,72 @@ mod tests {
             let d = arc.deriv(arc.len() * f64::from(k) / 20.0).norm();
             assert!(d <= 1.0 + 1e-15 && d > 0.999, "{d}");
         }
+        assert!((arc.deriv(0.0).norm() - 1.0).abs() < 1e-15);
+        assert!((arc.deriv(arc.len()).norm() - 1.0).abs() < 1e-15);
         assert_eq!(arc.point(arc.len()), e);
+        // A part cut out of it (as a blend does) runs at speed 1 at its own ends too.
+        let part = arc.sub(1.0, 9.0);
+        assert!((part.deriv(0.0).norm() - 1.0).abs() < 1e-15);
+        assert!((part.deriv(part.len()).norm() - 1.0).abs() < 1e-15);
+        assert!(close(part.start(), arc.point(1.0), 1e-12) && close(part.end(), arc.point(9.0), 1e-12));
+        assert!(close(part.point(part.len() / 2.0), arc.point(5.0), 1e-3));
+    }
+
+    /// `|dp/ds| ≤ 1` and every [`ShapeFactors`] bound, checked by finite differences along
+    /// circles, helices, spirals (up to a radius ratio of 3) and spiral helices in all
+    /// orientations, and along parts of them.
+    #[test]
+    fn the_shape_factors_bound_the_derivatives_of_every_arc() {
+        let normals = [Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.3, -0.5, 0.8)];
+        let mut checked = 0;
+        for normal in normals {
+            let n = normal.unit().unwrap();
+            let e1 = Vec3::new(1.0, 2.0, -0.5).cross(n).unit().unwrap();
+            let e2 = n.cross(e1);
+            for (r0, r1) in [(2.0, 2.0), (1.0, 1.5), (1.5, 1.0), (0.1, 0.128), (3.0, 1.0), (1.0, 3.0)] {
+                for rise in [0.0, 0.7, -4.0] {
+                    for sweep in [0.3f64, -2.5, 9.0] {
+                        let start = e1 * r0;
+                        let (sin, cos) = sweep.abs().sin_cos();
+                        let turn = if sweep < 0.0 { -1.0 } else { 1.0 };
+                        let end = (e1 * cos + e2 * (turn * sin)) * r1 + n * rise;
+                        let arc = Curve::Arc(ArcCurve::program(start, end, Vec3::ZERO, normal, sweep).unwrap());
+                        for piece in [arc.sub(0.0, arc.len()), arc.sub(0.3 * arc.len(), 0.7 * arc.len())] {
+                            check_factors(&piece);
+                            checked += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert_eq!(checked, 3 * 6 * 3 * 3 * 2);
+    }
+
+    fn check_factors(c: &Curve) {
+        let f = c.factors();
+        let (len, d) = (c.len(), 1e-5 * c.len());
+        assert!((c.deriv(0.0).norm() - 1.0).abs() < 1e-14 && (c.deriv(len).norm() - 1.0).abs() < 1e-14);
+        for k in 1..200 {
+            let s = len * f64::from(k) / 200.0;
+            let d1 = c.deriv(s);
+            let d2 = (c.deriv(s + d) - c.deriv(s - d)) * (0.5 / d);
+            let slack = 1e-6 * (1.0 + f.kappa);
+            assert!(d1.norm() <= 1.0 + 1e-14, "|dp/ds| = {}", d1.norm());
+            assert!(d2.norm() <= f.kappa + slack, "{} > kappa {}", d2.norm(), f.kappa);
+            assert!(d1.dot(d2).abs() <= f.cross * f.kappa + slack, "{} > cross {f:?}", d1.dot(d2));
+            let (a1, a2): ([f64; 3], [f64; 3]) = (d1.into(), d2.into());
+            for i in 0..3 {
+                assert!(a1[i].abs() <= f.c[i] + 1e-12, "axis {i}: {} > c {f:?}", a1[i]);
+                assert!(a2[i].abs() <= f.q[i] * f.kappa + slack, "axis {i}: {} > q·kappa {f:?}", a2[i]);
+            }
+            if f.circle {
+                let a = d2 * 0.3 + d1 * 0.7;
+                let parts: [f64; 3] = a.into();
+                for (part, q) in parts.iter().zip(f.q) {
+                    assert!(part.abs() <= q * a.norm() + 1e-12, "a circle's vectors lie in its plane");
+                }
+            }
+        }
     }
 
     #[test]

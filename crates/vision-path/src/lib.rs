@@ -97,7 +97,9 @@
 //! * **Axes**: a move of an axis no drive is mapped to is an error at its line; the follower's
 //!   `start_gcode` checks the whole program (streaming, no handler) before anything moves.
 //! * Arcs whose start and end radius differ slightly (rounded G-code) are spirals with
-//!   linearly changing radius.
+//!   linearly changing radius. They are blended and joined like circles; their path
+//!   parameter runs at exactly the real speed at both ends (and at the ends of any part a
+//!   blend cuts out of them), so the planned speed is the real speed at every join.
 //! * An arc turns by the sweep it is given ([`ArcShape::sweep`]: the interpreter's angle), never
 //!   by a rule of the planner's own: an end 10⁻⁸ mm past the start is a sliver or a full
 //!   circle exactly as the interpreter decided. A sweep that does not reach the end point is

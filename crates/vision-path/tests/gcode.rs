@@ -53,3 +53,18 @@ fn an_arc_of_a_nanoradian_is_not_driven_as_a_full_circle() {
     assert!(worst_second_difference(&p.setpoints).0 <= A * T * T * (1.0 + 1e-6) + 1e-9);
     assert!(p.events.is_empty());
 }
+
+#[test]
+fn a_rounded_arc_that_is_slightly_a_spiral_keeps_the_acceleration_bound_where_it_is_blended() {
+    // The start radius is 0.1 mm, the end radius 0.128 mm (within the interpreter's centre
+    // tolerance): a spiral, blended (G64) into the lines on either side. A parameter whose
+    // speed factor is below 1 at the spiral's smaller end made the real speed jump at the
+    // blends (|Δ²p| up to 1.53·a·T²).
+    let program = "G21 G90 G64\nG1 X0.1 Y-10 F3000\nG1 X0.1 Y0\nG3 X-0.128 Y0 I-0.1 J0\nG1 X-0.128 Y-10";
+    let p = plan(program);
+    let (path, axes) = worst_second_difference(&p.setpoints);
+    assert!(path <= A * T * T * (1.0 + 1e-6) + 1e-9, "|Δ²p| = {} a·T²", path / (A * T * T));
+    assert!(axes.iter().all(|&d| d <= A * T * T * (1.0 + 1e-6) + 1e-9), "{axes:?}");
+    assert!(p.setpoints.iter().any(|s| s.line == 4), "the spiral is driven");
+    assert_eq!(p.setpoints.last().unwrap().position, [-0.128, -10.0, 0.0]);
+}

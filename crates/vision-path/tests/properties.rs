@@ -3,7 +3,8 @@
 //!
 //! * no step between setpoints exceeds speed × period (path speed per line, and per axis);
 //! * no second difference exceeds acceleration × period² (path and per axis), within the
-//!   stated tolerance `(1 + 1e-6)·a·T² + 1e-9` units;
+//!   stated tolerance `(1 + 1e-6)·a·T² + 1e-9` units — also on spirals (arcs whose end radius
+//!   differs from their start radius, as rounded G-code makes them) joined tangentially;
 //! * G61 reaches every corner exactly (bitwise) with zero velocity;
 //! * G64 P never strays more than P from the programmed path;
 //! * the path ends exactly (bitwise) at the programmed end, at rest;
@@ -28,12 +29,23 @@ enum Op {
     },
     /// A short move relative to the current point (stresses blends and the look-ahead).
     Nudge([f64; 3]),
+    /// An arc (a spiral when `grow` ≠ 1: the end radius is `grow` × the start radius).
     Arc {
         plane: usize,
         dir: f64,
         radius: f64,
         angle: f64,
         rise: f64,
+        grow: f64,
+    },
+    /// In XY: a line along `heading`, a spiral leaving it exactly tangentially (radius `r0` →
+    /// `r0·grow`), and a line leaving the spiral exactly tangentially.
+    TangentSpiral {
+        heading: f64,
+        lead: f64,
+        r0: f64,
+        grow: f64,
+        angle: f64,
     },
     Dwell(f64),
     Tool(bool),
@@ -45,14 +57,22 @@ fn op(helix: bool) -> impl Strategy<Value = Op> {
         6 => ([coord.clone(), coord.clone(), coord], prop::bool::weighted(0.2))
             .prop_map(|(to, rapid)| Op::Line { to, rapid }),
         3 => prop::array::uniform3(-1.0..1.0f64).prop_map(Op::Nudge),
-        3 => (0..3usize, 0.0..std::f64::consts::TAU, 1.0..30.0f64, -6.0..6.0f64, -5.0..5.0f64)
-            .prop_filter("arcs sweep at least 0.1 rad", |(_, _, _, a, _)| a.abs() > 0.1)
-            .prop_map(move |(plane, dir, radius, angle, rise)| Op::Arc {
-                plane, dir, radius, angle, rise: if helix { rise } else { 0.0 },
+        3 => (0..3usize, 0.0..std::f64::consts::TAU, 1.0..30.0f64, -6.0..6.0f64, -5.0..5.0f64, grow())
+            .prop_filter("arcs sweep at least 0.1 rad", |(_, _, _, a, _, _)| a.abs() > 0.1)
+            .prop_map(move |(plane, dir, radius, angle, rise, grow)| Op::Arc {
+                plane, dir, radius, angle, rise: if helix { rise } else { 0.0 }, grow,
             }),
+        1 => (0.0..std::f64::consts::TAU, 0.5..20.0f64, 0.2..20.0f64, 0.7..1.5f64, -6.0..6.0f64)
+            .prop_filter("spirals sweep at least 0.1 rad", |(_, _, _, _, a)| a.abs() > 0.1)
+            .prop_map(|(heading, lead, r0, grow, angle)| Op::TangentSpiral { heading, lead, r0, grow, angle }),
         1 => (0.0..0.05f64).prop_map(Op::Dwell),
         1 => any::<bool>().prop_map(Op::Tool),
     ]
+}
+
+/// The end radius over the start radius of an arc: mostly a circle, often a spiral.
+fn grow() -> impl Strategy<Value = f64> {
+    prop_oneof![2 => Just(1.0), 1 => 0.8..1.25f64]
 }
 
 fn limits() -> impl Strategy<Value = (Limits, f64)> {
@@ -77,7 +97,7 @@ fn build(ops: &[Op], mode: PathMode, feed: f64) -> Vec<Item> {
             Op::Nudge(d) => {
                 p.line_to(common::add(p.pos, d), Speed::Feed(feed));
             }
-            Op::Arc { plane, dir, radius, angle, rise } => {
+            Op::Arc { plane, dir, radius, angle, rise, grow } => {
                 // The centre lies `radius` away from the current point, in the arc's plane.
                 let (b1, b2) = match plane {
                     0 => ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
@@ -87,7 +107,14 @@ fn build(ops: &[Op], mode: PathMode, feed: f64) -> Vec<Item> {
                 let off = common::add(common::scale(b1, radius * dir.cos()), common::scale(b2, radius * dir.sin()));
                 let centre = common::add(p.pos, off);
                 debug_assert!(common::dot(off, PLANES[plane]).abs() < 1e-12);
-                p.arc(plane, centre, angle, rise, Speed::Feed(feed));
+                p.spiral(plane, centre, angle, rise, grow, Speed::Feed(feed));
+            }
+            Op::TangentSpiral { heading, lead, r0, grow, angle } => {
+                let u = [heading.cos(), heading.sin(), 0.0];
+                p.line_to(common::add(p.pos, common::scale(u, lead)), Speed::Feed(feed));
+                p.tangent_spiral(u, r0, r0 * grow, angle, Speed::Feed(feed));
+                let out = segments(&p.items).last().map(|s| tangent(s, true)).expect("the spiral");
+                p.line_to(common::add(p.pos, common::scale(out, lead)), Speed::Feed(feed));
             }
             Op::Dwell(seconds) => {
                 p.item(|line| Item::Dwell { line, seconds });

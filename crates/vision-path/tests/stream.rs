@@ -85,6 +85,36 @@ fn an_arc_keeps_its_centripetal_acceleration_within_the_path_limit() {
 }
 
 #[test]
+fn a_spiral_joined_tangentially_or_blended_keeps_the_acceleration_bound() {
+    // A line into a spiral whose radius grows from 1 to 1.5 over half a turn, and a line out.
+    // Joined exactly tangentially (no stop even under G61) and at a blended corner (G64): the
+    // spiral's parameter runs at the real speed at its ends, so the speed never jumps there.
+    let bound = 1000.0 * 1e-6 * (1.0 + 1e-6) + 1e-9;
+    let feed = Speed::Feed(30000.0);
+    for mode in [PathMode::ExactStop, PathMode::Blend { tolerance: None }, PathMode::Blend { tolerance: Some(0.05) }] {
+        let mut p = Program::new([0.0; 3], mode);
+        p.line_to([10.0, 0.0, 0.0], feed).tangent_spiral([1.0, 0.0, 0.0], 1.0, 1.5, std::f64::consts::PI, feed);
+        let out = common::tangent(common::segments(&p.items)[1], true);
+        p.line_to(common::add(p.pos, common::scale(out, 10.0)), feed);
+        let run = common::run(&config(), &p.items);
+        let (worst, _) = common::worst_second_difference(&run.setpoints);
+        assert!(worst <= bound, "{mode:?}: |Δ²p| = {} a·T²", worst / 1e-3);
+        let interior = &run.setpoints[1..run.setpoints.len() - 1];
+        assert!(interior.iter().all(|s| norm(s.velocity) > 0.0), "{mode:?}: tangent joins do not stop");
+    }
+    // The same spiral entered at a corner (the line runs along +X, the spiral starts along
+    // +Y): G64 blends it, cutting into the spiral where its radius is about 1.
+    for tolerance in [None, Some(0.2)] {
+        let mut p = Program::new([0.0; 3], PathMode::Blend { tolerance });
+        p.line_to([10.0, 0.0, 0.0], feed).spiral(0, [9.0, 0.0, 0.0], std::f64::consts::PI, 0.0, 1.5, feed);
+        p.line_to(common::add(p.pos, [0.0, -10.0, 0.0]), feed);
+        let run = common::run(&config(), &p.items);
+        let (worst, _) = common::worst_second_difference(&run.setpoints);
+        assert!(worst <= bound, "P {tolerance:?}: |Δ²p| = {} a·T²", worst / 1e-3);
+    }
+}
+
+#[test]
 fn an_output_happens_at_rest_at_its_programmed_point_and_a_dwell_holds() {
     let mut p = Program::new([0.0; 3], PathMode::Blend { tolerance: None });
     p.line_to([100.0, 100.0, 0.0], Speed::Rapid);

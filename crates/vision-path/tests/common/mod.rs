@@ -40,6 +40,20 @@ impl Program {
     /// An arc about `centre` in the plane with normal `PLANES[plane]`, sweeping `angle`
     /// radians (positive = counter-clockwise), rising `rise` along the normal.
     pub fn arc(&mut self, plane: usize, centre: [f64; 3], angle: f64, rise: f64, speed: Speed) -> &mut Program {
+        self.spiral(plane, centre, angle, rise, 1.0, speed)
+    }
+
+    /// [`Program::arc`] whose end radius is `grow` times its start radius (a spiral, as
+    /// rounded G-code makes them).
+    pub fn spiral(
+        &mut self,
+        plane: usize,
+        centre: [f64; 3],
+        angle: f64,
+        rise: f64,
+        grow: f64,
+        speed: Speed,
+    ) -> &mut Program {
         let n = PLANES[plane];
         let axis = if angle >= 0.0 { n } else { neg(n) };
         let r = sub(self.pos, centre);
@@ -47,7 +61,7 @@ impl Program {
         let r_perp = sub(r, scale(n, r_par));
         let e2 = cross(axis, r_perp);
         let a = angle.abs();
-        let rotated = add(scale(r_perp, a.cos()), scale(e2, a.sin()));
+        let rotated = scale(add(scale(r_perp, a.cos()), scale(e2, a.sin())), grow);
         let end = add(add(centre, rotated), scale(n, r_par + rise));
         let line = self.next_line();
         self.items.push(Item::Move(Segment {
@@ -60,6 +74,18 @@ impl Program {
         }));
         self.pos = end;
         self
+    }
+
+    /// A spiral in the XY plane (G17) that leaves the current point exactly along the unit
+    /// in-plane direction `u` (its radial drift included), with radius `r0` → `r1`, sweeping
+    /// `angle` radians (positive = counter-clockwise).
+    pub fn tangent_spiral(&mut self, u: [f64; 3], r0: f64, r1: f64, angle: f64, speed: Speed) -> &mut Program {
+        let axis = if angle >= 0.0 { PLANES[0] } else { neg(PLANES[0]) };
+        // The start tangent is t·r0 + ρ̂·k_r (t = axis × ρ̂): ρ̂ is `u` turned by β − π/2.
+        let beta = ((r1 - r0) / angle.abs()).atan2(r0);
+        let radial = sub(scale(u, beta.sin()), scale(cross(axis, u), beta.cos()));
+        let centre = sub(self.pos, scale(radial, r0));
+        self.spiral(0, centre, angle, 0.0, r1 / r0, speed)
     }
 
     /// A G2/G3 in the XY plane (G17) to `end` about `centre`, exactly as programmed: less
@@ -139,9 +165,13 @@ pub fn unit(a: [f64; 3]) -> [f64; 3] {
 fn arc_axis_sweep(seg: &Segment, arc: &ArcShape) -> ([f64; 3], [f64; 3], f64) {
     let n = unit(arc.normal);
     let axis = if arc.sweep < 0.0 { neg(n) } else { n };
-    let rs = sub(seg.start, arc.centre);
-    let rs = sub(rs, scale(axis, dot(rs, axis)));
-    (axis, rs, arc.sweep.abs())
+    (axis, radius_vector(seg.start, arc, axis), arc.sweep.abs())
+}
+
+/// The in-plane radius vector of `p` about the arc's centre.
+fn radius_vector(p: [f64; 3], arc: &ArcShape, axis: [f64; 3]) -> [f64; 3] {
+    let r = sub(p, arc.centre);
+    sub(r, scale(axis, dot(r, axis)))
 }
 
 /// The unit tangent of a segment at its start (`at_end = false`) or end.
@@ -149,17 +179,20 @@ pub fn tangent(seg: &Segment, at_end: bool) -> [f64; 3] {
     match seg.shape {
         Shape::Line => unit(sub(seg.end, seg.start)),
         Shape::Arc(arc) => {
+            // The radius changes linearly with the angle (a spiral when the ends differ).
             let (axis, rs, sweep) = arc_axis_sweep(seg, &arc);
-            let r = if at_end { sub(seg.end, arc.centre) } else { rs };
-            let r = sub(r, scale(axis, dot(r, axis)));
+            let re = radius_vector(seg.end, &arc, axis);
+            let r = if at_end { re } else { rs };
             let rise = dot(sub(seg.end, seg.start), axis);
-            let t = add(scale(cross(axis, unit(r)), norm(rs) * sweep), scale(axis, rise));
+            let along = scale(cross(axis, unit(r)), norm(r) * sweep);
+            let t = add(add(along, scale(unit(r), norm(re) - norm(rs))), scale(axis, rise));
             unit(t)
         }
     }
 }
 
-/// Distance from `p` to a line or a planar (non-helical) arc segment.
+/// Distance from `p` to a line or a planar (non-helical) arc segment (for a spiral: from the
+/// radius at `p`'s angle).
 pub fn distance(p: [f64; 3], seg: &Segment) -> f64 {
     match seg.shape {
         Shape::Line => {
@@ -169,17 +202,18 @@ pub fn distance(p: [f64; 3], seg: &Segment) -> f64 {
         }
         Shape::Arc(arc) => {
             let (axis, rs, sweep) = arc_axis_sweep(seg, &arc);
+            let r1 = norm(radius_vector(seg.end, &arc, axis));
             let e1 = unit(rs);
             let e2 = cross(axis, e1);
-            let v = sub(p, arc.centre);
             let h = dot(sub(p, seg.start), axis);
-            let vp = sub(v, scale(axis, dot(v, axis)));
+            let vp = radius_vector(p, &arc, axis);
             let mut phi = dot(vp, e2).atan2(dot(vp, e1));
             if phi < 0.0 {
                 phi += TAU;
             }
             if phi <= sweep {
-                (h * h + (norm(vp) - norm(rs)).powi(2)).sqrt()
+                let r = norm(rs) + (r1 - norm(rs)) * phi / sweep;
+                (h * h + (norm(vp) - r).powi(2)).sqrt()
             } else {
                 norm(sub(p, seg.start)).min(norm(sub(p, seg.end)))
             }
