@@ -219,7 +219,7 @@ mod tests {
         assert!((dev - 1.0).abs() < 1e-9, "{dev}");
         // ℓ = P / tan(22.5°), radius ℓ / tan(45°) = ℓ.
         let ell = 1.0 / (std::f64::consts::PI / 8.0).tan();
-        assert!((b.s1 - ell).abs() < 1e-9 && (b.pieces[0].arc_radius().unwrap() - ell).abs() < 1e-9);
+        assert!((b.s1 - ell).abs() < 1e-9 && (b.pieces[0].radius() - ell).abs() < 1e-9);
         assert!(b.pieces[0].start_tangent().angle_to(c1.end_tangent()) < 1e-12);
         assert!(b.pieces[0].end_tangent().angle_to(c2.start_tangent()) < 1e-12);
     }
@@ -240,7 +240,7 @@ mod tests {
         // A square corner: radius = ℓ, so wanting radius 3 trims 3 (P10 would allow 24).
         let b = blend(&c1, 50.0, &c2, 50.0, Some(10.0), 3.0).unwrap();
         assert!((b.s1 - 3.0).abs() < 1e-12);
-        assert!((b.pieces[0].arc_radius().unwrap() - 3.0).abs() < 1e-9);
+        assert!((b.pieces[0].radius() - 3.0).abs() < 1e-9);
         // A nearly straight join still gets a blend of at least the minimum trim.
         let c3 = line([100.0, 0.0, 0.0], [200.0, 1e-7, 0.0]);
         let b = blend(&c1, 50.0, &c3, 50.0, None, 1.0).unwrap();
@@ -283,7 +283,7 @@ mod tests {
         )
         .unwrap();
         for p in &pieces {
-            assert!((p.arc_radius().unwrap() - 1.0).abs() < 1e-12);
+            assert!((p.radius() - 1.0).abs() < 1e-12);
         }
     }
 }

@@ -383,15 +383,6 @@ impl Curve {
             Curve::Arc(a) => a.distance_planar(p),
         }
     }
-
-    /// The curve's radius if it is an arc (blend arcs are circles).
-    #[cfg(test)]
-    pub(crate) fn arc_radius(&self) -> Option<f64> {
-        match self {
-            Curve::Line(_) => None,
-            Curve::Arc(a) => Some(a.r0),
-        }
-    }
 }
 
 #[cfg(test)]
@@ -586,7 +577,7 @@ mod tests {
         let start = Vec3::new(-1.0, 0.0, 0.0);
         let end = Vec3::new(0.0, 1.0, 0.0);
         let c = Curve::from_tangent(start, Vec3::new(1.0, 0.0, 0.0), end).unwrap();
-        assert!((c.arc_radius().unwrap() - 1.0).abs() < 1e-12);
+        assert!((c.radius() - 1.0).abs() < 1e-12);
         assert!(close(c.end_tangent(), Vec3::new(0.0, 1.0, 0.0), 1e-12));
         assert!((c.distance_to(Vec3::ZERO) - (2f64.sqrt() - 1.0)).abs() < 1e-12);
         let line = Curve::from_tangent(start, Vec3::new(1.0, 0.0, 0.0), Vec3::new(3.0, 0.0, 0.0)).unwrap();

@@ -8,7 +8,7 @@
 //! | `Dwell` (G4) | [`Item::Dwell`] |
 //! | `ToolChange` (M6) | [`Event::ToolChange`] |
 //! | `Output` (M3/M4/M5) | [`Event::Output`]: the tool (or the explicit port) and the command |
-//! | `Stop` (M0/M1), `UserMCode` without a handler | a zero-second dwell: an exact stop there |
+//! | `Stop` (M0/M1), `UserMCode` (reported, not executed) | a zero-second dwell: an exact stop there |
 //! | `ProgramEnd` (M2/M30) | [`Item::End`] |
 //! | an error at a line | `Err(PathError::Program { line, .. })` |
 //!
@@ -19,8 +19,8 @@
 use std::collections::VecDeque;
 
 use vision_gcode::{
-    Event as GEvent, GcodeError, Interpreter, InterpreterConfig, MCodeHandler, PathMode as GPathMode, Plane, Rate,
-    RunOutcome, SpindleCommand, Xyz,
+    Event as GEvent, GcodeError, Interpreter, InterpreterConfig, PathMode as GPathMode, Plane, Rate, RunOutcome,
+    SpindleCommand, Xyz,
 };
 
 use crate::follower::check_axes;
@@ -29,6 +29,11 @@ use crate::{MotionSink, Pace, PathError, PathFollower};
 
 /// A G-code program as a stream of planner items (see the module docs). `T` holds the text
 /// (`String` to own it, `&str` to borrow it).
+///
+/// User M-codes are reported by the interpreter, not executed, and become exact stops: the
+/// planner reads ahead of the machine, so a handler would run when the look-ahead reaches its
+/// line, up to a braking distance before the machine does. To expand M-codes into G-code, run
+/// the interpreter with the handler yourself and turn its events into items with [`item`].
 pub struct GcodeItems<T = String> {
     interp: Interpreter,
     text: T,
@@ -37,31 +42,18 @@ pub struct GcodeItems<T = String> {
     /// Number of the last line run.
     line: u32,
     queue: VecDeque<Result<Item, PathError>>,
-    handler: Option<Box<dyn MCodeHandler + Send>>,
     done: bool,
 }
 
 impl<T: AsRef<str>> GcodeItems<T> {
     /// Run `text` on `interp` (in its current state and machine position), lazily.
     pub fn new(interp: Interpreter, text: T) -> GcodeItems<T> {
-        GcodeItems { interp, text, next: Some(0), line: 0, queue: VecDeque::new(), handler: None, done: false }
-    }
-
-    /// Serve user M-codes with `handler` (without one they are reported by the interpreter
-    /// and become exact stops).
-    pub fn with_handler(mut self, handler: Box<dyn MCodeHandler + Send>) -> GcodeItems<T> {
-        self.handler = Some(handler);
-        self
+        GcodeItems { interp, text, next: Some(0), line: 0, queue: VecDeque::new(), done: false }
     }
 
     /// Where the machine is before the program runs (the planner's start), machine units.
     pub fn start_position(&self) -> [f64; 3] {
         xyz(self.interp.machine_position())
-    }
-
-    /// The interpreter, in the state the lines run so far left it.
-    pub fn interpreter(&self) -> &Interpreter {
-        &self.interp
     }
 
     /// Run the next line, queueing its items.
@@ -81,8 +73,7 @@ impl<T: AsRef<str>> GcodeItems<T> {
         self.line = self.line.saturating_add(1);
         let line = self.line;
         let queue = &mut self.queue;
-        let handler = self.handler.as_deref_mut().map(|h| h as &mut dyn MCodeHandler);
-        let outcome = self.interp.run(raw, handler, &mut |e: &GEvent| queue.push_back(Ok(item(e, line as usize))));
+        let outcome = self.interp.run(raw, None, &mut |e: &GEvent| queue.push_back(Ok(item(e, line as usize))));
         match outcome {
             Ok(RunOutcome::Completed { .. }) => {}
             Ok(RunOutcome::Ended { .. }) => self.done = true,
@@ -114,9 +105,10 @@ impl PathFollower {
     /// The seed's `startPath(GCODE_STRING, maxPathAcceleration)`: run `program` on a fresh
     /// interpreter built from `config`, starting where the machine is.
     ///
-    /// The whole program is checked first, streaming, with no handler (interpreter errors, a
-    /// move of an unmapped axis, an unknown tool or none selected): if anything fails, nothing
-    /// moves and the error comes back here. User M-codes are exact stops.
+    /// Refused at once while a path runs. The whole program is then checked, streaming
+    /// (interpreter errors, a move of an unmapped axis, a tool missing from the follower's
+    /// table): if anything fails, nothing moves and the error comes back here. User M-codes
+    /// are exact stops (see [`GcodeItems`]).
     pub fn start_gcode<S: MotionSink + 'static>(
         &mut self,
         config: &InterpreterConfig,
@@ -125,6 +117,9 @@ impl PathFollower {
         sink: S,
         pace: Pace,
     ) -> Result<(), PathError> {
+        if self.status().running() {
+            return Err(PathError::AlreadyRunning);
+        }
         let text = program.into();
         let at = self.status().position;
         let fresh = || -> Result<Interpreter, PathError> {
@@ -132,14 +127,11 @@ impl PathFollower {
             interp.set_machine_position(Xyz { x: at[0], y: at[1], z: at[2] }).map_err(|e| program_error(&e, 0))?;
             Ok(interp)
         };
-        let mut selected = None;
+        // The interpreter names the tool of every M3/M4/M5 (`$n` or its active tool), so no
+        // selection needs tracking here.
         for item in GcodeItems::new(fresh()?, text.as_str()) {
-            match check_axes(&self.config().axes, item?)? {
-                Item::Event { event: Event::ToolChange(n), .. } => selected = (n != 0).then_some(n),
-                Item::Event { line, event: Event::Output(command) } => {
-                    self.config().tools.resolve(line, selected, command)?;
-                }
-                _ => {}
+            if let Item::Event { line, event: Event::Output(command) } = check_axes(&self.config().axes, item?)? {
+                self.config().tools.resolve(line, None, command)?;
             }
         }
         self.start(GcodeItems::new(fresh()?, text), max_path_accel, sink, pace)
@@ -186,7 +178,7 @@ pub fn item(event: &GEvent, line: usize) -> Item {
             };
             let command = match (o.tool, o.writes.first()) {
                 (None, Some(w)) => OutputCommand::Port { device: w.device, port: w.port, on: w.high },
-                (tool, _) => OutputCommand::Tool { tool: tool.filter(|&t| t != 0), state },
+                (tool, _) => OutputCommand::Tool { tool, state },
             };
             Item::Event { line, event: Event::Output(command) }
         }

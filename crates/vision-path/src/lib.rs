@@ -88,7 +88,7 @@
 //! * **Stop** ([`Setpoints::stop`]) brakes along the path at each piece's tangential limit
 //!   (so the full bounds still hold) and ends at rest; later events do not happen.
 //! * **Rapids** (G0) move at the axes' maximum speed (any F on the line is only remembered).
-//! * **M0/M1** and user M-codes the interpreter reports (no handler) are exact stops (a
+//! * **M0/M1** and user M-codes (reported, never executed: see [`GcodeItems`]) are exact stops (a
 //!   zero-second dwell); the follower does not wait for an operator.
 //! * **Tools**: a bare M3/M4/M5 acts on the tool of the last `T… M6`; `M3 $n` acts on `n`
 //!   without selecting it (as the interpreter does). Switching a tool on first drives its

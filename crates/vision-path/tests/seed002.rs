@@ -262,3 +262,16 @@ fn start_gcode_checks_the_whole_program_before_anything_moves() {
     assert_eq!(follower.status().state, RunState::Idle);
     assert_eq!(follower.status().position, [0.0; 3]);
 }
+
+#[test]
+fn start_gcode_refuses_at_once_while_a_path_runs() {
+    let mut follower = seed_follower();
+    // A 20 m move in real time: still running when start_gcode is called.
+    follower
+        .start_gcode(&machine_motion(), "G21 G90\nG1 X20000 F24000", 1000.0, Writes::default(), Pace::RealTime)
+        .unwrap();
+    // Refused before the program is even read: its bad word would otherwise be the error.
+    let err = follower.start_gcode(&machine_motion(), "G21\nG1 X1 Q3", 1000.0, Writes::default(), Pace::Unpaced);
+    assert_eq!(err, Err(PathError::AlreadyRunning));
+    assert_eq!(follower.stop().state, RunState::Stopped);
+}
