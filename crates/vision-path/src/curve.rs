@@ -161,15 +161,18 @@ impl ArcCurve {
         (self.e1 * cos + self.e2 * sin, self.e2 * cos - self.e1 * sin)
     }
 
-    fn at_phi(&self, phi: f64) -> Vec3 {
-        let (radial, _) = self.radial(phi);
+    /// The point at angle `phi`, whose radial direction is `radial`.
+    fn position(&self, radial: Vec3, phi: f64) -> Vec3 {
         self.base + radial * (self.r0 + self.k_r * phi) + self.axis * (self.k_z * phi)
     }
 
-    /// `dp/ds` at angle `phi`, where `ds/dφ = h`.
-    fn deriv_phi(&self, phi: f64, h: f64) -> Vec3 {
-        let (radial, tangential) = self.radial(phi);
+    /// `dp/ds` at angle `phi` (radial and tangential directions `dirs`), where `ds/dφ = h`.
+    fn direction(&self, (radial, tangential): (Vec3, Vec3), phi: f64, h: f64) -> Vec3 {
         (tangential * (self.r0 + self.k_r * phi) + radial * self.k_r + self.axis * self.k_z) * (1.0 / h)
+    }
+
+    fn at_phi(&self, phi: f64) -> Vec3 {
+        self.position(self.radial(phi).0, phi)
     }
 
     /// Distance from `p` to this arc: exact for circles; for spirals the radius at the
@@ -304,7 +307,27 @@ impl Curve {
             Curve::Line(l) => l.dir,
             Curve::Arc(a) => {
                 let (phi, h) = a.phi_h(s.clamp(0.0, a.len));
-                a.deriv_phi(phi, h)
+                a.direction(a.radial(phi), phi, h)
+            }
+        }
+    }
+
+    /// [`Curve::point`] and [`Curve::deriv`] at `s` together, bit for bit, evaluating an
+    /// arc's angle once (the setpoint hot path).
+    pub(crate) fn point_and_deriv(&self, s: f64) -> (Vec3, Vec3) {
+        match self {
+            Curve::Line(l) => (self.point(s), l.dir),
+            Curve::Arc(a) => {
+                let (phi, h) = a.phi_h(s.clamp(0.0, a.len));
+                let dirs = a.radial(phi);
+                let point = if s <= 0.0 {
+                    a.start
+                } else if s >= a.len {
+                    a.end
+                } else {
+                    a.position(dirs.0, phi)
+                };
+                (point, a.direction(dirs, phi, h))
             }
         }
     }
@@ -533,6 +556,20 @@ mod tests {
                 for (part, q) in parts.iter().zip(f.q) {
                     assert!(part.abs() <= q * a.norm() + 1e-12, "a circle's vectors lie in its plane");
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn point_and_deriv_are_point_and_deriv() {
+        let s = Vec3::new(10.0, 0.0, 0.0);
+        let e = Vec3::new(0.0, 10.5, 3.0);
+        let spiral = Curve::Arc(ArcCurve::program(s, e, Vec3::ZERO, Vec3::new(0.0, 0.0, 1.0), FRAC_PI_2).unwrap());
+        let line = Curve::Line(LineCurve::new(s, e).unwrap());
+        for c in [spiral.clone(), spiral.sub(2.0, 9.0), line] {
+            for k in -2..=42 {
+                let at = c.len() * f64::from(k) / 40.0;
+                assert_eq!(c.point_and_deriv(at), (c.point(at), c.deriv(at)), "{c:?} at {at}");
             }
         }
     }
