@@ -156,22 +156,36 @@ struct EventText(Event);
 
 impl std::fmt::Display for EventText {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let code = |state| match state {
+            ToolState::Clockwise => "M3",
+            ToolState::CounterClockwise => "M4",
+            ToolState::Off => "M5",
+        };
         match self.0 {
             Event::ToolChange(t) => write!(f, "M6 T{t}"),
-            Event::Output(OutputCommand::Tool { tool, state }) => {
-                let code = match state {
-                    ToolState::Clockwise => "M3",
-                    ToolState::CounterClockwise => "M4",
-                    ToolState::Off => "M5",
-                };
-                match tool {
-                    Some(t) => write!(f, "{code} ${t}"),
-                    None => f.write_str(code),
-                }
-            }
-            Event::Output(OutputCommand::Port { device, port, on }) => {
-                write!(f, "{} A{device} P{port}", if on { "M3" } else { "M5" })
+            Event::Output(OutputCommand::Tool { tool: Some(t), state }) => write!(f, "{} ${t}", code(state)),
+            Event::Output(OutputCommand::Tool { tool: None, state }) => f.write_str(code(state)),
+            Event::Output(OutputCommand::Port { device, port, state }) => {
+                write!(f, "{} A{device} P{port}", code(state))
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn events_read_back_as_their_own_m_codes() {
+        let text = |event| EventText(event).to_string();
+        let port = |state| Event::Output(OutputCommand::Port { device: 1, port: 1, state });
+        assert_eq!(text(port(ToolState::CounterClockwise)), "M4 A1 P1");
+        assert_eq!(text(port(ToolState::Clockwise)), "M3 A1 P1");
+        assert_eq!(text(port(ToolState::Off)), "M5 A1 P1");
+        let tool = |tool, state| Event::Output(OutputCommand::Tool { tool, state });
+        assert_eq!(text(tool(Some(2), ToolState::CounterClockwise)), "M4 $2");
+        assert_eq!(text(tool(None, ToolState::Off)), "M5");
+        assert_eq!(text(Event::ToolChange(3)), "M6 T3");
     }
 }

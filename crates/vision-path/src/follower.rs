@@ -440,7 +440,7 @@ impl Worker {
     }
 
     /// The level that switches a port off: the opposite of a tool's active value; low for a
-    /// port that belongs to no tool (the explicit `M3 A… P…` form drives it high).
+    /// port that belongs to no tool (the explicit `M3/M4 A… P…` form drives it high).
     fn inactive_level(&self, device: u32, port: u32) -> bool {
         self.tools.outputs().find(|o| o.device == device && o.port == port).is_some_and(|o| !o.value)
     }

@@ -177,7 +177,7 @@ pub fn item(event: &GEvent, line: usize) -> Item {
                 SpindleCommand::Stop => ToolState::Off,
             };
             let command = match (o.tool, o.writes.first()) {
-                (None, Some(w)) => OutputCommand::Port { device: w.device, port: w.port, on: w.high },
+                (None, Some(w)) => OutputCommand::Port { device: w.device, port: w.port, state },
                 (tool, _) => OutputCommand::Tool { tool, state },
             };
             Item::Event { line, event: Event::Output(command) }

@@ -128,15 +128,15 @@ pub enum OutputCommand {
         /// What to do with it.
         state: ToolState,
     },
-    /// The explicit form `M3/M4 A<device> P<port>` (drive the port active) or `M5 A P`
-    /// (drive it inactive).
+    /// The explicit form `M3 A<device> P<port>` or `M4 A P` (drive the port high) and `M5 A P`
+    /// (drive it low). The code is kept so the event reads back as the G-code that caused it.
     Port {
         /// Digital I/O module device ID.
         device: u32,
         /// Port on the module.
         port: u32,
-        /// `true` for M3/M4 (active), `false` for M5.
-        on: bool,
+        /// M3, M4 (high) or M5 (low).
+        state: ToolState,
     },
 }
 

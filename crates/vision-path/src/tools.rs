@@ -86,7 +86,9 @@ impl ToolTable {
         command: OutputCommand,
     ) -> Result<Vec<OutputWrite>, PathError> {
         match command {
-            OutputCommand::Port { device, port, on } => Ok(vec![OutputWrite { device, port, level: on }]),
+            OutputCommand::Port { device, port, state } => {
+                Ok(vec![OutputWrite { device, port, level: state != ToolState::Off }])
+            }
             OutputCommand::Tool { tool, state } => {
                 let number = tool.or(selected).ok_or(PathError::NoToolSelected { line })?;
                 let t = self.get(number).ok_or(PathError::UnknownTool { line, tool: number })?;
@@ -132,8 +134,9 @@ mod tests {
         assert_eq!(t.resolve(6, Some(1), m4).unwrap(), vec![w(1, 0, false), w(1, 1, true)]);
         let m5 = OutputCommand::Tool { tool: None, state: ToolState::Off };
         assert_eq!(t.resolve(7, Some(1), m5).unwrap(), vec![w(1, 0, false), w(1, 1, false)]);
-        let explicit = OutputCommand::Port { device: 2, port: 7, on: false };
-        assert_eq!(t.resolve(8, None, explicit).unwrap(), vec![w(2, 7, false)]);
+        let explicit = |state| OutputCommand::Port { device: 2, port: 7, state };
+        assert_eq!(t.resolve(8, None, explicit(ToolState::Off)).unwrap(), vec![w(2, 7, false)]);
+        assert_eq!(t.resolve(8, None, explicit(ToolState::CounterClockwise)).unwrap(), vec![w(2, 7, true)]);
     }
 
     #[test]

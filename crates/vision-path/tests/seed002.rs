@@ -163,10 +163,12 @@ fn tool_snippets_switch_at_rest_at_their_programmed_points() {
     let at = implicit.setpoints.iter().find(|s| s.time == m3.time).unwrap();
     assert_eq!(at.position, [100.0, 100.0, 0.0]);
     let explicit = plan("G90 G21\nG0 X100 Y100\nM3 A1 P0\nG1 X200 Y200\nM5 A1 P0");
-    assert_eq!(explicit.events[0].event, Event::Output(OutputCommand::Port { device: 1, port: 0, on: true }));
-    assert_eq!(explicit.events[1].event, Event::Output(OutputCommand::Port { device: 1, port: 0, on: false }));
+    let port = |port, state| Event::Output(OutputCommand::Port { device: 1, port, state });
+    assert_eq!(explicit.events[0].event, port(0, ToolState::Clockwise));
+    assert_eq!(explicit.events[1].event, port(0, ToolState::Off));
     let m4 = plan("G90 G21\nG0 X100 Y100\nM4 A1 P1\nG1 X200 Y200\nM5 A1 P1");
-    assert_eq!(m4.events.len(), 2);
+    let events: Vec<_> = m4.events.iter().map(|e| e.event).collect();
+    assert_eq!(events, vec![port(1, ToolState::CounterClockwise), port(1, ToolState::Off)]);
 }
 
 /// The Python example's program (`GCODE_STRING`), two header comment lines first.

@@ -146,7 +146,10 @@ fn events_follow_the_setpoint_of_their_time_in_the_stream() {
     let mut p = Program::new([0.0; 3], PathMode::ExactStop);
     p.line_to([1.0, 0.0, 0.0], Speed::Feed(600.0));
     p.item(|line| Item::Event { line, event: Event::ToolChange(3) });
-    p.item(|line| Item::Event { line, event: Event::Output(OutputCommand::Port { device: 1, port: 2, on: true }) });
+    p.item(|line| Item::Event {
+        line,
+        event: Event::Output(OutputCommand::Port { device: 1, port: 2, state: ToolState::Clockwise }),
+    });
     let steps: Vec<Step> = Setpoints::from_items(&config(), p.items).unwrap().map(Result::unwrap).collect();
     let mut last_time = 0.0;
     let mut seen = 0;
