@@ -246,11 +246,11 @@ impl Curve {
         let e1 = -m;
         let e2 = tangent;
         let axis = e1.cross(e2);
-        let v = end - base;
-        let mut sweep = v.dot(e2).atan2(v.dot(e1));
-        if sweep <= 0.0 {
-            sweep += TAU;
-        }
+        // The arc turns by twice the angle between the tangent and the chord, in (0, 2π). Not
+        // from `end − base`: on a nearly straight arc the centre is far away, and the rounding
+        // of `m` (relative error ~10⁻¹⁷·|chord|/h) times the radius made the sweep, and so the
+        // length, wrong by a large factor, so the path jumped where the piece ended.
+        let sweep = 2.0 * h.atan2(chord.dot(tangent));
         Some(Curve::Arc(ArcCurve::build(base, e1, e2, axis, r, 0.0, 0.0, (0.0, sweep), start, end)))
     }
 
@@ -415,6 +415,28 @@ mod tests {
 
     fn close(a: Vec3, b: Vec3, tol: f64) -> bool {
         (a - b).norm() <= tol
+    }
+
+    #[test]
+    fn a_nearly_straight_tangent_arc_is_as_long_as_its_chord_and_runs_along_it() {
+        // A biarc piece a planner run produced (radius 7.4 km, 0.13 mm long): its sweep came
+        // out 2.5 times too large, so the path ran 0.2 mm past the piece's end and jumped back.
+        let start = Vec3::new(-4.111846120672503, 0.6365548900226443, 3.0);
+        let end = Vec3::new(-4.242390796453222, 0.6147396097029565, 3.0);
+        let tangent = Vec3::new(-0.9863229716703146, -0.16482413523340556, 0.0);
+        let arc = Curve::from_tangent(start, tangent, end).unwrap();
+        assert!(matches!(arc, Curve::Arc(_)) && arc.radius() > 1e6, "{arc:?}");
+        let chord = (end - start).norm();
+        assert!((arc.len() - chord).abs() < 1e-12, "{} vs {chord}", arc.len());
+        for k in 0..=8 {
+            let s = arc.len() * f64::from(k) / 8.0;
+            let along = start + (end - start) * (f64::from(k) / 8.0);
+            assert!(close(arc.point(s), along, 1e-9), "{k}: {:?} vs {along:?}", arc.point(s));
+        }
+        // And an ordinary one: a half circle of radius 1.
+        let half = Curve::from_tangent(Vec3::ZERO, Vec3::new(0.0, 1.0, 0.0), Vec3::new(2.0, 0.0, 0.0)).unwrap();
+        assert!((half.len() - PI).abs() < 1e-12 && (half.radius() - 1.0).abs() < 1e-12);
+        assert!(close(half.point(FRAC_PI_2), Vec3::new(1.0, 1.0, 0.0), 1e-12));
     }
 
     #[test]
