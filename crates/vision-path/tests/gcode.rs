@@ -66,5 +66,6 @@ fn a_rounded_arc_that_is_slightly_a_spiral_keeps_the_acceleration_bound_where_it
     assert!(path <= A * T * T * (1.0 + 1e-6) + 1e-9, "|Δ²p| = {} a·T²", path / (A * T * T));
     assert!(axes.iter().all(|&d| d <= A * T * T * (1.0 + 1e-6) + 1e-9), "{axes:?}");
     assert!(p.setpoints.iter().any(|s| s.line == 4), "the spiral is driven");
+    assert_eq!(common::interior_rests(&p.setpoints), 0, "the corner is blended, the spiral's joins pass");
     assert_eq!(p.setpoints.last().unwrap().position, [-0.128, -10.0, 0.0]);
 }

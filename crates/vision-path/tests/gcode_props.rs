@@ -2,7 +2,8 @@
 //! whose arcs arrive as polylines) through the interpreter and the planner: the sampled
 //! bounds hold, the path ends exactly where the interpreter leaves the machine, and a program
 //! the interpreter refuses comes out as the error of its line, after the motion before it
-//! came to rest.
+//! came to rest; and the path comes to rest only where an event, a dwell or a corner that is
+//! not blended between two lines (G61, `G64 P0`, a reversal, an arc) makes it.
 
 mod common;
 
@@ -12,7 +13,7 @@ use common::{norm, sub};
 use proptest::prelude::*;
 use vision_gcode::{Interpreter, InterpreterConfig};
 use vision_math::LengthUnit;
-use vision_path::{GcodeItems, Limits, PathError, PlanConfig, Setpoint, Setpoints, Step};
+use vision_path::{GcodeItems, Item, Limits, PathError, PlanConfig, Setpoint, Setpoints, Step};
 
 #[derive(Debug, Clone)]
 enum Line {
@@ -128,9 +129,10 @@ proptest! {
         config.default_feed = Some(3000.0);
         let items = GcodeItems::new(Interpreter::new(config.clone()), text.as_str());
         let plan = PlanConfig::new(Limits::uniform(A, 300.0, 1500.0), T, items.start_position());
+        let items: Vec<_> = items.collect();
         let mut setpoints: Vec<Setpoint> = Vec::new();
         let mut failure = None;
-        for step in Setpoints::new(&plan, items).unwrap() {
+        for step in Setpoints::new(&plan, items.clone().into_iter()).unwrap() {
             match step {
                 Ok(Step::Setpoint(s)) => setpoints.push(s),
                 Ok(Step::Event(_)) => {}
@@ -151,6 +153,9 @@ proptest! {
         }
         let last = setpoints.last().unwrap();
         prop_assert_eq!(last.velocity, [0.0; 3]);
+        let ran: Vec<Item> = items.into_iter().map_while(Result::ok).collect();
+        let (rests, allowed) = (common::interior_rests(&setpoints), common::allowed_rests(&ran));
+        prop_assert!(rests <= allowed, "{} stops inside the path, at most {} allowed\n{}", rests, allowed, text);
         // The interpreter alone, up to where it stops.
         let mut interp = Interpreter::new(config);
         let outcome = interp.run(&text, None, &mut |_: &vision_gcode::Event| {});

@@ -6,7 +6,8 @@
 //!   stated tolerance `(1 + 1e-6)·a·T² + 1e-9` units — also on spirals (arcs whose end radius
 //!   differs from their start radius, as rounded G-code makes them) joined tangentially;
 //! * G61 reaches every corner exactly (bitwise) with zero velocity;
-//! * G64 P never strays more than P from the programmed path;
+//! * G64 P never strays more than P from the programmed path, and the path never comes to rest
+//!   at a corner the planner's rules blend (two lines, not a reversal);
 //! * the path ends exactly (bitwise) at the programmed end, at rest;
 //! * events happen at rest at their programmed point, dwells last their time;
 //! * a single straight move takes the analytic trapezoid (or triangle) time, rounded up to
@@ -257,6 +258,8 @@ proptest! {
         let run = common::run(&config(limits, period), &items);
         check_kinematics(&run, &items, &limits, period)?;
         check_end_events_dwells(&run, &items, period)?;
+        let (rests, allowed) = (common::interior_rests(&run.setpoints), common::allowed_rests(&items));
+        prop_assert!(rests <= allowed, "{rests} stops inside the path, at most {allowed} allowed (blendable corners must not stop)");
         if let Some(p) = p {
             let segs = segments(&items);
             for s in &run.setpoints {

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{norm, sub};
+use common::{interior_rests, norm, sub};
 use vision_gcode::{
     DigitalOutput as GOutput, Interpreter, InterpreterConfig, Tool as GTool, ToolOutputs, ToolTable as GTools, Xyz,
 };
@@ -99,6 +99,9 @@ fn g90_and_g91_squares_with_a_z_lift() {
     let inc = plan("G21 G91 G64 P1\nG0 Z500\nX500\nY500\nX-500\nY-500");
     assert_eq!(abs.setpoints.last().unwrap().position, [-500.0, -500.0, 500.0]);
     assert_eq!(inc.setpoints.last().unwrap().position, [0.0, 0.0, 500.0]);
+    // G64 P1 blends every corner (all are 90° or 45°): neither square stops before its end.
+    assert_eq!(interior_rests(&abs.setpoints), 0);
+    assert_eq!(interior_rests(&inc.setpoints), 0);
 }
 
 /// Every setpoint of `line` lies on the circle about `centre` of `radius` in the plane whose
@@ -140,8 +143,12 @@ fn g28_g92_rapid_and_linear_snippets() {
     assert_eq!(g28.setpoints.last().unwrap().position, [500.0, 500.0, 500.0]);
     let g92 = plan("G90 G21 G64 P10.0\nG0 X500\nY500 Z500\nG92 X0 Y0 Z0\nG0 X-250 Y-250 Z-250");
     assert_eq!(g92.setpoints.last().unwrap().position, [250.0, 250.0, 250.0]);
-    plan("G90 G21 G64 P10.0\nG0 X500 Y500 F1000\nZ500\nX0 Y0\nZ0 F500");
+    let rapid = plan("G90 G21 G64 P10.0\nG0 X500 Y500 F1000\nZ500\nX0 Y0\nZ0 F500");
     let g1 = plan("G90 G21 G64 P10.0\nG1 Y500 Z500 F1000\nX500\nY0 Z0\nX0 F500");
+    // G64 P10 blends every corner of these three (G92 moves no axis, so it is no stop either).
+    for p in [&g92, &rapid, &g1] {
+        assert_eq!(interior_rests(&p.setpoints), 0);
+    }
     // G1 at F1000 = 16.7 mm/s; the last side at F500 = 8.3 mm/s.
     let top = interior(&g1).iter().filter(|s| s.line == 5).map(|s| norm(s.velocity)).fold(0.0, f64::max);
     assert!((top - 500.0 / 60.0).abs() < 1e-9, "{top}");
@@ -206,6 +213,10 @@ fn the_python_example_stays_within_half_a_millimetre_and_dwells_a_second() {
     let dwell = p.setpoints.iter().filter(|s| s.line == 17).count();
     assert_eq!(dwell, 1000);
     assert_eq!(p.events.len(), 2);
+    // It comes to rest twice on the way: for M3 (line 12) and for G4 + M5 (lines 17–18). The
+    // cut's corners are blended, so the cut itself never stops.
+    assert_eq!(interior_rests(&p.setpoints), 2);
+    assert!(cut[1..cut.len() - 1].iter().all(|s| s.velocity != [0.0; 3]), "the cut stops at a corner");
 }
 
 #[derive(Clone, Default)]

@@ -111,6 +111,7 @@ fn a_spiral_joined_tangentially_or_blended_keeps_the_acceleration_bound() {
         let run = common::run(&config(), &p.items);
         let (worst, _) = common::worst_second_difference(&run.setpoints);
         assert!(worst <= bound, "P {tolerance:?}: |Δ²p| = {} a·T²", worst / 1e-3);
+        assert_eq!(common::interior_rests(&run.setpoints), 0, "P {tolerance:?}: both corners are blended");
     }
 }
 

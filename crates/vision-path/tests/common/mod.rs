@@ -1,7 +1,7 @@
 //! Shared helpers: program builders and an independent model of the programmed path.
 #![allow(dead_code, unreachable_pub)]
 
-use std::f64::consts::TAU;
+use std::f64::consts::{PI, TAU};
 
 use vision_path::{ArcShape, Item, PathMode, PlanConfig, Segment, Setpoint, Setpoints, Shape, Speed, Step};
 
@@ -236,4 +236,52 @@ pub fn worst_second_difference(setpoints: &[Setpoint]) -> (f64, [f64; 3]) {
         }
     }
     worst
+}
+
+/// How many times the path comes to rest strictly between its start and its end: runs of
+/// consecutive setpoints with zero velocity, leaving out the run it starts with and the run it
+/// ends with. An event or a dwell is one run (an event next to a dwell at the same point shares
+/// it), and so is every corner the planner stops at.
+pub fn interior_rests(setpoints: &[Setpoint]) -> usize {
+    let at_rest: Vec<bool> = setpoints.iter().map(|s| s.velocity == [0.0; 3]).collect();
+    let first = at_rest.iter().position(|r| !r).unwrap_or(at_rest.len());
+    let last = at_rest.iter().rposition(|r| !r).map_or(first, |i| i + 1);
+    (first..last).filter(|&i| at_rest[i] && !at_rest[i - 1]).count()
+}
+
+/// The most times `items` may come to rest inside the path (see [`interior_rests`]) if the
+/// planner blends every corner its documented rules say it blends: each dwell and event is a
+/// stop, and so is each corner that is G61 or `G64 P0`, a reversal, or touches an arc (a
+/// biarc blend that does not fit is a stop). A G64 corner between two lines (with P > 0 or no
+/// P) is always blended, so it adds nothing.
+pub fn allowed_rests(items: &[Item]) -> usize {
+    let mut allowed = 0;
+    let mut prev: Option<&Segment> = None;
+    for item in items {
+        match item {
+            Item::Move(s) if s.shape == Shape::Line && s.start == s.end => {} // no motion: dropped
+            Item::Move(s) => {
+                if prev.is_some_and(|p| !always_blended(p, s)) {
+                    allowed += 1;
+                }
+                prev = Some(s);
+            }
+            Item::End { .. } => {}
+            Item::Dwell { .. } | Item::Event { .. } => {
+                allowed += 1;
+                prev = None;
+            }
+        }
+    }
+    allowed
+}
+
+/// Whether the corner at the end of `a` into `b` passes at speed under the planner's rules: a
+/// blend between two lines (governed by `a`'s mode) that is not a reversal.
+fn always_blended(a: &Segment, b: &Segment) -> bool {
+    let (u, w) = (tangent(a, true), tangent(b, false));
+    let turn = norm(cross(u, w)).atan2(dot(u, w));
+    let lines = a.shape == Shape::Line && b.shape == Shape::Line;
+    let blends = matches!(a.mode, PathMode::Blend { tolerance } if tolerance != Some(0.0));
+    lines && blends && turn < PI - 1e-5
 }
