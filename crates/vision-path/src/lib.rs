@@ -93,7 +93,9 @@
 //! * **Tools**: a bare M3/M4/M5 acts on the tool of the last `T… M6`; `M3 $n` acts on `n`
 //!   without selecting it (as the interpreter does). Switching a tool on first drives its
 //!   other direction inactive. When a followed path ends — completed, stopped or failed —
-//!   every output it drove active is driven inactive (as M2/M30 stop a spindle).
+//!   every output it drove active is driven inactive (as M2/M30 stop a spindle). Seed 002 says
+//!   nothing about outputs when a path stops or fails; leaving a tool running on a machine at
+//!   rest is the unsafe choice.
 //! * **Axes**: a move of an axis no drive is mapped to is an error at its line; the follower's
 //!   `start_gcode` checks the whole program (streaming, no handler) before anything moves.
 //! * Arcs whose start and end radius differ slightly (rounded G-code) are spirals with

@@ -148,43 +148,68 @@ fn stop_brakes_to_rest_on_the_path_and_switches_the_tool_off() {
 }
 
 #[test]
-fn a_move_of_an_unmapped_axis_halts_the_path_at_rest_before_it() {
+fn a_move_of_an_unmapped_axis_halts_the_path_at_rest_before_it_and_switches_the_tool_off() {
     let mut follower = seed_follower();
     let mut p = Program::new([0.0; 3], PathMode::ExactStop);
+    p.item(tool(ToolState::CounterClockwise));
     p.line_to([5.0, 5.0, 0.0], Speed::Feed(3000.0)).line_to([5.0, 5.0, 1.0], Speed::Feed(3000.0));
-    follower.start(p.items.into_iter().map(Ok), 1000.0, Recorder::default(), Pace::Unpaced).unwrap();
+    let rec = Recorder::default();
+    follower.start(p.items.into_iter().map(Ok), 1000.0, rec.clone(), Pace::Unpaced).unwrap();
     let status = follower.wait();
     assert_eq!(status.state, RunState::Failed);
-    assert_eq!(status.error, Some(PathError::UnmappedAxis { line: 2, axis: 'Z' }));
+    assert_eq!(status.error, Some(PathError::UnmappedAxis { line: 3, axis: 'Z' }));
     assert_eq!(status.position, [5.0, 5.0, 0.0]);
     assert!(status.error.unwrap().to_string().contains("no drive is mapped to Z"));
+    // M4 $1 (clockwise off, counter-clockwise on); the failed path drives it off again.
+    let w = |port, level| OutputWrite { device: 1, port, level };
+    assert_eq!(rec.0.lock().unwrap().writes, vec![w(0, false), w(1, true), w(1, false)]);
 }
 
 #[test]
-fn an_unknown_tool_or_a_failing_sink_halts_the_path_with_the_reason() {
+fn an_unknown_tool_halts_the_path_with_the_reason_and_the_tool_off() {
+    let w = |port, level| OutputWrite { device: 1, port, level };
     let mut follower = seed_follower();
-    let items = vec![Ok(Item::Event {
-        line: 3,
-        event: Event::Output(OutputCommand::Tool { tool: Some(7), state: ToolState::Clockwise }),
-    })];
-    follower.start(items, 1000.0, Recorder::default(), Pace::Unpaced).unwrap();
+    let items = vec![
+        Ok(tool(ToolState::Clockwise)(2)),
+        Ok(Item::Event {
+            line: 3,
+            event: Event::Output(OutputCommand::Tool { tool: Some(7), state: ToolState::Clockwise }),
+        }),
+    ];
+    let rec = Recorder::default();
+    follower.start(items, 1000.0, rec.clone(), Pace::Unpaced).unwrap();
     assert_eq!(follower.wait().error, Some(PathError::UnknownTool { line: 3, tool: 7 }));
+    assert_eq!(rec.0.lock().unwrap().writes, vec![w(1, false), w(0, true), w(0, false)]);
+}
 
-    struct Broken;
+#[test]
+fn a_failing_sink_halts_the_path_with_the_reason_and_the_tool_off() {
+    let w = |port, level| OutputWrite { device: 1, port, level };
+    let mut follower = seed_follower();
+    /// Drive 1 faults once the path has left X 0.5; outputs still work.
+    #[derive(Clone, Default)]
+    struct Broken(Arc<Mutex<Vec<OutputWrite>>>);
     impl MotionSink for Broken {
-        fn setpoint(&mut self, _: &Setpoint, _: &[DrivePosition]) -> Result<(), String> {
-            Err("drive 1 not enabled".into())
+        fn setpoint(&mut self, setpoint: &Setpoint, _: &[DrivePosition]) -> Result<(), String> {
+            if setpoint.position[0] > 0.5 {
+                return Err("drive 1 not enabled".into());
+            }
+            Ok(())
         }
-        fn output(&mut self, _: OutputWrite) -> Result<(), String> {
+        fn output(&mut self, write: OutputWrite) -> Result<(), String> {
+            self.0.lock().unwrap().push(write);
             Ok(())
         }
     }
     let mut p = Program::new([0.0; 3], PathMode::ExactStop);
+    p.item(tool(ToolState::Clockwise));
     p.line_to([1.0, 0.0, 0.0], Speed::Rapid);
-    follower.start(p.items.into_iter().map(Ok), 1000.0, Broken, Pace::Unpaced).unwrap();
+    let broken = Broken::default();
+    follower.start(p.items.into_iter().map(Ok), 1000.0, broken.clone(), Pace::Unpaced).unwrap();
     let status = follower.wait();
     assert_eq!(status.state, RunState::Failed);
     assert!(status.error.unwrap().to_string().contains("drive 1 not enabled"));
+    assert_eq!(*broken.0.lock().unwrap(), vec![w(1, false), w(0, true), w(0, false)]);
 }
 
 #[test]

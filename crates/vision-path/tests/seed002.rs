@@ -257,10 +257,11 @@ fn start_gcode_follows_the_python_example_like_start_path() {
 #[test]
 fn start_gcode_checks_the_whole_program_before_anything_moves() {
     let mut follower = seed_follower();
-    // Z has no drive on the seed's machine.
-    let err =
-        follower.start_gcode(&machine_motion(), "G21 G90\nG0 X10\nG0 Z5", 1000.0, Writes::default(), Pace::Unpaced);
+    // Z has no drive on the seed's machine. The tool is not switched on either.
+    let writes = Writes::default();
+    let err = follower.start_gcode(&machine_motion(), "G21 G90\nM3 $1\nG0 Z5", 1000.0, writes.clone(), Pace::Unpaced);
     assert_eq!(err, Err(PathError::UnmappedAxis { line: 3, axis: 'Z' }));
+    assert!(writes.0.lock().unwrap().is_empty());
     let err =
         follower.start_gcode(&machine_motion(), "G21 G90\nG0 X10\nG1 X20 Q3", 1000.0, Writes::default(), Pace::Unpaced);
     match err {
@@ -274,6 +275,23 @@ fn start_gcode_checks_the_whole_program_before_anything_moves() {
     assert_eq!(err, Err(PathError::UnknownTool { line: 3, tool: 2 }));
     assert_eq!(follower.status().state, RunState::Idle);
     assert_eq!(follower.status().position, [0.0; 3]);
+}
+
+#[test]
+fn a_gcode_path_that_fails_mid_program_halts_at_rest_and_switches_its_tool_off() {
+    // `start` (not `start_gcode`) reads the program as it runs: the bad line 4 is met after
+    // the tool went on and the machine moved.
+    let mut follower = seed_follower();
+    let writes = Writes::default();
+    let items =
+        GcodeItems::new(Interpreter::new(machine_motion()), "G21 G90\nM3 $1\nG1 X10 F600\nG1 X20 Q3".to_string());
+    follower.start(items, 1000.0, writes.clone(), Pace::Unpaced).unwrap();
+    let status = follower.wait();
+    assert_eq!(status.state, RunState::Failed);
+    assert!(matches!(status.error, Some(PathError::Program { line: 4, .. })), "{:?}", status.error);
+    assert_eq!(status.position, [10.0, 0.0, 0.0]);
+    let w = |port, level| OutputWrite { device: 1, port, level };
+    assert_eq!(*writes.0.lock().unwrap(), vec![w(1, false), w(0, true), w(0, false)]);
 }
 
 #[test]
