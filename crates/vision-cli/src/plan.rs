@@ -12,7 +12,7 @@ use std::path::PathBuf;
 use clap::Args;
 use vision_gcode::{Interpreter, InterpreterConfig};
 use vision_math::{LengthUnit, MM_PER_INCH};
-use vision_path::{Event, GcodeItems, Limits, OutputCommand, PathError, PlanConfig, Setpoints, Step, ToolState};
+use vision_path::{Event, GcodeItems, Limits, OutputCommand, PathError, PlanConfig, Setpoints, Step};
 
 use crate::trace::{read_program, UnitArg};
 use crate::Failure;
@@ -156,17 +156,12 @@ struct EventText(Event);
 
 impl std::fmt::Display for EventText {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let code = |state| match state {
-            ToolState::Clockwise => "M3",
-            ToolState::CounterClockwise => "M4",
-            ToolState::Off => "M5",
-        };
         match self.0 {
             Event::ToolChange(t) => write!(f, "M6 T{t}"),
-            Event::Output(OutputCommand::Tool { tool: Some(t), state }) => write!(f, "{} ${t}", code(state)),
-            Event::Output(OutputCommand::Tool { tool: None, state }) => f.write_str(code(state)),
-            Event::Output(OutputCommand::Port { device, port, state }) => {
-                write!(f, "{} A{device} P{port}", code(state))
+            Event::Output(OutputCommand::Tool { tool: Some(t), command }) => write!(f, "{} ${t}", command.gcode()),
+            Event::Output(OutputCommand::Tool { tool: None, command }) => f.write_str(command.gcode()),
+            Event::Output(OutputCommand::Port { device, port, command }) => {
+                write!(f, "{} A{device} P{port}", command.gcode())
             }
         }
     }
@@ -174,18 +169,20 @@ impl std::fmt::Display for EventText {
 
 #[cfg(test)]
 mod tests {
+    use vision_path::SpindleCommand;
+
     use super::*;
 
     #[test]
     fn events_read_back_as_their_own_m_codes() {
         let text = |event| EventText(event).to_string();
-        let port = |state| Event::Output(OutputCommand::Port { device: 1, port: 1, state });
-        assert_eq!(text(port(ToolState::CounterClockwise)), "M4 A1 P1");
-        assert_eq!(text(port(ToolState::Clockwise)), "M3 A1 P1");
-        assert_eq!(text(port(ToolState::Off)), "M5 A1 P1");
-        let tool = |tool, state| Event::Output(OutputCommand::Tool { tool, state });
-        assert_eq!(text(tool(Some(2), ToolState::CounterClockwise)), "M4 $2");
-        assert_eq!(text(tool(None, ToolState::Off)), "M5");
+        let port = |command| Event::Output(OutputCommand::Port { device: 1, port: 1, command });
+        assert_eq!(text(port(SpindleCommand::CounterClockwise)), "M4 A1 P1");
+        assert_eq!(text(port(SpindleCommand::Clockwise)), "M3 A1 P1");
+        assert_eq!(text(port(SpindleCommand::Stop)), "M5 A1 P1");
+        let tool = |tool, command| Event::Output(OutputCommand::Tool { tool, command });
+        assert_eq!(text(tool(Some(2), SpindleCommand::CounterClockwise)), "M4 $2");
+        assert_eq!(text(tool(None, SpindleCommand::Stop)), "M5");
         assert_eq!(text(Event::ToolChange(3)), "M6 T3");
     }
 }

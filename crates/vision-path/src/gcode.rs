@@ -3,28 +3,26 @@
 //!
 //! | interpreter event | planner item |
 //! | --- | --- |
-//! | `Linear` (G0, G1, G28 legs, arc polylines) | a line [`Segment`]: rapid or feed, its G61/G64 |
+//! | `Linear` (G0, G1, G28 legs, arc polylines) | a line [`Segment`]: its rate and G61/G64 as they are |
 //! | `Arc` | an arc [`Segment`]: centre, plane normal (+Z G17, +Y G18, +X G19), the interpreter's swept angle signed by the direction |
 //! | `Dwell` (G4) | [`Item::Dwell`] |
 //! | `ToolChange` (M6) | [`Event::ToolChange`] |
-//! | `Output` (M3/M4/M5) | [`Event::Output`]: the tool (or the explicit port) and the command |
+//! | `Output` (M3/M4/M5) | [`Event::Output`]: the tool (or the explicit port) and the M-code |
 //! | `Stop` (M0/M1), `UserMCode` (reported, not executed) | a zero-second dwell: an exact stop there |
 //! | `ProgramEnd` (M2/M30) | [`Item::End`] |
 //! | an error at a line | `Err(PathError::Program { line, .. })` |
 //!
 //! The interpreter resolves M3/M4/M5 to writes with its own tool table; the planner keeps only
-//! the tool number and the command, and the [`crate::PathFollower`]'s [`crate::ToolTable`]
-//! resolves them, so segments and G-code drive tools the same way.
+//! the tool number and the M-code, and the [`crate::PathFollower`]'s [`crate::ToolTable`]
+//! resolves them (by the same rule, [`vision_gcode::ToolOutputs::writes`]), so segments and
+//! G-code drive tools the same way.
 
 use std::collections::VecDeque;
 
-use vision_gcode::{
-    Event as GEvent, GcodeError, Interpreter, InterpreterConfig, PathMode as GPathMode, Plane, Rate, RunOutcome,
-    SpindleCommand, Xyz,
-};
+use vision_gcode::{Event as GEvent, GcodeError, Interpreter, InterpreterConfig, Plane, Rate, RunOutcome, Xyz};
 
 use crate::follower::check_axes;
-use crate::input::{ArcShape, Event, Item, OutputCommand, PathMode, Segment, Shape, Speed, ToolState};
+use crate::input::{ArcShape, Event, Item, OutputCommand, Segment, Shape};
 use crate::{MotionSink, Pace, PathError, PathFollower};
 
 /// A G-code program as a stream of planner items (see the module docs). `T` holds the text
@@ -53,7 +51,7 @@ impl<T: AsRef<str>> GcodeItems<T> {
 
     /// Where the machine is before the program runs (the planner's start), machine units.
     pub fn start_position(&self) -> [f64; 3] {
-        xyz(self.interp.machine_position())
+        self.interp.machine_position().to_array()
     }
 
     /// Run the next line, queueing its items.
@@ -124,7 +122,7 @@ impl PathFollower {
         let at = self.status().position;
         let fresh = || -> Result<Interpreter, PathError> {
             let mut interp = Interpreter::new(config.clone());
-            interp.set_machine_position(Xyz { x: at[0], y: at[1], z: at[2] }).map_err(|e| program_error(&e, 0))?;
+            interp.set_machine_position(Xyz::from(at)).map_err(|e| program_error(&e, 0))?;
             Ok(interp)
         };
         // The interpreter names the tool of every M3/M4/M5 (`$n` or its active tool), so no
@@ -143,21 +141,18 @@ pub fn item(event: &GEvent, line: usize) -> Item {
     match event {
         GEvent::Linear(m) => Item::Move(Segment {
             line,
-            start: xyz(m.start),
-            end: xyz(m.end),
+            start: m.start.to_array(),
+            end: m.end.to_array(),
             shape: Shape::Line,
-            speed: match m.rate {
-                Rate::Rapid => Speed::Rapid,
-                Rate::Feed(f) => Speed::Feed(f),
-            },
-            mode: path_mode(m.path),
+            rate: m.rate,
+            mode: m.path,
         }),
         GEvent::Arc(a) => Item::Move(Segment {
             line,
-            start: xyz(a.start),
-            end: xyz(a.end),
+            start: a.start.to_array(),
+            end: a.end.to_array(),
             shape: Shape::Arc(ArcShape {
-                centre: xyz(a.center),
+                centre: a.center.to_array(),
                 normal: match a.plane {
                     Plane::Xy => [0.0, 0.0, 1.0],
                     Plane::Zx => [0.0, 1.0, 0.0],
@@ -165,37 +160,21 @@ pub fn item(event: &GEvent, line: usize) -> Item {
                 },
                 sweep: a.direction.sign() * a.angle,
             }),
-            speed: Speed::Feed(a.feed),
-            mode: path_mode(a.path),
+            rate: Rate::Feed(a.feed),
+            mode: a.path,
         }),
         GEvent::Dwell { seconds, .. } => Item::Dwell { line, seconds: *seconds },
         GEvent::ToolChange { tool, .. } => Item::Event { line, event: Event::ToolChange(*tool) },
         GEvent::Output(o) => {
-            let state = match o.command {
-                SpindleCommand::Clockwise => ToolState::Clockwise,
-                SpindleCommand::CounterClockwise => ToolState::CounterClockwise,
-                SpindleCommand::Stop => ToolState::Off,
-            };
             let command = match (o.tool, o.writes.first()) {
-                (None, Some(w)) => OutputCommand::Port { device: w.device, port: w.port, state },
-                (tool, _) => OutputCommand::Tool { tool, state },
+                (None, Some(w)) => OutputCommand::Port { device: w.device, port: w.port, command: o.command },
+                (tool, _) => OutputCommand::Tool { tool, command: o.command },
             };
             Item::Event { line, event: Event::Output(command) }
         }
         GEvent::Stop { .. } | GEvent::UserMCode(_) => Item::Dwell { line, seconds: 0.0 },
         GEvent::ProgramEnd { .. } => Item::End { line },
     }
-}
-
-fn path_mode(p: GPathMode) -> PathMode {
-    match p {
-        GPathMode::ExactStop => PathMode::ExactStop,
-        GPathMode::Blend { tolerance } => PathMode::Blend { tolerance },
-    }
-}
-
-fn xyz(p: Xyz) -> [f64; 3] {
-    [p.x, p.y, p.z]
 }
 
 /// The interpreter's error for a line run alone (numbered 1), told at its real `line`.

@@ -20,7 +20,7 @@
 //! `maxPathAcceleration` is mm/s² on a metric machine), times in seconds.
 //!
 //! ```
-//! use vision_path::{Item, Limits, PathMode, PlanConfig, Segment, Setpoints, Shape, Speed};
+//! use vision_path::{Item, Limits, PathMode, PlanConfig, Rate, Segment, Setpoints, Shape};
 //!
 //! // One 100 mm feed move at F6000 (100 mm/s), a = 1000 mm/s², 1 ms setpoints.
 //! let config = PlanConfig::new(Limits::uniform(1000.0, 500.0, 1000.0), 0.001, [0.0; 3]);
@@ -29,7 +29,7 @@
 //!     start: [0.0; 3],
 //!     end: [100.0, 0.0, 0.0],
 //!     shape: Shape::Line,
-//!     speed: Speed::Feed(6000.0),
+//!     rate: Rate::Feed(6000.0),
 //!     mode: PathMode::ExactStop,
 //! })];
 //! let summary = Setpoints::from_items(&config, program)?.run_to_end()?;
@@ -126,7 +126,12 @@ pub use follower::{
     Axis, AxisMap, DrivePosition, FollowerConfig, MotionSink, Pace, PathFollower, PathStatus, RunState,
 };
 pub use gcode::{item, GcodeItems};
-pub use input::{ArcShape, Event, Item, OutputCommand, PathMode, Segment, Shape, Speed, ToolState};
+pub use input::{ArcShape, Event, Item, OutputCommand, Segment, Shape};
 pub use limits::{AxisLimits, Limits, PlanConfig};
 pub use sampler::{Setpoint, Setpoints, Step, Summary, TimedEvent};
-pub use tools::{DigitalOutput, OutputWrite, Tool, ToolTable};
+pub use tools::ToolTable;
+/// The interpreter's types this crate's API uses as they are: a segment's [`Rate`] (feed in
+/// machine units per minute, or rapid) and [`PathMode`] (G61, or G64 with `P` in machine
+/// units), an output event's [`SpindleCommand`] (M3/M4/M5), a tool's [`ToolOutputs`] (its
+/// [`DigitalOutput`]s) and the [`OutputWrite`]s a [`MotionSink`] receives.
+pub use vision_gcode::{DigitalOutput, OutputWrite, PathMode, Rate, SpindleCommand, ToolOutputs};

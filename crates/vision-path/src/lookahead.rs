@@ -152,7 +152,9 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Lookahead<I> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::input::{PathMode, Segment, Shape, Speed};
+    use vision_gcode::{PathMode, Rate};
+
+    use crate::input::{Segment, Shape};
     use crate::limits::Limits;
     use crate::vec3::Vec3;
 
@@ -164,7 +166,7 @@ mod tests {
                     start: [i as f64 * step, 0.0, 0.0],
                     end: [(i + 1) as f64 * step, 0.0, 0.0],
                     shape: Shape::Line,
-                    speed: Speed::Feed(feed),
+                    rate: Rate::Feed(feed),
                     mode: PathMode::ExactStop,
                 }))
             })
@@ -219,7 +221,7 @@ mod tests {
                 start: [i as f64 * 0.01, 0.0, 0.0],
                 end: [(i + 1) as f64 * 0.01, 0.0, 0.0],
                 shape: Shape::Line,
-                speed: Speed::Feed(6000.0),
+                rate: Rate::Feed(6000.0),
                 mode: PathMode::ExactStop,
             }))
         });

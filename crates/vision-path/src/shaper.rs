@@ -9,7 +9,9 @@ use std::f64::consts::PI;
 
 use crate::blend::blend;
 use crate::curve::{ArcCurve, ArcProblem, Curve, LineCurve};
-use crate::input::{Event, Item, PathMode, Segment, Shape, Speed};
+use vision_gcode::{PathMode, Rate};
+
+use crate::input::{Event, Item, Segment, Shape};
 use crate::limits::{speed_and_accel, Limits, NORMAL_SHARE};
 use crate::vec3::Vec3;
 use crate::PathError;
@@ -168,12 +170,10 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Shaper<I> {
                 ),
             ));
         }
-        let requested = match seg.speed {
-            Speed::Rapid => f64::INFINITY,
-            Speed::Feed(f) if f > 0.0 && f <= MAX_COORDINATE => f / 60.0,
-            Speed::Feed(f) => {
-                return Err(invalid(line, format!("feed F{f} is invalid; program a feed greater than 0")))
-            }
+        let requested = match seg.rate {
+            Rate::Rapid => f64::INFINITY,
+            Rate::Feed(f) if f > 0.0 && f <= MAX_COORDINATE => f / 60.0,
+            Rate::Feed(f) => return Err(invalid(line, format!("feed F{f} is invalid; program a feed greater than 0"))),
         };
         if let PathMode::Blend { tolerance: Some(p) } = seg.mode {
             if !(0.0..=MAX_COORDINATE).contains(&p) {

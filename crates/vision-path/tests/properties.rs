@@ -17,7 +17,7 @@ mod common;
 
 use common::{distance, norm, segments, sub, tangent, Program, Run, PLANES};
 use proptest::prelude::*;
-use vision_path::{AxisLimits, Event, Item, Limits, OutputCommand, PathMode, PlanConfig, Speed, ToolState};
+use vision_path::{AxisLimits, Event, Item, Limits, OutputCommand, PathMode, PlanConfig, Rate, SpindleCommand};
 
 const REL: f64 = 1e-6;
 const ABS: f64 = 1e-9;
@@ -93,10 +93,10 @@ fn build(ops: &[Op], mode: PathMode, feed: f64) -> Vec<Item> {
     for op in ops {
         match *op {
             Op::Line { to, rapid } => {
-                p.line_to(to, if rapid { Speed::Rapid } else { Speed::Feed(feed) });
+                p.line_to(to, if rapid { Rate::Rapid } else { Rate::Feed(feed) });
             }
             Op::Nudge(d) => {
-                p.line_to(common::add(p.pos, d), Speed::Feed(feed));
+                p.line_to(common::add(p.pos, d), Rate::Feed(feed));
             }
             Op::Arc { plane, dir, radius, angle, rise, grow } => {
                 // The centre lies `radius` away from the current point, in the arc's plane.
@@ -108,21 +108,24 @@ fn build(ops: &[Op], mode: PathMode, feed: f64) -> Vec<Item> {
                 let off = common::add(common::scale(b1, radius * dir.cos()), common::scale(b2, radius * dir.sin()));
                 let centre = common::add(p.pos, off);
                 debug_assert!(common::dot(off, PLANES[plane]).abs() < 1e-12);
-                p.spiral(plane, centre, angle, rise, grow, Speed::Feed(feed));
+                p.spiral(plane, centre, angle, rise, grow, Rate::Feed(feed));
             }
             Op::TangentSpiral { heading, lead, r0, grow, angle } => {
                 let u = [heading.cos(), heading.sin(), 0.0];
-                p.line_to(common::add(p.pos, common::scale(u, lead)), Speed::Feed(feed));
-                p.tangent_spiral(u, r0, r0 * grow, angle, Speed::Feed(feed));
+                p.line_to(common::add(p.pos, common::scale(u, lead)), Rate::Feed(feed));
+                p.tangent_spiral(u, r0, r0 * grow, angle, Rate::Feed(feed));
                 let out = segments(&p.items).last().map(|s| tangent(s, true)).expect("the spiral");
-                p.line_to(common::add(p.pos, common::scale(out, lead)), Speed::Feed(feed));
+                p.line_to(common::add(p.pos, common::scale(out, lead)), Rate::Feed(feed));
             }
             Op::Dwell(seconds) => {
                 p.item(|line| Item::Dwell { line, seconds });
             }
             Op::Tool(on) => {
-                let state = if on { ToolState::Clockwise } else { ToolState::Off };
-                p.item(|line| Item::Event { line, event: Event::Output(OutputCommand::Tool { tool: Some(1), state }) });
+                let command = if on { SpindleCommand::Clockwise } else { SpindleCommand::Stop };
+                p.item(|line| Item::Event {
+                    line,
+                    event: Event::Output(OutputCommand::Tool { tool: Some(1), command }),
+                });
             }
         }
     }
@@ -134,9 +137,9 @@ fn build(ops: &[Op], mode: PathMode, feed: f64) -> Vec<Item> {
 /// axis limits bound them).
 fn requested(items: &[Item], line: usize) -> f64 {
     items.iter().find(|i| i.line() == line).map_or(f64::INFINITY, |i| match i {
-        Item::Move(s) => match s.speed {
-            Speed::Feed(f) => f / 60.0,
-            Speed::Rapid => f64::INFINITY,
+        Item::Move(s) => match s.rate {
+            Rate::Feed(f) => f / 60.0,
+            Rate::Rapid => f64::INFINITY,
         },
         _ => 0.0,
     })
@@ -290,7 +293,7 @@ proptest! {
         }
         let analytic = if len >= v * v / a { len / v + v / a } else { 2.0 * (len / a).sqrt() };
         let mut p = Program::new(start, PathMode::ExactStop);
-        p.line_to(to, feed.map_or(Speed::Rapid, Speed::Feed));
+        p.line_to(to, feed.map_or(Rate::Rapid, Rate::Feed));
         let summary = vision_path::Setpoints::from_items(&config(limits, period), p.items.clone())
             .unwrap()
             .run_to_end()

@@ -6,27 +6,27 @@
 mod common;
 
 use common::{interior_rests, norm, sub};
-use vision_gcode::{
-    DigitalOutput as GOutput, Interpreter, InterpreterConfig, Tool as GTool, ToolOutputs, ToolTable as GTools, Xyz,
-};
+use vision_gcode::{Interpreter, InterpreterConfig, Tool as GTool, ToolTable as GTools, Xyz};
 use vision_math::LengthUnit;
 use vision_path::{
     Axis, AxisLimits, AxisMap, DigitalOutput, Event, FollowerConfig, GcodeItems, Limits, MotionSink, OutputCommand,
-    OutputWrite, Pace, PathError, PathFollower, PlanConfig, RunState, Setpoint, Setpoints, Step, TimedEvent, Tool,
-    ToolState, ToolTable,
+    OutputWrite, Pace, PathError, PathFollower, PlanConfig, RunState, Setpoint, Setpoints, SpindleCommand, Step,
+    TimedEvent, ToolOutputs, ToolTable,
 };
 
 const A: f64 = 1000.0;
 const T: f64 = 0.001;
 
+/// The seed's `tool1 = TOOL(1, clockwise, counterClockwise)`: device 1, ports 0 and 1, high.
+fn seed_tool() -> ToolOutputs {
+    let out = |port| DigitalOutput { device: 1, port, active_high: true };
+    ToolOutputs { clockwise: out(0), counter_clockwise: out(1) }
+}
+
 fn machine_motion() -> InterpreterConfig {
     let mut config = InterpreterConfig::new(LengthUnit::Millimetre);
     config.default_feed = Some(1000.0);
-    let outputs = ToolOutputs {
-        clockwise: GOutput { device: 1, port: 0, active_high: true },
-        counter_clockwise: GOutput { device: 1, port: 1, active_high: true },
-    };
-    config.tools = GTools::new().with(1, GTool { offset: Xyz::ZERO, outputs: Some(outputs) });
+    config.tools = GTools::new().with(1, GTool { offset: Xyz::ZERO, outputs: Some(seed_tool()) });
     config
 }
 
@@ -162,20 +162,20 @@ fn tool_snippets_switch_at_rest_at_their_programmed_points() {
         kinds,
         vec![
             (2, Event::ToolChange(1)),
-            (4, Event::Output(OutputCommand::Tool { tool: Some(1), state: ToolState::Clockwise })),
-            (6, Event::Output(OutputCommand::Tool { tool: Some(1), state: ToolState::Off })),
+            (4, Event::Output(OutputCommand::Tool { tool: Some(1), command: SpindleCommand::Clockwise })),
+            (6, Event::Output(OutputCommand::Tool { tool: Some(1), command: SpindleCommand::Stop })),
         ]
     );
     let m3 = implicit.events[1];
     let at = implicit.setpoints.iter().find(|s| s.time == m3.time).unwrap();
     assert_eq!(at.position, [100.0, 100.0, 0.0]);
     let explicit = plan("G90 G21\nG0 X100 Y100\nM3 A1 P0\nG1 X200 Y200\nM5 A1 P0");
-    let port = |port, state| Event::Output(OutputCommand::Port { device: 1, port, state });
-    assert_eq!(explicit.events[0].event, port(0, ToolState::Clockwise));
-    assert_eq!(explicit.events[1].event, port(0, ToolState::Off));
+    let port = |port, command| Event::Output(OutputCommand::Port { device: 1, port, command });
+    assert_eq!(explicit.events[0].event, port(0, SpindleCommand::Clockwise));
+    assert_eq!(explicit.events[1].event, port(0, SpindleCommand::Stop));
     let m4 = plan("G90 G21\nG0 X100 Y100\nM4 A1 P1\nG1 X200 Y200\nM5 A1 P1");
     let events: Vec<_> = m4.events.iter().map(|e| e.event).collect();
-    assert_eq!(events, vec![port(1, ToolState::CounterClockwise), port(1, ToolState::Off)]);
+    assert_eq!(events, vec![port(1, SpindleCommand::CounterClockwise), port(1, SpindleCommand::Stop)]);
 }
 
 /// The Python example's program (`GCODE_STRING`), two header comment lines first.
@@ -235,8 +235,7 @@ impl MotionSink for Writes {
 fn seed_follower() -> PathFollower {
     let axes = AxisMap::new(&[(Axis::X, 1), (Axis::Y, 3)]).unwrap();
     let mut tools = ToolTable::new();
-    let out = |port| DigitalOutput { device: 1, port, value: true };
-    tools.insert(1, Tool { clockwise: out(0), counter_clockwise: out(1) }).unwrap();
+    tools.insert(1, seed_tool()).unwrap();
     let limits = [AxisLimits { max_speed: 500.0, max_accel: 1000.0 }; 3];
     PathFollower::new(FollowerConfig::new(axes, tools, limits)).unwrap()
 }
@@ -250,7 +249,7 @@ fn start_gcode_follows_the_python_example_like_start_path() {
     assert_eq!(status.state, RunState::Completed, "{:?}", status.error);
     assert_eq!(status.position, [1.0, 1.0, 0.0]);
     assert_eq!(status.line, 19, "the last line of the text");
-    let w = |port, level| OutputWrite { device: 1, port, level };
+    let w = |port, high| OutputWrite { device: 1, port, high };
     assert_eq!(*writes.0.lock().unwrap(), vec![w(1, false), w(0, true), w(0, false), w(1, false)]);
 }
 
@@ -290,7 +289,7 @@ fn a_gcode_path_that_fails_mid_program_halts_at_rest_and_switches_its_tool_off()
     assert_eq!(status.state, RunState::Failed);
     assert!(matches!(status.error, Some(PathError::Program { line: 4, .. })), "{:?}", status.error);
     assert_eq!(status.position, [10.0, 0.0, 0.0]);
-    let w = |port, level| OutputWrite { device: 1, port, level };
+    let w = |port, high| OutputWrite { device: 1, port, high };
     assert_eq!(*writes.0.lock().unwrap(), vec![w(1, false), w(0, true), w(0, false)]);
 }
 

@@ -4,8 +4,8 @@ mod common;
 
 use common::{norm, sub, Program};
 use vision_path::{
-    Event, Item, Limits, OutputCommand, PathError, PathMode, PlanConfig, Segment, Setpoint, Setpoints, Shape, Speed,
-    Step, ToolState,
+    Event, Item, Limits, OutputCommand, PathError, PathMode, PlanConfig, Rate, Segment, Setpoint, Setpoints, Shape,
+    SpindleCommand, Step,
 };
 
 fn config() -> PlanConfig {
@@ -19,10 +19,10 @@ fn moves_of(run: &common::Run) -> Vec<Setpoint> {
 /// The seed's square, `G91 G21 G61 / G0 X500 / Y500 / X-500 / Y-500`, as segments.
 fn seed_square(mode: PathMode) -> Vec<Item> {
     let mut p = Program::new([0.0; 3], mode);
-    p.line_to([500.0, 0.0, 0.0], Speed::Rapid)
-        .line_to([500.0, 500.0, 0.0], Speed::Rapid)
-        .line_to([0.0, 500.0, 0.0], Speed::Rapid)
-        .line_to([0.0, 0.0, 0.0], Speed::Rapid);
+    p.line_to([500.0, 0.0, 0.0], Rate::Rapid)
+        .line_to([500.0, 500.0, 0.0], Rate::Rapid)
+        .line_to([0.0, 500.0, 0.0], Rate::Rapid)
+        .line_to([0.0, 0.0, 0.0], Rate::Rapid);
     p.item(|line| Item::End { line });
     p.items
 }
@@ -58,7 +58,7 @@ fn the_seed_square_under_g61_stops_at_each_corner_and_under_g64_keeps_moving() {
 fn collinear_moves_do_not_stop_even_under_g61() {
     let mut p = Program::new([0.0; 3], PathMode::ExactStop);
     for k in 1..=10 {
-        p.line_to([10.0 * f64::from(k), 5.0 * f64::from(k), 0.0], Speed::Feed(3000.0));
+        p.line_to([10.0 * f64::from(k), 5.0 * f64::from(k), 0.0], Rate::Feed(3000.0));
     }
     let run = common::run(&config(), &p.items);
     let moving = &run.setpoints[1..run.setpoints.len() - 1];
@@ -69,7 +69,7 @@ fn collinear_moves_do_not_stop_even_under_g61() {
 fn an_arc_keeps_its_centripetal_acceleration_within_the_path_limit() {
     // A full circle of radius 5 at a feed far above what the curvature allows.
     let mut p = Program::new([5.0, 0.0, 0.0], PathMode::ExactStop);
-    p.arc(0, [0.0; 3], std::f64::consts::TAU - 1e-9, 0.0, Speed::Feed(60000.0));
+    p.arc(0, [0.0; 3], std::f64::consts::TAU - 1e-9, 0.0, Rate::Feed(60000.0));
     let cfg = PlanConfig::new(Limits::uniform(1000.0, 500.0, 10000.0), 0.001, [5.0, 0.0, 0.0]);
     let run = common::run(&cfg, &p.items);
     let top = moves_of(&run).iter().map(|s| norm(s.velocity)).fold(0.0, f64::max);
@@ -90,7 +90,7 @@ fn a_spiral_joined_tangentially_or_blended_keeps_the_acceleration_bound() {
     // Joined exactly tangentially (no stop even under G61) and at a blended corner (G64): the
     // spiral's parameter runs at the real speed at its ends, so the speed never jumps there.
     let bound = 1000.0 * 1e-6 * (1.0 + 1e-6) + 1e-9;
-    let feed = Speed::Feed(30000.0);
+    let feed = Rate::Feed(30000.0);
     for mode in [PathMode::ExactStop, PathMode::Blend { tolerance: None }, PathMode::Blend { tolerance: Some(0.05) }] {
         let mut p = Program::new([0.0; 3], mode);
         p.line_to([10.0, 0.0, 0.0], feed).tangent_spiral([1.0, 0.0, 0.0], 1.0, 1.5, std::f64::consts::PI, feed);
@@ -118,18 +118,18 @@ fn a_spiral_joined_tangentially_or_blended_keeps_the_acceleration_bound() {
 #[test]
 fn an_output_happens_at_rest_at_its_programmed_point_and_a_dwell_holds() {
     let mut p = Program::new([0.0; 3], PathMode::Blend { tolerance: None });
-    p.line_to([100.0, 100.0, 0.0], Speed::Rapid);
+    p.line_to([100.0, 100.0, 0.0], Rate::Rapid);
     p.item(|line| Item::Event {
         line,
-        event: Event::Output(OutputCommand::Tool { tool: Some(1), state: ToolState::Clockwise }),
+        event: Event::Output(OutputCommand::Tool { tool: Some(1), command: SpindleCommand::Clockwise }),
     });
-    p.line_to([200.0, 200.0, 0.0], Speed::Feed(6000.0));
+    p.line_to([200.0, 200.0, 0.0], Rate::Feed(6000.0));
     p.item(|line| Item::Dwell { line, seconds: 0.25 });
     p.item(|line| Item::Event {
         line,
-        event: Event::Output(OutputCommand::Tool { tool: Some(1), state: ToolState::Off }),
+        event: Event::Output(OutputCommand::Tool { tool: Some(1), command: SpindleCommand::Stop }),
     });
-    p.line_to([1.0, 1.0, 0.0], Speed::Rapid);
+    p.line_to([1.0, 1.0, 0.0], Rate::Rapid);
     let run = common::run(&config(), &p.items);
     assert_eq!(run.events.len(), 2);
     let on = run.events[0];
@@ -145,11 +145,11 @@ fn an_output_happens_at_rest_at_its_programmed_point_and_a_dwell_holds() {
 #[test]
 fn events_follow_the_setpoint_of_their_time_in_the_stream() {
     let mut p = Program::new([0.0; 3], PathMode::ExactStop);
-    p.line_to([1.0, 0.0, 0.0], Speed::Feed(600.0));
+    p.line_to([1.0, 0.0, 0.0], Rate::Feed(600.0));
     p.item(|line| Item::Event { line, event: Event::ToolChange(3) });
     p.item(|line| Item::Event {
         line,
-        event: Event::Output(OutputCommand::Port { device: 1, port: 2, state: ToolState::Clockwise }),
+        event: Event::Output(OutputCommand::Port { device: 1, port: 2, command: SpindleCommand::Clockwise }),
     });
     let steps: Vec<Step> = Setpoints::from_items(&config(), p.items).unwrap().map(Result::unwrap).collect();
     let mut last_time = 0.0;
@@ -169,7 +169,7 @@ fn events_follow_the_setpoint_of_their_time_in_the_stream() {
 #[test]
 fn stop_brakes_along_the_path_within_the_limit_and_ends_at_rest() {
     let mut p = Program::new([0.0; 3], PathMode::Blend { tolerance: Some(1.0) });
-    p.line_to([300.0, 0.0, 0.0], Speed::Feed(24000.0)).line_to([300.0, 300.0, 0.0], Speed::Feed(24000.0));
+    p.line_to([300.0, 0.0, 0.0], Rate::Feed(24000.0)).line_to([300.0, 300.0, 0.0], Rate::Feed(24000.0));
     p.item(|line| Item::Event { line, event: Event::ToolChange(1) });
     let cfg = config();
     let mut stream = Setpoints::from_items(&cfg, p.items).unwrap();
@@ -205,7 +205,7 @@ fn stop_brakes_along_the_path_within_the_limit_and_ends_at_rest() {
 fn stop_before_the_first_setpoint_or_at_rest_ends_at_once() {
     let mut p = Program::new([0.0; 3], PathMode::ExactStop);
     p.item(|line| Item::Dwell { line, seconds: 10.0 });
-    p.line_to([5.0, 0.0, 0.0], Speed::Rapid);
+    p.line_to([5.0, 0.0, 0.0], Rate::Rapid);
     let mut s = Setpoints::from_items(&config(), p.items.clone()).unwrap();
     s.stop();
     let all: Vec<_> = s.collect();
@@ -223,7 +223,7 @@ fn an_error_arrives_at_its_place_after_the_motion_before_it_comes_to_rest() {
         start: [0.0; 3],
         end: [10.0, 0.0, 0.0],
         shape: Shape::Line,
-        speed: Speed::Feed(6000.0),
+        rate: Rate::Feed(6000.0),
         mode: PathMode::Blend { tolerance: None },
     };
     let failure = PathError::Program { line: 2, message: "unknown word Q".into() };
@@ -246,20 +246,20 @@ fn first_error(items: Vec<Item>) -> PathError {
 
 #[test]
 fn bad_items_are_refused_with_their_line_and_what_to_do() {
-    let line = |end: [f64; 3], speed| {
-        Item::Move(Segment { line: 7, start: [0.0; 3], end, shape: Shape::Line, speed, mode: PathMode::ExactStop })
+    let line = |end: [f64; 3], rate| {
+        Item::Move(Segment { line: 7, start: [0.0; 3], end, shape: Shape::Line, rate, mode: PathMode::ExactStop })
     };
-    let e = first_error(vec![line([1.0, 0.0, 0.0], Speed::Feed(0.0))]);
+    let e = first_error(vec![line([1.0, 0.0, 0.0], Rate::Feed(0.0))]);
     assert_eq!(e.line(), Some(7));
     assert!(e.to_string().contains("feed"), "{e}");
-    let e = first_error(vec![line([f64::NAN, 0.0, 0.0], Speed::Rapid)]);
+    let e = first_error(vec![line([f64::NAN, 0.0, 0.0], Rate::Rapid)]);
     assert!(e.to_string().contains("finite"), "{e}");
     let e = first_error(vec![Item::Move(Segment {
         line: 4,
         start: [1.0, 0.0, 0.0],
         end: [2.0, 0.0, 0.0],
         shape: Shape::Line,
-        speed: Speed::Rapid,
+        rate: Rate::Rapid,
         mode: PathMode::ExactStop,
     })]);
     assert!(e.to_string().contains("continuous"), "{e}");
@@ -272,7 +272,7 @@ fn bad_items_are_refused_with_their_line_and_what_to_do() {
             normal: [0.0, 0.0, 1.0],
             sweep: std::f64::consts::TAU,
         }),
-        speed: Speed::Feed(100.0),
+        rate: Rate::Feed(100.0),
         mode: PathMode::ExactStop,
     })]);
     assert!(e.to_string().contains("zero radius"), "{e}");
@@ -286,7 +286,7 @@ fn bad_items_are_refused_with_their_line_and_what_to_do() {
             normal: [0.0, 0.0, 1.0],
             sweep: std::f64::consts::PI,
         }),
-        speed: Speed::Feed(100.0),
+        rate: Rate::Feed(100.0),
         mode: PathMode::ExactStop,
     })]);
     assert!(e.to_string().contains("sweep does not turn it"), "{e}");
@@ -298,7 +298,7 @@ fn bad_items_are_refused_with_their_line_and_what_to_do() {
         start: [0.0; 3],
         end: [1.0, 0.0, 0.0],
         shape: Shape::Line,
-        speed: Speed::Rapid,
+        rate: Rate::Rapid,
         mode: PathMode::Blend { tolerance: Some(-1.0) },
     })]);
     assert!(e.to_string().contains("G64"), "{e}");

@@ -3,7 +3,7 @@
 
 use std::f64::consts::{PI, TAU};
 
-use vision_path::{ArcShape, Item, PathMode, PlanConfig, Segment, Setpoint, Setpoints, Shape, Speed, Step};
+use vision_path::{ArcShape, Item, PathMode, PlanConfig, Rate, Segment, Setpoint, Setpoints, Shape, Step};
 
 /// `PROPTEST_CASES` overrides a property's default case count (for deeper local runs).
 pub fn cases(default: u32) -> u32 {
@@ -30,17 +30,17 @@ impl Program {
         self.line
     }
 
-    pub fn line_to(&mut self, end: [f64; 3], speed: Speed) -> &mut Program {
+    pub fn line_to(&mut self, end: [f64; 3], rate: Rate) -> &mut Program {
         let line = self.next_line();
-        self.items.push(Item::Move(Segment { line, start: self.pos, end, shape: Shape::Line, speed, mode: self.mode }));
+        self.items.push(Item::Move(Segment { line, start: self.pos, end, shape: Shape::Line, rate, mode: self.mode }));
         self.pos = end;
         self
     }
 
     /// An arc about `centre` in the plane with normal `PLANES[plane]`, sweeping `angle`
     /// radians (positive = counter-clockwise), rising `rise` along the normal.
-    pub fn arc(&mut self, plane: usize, centre: [f64; 3], angle: f64, rise: f64, speed: Speed) -> &mut Program {
-        self.spiral(plane, centre, angle, rise, 1.0, speed)
+    pub fn arc(&mut self, plane: usize, centre: [f64; 3], angle: f64, rise: f64, rate: Rate) -> &mut Program {
+        self.spiral(plane, centre, angle, rise, 1.0, rate)
     }
 
     /// [`Program::arc`] whose end radius is `grow` times its start radius (a spiral, as
@@ -52,7 +52,7 @@ impl Program {
         angle: f64,
         rise: f64,
         grow: f64,
-        speed: Speed,
+        rate: Rate,
     ) -> &mut Program {
         let n = PLANES[plane];
         let axis = if angle >= 0.0 { n } else { neg(n) };
@@ -69,7 +69,7 @@ impl Program {
             start: self.pos,
             end,
             shape: Shape::Arc(ArcShape { centre, normal: n, sweep: angle }),
-            speed,
+            rate,
             mode: self.mode,
         }));
         self.pos = end;
@@ -79,18 +79,18 @@ impl Program {
     /// A spiral in the XY plane (G17) that leaves the current point exactly along the unit
     /// in-plane direction `u` (its radial drift included), with radius `r0` → `r1`, sweeping
     /// `angle` radians (positive = counter-clockwise).
-    pub fn tangent_spiral(&mut self, u: [f64; 3], r0: f64, r1: f64, angle: f64, speed: Speed) -> &mut Program {
+    pub fn tangent_spiral(&mut self, u: [f64; 3], r0: f64, r1: f64, angle: f64, rate: Rate) -> &mut Program {
         let axis = if angle >= 0.0 { PLANES[0] } else { neg(PLANES[0]) };
         // The start tangent is t·r0 + ρ̂·k_r (t = axis × ρ̂): ρ̂ is `u` turned by β − π/2.
         let beta = ((r1 - r0) / angle.abs()).atan2(r0);
         let radial = sub(scale(u, beta.sin()), scale(cross(axis, u), beta.cos()));
         let centre = sub(self.pos, scale(radial, r0));
-        self.spiral(0, centre, angle, 0.0, r1 / r0, speed)
+        self.spiral(0, centre, angle, 0.0, r1 / r0, rate)
     }
 
     /// A G2/G3 in the XY plane (G17) to `end` about `centre`, exactly as programmed: less
     /// than a full turn (a full circle when the ends coincide), as the interpreter sweeps it.
-    pub fn g17_arc_to(&mut self, end: [f64; 3], centre: [f64; 3], clockwise: bool, speed: Speed) -> &mut Program {
+    pub fn g17_arc_to(&mut self, end: [f64; 3], centre: [f64; 3], clockwise: bool, rate: Rate) -> &mut Program {
         let a0 = (self.pos[1] - centre[1]).atan2(self.pos[0] - centre[0]);
         let a1 = (end[1] - centre[1]).atan2(end[0] - centre[0]);
         let mut sweep = if clockwise { a0 - a1 } else { a1 - a0 };
@@ -104,7 +104,7 @@ impl Program {
             start: self.pos,
             end,
             shape: Shape::Arc(ArcShape { centre, normal: [0.0, 0.0, 1.0], sweep }),
-            speed,
+            rate,
             mode: self.mode,
         }));
         self.pos = end;
@@ -276,7 +276,7 @@ pub fn allowed_rests(items: &[Item]) -> usize {
     allowed
 }
 
-/// Whether the corner at the end of `a` into `b` passes at speed under the planner's rules: a
+/// Whether the corner at the end of `a` into `b` passes at rate under the planner's rules: a
 /// blend between two lines (governed by `a`'s mode) that is not a reversal.
 fn always_blended(a: &Segment, b: &Segment) -> bool {
     let (u, w) = (tangent(a, true), tangent(b, false));
