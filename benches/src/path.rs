@@ -1,6 +1,6 @@
 //! Inputs for the path planner benchmarks (`benches/path.rs`, `examples/path_loop.rs`).
 
-use vision_path::{Item, Limits, PathMode, PlanConfig, Segment, Shape, Speed};
+use vision_path::{Item, Limits, PathMode, PlanConfig, Rate, Segment, Shape};
 
 /// An inch machine like the manual's router: 20 in/s² path acceleration, every axis at
 /// 10 in/s and 20 in/s², 1 ms setpoints, starting at the origin.
@@ -25,7 +25,7 @@ pub fn spiral(n: usize, step: f64, feed: f64, mode: PathMode) -> impl Iterator<I
         let start = at(theta);
         let r = 0.5 + 0.02 * theta / std::f64::consts::TAU;
         theta += step / r;
-        Item::Move(Segment { line: k + 1, start, end: at(theta), shape: Shape::Line, speed: Speed::Feed(feed), mode })
+        Item::Move(Segment { line: k + 1, start, end: at(theta), shape: Shape::Line, rate: Rate::Feed(feed), mode })
     })
 }
 

@@ -12,7 +12,7 @@ use std::path::PathBuf;
 use clap::Args;
 use vision_gcode::{Interpreter, InterpreterConfig};
 use vision_math::{LengthUnit, MM_PER_INCH};
-use vision_path::{Event, GcodeItems, Limits, OutputCommand, PathError, PlanConfig, Setpoints, Step, ToolState};
+use vision_path::{Event, GcodeItems, Limits, OutputCommand, PathError, PlanConfig, Setpoints, Step};
 
 use crate::trace::{read_program, UnitArg};
 use crate::Failure;
@@ -125,43 +125,64 @@ impl Csv {
     }
 
     fn write(&mut self, s: &str) -> Result<(), Failure> {
-        self.out
-            .write_all(s.as_bytes())
-            .map_err(|e| Failure::Input(format!("cannot write {}: {e}", self.path.display())))
+        let written = self.out.write_all(s.as_bytes());
+        self.written(written)
     }
 
+    /// One row per step, formatted straight into the buffer (no string per row).
     fn step(&mut self, step: &Step) -> Result<(), Failure> {
-        let row = match step {
+        let written = match step {
             Step::Setpoint(s) => {
                 let (p, v) = (s.position, s.velocity);
-                format!("{:.6},{},{},{},{},{},{},{},\n", s.time, s.line, p[0], p[1], p[2], v[0], v[1], v[2])
+                writeln!(self.out, "{:.6},{},{},{},{},{},{},{},", s.time, s.line, p[0], p[1], p[2], v[0], v[1], v[2])
             }
-            Step::Event(e) => format!("{:.6},{},,,,,,,{}\n", e.time, e.line, event_text(e.event)),
+            Step::Event(e) => writeln!(self.out, "{:.6},{},,,,,,,{}", e.time, e.line, EventText(e.event)),
         };
-        self.write(&row)
+        self.written(written)
     }
 
     fn finish(mut self) -> Result<(), Failure> {
-        self.out.flush().map_err(|e| Failure::Input(format!("cannot write {}: {e}", self.path.display())))
+        let flushed = self.out.flush();
+        self.written(flushed)
+    }
+
+    fn written(&self, result: std::io::Result<()>) -> Result<(), Failure> {
+        result.map_err(|e| Failure::Input(format!("cannot write {}: {e}", self.path.display())))
     }
 }
 
-fn event_text(e: Event) -> String {
-    match e {
-        Event::ToolChange(t) => format!("M6 T{t}"),
-        Event::Output(OutputCommand::Tool { tool, state }) => {
-            let code = match state {
-                ToolState::Clockwise => "M3",
-                ToolState::CounterClockwise => "M4",
-                ToolState::Off => "M5",
-            };
-            match tool {
-                Some(t) => format!("{code} ${t}"),
-                None => code.to_string(),
+/// An event as the G-code that caused it (`M6 T2`, `M3 $1`, `M5 A1 P0`).
+struct EventText(Event);
+
+impl std::fmt::Display for EventText {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.0 {
+            Event::ToolChange(t) => write!(f, "M6 T{t}"),
+            Event::Output(OutputCommand::Tool { tool: Some(t), command }) => write!(f, "{} ${t}", command.gcode()),
+            Event::Output(OutputCommand::Tool { tool: None, command }) => f.write_str(command.gcode()),
+            Event::Output(OutputCommand::Port { device, port, command }) => {
+                write!(f, "{} A{device} P{port}", command.gcode())
             }
         }
-        Event::Output(OutputCommand::Port { device, port, on }) => {
-            format!("{} A{device} P{port}", if on { "M3" } else { "M5" })
-        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use vision_path::SpindleCommand;
+
+    use super::*;
+
+    #[test]
+    fn events_read_back_as_their_own_m_codes() {
+        let text = |event| EventText(event).to_string();
+        let port = |command| Event::Output(OutputCommand::Port { device: 1, port: 1, command });
+        assert_eq!(text(port(SpindleCommand::CounterClockwise)), "M4 A1 P1");
+        assert_eq!(text(port(SpindleCommand::Clockwise)), "M3 A1 P1");
+        assert_eq!(text(port(SpindleCommand::Stop)), "M5 A1 P1");
+        let tool = |tool, command| Event::Output(OutputCommand::Tool { tool, command });
+        assert_eq!(text(tool(Some(2), SpindleCommand::CounterClockwise)), "M4 $2");
+        assert_eq!(text(tool(None, SpindleCommand::Stop)), "M5");
+        assert_eq!(text(Event::ToolChange(3)), "M6 T3");
     }
 }

@@ -11,9 +11,7 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 use serde_json::{json, Value};
-use vision_gcode::{
-    ArcDirection, Event, GcodeError, Interpreter, InterpreterConfig, PathMode, Rate, RunOutcome, SpindleCommand, Xyz,
-};
+use vision_gcode::{ArcDirection, Event, GcodeError, Interpreter, InterpreterConfig, PathMode, Rate, RunOutcome, Xyz};
 use vision_math::LengthUnit;
 
 use crate::Failure;
@@ -129,8 +127,8 @@ impl<W: Write> Output<W> {
                 "line": line,
                 "code": code,
                 "machine_unit": interp.machine_unit().short_name(),
-                "machine": xyz(m),
-                "program": xyz(interp.program_position()),
+                "machine": m.to_array(),
+                "program": interp.program_position().to_array(),
                 "program_unit": interp.units().short_name(),
             });
             self.line(&summary.to_string());
@@ -152,10 +150,6 @@ impl<W: Write> Output<W> {
     }
 }
 
-fn xyz(p: Xyz) -> [f64; 3] {
-    [p.x, p.y, p.z]
-}
-
 fn pos(p: Xyz) -> String {
     format!("X{:.4} Y{:.4} Z{:.4}", p.x, p.y, p.z)
 }
@@ -167,14 +161,6 @@ fn path_json(path: PathMode) -> Value {
     }
 }
 
-fn spindle_code(c: SpindleCommand) -> &'static str {
-    match c {
-        SpindleCommand::Clockwise => "M3",
-        SpindleCommand::CounterClockwise => "M4",
-        SpindleCommand::Stop => "M5",
-    }
-}
-
 fn event_json(e: &Event) -> Value {
     match e {
         Event::Linear(m) => {
@@ -182,21 +168,21 @@ fn event_json(e: &Event) -> Value {
                 Rate::Rapid => ("rapid", None),
                 Rate::Feed(f) => ("feed", Some(f)),
             };
-            json!({"line": m.line, "type": "linear", "rate": rate, "feed": feed, "start": xyz(m.start),
-                   "end": xyz(m.end), "path": path_json(m.path)})
+            json!({"line": m.line, "type": "linear", "rate": rate, "feed": feed, "start": m.start.to_array(),
+                   "end": m.end.to_array(), "path": path_json(m.path)})
         }
         Event::Arc(a) => json!({
-            "line": a.line, "type": "arc", "start": xyz(a.start), "end": xyz(a.end), "center": xyz(a.center),
+            "line": a.line, "type": "arc", "start": a.start.to_array(), "end": a.end.to_array(), "center": a.center.to_array(),
             "plane": a.plane.gcode(),
             "direction": if a.direction == ArcDirection::Clockwise { "cw" } else { "ccw" },
             "angle_rad": a.angle, "extra_turns": a.extra_turns(), "feed": a.feed, "path": path_json(a.path),
         }),
         Event::Dwell { line, seconds } => json!({"line": line, "type": "dwell", "seconds": seconds}),
         Event::ToolChange { line, tool, offset } => {
-            json!({"line": line, "type": "tool_change", "tool": tool, "offset": xyz(*offset)})
+            json!({"line": line, "type": "tool_change", "tool": tool, "offset": offset.to_array()})
         }
         Event::Output(o) => json!({
-            "line": o.line, "type": "output", "command": spindle_code(o.command), "tool": o.tool,
+            "line": o.line, "type": "output", "command": o.command.gcode(), "tool": o.tool,
             "writes": o.writes.iter().map(|w| json!({"device": w.device, "port": w.port, "high": w.high})).collect::<Vec<_>>(),
         }),
         Event::Stop { line, optional } => json!({"line": line, "type": "stop", "optional": optional}),
@@ -240,7 +226,7 @@ fn event_text(e: &Event) -> String {
                 .map(|w| format!("device {} port {} {}", w.device, w.port, if w.high { "high" } else { "low" }))
                 .collect();
             let writes = if writes.is_empty() { "no outputs wired".to_string() } else { writes.join(", ") };
-            write!(s, "{}     {target}: {writes}", spindle_code(o.command))
+            write!(s, "{}     {target}: {writes}", o.command.gcode())
         }
         Event::Stop { optional, .. } => {
             write!(s, "{}", if *optional { "M1     optional stop" } else { "M0     program stop" })

@@ -62,6 +62,29 @@ fn the_seed_example_writes_every_setpoint_and_its_tool_events_to_csv() {
     assert_eq!(report_value(&text, "cycle time"), format!("{:.3} s", times.last().unwrap()));
 }
 
+/// The event column of every event row of `csv`, with its line.
+fn csv_events(csv: &PathBuf) -> Vec<(String, String)> {
+    let rows = std::fs::read_to_string(csv).unwrap();
+    rows.lines()
+        .skip(1)
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .filter(|r| !r[8].is_empty())
+        .map(|r| (r[1].to_string(), r[8].to_string()))
+        .collect()
+}
+
+#[test]
+fn explicit_port_events_are_written_as_the_m_code_that_caused_them() {
+    // Seed 002's explicit M4 snippet, and the same port driven by M3: each row names its own
+    // code (an M4 is not an M3), and M5 names its port.
+    let path = program("m4_port.nc", "G90 G21\nG0 X100 Y100\nM4 A1 P1\nG1 X200 Y200 F1000\nM5 A1 P1\nM3 A2 P0\n");
+    let csv = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("m4_port.csv");
+    let out = plan(&["--accel", "1000", "--machine-units", "mm", "--csv", csv.to_str().unwrap()], &path);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let expected = [("3", "M4 A1 P1"), ("5", "M5 A1 P1"), ("6", "M3 A2 P0")];
+    assert_eq!(csv_events(&csv), expected.map(|(l, e)| (l.to_string(), e.to_string())));
+}
+
 #[test]
 fn a_program_that_fails_at_a_line_exits_1_and_names_the_line() {
     let path = program("bad.nc", "G21 G90\nG0 X10\nG1 X20 Q7 F100\n");

@@ -4,22 +4,24 @@
 use crate::arc::Arc;
 use crate::geom::{ArcDirection, Plane, Xyz};
 
-/// How fast a linear move goes.
+/// How fast a move is asked to go (also the planner's input, `vision_path::Segment::rate`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Rate {
-    /// G0: the machine's rapid rate.
+    /// G0: as fast as the machine's axes allow (any `F` on the line is only remembered).
     Rapid,
-    /// G1 (and arc polylines): feed, machine units per minute.
+    /// G1, G2/G3 and arc polylines: feed `F`, machine units per minute (G94).
     Feed(f64),
 }
 
-/// Path control (G61 / G64), as the planner must honour it at the end of the move.
+/// Path control (G61 / G64) at the end of a move: how the planner treats the corner there.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum PathMode {
-    /// G61: stop exactly at the end of every move.
+    /// G61: stop exactly at every corner; tangent (e.g. co-linear) joins do not stop.
     ExactStop,
-    /// G64: blend corners; with `Some(p)` the path may leave each programmed point by at most
-    /// `p` (machine units), with `None` as fast as possible.
+    /// G64: blend corners. `tolerance` is the `P` word, machine units: the largest distance
+    /// the path may pass from the programmed corner point. `None` (G64 without `P`) sets no
+    /// distance: the planner limits a blend only by its own rules (`vision_path`: at most
+    /// half of each neighbouring segment). `Some(0.0)` allows no deviation, i.e. G61.
     Blend {
         /// The `P` tolerance, machine units.
         tolerance: Option<f64>,
@@ -94,19 +96,38 @@ impl ArcMove {
     }
 }
 
-/// M3 / M4 / M5.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// M3 / M4 / M5: what a tool (or an explicit `A… P…` port) is driven to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum SpindleCommand {
-    /// M3: clockwise.
+    /// M3: clockwise (the tool's clockwise output active; an explicit port high).
     Clockwise,
-    /// M4: counter-clockwise.
+    /// M4: counter-clockwise (the tool's counter-clockwise output active; an explicit port
+    /// high).
     CounterClockwise,
-    /// M5: stop.
+    /// M5: stop (both of the tool's outputs inactive; an explicit port low).
     Stop,
 }
 
+impl SpindleCommand {
+    /// The M-code: `"M3"`, `"M4"` or `"M5"`.
+    #[must_use]
+    pub fn gcode(self) -> &'static str {
+        match self {
+            SpindleCommand::Clockwise => "M3",
+            SpindleCommand::CounterClockwise => "M4",
+            SpindleCommand::Stop => "M5",
+        }
+    }
+
+    /// Whether the command switches something on (M3, M4) rather than off (M5).
+    #[must_use]
+    pub fn is_on(self) -> bool {
+        self != SpindleCommand::Stop
+    }
+}
+
 /// One digital output set high or low.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct OutputWrite {
     /// Digital I/O module device id.
     pub device: u32,

@@ -73,6 +73,24 @@ impl Xyz {
     pub fn norm(self) -> f64 {
         (self.x * self.x + self.y * self.y + self.z * self.z).sqrt()
     }
+
+    /// `[x, y, z]`.
+    #[must_use]
+    pub const fn to_array(self) -> [f64; 3] {
+        [self.x, self.y, self.z]
+    }
+}
+
+impl From<[f64; 3]> for Xyz {
+    fn from([x, y, z]: [f64; 3]) -> Xyz {
+        Xyz { x, y, z }
+    }
+}
+
+impl From<Xyz> for [f64; 3] {
+    fn from(p: Xyz) -> [f64; 3] {
+        p.to_array()
+    }
 }
 
 impl Add for Xyz {

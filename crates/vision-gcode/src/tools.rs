@@ -2,10 +2,11 @@
 
 use std::collections::BTreeMap;
 
+use crate::event::{OutputWrite, SpindleCommand};
 use crate::geom::Xyz;
 
-/// One digital output and the level that means "active".
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// One digital output and the level that means "active" (seed 002's `DIGITAL_OUTPUT_STATE`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct DigitalOutput {
     /// Digital I/O module device id.
     pub device: u32,
@@ -15,6 +16,14 @@ pub struct DigitalOutput {
     pub active_high: bool,
 }
 
+impl DigitalOutput {
+    /// The write that drives this output active (`true`) or inactive (`false`).
+    #[must_use]
+    pub fn write(self, active: bool) -> OutputWrite {
+        OutputWrite { device: self.device, port: self.port, high: active == self.active_high }
+    }
+}
+
 /// The outputs that turn a tool clockwise and counter-clockwise (seed 002's `TOOL`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ToolOutputs {
@@ -22,6 +31,20 @@ pub struct ToolOutputs {
     pub clockwise: DigitalOutput,
     /// Activated by M4.
     pub counter_clockwise: DigitalOutput,
+}
+
+impl ToolOutputs {
+    /// The writes `command` makes, in order. M3/M4 first release the other direction, then
+    /// drive the requested one, so both are never active together; M5 releases both.
+    #[must_use]
+    pub fn writes(self, command: SpindleCommand) -> [OutputWrite; 2] {
+        let (cw, ccw) = (self.clockwise, self.counter_clockwise);
+        match command {
+            SpindleCommand::Clockwise => [ccw.write(false), cw.write(true)],
+            SpindleCommand::CounterClockwise => [cw.write(false), ccw.write(true)],
+            SpindleCommand::Stop => [cw.write(false), ccw.write(false)],
+        }
+    }
 }
 
 /// One tool-table entry.
@@ -87,5 +110,28 @@ impl ToolTable {
     /// The defined tool numbers (without 0), ascending.
     pub fn numbers(&self) -> impl Iterator<Item = u32> + '_ {
         self.tools.keys().copied()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn w(device: u32, port: u32, high: bool) -> OutputWrite {
+        OutputWrite { device, port, high }
+    }
+
+    #[test]
+    fn m3_m4_m5_release_the_other_direction_first_and_honour_active_low() {
+        // Seed 002: clockwise = DIGITAL_OUTPUT_STATE(1, 0, 1), counterClockwise = (1, 1, 1).
+        let out = |port, active_high| DigitalOutput { device: 1, port, active_high };
+        let seed = ToolOutputs { clockwise: out(0, true), counter_clockwise: out(1, true) };
+        assert_eq!(seed.writes(SpindleCommand::Clockwise), [w(1, 1, false), w(1, 0, true)]);
+        assert_eq!(seed.writes(SpindleCommand::CounterClockwise), [w(1, 0, false), w(1, 1, true)]);
+        assert_eq!(seed.writes(SpindleCommand::Stop), [w(1, 0, false), w(1, 1, false)]);
+        // Active low: driven low to switch on, high to switch off.
+        let low = ToolOutputs { clockwise: out(0, false), counter_clockwise: out(1, false) };
+        assert_eq!(low.writes(SpindleCommand::Clockwise), [w(1, 1, true), w(1, 0, false)]);
+        assert_eq!(low.writes(SpindleCommand::Stop), [w(1, 0, true), w(1, 1, true)]);
     }
 }

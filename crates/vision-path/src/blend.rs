@@ -66,30 +66,33 @@ pub(crate) fn blend(
     };
     let near_corner = |pieces: &[Curve]| pieces.iter().map(|p| p.distance_to(corner)).fold(f64::INFINITY, f64::min);
     let radius = |pieces: &[Curve]| pieces.iter().map(Curve::radius).fold(f64::INFINITY, f64::min);
+    // Each search keeps the biarc of the trim it settles on, so none is built twice.
     // The largest trim that gives a biarc within P of the corner …
-    let fits = |lambda: f64| build(lambda).is_some_and(|b| tolerance.is_none_or(|p| near_corner(&b) <= p));
-    let mut lambda = if fits(1.0) { 1.0 } else { largest(0.0, 1.0, fits) };
+    let fits = |lambda: f64| build(lambda).filter(|b| tolerance.is_none_or(|p| near_corner(b) <= p));
+    let (mut lambda, mut pieces) = match fits(1.0) {
+        Some(b) => (1.0, Some(b)),
+        None => largest(0.0, 1.0, fits),
+    };
     // … no larger than keeps the path at speed …
     let floor = (MIN_TRIM / s_max).min(lambda);
-    if build(lambda).is_some_and(|b| radius(&b) > wanted) {
-        lambda = smallest(floor, lambda, |l| build(l).is_some_and(|b| radius(&b) >= wanted));
+    if let Some(b) = pieces.take_if(|b| radius(b) > wanted) {
+        let (l, b) = smallest(floor, lambda, b, |l| build(l).filter(|b| radius(b) >= wanted));
+        (lambda, pieces) = (l, Some(b));
     }
     // … and shrunk until the whole blend also stays within P of the programmed path (a
     // biarc between arcs can bulge slightly beyond the corner's distance).
     for _ in 0..20 {
-        if !(lambda > 0.0) {
-            return None;
-        }
+        let pieces_now = pieces.filter(|_| lambda > 0.0)?;
         let s = lambda * s_max;
-        let pieces = build(lambda)?;
         let Some(p) = tolerance else {
-            return Some(Blend { s1: s, s2: s, pieces });
+            return Some(Blend { s1: s, s2: s, pieces: pieces_now });
         };
-        let dev = path_deviation(&pieces, &c1.sub(c1.len() - s, c1.len()), &c2.sub(0.0, s));
+        let dev = path_deviation(&pieces_now, &c1.sub(c1.len() - s, c1.len()), &c2.sub(0.0, s));
         if dev <= p * (1.0 - DEVIATION_MARGIN) {
-            return Some(Blend { s1: s, s2: s, pieces });
+            return Some(Blend { s1: s, s2: s, pieces: pieces_now });
         }
         lambda *= 0.99 * p * (1.0 - DEVIATION_MARGIN) / dev;
+        pieces = build(lambda);
     }
     None
 }
@@ -97,34 +100,35 @@ pub(crate) fn blend(
 /// Bisection steps of the trim searches.
 const SEARCH_STEPS: u32 = 30;
 
-/// The largest `x` in `(lo, hi]` with `ok(x)`, for `ok` true below some threshold (`lo` if
-/// none is found).
-fn largest(mut lo: f64, mut hi: f64, ok: impl Fn(f64) -> bool) -> f64 {
+/// The largest `x` in `(lo, hi]` where `ok(x)` gives a value, for `ok` giving one below some
+/// threshold, with that value (`(lo, None)` if none is found).
+fn largest<T>(mut lo: f64, mut hi: f64, ok: impl Fn(f64) -> Option<T>) -> (f64, Option<T>) {
+    let mut found = None;
     for _ in 0..SEARCH_STEPS {
         let mid = 0.5 * (lo + hi);
-        if ok(mid) {
-            lo = mid;
-        } else {
-            hi = mid;
+        match ok(mid) {
+            Some(v) => (lo, found) = (mid, Some(v)),
+            None => hi = mid,
         }
     }
-    lo
+    (lo, found)
 }
 
-/// The smallest `x` in `[lo, hi]` with `ok(x)`, for `ok` true above some threshold and at `hi`.
-fn smallest(mut lo: f64, mut hi: f64, ok: impl Fn(f64) -> bool) -> f64 {
-    if ok(lo) {
-        return lo;
+/// The smallest `x` in `[lo, hi]` where `ok(x)` gives a value, for `ok` giving one above some
+/// threshold and at `hi` (`at_hi`), with that value.
+fn smallest<T>(mut lo: f64, mut hi: f64, at_hi: T, ok: impl Fn(f64) -> Option<T>) -> (f64, T) {
+    if let Some(v) = ok(lo) {
+        return (lo, v);
     }
+    let mut found = at_hi;
     for _ in 0..SEARCH_STEPS {
         let mid = 0.5 * (lo + hi);
-        if ok(mid) {
-            hi = mid;
-        } else {
-            lo = mid;
+        match ok(mid) {
+            Some(v) => (hi, found) = (mid, v),
+            None => lo = mid,
         }
     }
-    hi
+    (hi, found)
 }
 
 /// Samples along the blend when looking for its largest deviation from the path.
@@ -219,7 +223,7 @@ mod tests {
         assert!((dev - 1.0).abs() < 1e-9, "{dev}");
         // ℓ = P / tan(22.5°), radius ℓ / tan(45°) = ℓ.
         let ell = 1.0 / (std::f64::consts::PI / 8.0).tan();
-        assert!((b.s1 - ell).abs() < 1e-9 && (b.pieces[0].arc_radius().unwrap() - ell).abs() < 1e-9);
+        assert!((b.s1 - ell).abs() < 1e-9 && (b.pieces[0].radius() - ell).abs() < 1e-9);
         assert!(b.pieces[0].start_tangent().angle_to(c1.end_tangent()) < 1e-12);
         assert!(b.pieces[0].end_tangent().angle_to(c2.start_tangent()) < 1e-12);
     }
@@ -240,7 +244,7 @@ mod tests {
         // A square corner: radius = ℓ, so wanting radius 3 trims 3 (P10 would allow 24).
         let b = blend(&c1, 50.0, &c2, 50.0, Some(10.0), 3.0).unwrap();
         assert!((b.s1 - 3.0).abs() < 1e-12);
-        assert!((b.pieces[0].arc_radius().unwrap() - 3.0).abs() < 1e-9);
+        assert!((b.pieces[0].radius() - 3.0).abs() < 1e-9);
         // A nearly straight join still gets a blend of at least the minimum trim.
         let c3 = line([100.0, 0.0, 0.0], [200.0, 1e-7, 0.0]);
         let b = blend(&c1, 50.0, &c3, 50.0, None, 1.0).unwrap();
@@ -257,8 +261,7 @@ mod tests {
                 Vec3::new(110.0, 10.0, 0.0),
                 Vec3::new(100.0, 60.0, 0.0),
                 Vec3::new(0.0, 0.0, 1.0),
-                true,
-                1,
+                -2.0 * 50f64.atan2(10.0),
             )
             .unwrap(),
         );
@@ -284,7 +287,7 @@ mod tests {
         )
         .unwrap();
         for p in &pieces {
-            assert!((p.arc_radius().unwrap() - 1.0).abs() < 1e-12);
+            assert!((p.radius() - 1.0).abs() < 1e-12);
         }
     }
 }

@@ -13,10 +13,12 @@ use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+use vision_gcode::OutputWrite;
+
 use crate::input::{Event, Item, Segment, Shape};
 use crate::limits::{AxisLimits, Limits, PlanConfig};
 use crate::sampler::{Setpoint, Setpoints, Step};
-use crate::tools::{OutputWrite, ToolTable};
+use crate::tools::ToolTable;
 use crate::PathError;
 
 /// A G-code axis.
@@ -435,14 +437,14 @@ impl Worker {
     fn write<S: MotionSink>(&mut self, w: OutputWrite, sink: &mut S) -> Result<(), PathError> {
         sink.output(w).map_err(|message| PathError::Sink { message })?;
         let inactive = self.inactive_level(w.device, w.port);
-        self.driven.insert((w.device, w.port), (w.level, inactive));
+        self.driven.insert((w.device, w.port), (w.high, inactive));
         Ok(())
     }
 
     /// The level that switches a port off: the opposite of a tool's active value; low for a
-    /// port that belongs to no tool (the explicit `M3 A… P…` form drives it high).
+    /// port that belongs to no tool (the explicit `M3/M4 A… P…` form drives it high).
     fn inactive_level(&self, device: u32, port: u32) -> bool {
-        self.tools.outputs().find(|o| o.device == device && o.port == port).is_some_and(|o| !o.value)
+        self.tools.outputs().find(|o| o.device == device && o.port == port).is_some_and(|o| !o.active_high)
     }
 
     /// Drive every output this path left active inactive.
@@ -451,7 +453,7 @@ impl Worker {
             .driven
             .iter()
             .filter(|(_, (level, inactive))| level != inactive)
-            .map(|(&(device, port), &(_, inactive))| OutputWrite { device, port, level: inactive })
+            .map(|(&(device, port), &(_, inactive))| OutputWrite { device, port, high: inactive })
             .collect();
         for w in on {
             self.write(w, sink)?;

@@ -3,32 +3,35 @@
 //!
 //! | interpreter event | planner item |
 //! | --- | --- |
-//! | `Linear` (G0, G1, G28 legs, arc polylines) | a line [`Segment`]: rapid or feed, its G61/G64 |
-//! | `Arc` | an arc [`Segment`]: centre, plane normal (+Z G17, +Y G18, +X G19), direction, turns |
+//! | `Linear` (G0, G1, G28 legs, arc polylines) | a line [`Segment`]: its rate and G61/G64 as they are |
+//! | `Arc` | an arc [`Segment`]: centre, plane normal (+Z G17, +Y G18, +X G19), the interpreter's swept angle signed by the direction |
 //! | `Dwell` (G4) | [`Item::Dwell`] |
 //! | `ToolChange` (M6) | [`Event::ToolChange`] |
-//! | `Output` (M3/M4/M5) | [`Event::Output`]: the tool (or the explicit port) and the command |
-//! | `Stop` (M0/M1), `UserMCode` without a handler | a zero-second dwell: an exact stop there |
+//! | `Output` (M3/M4/M5) | [`Event::Output`]: the tool (or the explicit port) and the M-code |
+//! | `Stop` (M0/M1), `UserMCode` (reported, not executed) | a zero-second dwell: an exact stop there |
 //! | `ProgramEnd` (M2/M30) | [`Item::End`] |
 //! | an error at a line | `Err(PathError::Program { line, .. })` |
 //!
 //! The interpreter resolves M3/M4/M5 to writes with its own tool table; the planner keeps only
-//! the tool number and the command, and the [`crate::PathFollower`]'s [`crate::ToolTable`]
-//! resolves them, so segments and G-code drive tools the same way.
+//! the tool number and the M-code, and the [`crate::PathFollower`]'s [`crate::ToolTable`]
+//! resolves them (by the same rule, [`vision_gcode::ToolOutputs::writes`]), so segments and
+//! G-code drive tools the same way.
 
 use std::collections::VecDeque;
 
-use vision_gcode::{
-    ArcDirection, Event as GEvent, GcodeError, Interpreter, InterpreterConfig, MCodeHandler, PathMode as GPathMode,
-    Plane, Rate, RunOutcome, SpindleCommand, Xyz,
-};
+use vision_gcode::{Event as GEvent, GcodeError, Interpreter, InterpreterConfig, Plane, Rate, RunOutcome, Xyz};
 
 use crate::follower::check_axes;
-use crate::input::{ArcShape, Event, Item, OutputCommand, PathMode, Segment, Shape, Speed, ToolState};
+use crate::input::{ArcShape, Event, Item, OutputCommand, Segment, Shape};
 use crate::{MotionSink, Pace, PathError, PathFollower};
 
 /// A G-code program as a stream of planner items (see the module docs). `T` holds the text
 /// (`String` to own it, `&str` to borrow it).
+///
+/// User M-codes are reported by the interpreter, not executed, and become exact stops: the
+/// planner reads ahead of the machine, so a handler would run when the look-ahead reaches its
+/// line, up to a braking distance before the machine does. To expand M-codes into G-code, run
+/// the interpreter with the handler yourself and turn its events into items with [`item`].
 pub struct GcodeItems<T = String> {
     interp: Interpreter,
     text: T,
@@ -37,31 +40,18 @@ pub struct GcodeItems<T = String> {
     /// Number of the last line run.
     line: u32,
     queue: VecDeque<Result<Item, PathError>>,
-    handler: Option<Box<dyn MCodeHandler + Send>>,
     done: bool,
 }
 
 impl<T: AsRef<str>> GcodeItems<T> {
     /// Run `text` on `interp` (in its current state and machine position), lazily.
     pub fn new(interp: Interpreter, text: T) -> GcodeItems<T> {
-        GcodeItems { interp, text, next: Some(0), line: 0, queue: VecDeque::new(), handler: None, done: false }
-    }
-
-    /// Serve user M-codes with `handler` (without one they are reported by the interpreter
-    /// and become exact stops).
-    pub fn with_handler(mut self, handler: Box<dyn MCodeHandler + Send>) -> GcodeItems<T> {
-        self.handler = Some(handler);
-        self
+        GcodeItems { interp, text, next: Some(0), line: 0, queue: VecDeque::new(), done: false }
     }
 
     /// Where the machine is before the program runs (the planner's start), machine units.
     pub fn start_position(&self) -> [f64; 3] {
-        xyz(self.interp.machine_position())
-    }
-
-    /// The interpreter, in the state the lines run so far left it.
-    pub fn interpreter(&self) -> &Interpreter {
-        &self.interp
+        self.interp.machine_position().to_array()
     }
 
     /// Run the next line, queueing its items.
@@ -81,8 +71,7 @@ impl<T: AsRef<str>> GcodeItems<T> {
         self.line = self.line.saturating_add(1);
         let line = self.line;
         let queue = &mut self.queue;
-        let handler = self.handler.as_deref_mut().map(|h| h as &mut dyn MCodeHandler);
-        let outcome = self.interp.run(raw, handler, &mut |e: &GEvent| queue.push_back(Ok(item(e, line as usize))));
+        let outcome = self.interp.run(raw, None, &mut |e: &GEvent| queue.push_back(Ok(item(e, line as usize))));
         match outcome {
             Ok(RunOutcome::Completed { .. }) => {}
             Ok(RunOutcome::Ended { .. }) => self.done = true,
@@ -114,9 +103,10 @@ impl PathFollower {
     /// The seed's `startPath(GCODE_STRING, maxPathAcceleration)`: run `program` on a fresh
     /// interpreter built from `config`, starting where the machine is.
     ///
-    /// The whole program is checked first, streaming, with no handler (interpreter errors, a
-    /// move of an unmapped axis, an unknown tool or none selected): if anything fails, nothing
-    /// moves and the error comes back here. User M-codes are exact stops.
+    /// Refused at once while a path runs. The whole program is then checked, streaming
+    /// (interpreter errors, a move of an unmapped axis, a tool missing from the follower's
+    /// table): if anything fails, nothing moves and the error comes back here. User M-codes
+    /// are exact stops (see [`GcodeItems`]).
     pub fn start_gcode<S: MotionSink + 'static>(
         &mut self,
         config: &InterpreterConfig,
@@ -125,21 +115,21 @@ impl PathFollower {
         sink: S,
         pace: Pace,
     ) -> Result<(), PathError> {
+        if self.status().running() {
+            return Err(PathError::AlreadyRunning);
+        }
         let text = program.into();
         let at = self.status().position;
         let fresh = || -> Result<Interpreter, PathError> {
             let mut interp = Interpreter::new(config.clone());
-            interp.set_machine_position(Xyz { x: at[0], y: at[1], z: at[2] }).map_err(|e| program_error(&e, 0))?;
+            interp.set_machine_position(Xyz::from(at)).map_err(|e| program_error(&e, 0))?;
             Ok(interp)
         };
-        let mut selected = None;
+        // The interpreter names the tool of every M3/M4/M5 (`$n` or its active tool), so no
+        // selection needs tracking here.
         for item in GcodeItems::new(fresh()?, text.as_str()) {
-            match check_axes(&self.config().axes, item?)? {
-                Item::Event { event: Event::ToolChange(n), .. } => selected = (n != 0).then_some(n),
-                Item::Event { line, event: Event::Output(command) } => {
-                    self.config().tools.resolve(line, selected, command)?;
-                }
-                _ => {}
+            if let Item::Event { line, event: Event::Output(command) } = check_axes(&self.config().axes, item?)? {
+                self.config().tools.resolve(line, None, command)?;
             }
         }
         self.start(GcodeItems::new(fresh()?, text), max_path_accel, sink, pace)
@@ -151,60 +141,40 @@ pub fn item(event: &GEvent, line: usize) -> Item {
     match event {
         GEvent::Linear(m) => Item::Move(Segment {
             line,
-            start: xyz(m.start),
-            end: xyz(m.end),
+            start: m.start.to_array(),
+            end: m.end.to_array(),
             shape: Shape::Line,
-            speed: match m.rate {
-                Rate::Rapid => Speed::Rapid,
-                Rate::Feed(f) => Speed::Feed(f),
-            },
-            mode: path_mode(m.path),
+            rate: m.rate,
+            mode: m.path,
         }),
         GEvent::Arc(a) => Item::Move(Segment {
             line,
-            start: xyz(a.start),
-            end: xyz(a.end),
+            start: a.start.to_array(),
+            end: a.end.to_array(),
             shape: Shape::Arc(ArcShape {
-                centre: xyz(a.center),
+                centre: a.center.to_array(),
                 normal: match a.plane {
                     Plane::Xy => [0.0, 0.0, 1.0],
                     Plane::Zx => [0.0, 1.0, 0.0],
                     Plane::Yz => [1.0, 0.0, 0.0],
                 },
-                clockwise: a.direction == ArcDirection::Clockwise,
-                turns: a.extra_turns().saturating_add(1),
+                sweep: a.direction.sign() * a.angle,
             }),
-            speed: Speed::Feed(a.feed),
-            mode: path_mode(a.path),
+            rate: Rate::Feed(a.feed),
+            mode: a.path,
         }),
         GEvent::Dwell { seconds, .. } => Item::Dwell { line, seconds: *seconds },
         GEvent::ToolChange { tool, .. } => Item::Event { line, event: Event::ToolChange(*tool) },
         GEvent::Output(o) => {
-            let state = match o.command {
-                SpindleCommand::Clockwise => ToolState::Clockwise,
-                SpindleCommand::CounterClockwise => ToolState::CounterClockwise,
-                SpindleCommand::Stop => ToolState::Off,
-            };
             let command = match (o.tool, o.writes.first()) {
-                (None, Some(w)) => OutputCommand::Port { device: w.device, port: w.port, on: w.high },
-                (tool, _) => OutputCommand::Tool { tool: tool.filter(|&t| t != 0), state },
+                (None, Some(w)) => OutputCommand::Port { device: w.device, port: w.port, command: o.command },
+                (tool, _) => OutputCommand::Tool { tool, command: o.command },
             };
             Item::Event { line, event: Event::Output(command) }
         }
         GEvent::Stop { .. } | GEvent::UserMCode(_) => Item::Dwell { line, seconds: 0.0 },
         GEvent::ProgramEnd { .. } => Item::End { line },
     }
-}
-
-fn path_mode(p: GPathMode) -> PathMode {
-    match p {
-        GPathMode::ExactStop => PathMode::ExactStop,
-        GPathMode::Blend { tolerance } => PathMode::Blend { tolerance },
-    }
-}
-
-fn xyz(p: Xyz) -> [f64; 3] {
-    [p.x, p.y, p.z]
 }
 
 /// The interpreter's error for a line run alone (numbered 1), told at its real `line`.

@@ -2,7 +2,10 @@
 //! between them, in program order.
 //!
 //! Lengths are machine units (whatever unit the machine runs in, mm or inch), feeds are
-//! machine units per minute (G94), times are seconds.
+//! machine units per minute (G94), times are seconds. The rate, the path mode and the tool
+//! command are the interpreter's own types ([`Rate`], [`PathMode`], [`SpindleCommand`]).
+
+use vision_gcode::{PathMode, Rate, SpindleCommand};
 
 /// One item of a program, as the planner consumes it.
 #[derive(Debug, Clone, PartialEq)]
@@ -52,9 +55,10 @@ pub struct Segment {
     pub end: [f64; 3],
     /// Straight line or arc.
     pub shape: Shape,
-    /// Programmed feed or rapid.
-    pub speed: Speed,
-    /// The path-control mode governing the corner at the *end* of this segment.
+    /// Programmed feed (machine units per minute) or rapid.
+    pub rate: Rate,
+    /// The path-control mode governing the corner at the *end* of this segment (G64 `P` in
+    /// machine units).
     pub mode: PathMode,
 }
 
@@ -67,8 +71,8 @@ pub enum Shape {
     Arc(ArcShape),
 }
 
-/// A G2/G3 arc: centre, plane normal, direction and turns. Any displacement along the normal
-/// between start and end makes it a helix; a start and end radius that differ slightly
+/// A G2/G3 arc: centre, plane normal and the angle it sweeps. Any displacement along the
+/// normal between start and end makes it a helix; a start and end radius that differ slightly
 /// (rounded G-code) make it a spiral whose radius changes linearly with angle.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ArcShape {
@@ -77,35 +81,12 @@ pub struct ArcShape {
     /// The plane normal, any length: +Z for G17, +Y for G18, +X for G19. Counter-clockwise
     /// (G3) is a positive rotation about it (right-hand rule).
     pub normal: [f64; 3],
-    /// `true` for G2 (clockwise seen from the tip of `normal`), `false` for G3.
-    pub clockwise: bool,
-    /// LinuxCNC's `P` word: 1 = the plain arc, each extra count adds a full turn. When start
-    /// and end coincide (seen along the normal), the plain arc is a full circle.
-    pub turns: u32,
-}
-
-/// How fast a segment is asked to move.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Speed {
-    /// G1/G2/G3 at feed F, machine units per minute (G94).
-    Feed(f64),
-    /// G0: as fast as the axes allow.
-    Rapid,
-}
-
-/// The path-control mode at a corner (the end of a segment).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum PathMode {
-    /// G61: stop exactly at every corner; tangent (e.g. co-linear) joins do not stop.
-    ExactStop,
-    /// G64: blend corners with circular arcs. `tolerance` (the `P` word, machine units) is the
-    /// largest distance the path may pass from the programmed corner point; `None` (G64
-    /// without `P`) limits the blend only by the neighbouring segments (at most half of each).
-    /// `Some(0.0)` behaves as G61.
-    Blend {
-        /// Maximum distance from the programmed corner, machine units.
-        tolerance: Option<f64>,
-    },
+    /// The angle the arc turns about `normal`, radians: positive counter-clockwise (G3),
+    /// negative clockwise (G2); beyond ±2π for multi-turn arcs (G2/G3 `P`), ±2π for a full
+    /// circle. It is what the interpreter reports (`ArcMove::angle` with the direction's
+    /// sign), and it must take the arc from `start` to `end` (within 10⁻⁹ relative to the
+    /// coordinates' size), or the segment is refused.
+    pub sweep: f64,
 }
 
 /// A non-motion event that happens at its place in the path.
@@ -118,34 +99,24 @@ pub enum Event {
 }
 
 /// An output command as programmed (resolved to digital outputs by [`crate::ToolTable`]).
+/// Both forms keep the M-code, so an event reads back as the G-code that caused it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum OutputCommand {
     /// The implicit form `M3 [$n]`, `M4 [$n]`, `M5 [$n]`: drive a configured tool.
     Tool {
         /// `$n`; `None` means the tool selected by the last `T… M6`.
         tool: Option<u32>,
-        /// What to do with it.
-        state: ToolState,
+        /// M3, M4 or M5.
+        command: SpindleCommand,
     },
-    /// The explicit form `M3/M4 A<device> P<port>` (drive the port active) or `M5 A P`
-    /// (drive it inactive).
+    /// The explicit form `M3 A<device> P<port>` or `M4 A P` (drive the port high) and `M5 A P`
+    /// (drive it low).
     Port {
         /// Digital I/O module device ID.
         device: u32,
         /// Port on the module.
         port: u32,
-        /// `true` for M3/M4 (active), `false` for M5.
-        on: bool,
+        /// M3, M4 (high) or M5 (low).
+        command: SpindleCommand,
     },
-}
-
-/// The state a tool is driven to.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ToolState {
-    /// M3.
-    Clockwise,
-    /// M4.
-    CounterClockwise,
-    /// M5.
-    Off,
 }

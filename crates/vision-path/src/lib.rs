@@ -20,7 +20,7 @@
 //! `maxPathAcceleration` is mm/s² on a metric machine), times in seconds.
 //!
 //! ```
-//! use vision_path::{Item, Limits, PathMode, PlanConfig, Segment, Setpoints, Shape, Speed};
+//! use vision_path::{Item, Limits, PathMode, PlanConfig, Rate, Segment, Setpoints, Shape};
 //!
 //! // One 100 mm feed move at F6000 (100 mm/s), a = 1000 mm/s², 1 ms setpoints.
 //! let config = PlanConfig::new(Limits::uniform(1000.0, 500.0, 1000.0), 0.001, [0.0; 3]);
@@ -29,7 +29,7 @@
 //!     start: [0.0; 3],
 //!     end: [100.0, 0.0, 0.0],
 //!     shape: Shape::Line,
-//!     speed: Speed::Feed(6000.0),
+//!     rate: Rate::Feed(6000.0),
 //!     mode: PathMode::ExactStop,
 //! })];
 //! let summary = Setpoints::from_items(&config, program)?.run_to_end()?;
@@ -88,16 +88,24 @@
 //! * **Stop** ([`Setpoints::stop`]) brakes along the path at each piece's tangential limit
 //!   (so the full bounds still hold) and ends at rest; later events do not happen.
 //! * **Rapids** (G0) move at the axes' maximum speed (any F on the line is only remembered).
-//! * **M0/M1** and user M-codes the interpreter reports (no handler) are exact stops (a
+//! * **M0/M1** and user M-codes (reported, never executed: see [`GcodeItems`]) are exact stops (a
 //!   zero-second dwell); the follower does not wait for an operator.
 //! * **Tools**: a bare M3/M4/M5 acts on the tool of the last `T… M6`; `M3 $n` acts on `n`
 //!   without selecting it (as the interpreter does). Switching a tool on first drives its
 //!   other direction inactive. When a followed path ends — completed, stopped or failed —
-//!   every output it drove active is driven inactive (as M2/M30 stop a spindle).
+//!   every output it drove active is driven inactive (as M2/M30 stop a spindle). Seed 002 says
+//!   nothing about outputs when a path stops or fails; leaving a tool running on a machine at
+//!   rest is the unsafe choice.
 //! * **Axes**: a move of an axis no drive is mapped to is an error at its line; the follower's
 //!   `start_gcode` checks the whole program (streaming, no handler) before anything moves.
 //! * Arcs whose start and end radius differ slightly (rounded G-code) are spirals with
-//!   linearly changing radius; start and end coincide (seen along the axis) = a full circle.
+//!   linearly changing radius. They are blended and joined like circles; their path
+//!   parameter runs at exactly the real speed at both ends (and at the ends of any part a
+//!   blend cuts out of them), so the planned speed is the real speed at every join.
+//! * An arc turns by the sweep it is given ([`ArcShape::sweep`]: the interpreter's angle), never
+//!   by a rule of the planner's own: an end 10⁻⁸ mm past the start is a sliver or a full
+//!   circle exactly as the interpreter decided. A sweep that does not reach the end point is
+//!   refused at its line.
 
 mod blend;
 mod curve;
@@ -118,7 +126,12 @@ pub use follower::{
     Axis, AxisMap, DrivePosition, FollowerConfig, MotionSink, Pace, PathFollower, PathStatus, RunState,
 };
 pub use gcode::{item, GcodeItems};
-pub use input::{ArcShape, Event, Item, OutputCommand, PathMode, Segment, Shape, Speed, ToolState};
+pub use input::{ArcShape, Event, Item, OutputCommand, Segment, Shape};
 pub use limits::{AxisLimits, Limits, PlanConfig};
 pub use sampler::{Setpoint, Setpoints, Step, Summary, TimedEvent};
-pub use tools::{DigitalOutput, OutputWrite, Tool, ToolTable};
+pub use tools::ToolTable;
+/// The interpreter's types this crate's API uses as they are: a segment's [`Rate`] (feed in
+/// machine units per minute, or rapid) and [`PathMode`] (G61, or G64 with `P` in machine
+/// units), an output event's [`SpindleCommand`] (M3/M4/M5), a tool's [`ToolOutputs`] (its
+/// [`DigitalOutput`]s) and the [`OutputWrite`]s a [`MotionSink`] receives.
+pub use vision_gcode::{DigitalOutput, OutputWrite, PathMode, Rate, SpindleCommand, ToolOutputs};

@@ -45,8 +45,6 @@ pub(crate) struct Lookahead<I> {
     ready: VecDeque<Ready>,
     /// Planned speed at the start of the window's first piece.
     entry: f64,
-    /// Cap of the last piece appended since the last stop (`None` right after a stop).
-    prev_cap: Option<f64>,
     capacity: usize,
     input_done: bool,
 }
@@ -59,7 +57,6 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Lookahead<I> {
             closing: None,
             ready: VecDeque::new(),
             entry: 0.0,
-            prev_cap: None,
             capacity,
             input_done: false,
         }
@@ -87,8 +84,10 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Lookahead<I> {
             }
             match self.shaper.next() {
                 Some(Shaped::Piece(piece)) => {
-                    let entry_cap = self.prev_cap.map_or(0.0, |c| c.min(piece.v_cap));
-                    self.prev_cap = Some(piece.v_cap);
+                    // The window empties only at a stop (otherwise at least one piece stays
+                    // after a release): its last piece is the one before this, if any since
+                    // the stop.
+                    let entry_cap = self.window.back().map_or(0.0, |prev| prev.piece.v_cap.min(piece.v_cap));
                     if !self.window.is_empty() {
                         reach += 2.0 * piece.accel * piece.curve.len();
                     }
@@ -146,7 +145,6 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Lookahead<I> {
                 self.ready.push_back(Ready::Stop(marker));
             }
             self.entry = 0.0;
-            self.prev_cap = None;
         }
     }
 }
@@ -154,7 +152,9 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Lookahead<I> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::input::{PathMode, Segment, Shape, Speed};
+    use vision_gcode::{PathMode, Rate};
+
+    use crate::input::{Segment, Shape};
     use crate::limits::Limits;
     use crate::vec3::Vec3;
 
@@ -166,7 +166,7 @@ mod tests {
                     start: [i as f64 * step, 0.0, 0.0],
                     end: [(i + 1) as f64 * step, 0.0, 0.0],
                     shape: Shape::Line,
-                    speed: Speed::Feed(feed),
+                    rate: Rate::Feed(feed),
                     mode: PathMode::ExactStop,
                 }))
             })
@@ -221,7 +221,7 @@ mod tests {
                 start: [i as f64 * 0.01, 0.0, 0.0],
                 end: [(i + 1) as f64 * 0.01, 0.0, 0.0],
                 shape: Shape::Line,
-                speed: Speed::Feed(6000.0),
+                rate: Rate::Feed(6000.0),
                 mode: PathMode::ExactStop,
             }))
         });

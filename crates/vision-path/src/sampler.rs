@@ -269,7 +269,8 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Setpoints<I> {
         let (position, velocity, line) = match &self.span {
             Span::Motion { piece, profile, t0, .. } => {
                 let (s, v) = profile.at(t - t0);
-                (piece.curve.point(s), piece.curve.deriv(s) * v, piece.line)
+                let (point, deriv) = piece.curve.point_and_deriv(s);
+                (point, deriv * v, piece.line)
             }
             Span::Rest { pos, line, .. } => (*pos, Vec3::ZERO, *line),
         };

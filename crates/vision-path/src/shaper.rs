@@ -9,7 +9,9 @@ use std::f64::consts::PI;
 
 use crate::blend::blend;
 use crate::curve::{ArcCurve, ArcProblem, Curve, LineCurve};
-use crate::input::{Event, Item, PathMode, Segment, Shape, Speed};
+use vision_gcode::{PathMode, Rate};
+
+use crate::input::{Event, Item, Segment, Shape};
 use crate::limits::{speed_and_accel, Limits, NORMAL_SHARE};
 use crate::vec3::Vec3;
 use crate::PathError;
@@ -62,6 +64,7 @@ pub(crate) enum Shaped {
     Stop(Marker),
 }
 
+/// The segment whose end corner waits for the next one.
 struct Pending {
     curve: Curve,
     /// Half the untrimmed length: the most either corner may trim.
@@ -69,6 +72,9 @@ struct Pending {
     line: usize,
     requested: f64,
     mode: PathMode,
+    /// `speed_and_accel` of `curve` (kept up to date when a blend trims it).
+    v_cap: f64,
+    accel: f64,
 }
 
 pub(crate) struct Shaper<I> {
@@ -164,12 +170,10 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Shaper<I> {
                 ),
             ));
         }
-        let requested = match seg.speed {
-            Speed::Rapid => f64::INFINITY,
-            Speed::Feed(f) if f > 0.0 && f <= MAX_COORDINATE => f / 60.0,
-            Speed::Feed(f) => {
-                return Err(invalid(line, format!("feed F{f} is invalid; program a feed greater than 0")))
-            }
+        let requested = match seg.rate {
+            Rate::Rapid => f64::INFINITY,
+            Rate::Feed(f) if f > 0.0 && f <= MAX_COORDINATE => f / 60.0,
+            Rate::Feed(f) => return Err(invalid(line, format!("feed F{f} is invalid; program a feed greater than 0"))),
         };
         if let PathMode::Blend { tolerance: Some(p) } = seg.mode {
             if !(0.0..=MAX_COORDINATE).contains(&p) {
@@ -187,14 +191,15 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Shaper<I> {
                 if !(centre.is_finite() && normal.is_finite()) || centre.max_abs() > MAX_COORDINATE {
                     return Err(invalid(line, "an arc centre or normal is not a finite number in range".into()));
                 }
-                match ArcCurve::program(self.pos, end, centre, normal, arc.clockwise, arc.turns) {
+                match ArcCurve::program(self.pos, end, centre, normal, arc.sweep) {
                     Ok(a) => Curve::Arc(a),
                     Err(p) => return Err(invalid(line, arc_message(p).into())),
                 }
             }
         };
         self.pos = end;
-        let next = Pending { half: curve.len() / 2.0, curve, line, requested, mode: seg.mode };
+        let (v_cap, accel) = speed_and_accel(&curve.factors(), requested, &self.limits);
+        let next = Pending { half: curve.len() / 2.0, curve, line, requested, mode: seg.mode, v_cap, accel };
         match self.pending.take() {
             None => self.pending = Some(next),
             Some(prev) => self.corner(prev, next),
@@ -203,10 +208,10 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Shaper<I> {
     }
 
     /// Decide the corner between `prev` (ending) and `next` (starting), emit `prev`.
-    fn corner(&mut self, prev: Pending, mut next: Pending) {
+    fn corner(&mut self, mut prev: Pending, mut next: Pending) {
         let theta = prev.curve.end_tangent().angle_to(next.curve.start_tangent());
         if theta <= TANGENT_TOLERANCE {
-            self.emit(prev.curve, prev.line, prev.requested);
+            self.emit(prev);
             self.pending = Some(next);
             return;
         }
@@ -216,23 +221,25 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Shaper<I> {
         };
         // The blend radius at which the centripetal limit allows the neighbours' own speed: a
         // larger blend would deviate more without being faster.
-        let speed = |c: &Curve, requested| speed_and_accel(&c.factors(), requested, &self.limits).0;
-        let target = speed(&prev.curve, prev.requested).min(speed(&next.curve, next.requested));
+        let target = prev.v_cap.min(next.v_cap);
         let weakest = self.limits.axes.iter().map(|a| a.max_accel).fold(self.limits.max_path_accel, f64::min);
         let wanted = target * target / (NORMAL_SHARE * weakest);
         let blended = tolerance.and_then(|tol| blend(&prev.curve, prev.half, &next.curve, next.half, tol, wanted));
         match blended {
             Some(b) => {
-                let len = prev.curve.len();
-                self.emit(prev.curve.sub(0.0, len - b.s1), prev.line, prev.requested);
-                let requested = prev.requested.min(next.requested);
-                for piece in b.pieces {
-                    self.emit(piece, prev.line, requested);
+                let (line, requested) = (prev.line, prev.requested.min(next.requested));
+                let kept = prev.curve.len() - b.s1;
+                self.trim(&mut prev, 0.0, kept);
+                self.emit(prev);
+                for curve in b.pieces {
+                    let (v_cap, accel) = speed_and_accel(&curve.factors(), requested, &self.limits);
+                    self.push(Piece { curve, line, v_cap, accel });
                 }
-                next.curve = next.curve.sub(b.s2, next.curve.len());
+                let len = next.curve.len();
+                self.trim(&mut next, b.s2, len);
             }
             None => {
-                self.emit(prev.curve, prev.line, prev.requested);
+                self.emit(prev);
                 self.out.push_back(Shaped::Stop(Marker::Corner));
             }
         }
@@ -241,16 +248,29 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Shaper<I> {
 
     fn flush(&mut self) {
         if let Some(p) = self.pending.take() {
-            self.emit(p.curve, p.line, p.requested);
+            self.emit(p);
         }
     }
 
-    fn emit(&mut self, curve: Curve, line: usize, requested: f64) {
-        if curve.len() < MIN_PIECE {
-            return;
+    /// Cut `p` down to its parameters `a..b`; its limits change only if its shape factors do
+    /// (on spirals, whose parts are bounded more tightly; lines and circles keep them).
+    fn trim(&self, p: &mut Pending, a: f64, b: f64) {
+        let part = p.curve.sub(a, b);
+        let factors = part.factors();
+        if factors != p.curve.factors() {
+            (p.v_cap, p.accel) = speed_and_accel(&factors, p.requested, &self.limits);
         }
-        let (v_cap, accel) = speed_and_accel(&curve.factors(), requested, &self.limits);
-        self.out.push_back(Shaped::Piece(Piece { curve, line, v_cap, accel }));
+        p.curve = part;
+    }
+
+    fn emit(&mut self, p: Pending) {
+        self.push(Piece { curve: p.curve, line: p.line, v_cap: p.v_cap, accel: p.accel });
+    }
+
+    fn push(&mut self, piece: Piece) {
+        if piece.curve.len() >= MIN_PIECE {
+            self.out.push_back(Shaped::Piece(piece));
+        }
     }
 }
 
@@ -262,6 +282,9 @@ fn arc_message(p: ArcProblem) -> &'static str {
     match p {
         ArcProblem::NoPlane => "the arc's plane normal is zero; select a plane (G17, G18 or G19)",
         ArcProblem::OnCentre => "the arc has zero radius (start or end on the centre); check I, J, K",
-        ArcProblem::NoTurns => "an arc needs at least 1 turn (P1); check the P word",
+        ArcProblem::BadSweep => "the arc's sweep is zero, not a finite number or over a million turns; check the arc",
+        ArcProblem::MissesEnd => {
+            "the arc's sweep does not turn it from its start to its end point; check the sweep and the centre"
+        }
     }
 }

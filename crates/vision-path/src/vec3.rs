@@ -39,15 +39,6 @@ impl Vec3 {
         self.x.is_finite() && self.y.is_finite() && self.z.is_finite()
     }
 
-    /// Component `i` (0 = X, 1 = Y, 2 = Z).
-    pub(crate) fn get(self, i: usize) -> f64 {
-        match i {
-            0 => self.x,
-            1 => self.y,
-            _ => self.z,
-        }
-    }
-
     /// The largest absolute component (a length scale for relative tolerances).
     pub(crate) fn max_abs(self) -> f64 {
         self.x.abs().max(self.y.abs()).max(self.z.abs())

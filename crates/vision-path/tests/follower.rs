@@ -8,7 +8,8 @@ use std::time::Duration;
 use common::{norm, Program};
 use vision_path::{
     Axis, AxisLimits, AxisMap, DigitalOutput, DrivePosition, Event, FollowerConfig, Item, MotionSink, OutputCommand,
-    OutputWrite, Pace, PathError, PathFollower, PathMode, RunState, Setpoint, Speed, Tool, ToolState, ToolTable,
+    OutputWrite, Pace, PathError, PathFollower, PathMode, Rate, RunState, Setpoint, SpindleCommand, ToolOutputs,
+    ToolTable,
 };
 
 #[derive(Default)]
@@ -39,9 +40,9 @@ fn seed_follower() -> PathFollower {
     tools
         .insert(
             1,
-            Tool {
-                clockwise: DigitalOutput { device: 1, port: 0, value: true },
-                counter_clockwise: DigitalOutput { device: 1, port: 1, value: true },
+            ToolOutputs {
+                clockwise: DigitalOutput { device: 1, port: 0, active_high: true },
+                counter_clockwise: DigitalOutput { device: 1, port: 1, active_high: true },
             },
         )
         .unwrap();
@@ -49,23 +50,23 @@ fn seed_follower() -> PathFollower {
     PathFollower::new(FollowerConfig::new(axes, tools, limits)).unwrap()
 }
 
-fn tool(state: ToolState) -> impl FnOnce(usize) -> Item {
-    move |line| Item::Event { line, event: Event::Output(OutputCommand::Tool { tool: Some(1), state }) }
+fn tool(command: SpindleCommand) -> impl FnOnce(usize) -> Item {
+    move |line| Item::Event { line, event: Event::Output(OutputCommand::Tool { tool: Some(1), command }) }
 }
 
 /// The seed's example program (G90 G90.1 G21 G17 G64 P0.5), as segments.
 fn seed_program() -> Vec<Result<Item, PathError>> {
-    let feed = Speed::Feed(1000.0);
+    let feed = Rate::Feed(1000.0);
     let mut p = Program::new([0.0; 3], PathMode::Blend { tolerance: Some(0.5) });
-    p.line_to([60.0, 110.0, 0.0], Speed::Rapid); // G0 X60 Y110 F1000
-    p.item(tool(ToolState::Clockwise)); // M3 $1
+    p.line_to([60.0, 110.0, 0.0], Rate::Rapid); // G0 X60 Y110 F1000
+    p.item(tool(SpindleCommand::Clockwise)); // M3 $1
     p.line_to([110.0, 110.0, 0.0], feed); // G1 X110 Y110
     p.g17_arc_to([110.0, 10.0, 0.0], [100.0, 60.0, 0.0], true, feed); // G2 X110 Y10 I100 J60
     p.line_to([60.0, 10.0, 0.0], feed); // G1 X60 Y10
     p.g17_arc_to([60.0, 110.0, 0.0], [60.0, 60.0, 0.0], true, feed); // G2 X60 Y110 I60 J60
     p.item(|line| Item::Dwell { line, seconds: 1.0 }); // G4 P1.0
-    p.item(tool(ToolState::Off)); // M5 $1
-    p.line_to([1.0, 1.0, 0.0], Speed::Rapid); // G0 X1 Y1
+    p.item(tool(SpindleCommand::Stop)); // M5 $1
+    p.line_to([1.0, 1.0, 0.0], Rate::Rapid); // G0 X1 Y1
     p.item(|line| Item::End { line });
     p.items.into_iter().map(Ok).collect()
 }
@@ -85,7 +86,7 @@ fn the_seed_example_runs_to_completion_on_drives_1_and_3_with_its_tool() {
     assert_eq!(status.elapsed, last.time);
     assert_eq!(drives, &vec![DrivePosition { drive: 1, position: 1.0 }, DrivePosition { drive: 3, position: 1.0 }]);
     // M3 $1: counter-clockwise off, clockwise on; M5 $1: both off; nothing left to switch off.
-    let w = |port, level| OutputWrite { device: 1, port, level };
+    let w = |port, high| OutputWrite { device: 1, port, high };
     assert_eq!(record.writes, vec![w(1, false), w(0, true), w(0, false), w(1, false)]);
     // The dwell holds 1 s at (60, 110).
     let held = record.setpoints.iter().filter(|(s, _)| s.position == [60.0, 110.0, 0.0]).count();
@@ -96,16 +97,16 @@ fn the_seed_example_runs_to_completion_on_drives_1_and_3_with_its_tool() {
 fn a_tool_left_on_is_switched_off_at_the_end_and_the_next_path_starts_where_this_one_ended() {
     let mut follower = seed_follower();
     let mut p = Program::new([0.0; 3], PathMode::ExactStop);
-    p.item(tool(ToolState::CounterClockwise));
-    p.line_to([10.0, 0.0, 0.0], Speed::Feed(3000.0));
+    p.item(tool(SpindleCommand::CounterClockwise));
+    p.line_to([10.0, 0.0, 0.0], Rate::Feed(3000.0));
     let rec = Recorder::default();
     follower.start(p.items.into_iter().map(Ok), 1000.0, rec.clone(), Pace::Unpaced).unwrap();
     assert_eq!(follower.wait().state, RunState::Completed);
-    let w = |port, level| OutputWrite { device: 1, port, level };
+    let w = |port, high| OutputWrite { device: 1, port, high };
     assert_eq!(rec.0.lock().unwrap().writes, vec![w(0, false), w(1, true), w(1, false)]);
 
     let mut q = Program::new([10.0, 0.0, 0.0], PathMode::ExactStop);
-    q.line_to([10.0, 5.0, 0.0], Speed::Feed(3000.0));
+    q.line_to([10.0, 5.0, 0.0], Rate::Feed(3000.0));
     let rec2 = Recorder::default();
     follower.start(q.items.into_iter().map(Ok), 1000.0, rec2.clone(), Pace::Unpaced).unwrap();
     assert_eq!(follower.wait().state, RunState::Completed);
@@ -116,8 +117,8 @@ fn a_tool_left_on_is_switched_off_at_the_end_and_the_next_path_starts_where_this
 fn stop_brakes_to_rest_on_the_path_and_switches_the_tool_off() {
     let mut follower = seed_follower();
     let mut p = Program::new([0.0; 3], PathMode::ExactStop);
-    p.item(tool(ToolState::Clockwise));
-    p.line_to([20000.0, 0.0, 0.0], Speed::Feed(24000.0));
+    p.item(tool(SpindleCommand::Clockwise));
+    p.line_to([20000.0, 0.0, 0.0], Rate::Feed(24000.0));
     let rec = Recorder::default();
     // 20× real time: the 50-second move would take 2.5 s of wall clock; it is stopped early.
     follower.start(p.items.into_iter().map(Ok), 1000.0, rec.clone(), Pace::Scaled(20.0)).unwrap();
@@ -144,47 +145,72 @@ fn stop_brakes_to_rest_on_the_path_and_switches_the_tool_off() {
             common::sub(common::sub(w[2].0.position, w[1].0.position), common::sub(w[1].0.position, w[0].0.position));
         assert!(norm(dd) <= bound);
     }
-    assert_eq!(record.writes.last(), Some(&OutputWrite { device: 1, port: 0, level: false }));
+    assert_eq!(record.writes.last(), Some(&OutputWrite { device: 1, port: 0, high: false }));
 }
 
 #[test]
-fn a_move_of_an_unmapped_axis_halts_the_path_at_rest_before_it() {
+fn a_move_of_an_unmapped_axis_halts_the_path_at_rest_before_it_and_switches_the_tool_off() {
     let mut follower = seed_follower();
     let mut p = Program::new([0.0; 3], PathMode::ExactStop);
-    p.line_to([5.0, 5.0, 0.0], Speed::Feed(3000.0)).line_to([5.0, 5.0, 1.0], Speed::Feed(3000.0));
-    follower.start(p.items.into_iter().map(Ok), 1000.0, Recorder::default(), Pace::Unpaced).unwrap();
+    p.item(tool(SpindleCommand::CounterClockwise));
+    p.line_to([5.0, 5.0, 0.0], Rate::Feed(3000.0)).line_to([5.0, 5.0, 1.0], Rate::Feed(3000.0));
+    let rec = Recorder::default();
+    follower.start(p.items.into_iter().map(Ok), 1000.0, rec.clone(), Pace::Unpaced).unwrap();
     let status = follower.wait();
     assert_eq!(status.state, RunState::Failed);
-    assert_eq!(status.error, Some(PathError::UnmappedAxis { line: 2, axis: 'Z' }));
+    assert_eq!(status.error, Some(PathError::UnmappedAxis { line: 3, axis: 'Z' }));
     assert_eq!(status.position, [5.0, 5.0, 0.0]);
     assert!(status.error.unwrap().to_string().contains("no drive is mapped to Z"));
+    // M4 $1 (clockwise off, counter-clockwise on); the failed path drives it off again.
+    let w = |port, high| OutputWrite { device: 1, port, high };
+    assert_eq!(rec.0.lock().unwrap().writes, vec![w(0, false), w(1, true), w(1, false)]);
 }
 
 #[test]
-fn an_unknown_tool_or_a_failing_sink_halts_the_path_with_the_reason() {
+fn an_unknown_tool_halts_the_path_with_the_reason_and_the_tool_off() {
+    let w = |port, high| OutputWrite { device: 1, port, high };
     let mut follower = seed_follower();
-    let items = vec![Ok(Item::Event {
-        line: 3,
-        event: Event::Output(OutputCommand::Tool { tool: Some(7), state: ToolState::Clockwise }),
-    })];
-    follower.start(items, 1000.0, Recorder::default(), Pace::Unpaced).unwrap();
+    let items = vec![
+        Ok(tool(SpindleCommand::Clockwise)(2)),
+        Ok(Item::Event {
+            line: 3,
+            event: Event::Output(OutputCommand::Tool { tool: Some(7), command: SpindleCommand::Clockwise }),
+        }),
+    ];
+    let rec = Recorder::default();
+    follower.start(items, 1000.0, rec.clone(), Pace::Unpaced).unwrap();
     assert_eq!(follower.wait().error, Some(PathError::UnknownTool { line: 3, tool: 7 }));
+    assert_eq!(rec.0.lock().unwrap().writes, vec![w(1, false), w(0, true), w(0, false)]);
+}
 
-    struct Broken;
+#[test]
+fn a_failing_sink_halts_the_path_with_the_reason_and_the_tool_off() {
+    let w = |port, high| OutputWrite { device: 1, port, high };
+    let mut follower = seed_follower();
+    /// Drive 1 faults once the path has left X 0.5; outputs still work.
+    #[derive(Clone, Default)]
+    struct Broken(Arc<Mutex<Vec<OutputWrite>>>);
     impl MotionSink for Broken {
-        fn setpoint(&mut self, _: &Setpoint, _: &[DrivePosition]) -> Result<(), String> {
-            Err("drive 1 not enabled".into())
+        fn setpoint(&mut self, setpoint: &Setpoint, _: &[DrivePosition]) -> Result<(), String> {
+            if setpoint.position[0] > 0.5 {
+                return Err("drive 1 not enabled".into());
+            }
+            Ok(())
         }
-        fn output(&mut self, _: OutputWrite) -> Result<(), String> {
+        fn output(&mut self, write: OutputWrite) -> Result<(), String> {
+            self.0.lock().unwrap().push(write);
             Ok(())
         }
     }
     let mut p = Program::new([0.0; 3], PathMode::ExactStop);
-    p.line_to([1.0, 0.0, 0.0], Speed::Rapid);
-    follower.start(p.items.into_iter().map(Ok), 1000.0, Broken, Pace::Unpaced).unwrap();
+    p.item(tool(SpindleCommand::Clockwise));
+    p.line_to([1.0, 0.0, 0.0], Rate::Rapid);
+    let broken = Broken::default();
+    follower.start(p.items.into_iter().map(Ok), 1000.0, broken.clone(), Pace::Unpaced).unwrap();
     let status = follower.wait();
     assert_eq!(status.state, RunState::Failed);
     assert!(status.error.unwrap().to_string().contains("drive 1 not enabled"));
+    assert_eq!(*broken.0.lock().unwrap(), vec![w(1, false), w(0, true), w(0, false)]);
 }
 
 #[test]

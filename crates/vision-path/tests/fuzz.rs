@@ -4,8 +4,8 @@
 
 use proptest::prelude::*;
 use vision_path::{
-    ArcShape, Event, Item, Limits, OutputCommand, PathMode, PlanConfig, Segment, Setpoints, Shape, Speed, Step,
-    ToolState,
+    ArcShape, Event, Item, Limits, OutputCommand, PathMode, PlanConfig, Rate, Segment, Setpoints, Shape,
+    SpindleCommand, Step,
 };
 
 fn number() -> impl Strategy<Value = f64> {
@@ -24,21 +24,18 @@ fn item() -> impl Strategy<Value = Item> {
         Just(PathMode::ExactStop),
         prop::option::of(number()).prop_map(|tolerance| PathMode::Blend { tolerance })
     ];
-    let speed = prop_oneof![Just(Speed::Rapid), number().prop_map(|f| Speed::Feed(f * 100.0))];
-    let shape =
-        prop_oneof![
-            Just(Shape::Line),
-            (xyz(), xyz(), any::<bool>(), 0..4u32).prop_map(|(centre, normal, clockwise, turns)| Shape::Arc(
-                ArcShape { centre, normal, clockwise, turns }
-            )),
-        ];
+    let rate = prop_oneof![Just(Rate::Rapid), number().prop_map(|f| Rate::Feed(f * 100.0))];
+    let shape = prop_oneof![
+        Just(Shape::Line),
+        (xyz(), xyz(), number()).prop_map(|(centre, normal, sweep)| Shape::Arc(ArcShape { centre, normal, sweep })),
+    ];
     prop_oneof![
-        6 => (1..100usize, xyz(), xyz(), shape, speed, mode)
-            .prop_map(|(line, start, end, shape, speed, mode)| Item::Move(Segment { line, start, end, shape, speed, mode })),
+        6 => (1..100usize, xyz(), xyz(), shape, rate, mode)
+            .prop_map(|(line, start, end, shape, rate, mode)| Item::Move(Segment { line, start, end, shape, rate, mode })),
         1 => (1..100usize, number()).prop_map(|(line, seconds)| Item::Dwell { line, seconds }),
         1 => (1..100usize).prop_map(|line| Item::Event {
             line,
-            event: Event::Output(OutputCommand::Tool { tool: None, state: ToolState::Off }),
+            event: Event::Output(OutputCommand::Tool { tool: None, command: SpindleCommand::Stop }),
         }),
         1 => (1..100usize).prop_map(|line| Item::End { line }),
     ]

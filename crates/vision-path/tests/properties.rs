@@ -3,9 +3,11 @@
 //!
 //! * no step between setpoints exceeds speed × period (path speed per line, and per axis);
 //! * no second difference exceeds acceleration × period² (path and per axis), within the
-//!   stated tolerance `(1 + 1e-6)·a·T² + 1e-9` units;
+//!   stated tolerance `(1 + 1e-6)·a·T² + 1e-9` units — also on spirals (arcs whose end radius
+//!   differs from their start radius, as rounded G-code makes them) joined tangentially;
 //! * G61 reaches every corner exactly (bitwise) with zero velocity;
-//! * G64 P never strays more than P from the programmed path;
+//! * G64 P never strays more than P from the programmed path, and the path never comes to rest
+//!   at a corner the planner's rules blend (two lines, not a reversal);
 //! * the path ends exactly (bitwise) at the programmed end, at rest;
 //! * events happen at rest at their programmed point, dwells last their time;
 //! * a single straight move takes the analytic trapezoid (or triangle) time, rounded up to
@@ -15,7 +17,7 @@ mod common;
 
 use common::{distance, norm, segments, sub, tangent, Program, Run, PLANES};
 use proptest::prelude::*;
-use vision_path::{AxisLimits, Event, Item, Limits, OutputCommand, PathMode, PlanConfig, Speed, ToolState};
+use vision_path::{AxisLimits, Event, Item, Limits, OutputCommand, PathMode, PlanConfig, Rate, SpindleCommand};
 
 const REL: f64 = 1e-6;
 const ABS: f64 = 1e-9;
@@ -28,12 +30,23 @@ enum Op {
     },
     /// A short move relative to the current point (stresses blends and the look-ahead).
     Nudge([f64; 3]),
+    /// An arc (a spiral when `grow` ≠ 1: the end radius is `grow` × the start radius).
     Arc {
         plane: usize,
         dir: f64,
         radius: f64,
         angle: f64,
         rise: f64,
+        grow: f64,
+    },
+    /// In XY: a line along `heading`, a spiral leaving it exactly tangentially (radius `r0` →
+    /// `r0·grow`), and a line leaving the spiral exactly tangentially.
+    TangentSpiral {
+        heading: f64,
+        lead: f64,
+        r0: f64,
+        grow: f64,
+        angle: f64,
     },
     Dwell(f64),
     Tool(bool),
@@ -45,14 +58,22 @@ fn op(helix: bool) -> impl Strategy<Value = Op> {
         6 => ([coord.clone(), coord.clone(), coord], prop::bool::weighted(0.2))
             .prop_map(|(to, rapid)| Op::Line { to, rapid }),
         3 => prop::array::uniform3(-1.0..1.0f64).prop_map(Op::Nudge),
-        3 => (0..3usize, 0.0..std::f64::consts::TAU, 1.0..30.0f64, -6.0..6.0f64, -5.0..5.0f64)
-            .prop_filter("arcs sweep at least 0.1 rad", |(_, _, _, a, _)| a.abs() > 0.1)
-            .prop_map(move |(plane, dir, radius, angle, rise)| Op::Arc {
-                plane, dir, radius, angle, rise: if helix { rise } else { 0.0 },
+        3 => (0..3usize, 0.0..std::f64::consts::TAU, 1.0..30.0f64, -6.0..6.0f64, -5.0..5.0f64, grow())
+            .prop_filter("arcs sweep at least 0.1 rad", |(_, _, _, a, _, _)| a.abs() > 0.1)
+            .prop_map(move |(plane, dir, radius, angle, rise, grow)| Op::Arc {
+                plane, dir, radius, angle, rise: if helix { rise } else { 0.0 }, grow,
             }),
+        1 => (0.0..std::f64::consts::TAU, 0.5..20.0f64, 0.2..20.0f64, 0.7..1.5f64, -6.0..6.0f64)
+            .prop_filter("spirals sweep at least 0.1 rad", |(_, _, _, _, a)| a.abs() > 0.1)
+            .prop_map(|(heading, lead, r0, grow, angle)| Op::TangentSpiral { heading, lead, r0, grow, angle }),
         1 => (0.0..0.05f64).prop_map(Op::Dwell),
         1 => any::<bool>().prop_map(Op::Tool),
     ]
+}
+
+/// The end radius over the start radius of an arc: mostly a circle, often a spiral.
+fn grow() -> impl Strategy<Value = f64> {
+    prop_oneof![2 => Just(1.0), 1 => 0.8..1.25f64]
 }
 
 fn limits() -> impl Strategy<Value = (Limits, f64)> {
@@ -72,12 +93,12 @@ fn build(ops: &[Op], mode: PathMode, feed: f64) -> Vec<Item> {
     for op in ops {
         match *op {
             Op::Line { to, rapid } => {
-                p.line_to(to, if rapid { Speed::Rapid } else { Speed::Feed(feed) });
+                p.line_to(to, if rapid { Rate::Rapid } else { Rate::Feed(feed) });
             }
             Op::Nudge(d) => {
-                p.line_to(common::add(p.pos, d), Speed::Feed(feed));
+                p.line_to(common::add(p.pos, d), Rate::Feed(feed));
             }
-            Op::Arc { plane, dir, radius, angle, rise } => {
+            Op::Arc { plane, dir, radius, angle, rise, grow } => {
                 // The centre lies `radius` away from the current point, in the arc's plane.
                 let (b1, b2) = match plane {
                     0 => ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
@@ -87,14 +108,24 @@ fn build(ops: &[Op], mode: PathMode, feed: f64) -> Vec<Item> {
                 let off = common::add(common::scale(b1, radius * dir.cos()), common::scale(b2, radius * dir.sin()));
                 let centre = common::add(p.pos, off);
                 debug_assert!(common::dot(off, PLANES[plane]).abs() < 1e-12);
-                p.arc(plane, centre, angle, rise, Speed::Feed(feed));
+                p.spiral(plane, centre, angle, rise, grow, Rate::Feed(feed));
+            }
+            Op::TangentSpiral { heading, lead, r0, grow, angle } => {
+                let u = [heading.cos(), heading.sin(), 0.0];
+                p.line_to(common::add(p.pos, common::scale(u, lead)), Rate::Feed(feed));
+                p.tangent_spiral(u, r0, r0 * grow, angle, Rate::Feed(feed));
+                let out = segments(&p.items).last().map(|s| tangent(s, true)).expect("the spiral");
+                p.line_to(common::add(p.pos, common::scale(out, lead)), Rate::Feed(feed));
             }
             Op::Dwell(seconds) => {
                 p.item(|line| Item::Dwell { line, seconds });
             }
             Op::Tool(on) => {
-                let state = if on { ToolState::Clockwise } else { ToolState::Off };
-                p.item(|line| Item::Event { line, event: Event::Output(OutputCommand::Tool { tool: Some(1), state }) });
+                let command = if on { SpindleCommand::Clockwise } else { SpindleCommand::Stop };
+                p.item(|line| Item::Event {
+                    line,
+                    event: Event::Output(OutputCommand::Tool { tool: Some(1), command }),
+                });
             }
         }
     }
@@ -106,9 +137,9 @@ fn build(ops: &[Op], mode: PathMode, feed: f64) -> Vec<Item> {
 /// axis limits bound them).
 fn requested(items: &[Item], line: usize) -> f64 {
     items.iter().find(|i| i.line() == line).map_or(f64::INFINITY, |i| match i {
-        Item::Move(s) => match s.speed {
-            Speed::Feed(f) => f / 60.0,
-            Speed::Rapid => f64::INFINITY,
+        Item::Move(s) => match s.rate {
+            Rate::Feed(f) => f / 60.0,
+            Rate::Rapid => f64::INFINITY,
         },
         _ => 0.0,
     })
@@ -230,6 +261,8 @@ proptest! {
         let run = common::run(&config(limits, period), &items);
         check_kinematics(&run, &items, &limits, period)?;
         check_end_events_dwells(&run, &items, period)?;
+        let (rests, allowed) = (common::interior_rests(&run.setpoints), common::allowed_rests(&items));
+        prop_assert!(rests <= allowed, "{rests} stops inside the path, at most {allowed} allowed (blendable corners must not stop)");
         if let Some(p) = p {
             let segs = segments(&items);
             for s in &run.setpoints {
@@ -260,7 +293,7 @@ proptest! {
         }
         let analytic = if len >= v * v / a { len / v + v / a } else { 2.0 * (len / a).sqrt() };
         let mut p = Program::new(start, PathMode::ExactStop);
-        p.line_to(to, feed.map_or(Speed::Rapid, Speed::Feed));
+        p.line_to(to, feed.map_or(Rate::Rapid, Rate::Feed));
         let summary = vision_path::Setpoints::from_items(&config(limits, period), p.items.clone())
             .unwrap()
             .run_to_end()

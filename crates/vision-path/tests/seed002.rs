@@ -5,28 +5,28 @@
 
 mod common;
 
-use common::{norm, sub};
-use vision_gcode::{
-    DigitalOutput as GOutput, Interpreter, InterpreterConfig, Tool as GTool, ToolOutputs, ToolTable as GTools, Xyz,
-};
+use common::{interior_rests, norm, sub};
+use vision_gcode::{Interpreter, InterpreterConfig, Tool as GTool, ToolTable as GTools, Xyz};
 use vision_math::LengthUnit;
 use vision_path::{
     Axis, AxisLimits, AxisMap, DigitalOutput, Event, FollowerConfig, GcodeItems, Limits, MotionSink, OutputCommand,
-    OutputWrite, Pace, PathError, PathFollower, PlanConfig, RunState, Setpoint, Setpoints, Step, TimedEvent, Tool,
-    ToolState, ToolTable,
+    OutputWrite, Pace, PathError, PathFollower, PlanConfig, RunState, Setpoint, Setpoints, SpindleCommand, Step,
+    TimedEvent, ToolOutputs, ToolTable,
 };
 
 const A: f64 = 1000.0;
 const T: f64 = 0.001;
 
+/// The seed's `tool1 = TOOL(1, clockwise, counterClockwise)`: device 1, ports 0 and 1, high.
+fn seed_tool() -> ToolOutputs {
+    let out = |port| DigitalOutput { device: 1, port, active_high: true };
+    ToolOutputs { clockwise: out(0), counter_clockwise: out(1) }
+}
+
 fn machine_motion() -> InterpreterConfig {
     let mut config = InterpreterConfig::new(LengthUnit::Millimetre);
     config.default_feed = Some(1000.0);
-    let outputs = ToolOutputs {
-        clockwise: GOutput { device: 1, port: 0, active_high: true },
-        counter_clockwise: GOutput { device: 1, port: 1, active_high: true },
-    };
-    config.tools = GTools::new().with(1, GTool { offset: Xyz::ZERO, outputs: Some(outputs) });
+    config.tools = GTools::new().with(1, GTool { offset: Xyz::ZERO, outputs: Some(seed_tool()) });
     config
 }
 
@@ -99,6 +99,9 @@ fn g90_and_g91_squares_with_a_z_lift() {
     let inc = plan("G21 G91 G64 P1\nG0 Z500\nX500\nY500\nX-500\nY-500");
     assert_eq!(abs.setpoints.last().unwrap().position, [-500.0, -500.0, 500.0]);
     assert_eq!(inc.setpoints.last().unwrap().position, [0.0, 0.0, 500.0]);
+    // G64 P1 blends every corner (all are 90° or 45°): neither square stops before its end.
+    assert_eq!(interior_rests(&abs.setpoints), 0);
+    assert_eq!(interior_rests(&inc.setpoints), 0);
 }
 
 /// Every setpoint of `line` lies on the circle about `centre` of `radius` in the plane whose
@@ -140,8 +143,12 @@ fn g28_g92_rapid_and_linear_snippets() {
     assert_eq!(g28.setpoints.last().unwrap().position, [500.0, 500.0, 500.0]);
     let g92 = plan("G90 G21 G64 P10.0\nG0 X500\nY500 Z500\nG92 X0 Y0 Z0\nG0 X-250 Y-250 Z-250");
     assert_eq!(g92.setpoints.last().unwrap().position, [250.0, 250.0, 250.0]);
-    plan("G90 G21 G64 P10.0\nG0 X500 Y500 F1000\nZ500\nX0 Y0\nZ0 F500");
+    let rapid = plan("G90 G21 G64 P10.0\nG0 X500 Y500 F1000\nZ500\nX0 Y0\nZ0 F500");
     let g1 = plan("G90 G21 G64 P10.0\nG1 Y500 Z500 F1000\nX500\nY0 Z0\nX0 F500");
+    // G64 P10 blends every corner of these three (G92 moves no axis, so it is no stop either).
+    for p in [&g92, &rapid, &g1] {
+        assert_eq!(interior_rests(&p.setpoints), 0);
+    }
     // G1 at F1000 = 16.7 mm/s; the last side at F500 = 8.3 mm/s.
     let top = interior(&g1).iter().filter(|s| s.line == 5).map(|s| norm(s.velocity)).fold(0.0, f64::max);
     assert!((top - 500.0 / 60.0).abs() < 1e-9, "{top}");
@@ -155,18 +162,20 @@ fn tool_snippets_switch_at_rest_at_their_programmed_points() {
         kinds,
         vec![
             (2, Event::ToolChange(1)),
-            (4, Event::Output(OutputCommand::Tool { tool: Some(1), state: ToolState::Clockwise })),
-            (6, Event::Output(OutputCommand::Tool { tool: Some(1), state: ToolState::Off })),
+            (4, Event::Output(OutputCommand::Tool { tool: Some(1), command: SpindleCommand::Clockwise })),
+            (6, Event::Output(OutputCommand::Tool { tool: Some(1), command: SpindleCommand::Stop })),
         ]
     );
     let m3 = implicit.events[1];
     let at = implicit.setpoints.iter().find(|s| s.time == m3.time).unwrap();
     assert_eq!(at.position, [100.0, 100.0, 0.0]);
     let explicit = plan("G90 G21\nG0 X100 Y100\nM3 A1 P0\nG1 X200 Y200\nM5 A1 P0");
-    assert_eq!(explicit.events[0].event, Event::Output(OutputCommand::Port { device: 1, port: 0, on: true }));
-    assert_eq!(explicit.events[1].event, Event::Output(OutputCommand::Port { device: 1, port: 0, on: false }));
+    let port = |port, command| Event::Output(OutputCommand::Port { device: 1, port, command });
+    assert_eq!(explicit.events[0].event, port(0, SpindleCommand::Clockwise));
+    assert_eq!(explicit.events[1].event, port(0, SpindleCommand::Stop));
     let m4 = plan("G90 G21\nG0 X100 Y100\nM4 A1 P1\nG1 X200 Y200\nM5 A1 P1");
-    assert_eq!(m4.events.len(), 2);
+    let events: Vec<_> = m4.events.iter().map(|e| e.event).collect();
+    assert_eq!(events, vec![port(1, SpindleCommand::CounterClockwise), port(1, SpindleCommand::Stop)]);
 }
 
 /// The Python example's program (`GCODE_STRING`), two header comment lines first.
@@ -204,6 +213,10 @@ fn the_python_example_stays_within_half_a_millimetre_and_dwells_a_second() {
     let dwell = p.setpoints.iter().filter(|s| s.line == 17).count();
     assert_eq!(dwell, 1000);
     assert_eq!(p.events.len(), 2);
+    // It comes to rest twice on the way: for M3 (line 12) and for G4 + M5 (lines 17–18). The
+    // cut's corners are blended, so the cut itself never stops.
+    assert_eq!(interior_rests(&p.setpoints), 2);
+    assert!(cut[1..cut.len() - 1].iter().all(|s| s.velocity != [0.0; 3]), "the cut stops at a corner");
 }
 
 #[derive(Clone, Default)]
@@ -222,8 +235,7 @@ impl MotionSink for Writes {
 fn seed_follower() -> PathFollower {
     let axes = AxisMap::new(&[(Axis::X, 1), (Axis::Y, 3)]).unwrap();
     let mut tools = ToolTable::new();
-    let out = |port| DigitalOutput { device: 1, port, value: true };
-    tools.insert(1, Tool { clockwise: out(0), counter_clockwise: out(1) }).unwrap();
+    tools.insert(1, seed_tool()).unwrap();
     let limits = [AxisLimits { max_speed: 500.0, max_accel: 1000.0 }; 3];
     PathFollower::new(FollowerConfig::new(axes, tools, limits)).unwrap()
 }
@@ -237,17 +249,18 @@ fn start_gcode_follows_the_python_example_like_start_path() {
     assert_eq!(status.state, RunState::Completed, "{:?}", status.error);
     assert_eq!(status.position, [1.0, 1.0, 0.0]);
     assert_eq!(status.line, 19, "the last line of the text");
-    let w = |port, level| OutputWrite { device: 1, port, level };
+    let w = |port, high| OutputWrite { device: 1, port, high };
     assert_eq!(*writes.0.lock().unwrap(), vec![w(1, false), w(0, true), w(0, false), w(1, false)]);
 }
 
 #[test]
 fn start_gcode_checks_the_whole_program_before_anything_moves() {
     let mut follower = seed_follower();
-    // Z has no drive on the seed's machine.
-    let err =
-        follower.start_gcode(&machine_motion(), "G21 G90\nG0 X10\nG0 Z5", 1000.0, Writes::default(), Pace::Unpaced);
+    // Z has no drive on the seed's machine. The tool is not switched on either.
+    let writes = Writes::default();
+    let err = follower.start_gcode(&machine_motion(), "G21 G90\nM3 $1\nG0 Z5", 1000.0, writes.clone(), Pace::Unpaced);
     assert_eq!(err, Err(PathError::UnmappedAxis { line: 3, axis: 'Z' }));
+    assert!(writes.0.lock().unwrap().is_empty());
     let err =
         follower.start_gcode(&machine_motion(), "G21 G90\nG0 X10\nG1 X20 Q3", 1000.0, Writes::default(), Pace::Unpaced);
     match err {
@@ -261,4 +274,34 @@ fn start_gcode_checks_the_whole_program_before_anything_moves() {
     assert_eq!(err, Err(PathError::UnknownTool { line: 3, tool: 2 }));
     assert_eq!(follower.status().state, RunState::Idle);
     assert_eq!(follower.status().position, [0.0; 3]);
+}
+
+#[test]
+fn a_gcode_path_that_fails_mid_program_halts_at_rest_and_switches_its_tool_off() {
+    // `start` (not `start_gcode`) reads the program as it runs: the bad line 4 is met after
+    // the tool went on and the machine moved.
+    let mut follower = seed_follower();
+    let writes = Writes::default();
+    let items =
+        GcodeItems::new(Interpreter::new(machine_motion()), "G21 G90\nM3 $1\nG1 X10 F600\nG1 X20 Q3".to_string());
+    follower.start(items, 1000.0, writes.clone(), Pace::Unpaced).unwrap();
+    let status = follower.wait();
+    assert_eq!(status.state, RunState::Failed);
+    assert!(matches!(status.error, Some(PathError::Program { line: 4, .. })), "{:?}", status.error);
+    assert_eq!(status.position, [10.0, 0.0, 0.0]);
+    let w = |port, high| OutputWrite { device: 1, port, high };
+    assert_eq!(*writes.0.lock().unwrap(), vec![w(1, false), w(0, true), w(0, false)]);
+}
+
+#[test]
+fn start_gcode_refuses_at_once_while_a_path_runs() {
+    let mut follower = seed_follower();
+    // A 20 m move in real time: still running when start_gcode is called.
+    follower
+        .start_gcode(&machine_motion(), "G21 G90\nG1 X20000 F24000", 1000.0, Writes::default(), Pace::RealTime)
+        .unwrap();
+    // Refused before the program is even read: its bad word would otherwise be the error.
+    let err = follower.start_gcode(&machine_motion(), "G21\nG1 X1 Q3", 1000.0, Writes::default(), Pace::Unpaced);
+    assert_eq!(err, Err(PathError::AlreadyRunning));
+    assert_eq!(follower.stop().state, RunState::Stopped);
 }

@@ -4,8 +4,8 @@ mod common;
 
 use common::{norm, sub, Program};
 use vision_path::{
-    Event, Item, Limits, OutputCommand, PathError, PathMode, PlanConfig, Segment, Setpoint, Setpoints, Shape, Speed,
-    Step, ToolState,
+    Event, Item, Limits, OutputCommand, PathError, PathMode, PlanConfig, Rate, Segment, Setpoint, Setpoints, Shape,
+    SpindleCommand, Step,
 };
 
 fn config() -> PlanConfig {
@@ -19,10 +19,10 @@ fn moves_of(run: &common::Run) -> Vec<Setpoint> {
 /// The seed's square, `G91 G21 G61 / G0 X500 / Y500 / X-500 / Y-500`, as segments.
 fn seed_square(mode: PathMode) -> Vec<Item> {
     let mut p = Program::new([0.0; 3], mode);
-    p.line_to([500.0, 0.0, 0.0], Speed::Rapid)
-        .line_to([500.0, 500.0, 0.0], Speed::Rapid)
-        .line_to([0.0, 500.0, 0.0], Speed::Rapid)
-        .line_to([0.0, 0.0, 0.0], Speed::Rapid);
+    p.line_to([500.0, 0.0, 0.0], Rate::Rapid)
+        .line_to([500.0, 500.0, 0.0], Rate::Rapid)
+        .line_to([0.0, 500.0, 0.0], Rate::Rapid)
+        .line_to([0.0, 0.0, 0.0], Rate::Rapid);
     p.item(|line| Item::End { line });
     p.items
 }
@@ -58,7 +58,7 @@ fn the_seed_square_under_g61_stops_at_each_corner_and_under_g64_keeps_moving() {
 fn collinear_moves_do_not_stop_even_under_g61() {
     let mut p = Program::new([0.0; 3], PathMode::ExactStop);
     for k in 1..=10 {
-        p.line_to([10.0 * f64::from(k), 5.0 * f64::from(k), 0.0], Speed::Feed(3000.0));
+        p.line_to([10.0 * f64::from(k), 5.0 * f64::from(k), 0.0], Rate::Feed(3000.0));
     }
     let run = common::run(&config(), &p.items);
     let moving = &run.setpoints[1..run.setpoints.len() - 1];
@@ -69,7 +69,7 @@ fn collinear_moves_do_not_stop_even_under_g61() {
 fn an_arc_keeps_its_centripetal_acceleration_within_the_path_limit() {
     // A full circle of radius 5 at a feed far above what the curvature allows.
     let mut p = Program::new([5.0, 0.0, 0.0], PathMode::ExactStop);
-    p.arc(0, [0.0; 3], std::f64::consts::TAU - 1e-9, 0.0, Speed::Feed(60000.0));
+    p.arc(0, [0.0; 3], std::f64::consts::TAU - 1e-9, 0.0, Rate::Feed(60000.0));
     let cfg = PlanConfig::new(Limits::uniform(1000.0, 500.0, 10000.0), 0.001, [5.0, 0.0, 0.0]);
     let run = common::run(&cfg, &p.items);
     let top = moves_of(&run).iter().map(|s| norm(s.velocity)).fold(0.0, f64::max);
@@ -85,20 +85,51 @@ fn an_arc_keeps_its_centripetal_acceleration_within_the_path_limit() {
 }
 
 #[test]
+fn a_spiral_joined_tangentially_or_blended_keeps_the_acceleration_bound() {
+    // A line into a spiral whose radius grows from 1 to 1.5 over half a turn, and a line out.
+    // Joined exactly tangentially (no stop even under G61) and at a blended corner (G64): the
+    // spiral's parameter runs at the real speed at its ends, so the speed never jumps there.
+    let bound = 1000.0 * 1e-6 * (1.0 + 1e-6) + 1e-9;
+    let feed = Rate::Feed(30000.0);
+    for mode in [PathMode::ExactStop, PathMode::Blend { tolerance: None }, PathMode::Blend { tolerance: Some(0.05) }] {
+        let mut p = Program::new([0.0; 3], mode);
+        p.line_to([10.0, 0.0, 0.0], feed).tangent_spiral([1.0, 0.0, 0.0], 1.0, 1.5, std::f64::consts::PI, feed);
+        let out = common::tangent(common::segments(&p.items)[1], true);
+        p.line_to(common::add(p.pos, common::scale(out, 10.0)), feed);
+        let run = common::run(&config(), &p.items);
+        let (worst, _) = common::worst_second_difference(&run.setpoints);
+        assert!(worst <= bound, "{mode:?}: |Δ²p| = {} a·T²", worst / 1e-3);
+        let interior = &run.setpoints[1..run.setpoints.len() - 1];
+        assert!(interior.iter().all(|s| norm(s.velocity) > 0.0), "{mode:?}: tangent joins do not stop");
+    }
+    // The same spiral entered at a corner (the line runs along +X, the spiral starts along
+    // +Y): G64 blends it, cutting into the spiral where its radius is about 1.
+    for tolerance in [None, Some(0.2)] {
+        let mut p = Program::new([0.0; 3], PathMode::Blend { tolerance });
+        p.line_to([10.0, 0.0, 0.0], feed).spiral(0, [9.0, 0.0, 0.0], std::f64::consts::PI, 0.0, 1.5, feed);
+        p.line_to(common::add(p.pos, [0.0, -10.0, 0.0]), feed);
+        let run = common::run(&config(), &p.items);
+        let (worst, _) = common::worst_second_difference(&run.setpoints);
+        assert!(worst <= bound, "P {tolerance:?}: |Δ²p| = {} a·T²", worst / 1e-3);
+        assert_eq!(common::interior_rests(&run.setpoints), 0, "P {tolerance:?}: both corners are blended");
+    }
+}
+
+#[test]
 fn an_output_happens_at_rest_at_its_programmed_point_and_a_dwell_holds() {
     let mut p = Program::new([0.0; 3], PathMode::Blend { tolerance: None });
-    p.line_to([100.0, 100.0, 0.0], Speed::Rapid);
+    p.line_to([100.0, 100.0, 0.0], Rate::Rapid);
     p.item(|line| Item::Event {
         line,
-        event: Event::Output(OutputCommand::Tool { tool: Some(1), state: ToolState::Clockwise }),
+        event: Event::Output(OutputCommand::Tool { tool: Some(1), command: SpindleCommand::Clockwise }),
     });
-    p.line_to([200.0, 200.0, 0.0], Speed::Feed(6000.0));
+    p.line_to([200.0, 200.0, 0.0], Rate::Feed(6000.0));
     p.item(|line| Item::Dwell { line, seconds: 0.25 });
     p.item(|line| Item::Event {
         line,
-        event: Event::Output(OutputCommand::Tool { tool: Some(1), state: ToolState::Off }),
+        event: Event::Output(OutputCommand::Tool { tool: Some(1), command: SpindleCommand::Stop }),
     });
-    p.line_to([1.0, 1.0, 0.0], Speed::Rapid);
+    p.line_to([1.0, 1.0, 0.0], Rate::Rapid);
     let run = common::run(&config(), &p.items);
     assert_eq!(run.events.len(), 2);
     let on = run.events[0];
@@ -114,9 +145,12 @@ fn an_output_happens_at_rest_at_its_programmed_point_and_a_dwell_holds() {
 #[test]
 fn events_follow_the_setpoint_of_their_time_in_the_stream() {
     let mut p = Program::new([0.0; 3], PathMode::ExactStop);
-    p.line_to([1.0, 0.0, 0.0], Speed::Feed(600.0));
+    p.line_to([1.0, 0.0, 0.0], Rate::Feed(600.0));
     p.item(|line| Item::Event { line, event: Event::ToolChange(3) });
-    p.item(|line| Item::Event { line, event: Event::Output(OutputCommand::Port { device: 1, port: 2, on: true }) });
+    p.item(|line| Item::Event {
+        line,
+        event: Event::Output(OutputCommand::Port { device: 1, port: 2, command: SpindleCommand::Clockwise }),
+    });
     let steps: Vec<Step> = Setpoints::from_items(&config(), p.items).unwrap().map(Result::unwrap).collect();
     let mut last_time = 0.0;
     let mut seen = 0;
@@ -135,7 +169,7 @@ fn events_follow_the_setpoint_of_their_time_in_the_stream() {
 #[test]
 fn stop_brakes_along_the_path_within_the_limit_and_ends_at_rest() {
     let mut p = Program::new([0.0; 3], PathMode::Blend { tolerance: Some(1.0) });
-    p.line_to([300.0, 0.0, 0.0], Speed::Feed(24000.0)).line_to([300.0, 300.0, 0.0], Speed::Feed(24000.0));
+    p.line_to([300.0, 0.0, 0.0], Rate::Feed(24000.0)).line_to([300.0, 300.0, 0.0], Rate::Feed(24000.0));
     p.item(|line| Item::Event { line, event: Event::ToolChange(1) });
     let cfg = config();
     let mut stream = Setpoints::from_items(&cfg, p.items).unwrap();
@@ -171,7 +205,7 @@ fn stop_brakes_along_the_path_within_the_limit_and_ends_at_rest() {
 fn stop_before_the_first_setpoint_or_at_rest_ends_at_once() {
     let mut p = Program::new([0.0; 3], PathMode::ExactStop);
     p.item(|line| Item::Dwell { line, seconds: 10.0 });
-    p.line_to([5.0, 0.0, 0.0], Speed::Rapid);
+    p.line_to([5.0, 0.0, 0.0], Rate::Rapid);
     let mut s = Setpoints::from_items(&config(), p.items.clone()).unwrap();
     s.stop();
     let all: Vec<_> = s.collect();
@@ -189,7 +223,7 @@ fn an_error_arrives_at_its_place_after_the_motion_before_it_comes_to_rest() {
         start: [0.0; 3],
         end: [10.0, 0.0, 0.0],
         shape: Shape::Line,
-        speed: Speed::Feed(6000.0),
+        rate: Rate::Feed(6000.0),
         mode: PathMode::Blend { tolerance: None },
     };
     let failure = PathError::Program { line: 2, message: "unknown word Q".into() };
@@ -212,20 +246,20 @@ fn first_error(items: Vec<Item>) -> PathError {
 
 #[test]
 fn bad_items_are_refused_with_their_line_and_what_to_do() {
-    let line = |end: [f64; 3], speed| {
-        Item::Move(Segment { line: 7, start: [0.0; 3], end, shape: Shape::Line, speed, mode: PathMode::ExactStop })
+    let line = |end: [f64; 3], rate| {
+        Item::Move(Segment { line: 7, start: [0.0; 3], end, shape: Shape::Line, rate, mode: PathMode::ExactStop })
     };
-    let e = first_error(vec![line([1.0, 0.0, 0.0], Speed::Feed(0.0))]);
+    let e = first_error(vec![line([1.0, 0.0, 0.0], Rate::Feed(0.0))]);
     assert_eq!(e.line(), Some(7));
     assert!(e.to_string().contains("feed"), "{e}");
-    let e = first_error(vec![line([f64::NAN, 0.0, 0.0], Speed::Rapid)]);
+    let e = first_error(vec![line([f64::NAN, 0.0, 0.0], Rate::Rapid)]);
     assert!(e.to_string().contains("finite"), "{e}");
     let e = first_error(vec![Item::Move(Segment {
         line: 4,
         start: [1.0, 0.0, 0.0],
         end: [2.0, 0.0, 0.0],
         shape: Shape::Line,
-        speed: Speed::Rapid,
+        rate: Rate::Rapid,
         mode: PathMode::ExactStop,
     })]);
     assert!(e.to_string().contains("continuous"), "{e}");
@@ -236,13 +270,27 @@ fn bad_items_are_refused_with_their_line_and_what_to_do() {
         shape: Shape::Arc(vision_path::ArcShape {
             centre: [0.0; 3],
             normal: [0.0, 0.0, 1.0],
-            clockwise: false,
-            turns: 1,
+            sweep: std::f64::consts::TAU,
         }),
-        speed: Speed::Feed(100.0),
+        rate: Rate::Feed(100.0),
         mode: PathMode::ExactStop,
     })]);
     assert!(e.to_string().contains("zero radius"), "{e}");
+    // A quarter turn that is said to be a half turn does not reach its end.
+    let e = first_error(vec![Item::Move(Segment {
+        line: 6,
+        start: [0.0; 3],
+        end: [-1.0, 1.0, 0.0],
+        shape: Shape::Arc(vision_path::ArcShape {
+            centre: [-1.0, 0.0, 0.0],
+            normal: [0.0, 0.0, 1.0],
+            sweep: std::f64::consts::PI,
+        }),
+        rate: Rate::Feed(100.0),
+        mode: PathMode::ExactStop,
+    })]);
+    assert!(e.to_string().contains("sweep does not turn it"), "{e}");
+    assert!(e.to_string().contains("line 6: "), "{e}");
     let e = first_error(vec![Item::Dwell { line: 9, seconds: -1.0 }]);
     assert_eq!(e.line(), Some(9));
     let e = first_error(vec![Item::Move(Segment {
@@ -250,7 +298,7 @@ fn bad_items_are_refused_with_their_line_and_what_to_do() {
         start: [0.0; 3],
         end: [1.0, 0.0, 0.0],
         shape: Shape::Line,
-        speed: Speed::Rapid,
+        rate: Rate::Rapid,
         mode: PathMode::Blend { tolerance: Some(-1.0) },
     })]);
     assert!(e.to_string().contains("G64"), "{e}");

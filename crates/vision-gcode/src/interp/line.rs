@@ -298,11 +298,12 @@ impl LineRun<'_> {
     }
 
     fn spindle(&mut self, code: u32) -> Result<(), RunProblem> {
-        let (name, command) = match code {
-            3 => ("M3", SpindleCommand::Clockwise),
-            4 => ("M4", SpindleCommand::CounterClockwise),
-            _ => ("M5", SpindleCommand::Stop),
+        let command = match code {
+            3 => SpindleCommand::Clockwise,
+            4 => SpindleCommand::CounterClockwise,
+            _ => SpindleCommand::Stop,
         };
+        let name = command.gcode();
         let dollar = self.w.take(b'$', name)?;
         let change = if self.w.has(b'A') {
             let (Some(a), Some(p)) = (self.w.take(b'A', name)?, self.w.take(b'P', name)?) else {
@@ -311,7 +312,7 @@ impl LineRun<'_> {
             if dollar.is_some() {
                 return Err(RunProblem::OutputForm { code: name });
             }
-            let write = OutputWrite { device: whole(b'A', a)?, port: whole(b'P', p)?, high: code != 5 };
+            let write = OutputWrite { device: whole(b'A', a)?, port: whole(b'P', p)?, high: command.is_on() };
             OutputChange { line: self.line, command, tool: None, writes: vec![write] }
         } else {
             let tool = match dollar {
@@ -322,24 +323,7 @@ impl LineRun<'_> {
                 return Err(RunProblem::NoSpindleTool { code: name });
             }
             let entry = self.cfg.tools.get(tool).ok_or(RunProblem::UnknownTool { tool })?;
-            let writes = entry.outputs.map_or_else(Vec::new, |o| {
-                let on = |d: crate::tools::DigitalOutput| OutputWrite {
-                    device: d.device,
-                    port: d.port,
-                    high: d.active_high,
-                };
-                let off = |d: crate::tools::DigitalOutput| OutputWrite {
-                    device: d.device,
-                    port: d.port,
-                    high: !d.active_high,
-                };
-                // The opposite direction is released before the requested one is driven.
-                match command {
-                    SpindleCommand::Clockwise => vec![off(o.counter_clockwise), on(o.clockwise)],
-                    SpindleCommand::CounterClockwise => vec![off(o.clockwise), on(o.counter_clockwise)],
-                    SpindleCommand::Stop => vec![off(o.clockwise), off(o.counter_clockwise)],
-                }
-            });
+            let writes = entry.outputs.map_or_else(Vec::new, |o| o.writes(command).to_vec());
             OutputChange { line: self.line, command, tool: Some(tool), writes }
         };
         self.emit(Event::Output(change));
