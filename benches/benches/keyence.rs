@@ -17,7 +17,11 @@ fn round_trip(c: &mut Criterion) {
     let mut group = c.benchmark_group("keyence/trg_round_trip");
     let mut driver = KeyenceDriver::new(KeyenceConfig::new("127.0.0.1", em.addr().port())).expect("config");
     driver.measure().expect("warm-up");
-    group.bench_function("driver", |b| b.iter(|| black_box(driver.measure().expect("reading"))));
+    group.bench_function("driver", |b| {
+        b.iter(|| {
+            black_box(driver.measure().expect("reading"));
+        })
+    });
     driver.disconnect();
     std::thread::sleep(Duration::from_millis(50));
 
@@ -25,7 +29,11 @@ fn round_trip(c: &mut Criterion) {
     raw.set_nodelay(true).expect("nodelay");
     let mut buf = [0u8; 512];
     raw_trigger(&mut raw, &mut buf).expect("warm-up");
-    group.bench_function("raw_tcp", |b| b.iter(|| black_box(raw_trigger(&mut raw, &mut buf).expect("reply"))));
+    group.bench_function("raw_tcp", |b| {
+        b.iter(|| {
+            black_box(raw_trigger(&mut raw, &mut buf).expect("reply"));
+        })
+    });
     group.finish();
 }
 
@@ -33,9 +41,15 @@ fn protocol(c: &mut Criterion) {
     let mut group = c.benchmark_group("keyence/protocol");
     let mut session = Session::new(InMemoryCamera::default(), Limits::default(), Duration::from_secs(3));
     group.bench_function("session_trigger_in_memory", |b| {
-        b.iter(|| black_box(session.trigger().expect("reading")));
+        b.iter(|| {
+            black_box(session.trigger().expect("reading"));
+        });
     });
-    group.bench_function("parse_full_line", |b| b.iter(|| black_box(parse_data_line(black_box(FULL_LINE)))));
+    group.bench_function("parse_full_line", |b| {
+        b.iter(|| {
+            black_box(parse_data_line(black_box(FULL_LINE)).expect("the full line parses"));
+        })
+    });
     group.finish();
 }
 
