@@ -50,10 +50,8 @@ fn the_seed_example_writes_every_setpoint_and_its_tool_events_to_csv() {
     let mut lines = rows.lines();
     assert_eq!(lines.next(), Some("time_s,line,x,y,z,vx,vy,vz,event"));
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
-    let events: Vec<&Vec<&str>> = rows.iter().filter(|r| !r[8].is_empty()).collect();
-    assert_eq!(events.len(), 2);
-    assert_eq!((events[0][1], events[0][8]), ("12", "M3 $1"));
-    assert_eq!((events[1][1], events[1][8]), ("18", "M5 $1"));
+    let events = csv_events(&csv);
+    assert_eq!(events, [("12", "M3 $1"), ("18", "M5 $1")].map(|(l, e)| (l.to_string(), e.to_string())));
     assert_eq!(rows.len() - events.len(), setpoints);
     let last = rows.last().unwrap();
     assert_eq!(&last[2..5], &["1", "1", "0"]);

@@ -7,10 +7,10 @@
 use std::collections::VecDeque;
 use std::f64::consts::PI;
 
-use crate::blend::blend;
-use crate::curve::{ArcCurve, ArcProblem, Curve, LineCurve};
 use vision_gcode::{PathMode, Rate};
 
+use crate::blend::blend;
+use crate::curve::{ArcCurve, ArcProblem, Curve, LineCurve};
 use crate::input::{Event, Item, Segment, Shape};
 use crate::limits::{speed_and_accel, Limits, NORMAL_SHARE};
 use crate::vec3::Vec3;
@@ -66,15 +66,12 @@ pub(crate) enum Shaped {
 
 /// The segment whose end corner waits for the next one.
 struct Pending {
-    curve: Curve,
+    /// The segment as it will be emitted (its caps kept up to date when a blend trims it).
+    piece: Piece,
     /// Half the untrimmed length: the most either corner may trim.
     half: f64,
-    line: usize,
     requested: f64,
     mode: PathMode,
-    /// `speed_and_accel` of `curve` (kept up to date when a blend trims it).
-    v_cap: f64,
-    accel: f64,
 }
 
 pub(crate) struct Shaper<I> {
@@ -198,8 +195,8 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Shaper<I> {
             }
         };
         self.pos = end;
-        let (v_cap, accel) = speed_and_accel(&curve.factors(), requested, &self.limits);
-        let next = Pending { half: curve.len() / 2.0, curve, line, requested, mode: seg.mode, v_cap, accel };
+        let next =
+            Pending { half: curve.len() / 2.0, piece: self.piece(curve, line, requested), requested, mode: seg.mode };
         match self.pending.take() {
             None => self.pending = Some(next),
             Some(prev) => self.corner(prev, next),
@@ -209,9 +206,9 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Shaper<I> {
 
     /// Decide the corner between `prev` (ending) and `next` (starting), emit `prev`.
     fn corner(&mut self, mut prev: Pending, mut next: Pending) {
-        let theta = prev.curve.end_tangent().angle_to(next.curve.start_tangent());
+        let theta = prev.piece.curve.end_tangent().angle_to(next.piece.curve.start_tangent());
         if theta <= TANGENT_TOLERANCE {
-            self.emit(prev);
+            self.push(prev.piece);
             self.pending = Some(next);
             return;
         }
@@ -221,25 +218,26 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Shaper<I> {
         };
         // The blend radius at which the centripetal limit allows the neighbours' own speed: a
         // larger blend would deviate more without being faster.
-        let target = prev.v_cap.min(next.v_cap);
+        let target = prev.piece.v_cap.min(next.piece.v_cap);
         let weakest = self.limits.axes.iter().map(|a| a.max_accel).fold(self.limits.max_path_accel, f64::min);
         let wanted = target * target / (NORMAL_SHARE * weakest);
-        let blended = tolerance.and_then(|tol| blend(&prev.curve, prev.half, &next.curve, next.half, tol, wanted));
+        let blended =
+            tolerance.and_then(|tol| blend(&prev.piece.curve, prev.half, &next.piece.curve, next.half, tol, wanted));
         match blended {
             Some(b) => {
-                let (line, requested) = (prev.line, prev.requested.min(next.requested));
-                let kept = prev.curve.len() - b.s1;
+                let (line, requested) = (prev.piece.line, prev.requested.min(next.requested));
+                let kept = prev.piece.curve.len() - b.s1;
                 self.trim(&mut prev, 0.0, kept);
-                self.emit(prev);
+                self.push(prev.piece);
                 for curve in b.pieces {
-                    let (v_cap, accel) = speed_and_accel(&curve.factors(), requested, &self.limits);
-                    self.push(Piece { curve, line, v_cap, accel });
+                    let piece = self.piece(curve, line, requested);
+                    self.push(piece);
                 }
-                let len = next.curve.len();
+                let len = next.piece.curve.len();
                 self.trim(&mut next, b.s2, len);
             }
             None => {
-                self.emit(prev);
+                self.push(prev.piece);
                 self.out.push_back(Shaped::Stop(Marker::Corner));
             }
         }
@@ -248,23 +246,21 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Shaper<I> {
 
     fn flush(&mut self) {
         if let Some(p) = self.pending.take() {
-            self.emit(p);
+            self.push(p.piece);
         }
     }
 
-    /// Cut `p` down to its parameters `a..b`; its limits change only if its shape factors do
-    /// (on spirals, whose parts are bounded more tightly; lines and circles keep them).
+    /// The piece `curve` of `line`, asked to run at `requested` (units/s), with the speed cap
+    /// and tangential acceleration its shape allows under the limits.
+    fn piece(&self, curve: Curve, line: usize, requested: f64) -> Piece {
+        let (v_cap, accel) = speed_and_accel(&curve.factors(), requested, &self.limits);
+        Piece { curve, line, v_cap, accel }
+    }
+
+    /// Cut `p` down to its parameters `a..b`, with the caps of the part (a part of a spiral is
+    /// bounded more tightly than the whole).
     fn trim(&self, p: &mut Pending, a: f64, b: f64) {
-        let part = p.curve.sub(a, b);
-        let factors = part.factors();
-        if factors != p.curve.factors() {
-            (p.v_cap, p.accel) = speed_and_accel(&factors, p.requested, &self.limits);
-        }
-        p.curve = part;
-    }
-
-    fn emit(&mut self, p: Pending) {
-        self.push(Piece { curve: p.curve, line: p.line, v_cap: p.v_cap, accel: p.accel });
+        p.piece = self.piece(p.piece.curve.sub(a, b), p.piece.line, p.requested);
     }
 
     fn push(&mut self, piece: Piece) {

@@ -3,34 +3,22 @@
 
 mod common;
 
-use common::worst_second_difference;
+use common::{worst_second_difference, Run};
 use vision_gcode::{Interpreter, InterpreterConfig};
 use vision_math::LengthUnit;
-use vision_path::{GcodeItems, Limits, PlanConfig, Setpoint, Setpoints, Step, TimedEvent};
+use vision_path::{GcodeItems, Limits, PlanConfig, Setpoints};
 
 const A: f64 = 1000.0;
 const T: f64 = 0.001;
 
-struct Planned {
-    setpoints: Vec<Setpoint>,
-    events: Vec<TimedEvent>,
-}
-
 /// `program` (millimetres) on a machine with `A` path acceleration, axes at 500 mm/s and
 /// `A`, 1 ms setpoints.
-fn plan(program: &str) -> Planned {
+fn plan(program: &str) -> Run {
     let mut config = InterpreterConfig::new(LengthUnit::Millimetre);
     config.default_feed = Some(1000.0);
     let items = GcodeItems::new(Interpreter::new(config), program);
     let plan = PlanConfig::new(Limits::uniform(A, 500.0, A), T, items.start_position());
-    let mut planned = Planned { setpoints: Vec::new(), events: Vec::new() };
-    for step in Setpoints::new(&plan, items).unwrap() {
-        match step.unwrap_or_else(|e| panic!("{e}\n{program}")) {
-            Step::Setpoint(s) => planned.setpoints.push(s),
-            Step::Event(e) => planned.events.push(e),
-        }
-    }
-    planned
+    common::collect(Setpoints::new(&plan, items).unwrap(), program)
 }
 
 #[test]

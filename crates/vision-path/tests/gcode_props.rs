@@ -160,7 +160,7 @@ proptest! {
         let mut interp = Interpreter::new(config);
         let outcome = interp.run(&text, None, &mut |_: &vision_gcode::Event| {});
         let m = interp.machine_position();
-        prop_assert_eq!(last.position, [m.x, m.y, m.z], "\n{}", text);
+        prop_assert_eq!(last.position, m.to_array(), "\n{}", text);
         match (outcome, failure) {
             (Ok(_), None) => {}
             (Err(e), Some(PathError::Program { line, message })) => {

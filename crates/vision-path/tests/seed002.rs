@@ -5,13 +5,13 @@
 
 mod common;
 
-use common::{interior_rests, norm, sub};
+use common::{interior_rests, norm, sub, Run};
 use vision_gcode::{Interpreter, InterpreterConfig, Tool as GTool, ToolTable as GTools, Xyz};
 use vision_math::LengthUnit;
 use vision_path::{
     Axis, AxisLimits, AxisMap, DigitalOutput, Event, FollowerConfig, GcodeItems, Limits, MotionSink, OutputCommand,
-    OutputWrite, Pace, PathError, PathFollower, PlanConfig, RunState, Setpoint, Setpoints, SpindleCommand, Step,
-    TimedEvent, ToolOutputs, ToolTable,
+    OutputWrite, Pace, PathError, PathFollower, PlanConfig, RunState, Setpoint, Setpoints, SpindleCommand, ToolOutputs,
+    ToolTable,
 };
 
 const A: f64 = 1000.0;
@@ -30,23 +30,12 @@ fn machine_motion() -> InterpreterConfig {
     config
 }
 
-struct Planned {
-    setpoints: Vec<Setpoint>,
-    events: Vec<TimedEvent>,
-}
-
 /// Interpreter + planner on `program`; checks the sampled bounds and that the path ends exactly
 /// where the interpreter leaves the machine.
-fn plan(program: &str) -> Planned {
+fn plan(program: &str) -> Run {
     let items = GcodeItems::new(Interpreter::new(machine_motion()), program);
     let config = PlanConfig::new(Limits::uniform(A, 500.0, 1000.0), T, items.start_position());
-    let mut planned = Planned { setpoints: Vec::new(), events: Vec::new() };
-    for step in Setpoints::new(&config, items).unwrap() {
-        match step.unwrap_or_else(|e| panic!("{e}\n{program}")) {
-            Step::Setpoint(s) => planned.setpoints.push(s),
-            Step::Event(e) => planned.events.push(e),
-        }
-    }
+    let planned = common::collect(Setpoints::new(&config, items).unwrap(), program);
     let sp = &planned.setpoints;
     for w in sp.windows(2) {
         let d = sub(w[1].position, w[0].position);
@@ -59,17 +48,17 @@ fn plan(program: &str) -> Planned {
     let mut interp = Interpreter::new(machine_motion());
     interp.run(program, None, &mut |_: &vision_gcode::Event| {}).unwrap();
     let m = interp.machine_position();
-    assert_eq!(sp.last().unwrap().position, [m.x, m.y, m.z], "ends exactly where the interpreter does");
+    assert_eq!(sp.last().unwrap().position, m.to_array(), "ends exactly where the interpreter does");
     assert_eq!(sp.last().unwrap().velocity, [0.0; 3]);
     planned
 }
 
-fn rests_at(p: &Planned, at: [f64; 3]) -> bool {
+fn rests_at(p: &Run, at: [f64; 3]) -> bool {
     p.setpoints.iter().any(|s| s.position == at && s.velocity == [0.0; 3])
 }
 
 /// Setpoints strictly between the first and the last (the path's interior).
-fn interior(p: &Planned) -> &[Setpoint] {
+fn interior(p: &Run) -> &[Setpoint] {
     &p.setpoints[1..p.setpoints.len() - 1]
 }
 
@@ -106,7 +95,7 @@ fn g90_and_g91_squares_with_a_z_lift() {
 
 /// Every setpoint of `line` lies on the circle about `centre` of `radius` in the plane whose
 /// normal axis is `normal`.
-fn on_circle(p: &Planned, line: usize, centre: [f64; 3], normal: usize, radius: f64) {
+fn on_circle(p: &Run, line: usize, centre: [f64; 3], normal: usize, radius: f64) {
     let mut n = 0;
     for s in p.setpoints.iter().filter(|s| s.line == line) {
         let mut d = sub(s.position, centre);

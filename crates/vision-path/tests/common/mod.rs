@@ -3,7 +3,7 @@
 
 use std::f64::consts::{PI, TAU};
 
-use vision_path::{ArcShape, Item, PathMode, PlanConfig, Rate, Segment, Setpoint, Setpoints, Shape, Step};
+use vision_path::{ArcShape, Item, PathError, PathMode, PlanConfig, Rate, Segment, Setpoint, Setpoints, Shape, Step};
 
 /// `PROPTEST_CASES` overrides a property's default case count (for deeper local runs).
 pub fn cases(default: u32) -> u32 {
@@ -118,21 +118,27 @@ impl Program {
     }
 }
 
+/// A planned program: its setpoints and its events.
 pub struct Run {
     pub setpoints: Vec<Setpoint>,
     pub events: Vec<vision_path::TimedEvent>,
 }
 
 pub fn run(config: &PlanConfig, items: &[Item]) -> Run {
-    let mut setpoints = Vec::new();
-    let mut events = Vec::new();
-    for step in Setpoints::from_items(config, items.to_vec()).expect("valid config") {
-        match step.expect("the program is valid") {
-            Step::Setpoint(s) => setpoints.push(s),
-            Step::Event(e) => events.push(e),
+    collect(Setpoints::from_items(config, items.to_vec()).expect("valid config"), "the program is valid")
+}
+
+/// Every step of `steps`, setpoints and events apart; an error panics with `context` (the
+/// program's text, say).
+pub fn collect(steps: impl Iterator<Item = Result<Step, PathError>>, context: &str) -> Run {
+    let mut run = Run { setpoints: Vec::new(), events: Vec::new() };
+    for step in steps {
+        match step.unwrap_or_else(|e| panic!("{e}\n{context}")) {
+            Step::Setpoint(s) => run.setpoints.push(s),
+            Step::Event(e) => run.events.push(e),
         }
     }
-    Run { setpoints, events }
+    run
 }
 
 pub fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
