@@ -114,6 +114,29 @@ fn a_tool_left_on_is_switched_off_at_the_end_and_the_next_path_starts_where_this
 }
 
 #[test]
+fn an_active_low_tool_is_driven_low_to_switch_on_and_high_when_the_path_leaves_it_on() {
+    let axes = AxisMap::new(&[(Axis::X, 1), (Axis::Y, 3)]).unwrap();
+    let mut tools = ToolTable::new();
+    let out = |port| DigitalOutput { device: 3, port, active_high: false };
+    tools.insert(2, ToolOutputs { clockwise: out(0), counter_clockwise: out(1) }).unwrap();
+    let limits = [AxisLimits { max_speed: 500.0, max_accel: 1000.0 }; 3];
+    let mut follower = PathFollower::new(FollowerConfig::new(axes, tools, limits)).unwrap();
+    let mut p = Program::new([0.0; 3], PathMode::ExactStop);
+    p.item(|line| Item::Event {
+        line,
+        event: Event::Output(OutputCommand::Tool { tool: Some(2), command: SpindleCommand::Clockwise }),
+    });
+    p.line_to([10.0, 0.0, 0.0], Rate::Feed(3000.0));
+    let rec = Recorder::default();
+    follower.start(p.items.into_iter().map(Ok), 1000.0, rec.clone(), Pace::Unpaced).unwrap();
+    assert_eq!(follower.wait().state, RunState::Completed);
+    // M3: counter-clockwise released (high), clockwise driven active (low); at the end the
+    // tool still on is switched off by driving its port to the inactive level (high).
+    let w = |port, high| OutputWrite { device: 3, port, high };
+    assert_eq!(rec.0.lock().unwrap().writes, vec![w(1, true), w(0, false), w(0, true)]);
+}
+
+#[test]
 fn stop_brakes_to_rest_on_the_path_and_switches_the_tool_off() {
     let mut follower = seed_follower();
     let mut p = Program::new([0.0; 3], PathMode::ExactStop);
