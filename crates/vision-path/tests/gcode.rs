@@ -39,7 +39,6 @@ fn an_arc_of_a_nanoradian_is_not_driven_as_a_full_circle() {
     let p = plan("G21 G90 G17\nG0 X10 Y0\nG3 X10 Y0.00000001 I-10 J0 P2 F600");
     assert!(p.setpoints.iter().any(|s| s.position[0] < -9.99), "the P2 arc goes round");
     assert!(worst_second_difference(&p.setpoints).0 <= A * T * T * (1.0 + 1e-6) + 1e-9);
-    assert!(p.events.is_empty());
 }
 
 #[test]
