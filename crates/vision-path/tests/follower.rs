@@ -35,7 +35,6 @@ impl MotionSink for Recorder {
 /// The seed's Python example: X on drive 1, Y on drive 3, tool 1 on device 1 ports 0/1,
 /// drives at 500 mm/s and 1000 mm/s².
 fn seed_follower() -> PathFollower {
-    let axes = AxisMap::new(&[(Axis::X, 1), (Axis::Y, 3)]).unwrap();
     let mut tools = ToolTable::new();
     tools
         .insert(
@@ -46,6 +45,12 @@ fn seed_follower() -> PathFollower {
             },
         )
         .unwrap();
+    follower(tools)
+}
+
+/// The seed's drives (X on 1, Y on 3, 500 mm/s, 1000 mm/s²) with `tools`.
+fn follower(tools: ToolTable) -> PathFollower {
+    let axes = AxisMap::new(&[(Axis::X, 1), (Axis::Y, 3)]).unwrap();
     let limits = [AxisLimits { max_speed: 500.0, max_accel: 1000.0 }; 3];
     PathFollower::new(FollowerConfig::new(axes, tools, limits)).unwrap()
 }
@@ -115,12 +120,10 @@ fn a_tool_left_on_is_switched_off_at_the_end_and_the_next_path_starts_where_this
 
 #[test]
 fn an_active_low_tool_is_driven_low_to_switch_on_and_high_when_the_path_leaves_it_on() {
-    let axes = AxisMap::new(&[(Axis::X, 1), (Axis::Y, 3)]).unwrap();
     let mut tools = ToolTable::new();
     let out = |port| DigitalOutput { device: 3, port, active_high: false };
     tools.insert(2, ToolOutputs { clockwise: out(0), counter_clockwise: out(1) }).unwrap();
-    let limits = [AxisLimits { max_speed: 500.0, max_accel: 1000.0 }; 3];
-    let mut follower = PathFollower::new(FollowerConfig::new(axes, tools, limits)).unwrap();
+    let mut follower = follower(tools);
     let mut p = Program::new([0.0; 3], PathMode::ExactStop);
     p.item(|line| Item::Event {
         line,
