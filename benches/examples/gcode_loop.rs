@@ -1,7 +1,7 @@
 //! Parses (`parse`), interprets (`run`) or parses with the `gcode` crate (`gcode-crate`) a
 //! generated program once, or only generates it (`generate`, the baseline to subtract from
 //! instruction counts), for callgrind and quick timings:
-//! `cargo run --release -p vision-benches --example gcode_loop -- run 1000000`.
+//! `cargo run --release -p vision-benches --features bench --example gcode_loop -- run 1000000`.
 use std::hint::black_box;
 use std::time::Instant;
 

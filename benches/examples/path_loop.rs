@@ -1,6 +1,6 @@
 //! Plans a program once and prints its cycle time, setpoint count, wall time and real-time
 //! factor — for callgrind (instructions per setpoint) and `/usr/bin/time -v` (peak memory):
-//! `cargo run --release -p vision-benches --example path_loop -- spiral-g64 1000000`
+//! `cargo run --release -p vision-benches --features bench --example path_loop -- spiral-g64 1000000`
 //! (`spiral-g64`, `spiral-g61`: the dense polyline with that many segments; `gcode`: the
 //! G-code benchmark's program with that many lines).
 use std::time::Instant;

@@ -169,7 +169,7 @@ fn tool_snippets_switch_at_rest_at_their_programmed_points() {
 
 /// The Python example's program (`GCODE_STRING`), two header comment lines first.
 fn seed_example() -> String {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/path/seed002-example.nc");
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/path/seed002-example.nc");
     std::fs::read_to_string(path).expect("examples/path/seed002-example.nc")
 }
 

@@ -11,7 +11,7 @@ fn bin() -> Command {
 }
 
 fn example(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/programs").join(name)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../examples/programs").join(name)
 }
 
 /// A scratch directory for this test process.

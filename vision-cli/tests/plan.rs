@@ -39,7 +39,7 @@ fn the_g61_square_takes_four_trapezoids() {
 
 #[test]
 fn the_seed_example_writes_every_setpoint_and_its_tool_events_to_csv() {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/path/seed002-example.nc");
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../examples/path/seed002-example.nc");
     let csv = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("seed.csv");
     let csv_arg = csv.to_str().unwrap();
     let out = plan(&["--accel", "1000", "--machine-units", "mm", "--period", "2", "--csv", csv_arg], &path);

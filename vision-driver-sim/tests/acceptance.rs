@@ -9,13 +9,13 @@ use vision_gcode::Event;
 use vision_math::{LengthUnit, Point2, Vector2};
 use vision_mcode::{fixed_clock, Outcome, Record, VisionHandler};
 
-const EX1: &str = include_str!("../../../examples/programs/01-calibrate-sheet.nc");
-const EX2: &str = include_str!("../../../examples/programs/02-verify-calibration.nc");
-const EX3: &str = include_str!("../../../examples/programs/03-quick-diameter-cal.nc");
-const EX4: &str = include_str!("../../../examples/programs/04-rectangle-fit.nc");
-const EX5: &str = include_str!("../../../examples/programs/05-similarity-fit.nc");
-const EX6: &str = include_str!("../../../examples/programs/06-pound-variables.nc");
-const EX7: &str = include_str!("../../../examples/programs/07-switch-jobs.nc");
+const EX1: &str = include_str!("../../examples/programs/01-calibrate-sheet.nc");
+const EX2: &str = include_str!("../../examples/programs/02-verify-calibration.nc");
+const EX3: &str = include_str!("../../examples/programs/03-quick-diameter-cal.nc");
+const EX4: &str = include_str!("../../examples/programs/04-rectangle-fit.nc");
+const EX5: &str = include_str!("../../examples/programs/05-similarity-fit.nc");
+const EX6: &str = include_str!("../../examples/programs/06-pound-variables.nc");
+const EX7: &str = include_str!("../../examples/programs/07-switch-jobs.nc");
 
 /// A world, its machine, and the Vision module as the M-code handler.
 struct Rig {

@@ -9,7 +9,7 @@ fn bin() -> Command {
 }
 
 fn example4() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/fit/example4.json")
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../examples/fit/example4.json")
 }
 
 fn with_stdin(args: &[&str], input: &str) -> Output {
