@@ -24,10 +24,10 @@ use super::reply::{parse_data_line, parse_error_reply, parse_program, parse_vers
 use crate::error::KeyenceError;
 
 /// Longest command the camera accepts, bytes, delimiter included (SPEC §7).
-pub const MAX_COMMAND_LEN: usize = 500;
+pub(crate) const MAX_COMMAND_LEN: usize = 500;
 
 /// Highest camera job number.
-pub const MAX_JOB: u32 = 999;
+pub(crate) const MAX_JOB: u32 = 999;
 
 /// The command that switches jobs: `PL` on the VS series, `PW` on CV-X and IV.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -73,7 +73,7 @@ enum Want {
 /// ```
 /// use std::io::{self, Read, Write};
 /// use std::time::Duration;
-/// use vision_driver_keyence::protocol::{Limits, Session};
+/// use vision_driver_keyence::{Limits, Session};
 ///
 /// /// A camera that answers every command with the echo and one data line.
 /// struct Canned(io::Cursor<&'static [u8]>);
