@@ -58,9 +58,9 @@ pub(crate) fn parse_error_reply(line: &str) -> Option<Result<ErrorReply<'_>, Str
 /// or `0`/`NG` (any case, or a number equal to 1 or 0). The count is a whole number ≥ 0.
 ///
 /// A reading that claims a mark (not NG, count not 0) must have coordinates, width and height
-/// within [`MAX_ABS_PIXELS`] (width and height ≥ 0), angle within [`MAX_ABS_ANGLE_DEG`] and score
-/// within [`MAX_ABS_SCORE`]. NG and count-0 readings keep whatever finite numbers the camera
-/// sent: a camera that found nothing may report sentinels, and the core ignores them.
+/// within ±10⁶ px (width and height ≥ 0), angle within ±360° and score within ±10⁶; the count
+/// is at most 10⁶. NG and count-0 readings keep whatever finite numbers the camera sent: a
+/// camera that found nothing may report sentinels, and the core ignores them.
 ///
 /// # Errors
 /// The reason, as text.

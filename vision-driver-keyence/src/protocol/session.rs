@@ -562,6 +562,21 @@ mod tests {
     }
 
     #[test]
+    fn an_unreadable_job_reply_speaks_of_job_switching() {
+        let mut s = session(vec![Step::write(b"PR\r"), Step::read(b"PR,9\r")]);
+        let e = s.program().expect_err("not PR,<device>,<job>");
+        assert!(matches!(e, KeyenceError::Malformed { .. }), "{e:?}");
+        let text = e.to_string();
+        assert!(text.contains("job switching (M284)") && !text.contains("Data Output"), "{text}");
+        let mut s = session(vec![Step::write(b"PL,1,005\r"), Step::read(b"PL,1\r")]);
+        let text = s.load_program(JobCommand::Pl, 1, 5).expect_err("not a bare PL").to_string();
+        assert!(text.contains("job switching (M284)") && !text.contains("Data Output"), "{text}");
+        // A bare NG after the echo is a reading, not a broken reply.
+        let mut s = session(trg(b"TRG\r0\r"));
+        assert_eq!(s.trigger().expect("NG").judgment, Judgment::Ng);
+    }
+
+    #[test]
     fn job_switch_falls_back_from_pl_to_pw() {
         let mut s = session(vec![Step::write(b"PL,1,005\r"), Step::read(b"PL\r")]);
         assert_eq!(s.select_job(None, 1, 5), Ok(JobCommand::Pl));
