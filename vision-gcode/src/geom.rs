@@ -1,6 +1,6 @@
 //! Small geometric types: a 3-axis triple, the arc planes and directions.
 
-use std::ops::{Add, Sub};
+use std::ops::{Add, Mul, Neg, Sub};
 
 use vision_math::{LengthUnit, Point2};
 
@@ -25,10 +25,10 @@ impl Xyz {
         Xyz { x, y, z }
     }
 
-    /// Every component multiplied by `k` (a unit conversion factor).
+    /// Every component multiplied by `k` (a unit conversion factor); the same as `self * k`.
     #[must_use]
     pub fn scaled(self, k: f64) -> Xyz {
-        Xyz { x: self.x * k, y: self.y * k, z: self.z * k }
+        self * k
     }
 
     /// Every component converted from `from` to `to` (exactly as [`LengthUnit::convert`]).
@@ -71,7 +71,38 @@ impl Xyz {
     /// Euclidean length.
     #[must_use]
     pub fn norm(self) -> f64 {
-        (self.x * self.x + self.y * self.y + self.z * self.z).sqrt()
+        self.dot(self).sqrt()
+    }
+
+    /// The dot product.
+    #[must_use]
+    pub fn dot(self, o: Xyz) -> f64 {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+
+    /// The cross product `self × o`.
+    #[must_use]
+    pub fn cross(self, o: Xyz) -> Xyz {
+        Xyz::new(self.y * o.z - self.z * o.y, self.z * o.x - self.x * o.z, self.x * o.y - self.y * o.x)
+    }
+
+    /// The unit vector along `self`, or `None` for a (near-)zero or non-finite vector.
+    #[must_use]
+    pub fn unit(self) -> Option<Xyz> {
+        let n = self.norm();
+        (n.is_finite() && n > 1e-300).then(|| self * (1.0 / n))
+    }
+
+    /// The largest absolute component (a length scale for relative tolerances).
+    #[must_use]
+    pub fn max_abs(self) -> f64 {
+        self.x.abs().max(self.y.abs()).max(self.z.abs())
+    }
+
+    /// The angle between two unit vectors, radians in `[0, π]` (accurate near 0 and π).
+    #[must_use]
+    pub fn angle_to(self, o: Xyz) -> f64 {
+        self.cross(o).norm().atan2(self.dot(o))
     }
 
     /// `[x, y, z]`.
@@ -104,6 +135,20 @@ impl Sub for Xyz {
     type Output = Xyz;
     fn sub(self, o: Xyz) -> Xyz {
         Xyz { x: self.x - o.x, y: self.y - o.y, z: self.z - o.z }
+    }
+}
+
+impl Mul<f64> for Xyz {
+    type Output = Xyz;
+    fn mul(self, k: f64) -> Xyz {
+        Xyz { x: self.x * k, y: self.y * k, z: self.z * k }
+    }
+}
+
+impl Neg for Xyz {
+    type Output = Xyz;
+    fn neg(self) -> Xyz {
+        Xyz { x: -self.x, y: -self.y, z: -self.z }
     }
 }
 

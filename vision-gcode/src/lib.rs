@@ -4,7 +4,7 @@
 //! simulated machine. It knows nothing of vision: user M-codes (M280–M284 among them) go to an
 //! [`MCodeHandler`].
 //!
-//! * [`parse`]: the hand-written line parser (words, `#` parameters, `[expressions]`, comments).
+//! * A hand-written line parser (words, `#` parameters, `[expressions]`, comments), private.
 //! * [`Interpreter`]: modal state, the frame chain, arcs, tools, outputs; streams [`Event`]s in
 //!   machine coordinates to an [`EventSink`], each tagged with its source line.
 //! * [`MCodeHandler`] / [`Context`]: the extension point; a handler reads and writes parameters,
@@ -108,13 +108,19 @@ mod arc;
 pub mod config;
 pub mod error;
 pub mod event;
-pub mod expr;
+mod expr;
 mod frame;
 pub mod geom;
 pub mod handler;
 mod interp;
 pub mod params;
+/// The line parser is crate-private; the `bench-internals` feature exposes it (unstable, not
+/// part of the API) for the parse-only benchmark.
+#[cfg(feature = "bench-internals")]
+#[doc(hidden)]
 pub mod parse;
+#[cfg(not(feature = "bench-internals"))]
+mod parse;
 pub mod tools;
 mod words;
 

@@ -156,15 +156,15 @@ mod tests {
 
     use crate::input::{Segment, Shape};
     use crate::limits::Limits;
-    use crate::vec3::Vec3;
+    use vision_gcode::Xyz;
 
     fn straight_line_in_pieces(n: usize, step: f64, feed: f64) -> Vec<Result<Item, PathError>> {
         (0..n)
             .map(|i| {
                 Ok(Item::Move(Segment {
                     line: i + 1,
-                    start: [i as f64 * step, 0.0, 0.0],
-                    end: [(i + 1) as f64 * step, 0.0, 0.0],
+                    start: [i as f64 * step, 0.0, 0.0].into(),
+                    end: [(i + 1) as f64 * step, 0.0, 0.0].into(),
                     shape: Shape::Line,
                     rate: Rate::Feed(feed),
                     mode: PathMode::ExactStop,
@@ -174,7 +174,7 @@ mod tests {
     }
 
     fn plan_all(items: Vec<Result<Item, PathError>>, capacity: usize) -> Vec<Ready> {
-        let shaper = Shaper::new(items.into_iter(), Limits::uniform(1000.0, 500.0, 1000.0), Vec3::ZERO);
+        let shaper = Shaper::new(items.into_iter(), Limits::uniform(1000.0, 500.0, 1000.0), Xyz::ZERO);
         let mut la = Lookahead::new(shaper, capacity);
         std::iter::from_fn(|| la.next()).collect()
     }
@@ -218,14 +218,14 @@ mod tests {
         let items = (0..200_000usize).map(|i| {
             Ok(Item::Move(Segment {
                 line: i + 1,
-                start: [i as f64 * 0.01, 0.0, 0.0],
-                end: [(i + 1) as f64 * 0.01, 0.0, 0.0],
+                start: [i as f64 * 0.01, 0.0, 0.0].into(),
+                end: [(i + 1) as f64 * 0.01, 0.0, 0.0].into(),
                 shape: Shape::Line,
                 rate: Rate::Feed(6000.0),
                 mode: PathMode::ExactStop,
             }))
         });
-        let shaper = Shaper::new(items, Limits::uniform(1000.0, 500.0, 1000.0), Vec3::ZERO);
+        let shaper = Shaper::new(items, Limits::uniform(1000.0, 500.0, 1000.0), Xyz::ZERO);
         let mut la = Lookahead::new(shaper, 64);
         let mut peak = 0;
         let mut n = 0;
