@@ -9,6 +9,8 @@
 //!   machine coordinates to an [`EventSink`], each tagged with its source line.
 //! * [`MCodeHandler`] / [`Context`]: the extension point; a handler reads and writes parameters,
 //!   reads positions, writes tool offsets and runs G-code synchronously.
+//! * [`PositionWatch`] ([`Interpreter::watch_position`]): the machine position, published by
+//!   the interpreter for readers that cannot borrow it (a simulated camera).
 //!
 //! ```
 //! use vision_gcode::{Event, Interpreter, InterpreterConfig, Xyz};
@@ -122,6 +124,7 @@ pub mod parse;
 #[cfg(not(feature = "bench-internals"))]
 mod parse;
 pub mod tools;
+mod watch;
 mod words;
 
 pub use arc::{CENTRE_TOLERANCE_INCH, CENTRE_TOLERANCE_MM, RADIUS_TOLERANCE_INCH, RADIUS_TOLERANCE_MM};
@@ -134,3 +137,4 @@ pub use geom::{ArcDirection, Plane, Xyz};
 pub use handler::{Context, HandlerError, MCodeHandler, UserMCode};
 pub use interp::{Interpreter, MotionMode, RunOutcome};
 pub use tools::{DigitalOutput, Tool, ToolOutputs, ToolTable};
+pub use watch::PositionWatch;
