@@ -123,7 +123,7 @@ impl Session {
             module = module.with_profile(ProfileStore::new(path));
         }
         let clock = system_clock();
-        let machine = SimMachine::new(&sim, clock.clone()).map_err(|e| Failure::Input(e.to_string()))?;
+        let machine = SimMachine::new(&sim).map_err(|e| Failure::Input(e.to_string()))?;
         Ok(Session { sim, machine, handler: VisionHandler::new(module, clock), camera, _emulator: emulator })
     }
 
