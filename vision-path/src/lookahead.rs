@@ -63,6 +63,10 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Lookahead<I> {
     }
 
     /// The next piece (with final entry and exit speeds) or stop.
+    // Its one caller is the sampler's `next`; left to itself LLVM stopped inlining it there
+    // once the 3-vector came from vision-gcode, which cost 1 % of the instructions (and a copy
+    // of every piece) on a dense G64 spiral.
+    #[inline]
     pub(crate) fn next(&mut self) -> Option<Ready> {
         loop {
             if let Some(r) = self.ready.pop_front() {
