@@ -408,15 +408,15 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
     }
     let seen: Vec<Point2<f64>> = sums.iter().map(|(sum, count)| Point2::from(sum / *count)).collect();
     let fit = fit_rectangle(&nominal, &seen).map_err(|e| fail(format!("sheet fit: {e}")))?;
-    let dev = (fit.scale.x - 1.0).abs().max((fit.scale.y - 1.0).abs());
+    let dev = (fit.transform.scale.x - 1.0).abs().max((fit.transform.scale.y - 1.0).abs());
     if dev > MAX_SHEET_SCALE_DEV {
         return Err(fail(format!(
             "the sheet measures {:.4} x {:.4} of its nominal size — wrong sheet number, a sheet printed with \
              'Fit to Page', or the camera found other marks",
-            fit.scale.x, fit.scale.y
+            fit.transform.scale.x, fit.transform.scale.y
         )));
     }
-    let b = fit.offset();
+    let b = fit.transform.offset();
     let offset_written = offset_before - b;
     walker.machine.set_tool_offset(tool, offset_written)?;
 
@@ -427,7 +427,7 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
         let s = walker.shoot(i)?;
         let shot = walker.shots[s];
         let observed = shot.pos + chain.delta(shot.native);
-        let expected = fit.apply(*n_i) - b;
+        let expected = fit.transform.apply(*n_i) - b;
         verify.push(DotVerify { dot: i + 1, nominal: *n_i, expected, observed, residual: observed - expected });
     }
     #[allow(clippy::cast_precision_loss)]
@@ -441,8 +441,8 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
         scale: Vector2::new(k.column(0).norm(), k.column(1).norm()),
         camera_rotation_deg: (k[(1, 0)] - k[(0, 1)]).atan2(k[(0, 0)] + k[(1, 1)]).to_degrees(),
         k_rms,
-        sheet_rotation_deg: fit.theta_deg(),
-        sheet_scale: fit.scale,
+        sheet_rotation_deg: fit.transform.theta_deg(),
+        sheet_scale: fit.transform.scale,
         walk_rms: fit.rms,
         tool,
         offset_before,

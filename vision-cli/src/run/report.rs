@@ -2,7 +2,7 @@
 //! truth. Serialised as-is for `--json`; [`super::text`] renders it for people.
 
 use serde::Serialize;
-use vision_core::{CalReport, Machine, ParamValue, Params, Pieces};
+use vision_core::{CalReport, ParamValue, Params, Pieces};
 use vision_driver_sim::{Sim, SimMachine};
 use vision_math::{LengthUnit, Point2, Vector2};
 use vision_mcode::{Outcome, Record};
@@ -338,14 +338,15 @@ fn cut_error(
     for p in &grid {
         max = max.max(machine.cut_error(gcode, &fixture.name, *p).ok()?);
     }
-    Some(CutError { fixture: fixture.name.clone(), tool: machine.active_tool(), points: grid.len(), max })
+    Some(CutError { fixture: fixture.name.clone(), tool: machine.interpreter().active_tool(), points: grid.len(), max })
 }
 
 /// The calibration truth now (after a program that calibrated).
 pub(crate) fn calibration_truth(sim: &Sim, machine: &SimMachine, params: &Params) -> Option<CalibrationTruth> {
-    let unit = machine.units();
-    let tool = params.camera_tool().unwrap_or_else(|| machine.active_tool());
-    let offset = machine.tool_offset(tool).ok()?;
+    let interp = machine.interpreter();
+    let unit = interp.units();
+    let tool = params.camera_tool().unwrap_or_else(|| interp.active_tool());
+    let offset = interp.tool_offset(tool)?.xy().coords;
     let e = sim.calibration_error(params, offset, unit);
     Some(CalibrationTruth {
         k_relative: e.k_relative,
@@ -362,7 +363,7 @@ pub(crate) fn pound(machine: &SimMachine, params: &Params) -> PoundReport {
         .map(|s| {
             std::array::from_fn(|f| {
                 let at = u32::try_from(base).ok().map(|b| b + 8 * s + u32::try_from(f).unwrap_or(0));
-                at.and_then(|a| machine.pound(a).ok()).unwrap_or(0.0)
+                at.map_or(0.0, |a| machine.interpreter().param(a))
             })
         })
         .collect();

@@ -64,7 +64,7 @@ pub struct AlignReport {
     pub pieces: Pieces,
     /// The full fit of the run's model over every capture (what the quality gates judged).
     pub fit: Fit,
-    /// The chain emitted (equal to `fit.chain()` for [`Pieces::All`]).
+    /// The chain emitted (equal to `fit.transform.chain()` for [`Pieces::All`]).
     pub chain: AlignmentChain,
     /// Residual `chain(nᵢ) − oᵢ` of each capture under the emitted chain, in capture order.
     pub residuals: Vec<Vector2<f64>>,
@@ -108,7 +108,9 @@ impl VisionModule {
         };
         self.check_gates(&fit, unit)?;
         let chain = match pieces {
-            Pieces::All => fit.chain().ok_or(VisionError::Math(vision_math::MathError::DegenerateObserved))?,
+            Pieces::All => {
+                fit.transform.chain().ok_or(VisionError::Math(vision_math::MathError::DegenerateObserved))?
+            }
             Pieces::Shift => fit_piece(Piece::Shift, &commanded, &observed)?.chain,
             Pieces::Rotation => fit_piece(Piece::Rotation, &commanded, &observed)?.chain,
             Pieces::Scale => {
@@ -135,17 +137,17 @@ impl VisionModule {
     fn check_gates(&self, fit: &Fit, unit: LengthUnit) -> Result<(), VisionError> {
         let u = unit.short_name();
         let max_dev = self.params.fit_max_scale_dev_pct();
-        let dev = (fit.scale.x - 1.0).abs().max((fit.scale.y - 1.0).abs()) * 100.0;
+        let dev = (fit.transform.scale.x - 1.0).abs().max((fit.transform.scale.y - 1.0).abs()) * 100.0;
         if max_dev > 0.0 && dev > max_dev {
             return Err(VisionError::FitRejected {
                 reason: format!(
                     "scale X {:.5} / Y {:.5} deviates {dev:.3} % from 1, more than VisionFitMaxScaleDev = {max_dev} %",
-                    fit.scale.x, fit.scale.y
+                    fit.transform.scale.x, fit.transform.scale.y
                 ),
             });
         }
         let max_shift = LengthUnit::Inch.convert(self.params.fit_max_shift_in(), unit);
-        let shift = (fit.observed_centroid - fit.commanded_centroid).norm();
+        let shift = (fit.transform.observed_centroid - fit.transform.commanded_centroid).norm();
         if max_shift > 0.0 && shift > max_shift {
             return Err(VisionError::FitRejected {
                 reason: format!("shift {shift:.4} {u} exceeds VisionFitMaxShift = {max_shift:.4} {u}"),
