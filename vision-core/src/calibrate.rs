@@ -66,26 +66,6 @@ pub enum Calibrate {
     },
 }
 
-impl Calibrate {
-    /// The calibration for M283's words: exactly one of `Q` (diameter) and `C` (sheet).
-    ///
-    /// # Errors
-    /// [`VisionError::BadWord`] for none or both, a non-positive diameter or a non-integer
-    /// sheet number.
-    pub fn from_words(q: Option<f64>, c: Option<f64>) -> Result<Calibrate, VisionError> {
-        let bad = |word: String, reason: &str| VisionError::BadWord { mcode: "M283", word, reason: reason.into() };
-        match (q, c) {
-            (Some(d), None) if d.is_finite() && d > 0.0 => Ok(Calibrate::Quick { diameter: d }),
-            (Some(d), None) => Err(bad(format!("Q{d}"), "Q is the dot diameter and must be positive")),
-            (None, Some(n)) => crate::module::integer_word(n)
-                .and_then(|n| u32::try_from(n).ok())
-                .map(|n| Calibrate::Sheet { n })
-                .ok_or_else(|| bad(format!("C{n}"), "C is a calibration sheet number (C1)")),
-            _ => Err(bad(String::new(), "give exactly one of Qd (quick, dot diameter d) or Cn (sheet n)")),
-        }
-    }
-}
-
 /// Result of the axis-detect bump.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AxisReport {
@@ -460,16 +440,6 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
 #[allow(clippy::float_cmp)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn words_select_exactly_one_mode() {
-        assert_eq!(Calibrate::from_words(Some(0.5), None), Ok(Calibrate::Quick { diameter: 0.5 }));
-        assert_eq!(Calibrate::from_words(None, Some(1.0)), Ok(Calibrate::Sheet { n: 1 }));
-        for (q, c) in [(None, None), (Some(0.5), Some(1.0)), (Some(-1.0), None), (None, Some(1.5)), (None, Some(-1.0))]
-        {
-            assert!(matches!(Calibrate::from_words(q, c), Err(VisionError::BadWord { .. })), "{q:?} {c:?}");
-        }
-    }
 
     #[test]
     fn remap_detection_for_all_eight_mountings() {

@@ -95,7 +95,7 @@ fn a_rectangle_run_emits_the_modals_and_the_interpreter_applies_them() {
     assert!((chain.shift - shift).norm() < 1e-9, "{chain:?}");
     let m = interp.machine_position();
     assert!((m.xy() - (vision_math::Point2::new(3.0, 2.0) + shift)).norm() < 1e-9, "{m:?}");
-    assert_eq!(h.module().params().run_active(), 0);
+    assert_eq!(h.module().telemetry().run_active(), 0);
 }
 
 #[test]

@@ -203,7 +203,7 @@ pub(crate) fn run(args: &RunArgs) -> Result<String, Failure> {
         profile: args.profile.as_ref().map(|p| p.display().to_string()),
         programs,
         pound: pound(&session.machine, params),
-        telemetry: telemetry(params),
+        telemetry: telemetry(session.handler.module().telemetry()),
     };
     let output = if args.json {
         let mut s = serde_json::to_string_pretty(&report).map_err(|e| Failure::Input(e.to_string()))?;

@@ -370,12 +370,11 @@ pub(crate) fn pound(machine: &SimMachine, params: &Params) -> PoundReport {
 }
 
 /// Every telemetry parameter.
-pub(crate) fn telemetry(params: &Params) -> Vec<Telemetry> {
-    Params::SPECS
+pub(crate) fn telemetry(t: &vision_core::Telemetry) -> Vec<Telemetry> {
+    vision_core::Telemetry::SPECS
         .iter()
-        .filter(|s| s.access == vision_core::Access::Telemetry)
         .filter_map(|s| {
-            let value = match params.get(s.name).ok()? {
+            let value = match t.get(s.name)? {
                 ParamValue::Bool(b) => serde_json::Value::from(b),
                 ParamValue::Int(i) => serde_json::Value::from(i),
                 ParamValue::Float(f) => serde_json::Value::from(f),

@@ -3,7 +3,7 @@
 use vision_math::{fit_piece, fit_rectangle, fit_similarity, AlignmentChain, Fit, LengthUnit, Piece, Point2, Vector2};
 
 use super::m280::RunMode;
-use super::{integer_word, Reply, VisionModule};
+use super::{Reply, VisionModule};
 use crate::error::VisionError;
 use crate::machine::Machine;
 
@@ -30,27 +30,6 @@ pub enum Pieces {
     Rotation,
     /// `P3`: scale only, about the centroid.
     Scale,
-}
-
-impl Pieces {
-    /// The selection for M282's `P` word (`None` = omitted = all).
-    ///
-    /// # Errors
-    /// [`VisionError::BadWord`] for anything but 0–3.
-    pub fn from_p(p: Option<f64>) -> Result<Pieces, VisionError> {
-        match p.map(integer_word) {
-            None => Ok(Pieces::All),
-            Some(Some(0)) => Ok(Pieces::All),
-            Some(Some(1)) => Ok(Pieces::Shift),
-            Some(Some(2)) => Ok(Pieces::Rotation),
-            Some(Some(3)) => Ok(Pieces::Scale),
-            Some(_) => Err(VisionError::BadWord {
-                mcode: "M282",
-                word: format!("P{}", p.unwrap_or(f64::NAN)),
-                reason: "P must be 0 / omitted (all), 1 (shift), 2 (rotation) or 3 (scale)".into(),
-            }),
-        }
-    }
 }
 
 /// What M282 solved and emitted. Lengths in the machine's current units (`unit`).
@@ -94,14 +73,14 @@ impl VisionModule {
     pub fn m282(&mut self, machine: &mut dyn Machine, pieces: Pieces) -> Result<Reply<AlignReport>, VisionError> {
         self.check_enabled()?;
         self.check_tool(machine)?;
-        let mode = RunMode::from_code(self.params.run_mode());
+        let mode = self.run.mode;
         let needed = mode.min_marks();
-        if self.dots.len() < needed {
-            return Err(VisionError::TooFewDots { mode: mode.name(), needed, got: self.dots.len() });
+        if self.run.dots.len() < needed {
+            return Err(VisionError::TooFewDots { mode: mode.name(), needed, got: self.run.dots.len() });
         }
         let unit = machine.units();
         let (commanded, observed): (Vec<Point2<f64>>, Vec<Point2<f64>>) =
-            self.dots.iter().map(|d| d.in_unit(unit)).unzip();
+            self.run.dots.iter().map(|d| d.in_unit(unit)).unzip();
         let fit = match mode {
             RunMode::Rectangle => fit_rectangle(&commanded, &observed)?,
             RunMode::Similarity => fit_similarity(&commanded, &observed)?,
@@ -119,7 +98,9 @@ impl VisionModule {
         let residuals: Vec<Vector2<f64>> = commanded.iter().zip(&observed).map(|(n, o)| chain.apply(*n) - o).collect();
         let max_residual = residuals.iter().map(|r| r.norm()).fold(0.0, f64::max);
 
-        let p = &mut self.params;
+        self.run.active = false;
+        self.publish_run();
+        let p = &mut self.telemetry;
         p.run_tx = chain.shift.x;
         p.run_ty = chain.shift.y;
         p.run_theta = chain.rotation_deg.to_radians();
@@ -127,7 +108,6 @@ impl VisionModule {
         p.run_sy = chain.scale.y;
         p.run_center_x = chain.center.x;
         p.run_center_y = chain.center.y;
-        p.run_active = 0;
         Ok(Reply { gcode, report: AlignReport { unit, mode, pieces, fit, chain, residuals, max_residual } })
     }
 

@@ -6,6 +6,7 @@ use super::{Reply, VisionModule};
 use crate::calibrate::{quick, sheet_walk, CalReport, Calibrate, Walker};
 use crate::error::VisionError;
 use crate::machine::Machine;
+use crate::params::Params;
 use crate::sheets::{cal_sheet, known_sheets};
 
 /// True when `chain` moves no point (within 1e-12).
@@ -56,7 +57,6 @@ impl VisionModule {
             Calibrate::Quick { .. } => None,
         };
         let start: Point2<f64> = machine.program_position();
-        let snapshot = self.params.clone();
 
         let outcome = {
             let Some(driver) = self.driver.as_deref_mut() else {
@@ -69,30 +69,27 @@ impl VisionModule {
             }
         };
         let result = outcome.and_then(|solution| {
-            self.params.set_cal_k(solution.k)?;
-            self.params.set_remap(solution.remap);
-            self.params.cal_units = machine.units();
-            self.params.cal_date = match &solution.report {
+            let date = match &solution.report {
                 CalReport::Quick(r) => r.date.clone(),
                 CalReport::Sheet(r) => r.date.clone(),
             };
-            self.save_profile()?;
+            let calibration = self.params.calibration.solved(solution.k, solution.remap, machine.units(), &date)?;
+            self.commit_params(Params { calibration, ..self.params.clone() })?;
             Ok(solution.report)
         });
         match result {
             Ok(report) => {
-                self.params.last_status = "OK".to_string();
+                self.telemetry.last_status = "OK".to_string();
                 Ok(Reply { gcode: Vec::new(), report })
             }
             Err(e) => {
-                self.params = snapshot;
                 if let Some(offset) = offset_before {
                     let _ = machine.set_tool_offset(tool, offset);
                 }
                 if let Some(driver) = self.driver.as_deref_mut() {
                     let _ = Walker::new(machine, driver, 0.0).move_abs(start);
                 }
-                self.params.last_status = e.to_string();
+                self.publish_failure(None, &e);
                 Err(e)
             }
         }

@@ -73,7 +73,7 @@ fn sheet_walk_recovers_k_and_offset_for_all_eight_mountings() {
         assert!((rep.camera_rotation_deg - 1.5).abs() < 0.3);
         assert!((rep.scale.x - 0.00203 * f).abs() < 1e-5 * f);
         assert_eq!(p.cal_date(), "2023-11-14T23:13:20+01:00");
-        assert_eq!(p.last_status(), "OK");
+        assert_eq!(rig.module.telemetry().last_status(), "OK");
         // With the new offset the camera lands on what it is commanded to: dot 5 at 0, 0.
         assert!((rig.world().camera_axis() - Point2::origin()).norm() < 1e-9);
         // The bump was 0.1 in (2.54 mm) and settling was dwelt after every move.
@@ -156,7 +156,7 @@ fn a_failed_walk_restores_k_flags_offset_and_position() {
     assert!(e.to_string().contains("lost the mark"), "{e}");
     assert!(e.to_string().ends_with("the tool offsets were left unchanged"), "{e}");
     assert_untouched(&rig, start);
-    assert_eq!(rig.module.params().last_status(), e.to_string());
+    assert_eq!(rig.module.telemetry().last_status(), e.to_string());
 }
 
 #[test]
@@ -236,7 +236,7 @@ fn refusals_before_any_motion() {
         rig.module.m283(&mut rig.machine, Calibrate::Quick { diameter: 0.5 }).map(|_| ()),
         Err(VisionError::WrongTool { camera: 98, active: 1 })
     );
-    rig.module.params.enabled = false;
+    rig.module.params.config.enabled = false;
     assert_eq!(rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).map(|_| ()), Err(VisionError::NotEnabled));
     assert_eq!(rig.world().triggers, 0);
     assert!(rig.world().log.is_empty());

@@ -8,7 +8,7 @@ use crate::module::{Pieces, RunMode};
 #[test]
 fn disabled_refuses_all_five_and_changes_nothing() {
     let mut rig = Rig::new();
-    rig.module.params.enabled = false;
+    rig.module.params.config.enabled = false;
     let before = rig.module.params().clone();
     let m = &mut rig.machine;
     assert_eq!(rig.module.m280(m, RunMode::Rectangle).map(|_| ()), Err(VisionError::NotEnabled));
@@ -48,7 +48,7 @@ fn m284_switches_jobs_only_with_select_job() {
     assert_eq!(r.report.job, 5);
     rig.module.m284(Some(0)).expect("P0");
     assert_eq!(rig.world().jobs, vec![5, 5, 5]);
-    assert!(matches!(rig.module.m284(Some(1000)), Err(VisionError::BadWord { .. })));
+    assert!(matches!(rig.module.m284(Some(1000)), Err(VisionError::InvalidParam { .. })));
     // A camera-side refusal leaves ActiveJob alone.
     rig.world().select_job = true;
     let mut fresh = Rig::new();
@@ -79,14 +79,14 @@ fn driver_errors_carry_the_manuals_fix() {
     rig.world().script.push_back(Err(DriverError::new(DriverErrorKind::Refused, "connect 192.168.208.80:8500")));
     let e = rig.module.m281(&mut rig.machine, false).expect_err("refused");
     assert!(e.to_string().starts_with("connection refused — camera not in Run Mode"), "{e}");
-    assert_eq!(rig.module.params().last_status(), e.to_string());
-    assert_eq!(rig.module.params().last_judgment(), -1);
+    assert_eq!(rig.module.telemetry().last_status(), e.to_string());
+    assert_eq!(rig.module.telemetry().last_judgment(), -1);
     // A camera refusal reaches the operator in the driver's words, with nothing of the core's.
     let refusal = "camera replied ER,TRG,06 to TRG — switch the camera to Run mode";
     rig.world().script.push_back(Err(DriverError::new(DriverErrorKind::Rejected, refusal)));
     let e = rig.module.m281(&mut rig.machine, false).expect_err("rejected");
     assert_eq!(e.to_string(), refusal);
-    assert_eq!(rig.module.params().last_status(), refusal);
+    assert_eq!(rig.module.telemetry().last_status(), refusal);
 }
 
 #[test]
