@@ -20,9 +20,15 @@
 //!    nominal dots onto the mean `D` of each dot gives `L` (reported as the sheet rotation and
 //!    measured scale, so a mis-printed sheet is visible, not baked into K) and `b`.
 //!
-//! The camera offset written is `a = o₀ − b`: commanding `P` then puts the spindle at `P − a`
-//! and the optical axis at `P`. The routine then re-walks every dot in G90 at its nominal
-//! position with the new K and offset and reports each dot's residual against the fitted sheet.
+//! The camera offset solved is `a = o₀ − b`: once written, commanding `P` puts the spindle at
+//! `P − a` and the optical axis at `P`. The routine then re-walks every dot in G90 with the new
+//! K and reports each dot's residual against the fitted sheet. The offset is not written yet, so
+//! the verify walk compensates: commanding `N + o₀ − a = N + b` puts the optical axis on `N`,
+//! and a capture there is seen at `C − b + K·R·c`, where the new offset will see it.
+//!
+//! Nothing here commits: [`sheet_walk`] and [`quick`] return a [`Solution`] (K, remap, tool
+//! offset, report) and M283 applies it in one place, or nothing (see
+//! [`crate::VisionModule::m283`]).
 //!
 //! Moves between stations are incremental (`G91 G0 X.. Y..` followed by `G90`), stations are
 //! planned so each dot lands near the image centre, and `VisionTriggerSettleSec` is dwelt after
@@ -169,11 +175,25 @@ pub enum CalReport {
     Sheet(SheetReport),
 }
 
-/// What a successful calibration asks the module to write.
+/// What a successful calibration asks the module to write; nothing is written yet.
 pub(crate) struct Solution {
+    /// K, units (the machine's, at calibration) per pixel.
     pub(crate) k: Matrix2<f64>,
     pub(crate) remap: Remap,
+    /// The camera tool and its new X/Y table offset, current units (sheet walk only).
+    pub(crate) tool_offset: Option<(u32, Vector2<f64>)>,
     pub(crate) report: CalReport,
+}
+
+impl CalReport {
+    /// The `Cal_Date` the calibration writes.
+    #[must_use]
+    pub fn date(&self) -> &str {
+        match self {
+            CalReport::Quick(r) => &r.date,
+            CalReport::Sheet(r) => &r.date,
+        }
+    }
 }
 
 fn fail(reason: impl Into<String>) -> VisionError {
@@ -197,12 +217,27 @@ pub(crate) struct Walker<'a> {
     unit: LengthUnit,
     shots: Vec<Shot>,
     triggers: usize,
+    /// Every line run on the machine, in order (M283's reply lists them).
+    ran: Vec<String>,
 }
 
 impl<'a> Walker<'a> {
     pub(crate) fn new(machine: &'a mut dyn Machine, driver: &'a mut dyn CameraDriver, settle_s: f64) -> Self {
         let unit = machine.units();
-        Walker { machine, driver, settle_s, unit, shots: Vec::new(), triggers: 0 }
+        Walker { machine, driver, settle_s, unit, shots: Vec::new(), triggers: 0, ran: Vec::new() }
+    }
+
+    /// The lines run so far, in order.
+    pub(crate) fn into_ran(self) -> Vec<String> {
+        self.ran
+    }
+
+    /// Runs `lines` on the machine and records them.
+    fn run(&mut self, lines: Vec<String>) -> Result<(), VisionError> {
+        self.machine.run_gcode(&lines)?;
+        self.ran.extend(lines);
+        self.machine.dwell(self.settle_s);
+        Ok(())
     }
 
     fn position(&self) -> Point2<f64> {
@@ -214,18 +249,14 @@ impl<'a> Walker<'a> {
         let d = target - self.position();
         let x = fixed(d.x, MOVE_DECIMALS);
         let y = fixed(d.y, MOVE_DECIMALS);
-        self.machine.run_gcode(&[format!("G91 G0 X{x} Y{y}"), "G90".to_string()])?;
-        self.machine.dwell(self.settle_s);
-        Ok(())
+        self.run(vec![format!("G91 G0 X{x} Y{y}"), "G90".to_string()])
     }
 
     /// Absolute G90 move to `target`, then settle.
     pub(crate) fn move_abs(&mut self, target: Point2<f64>) -> Result<(), VisionError> {
         let x = fixed(target.x, MOVE_DECIMALS);
         let y = fixed(target.y, MOVE_DECIMALS);
-        self.machine.run_gcode(&[format!("G90 G0 X{x} Y{y}")])?;
-        self.machine.dwell(self.settle_s);
-        Ok(())
+        self.run(vec![format!("G90 G0 X{x} Y{y}")])
     }
 
     /// Triggers and records a shot of walk dot `dot`; returns its index.
@@ -329,11 +360,10 @@ pub(crate) fn quick(walker: &mut Walker<'_>, params: &Params, diameter: f64) -> 
         bump_error,
         date: walker.machine.now().iso_local(),
     };
-    Ok(Solution { k, remap, report: CalReport::Quick(report) })
+    Ok(Solution { k, remap, tool_offset: None, report: CalReport::Quick(report) })
 }
 
-/// `M283 Cn`: walk, solve, write the tool offset, verify. The caller restores the offset on
-/// error.
+/// `M283 Cn`: walk, solve, verify (compensating for the offset not yet written); writes nothing.
 pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool: u32) -> Result<Solution, VisionError> {
     let sheet = cal_sheet(n).ok_or_else(|| VisionError::UnknownSheet { sheet: n, known: known_sheets() })?;
     let unit = walker.unit;
@@ -398,15 +428,15 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
     }
     let b = fit.offset();
     let offset_written = offset_before - b;
-    walker.machine.set_tool_offset(tool, offset_written)?;
 
-    // 5. Verify: every dot at its nominal position in G90 with the new K and offset.
+    // 5. Verify: the optical axis on every dot's nominal position in G90 with the new K, seen
+    //    as the new offset will see it (the module doc explains the `+ b`).
     let mut verify = Vec::with_capacity(nominal.len());
     for (i, n_i) in nominal.iter().enumerate() {
-        walker.move_abs(*n_i)?;
+        walker.move_abs(n_i + b)?;
         let s = walker.shoot(i)?;
         let shot = walker.shots[s];
-        let observed = shot.pos + chain.delta(shot.native);
+        let observed = shot.pos - b + chain.delta(shot.native);
         let expected = fit.apply(*n_i) - b;
         verify.push(DotVerify { dot: i + 1, nominal: *n_i, expected, observed, residual: observed - expected });
     }
@@ -433,7 +463,7 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
         triggers: walker.triggers,
         date: walker.machine.now().iso_local(),
     };
-    Ok(Solution { k, remap, report: CalReport::Sheet(report) })
+    Ok(Solution { k, remap, tool_offset: Some((tool, offset_written)), report: CalReport::Sheet(report) })
 }
 
 #[cfg(test)]

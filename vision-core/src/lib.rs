@@ -18,9 +18,9 @@
 //!
 //! The M-code adapter (`vision-mcode`) parses `M280 P3`, `M281 D1`, … into typed values
 //! ([`RunMode`], [`Pieces`], [`Calibrate`], a job number, a keep-image flag), calls
-//! [`VisionModule::m280`] … [`VisionModule::m284`] with the host's [`Machine`], runs the
-//! [`Reply::gcode`] lines it gets back (M280's cancel line, M282's four modal lines) and shows
-//! the report. The run's state is typed ([`Run`]); the `Last*` / `Run_*` telemetry is written
+//! [`VisionModule::m280`] … [`VisionModule::m284`] with the host's [`Machine`] and shows the
+//! report. The module runs its own G-code through [`Machine::run_gcode`] (M280's cancel line,
+//! M282's four modal lines, M283's moves); [`Reply::gcode`] lists what it ran. The run's state is typed ([`Run`]); the `Last*` / `Run_*` telemetry is written
 //! from it after each operation and never read back. The CLI picks the driver by `VisionDriver` through a [`DriverRegistry`] and
 //! loads/saves parameters with a [`ProfileStore`].
 //!
@@ -40,9 +40,10 @@
 //! * Pound fields 6–7 are never written. `Run_*` hold the **emitted** chain.
 //! * M284's job above 999 is refused as an invalid `VisionActiveJob` before the camera is
 //!   contacted; word syntax (`P1.5`) is the adapter's to refuse.
-//! * M283 refuses while an alignment is active, leaves the machine in G90, writes the offset to
-//!   `VisionCameraToolNumber` (or the active tool when that is 0), saves the profile, and undoes
-//!   everything on failure (including a failed save). See [`calibrate`] for the solve.
+//! * M283 refuses while an alignment is active and leaves the machine in G90. The walk commits
+//!   nothing; M283 then writes the offset to `VisionCameraToolNumber` (or the active tool when
+//!   that is 0), saves the profile, and takes the new calibration — all or nothing, the tool
+//!   table first (see [`VisionModule::m283`]). See [`calibrate`] for the solve.
 //! * M284 with job 0 (stored or given) does not contact the camera; the tool check does not
 //!   apply to M284. M281 D1 needs a driver advertising `grab_image`.
 //! * The `VisionFitMax*` gates are in percent and inches (converted under G21).

@@ -49,20 +49,23 @@ impl RunMode {
 impl VisionModule {
     /// **M280**: begins an alignment run in `mode`.
     ///
-    /// Validates the pound-variable base, clears the dot list, sets `Run_Active` = 1,
-    /// `Run_Mode`, `Run_DotCount` = 0, and returns `G69 G50 G52 X0 Y0` for the adapter to run
-    /// (cancelling any earlier alignment). Needs no camera and no calibration.
+    /// Validates the pound-variable base, runs `G69 G50 G52 X0 Y0` on the machine (cancelling
+    /// any earlier alignment), then opens a fresh [`Run`] (empty dot list) and writes
+    /// `Run_Active` = 1, `Run_Mode`, `Run_DotCount` = 0. Needs no camera and no calibration.
     ///
     /// # Errors
     /// [`VisionError::NotEnabled`], [`VisionError::WrongTool`],
-    /// [`VisionError::PoundBaseReserved`], [`VisionError::PoundBlockMissing`]; nothing changes.
+    /// [`VisionError::PoundBaseReserved`], [`VisionError::PoundBlockMissing`], or the machine's
+    /// refusal of the cancel line ([`VisionError::Machine`]); the run is unchanged.
     pub fn m280(&mut self, machine: &mut dyn Machine, mode: RunMode) -> Result<Reply<RunMode>, VisionError> {
         self.check_enabled()?;
         self.check_tool(machine)?;
         PoundBlock::on_machine(self.params.pound_var_base(), machine)?;
+        let gcode = vec![CANCEL_LINE.to_string()];
+        machine.run_gcode(&gcode)?;
         self.run = Run { mode, active: true, dots: Vec::new() };
         self.publish_run();
-        Ok(Reply { gcode: vec![CANCEL_LINE.to_string()], report: mode })
+        Ok(Reply { gcode, report: mode })
     }
 
     /// True between M280 and a successful M282.

@@ -55,8 +55,8 @@ impl VisionModule {
     /// **M282**: solves the fit commanded → observed over every capture of the run (least
     /// squares when there are more marks than the minimum), checks the quality gates, writes
     /// `Run_*` (the emitted chain: `Run_Tx/Ty` = G52, `Run_Theta` = G68 R in radians,
-    /// `Run_Sx/Sy` = G51, `Run_CenterX/Y` = G68 X/Y), sets `Run_Active` = 0 and returns the four
-    /// lines of [`AlignmentChain::gcode`] for the adapter to run.
+    /// `Run_Sx/Sy` = G51, `Run_CenterX/Y` = G68 X/Y), closes the run (`Run_Active` = 0) and runs
+    /// the four lines of [`AlignmentChain::gcode`] on the machine; the reply lists them.
     ///
     /// Quality gates, judged on the full fit of the run's model whatever `pieces` is emitted
     /// (0 disables a gate): X or Y scale off 1 by more than `VisionFitMaxScaleDev` percent;
@@ -69,7 +69,10 @@ impl VisionModule {
     /// # Errors
     /// [`VisionError::NotEnabled`], [`VisionError::WrongTool`], [`VisionError::TooFewDots`],
     /// [`VisionError::Math`] (degenerate marks), [`VisionError::FitRejected`]; nothing is
-    /// emitted and nothing changes.
+    /// emitted and nothing changes. [`VisionError::Machine`] when the machine refuses a line:
+    /// the run stays open and the telemetry unchanged, but the lines before the refused one have
+    /// run (the first is the cancel line, so at worst the machine is left unaligned); run M282
+    /// again once the machine accepts G-code.
     pub fn m282(&mut self, machine: &mut dyn Machine, pieces: Pieces) -> Result<Reply<AlignReport>, VisionError> {
         self.check_enabled()?;
         self.check_tool(machine)?;
@@ -95,6 +98,7 @@ impl VisionModule {
             }
         };
         let gcode = chain.gcode()?.to_vec();
+        machine.run_gcode(&gcode)?;
         let residuals: Vec<Vector2<f64>> = commanded.iter().zip(&observed).map(|(n, o)| chain.apply(*n) - o).collect();
         let max_residual = residuals.iter().map(|r| r.norm()).fold(0.0, f64::max);
 

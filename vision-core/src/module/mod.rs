@@ -1,9 +1,15 @@
 //! The Vision module: the typed entry points behind M280–M284.
 //!
-//! The M-code adapter parses the words and calls [`VisionModule::m280`] … [`VisionModule::m284`];
-//! each returns a [`Reply`] with the G-code lines the adapter must run next (possibly none) and
-//! a typed report. A refused call returns a [`VisionError`] and changes nothing it promises to
-//! keep (see each entry point); the G-code of a refused call is never produced.
+//! The M-code adapter parses the words and calls [`VisionModule::m280`] … [`VisionModule::m284`]
+//! with typed values; each returns a [`Reply`] with a typed report and the G-code lines the
+//! module ran. A refused call returns a [`VisionError`] and changes nothing it promises to keep
+//! (see each entry point).
+//!
+//! Decision: every entry point delivers its G-code the same way — it runs the lines itself
+//! through [`Machine::run_gcode`], in order, while it works (M280's cancel line, M282's four
+//! modal lines, M283's moves), and [`Reply::gcode`] lists what it ran. A host never runs a
+//! reply's lines again. Running them inside the call is what M283 needs anyway (it moves, then
+//! triggers), and it lets M280/M282 commit their state only after the machine took the lines.
 //!
 //! Common checks, in order, for every entry point: `VisionEnabled` ("Vision is not enabled");
 //! for M280–M283 the camera-tool check (`VisionCameraToolNumber` ≠ 0 and another tool active).
@@ -35,10 +41,11 @@ pub use m280::RunMode;
 pub use m282::{AlignReport, Pieces};
 pub use m284::{JobReport, MAX_JOB};
 
-/// What an entry point hands back: G-code for the adapter to run, then a report.
+/// What an entry point hands back: the G-code it ran, then a report.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Reply<R> {
-    /// Lines the adapter must run, in order, after the call returns (empty when none).
+    /// Lines the module ran on the machine through [`Machine::run_gcode`], in order (empty
+    /// when none). Informational: the host must not run them again.
     pub gcode: Vec<String>,
     /// What happened.
     pub report: R,

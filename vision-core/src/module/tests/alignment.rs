@@ -59,6 +59,23 @@ fn m280_starts_a_run_and_cancels_alignment() {
 }
 
 #[test]
+fn m280_and_m282_commit_only_after_the_machine_took_their_lines() {
+    let mut rig = rig_with_part();
+    rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect("m280");
+    capture_all(&mut rig, &PART);
+    let run = rig.module.run().clone();
+    rig.world().fail_gcode_after = Some(0);
+    let e = rig.module.m282(&mut rig.machine, Pieces::All).expect_err("e-stop");
+    assert!(matches!(e, VisionError::Machine(_)), "{e}");
+    assert_eq!(rig.module.run(), &run, "the run stays open");
+    assert_eq!(rig.module.telemetry().run_active(), 1);
+    assert_eq!(rig.module.telemetry().run_sx(), 1.0);
+    let e = rig.module.m280(&mut rig.machine, RunMode::Similarity).expect_err("e-stop");
+    assert!(matches!(e, VisionError::Machine(_)), "{e}");
+    assert_eq!(rig.module.run(), &run, "the dots survive a refused M280");
+}
+
+#[test]
 fn m280_refuses_a_reserved_pound_base() {
     let mut rig = Rig::new();
     // Bypass set() validation to model a profile written by an older version.
@@ -165,8 +182,11 @@ fn captures_after_m282_are_in_the_program_frame() {
     rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect("m280");
     capture_all(&mut rig, &PART);
     let r = rig.module.m282(&mut rig.machine, Pieces::All).expect("m282");
-    // The host runs the emitted modals; the fake takes the chain directly.
-    rig.world().alignment = Some(r.report.chain);
+    // M282 ran its modals on the machine: the fake now applies the emitted chain.
+    let active = rig.world().alignment.expect("alignment active");
+    assert!((active.apply(Point2::new(6.0, 4.0)) - r.report.chain.apply(Point2::new(6.0, 4.0))).norm() < 1e-9);
+    let log = rig.world().log.clone();
+    assert_eq!(log[log.len() - 4..], r.gcode[..]);
     rig.go(3.0, 2.0);
     let c = rig.module.m281(&mut rig.machine, false).expect("verify").report;
     assert!((c.observed - Point2::new(3.0, 2.0)).norm() < 1e-9, "{c:?}");

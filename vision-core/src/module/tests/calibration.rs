@@ -2,6 +2,7 @@
 
 use std::path::Path;
 
+use vision_math::chain::fixed;
 use vision_math::{AlignmentChain, LengthUnit, Matrix2, Point2, Remap, Vector2};
 
 use super::fakes::{Rig, World};
@@ -41,6 +42,23 @@ fn sheet_rig(k: Matrix2<f64>, remap: Remap, units: LengthUnit, o0: Vector2<f64>,
     rig
 }
 
+/// The sheet 0.3° on the table, identity flags, the camera tool's offset (3, −1.5) in, inches.
+fn standard_rig() -> Rig {
+    sheet_rig(
+        true_k(),
+        Remap::IDENTITY,
+        LengthUnit::Inch,
+        Vector2::new(3.0, -1.5),
+        sheet_marks(0.3, Vector2::new(1.0, 1.0)),
+    )
+}
+
+/// `rig` with a profile store in place of none.
+fn with_store(rig: &mut Rig, store: ProfileStore) {
+    let module = std::mem::replace(&mut rig.module, crate::module::VisionModule::new(Default::default()));
+    rig.module = module.with_profile(store);
+}
+
 fn sheet_report(r: CalReport) -> SheetReport {
     match r {
         CalReport::Sheet(s) => s,
@@ -56,7 +74,8 @@ fn sheet_walk_recovers_k_and_offset_for_all_eight_mountings() {
         let o0 = if i % 3 == 0 { Vector2::zeros() } else { Vector2::new(3.0, -1.5) };
         let mut rig = sheet_rig(true_k(), remap, units, o0, sheet_marks(0.3, Vector2::new(1.0, 1.0)));
         let r = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("calibrates");
-        assert!(r.gcode.is_empty());
+        // The reply lists exactly the lines the module ran on the machine.
+        assert_eq!(r.gcode, rig.world().log);
         let rep = sheet_report(r.report);
         let p = rig.module.params();
         assert_eq!(p.remap(), remap, "mounting {i}");
@@ -80,7 +99,11 @@ fn sheet_walk_recovers_k_and_offset_for_all_eight_mountings() {
         assert!((rep.axis.bump - 0.1 * f).abs() < 1e-12);
         assert!(rig.world().dwell_s > 0.0);
         assert!(rig.world().log.iter().any(|l| l.starts_with("G91 G0 X")));
-        assert!(rig.world().log.iter().any(|l| l == "G90 G0 X0.0000000 Y0.0000000"));
+        // The verify walk ran before the offset was written, so it commanded dot 5 (at 0, 0)
+        // compensated by o₀ − a (current units).
+        let b = (o0 - CAMERA) * f;
+        let verify_5 = format!("G90 G0 X{} Y{}", fixed(b.x, 7), fixed(b.y, 7));
+        assert_eq!(rig.world().log.iter().rfind(|l| l.starts_with("G90 G0 X")), Some(&verify_5));
     }
 }
 
@@ -160,14 +183,8 @@ fn a_failed_walk_restores_k_flags_offset_and_position() {
 }
 
 #[test]
-fn a_failed_verify_restores_the_offset_it_already_wrote() {
-    let mut rig = sheet_rig(
-        true_k(),
-        Remap::IDENTITY,
-        LengthUnit::Inch,
-        Vector2::new(3.0, -1.5),
-        sheet_marks(0.3, Vector2::new(1.0, 1.0)),
-    );
+fn a_failed_verify_writes_nothing() {
+    let mut rig = standard_rig();
     let start = rig.machine.program_position();
     // 3 bumps + 5 × (5 + 5) walk moves = the verify's first move fails.
     rig.world().fail_gcode_after = Some(3 + 25);
@@ -201,19 +218,48 @@ impl ProfileFs for BrokenDisk {
 
 #[test]
 fn a_failed_save_undoes_the_calibration() {
-    let mut rig = sheet_rig(
-        true_k(),
-        Remap::IDENTITY,
-        LengthUnit::Inch,
-        Vector2::new(3.0, -1.5),
-        sheet_marks(0.3, Vector2::new(1.0, 1.0)),
-    );
+    let mut rig = standard_rig();
     let start = rig.machine.program_position();
-    let module = std::mem::replace(&mut rig.module, crate::module::VisionModule::new(Default::default()));
-    rig.module = module.with_profile(ProfileStore::with_fs("/nonexistent/vision.toml", Box::new(BrokenDisk)));
+    with_store(&mut rig, ProfileStore::with_fs("/nonexistent/vision.toml", Box::new(BrokenDisk)));
     let e = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect_err("save fails");
     assert!(matches!(e, VisionError::Profile { .. }), "{e}");
     assert_untouched(&rig, start);
+}
+
+#[test]
+fn a_failed_save_whose_offset_restore_fails_says_what_to_set_by_hand() {
+    let mut rig = standard_rig();
+    with_store(&mut rig, ProfileStore::with_fs("/nonexistent/vision.toml", Box::new(BrokenDisk)));
+    // The offset write succeeds, the save fails, the restoring write fails.
+    rig.world().fail_offset_after = Some(1);
+    let e = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect_err("save fails");
+    assert!(matches!(e, VisionError::Machine(_)), "{e}");
+    let text = e.to_string();
+    assert!(
+        text.contains("read-only file system") && text.contains("set its X/Y offset back to X3.000000 Y-1.500000"),
+        "{text}"
+    );
+    // The module kept its calibration; the machine kept the new offset (that is what the message is for).
+    assert_eq!(rig.module.params().cal_k(), Matrix2::zeros());
+    assert!((rig.machine.tool_offset(98).expect("tool") - CAMERA).amax() < 1e-9);
+    assert_eq!(rig.module.telemetry().last_status(), text);
+}
+
+#[test]
+fn a_refused_offset_write_commits_nothing() {
+    let mut rig = standard_rig();
+    let dir = std::env::temp_dir().join(format!("vision-core-cal-offset-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("tmp");
+    let path = dir.join("vision.toml");
+    with_store(&mut rig, ProfileStore::new(&path));
+    let start = rig.machine.program_position();
+    rig.world().fail_offset_after = Some(0);
+    let e = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect_err("tool table locked");
+    assert!(e.to_string().contains("tool table is locked"), "{e}");
+    assert_untouched(&rig, start);
+    assert!(!path.exists(), "the profile is not written when the tool table refuses");
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -280,15 +326,13 @@ fn manual_examples_one_and_two_calibrate_then_verify_at_the_centre() {
     let mut rig = sheet_rig(true_k(), Remap::all()[6], LengthUnit::Inch, Vector2::zeros(), marks);
     rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("example 1");
     // Example 2: 4-point run over the corners, M282, then capture the centre in the aligned frame.
-    let cancel = rig.module.m280(&mut rig.machine, crate::module::RunMode::Rectangle).expect("M280").gcode;
-    rig.run(&cancel);
+    rig.module.m280(&mut rig.machine, crate::module::RunMode::Rectangle).expect("M280");
     for (x, y) in [(-2.5, -4.0), (-2.5, 4.0), (2.5, 4.0), (2.5, -4.0)] {
         rig.go(x, y);
         rig.module.m281(&mut rig.machine, false).expect("M281");
     }
     let r = rig.module.m282(&mut rig.machine, crate::module::Pieces::All).expect("M282");
     assert!((r.report.chain.rotation_deg - 0.3).abs() < 1e-9);
-    rig.world().alignment = Some(r.report.chain);
     rig.go(0.0, 0.0);
     rig.module.m281(&mut rig.machine, false).expect("centre");
     let (x, y) = (rig.machine.pound(500).expect("#500"), rig.machine.pound(501).expect("#501"));

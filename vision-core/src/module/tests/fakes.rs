@@ -35,6 +35,8 @@ pub(crate) struct World {
     pub last_pound: u32,
     /// `run_gcode` fails after this many more calls.
     pub fail_gcode_after: Option<usize>,
+    /// `set_tool_offset` fails after this many more calls.
+    pub fail_offset_after: Option<usize>,
 
     pub marks: Vec<Point2<f64>>,
     pub mark_size: f64,
@@ -70,6 +72,7 @@ impl Default for World {
             fail_pound: None,
             last_pound: 9999,
             fail_gcode_after: None,
+            fail_offset_after: None,
             marks: Vec::new(),
             mark_size: 0.5,
             cam_k: Matrix2::new(0.00203, 0.0, 0.0, 0.00203),
@@ -193,6 +196,10 @@ impl Machine for FakeMachine {
                 w.alignment = None;
                 continue;
             }
+            if let Some(chain) = alignment_modal(&w, line)? {
+                w.alignment = Some(chain);
+                continue;
+            }
             let (mut x, mut y) = (None, None);
             for word in line.split_whitespace() {
                 let (letter, num) = word.split_at(1);
@@ -230,6 +237,12 @@ impl Machine for FakeMachine {
     }
     fn set_tool_offset(&mut self, tool: u32, offset: Vector2<f64>) -> Result<(), MachineError> {
         let mut w = self.world();
+        if let Some(n) = w.fail_offset_after {
+            if n == 0 {
+                return Err(MachineError::new("the tool table is locked"));
+            }
+            w.fail_offset_after = Some(n - 1);
+        }
         let f = w.to_inch(1.0);
         match w.offsets.get_mut(&tool) {
             Some(o) => {
@@ -263,6 +276,31 @@ impl Machine for FakeMachine {
     fn now(&self) -> Timestamp {
         Timestamp::from_unix(self.world().now_s, 3600)
     }
+}
+
+/// The alignment after one of M282's `G52 X Y` / `G68 X Y R` / `G51 X Y` lines (positions in
+/// current units, stored in inches); `None` for any other line.
+fn alignment_modal(w: &World, line: &str) -> Result<Option<AlignmentChain>, MachineError> {
+    let mut words = line.split_whitespace();
+    let code = words.next().unwrap_or_default();
+    if !["G52", "G68", "G51"].contains(&code) {
+        return Ok(None);
+    }
+    let mut value = |letter: char| -> Result<f64, MachineError> {
+        let word = words.next().filter(|w| w.starts_with(letter));
+        word.and_then(|w| w[1..].parse().ok())
+            .ok_or_else(|| MachineError::new(format!("{code} needs {letter} in {line:?}")))
+    };
+    let mut chain = w.alignment.unwrap_or(AlignmentChain::IDENTITY);
+    match code {
+        "G52" => chain.shift = Vector2::new(w.to_inch(value('X')?), w.to_inch(value('Y')?)),
+        "G68" => {
+            chain.center = Point2::new(w.to_inch(value('X')?), w.to_inch(value('Y')?));
+            chain.rotation_deg = value('R')?;
+        }
+        _ => chain.scale = Vector2::new(value('X')?, value('Y')?),
+    }
+    Ok(Some(chain))
 }
 
 /// The fake camera.
