@@ -43,6 +43,7 @@ use crate::error::VisionError;
 use crate::machine::Machine;
 use crate::module::capture::{chain_with, mark_size, require_mark};
 use crate::params::Params;
+use crate::ser;
 use crate::sheets::{cal_sheet, known_sheets};
 
 /// The axis-detect bump: 0.1 inch (2.54 mm under G21).
@@ -73,32 +74,39 @@ pub enum Calibrate {
 }
 
 /// Result of the axis-detect bump.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct AxisReport {
     /// The remap written to `VisionCameraSwapXY` / `InvertX` / `InvertY`.
+    #[serde(serialize_with = "ser::remap")]
     pub remap: Remap,
     /// The bump length, current units.
     pub bump: f64,
     /// Native pixel motion of the mark during the +X bump.
+    #[serde(serialize_with = "ser::vector")]
     pub pixels_for_x: Vector2<f64>,
     /// Native pixel motion of the mark during the +Y bump.
+    #[serde(serialize_with = "ser::vector")]
     pub pixels_for_y: Vector2<f64>,
 }
 
 /// What `M283 Qd` measured and wrote. Lengths in `unit`.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct QuickReport {
     /// The unit of every length (also the new `Cal_Units`).
+    #[serde(serialize_with = "ser::unit")]
     pub unit: LengthUnit,
     /// The axis detect.
     pub axis: AxisReport,
     /// The K written, units per pixel.
+    #[serde(serialize_with = "ser::matrix")]
     pub k: Matrix2<f64>,
     /// The dot diameter given.
     pub diameter: f64,
     /// The mark size the camera reported, pixels (native width, height).
+    #[serde(serialize_with = "ser::vector")]
     pub size_px: Vector2<f64>,
     /// The confirming trigger's mark size with the new K (width, height).
+    #[serde(serialize_with = "ser::vector")]
     pub confirm_size: Vector2<f64>,
     /// Largest `|confirm size − diameter|`.
     pub size_error: f64,
@@ -110,33 +118,40 @@ pub struct QuickReport {
 }
 
 /// One dot of the verify walk. Lengths in the report's unit, work frame.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct DotVerify {
     /// The dot's number on the sheet (1-based, walk order).
     pub dot: usize,
     /// Nominal position (the G90 target).
+    #[serde(serialize_with = "ser::point")]
     pub nominal: Point2<f64>,
     /// Where the walk's sheet fit puts the dot.
+    #[serde(serialize_with = "ser::point")]
     pub expected: Point2<f64>,
     /// Where the re-walk saw it with the new K and offset.
+    #[serde(serialize_with = "ser::point")]
     pub observed: Point2<f64>,
     /// `observed − expected`.
+    #[serde(serialize_with = "ser::vector")]
     pub residual: Vector2<f64>,
 }
 
 /// What `M283 Cn` measured and wrote: everything the manual's result popup shows. Lengths in
 /// `unit`.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct SheetReport {
     /// The sheet walked.
     pub sheet: u32,
     /// The unit of every length (also the new `Cal_Units`).
+    #[serde(serialize_with = "ser::unit")]
     pub unit: LengthUnit,
     /// The axis detect.
     pub axis: AxisReport,
     /// The K written, units per pixel.
+    #[serde(serialize_with = "ser::matrix")]
     pub k: Matrix2<f64>,
     /// Per-axis scale: units per pixel along machine X and Y (K's column norms).
+    #[serde(serialize_with = "ser::vector")]
     pub scale: Vector2<f64>,
     /// Camera rotation left in K after the remap, degrees counter-clockwise.
     pub camera_rotation_deg: f64,
@@ -145,14 +160,17 @@ pub struct SheetReport {
     /// Sheet rotation on the table, degrees counter-clockwise.
     pub sheet_rotation_deg: f64,
     /// Measured print scale of the sheet along its X and Y (1 = true size).
+    #[serde(serialize_with = "ser::vector")]
     pub sheet_scale: Vector2<f64>,
     /// RMS residual of the sheet fit over the walk, units.
     pub walk_rms: f64,
     /// The camera tool whose offset was written.
     pub tool: u32,
     /// Its X/Y offset before.
+    #[serde(serialize_with = "ser::vector")]
     pub offset_before: Vector2<f64>,
     /// Its X/Y offset written.
+    #[serde(serialize_with = "ser::vector")]
     pub offset_written: Vector2<f64>,
     /// The verify walk, one entry per dot.
     pub verify: Vec<DotVerify>,
@@ -166,8 +184,9 @@ pub struct SheetReport {
     pub date: String,
 }
 
-/// M283's report.
-#[derive(Debug, Clone, PartialEq)]
+/// M283's report (JSON: the inner report with `"mode": "quick"` or `"sheet"`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[serde(tag = "mode", rename_all = "lowercase")]
 pub enum CalReport {
     /// `Qd`.
     Quick(QuickReport),

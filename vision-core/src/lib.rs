@@ -75,6 +75,7 @@ pub mod params;
 pub mod pound;
 pub mod profile;
 pub mod registry;
+mod ser;
 pub mod sheets;
 
 pub use calibrate::{AxisReport, CalReport, Calibrate, DotVerify, QuickReport, SheetReport};
@@ -83,7 +84,7 @@ pub use error::VisionError;
 pub use machine::{Machine, MachineError, Timestamp};
 pub use module::{AlignReport, Capture, Dot, JobReport, Pieces, Reply, Run, RunMode, VisionModule};
 pub use params::{Access, Calibration, Config, ParamKind, ParamSpec, ParamValue, Params, Section, Telemetry};
-pub use pound::{PoundBlock, SlotValues};
+pub use pound::{PoundBlock, PoundReport, SlotValues};
 pub use profile::{ProfileFs, ProfileStore, StdFs};
 pub use registry::{DriverFactory, DriverRegistry};
 pub use sheets::{cal_sheet, CalSheet, CAL_SHEETS};

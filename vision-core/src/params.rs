@@ -720,6 +720,13 @@ impl Params {
     }
 }
 
+impl serde::Serialize for Telemetry {
+    /// A map from each telemetry parameter's manual name to its value, in the manual's order.
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        crate::ser::named_values(Telemetry::SPECS, |name| self.get(name), s)
+    }
+}
+
 impl Config {
     /// The camera tool number, or `None` when the check is disabled (0).
     #[must_use]

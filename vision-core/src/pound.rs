@@ -115,6 +115,31 @@ impl PoundBlock {
         ];
         fields.iter().filter_map(|(f, val)| self.address(slot, *f).map(|a| (a, *val))).collect()
     }
+
+    /// The whole block as the machine holds it now; a variable the machine cannot read shows
+    /// as 0.
+    #[must_use]
+    pub fn report(self, machine: &dyn Machine) -> PoundReport {
+        let slots = (0..SLOTS)
+            .map(|s| {
+                std::array::from_fn(|f| {
+                    self.address(s, u32::try_from(f).unwrap_or(FIELDS))
+                        .and_then(|a| machine.pound(a).ok())
+                        .unwrap_or(0.0)
+                })
+            })
+            .collect();
+        PoundReport { base: self.base, slots }
+    }
+}
+
+/// The pound-variable block as read back from the machine.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct PoundReport {
+    /// The base B (`VisionPoundVarBase`).
+    pub base: u32,
+    /// Slots 0–4, fields 0–7 each (X, Y, width, height, angle, score, reserved, reserved).
+    pub slots: Vec<[f64; 8]>,
 }
 
 #[cfg(test)]

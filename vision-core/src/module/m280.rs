@@ -8,7 +8,8 @@ use crate::machine::Machine;
 use crate::pound::PoundBlock;
 
 /// The fit an alignment run solves at M282.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
 pub enum RunMode {
     /// `P4` or omitted: rectangle fit (shift, rotation, X and Y scale); needs 4 marks.
     #[default]

@@ -6,6 +6,7 @@ use super::m280::RunMode;
 use super::{Reply, VisionModule};
 use crate::error::VisionError;
 use crate::machine::Machine;
+use crate::ser;
 
 /// Which pieces of the fit M282 emits (`P` word).
 ///
@@ -20,7 +21,8 @@ use crate::machine::Machine;
 ///
 /// Every mode emits the same four lines ([`AlignmentChain::gcode`]) with the other pieces at
 /// identity, so a later M282 always replaces, never compounds.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Pieces {
     /// `P0` / omitted: shift, rotation and scale.
     All,
@@ -32,21 +34,40 @@ pub enum Pieces {
     Scale,
 }
 
+impl Pieces {
+    /// The selection's name (`all`, `shift`, `rotation`, `scale`), as in the JSON.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Pieces::All => "all",
+            Pieces::Shift => "shift",
+            Pieces::Rotation => "rotation",
+            Pieces::Scale => "scale",
+        }
+    }
+}
+
 /// What M282 solved and emitted. Lengths in the machine's current units (`unit`).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct AlignReport {
     /// The unit of every length below.
+    #[serde(serialize_with = "ser::unit")]
     pub unit: LengthUnit,
     /// The run's fit model.
     pub mode: RunMode,
     /// The pieces emitted.
     pub pieces: Pieces,
     /// The full fit of the run's model over every capture (what the quality gates judged).
+    #[serde(serialize_with = "ser::fit")]
     pub fit: Fit,
     /// The chain emitted (equal to `fit.chain()` for [`Pieces::All`]).
+    #[serde(serialize_with = "ser::chain")]
     pub chain: AlignmentChain,
     /// Residual `chain(nᵢ) − oᵢ` of each capture under the emitted chain, in capture order.
+    #[serde(serialize_with = "ser::vectors")]
     pub residuals: Vec<Vector2<f64>>,
+    /// RMS residual length under the emitted chain, `sqrt(Σ‖rᵢ‖² / N)`.
+    pub rms: f64,
     /// Largest residual length under the emitted chain.
     pub max_residual: f64,
 }
@@ -101,6 +122,8 @@ impl VisionModule {
         machine.run_gcode(&gcode)?;
         let residuals: Vec<Vector2<f64>> = commanded.iter().zip(&observed).map(|(n, o)| chain.apply(*n) - o).collect();
         let max_residual = residuals.iter().map(|r| r.norm()).fold(0.0, f64::max);
+        #[allow(clippy::cast_precision_loss)] // a handful of marks
+        let rms = (residuals.iter().map(Vector2::norm_squared).sum::<f64>() / residuals.len() as f64).sqrt();
 
         self.run.active = false;
         self.publish_run();
@@ -112,7 +135,7 @@ impl VisionModule {
         p.run_sy = chain.scale.y;
         p.run_center_x = chain.center.x;
         p.run_center_y = chain.center.y;
-        Ok(Reply { gcode, report: AlignReport { unit, mode, pieces, fit, chain, residuals, max_residual } })
+        Ok(Reply { gcode, report: AlignReport { unit, mode, pieces, fit, chain, residuals, rms, max_residual } })
     }
 
     /// The `VisionFitMax*` gates (see [`VisionModule::m282`]).

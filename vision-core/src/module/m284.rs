@@ -4,7 +4,7 @@ use super::{Reply, VisionModule};
 use crate::error::VisionError;
 
 /// What M284 did.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub struct JobReport {
     /// The job applied (0 = the camera was left on its loaded job).
     pub job: u32,
