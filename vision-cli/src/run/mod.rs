@@ -16,7 +16,7 @@ use vision_mcode::{system_clock, VisionHandler};
 use vision_path::{Limits, PlanConfig, Setpoints};
 
 use crate::{read_text, world, Failure};
-use report::{calibration_truth, pound, steps, telemetry, ProgramReport, Report, Step};
+use report::{calibration_truth, pound, steps, ProgramReport, Report, Step};
 
 /// Setpoint period of the cycle-time planning, seconds.
 const CYCLE_PERIOD_S: f64 = 0.001;
@@ -202,8 +202,8 @@ pub(crate) fn run(args: &RunArgs) -> Result<String, Failure> {
         camera: session.camera.clone(),
         profile: args.profile.as_ref().map(|p| p.display().to_string()),
         programs,
-        pound: pound(&session.machine, params),
-        telemetry: telemetry(params),
+        pound: pound(&session.machine, params)?,
+        telemetry: session.handler.module().telemetry().clone(),
     };
     let output = if args.json {
         let mut s = serde_json::to_string_pretty(&report).map_err(|e| Failure::Input(e.to_string()))?;
