@@ -54,6 +54,17 @@ pub(crate) fn run(args: &PlanArgs) -> Result<String, Failure> {
         LengthUnit::Inch => 500.0 / MM_PER_INCH,
     });
     let limits = Limits::uniform(args.accel, max_speed, args.axis_accel.unwrap_or(args.accel));
+    if let Some(f) = args.default_feed {
+        // An option, not the program: refused as bad input before anything runs.
+        let range = &Limits::SPEED_RANGE;
+        if !range.contains(&(f / 60.0)) {
+            return Err(Failure::Input(format!(
+                "--default-feed {f} is invalid: must be a feed between {} and {} units/min",
+                range.start() * 60.0,
+                range.end() * 60.0
+            )));
+        }
+    }
     let text = read_program(&args.program)?;
     let mut config = InterpreterConfig::new(unit);
     config.default_feed = args.default_feed;

@@ -11,6 +11,7 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 use serde_json::{json, Value};
+use vision_core::text::{printable_line, MAX_MESSAGE_CHARS};
 use vision_gcode::{ArcDirection, Event, GcodeError, Interpreter, InterpreterConfig, PathMode, Rate, RunOutcome, Xyz};
 use vision_math::LengthUnit;
 
@@ -98,6 +99,15 @@ struct Output<W: Write> {
 
 impl<W: Write> Output<W> {
     fn line(&mut self, s: &str) {
+        // Text lines quote program comments and file names: shown escaped and cut (JSON
+        // escapes them itself).
+        let printable;
+        let s = if self.json {
+            s
+        } else {
+            printable = printable_line(s, MAX_MESSAGE_CHARS);
+            printable.as_str()
+        };
         if !self.broken && writeln!(self.writer, "{s}").is_err() {
             self.broken = true;
         }

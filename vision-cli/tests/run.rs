@@ -364,3 +364,23 @@ fn the_json_output_is_documented_field_by_field() {
     assert_eq!(telemetry["VisionRun_DotCount"], 4);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn world_motion_limits_outside_the_planner_range_are_refused_at_load() {
+    // 1e-12 made the cycle-time planner run for ever; 1e-300 reported the walk at a few seconds.
+    let dir = scratch("limits");
+    let world = vision_driver_sim::DEFAULT_WORLD_TOML;
+    for (from, to, field) in [
+        ("max_accel = 20.0", "max_accel = 1e-12", "machine.max_accel"),
+        ("max_speed = 8.0", "max_speed = 1e-300", "machine.max_speed"),
+        ("max_speed = 8.0", "max_speed = 1e300", "machine.max_speed"),
+    ] {
+        assert!(world.contains(from), "the built-in world sets {from}");
+        let path = write(&dir, "w.toml", &world.replace(from, to));
+        let out = run(&["--world", path.to_str().expect("utf-8")], &[&example("04-rectangle-fit.nc")]);
+        assert_eq!(out.status.code(), Some(2), "{to}");
+        assert!(out.stdout.is_empty(), "nothing ran");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(field) && err.contains("invalid"), "{to}: {err}");
+    }
+}

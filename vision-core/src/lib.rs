@@ -10,6 +10,7 @@
 //! * [`pound`]: the pound-variable block; [`image_grab`]: M281 D1.
 //! * [`calibrate`]: M283's axis detect, quick calibration and sheet walk; [`sheets`]: `CAL_SHEETS`.
 //! * [`registry`]: drivers by name for the CLI.
+//! * [`text`]: messages and reports made safe to show a person (control characters, huge input).
 //!
 //! The crate depends on `vision-math` only (plus `thiserror`, `serde`, `toml`); it knows no
 //! driver, no G-code interpreter and no CLI.
@@ -77,6 +78,7 @@ pub mod profile;
 pub mod registry;
 mod ser;
 pub mod sheets;
+pub mod text;
 
 pub use calibrate::{AxisReport, CalReport, Calibrate, DotVerify, QuickReport, SheetReport};
 pub use driver::{CameraDriver, Capabilities, DriverError, DriverErrorKind, Judgment, Reading};

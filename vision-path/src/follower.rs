@@ -309,6 +309,7 @@ fn plan_config(config: &FollowerConfig, max_path_accel: f64) -> PlanConfig {
         period: config.period,
         lookahead: config.lookahead,
         start: config.start,
+        max_setpoints: PlanConfig::DEFAULT_MAX_SETPOINTS,
     }
 }
 

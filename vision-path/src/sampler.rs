@@ -80,6 +80,8 @@ pub struct Setpoints<I> {
     planner: Lookahead<I>,
     period: f64,
     tick: u64,
+    /// [`PlanConfig::max_setpoints`].
+    max_setpoints: u64,
     span: Span,
     /// Speed carried from a braking piece into the next (after [`Setpoints::stop`]).
     carry: f64,
@@ -112,6 +114,7 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Setpoints<I> {
         Ok(Setpoints {
             planner: Lookahead::new(shaper, config.lookahead),
             period: config.period,
+            max_setpoints: config.max_setpoints,
             tick: 0,
             span: Span::Rest { pos: start, line: 0, t1: 0.0 },
             carry: 0.0,
@@ -287,6 +290,22 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Iterator for Setpoints<I> {
         }
         if self.finished {
             return None;
+        }
+        if self.tick >= self.max_setpoints {
+            self.finished = true;
+            let line = match &self.span {
+                Span::Motion { piece, .. } => piece.line,
+                Span::Rest { line, .. } => *line,
+            };
+            let days = self.max_setpoints as f64 * self.period / 86_400.0;
+            return Some(Err(PathError::InvalidItem {
+                line,
+                reason: format!(
+                    "the path runs longer than {} setpoints ({days:.1} days at this period); check the \
+                     feeds, the limits and the program's units",
+                    self.max_setpoints
+                ),
+            }));
         }
         let t = self.tick as f64 * self.period;
         // `>=`: stops and events due at exactly `t` are taken before sampling `t`.

@@ -168,8 +168,17 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Shaper<I> {
         }
         let requested = match seg.rate {
             Rate::Rapid => f64::INFINITY,
-            Rate::Feed(f) if f > 0.0 && f <= MAX_COORDINATE => f / 60.0,
-            Rate::Feed(f) => return Err(invalid(line, format!("feed F{f} is invalid; program a feed greater than 0"))),
+            Rate::Feed(f) if Limits::SPEED_RANGE.contains(&(f / 60.0)) => f / 60.0,
+            Rate::Feed(f) => {
+                return Err(invalid(
+                    line,
+                    format!(
+                        "feed F{f} is invalid; program a feed between {} and {} units/min",
+                        Limits::SPEED_RANGE.start() * 60.0,
+                        Limits::SPEED_RANGE.end() * 60.0
+                    ),
+                ))
+            }
         };
         if let PathMode::Blend { tolerance: Some(p) } = seg.mode {
             if !(0.0..=MAX_COORDINATE).contains(&p) {
