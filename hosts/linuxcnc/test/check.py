@@ -30,12 +30,22 @@ def ini_text():
         return f.read().replace("/opt/mach-vision/linuxcnc", HOST)
 
 
-def run(rs274, program, env_extra, var_text=VAR_PERSISTENT):
-    """Returns (exit status, canonical calls [(name, args)], other output lines)."""
+PROBE_INI = """[RS274NGC]
+REMAP = M281 modalgroup=10 argspec=d python=m281
+REMAP = M282 modalgroup=10 python=m282
+[PYTHON]
+TOPLEVEL = %(dir)s/toplevel.py
+PATH_PREPEND = %(dir)s
+""" % {"dir": os.path.join(HERE, "probe")}
+
+
+def run(rs274, program, env_extra, var_text=VAR_PERSISTENT, ini=None):
+    """Returns (exit status, canonical calls [(name, args)], other output lines); `ini` defaults
+    to the shipped snippet."""
     with tempfile.TemporaryDirectory(prefix="lcnc-remap-") as tmp:
         paths = {name: os.path.join(tmp, name) for name in ("test.ini", "test.tbl", "test.var", "test.ngc")}
         with open(paths["test.ini"], "w") as f:
-            f.write(ini_text())
+            f.write(ini if ini is not None else ini_text())
         with open(paths["test.tbl"], "w") as f:
             f.write("T1 P1 ;camera\nT2 P2 ;\n")
         with open(paths["test.var"], "w") as f:
@@ -148,6 +158,22 @@ def main():
     status, calls, other = run(rs274, "G20\nG10 L2 P1 X1 Y2 R30\nG52 X0.1 Y0.2\nG53 G0 X0.7 Y0.5\nM2\n", {})
     machine = traverses(calls)[0][1]
     check.that("canon-order", math.dist(machine, (0.7, 0.5)) < 1e-4, "G53 X0.7 Y0.5 maps back to %s" % (machine,))
+
+    # Probe: what rs274 does with a Python remap (no vision code involved).
+    status, calls, other = run(rs274, "G21\nM281 D1\nM282\nG0 X0 Y0\nM2\n", {}, ini=PROBE_INI)
+    moves = [m for _, m in traverses(calls)]
+    check.that("probe", moves == [(5.0, 6.0), (1.0, 2.0), (7.0, 8.0), (0.0, 0.0)], "self.execute moves %s" % moves)
+    check.that("probe", "probe: m281 task=0 words=[('d', 1.0)]" in other, "rs274 runs remaps with self.task == 0")
+    check.that(
+        "probe",
+        "probe: before-yield #5420=5 current_x=1" in other,
+        "#5420 still holds the block's start after self.execute; current_x follows",
+    )
+    check.that(
+        "probe",
+        "probe: execute-after-yield status=0" in other,
+        "rs274 (no motion) even accepts self.execute after the yield; only the task refuses it",
+    )
 
     # 1. Shifted and rotated part: the marks land; the final M280 puts everything back.
     part = {"MACH_VISION_FAKE_PART": "0.7,0.12,-0.08,1"}
