@@ -3,15 +3,17 @@
 //! LinuxCNC rotates the active G5x system (`G10 L2 P0 R`, degrees, counter-clockwise) about its
 //! origin, and its canon maps a programmed XY `p` to the machine as
 //! `g5x + R(rot)·(p + g92) + tool` (emccanon.cc, `rotate_and_offset_pos`): the G92/G52 offset
-//! is added *before* the rotation, in the rotated frame. So the chain's rotation about its centre
+//! is added *before* the rotation, in the rotated frame (rs274's own G53 conversion agrees:
+//! `hosts/linuxcnc/test`). So the chain's rotation about its centre
 //! `c` plus its shift `t`, `R(θ)·(p − c) + c + t = R(θ)·p + t'` with `t' = c − R(θ)·c + t`, is
 //! executed exactly by rotating the G5x system by θ (on top of the rotation it had before, the
 //! *base* rotation θ₀) and setting `G52 = R(θ)ᵀ·t'`:
 //! `R(θ₀ + θ)·(p + R(θ)ᵀ·t') = R(θ₀)·(R(θ)·p + t')`.
 //!
 //! The fit's frame is the program frame before the alignment, i.e. the G5x system already rotated
-//! by θ₀; the cancel restores θ₀ and clears G52. Who remembers θ₀ (the host) is not this module's
-//! concern: it takes it as a number.
+//! by θ₀ (so a host must turn the camera's machine-axis offset by −θ₀ before adding it to a
+//! program-frame position); the cancel restores θ₀ and clears G52. Who remembers θ₀ (the host)
+//! is not this module's concern: it takes it as a number.
 //!
 //! LinuxCNC cannot scale. A chain whose scale deviates from 1 by more than the scale gate is
 //! refused ([`MathError::ScaleNotExpressible`]); within the gate the rigid part is applied — the
