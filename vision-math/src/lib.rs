@@ -6,6 +6,7 @@
 //!   similarity, rectangle (the true 5-parameter minimum) and affine — and the 2×2 solve
 //!   calibration needs.
 //! * [`chain`]: the `G51 → G68 → G52` modal chain M282 emits, its exact `apply`, and its text.
+//! * [`linuxcnc`]: the same alignment in LinuxCNC's dialect (`G10 L2 P0 R` + `G52`, no scale).
 //! * [`units`]: inch ↔ millimetre.
 //!
 //! No I/O, no allocation on the fit path, no NaN: every degenerate input is a [`MathError`].
@@ -29,6 +30,7 @@
 pub mod chain;
 mod error;
 pub mod fit;
+pub mod linuxcnc;
 pub mod pixel;
 pub mod units;
 
