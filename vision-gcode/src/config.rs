@@ -40,6 +40,9 @@ pub struct InterpreterConfig {
     /// interpreter keeps this one copy up to date: its `config().tools` is the live table, the
     /// same as [`crate::Interpreter::tools`].
     pub tools: ToolTable,
+    /// The block-delete switch: when on, lines starting with `/` are skipped; when off (the
+    /// default, as on the controllers) the `/` is ignored and the line runs.
+    pub block_delete: bool,
 }
 
 impl Default for InterpreterConfig {
@@ -64,6 +67,7 @@ impl InterpreterConfig {
             max_arc_segments: MAX_ARC_SEGMENTS,
             user_mcodes: 100..=999,
             tools: ToolTable::numbered(1, 254),
+            block_delete: false,
         }
     }
 }

@@ -12,6 +12,8 @@ use crate::words::whole_in;
 pub const MAX_PARAMETER: u32 = 9999;
 /// `#5161`–`#5163`: the G28 position (machine coordinates, machine units).
 pub const G28_POSITION: u32 = 5161;
+/// `#5181`–`#5183`: the G30 position (machine coordinates, machine units).
+pub const G30_POSITION: u32 = 5181;
 /// `#5211`–`#5213`: the G92 offset (machine units).
 pub const G92_OFFSET: u32 = 5211;
 /// `#5220`: the active coordinate system, 1 (G54) … 6 (G59). Read-only.

@@ -19,7 +19,8 @@ fn check_finite(event: &Event) {
         Event::Dwell { seconds, .. } => seconds.is_finite(),
         Event::ToolChange { offset, .. } => offset.is_finite(),
         Event::UserMCode(c) => c.words.iter().all(|(_, v)| v.is_finite()),
-        Event::Output(_) | Event::Stop { .. } | Event::ProgramEnd { .. } => true,
+        Event::Spindle { speed, .. } => speed.is_none_or(f64::is_finite),
+        Event::Output(_) | Event::Coolant { .. } | Event::Stop { .. } | Event::ProgramEnd { .. } => true,
     };
     assert!(ok, "non-finite event {event:?}");
 }
@@ -81,6 +82,7 @@ const PROGRAMS: &[&str] = &[
     "G90 G20 F10\nG52 X0.1 Y0.2\nG68 X3 Y2 R0.5\nG51 X1.001 Y0.999\nG0 X6 Y4\nG2 X0 Y4 I-3 J0\nG69 G50 G52 X0 Y0",
     "#1 = [2 * ATAN[1]/[2]] #2 = [#1 MOD 7 ** 2]\nG1 X[#1 / 3] Y-#2 Z[SQRT[ABS[#2]]] F[100 + #1]\nG10 L20 P0 X0\nG92 Y1\nG28.1\nG28 X2",
     "T1 M6 M3\nG4 P0.5\nM4 $1\nM5 A1 P2\nM0\nM1\nM2",
+    "%\nG17 G40 G49 G80 G90 G20\nT2 M6\nS12000 M3\nG43 H2 M8\nG53 G0 Z0\n/G0 X1\nG0 X0.5 Y0.5 Z0.2\nG98 G81 X1 Y1 Z-0.3 R0.1 F20\nX2\nG99 G83 X3 Q0.1 Z-0.5 R0.1 L2\nG91 G73 X0.5 Z-0.2 R-0.1 Q0.05 L3\nG90 G82 P0.2 Z-0.1 R0.1 X1\nG85 X2\nG89 X3 P0.1\nG80 G0 Z1\nG2 I0.5 F30\nG3 X1 Y1 R0.5 P2\nG64 P0.01 Q0.01\nG43.1 Z0.1\nG49 M9\nG30 G92.1\nM5\n%\nG1 X9",
 ];
 
 /// 384 cases per property in CI; `FUZZ_CASES=100000 cargo test --release --test fuzz` for a
@@ -103,7 +105,7 @@ proptest! {
     }
 
     #[test]
-    fn gcode_shaped_text_never_panics(text in "[GMXYZIJKRPFTLNQS#$\\[\\]0-9.+*/ ()=;EQANDORSINMCOS\n-]{0,300}") {
+    fn gcode_shaped_text_never_panics(text in "[GMXYZIJKRPFTLNQSHO#$%<>\\[\\]0-9.+*/ ()=;EQANDORSINMCOS\n-]{0,300}") {
         exercise(&text);
     }
 

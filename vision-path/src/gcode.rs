@@ -172,7 +172,10 @@ pub fn item(event: &GEvent, line: usize) -> Item {
             };
             Item::Event { line, event: Event::Output(command) }
         }
-        GEvent::Stop { .. } | GEvent::UserMCode(_) => Item::Dwell { line, seconds: 0.0 },
+        // A spindle or coolant switch waits for the motion before it (a stop, like M0).
+        GEvent::Stop { .. } | GEvent::UserMCode(_) | GEvent::Spindle { .. } | GEvent::Coolant { .. } => {
+            Item::Dwell { line, seconds: 0.0 }
+        }
         GEvent::ProgramEnd { .. } => Item::End { line },
     }
 }

@@ -16,6 +16,8 @@ impl LineRun<'_> {
         let given = AXIS_LETTERS.map(|l| self.w.has(l));
         if given.iter().any(|g| *g) {
             Ok(given)
+        } else if let Some(&letter) = b"ABCUVW".iter().find(|&&l| self.w.has(l)) {
+            Err(RunProblem::AxisNotSupported { letter: char::from(letter) })
         } else {
             Err(RunProblem::NoAxisWords { code: owner })
         }
@@ -57,6 +59,17 @@ impl LineRun<'_> {
             system = self.st.system;
         }
         let base = work_offset_base(system);
+        // LinuxCNC's coordinate-system rotation: only "no rotation" is possible here.
+        match self.w.take(b'R', "G10")? {
+            Some(r) if r != 0.0 => {
+                return Err(RunProblem::Unsupported {
+                    code: "G10 L2 R".into(),
+                    feature: "coordinate-system rotation (use G68 instead)",
+                })
+            }
+            Some(_) if !AXIS_LETTERS.iter().any(|&l| self.w.has(l)) => return Ok(()),
+            _ => {}
+        }
         let (v, given) = self.absolute_point("G10")?;
         if l == 2.0 {
             for axis in (0..3).filter(|&a| given[a]) {
@@ -110,6 +123,14 @@ impl LineRun<'_> {
         self.st.rederive_program(self.params);
         self.keep_given(v, given);
         Ok(())
+    }
+
+    /// G92.1 / G92.2: the G92 offset back to zero (the program point is re-derived).
+    pub(super) fn g92_reset(&mut self) {
+        for axis in 0..3 {
+            self.params.set(G92_OFFSET + axis, 0.0);
+        }
+        self.st.rederive_program(self.params);
     }
 
     pub(super) fn g52(&mut self) -> Result<(), RunProblem> {

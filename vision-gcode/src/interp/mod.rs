@@ -1,5 +1,6 @@
 //! The interpreter: runs text line by line, keeps the modal state, streams events.
 
+mod cycles;
 mod frames;
 mod line;
 mod modal;
@@ -106,11 +107,19 @@ impl Interpreter {
         sink: &mut dyn EventSink,
     ) -> Result<RunOutcome, GcodeError> {
         let mut lines = 0;
+        // `%` on the first non-blank line opens a delimited program; the next `%` ends it.
+        let (mut started, mut delimited) = (false, false);
         for (i, raw) in text.split('\n').enumerate() {
             let line = u32::try_from(i + 1).unwrap_or(u32::MAX);
             let at = At { line, tag: line, nested: false };
-            if let Flow::End(code) = self.exec_line(raw, at, handler.as_deref_mut(), sink)? {
-                return Ok(RunOutcome::Ended { line, code });
+            match self.exec_line(raw, at, handler.as_deref_mut(), sink)? {
+                Flow::End(code) => return Ok(RunOutcome::Ended { line, code }),
+                Flow::Percent if delimited => return Ok(RunOutcome::Completed { lines: line }),
+                Flow::Percent => delimited = !started,
+                Flow::Continue => {}
+            }
+            if !started {
+                started = !raw.trim().is_empty();
             }
             lines = line;
         }
@@ -152,8 +161,8 @@ impl Interpreter {
     ) -> Result<Flow, GcodeError> {
         let line = at.line;
         let block = self.parser.parse_line(text, line)?;
-        if block.is_empty() {
-            return Ok(Flow::Continue);
+        if block.is_empty() || (self.config.block_delete && block.block_delete()) {
+            return Ok(if block.is_percent() { Flow::Percent } else { Flow::Continue });
         }
         let mut words = Words::default();
         self.params.begin();

@@ -83,6 +83,7 @@ impl Parser {
                 cur.pos += 1;
                 self.bracketed(cur, depth + 1, at)?;
             }
+            Some(b'<') => return Err((at, SyntaxProblem::NamedParameter)),
             Some(b) if b.is_ascii_alphabetic() => {
                 let (func, end) = function_at(cur).ok_or((at, SyntaxProblem::UnknownFunction))?;
                 cur.pos = end;

@@ -139,6 +139,7 @@ pub struct Block<'p, 's> {
     text: &'s str,
     line: u32,
     number: Option<u32>,
+    marks: Marks,
     words: &'p [Word],
     assignments: &'p [Assignment],
     comments: &'p [Span],
@@ -156,6 +157,18 @@ impl<'p, 's> Block<'p, 's> {
     #[must_use]
     pub fn line_number(&self) -> Option<u32> {
         self.number
+    }
+
+    /// Whether the line starts with `/` (block delete: skipped when the switch is on).
+    #[must_use]
+    pub fn block_delete(&self) -> bool {
+        self.marks.block_delete
+    }
+
+    /// Whether the line is a `%` program delimiter.
+    #[must_use]
+    pub fn is_percent(&self) -> bool {
+        self.marks.percent
     }
 
     /// The words in order of appearance.
@@ -212,6 +225,13 @@ fn column(text: &str, offset: usize) -> u32 {
     u32::try_from(text[..end].chars().count() + 1).unwrap_or(u32::MAX)
 }
 
+/// The marks a line can start with.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+struct Marks {
+    block_delete: bool,
+    percent: bool,
+}
+
 /// The reusable line parser.
 #[derive(Debug, Clone, Default)]
 pub struct Parser {
@@ -238,11 +258,13 @@ impl Parser {
         self.comments.clear();
         self.nodes.clear();
         let mut cur = Cursor::new(text);
-        match self.items(&mut cur) {
+        let mut marks = Marks::default();
+        match self.items(&mut cur, &mut marks) {
             Ok(number) => Ok(Block {
                 text,
                 line,
                 number,
+                marks,
                 words: &self.words,
                 assignments: &self.assignments,
                 comments: &self.comments,
@@ -252,7 +274,7 @@ impl Parser {
         }
     }
 
-    fn items(&mut self, cur: &mut Cursor<'_>) -> PResult<Option<u32>> {
+    fn items(&mut self, cur: &mut Cursor<'_>, marks: &mut Marks) -> PResult<Option<u32>> {
         let mut number = None;
         let mut seen: u32 = 0;
         let mut first = true;
@@ -276,6 +298,13 @@ impl Parser {
                     // Program delimiter: the line holds nothing else but comments.
                     cur.pos += 1;
                     first = false;
+                    marks.percent = true;
+                    continue;
+                }
+                b'/' if first && !marks.block_delete => {
+                    // Block delete: the line's first character; `N` may follow.
+                    cur.pos += 1;
+                    marks.block_delete = true;
                     continue;
                 }
                 b'#' => {
@@ -293,6 +322,9 @@ impl Parser {
                     let letter = b.to_ascii_uppercase();
                     if !(letter.is_ascii_uppercase() || letter == b'$') {
                         return Err((at, unexpected(cur, at)));
+                    }
+                    if letter == b'O' {
+                        return Err((at, SyntaxProblem::OWord));
                     }
                     cur.pos += 1;
                     if letter == b'N' {
