@@ -29,6 +29,10 @@ pub(crate) struct TraceArgs {
     /// on the controllers: the `/` is ignored).
     #[arg(long)]
     block_delete: bool,
+    /// Folders searched for `name.ngc` when `o<name> call` names a subroutine the program does
+    /// not define (LinuxCNC's SUBROUTINE_PATH); colon-separated, or repeat the option.
+    #[arg(long, value_delimiter = ':')]
+    subroutine_path: Vec<PathBuf>,
     /// The G-code program; standard input when `-`.
     program: PathBuf,
 }
@@ -55,7 +59,11 @@ impl UnitArg {
 pub(crate) fn run(args: &TraceArgs) -> Result<String, Failure> {
     let text = read_program(&args.program)?;
     let unit = args.machine_units.unit();
-    let config = InterpreterConfig { block_delete: args.block_delete, ..InterpreterConfig::new(unit) };
+    let config = InterpreterConfig {
+        block_delete: args.block_delete,
+        subroutine_path: args.subroutine_path.clone(),
+        ..InterpreterConfig::new(unit)
+    };
     let mut interp = Interpreter::new(config);
     let stdout = std::io::stdout();
     let mut out = Output { writer: BufWriter::new(stdout.lock()), json: args.json, broken: false };

@@ -1,6 +1,7 @@
 //! How the interpreter is set up: machine unit, start-up modes, tolerances, tools, user M-codes.
 
 use std::ops::RangeInclusive;
+use std::path::PathBuf;
 
 use vision_math::LengthUnit;
 
@@ -43,6 +44,12 @@ pub struct InterpreterConfig {
     /// The block-delete switch: when on, lines starting with `/` are skipped; when off (the
     /// default, as on the controllers) the `/` is ignored and the line runs.
     pub block_delete: bool,
+    /// Folders searched, in order, for `name.ngc` when `o<name> call` names a subroutine the
+    /// program does not define (LinuxCNC's `SUBROUTINE_PATH`). Default: none.
+    pub subroutine_path: Vec<PathBuf>,
+    /// Most loop iterations (`while`, `do`, `repeat`, `continue`) one run may make, so that a
+    /// runaway loop ends with an error rather than hanging. Default 10 million.
+    pub max_loop_iterations: u64,
 }
 
 impl Default for InterpreterConfig {
@@ -68,6 +75,8 @@ impl InterpreterConfig {
             user_mcodes: 100..=999,
             tools: ToolTable::numbered(1, 254),
             block_delete: false,
+            subroutine_path: Vec::new(),
+            max_loop_iterations: 10_000_000,
         }
     }
 }

@@ -149,12 +149,18 @@ pub enum SyntaxProblem {
     /// `N` with a fraction, a sign or an expression.
     #[error("the line number `N` must be a whole number, e.g. N10")]
     BadLineNumber,
-    /// An `o` word: LinuxCNC subroutines and control flow, or a Fanuc program number.
-    #[error("o-words (LinuxCNC `o100 sub`/`call`/`if`/`while`/`repeat`, Fanuc program numbers `O1000`) are not supported: expand the subroutines and loops in the post-processor")]
-    OWord,
-    /// A named parameter `#<name>`.
-    #[error("named parameters (`#<name>`) are not supported: use numbered parameters #1-#5000")]
-    NamedParameter,
+    /// An `o` word after other words.
+    #[error("an o-word (`o100 sub`, `o<name> call`, `o1 if [...]`) must start its line (after `/` and `N` only)")]
+    OWordNotFirst,
+    /// A malformed o-word line.
+    #[error("o-word line: {detail}")]
+    BadOWord {
+        /// What is wrong.
+        detail: String,
+    },
+    /// `#<` without its `>`, or an empty name.
+    #[error("named parameter `#<` is not closed: write #<name>")]
+    UnclosedName,
     /// The same letter twice (G and M may repeat).
     #[error("two `{letter}` words on one line: keep one")]
     DuplicateWord {
@@ -427,6 +433,46 @@ pub enum RunProblem {
         /// The index as computed.
         index: f64,
     },
+    /// A named parameter read before any value was assigned to it.
+    #[error("named parameter #<{name}> is not defined: assign it first, e.g. #<{name}> = 0")]
+    UndefinedName {
+        /// The name (lower case).
+        name: String,
+    },
+    /// `endsub` or `return` with no call to return from.
+    #[error("endsub/return outside a subroutine call")]
+    FlowOutsideCall,
+    /// o-word calls nested too deeply.
+    #[error("subroutine calls nest more than {limit} deep: check for unintended recursion")]
+    CallsTooDeep {
+        /// The limit.
+        limit: usize,
+    },
+    /// A subroutine neither in the program nor on the subroutine path.
+    #[error(
+        "subroutine o<{label}> is not defined in the program and no {label}.ngc on the subroutine path defines it"
+    )]
+    UnknownSubroutine {
+        /// The label.
+        label: String,
+    },
+    /// A subroutine file that does not read.
+    #[error("subroutine file {file}: {message}")]
+    SubroutineFile {
+        /// The file.
+        file: String,
+        /// Its problem.
+        message: String,
+    },
+    /// A loop ran more often than allowed.
+    #[error("loops ran more than {limit} iterations: the program probably never leaves a loop")]
+    TooManyIterations {
+        /// The limit.
+        limit: u64,
+    },
+    /// An o-word in G-code a handler runs.
+    #[error("o-words (subroutines and control flow) cannot appear in G-code run by a handler")]
+    FlowInHandler,
     /// A write to a read-only parameter.
     #[error("#{index} is read-only ({what}); write to another parameter")]
     ReadOnlyParameter {

@@ -68,8 +68,16 @@
 //!   non-blank line makes the next `%` line end the program; `/` at the start of a line is
 //!   block delete (skipped only with [`InterpreterConfig::block_delete`]). Features left out
 //!   (cutter compensation, lathe modes and cycles, threading, NURBS, probing, inverse-time feed,
-//!   HAL M-codes, o-word subroutines, named parameters, …) are refused with a message naming
-//!   them ([`RunProblem::Unsupported`], [`SyntaxProblem::OWord`]).
+//!   HAL M-codes, …) are refused with a message naming them ([`RunProblem::Unsupported`]).
+//! * **o-words** (LinuxCNC): `sub`/`endsub`/`call`/`return` (arguments in #1–#30, local to the
+//!   call and restored after it; `endsub [v]`/`return [v]` set `#<_value>`), `if`/`elseif`/
+//!   `else`/`endif`, `while`/`endwhile`, `do`/`while`, `repeat`/`endrepeat`, `break`/`continue`
+//!   (in `while` and `do` loops, as LinuxCNC), and `o<name> call` of a file `name.ngc` on
+//!   [`InterpreterConfig::subroutine_path`]. A program streams line by line until its first
+//!   o-word line; from there its text is indexed once and run with a program counter. Loops stop
+//!   with an error after [`InterpreterConfig::max_loop_iterations`]; calls nest 10 deep.
+//! * **Named parameters** `#<name>` (case and blanks ignored): local to the call that wrote
+//!   them, global when the name starts with `_`; reading one never written is an error.
 //! * **Frame changes never move the machine** (G54–G59, G10 on the active system, G92, G52,
 //!   G68/G69, G51/G50, M6, a tool-offset or offset-parameter write): the program position is
 //!   re-derived from the machine position, and the next move goes to the new frame.

@@ -10,6 +10,9 @@ use vision_gcode::{
 };
 use vision_math::LengthUnit;
 
+mod common;
+use common::moves;
+
 fn machine(unit: LengthUnit) -> Interpreter {
     let tools = ToolTable::numbered(1, 20).with(1, Tool { offset: Xyz::new(0.0, 0.0, 0.5), outputs: None });
     Interpreter::new(InterpreterConfig { tools, ..InterpreterConfig::new(unit) })
@@ -26,17 +29,6 @@ fn problem(interp: &mut Interpreter, program: &str) -> RunProblem {
         Err(GcodeError::Run { problem, .. }) => problem,
         other => panic!("expected a run error for {program:?}, got {other:?}"),
     }
-}
-
-/// The straight moves: (rapid?, end) in machine coordinates.
-fn moves(events: &[Event]) -> Vec<(bool, [f64; 3])> {
-    events
-        .iter()
-        .filter_map(|e| match e {
-            Event::Linear(m) => Some((m.rate == Rate::Rapid, m.end.to_array())),
-            _ => None,
-        })
-        .collect()
 }
 
 fn assert_moves(got: &[(bool, [f64; 3])], want: &[(bool, [f64; 3])]) {
@@ -217,8 +209,4 @@ fn unsupported_features_are_named() {
         let message = problem(&mut interp, text).to_string();
         assert!(message.contains(feature), "{text}: {message}");
     }
-    let err = interp.run("o100 sub", None, &mut Vec::new()).expect_err("o-word");
-    assert!(err.to_string().contains("o-words"), "{err}");
-    let err = interp.run("#<depth> = 1", None, &mut Vec::new()).expect_err("named");
-    assert!(err.to_string().contains("named parameters"), "{err}");
 }

@@ -23,6 +23,8 @@ pub(crate) enum Flow {
     End(u32),
     /// A `%` delimiter line.
     Percent,
+    /// An o-word line: control flow takes over.
+    OWord,
 }
 
 /// An action queued until the line commits.

@@ -1,6 +1,7 @@
 //! The interpreter: runs text line by line, keeps the modal state, streams events.
 
 mod cycles;
+mod flow;
 mod frames;
 mod line;
 mod modal;
@@ -18,7 +19,7 @@ use crate::handler::{Context, HandlerError, MCodeHandler, UserMCode};
 use crate::params::{Params, ACTIVE_SYSTEM, G92_OFFSET, POSITION, TOOL_NUMBER, TOOL_OFFSET};
 use crate::parse::Parser;
 use crate::tools::{Tool, ToolTable};
-use crate::words::{evaluate, Words};
+use crate::words::{evaluate, Target, Words};
 use line::{is_builtin_m, Flow, LineRun, Pending};
 use modal::{is_work_offset, work_offset_base, Modal};
 
@@ -63,7 +64,7 @@ pub struct Interpreter {
     modal: Modal,
     parser: Parser,
     stack: Vec<f64>,
-    assigns: Vec<(u32, f64)>,
+    assigns: Vec<(Target, f64)>,
     pending: Vec<Pending>,
 }
 
@@ -116,6 +117,7 @@ impl Interpreter {
                 Flow::End(code) => return Ok(RunOutcome::Ended { line, code }),
                 Flow::Percent if delimited => return Ok(RunOutcome::Completed { lines: line }),
                 Flow::Percent => delimited = !started,
+                Flow::OWord => return self.run_flow(text, i, delimited, handler, sink),
                 Flow::Continue => {}
             }
             if !started {
@@ -146,7 +148,9 @@ impl Interpreter {
     pub(crate) fn run_nested(&mut self, text: &str, tag: u32, sink: &mut dyn EventSink) -> Result<(), GcodeError> {
         for (i, raw) in text.split('\n').enumerate() {
             let line = u32::try_from(i + 1).unwrap_or(u32::MAX);
-            self.exec_line(raw, At { line, tag: line_tag(tag, line), nested: true }, None, sink)?;
+            if self.exec_line(raw, At { line, tag: line_tag(tag, line), nested: true }, None, sink)? == Flow::OWord {
+                return Err(GcodeError::run(line, RunProblem::FlowInHandler));
+            }
         }
         Ok(())
     }
@@ -162,7 +166,13 @@ impl Interpreter {
         let line = at.line;
         let block = self.parser.parse_line(text, line)?;
         if block.is_empty() || (self.config.block_delete && block.block_delete()) {
-            return Ok(if block.is_percent() { Flow::Percent } else { Flow::Continue });
+            return Ok(if block.is_percent() {
+                Flow::Percent
+            } else if block.is_oword() && !(self.config.block_delete && block.block_delete()) {
+                Flow::OWord
+            } else {
+                Flow::Continue
+            });
         }
         let mut words = Words::default();
         self.params.begin();
@@ -173,13 +183,18 @@ impl Interpreter {
         let comments: Vec<&str> = if user.is_some() { block.comments().collect() } else { Vec::new() };
         read.map_err(|p| GcodeError::run(line, p))?;
         let mut offsets_written = false;
-        for i in 0..self.assigns.len() {
-            let (n, v) = self.assigns[i];
-            if let Err(p) = self.params.write(n, v) {
+        for (target, v) in &self.assigns {
+            let written = match target {
+                Target::Number(n) => {
+                    offsets_written |= affects_frame(*n);
+                    self.params.write(*n, *v)
+                }
+                Target::Named(name) => self.params.write_named(name, *v),
+            };
+            if let Err(p) = written {
                 self.params.rollback();
                 return Err(GcodeError::run(line, p));
             }
-            offsets_written |= affects_frame(n);
         }
         if let Some(code) = user {
             if let Err(problem) = user_line_alone(code, &words, at.nested) {

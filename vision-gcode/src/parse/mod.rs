@@ -144,6 +144,7 @@ pub struct Block<'p, 's> {
     assignments: &'p [Assignment],
     comments: &'p [Span],
     nodes: &'p [Node],
+    names: &'p [Box<str>],
 }
 
 impl<'p, 's> Block<'p, 's> {
@@ -163,6 +164,13 @@ impl<'p, 's> Block<'p, 's> {
     #[must_use]
     pub fn block_delete(&self) -> bool {
         self.marks.block_delete
+    }
+
+    /// Whether the line is an o-word line (`o100 sub`, `o<name> call [1]`, …): its text is
+    /// left to the control-flow reader; only `/` and `N` before the `o` are parsed.
+    #[must_use]
+    pub fn is_oword(&self) -> bool {
+        self.marks.oword
     }
 
     /// Whether the line is a `%` program delimiter.
@@ -204,6 +212,12 @@ impl<'p, 's> Block<'p, 's> {
         self.words.is_empty() && self.assignments.is_empty()
     }
 
+    /// The named parameters the line mentions (lower case, blanks removed), by
+    /// [`Node::Named`] index.
+    pub(crate) fn names(&self) -> &'p [Box<str>] {
+        self.names
+    }
+
     /// The postfix nodes of `expr`.
     pub(crate) fn nodes(&self, expr: Expr) -> &'p [Node] {
         self.nodes.get(expr.start as usize..expr.end as usize).unwrap_or(&[])
@@ -230,6 +244,7 @@ fn column(text: &str, offset: usize) -> u32 {
 struct Marks {
     block_delete: bool,
     percent: bool,
+    oword: bool,
 }
 
 /// The reusable line parser.
@@ -239,6 +254,7 @@ pub struct Parser {
     assignments: Vec<Assignment>,
     comments: Vec<Span>,
     nodes: Vec<Node>,
+    names: Vec<Box<str>>,
 }
 
 impl Parser {
@@ -253,13 +269,25 @@ impl Parser {
     /// # Errors
     /// [`GcodeError::Syntax`] with `line` and the column of the problem.
     pub fn parse_line<'p, 's>(&'p mut self, text: &'s str, line: u32) -> Result<Block<'p, 's>, GcodeError> {
+        self.parse_with(text, line, Parser::items)
+    }
+
+    /// Clears the buffers, runs `read` over `text` and wraps what it left in a [`Block`].
+    #[inline]
+    fn parse_with<'p, 's>(
+        &'p mut self,
+        text: &'s str,
+        line: u32,
+        read: impl FnOnce(&mut Parser, &mut Cursor<'_>, &mut Marks) -> PResult<Option<u32>>,
+    ) -> Result<Block<'p, 's>, GcodeError> {
         self.words.clear();
         self.assignments.clear();
         self.comments.clear();
         self.nodes.clear();
+        self.names.clear();
         let mut cur = Cursor::new(text);
         let mut marks = Marks::default();
-        match self.items(&mut cur, &mut marks) {
+        match read(self, &mut cur, &mut marks) {
             Ok(number) => Ok(Block {
                 text,
                 line,
@@ -269,6 +297,7 @@ impl Parser {
                 assignments: &self.assignments,
                 comments: &self.comments,
                 nodes: &self.nodes,
+                names: &self.names,
             }),
             Err((at, problem)) => Err(GcodeError::Syntax { line, column: column(text, at), problem }),
         }
@@ -309,7 +338,7 @@ impl Parser {
                 }
                 b'#' => {
                     cur.pos += 1;
-                    let target = self.expr_of(cur, |p, c| p.operand(c, 1))?;
+                    let target = self.expr_of(cur, |p, c| if p.named(c)? { Ok(()) } else { p.operand(c, 1) })?;
                     cur.skip_blanks();
                     if cur.peek() != Some(b'=') {
                         return Err((cur.pos, SyntaxProblem::ExpectedEquals));
@@ -324,7 +353,11 @@ impl Parser {
                         return Err((at, unexpected(cur, at)));
                     }
                     if letter == b'O' {
-                        return Err((at, SyntaxProblem::OWord));
+                        if !self.words.is_empty() || !self.assignments.is_empty() {
+                            return Err((at, SyntaxProblem::OWordNotFirst));
+                        }
+                        marks.oword = true;
+                        return Ok(number);
                     }
                     cur.pos += 1;
                     if letter == b'N' {
@@ -349,6 +382,39 @@ impl Parser {
             first = false;
         }
         Ok(number)
+    }
+
+    /// The bracketed arguments of an o-word line (`[1] [#2 * 3]`, comments allowed), each as a
+    /// word with the letter `[`.
+    ///
+    /// # Errors
+    /// [`GcodeError::Syntax`] for anything but brackets and comments.
+    pub(crate) fn parse_args<'p, 's>(&'p mut self, text: &'s str, line: u32) -> Result<Block<'p, 's>, GcodeError> {
+        self.parse_with(text, line, |p, cur, _| p.args(cur).map(|()| None))
+    }
+
+    fn args(&mut self, cur: &mut Cursor<'_>) -> PResult<()> {
+        loop {
+            cur.skip_blanks();
+            let at = cur.pos;
+            match cur.peek() {
+                None => return Ok(()),
+                Some(b'(') => {
+                    let close = comment_end(cur.bytes, at).ok_or((at, SyntaxProblem::UnclosedComment))?;
+                    self.comments.push(span(at + 1, close));
+                    cur.pos = close + 1;
+                }
+                Some(b';') => {
+                    self.comments.push(span(at + 1, cur.bytes.len()));
+                    return Ok(());
+                }
+                Some(b'[') => {
+                    let value = self.value(cur, b'[', at)?;
+                    self.words.push(Word { letter: b'[', value, at: offset(at) });
+                }
+                Some(_) => return Err((at, unexpected(cur, at))),
+            }
+        }
     }
 
     /// A word's (or an assignment's) value: a literal on the fast path, else an expression.
