@@ -76,6 +76,9 @@
 //!   [`InterpreterConfig::subroutine_path`]. A program streams line by line until its first
 //!   o-word line; from there its text is indexed once and run with a program counter. Loops stop
 //!   with an error after [`InterpreterConfig::max_loop_iterations`]; calls nest 10 deep.
+//! * **Fanuc/Mach subprograms:** `M98 P<n> [L<count>]` calls the program that starts at the
+//!   line `O<n>` of the same text (leading zeros ignored), `M99` returns (in the main program it
+//!   is an error, not Fanuc's endless restart). They share #1–#30 with their caller.
 //! * **Named parameters** `#<name>` (case and blanks ignored): local to the call that wrote
 //!   them, global when the name starts with `_`; reading one never written is an error.
 //! * **Frame changes never move the machine** (G54–G59, G10 on the active system, G92, G52,

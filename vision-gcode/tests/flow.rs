@@ -91,3 +91,28 @@ fn control_flow_errors_are_named() {
     interp.run("G0 X1\no1 repeat [3]\nG91 G0 X1\no1 endrepeat\nG90 G0 Y1", None, &mut events).expect("runs");
     assert_eq!(moves(&events).iter().map(|m| m.1[0]).collect::<Vec<_>>(), [1.0, 2.0, 3.0, 4.0, 4.0]);
 }
+
+#[test]
+fn fanuc_subprograms_m98_m99() {
+    let program = "%\nO0001 (main)\nG90 G0 X0 Y0\nM98 P1000 L3\nG0 Y5\nM98 P2000\nM30\nO1000 (step)\nG91 G1 X1 F100\nG90\nM99\nO2000\nM98 P1000\nM99\n%";
+    let mut interp = mm(Vec::new());
+    let mut events = Vec::new();
+    let outcome = interp.run(program, None, &mut events).expect("runs");
+    assert_eq!(outcome, vision_gcode::RunOutcome::Ended { line: 7, code: 30 });
+    #[rustfmt::skip]
+    let want = [
+        (true, [0.0, 0.0, 0.0]),
+        (false, [1.0, 0.0, 0.0]), (false, [2.0, 0.0, 0.0]), (false, [3.0, 0.0, 0.0]),
+        (true, [3.0, 5.0, 0.0]),
+        (false, [4.0, 5.0, 0.0]),
+    ];
+    assert_eq!(moves(&events), want);
+    let mut interp = mm(Vec::new());
+    assert_eq!(run_problem(&mut interp, "G0 X1\nM99"), RunProblem::FlowOutsideCall);
+    assert_eq!(run_problem(&mut interp, "M98 P12"), RunProblem::UnknownSubroutine { label: "12".into() });
+    assert_eq!(
+        run_problem(&mut interp, "o12 sub\no12 endsub\nM98 P12"),
+        RunProblem::UnknownSubroutine { label: "O12".into() }
+    );
+    assert!(matches!(run_problem(&mut interp, "M98 P1 L0\nO1\nM99"), RunProblem::OutOfRange { letter: 'L', .. }));
+}

@@ -43,6 +43,8 @@ enum Keyword {
     EndRepeat,
     Break,
     Continue,
+    /// `O1000` alone: a program number (Fanuc/Mach), the target of `M98 P1000`.
+    Program,
 }
 
 impl Keyword {
@@ -144,6 +146,19 @@ fn oline(text: &str, index: usize) -> Result<Option<OLine>, GcodeError> {
         i += 1;
     }
     let word = text[start..i].to_ascii_lowercase();
+    let rest = text[i..].trim_start();
+    if word.is_empty()
+        && (rest.is_empty() || rest.starts_with(['(', ';']))
+        && !label.starts_with(|c: char| !c.is_ascii_digit())
+    {
+        return Ok(Some(OLine {
+            label: label.into_boxed_str(),
+            keyword: Keyword::Program,
+            args: i,
+            jump: usize::MAX,
+            end: usize::MAX,
+        }));
+    }
     let keyword = Keyword::parse(&word).ok_or_else(|| {
         syntax(
             index,
@@ -234,7 +249,7 @@ impl Source {
                         .map(|h| h.0)
                         .ok_or_else(|| syntax(index, "`break`/`continue` outside a while or do loop of its label"))?;
                 }
-                Keyword::Call | Keyword::Return | Keyword::DoWhile => {}
+                Keyword::Call | Keyword::Return | Keyword::DoWhile | Keyword::Program => {}
             }
             olines.insert(index, o);
         }
@@ -253,8 +268,11 @@ impl Source {
 #[derive(Debug)]
 struct Frame {
     return_to: (usize, usize),
-    saved: [f64; CALL_PARAMS],
+    /// #1–#30 of the caller (o-word calls; M98 calls share them).
+    saved: Option<[f64; CALL_PARAMS]>,
     repeats: usize,
+    /// M98: the program's first line and the calls still to make after this one.
+    again: Option<((usize, usize), u32)>,
 }
 
 /// The control-flow run of one program.
@@ -273,6 +291,7 @@ impl Interpreter {
         &mut self,
         text: &str,
         from: usize,
+        pending: Option<Flow>,
         mut delimited: bool,
         mut handler: Option<&mut dyn MCodeHandler>,
         sink: &mut dyn EventSink,
@@ -282,6 +301,10 @@ impl Interpreter {
             Runner { sources: Vec::new(), subs: HashMap::new(), calls: Vec::new(), repeats: Vec::new(), iterations: 0 };
         r.register(main);
         let (mut src, mut pc) = (0, from);
+        if let Some(flow) = pending {
+            let line = u32::try_from(from).unwrap_or(u32::MAX);
+            (src, pc) = self.m98(&mut r, flow, (src, pc), line)?;
+        }
         let started = true;
         while let Some(source) = r.sources.get(src) {
             if pc >= source.lines.len() {
@@ -296,6 +319,10 @@ impl Interpreter {
                 let at = At { line, tag: line, nested: false };
                 match self.exec_line(&raw, at, handler.as_deref_mut(), sink)? {
                     Flow::End(code) => return Ok(RunOutcome::Ended { line, code }),
+                    flow @ (Flow::Call { .. } | Flow::Return) => {
+                        (src, pc) = self.m98(&mut r, flow, (src, pc + 1), line)?;
+                        continue;
+                    }
                     Flow::Percent if delimited && src == 0 => return Ok(RunOutcome::Completed { lines: line }),
                     Flow::Percent => delimited = !started,
                     Flow::Continue | Flow::OWord => {}
@@ -308,18 +335,13 @@ impl Interpreter {
             let cond = |args: &[f64]| args.first().is_some_and(|v| *v != 0.0);
             let next = match o.keyword {
                 Keyword::Sub => o.jump + 1,
+                Keyword::Program => pc + 1,
                 Keyword::EndSub | Keyword::Return => {
                     if let Some(&v) = args.first() {
                         let _ = self.params.write_named("_value", v);
                     }
-                    let frame = r.calls.pop().ok_or_else(|| GcodeError::run(line, RunProblem::FlowOutsideCall))?;
-                    for (i, v) in frame.saved.iter().enumerate() {
-                        self.params.set(u32::try_from(i + 1).unwrap_or(1), *v);
-                    }
-                    self.params.pop_frame();
-                    r.repeats.truncate(frame.repeats);
-                    src = frame.return_to.0;
-                    frame.return_to.1
+                    (src, pc) = self.leave(&mut r, line)?;
+                    continue;
                 }
                 Keyword::Call => {
                     let target = r.find(&o.label, &self.config.subroutine_path, line)?;
@@ -333,7 +355,12 @@ impl Interpreter {
                         self.params.set(n, args.get(i).copied().unwrap_or(0.0));
                     }
                     self.params.push_frame();
-                    r.calls.push(Frame { return_to: (src, pc + 1), saved, repeats: r.repeats.len() });
+                    r.calls.push(Frame {
+                        return_to: (src, pc + 1),
+                        saved: Some(saved),
+                        repeats: r.repeats.len(),
+                        again: None,
+                    });
                     src = target.0;
                     target.1 + 1
                 }
@@ -414,6 +441,55 @@ impl Interpreter {
         })
     }
 
+    /// Returns from the innermost call (endsub, return, M99): restores its caller's #1–#30 and
+    /// local names; an M98 call with repeats left starts its program again.
+    fn leave(&mut self, r: &mut Runner, line: u32) -> Result<(usize, usize), GcodeError> {
+        let mut frame = r.calls.pop().ok_or_else(|| GcodeError::run(line, RunProblem::FlowOutsideCall))?;
+        r.repeats.truncate(frame.repeats);
+        if let Some((start, left)) = frame.again.filter(|(_, left)| *left > 0) {
+            frame.again = Some((start, left - 1));
+            r.calls.push(frame);
+            r.tick(line, self.config.max_loop_iterations)?;
+            return Ok((start.0, start.1 + 1));
+        }
+        if let Some(saved) = frame.saved {
+            for (i, v) in saved.iter().enumerate() {
+                self.params.set(u32::try_from(i + 1).unwrap_or(1), *v);
+            }
+            self.params.pop_frame();
+        }
+        Ok(frame.return_to)
+    }
+
+    /// M98 (call program `O<P>`, `L` times) or M99 (return), from a line whose next line is
+    /// `next`; where to go on.
+    fn m98(
+        &mut self,
+        r: &mut Runner,
+        flow: Flow,
+        next: (usize, usize),
+        line: u32,
+    ) -> Result<(usize, usize), GcodeError> {
+        let Flow::Call { program, repeats } = flow else {
+            return self.leave(r, line);
+        };
+        let label = program.to_string();
+        let start = r.find(&label, &[], line)?;
+        if r.sources[start.0].olines.get(&start.1).map(|o| o.keyword) != Some(Keyword::Program) {
+            return Err(GcodeError::run(line, RunProblem::UnknownSubroutine { label: format!("O{program}") }));
+        }
+        if r.calls.len() >= MAX_CALL_DEPTH {
+            return Err(GcodeError::run(line, RunProblem::CallsTooDeep { limit: MAX_CALL_DEPTH }));
+        }
+        r.calls.push(Frame {
+            return_to: next,
+            saved: None,
+            repeats: r.repeats.len(),
+            again: Some((start, repeats - 1)),
+        });
+        Ok((start.0, start.1 + 1))
+    }
+
     /// From a false `if`/`elseif`, the next branch to run: a true `elseif`, the `else`, or past
     /// the `endif`.
     fn branch(&mut self, r: &Runner, src: usize, mut at: usize, line: u32) -> Result<usize, GcodeError> {
@@ -454,7 +530,7 @@ impl Runner {
     fn register(&mut self, source: Source) {
         let index = self.sources.len();
         for (&at, o) in &source.olines {
-            if o.keyword == Keyword::Sub {
+            if matches!(o.keyword, Keyword::Sub | Keyword::Program) {
                 self.subs.entry(o.label.clone()).or_insert((index, at));
             }
         }

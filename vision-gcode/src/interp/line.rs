@@ -25,6 +25,15 @@ pub(crate) enum Flow {
     Percent,
     /// An o-word line: control flow takes over.
     OWord,
+    /// M98: call program `O<program>` `repeats` times.
+    Call {
+        /// The program number (`P`).
+        program: u32,
+        /// How many times (`L`, default 1).
+        repeats: u32,
+    },
+    /// M99: return from a program called by M98.
+    Return,
 }
 
 /// An action queued until the line commits.
@@ -111,7 +120,6 @@ fn unsupported_m(code: u32) -> Option<&'static str> {
         61 => "setting the tool without a change (M61)",
         62..=68 => "HAL digital/analog I/O (M62-M68)",
         70..=73 => "saving and restoring the modal state (M70-M73)",
-        98 | 99 => "subprogram calls (M98/M99)",
         _ => return None,
     })
 }
@@ -139,7 +147,7 @@ struct MCodes {
 
 /// Whether `code` is a built-in M-code.
 pub(crate) fn is_builtin_m(code: u32) -> bool {
-    matches!(code, 0..=9 | 30)
+    matches!(code, 0..=9 | 30 | 98 | 99)
 }
 
 /// The G-codes that take the axis words for themselves (besides motion).
@@ -278,7 +286,7 @@ impl LineRun<'_> {
         let mut ms = MCodes::default();
         for &code in self.w.m.as_slice() {
             let slot = match code {
-                0 | 1 | 2 | 30 => &mut ms.stop,
+                0 | 1 | 2 | 30 | 98 | 99 => &mut ms.stop,
                 3..=5 => &mut ms.spindle,
                 6 if !ms.change => {
                     ms.change = true;
@@ -536,6 +544,14 @@ impl LineRun<'_> {
                 self.emit(Event::Stop { line: self.line, optional: c == 1 });
                 Ok(Flow::Continue)
             }
+            Some(98 | 99) if self.nested => Err(RunProblem::FlowInHandler),
+            Some(98) => {
+                let p = self.require(b'P', "M98", "the program number to call, e.g. M98 P1000 for O1000")?;
+                let program = whole(b'P', p)?;
+                let repeats = self.count(b'L', "M98", "L counts calls and must be at least 1")?;
+                Ok(Flow::Call { program, repeats })
+            }
+            Some(99) => Ok(Flow::Return),
             Some(c) if self.nested => Err(RunProblem::EndInHandler { code: c }),
             Some(c) => {
                 self.emit(Event::ProgramEnd { line: self.line, code: c });

@@ -117,7 +117,10 @@ impl Interpreter {
                 Flow::End(code) => return Ok(RunOutcome::Ended { line, code }),
                 Flow::Percent if delimited => return Ok(RunOutcome::Completed { lines: line }),
                 Flow::Percent => delimited = !started,
-                Flow::OWord => return self.run_flow(text, i, delimited, handler, sink),
+                Flow::OWord => return self.run_flow(text, i, None, delimited, handler, sink),
+                call @ (Flow::Call { .. } | Flow::Return) => {
+                    return self.run_flow(text, i + 1, Some(call), delimited, handler, sink)
+                }
                 Flow::Continue => {}
             }
             if !started {
@@ -148,8 +151,11 @@ impl Interpreter {
     pub(crate) fn run_nested(&mut self, text: &str, tag: u32, sink: &mut dyn EventSink) -> Result<(), GcodeError> {
         for (i, raw) in text.split('\n').enumerate() {
             let line = u32::try_from(i + 1).unwrap_or(u32::MAX);
-            if self.exec_line(raw, At { line, tag: line_tag(tag, line), nested: true }, None, sink)? == Flow::OWord {
-                return Err(GcodeError::run(line, RunProblem::FlowInHandler));
+            match self.exec_line(raw, At { line, tag: line_tag(tag, line), nested: true }, None, sink)? {
+                Flow::OWord | Flow::Call { .. } | Flow::Return => {
+                    return Err(GcodeError::run(line, RunProblem::FlowInHandler))
+                }
+                _ => {}
             }
         }
         Ok(())
