@@ -128,7 +128,7 @@ def run_rs274(rs274, program, tool_table, subroutine_path, timeout):
 
 def run_trace(trace, program, units, subroutine_path, timeout):
     """Returns (motions, error) with motions in machine coordinates, millimetres."""
-    cmd = [trace, "trace", "--json", "--machine-units", units, "--subroutine-path", subroutine_path, program]
+    cmd = [trace, "trace", "--json", "--machine-units", units, "--dialect", "linuxcnc", "--subroutine-path", subroutine_path, program]
     try:
         p = subprocess.run(cmd, capture_output=True, timeout=timeout)
     except subprocess.TimeoutExpired:

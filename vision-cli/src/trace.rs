@@ -11,7 +11,9 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 use serde_json::{json, Value};
-use vision_gcode::{ArcDirection, Event, GcodeError, Interpreter, InterpreterConfig, PathMode, Rate, RunOutcome, Xyz};
+use vision_gcode::{
+    ArcDirection, Dialect, Event, GcodeError, Interpreter, InterpreterConfig, PathMode, Rate, RunOutcome, Xyz,
+};
 use vision_math::LengthUnit;
 
 use crate::Failure;
@@ -29,12 +31,37 @@ pub(crate) struct TraceArgs {
     /// on the controllers: the `/` is ignored).
     #[arg(long)]
     block_delete: bool,
+    /// Whose rules apply where the controllers differ.
+    #[arg(long, value_enum, default_value_t = DialectArg::Machinemotion)]
+    dialect: DialectArg,
     /// Folders searched for `name.ngc` when `o<name> call` names a subroutine the program does
     /// not define (LinuxCNC's SUBROUTINE_PATH); colon-separated, or repeat the option.
     #[arg(long, value_delimiter = ':')]
     subroutine_path: Vec<PathBuf>,
     /// The G-code program; standard input when `-`.
     program: PathBuf,
+}
+
+/// Whose G-code rules apply where the controllers differ (shared with `plan`).
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub(crate) enum DialectArg {
+    /// Seed 002's MachineMotion: G92 zeroes unnamed axes, M6 applies tool offsets, nested
+    /// comments.
+    Machinemotion,
+    /// Mach4: G92 keeps unnamed axes, G43 applies tool length offsets, flat comments.
+    Mach4,
+    /// LinuxCNC 2.9: as Mach4, without G68/G51.
+    Linuxcnc,
+}
+
+impl DialectArg {
+    pub(crate) fn dialect(self) -> Dialect {
+        match self {
+            DialectArg::Machinemotion => Dialect::MachineMotion,
+            DialectArg::Mach4 => Dialect::Mach4,
+            DialectArg::Linuxcnc => Dialect::LinuxCnc,
+        }
+    }
 }
 
 /// The machine unit on the command line (shared with `plan`).
@@ -61,6 +88,7 @@ pub(crate) fn run(args: &TraceArgs) -> Result<String, Failure> {
     let unit = args.machine_units.unit();
     let config = InterpreterConfig {
         block_delete: args.block_delete,
+        dialect: args.dialect.dialect(),
         subroutine_path: args.subroutine_path.clone(),
         ..InterpreterConfig::new(unit)
     };

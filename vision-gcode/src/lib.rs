@@ -90,6 +90,10 @@
 //!   M6 on (seed 002 has no G43); G43 `H` replaces them with a table entry's (the loaded tool's
 //!   without `H`), G43.1 `Z` with a length given in the program, G49 with none. The default
 //!   table holds tools 1–254 with zero offsets.
+//! * **Dialects** ([`InterpreterConfig::dialect`], default seed 002's MachineMotion) where the
+//!   controllers differ: G92 on some axes (seed 002 zeroes the others, Mach4 and LinuxCNC keep
+//!   them), tool offsets from M6 (seed 002) or from G43 only (Mach4, LinuxCNC), nested comments
+//!   (seed 002) or comments ending at the first `)`, G68/G51 (refused under LinuxCNC).
 //! * **G92** with an axis word missing zeroes that axis's G92 offset (seed 002); G52, G51 and
 //!   G10 L2 leave unmentioned axes unchanged. G92 and G10 L20 make the current point read exactly
 //!   the given values.
@@ -151,7 +155,7 @@ pub mod tools;
 mod words;
 
 pub use arc::{CENTRE_TOLERANCE_INCH, CENTRE_TOLERANCE_MM, RADIUS_TOLERANCE_INCH, RADIUS_TOLERANCE_MM};
-pub use config::InterpreterConfig;
+pub use config::{Dialect, InterpreterConfig};
 pub use error::{GCode, GcodeError, RunProblem, SyntaxProblem};
 pub use event::{
     ArcMove, Coolant, Event, EventSink, LinearMove, OutputChange, OutputWrite, PathMode, Rate, SpindleCommand, UserCall,

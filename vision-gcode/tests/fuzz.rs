@@ -73,6 +73,12 @@ fn exercise(text: &str) {
     assert!(interp.machine_position().is_finite());
     assert!(interp.program_position().is_finite());
     let _ = interp.run(text, None, &mut |e: &Event| check_finite(e));
+    let mut linuxcnc = Interpreter::new(InterpreterConfig {
+        dialect: vision_gcode::Dialect::LinuxCnc,
+        max_loop_iterations: 10_000,
+        ..InterpreterConfig::default()
+    });
+    let _ = linuxcnc.run(text, None, &mut |e: &Event| check_finite(e));
 }
 
 const PROGRAMS: &[&str] = &[

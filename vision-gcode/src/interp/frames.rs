@@ -4,6 +4,7 @@ use vision_math::Point2;
 
 use super::line::LineRun;
 use super::modal::{work_offset_base, SYSTEMS};
+use crate::config::Dialect;
 use crate::error::RunProblem;
 use crate::frame::Placement;
 use crate::geom::{Xyz, AXIS_LETTERS};
@@ -109,10 +110,12 @@ impl LineRun<'_> {
 
     pub(super) fn g92(&mut self) -> Result<(), RunProblem> {
         let given = self.given_axes("G92")?;
-        // Seed 002: an axis without a word gets a zero G92 offset. Do that first, so the given
-        // axes are computed in the frame that will hold.
-        for axis in (0..3).filter(|&a| !given[a]) {
-            self.params.set(G92_OFFSET + axis as u32, 0.0);
+        // Seed 002: an axis without a word gets a zero G92 offset (Mach4 and LinuxCNC keep it).
+        // Do that first, so the given axes are computed in the frame that will hold.
+        if self.cfg.dialect == Dialect::MachineMotion {
+            for axis in (0..3).filter(|&a| !given[a]) {
+                self.params.set(G92_OFFSET + axis as u32, 0.0);
+            }
         }
         self.st.rederive_program(self.params);
         let (v, given) = self.absolute_point("G92")?;

@@ -4,7 +4,7 @@
 //! once the whole line succeeded, so a failing line emits nothing and changes nothing.
 
 use super::motion::Polyline;
-use crate::config::InterpreterConfig;
+use crate::config::{Dialect, InterpreterConfig};
 use crate::error::{GCode, RunProblem};
 use crate::event::{Coolant, Event, OutputChange, OutputWrite, PathMode, SpindleCommand};
 use crate::frame::Placement;
@@ -258,6 +258,12 @@ impl LineRun<'_> {
     fn classify_g(&self) -> Result<Groups, RunProblem> {
         let mut groups = Groups::default();
         for &code in self.w.g.as_slice() {
+            if self.cfg.dialect == Dialect::LinuxCnc && matches!(code, 500 | 510 | 680 | 690) {
+                return Err(RunProblem::Unsupported {
+                    code: GCode(code).to_string(),
+                    feature: "scaling and rotation (G50/G51, G68/G69: Mach and Fanuc codes LinuxCNC does not have)",
+                });
+            }
             let group = group_of(code).ok_or_else(|| match unsupported_g(code) {
                 Some(feature) => RunProblem::Unsupported { code: GCode(code).to_string(), feature },
                 None => RunProblem::UnknownGCode { code: GCode(code) },
@@ -466,8 +472,11 @@ impl LineRun<'_> {
         let tool = self.st.selected_tool;
         let entry = self.cfg.tools.get(tool).ok_or(RunProblem::UnknownTool { tool })?;
         self.st.tool = tool;
-        self.st.tool_offset = entry.offset;
-        self.st.rederive_program(self.params);
+        // Seed 002 has no G43: the tool's offsets apply from M6. Mach4 and LinuxCNC wait for G43.
+        if self.cfg.dialect == Dialect::MachineMotion {
+            self.st.tool_offset = entry.offset;
+            self.st.rederive_program(self.params);
+        }
         self.emit(Event::ToolChange { line: self.line, tool, offset: entry.offset });
         Ok(())
     }

@@ -11,7 +11,7 @@ use vision_math::{AlignmentChain, LengthUnit, Point2, Vector2};
 
 pub use modal::MotionMode;
 
-use crate::config::InterpreterConfig;
+use crate::config::{Dialect, InterpreterConfig};
 use crate::error::{GcodeError, RunProblem};
 use crate::event::{Event, EventSink, PathMode, UserCall};
 use crate::geom::{Plane, Xyz};
@@ -73,11 +73,13 @@ impl Interpreter {
     #[must_use]
     pub fn new(config: InterpreterConfig) -> Interpreter {
         let modal = Modal::initial(&config);
+        let parser =
+            if config.dialect == Dialect::MachineMotion { Parser::new() } else { Parser::with_flat_comments() };
         let mut interp = Interpreter {
             config,
             params: Params::new(),
             modal,
-            parser: Parser::new(),
+            parser,
             stack: Vec::new(),
             assigns: Vec::new(),
             pending: Vec::new(),

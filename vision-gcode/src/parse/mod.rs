@@ -250,6 +250,9 @@ struct Marks {
 /// The reusable line parser.
 #[derive(Debug, Clone, Default)]
 pub struct Parser {
+    /// Whether parentheses nest inside comments (seed 002) or the first `)` closes (Mach4,
+    /// LinuxCNC).
+    flat_comments: bool,
     words: Vec<Word>,
     assignments: Vec<Assignment>,
     comments: Vec<Span>,
@@ -262,6 +265,13 @@ impl Parser {
     #[must_use]
     pub fn new() -> Parser {
         Parser::default()
+    }
+
+    /// A parser whose comments end at their first `)` (Mach4, LinuxCNC), where [`Parser::new`]
+    /// nests parentheses inside comments (seed 002's manual writes `( … (x, y) )`).
+    #[must_use]
+    pub fn with_flat_comments() -> Parser {
+        Parser { flat_comments: true, ..Parser::default() }
     }
 
     /// Parses one line of text (without its line break).
@@ -313,7 +323,8 @@ impl Parser {
             let at = cur.pos;
             match b {
                 b'(' => {
-                    let close = comment_end(cur.bytes, at).ok_or((at, SyntaxProblem::UnclosedComment))?;
+                    let close =
+                        comment_end(cur.bytes, at, self.flat_comments).ok_or((at, SyntaxProblem::UnclosedComment))?;
                     self.comments.push(span(at + 1, close));
                     cur.pos = close + 1;
                     continue;
@@ -400,7 +411,8 @@ impl Parser {
             match cur.peek() {
                 None => return Ok(()),
                 Some(b'(') => {
-                    let close = comment_end(cur.bytes, at).ok_or((at, SyntaxProblem::UnclosedComment))?;
+                    let close =
+                        comment_end(cur.bytes, at, self.flat_comments).ok_or((at, SyntaxProblem::UnclosedComment))?;
                     self.comments.push(span(at + 1, close));
                     cur.pos = close + 1;
                 }
@@ -456,9 +468,12 @@ impl Parser {
     }
 }
 
-/// The `)` that closes the comment opened at `open`. Parentheses inside a comment nest (the
-/// manual's own programs write `( ... (lower-left -2.5,-4.0) )`).
-fn comment_end(bytes: &[u8], open: usize) -> Option<usize> {
+/// The `)` that closes the comment opened at `open`: the first one when `flat`, else the one
+/// that balances it (the manual's own programs write `( ... (lower-left -2.5,-4.0) )`).
+fn comment_end(bytes: &[u8], open: usize, flat: bool) -> Option<usize> {
+    if flat {
+        return bytes[open..].iter().position(|&b| b == b')').map(|i| open + i);
+    }
     let mut depth = 0usize;
     for (i, &b) in bytes.iter().enumerate().skip(open) {
         match b {
