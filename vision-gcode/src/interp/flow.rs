@@ -9,6 +9,7 @@
 
 use std::collections::HashMap;
 use std::path::PathBuf;
+use std::rc::Rc;
 
 use super::line::Flow;
 use super::{At, Interpreter, RunOutcome};
@@ -88,7 +89,8 @@ struct Source {
     text: String,
     /// Byte range of each line.
     lines: Vec<(usize, usize)>,
-    olines: HashMap<usize, OLine>,
+    /// The o-line of each line, if any (shared: reading one costs no allocation).
+    olines: Vec<Option<Rc<OLine>>>,
 }
 
 fn syntax(line: usize, detail: impl Into<String>) -> GcodeError {
@@ -256,7 +258,17 @@ impl Source {
         if let Some(&(at, _)) = open.last() {
             return Err(syntax(at, "this block is never closed"));
         }
-        Ok(Source { text, lines, olines })
+        let mut slots = vec![None; lines.len()];
+        for (at, o) in olines {
+            if let Some(slot) = slots.get_mut(at) {
+                *slot = Some(Rc::new(o));
+            }
+        }
+        Ok(Source { text, lines, olines: slots })
+    }
+
+    fn oline(&self, index: usize) -> Option<Rc<OLine>> {
+        self.olines.get(index).and_then(Clone::clone)
     }
 
     fn line(&self, index: usize) -> &str {
@@ -314,10 +326,10 @@ impl Interpreter {
                 break;
             }
             let line = u32::try_from(pc + 1).unwrap_or(u32::MAX);
-            let Some(o) = source.olines.get(&pc).cloned() else {
-                let raw = source.line(pc).to_string();
+            let Some(o) = source.oline(pc) else {
+                let raw = source.line(pc);
                 let at = At { line, tag: line, nested: false };
-                match self.exec_line(&raw, at, handler.as_deref_mut(), sink)? {
+                match self.exec_line(raw, at, handler.as_deref_mut(), sink)? {
                     Flow::End(code) => return Ok(RunOutcome::Ended { line, code }),
                     flow @ (Flow::Call { .. } | Flow::Return) => {
                         (src, pc) = self.m98(&mut r, flow, (src, pc + 1), line)?;
@@ -330,8 +342,7 @@ impl Interpreter {
                 pc += 1;
                 continue;
             };
-            let args_text = source.line(pc).get(o.args..).unwrap_or("").to_string();
-            let args = self.flow_args(&args_text, line)?;
+            let args = self.flow_args(source.line(pc).get(o.args..).unwrap_or(""), line)?;
             let cond = |args: &[f64]| args.first().is_some_and(|v| *v != 0.0);
             let next = match o.keyword {
                 Keyword::Sub => o.jump + 1,
@@ -420,7 +431,7 @@ impl Interpreter {
                     }
                 }
                 Keyword::Break | Keyword::Continue => {
-                    let head = r.sources[src].olines.get(&o.jump).cloned();
+                    let head = r.sources[src].oline(o.jump);
                     let Some(head) = head else { return Err(syntax(pc, "`break`/`continue` outside its loop")) };
                     let brk = o.keyword == Keyword::Break;
                     match head.keyword {
@@ -475,7 +486,7 @@ impl Interpreter {
         };
         let label = program.to_string();
         let start = r.find(&label, &[], line)?;
-        if r.sources[start.0].olines.get(&start.1).map(|o| o.keyword) != Some(Keyword::Program) {
+        if r.sources[start.0].oline(start.1).map(|o| o.keyword) != Some(Keyword::Program) {
             return Err(GcodeError::run(line, RunProblem::UnknownSubroutine { label: format!("O{program}") }));
         }
         if r.calls.len() >= MAX_CALL_DEPTH {
@@ -495,7 +506,7 @@ impl Interpreter {
     fn branch(&mut self, r: &Runner, src: usize, mut at: usize, line: u32) -> Result<usize, GcodeError> {
         let source = &r.sources[src];
         loop {
-            let Some(o) = source.olines.get(&at) else { return Ok(at + 1) };
+            let Some(o) = source.oline(at) else { return Ok(at + 1) };
             match o.keyword {
                 Keyword::ElseIf => {
                     let text = source.line(at).get(o.args..).unwrap_or("").to_string();
@@ -529,7 +540,7 @@ impl Interpreter {
 impl Runner {
     fn register(&mut self, source: Source) {
         let index = self.sources.len();
-        for (&at, o) in &source.olines {
+        for (at, o) in source.olines.iter().enumerate().filter_map(|(at, o)| o.as_ref().map(|o| (at, o))) {
             if matches!(o.keyword, Keyword::Sub | Keyword::Program) {
                 self.subs.entry(o.label.clone()).or_insert((index, at));
             }

@@ -188,7 +188,9 @@ impl LineRun<'_> {
         if let Some(code) = ms.spindle {
             self.spindle(code)?;
         }
-        self.coolant(&ms);
+        if ms.mist || ms.flood || ms.coolant_off {
+            self.coolant(&ms);
+        }
         if groups.get(Group::NonModal) == Some(40) {
             self.dwell()?;
         }
@@ -258,16 +260,16 @@ impl LineRun<'_> {
     fn classify_g(&self) -> Result<Groups, RunProblem> {
         let mut groups = Groups::default();
         for &code in self.w.g.as_slice() {
-            if self.cfg.dialect == Dialect::LinuxCnc && matches!(code, 500 | 510 | 680 | 690) {
+            let group = group_of(code).ok_or_else(|| match unsupported_g(code) {
+                Some(feature) => RunProblem::Unsupported { code: GCode(code).to_string(), feature },
+                None => RunProblem::UnknownGCode { code: GCode(code) },
+            })?;
+            if matches!(group, Group::Rotation | Group::Scale) && self.cfg.dialect == Dialect::LinuxCnc {
                 return Err(RunProblem::Unsupported {
                     code: GCode(code).to_string(),
                     feature: "scaling and rotation (G50/G51, G68/G69: Mach and Fanuc codes LinuxCNC does not have)",
                 });
             }
-            let group = group_of(code).ok_or_else(|| match unsupported_g(code) {
-                Some(feature) => RunProblem::Unsupported { code: GCode(code).to_string(), feature },
-                None => RunProblem::UnknownGCode { code: GCode(code) },
-            })?;
             let slot = &mut groups.0[group as usize];
             // LinuxCNC lets G80 share a line with a motion code (post-processors write
             // `G80 G0`); the motion code wins.
