@@ -46,11 +46,10 @@ fn program(tolerance: Option<f64>, feed: f64, moves: &[(bool, f64, f64)]) -> Str
     text
 }
 
-/// The smallest case the property below found: a line, then a small arc away from the origin.
-/// On an inch machine it plans 0.985 s, on a millimetre machine 1.016 s (G61; 0.909 against
-/// 0.960 s under G64); the same arc near the origin plans alike.
+/// The smallest case the property below found: a line, then a small arc away from the origin,
+/// whose radii to start and end differ in the last bit in millimetres and not in inches. It
+/// planned 1.016 s against 0.985 s (G61) when that rounding made the arc a spiral.
 #[test]
-#[ignore = "issue 14: vision-path plans a line -> arc corner differently in in and mm; un-ignore with the fix"]
 fn a_line_then_a_small_arc_plans_alike_in_both_units() {
     let text = "G21 G90 G17 G61 F3321.0\nG1 X33.979 Y0.000\nG3 X36.505 Y0.000 I1.263 J0\n";
     let mm = cycle_time(text, LengthUnit::Millimetre, 508.0, 500.0);
@@ -62,7 +61,6 @@ proptest! {
     #![proptest_config(ProptestConfig::with_cases(48))]
 
     #[test]
-    #[ignore = "issue 14: fails on line -> arc programs (see the test above); un-ignore with the fix"]
     fn inch_and_millimetre_machines_plan_the_same_cycle_time(
         tolerance in prop::option::of(0.001f64..0.5),
         feed in 300.0f64..6000.0,
