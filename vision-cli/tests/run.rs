@@ -260,13 +260,32 @@ fn emulate_serves_the_simulated_camera_and_trigger_reads_it() {
     // The built-in world starts with the camera over sheet dot 1, off centre by ~(0.15, −0.1) in.
     assert_eq!((r["judgment"].as_str(), r["found"].as_bool()), (Some("OK"), Some(true)), "{r}");
     assert!((f(&r["width_px"]) - 246.6).abs() < 1.0, "{r}");
-    // Nothing listens on a closed port: exit 1 with the manual's diagnosis.
+    // Nothing listens on a closed port: exit 1 with the driver's diagnosis.
     let out =
         bin().args(["trigger", "--ip", "127.0.0.1", "--port", &port, "--timeout", "1"]).output().expect("trigger");
     assert_eq!(out.status.code(), Some(1));
     assert!(
-        String::from_utf8_lossy(&out.stderr).contains("connection refused"),
+        String::from_utf8_lossy(&out.stderr).contains("refused the connection"),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+}
+
+#[test]
+fn trigger_names_its_timeout_option_when_refusing_it() {
+    for (timeout, want) in [
+        ("0", "--timeout 0 must be more than 0 s"),
+        ("-1", "--timeout -1 must be more than 0 s"),
+        ("1e30", "--timeout 1e30 s is longer than 300 s"),
+        ("301", "--timeout 301 s is longer than 300 s"),
+    ] {
+        let out = bin()
+            .args(["trigger", "--ip", "127.0.0.1", "--port", "9", &format!("--timeout={timeout}")])
+            .output()
+            .expect("trigger");
+        assert_eq!(out.status.code(), Some(2), "{timeout}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(want), "{timeout}: {err}");
+        assert!(!err.contains("VisionTimeout") && !err.contains("non-positive"), "{timeout}: {err}");
+    }
 }

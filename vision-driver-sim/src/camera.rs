@@ -182,9 +182,9 @@ mod tests {
         let noisy = cam.trigger().expect("r");
         assert!((noisy.x_px - exact.x_px).abs() > 1e-6);
         let e = cam.select_job(7).expect_err("no job 7");
-        assert_eq!(e.kind, DriverErrorKind::Rejected);
-        assert!(e.message.contains("jobs 1, 2"), "{e}");
-        assert_eq!(cam.select_job(1000).expect_err("range").kind, DriverErrorKind::InvalidArgument);
+        assert_eq!(e.kind(), DriverErrorKind::Rejected);
+        assert!(e.to_string().contains("jobs 1, 2"), "{e}");
+        assert_eq!(cam.select_job(1000).expect_err("range").kind(), DriverErrorKind::InvalidArgument);
         assert_eq!(sim.job(), 1, "a refused switch keeps the job");
     }
 

@@ -122,6 +122,9 @@ impl VisionModule {
                 }
             }
         }
+        if let Some(note) = self.driver.as_deref().and_then(|d| d.reading_warning(&reading)) {
+            warning = Some(warning.map_or_else(|| note.clone(), |w| format!("{note}; {w}")));
+        }
         if let Some(w) = &warning {
             self.params.last_status = format!("OK (warning: {w})");
         }

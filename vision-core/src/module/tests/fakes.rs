@@ -294,6 +294,9 @@ impl CameraDriver for FakeCamera {
     fn test_connection(&mut self) -> Result<String, DriverError> {
         Ok("FVR,fake".into())
     }
+    fn reading_warning(&self, reading: &Reading) -> Option<String> {
+        reading.count.filter(|n| *n > 1).map(|n| format!("the fake camera saw {n} marks and reported the nearest"))
+    }
 }
 
 /// A machine, a camera and a module sharing one world.
