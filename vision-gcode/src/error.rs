@@ -149,6 +149,9 @@ pub enum SyntaxProblem {
     /// `N` with a fraction, a sign or an expression.
     #[error("the line number `N` must be a whole number, e.g. N10")]
     BadLineNumber,
+    /// LinuxCNC's polar coordinate words.
+    #[error("polar coordinates (`@` radius, `^` angle) are not supported: post-process with X and Y")]
+    PolarCoordinates,
     /// An `o` word after other words.
     #[error("an o-word (`o100 sub`, `o<name> call`, `o1 if [...]`) must start its line (after `/` and `N` only)")]
     OWordNotFirst,

@@ -241,3 +241,18 @@ fn dialects_differ_where_the_controllers_do() {
     assert!(matches!(problem(&mut with(Dialect::LinuxCnc), "G68 X0 Y0 R30"), RunProblem::Unsupported { .. }));
     assert_eq!(Dialect::LinuxCnc.name(), "linuxcnc");
 }
+
+#[test]
+fn polar_words_and_rotary_axes_are_named_not_misread() {
+    let mut interp = Interpreter::new(InterpreterConfig { dialect: Dialect::LinuxCnc, ..InterpreterConfig::default() });
+    for text in ["G1 @1 ^30 F10", "G0 ^45"] {
+        match interp.run(text, None, &mut Vec::new()) {
+            Err(GcodeError::Syntax { problem: vision_gcode::SyntaxProblem::PolarCoordinates, .. }) => {}
+            other => panic!("{text}: {other:?}"),
+        }
+    }
+    // Under LinuxCNC a lone A beside M3 is the rotary axis, not seed 002's output device.
+    assert_eq!(problem(&mut interp, "G0 A90 M3"), RunProblem::AxisNotSupported { letter: 'A' });
+    let mut seed = machine(LengthUnit::Inch);
+    assert_eq!(problem(&mut seed, "M3 A1"), RunProblem::OutputForm { code: "M3" });
+}

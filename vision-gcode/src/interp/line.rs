@@ -491,7 +491,9 @@ impl LineRun<'_> {
         };
         let name = command.gcode();
         let dollar = self.w.take(b'$', name)?;
-        let change = if self.w.has(b'A') {
+        // Seed 002's explicit `A<device> P<port>` form; elsewhere a lone A is the rotary axis.
+        let explicit = self.w.has(b'A') && (self.cfg.dialect == Dialect::MachineMotion || self.w.has(b'P'));
+        let change = if explicit {
             let (Some(a), Some(p)) = (self.w.take(b'A', name)?, self.w.take(b'P', name)?) else {
                 return Err(RunProblem::OutputForm { code: name });
             };

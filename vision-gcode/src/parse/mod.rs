@@ -358,6 +358,7 @@ impl Parser {
                     let value = self.value(cur, b'=', cur.pos)?;
                     self.assignments.push(Assignment { target, value, at: offset(at) });
                 }
+                b'@' | b'^' => return Err((at, SyntaxProblem::PolarCoordinates)),
                 _ => {
                     let letter = b.to_ascii_uppercase();
                     if !(letter.is_ascii_uppercase() || letter == b'$') {
