@@ -13,10 +13,12 @@ Each program gets one verdict:
   agree          both ran; same motions
   differ         both ran; the first different motion is shown
   refused        rs274 ran it, mach-vision refused it (its message is shown)
-  rs274-refuses  rs274 itself stops with an error (not a comparison)
+  both-refuse    rs274 stops with an error, and so does mach-vision
+  rs274-refuses  rs274 stops with an error, mach-vision runs it (not a comparison: LinuxCNC's
+                 own limits, e.g. a subroutine file run without its call)
 
 Usage: compare.py [--rs274 PATH] [--trace PATH] [--units mm|in] [--subroutine-path DIRS]
-                  [--tool-table FILE] [--quiet] PROGRAM...
+                  [--tool-table FILE] [--random N [--seed S]] [--quiet] [PROGRAM...]
 Exit status 0 when no program differs (refusals are counted, not failures), 1 otherwise.
 """
 
@@ -25,6 +27,7 @@ import collections
 import json
 import math
 import os
+import random
 import re
 import subprocess
 import sys
@@ -185,6 +188,119 @@ def fmt(p):
     return "(" + ", ".join("-" if x is None else "%.4f" % x for x in p) + ")"
 
 
+def random_program(rng):
+    """A random program of the G-code both interpreters share: units, planes, G90/G91, G0-G3
+    (centre and R forms, full circles, P turns), work offsets, G92, G53, canned cycles and
+    o-word loops."""
+    f = lambda v: "%.4f" % v
+    units = rng.choice(["G20", "G21"])
+    big = 1.0 if units == "G20" else 25.4
+    lines = ["%s G90 G17 G40 G49 G80 G94 F%s" % (units, f(rng.uniform(5, 50) * big))]
+    lines.append("G10 L2 P%d X%s Y%s Z%s" % (rng.randint(1, 6), f(rng.uniform(-2, 2) * big),
+                                            f(rng.uniform(-2, 2) * big), f(rng.uniform(-1, 1) * big)))
+    pos = [0.0, 0.0, 0.0]  # the program point, tracked for arcs under G90 only
+    absolute = True
+    for _ in range(rng.randint(5, 25)):
+        kind = rng.random()
+        if kind < 0.30:
+            code = rng.choice(["G0", "G1"])
+            axes = rng.sample("XYZ", rng.randint(1, 3))
+            words = []
+            for a in axes:
+                v = rng.uniform(-3, 3) * big
+                words.append("%s%s" % (a, f(v)))
+                if absolute:
+                    pos["XYZ".index(a)] = round(v, 4)
+            lines.append("%s %s" % (code, " ".join(words)))
+            if not absolute:
+                pos = None
+        elif kind < 0.55 and absolute and pos is not None:
+            plane, (a, b), (ca, cb) = rng.choice([("G17", (0, 1), ("I", "J")), ("G18", (2, 0), ("K", "I")),
+                                                  ("G19", (1, 2), ("J", "K"))])
+            code = rng.choice(["G2", "G3"])
+            r = rng.uniform(0.2, 2) * big
+            phi0 = rng.uniform(0, 6.283)
+            centre = (pos[a] - r * math.cos(phi0), pos[b] - r * math.sin(phi0))
+            if rng.random() < 0.15:
+                # A full circle from the centre words alone, possibly several turns.
+                turns = rng.choice(["", " P2"])
+                lines.append("%s %s %s%s %s%s%s" % (plane, code, ca, f(centre[0] - pos[a]), cb,
+                                                    f(centre[1] - pos[b]), turns))
+            else:
+                phi1 = rng.uniform(0, 6.283)
+                end = [centre[0] + r * math.cos(phi1), centre[1] + r * math.sin(phi1)]
+                end = [round(end[0], 4), round(end[1], 4)]
+                letters = "XYZ"
+                normal = 3 - a - b
+                rise = rng.choice([0.0, rng.uniform(-0.5, 0.5) * big])
+                words = "%s%s %s%s" % (letters[a], f(end[0]), letters[b], f(end[1]))
+                if rise:
+                    pos[normal] = round(pos[normal] + rise, 4)
+                    words += " %s%s" % (letters[normal], f(pos[normal]))
+                if rng.random() < 0.3 and math.hypot(end[0] - pos[a], end[1] - pos[b]) > 0.01 * big:
+                    half = math.hypot(end[0] - pos[a], end[1] - pos[b]) / 2
+                    radius = max(half * rng.uniform(1.0, 3.0), half + 0.001 * big)
+                    lines.append("%s %s %s R%s" % (plane, code, words, f(rng.choice([1, -1]) * radius)))
+                else:
+                    lines.append("%s %s %s %s%s %s%s" % (plane, code, words, ca, f(centre[0] - pos[a]), cb,
+                                                         f(centre[1] - pos[b])))
+                pos[a], pos[b] = end
+            lines.append("G17")
+        elif kind < 0.62:
+            absolute = not absolute
+            lines.append("G90" if absolute else "G91")
+            if absolute:
+                lines.append("G0 X%s Y%s Z%s" % (f(pos[0] if pos else 0), f(pos[1] if pos else 0), f(pos[2] if pos else 0)))
+                pos = pos or [0.0, 0.0, 0.0]
+        elif kind < 0.68:
+            lines.append("G%d" % rng.randint(54, 59))
+            pos = None if absolute else pos
+            if absolute:
+                lines.append("G0 X0 Y0 Z0")
+                pos = [0.0, 0.0, 0.0]
+        elif kind < 0.73 and absolute:
+            lines.append("G92 X%s Y%s" % (f(rng.uniform(-1, 1) * big), f(rng.uniform(-1, 1) * big)))
+            lines.append("G0 X0 Y0 Z0")
+            pos = [0.0, 0.0, 0.0]
+        elif kind < 0.76:
+            lines.append("G92.1")
+            if absolute:
+                lines.append("G0 X0 Y0 Z0")
+                pos = [0.0, 0.0, 0.0]
+        elif kind < 0.80 and absolute:
+            lines.append("G53 G0 Z%s" % f(rng.uniform(-1, 1) * big))
+            lines.append("G0 X0 Y0 Z0")
+            pos = [0.0, 0.0, 0.0]
+        elif kind < 0.92:
+            cycle = rng.choice(["G81", "G82 P0.1", "G83 Q%s" % f(0.1 * big), "G73 Q%s" % f(0.07 * big),
+                                "G85", "G89 P0.2"])
+            retract = rng.choice(["G98", "G99"])
+            if absolute:
+                lines.append("%s %s X%s Y%s Z%s R%s L%d" % (retract, cycle, f(rng.uniform(-2, 2) * big),
+                                                          f(rng.uniform(-2, 2) * big), f(-0.4 * big),
+                                                          f(0.1 * big), rng.randint(1, 2)))
+            else:
+                lines.append("%s %s X%s Y%s Z%s R%s L%d" % (retract, cycle, f(0.3 * big), f(0.2 * big),
+                                                          f(-0.4 * big), f(0.1 * big), rng.randint(1, 3)))
+            lines.append("G80")
+            pos = None if absolute else pos
+            if absolute:
+                lines.append("G0 X0 Y0 Z0")
+                pos = [0.0, 0.0, 0.0]
+        else:
+            n = rng.randint(100, 999)
+            lines.append("#1 = 0")
+            lines.append("o%d while [#1 LT %d]" % (n, rng.randint(1, 4)))
+            lines.append("G91 G1 X%s Y[#1 * %s]" % (f(0.1 * big), f(0.05 * big)))
+            lines.append("#1 = [#1 + 1]")
+            lines.append("o%d endwhile" % n)
+            lines.append("G90 G0 X0 Y0 Z0" if absolute else "G91")
+            if absolute:
+                pos = [0.0, 0.0, 0.0]
+    lines.append("M2")
+    return "\n".join(lines) + "\n"
+
+
 def default_tool_table(directory):
     path = os.path.join(directory, "oracle.tbl")
     with open(path, "w") as f:
@@ -206,8 +322,19 @@ def main():
     ap.add_argument("--tool-table", default=None, help="rs274's tool table (default: tools 1-254, zero offsets)")
     ap.add_argument("--timeout", type=float, default=30.0)
     ap.add_argument("--quiet", action="store_true", help="print only the summary")
-    ap.add_argument("programs", nargs="+")
+    ap.add_argument("--random", type=int, default=0, metavar="N",
+                    help="also compare N random programs (written to a temporary folder, kept)")
+    ap.add_argument("--seed", type=int, default=1, help="seed of --random")
+    ap.add_argument("programs", nargs="*")
     a = ap.parse_args()
+    if a.random:
+        rng = random.Random(a.seed)
+        folder = tempfile.mkdtemp(prefix="oracle-random-")
+        for i in range(a.random):
+            path = os.path.join(folder, "random-%04d.ngc" % i)
+            with open(path, "w") as f:
+                f.write(random_program(rng))
+            a.programs.append(path)
     with tempfile.TemporaryDirectory(prefix="oracle-tbl-") as tbl_dir:
         tool_table = a.tool_table or default_tool_table(tbl_dir)
         verdicts = collections.Counter()
@@ -215,10 +342,11 @@ def main():
         for program in a.programs:
             sub_path = a.subroutine_path or os.path.dirname(os.path.abspath(program))
             theirs, their_error = run_rs274(a.rs274, os.path.abspath(program), tool_table, sub_path, a.timeout)
+            ours, our_error = run_trace(a.trace, program, a.units, sub_path, a.timeout)
             if their_error is not None:
-                verdict, detail = "rs274-refuses", their_error
+                verdict = "both-refuse" if our_error is not None else "rs274-refuses"
+                detail = their_error if our_error is None else "%s | ours: %s" % (their_error, our_error)
             else:
-                ours, our_error = run_trace(a.trace, program, a.units, sub_path, a.timeout)
                 if our_error is not None:
                     verdict, detail = "refused", our_error
                     reasons[re.sub(r"^.*?line \d+(, column \d+)?: ", "", our_error)[:90]] += 1
@@ -229,7 +357,7 @@ def main():
             if not a.quiet:
                 print("%-13s %s: %s" % (verdict, program, detail))
         print("# %d programs: %s" % (len(a.programs), ", ".join(
-            "%d %s" % (verdicts[k], k) for k in ("agree", "differ", "refused", "rs274-refuses"))))
+            "%d %s" % (verdicts[k], k) for k in ("agree", "differ", "refused", "both-refuse", "rs274-refuses"))))
         if reasons and not a.quiet:
             print("# mach-vision's refusals, most frequent first:")
             for reason, n in reasons.most_common(25):
