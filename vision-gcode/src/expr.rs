@@ -277,7 +277,10 @@ pub(crate) fn eval(
 }
 
 fn pop(stack: &mut Vec<f64>) -> Result<f64, RunProblem> {
-    stack.pop().ok_or(RunProblem::NonFinite { what: "a malformed expression" })
+    match stack.pop() {
+        Some(v) => Ok(v),
+        None => Err(RunProblem::NonFinite { what: "a malformed expression" }),
+    }
 }
 
 fn node_name(node: Node) -> &'static str {

@@ -202,12 +202,19 @@ pub(crate) fn whole_in(value: f64, tolerance: f64, max: u32) -> Option<u32> {
 
 /// A G value in tenths (`90.1` → 901).
 fn g_code(v: f64) -> Result<u16, RunProblem> {
-    whole_in(v * 10.0, 1e-6, 9999).and_then(|t| u16::try_from(t).ok()).ok_or(RunProblem::BadGCode { value: v })
+    // A `match`, not `ok_or`: no error value is built (and dropped) for every G word.
+    match whole_in(v * 10.0, 1e-6, 9999).and_then(|t| u16::try_from(t).ok()) {
+        Some(code) => Ok(code),
+        None => Err(RunProblem::BadGCode { value: v }),
+    }
 }
 
 /// An M value: a whole, non-negative number.
 fn m_code(v: f64) -> Result<u32, RunProblem> {
-    whole_in(v, 1e-6, 999_999).ok_or(RunProblem::BadMCode { value: v })
+    match whole_in(v, 1e-6, 999_999) {
+        Some(code) => Ok(code),
+        None => Err(RunProblem::BadMCode { value: v }),
+    }
 }
 
 /// A word value that must be a whole, non-negative number (tool, port, coordinate system).
@@ -215,7 +222,7 @@ fn m_code(v: f64) -> Result<u32, RunProblem> {
 /// # Errors
 /// [`RunProblem::NotWhole`].
 pub(crate) fn whole(letter: u8, v: f64) -> Result<u32, RunProblem> {
-    whole_in(v, 1e-4, u32::MAX).ok_or(RunProblem::NotWhole { letter: char::from(letter), value: v })
+    whole_in(v, 1e-4, u32::MAX).ok_or_else(|| RunProblem::NotWhole { letter: char::from(letter), value: v })
 }
 
 #[cfg(test)]

@@ -353,9 +353,15 @@ impl LineRun<'_> {
     fn axis_owner(&self, groups: &Groups) -> Result<bool, RunProblem> {
         let mut owner: Option<u16> = None;
         // The motion group comes first, so a motion code is always named first.
-        let owners =
-            groups.0.iter().flatten().copied().filter(|&c| axis_consumer(c) || group_of(c) == Some(Group::Motion));
-        for code in owners {
+        let consumer = |g: Group| groups.get(g).filter(|&c| axis_consumer(c));
+        let owners = [
+            groups.get(Group::Motion),
+            consumer(Group::NonModal),
+            consumer(Group::Rotation),
+            consumer(Group::Scale),
+            consumer(Group::ToolLength),
+        ];
+        for code in owners.into_iter().flatten() {
             if let Some(first) = owner {
                 return Err(RunProblem::AxisWordConflict {
                     first: GCode(first).to_string(),

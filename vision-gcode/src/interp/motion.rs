@@ -160,7 +160,8 @@ impl LineRun<'_> {
             }
             return Ok(());
         }
-        let mode = self.st.motion.ok_or(RunProblem::NoMotionMode)?;
+        // A `let … else`, not `ok_or`: no error value is built (and dropped) on every move.
+        let Some(mode) = self.st.motion else { return Err(RunProblem::NoMotionMode) };
         let name = motion_name(mode);
         self.st.cycle.initial_level = None;
         match mode {
