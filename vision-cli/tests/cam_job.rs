@@ -26,3 +26,17 @@ fn the_cam_job_example_runs_aligned_on_the_built_in_world() {
     let worst = fit[0]["cut_error"]["max"].as_f64().expect("cut error");
     assert!(worst < 0.002, "cut error {worst} in");
 }
+
+#[test]
+fn plan_runs_the_cam_job_with_its_subprogram() {
+    let program = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../examples/programs/08-cam-job.nc");
+    let out = Command::new(env!("CARGO_BIN_EXE_mach-vision"))
+        .args(["plan", "--accel", "20"])
+        .arg(&program)
+        .output()
+        .expect("spawn");
+    assert!(out.status.success(), "stderr: {}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout).expect("utf-8");
+    // The subprogram's last move ends the slot at X2 Y1; the job then lifts to Z0.5.
+    assert!(text.contains("end         X2.0000 Y1.0000 Z0.5000"), "{text}");
+}

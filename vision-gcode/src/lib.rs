@@ -162,5 +162,5 @@ pub use event::{
 };
 pub use geom::{ArcDirection, Plane, Xyz};
 pub use handler::{Context, HandlerError, MCodeHandler, UserMCode};
-pub use interp::{Interpreter, MotionMode, RunOutcome};
+pub use interp::{needs_program, Interpreter, MotionMode, RunOutcome};
 pub use tools::{DigitalOutput, Tool, ToolOutputs, ToolTable};

@@ -116,3 +116,13 @@ fn fanuc_subprograms_m98_m99() {
     );
     assert!(matches!(run_problem(&mut interp, "M98 P1 L0\nO1\nM99"), RunProblem::OutOfRange { letter: 'L', .. }));
 }
+
+#[test]
+fn lines_that_need_the_whole_program_are_recognised() {
+    for line in ["o100 sub", "  /N20 O<pocket> call [1]", "G0 X1 M98 P100 L2", "M 9 9", "m99 (back)"] {
+        assert!(vision_gcode::needs_program(line), "{line}");
+    }
+    for line in ["G0 X1", "M9", "M980", "M9.8", "G1 X98", "N10 G0 (o-ring)", ""] {
+        assert!(!vision_gcode::needs_program(line), "{line}");
+    }
+}

@@ -19,7 +19,9 @@
 
 use std::collections::VecDeque;
 
-use vision_gcode::{Event as GEvent, GcodeError, Interpreter, InterpreterConfig, Plane, Rate, RunOutcome, Xyz};
+use vision_gcode::{
+    needs_program, Event as GEvent, GcodeError, Interpreter, InterpreterConfig, Plane, Rate, RunOutcome, Xyz,
+};
 
 use crate::follower::check_axes;
 use crate::input::{ArcShape, Event, Item, OutputCommand, Segment, Shape};
@@ -71,6 +73,24 @@ impl<T: AsRef<str>> GcodeItems<T> {
         self.line = self.line.saturating_add(1);
         let line = self.line;
         let queue = &mut self.queue;
+        if needs_program(raw) {
+            // Control flow needs the rest of the text at once (its subroutines may come later):
+            // from here the items are queued whole, not streamed.
+            let base = line - 1;
+            let outcome = self.interp.run(rest, None, &mut |e: &GEvent| {
+                queue.push_back(Ok(item(e, base.saturating_add(e.line()) as usize)));
+            });
+            self.done = true;
+            match outcome {
+                Ok(RunOutcome::Completed { lines }) => {
+                    self.line = base.saturating_add(lines);
+                    self.queue.push_back(Ok(Item::End { line: self.line as usize }));
+                }
+                Ok(RunOutcome::Ended { .. }) => {}
+                Err(e) => self.queue.push_back(Err(program_error(&e, base.saturating_add(e.line())))),
+            }
+            return;
+        }
         let outcome = self.interp.run(raw, None, &mut |e: &GEvent| queue.push_back(Ok(item(e, line as usize))));
         match outcome {
             Ok(RunOutcome::Completed { .. }) => {}

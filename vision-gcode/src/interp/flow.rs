@@ -19,6 +19,26 @@ use crate::expr::eval;
 use crate::handler::MCodeHandler;
 use crate::parse::Value;
 
+/// Whether `line` starts or calls control flow (an o-word line, M98 or M99). Such a line needs
+/// the rest of the program (subroutines may be defined anywhere), so a host that feeds
+/// [`Interpreter::run`] one line at a time runs the text from there in one call instead. A
+/// comment mentioning M98 also answers true (harmless: the rest then runs in one call).
+#[must_use]
+pub fn needs_program(line: &str) -> bool {
+    let b = line.as_bytes();
+    if b.get(o_word_at(b)).is_some_and(|c| c.eq_ignore_ascii_case(&b'o')) {
+        return true;
+    }
+    b.iter().enumerate().any(|(at, c)| {
+        if !c.eq_ignore_ascii_case(&b'm') {
+            return false;
+        }
+        let digits: Vec<u8> = b[at + 1..].iter().copied().filter(|d| !d.is_ascii_whitespace()).take(3).collect();
+        matches!(digits.as_slice(), [b'9', b'8' | b'9'] | [b'9', b'8' | b'9', _])
+            && !digits.get(2).is_some_and(|d| d.is_ascii_digit() || *d == b'.')
+    })
+}
+
 /// Parameters #1–#30 carry a call's arguments and are local to it (LinuxCNC).
 const CALL_PARAMS: usize = 30;
 /// Calls nest at most this deep (LinuxCNC: 10).
@@ -101,12 +121,11 @@ fn syntax(line: usize, detail: impl Into<String>) -> GcodeError {
     }
 }
 
-/// Parses the o-word of a line (`/`, `N…`, blanks before it), or `None` when the line has none.
-fn oline(text: &str, index: usize) -> Result<Option<OLine>, GcodeError> {
-    let b = text.as_bytes();
+/// Where a line's o-word would be: past blanks, a block-delete `/` and an `N` number.
+fn o_word_at(b: &[u8]) -> usize {
     let mut i = 0;
     let skip = |i: &mut usize| {
-        while b.get(*i).is_some_and(|c| c.is_ascii_whitespace()) {
+        while b.get(*i).is_some_and(u8::is_ascii_whitespace) {
             *i += 1;
         }
     };
@@ -121,6 +140,18 @@ fn oline(text: &str, index: usize) -> Result<Option<OLine>, GcodeError> {
             i += 1;
         }
     }
+    i
+}
+
+/// Parses the o-word of a line (`/`, `N…`, blanks before it), or `None` when the line has none.
+fn oline(text: &str, index: usize) -> Result<Option<OLine>, GcodeError> {
+    let b = text.as_bytes();
+    let skip = |i: &mut usize| {
+        while b.get(*i).is_some_and(|c| c.is_ascii_whitespace()) {
+            *i += 1;
+        }
+    };
+    let mut i = o_word_at(b);
     if !b.get(i).is_some_and(|c| c.eq_ignore_ascii_case(&b'o')) {
         return Ok(None);
     }

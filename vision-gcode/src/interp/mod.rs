@@ -9,6 +9,7 @@ mod motion;
 
 use vision_math::{AlignmentChain, LengthUnit, Point2, Vector2};
 
+pub use flow::needs_program;
 pub use modal::MotionMode;
 
 use crate::config::{Dialect, InterpreterConfig};
