@@ -1,5 +1,7 @@
 //! The adapter from the G-code interpreter (`vision-gcode`) to the planner: program text in,
-//! [`Item`]s out, one line at a time, so memory stays bounded by one line's events.
+//! [`Item`]s out, one line at a time, so memory stays bounded by one line's events. From the
+//! first line that needs control flow (an o-word, M98, M99: [`vision_gcode::needs_program`])
+//! the rest of the text runs in one call and its items are queued whole.
 //!
 //! | interpreter event | planner item |
 //! | --- | --- |
@@ -8,7 +10,7 @@
 //! | `Dwell` (G4) | [`Item::Dwell`] |
 //! | `ToolChange` (M6) | [`Event::ToolChange`] |
 //! | `Output` (M3/M4/M5) | [`Event::Output`]: the tool (or the explicit port) and the M-code |
-//! | `Stop` (M0/M1), `UserMCode` (reported, not executed) | a zero-second dwell: an exact stop there |
+//! | `Stop` (M0/M1), `UserMCode` (reported, not executed), `Spindle` (M3/M4/M5 without a tool), `Coolant` (M7/M8/M9) | a zero-second dwell: an exact stop there |
 //! | `ProgramEnd` (M2/M30) | [`Item::End`] |
 //! | an error at a line | `Err(PathError::Program { line, .. })` |
 //!
