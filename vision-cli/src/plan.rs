@@ -100,7 +100,7 @@ pub(crate) fn run(args: &PlanArgs) -> Result<String, Failure> {
         let _ = writeln!(report, "cycle time  {:.3} s", s.time);
         let _ = writeln!(report, "setpoints   {setpoints}");
         let _ = writeln!(report, "events      {events}");
-        let _ = writeln!(report, "end         X{:.4} Y{:.4} Z{:.4} (line {})", p[0], p[1], p[2], s.line);
+        let _ = writeln!(report, "end         X{:.4} Y{:.4} Z{:.4} (line {})", p.x, p.y, p.z, s.line);
     }
     Ok(report)
 }
@@ -138,7 +138,7 @@ impl Csv {
         let written = match step {
             Step::Setpoint(s) => {
                 let (p, v) = (s.position, s.velocity);
-                writeln!(self.out, "{:.6},{},{},{},{},{},{},{},", s.time, s.line, p[0], p[1], p[2], v[0], v[1], v[2])
+                writeln!(self.out, "{:.6},{},{},{},{},{},{},{},", s.time, s.line, p.x, p.y, p.z, v.x, v.y, v.z)
             }
             Step::Event(e) => writeln!(self.out, "{:.6},{},,,,,,,{}", e.time, e.line, EventText(e.event)),
         };

@@ -132,17 +132,6 @@ pub enum VisionError {
         driver: String,
     },
 
-    /// An M-code word out of range (e.g. `M280 P5`, `M284 P1000`).
-    #[error("{mcode} {word} is invalid: {reason}")]
-    BadWord {
-        /// The M-code (`M280`, …).
-        mcode: &'static str,
-        /// The word as given (`P5`).
-        word: String,
-        /// What is allowed.
-        reason: String,
-    },
-
     /// A parameter name that does not exist.
     #[error("unknown parameter {name:?} — Vision parameter names start with Vision (e.g. VisionCal_K11)")]
     UnknownParam {

@@ -116,14 +116,17 @@ fn normalize_deg(deg: f64) -> f64 {
 mod tests {
     use super::*;
     use crate::World;
-    use nalgebra::Point3;
+    use vision_gcode::{Interpreter, InterpreterConfig, Xyz};
     use vision_math::Vector2;
 
-    /// Puts the optical axis over machine point `at`.
+    /// Puts the optical axis over machine point `at`: a bare interpreter in the world's unit
+    /// drives the head there.
     fn look_at(sim: &Sim, at: Point2<f64>) {
         let o = Vector2::from(sim.world().camera.offset);
         let p = at - o;
-        sim.set_spindle(Point3::new(p.x, p.y, 0.0));
+        let mut interp = Interpreter::new(InterpreterConfig::new(sim.unit()));
+        sim.follow(interp.watch_position());
+        interp.set_machine_position(Xyz::new(p.x, p.y, 0.0)).expect("finite");
     }
 
     fn quiet_world() -> World {

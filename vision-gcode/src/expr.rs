@@ -13,11 +13,11 @@ use crate::error::RunProblem;
 use crate::params::Params;
 
 /// Two numbers compare equal (`EQ`, `NE`, `LE`, `GE`) when they differ by less than this.
-pub const EQUAL_TOLERANCE: f64 = 1e-6;
+pub(crate) const EQUAL_TOLERANCE: f64 = 1e-6;
 
 /// A one-argument function, `NAME[x]`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Func {
+pub(crate) enum Func {
     /// Absolute value.
     Abs,
     /// Arc cosine, degrees.
@@ -63,7 +63,7 @@ impl Func {
 
     /// The function's name as written.
     #[must_use]
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         Func::ALL.iter().find(|(f, _)| *f == self).map_or("?", |(_, n)| n)
     }
 
@@ -71,7 +71,7 @@ impl Func {
     ///
     /// # Errors
     /// Arguments outside the domain (ACOS/ASIN outside [-1, 1], LN of x ≤ 0, SQRT of x < 0).
-    pub fn apply(self, x: f64) -> Result<f64, RunProblem> {
+    pub(crate) fn apply(self, x: f64) -> Result<f64, RunProblem> {
         let domain = |hint| Err(RunProblem::Domain { function: self.name(), argument: x, hint });
         Ok(match self {
             Func::Abs => x.abs(),
@@ -96,7 +96,7 @@ impl Func {
 
 /// A binary operator.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum BinOp {
+pub(crate) enum BinOp {
     /// `**`
     Pow,
     /// `*`
@@ -147,7 +147,7 @@ impl BinOp {
     /// Binding strength, LinuxCNC's five levels: `**` 4; `* / MOD` 3; `+ -` 2; comparisons 1;
     /// `AND OR XOR` 0. Operators of one level associate to the left.
     #[must_use]
-    pub fn precedence(self) -> u8 {
+    pub(crate) fn precedence(self) -> u8 {
         match self {
             BinOp::Pow => 4,
             BinOp::Mul | BinOp::Div | BinOp::Mod => 3,
@@ -159,7 +159,7 @@ impl BinOp {
 
     /// The operator as written.
     #[must_use]
-    pub fn symbol(self) -> &'static str {
+    pub(crate) fn symbol(self) -> &'static str {
         match self {
             BinOp::Pow => "**",
             BinOp::Mul => "*",
@@ -178,7 +178,7 @@ impl BinOp {
     ///
     /// # Errors
     /// Division by zero; a negative number to a non-integer power.
-    pub fn apply(self, a: f64, b: f64) -> Result<f64, RunProblem> {
+    pub(crate) fn apply(self, a: f64, b: f64) -> Result<f64, RunProblem> {
         let truth = |t: bool| if t { 1.0 } else { 0.0 };
         Ok(match self {
             BinOp::Pow if a < 0.0 && b.floor() != b => {

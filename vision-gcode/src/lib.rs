@@ -4,11 +4,13 @@
 //! simulated machine. It knows nothing of vision: user M-codes (M280–M284 among them) go to an
 //! [`MCodeHandler`].
 //!
-//! * [`parse`]: the hand-written line parser (words, `#` parameters, `[expressions]`, comments).
+//! * A hand-written line parser (words, `#` parameters, `[expressions]`, comments), private.
 //! * [`Interpreter`]: modal state, the frame chain, arcs, tools, outputs; streams [`Event`]s in
 //!   machine coordinates to an [`EventSink`], each tagged with its source line.
 //! * [`MCodeHandler`] / [`Context`]: the extension point; a handler reads and writes parameters,
 //!   reads positions, writes tool offsets and runs G-code synchronously.
+//! * [`PositionWatch`] ([`Interpreter::watch_position`]): the machine position, published by
+//!   the interpreter for readers that cannot borrow it (a simulated camera).
 //!
 //! ```
 //! use vision_gcode::{Event, Interpreter, InterpreterConfig, Xyz};
@@ -144,14 +146,21 @@ mod arc;
 pub mod config;
 pub mod error;
 pub mod event;
-pub mod expr;
+mod expr;
 mod frame;
 pub mod geom;
 pub mod handler;
 mod interp;
 pub mod params;
+/// The line parser is crate-private; the `bench-internals` feature exposes it (unstable, not
+/// part of the API) for the parse-only benchmark.
+#[cfg(feature = "bench-internals")]
+#[doc(hidden)]
 pub mod parse;
+#[cfg(not(feature = "bench-internals"))]
+mod parse;
 pub mod tools;
+mod watch;
 mod words;
 
 pub use arc::{CENTRE_TOLERANCE_INCH, CENTRE_TOLERANCE_MM, RADIUS_TOLERANCE_INCH, RADIUS_TOLERANCE_MM};
@@ -164,3 +173,4 @@ pub use geom::{ArcDirection, Plane, Xyz};
 pub use handler::{Context, HandlerError, MCodeHandler, UserMCode};
 pub use interp::{needs_program, Interpreter, MotionMode, RunOutcome};
 pub use tools::{DigitalOutput, Tool, ToolOutputs, ToolTable};
+pub use watch::PositionWatch;

@@ -2,7 +2,6 @@
 //! text or bytes, or on mutated valid programs, and never emit a non-finite number.
 
 use proptest::prelude::*;
-use vision_gcode::parse::Parser;
 use vision_gcode::{Context, Event, HandlerError, Interpreter, InterpreterConfig, MCodeHandler, UserMCode};
 
 /// Panics if an event carries NaN or infinity.
@@ -60,15 +59,14 @@ impl MCodeHandler for Echo {
 }
 
 fn exercise(text: &str) {
-    let mut parser = Parser::new();
-    for (i, line) in text.split('\n').enumerate() {
-        let _ = parser.parse_line(line, u32::try_from(i + 1).unwrap_or(u32::MAX));
+    let config =
+        InterpreterConfig { max_arc_segments: 100_000, max_loop_iterations: 10_000, ..InterpreterConfig::default() };
+    // A run stops at its first bad line; one run per line parses every line.
+    let mut per_line = Interpreter::new(config.clone());
+    for line in text.split('\n') {
+        let _ = per_line.run(line, None, &mut |e: &Event| check_finite(e));
     }
-    let mut interp = Interpreter::new(InterpreterConfig {
-        max_arc_segments: 100_000,
-        max_loop_iterations: 10_000,
-        ..InterpreterConfig::default()
-    });
+    let mut interp = Interpreter::new(config);
     let _ = interp.run(text, Some(&mut Echo), &mut |e: &Event| check_finite(e));
     assert!(interp.machine_position().is_finite());
     assert!(interp.program_position().is_finite());

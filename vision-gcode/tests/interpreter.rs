@@ -410,3 +410,49 @@ fn g28_with_an_intermediate_point_homes_only_the_named_axes() {
     assert_eq!(moves[0].end, Xyz::new(5.0, 5.0, 4.0));
     assert_eq!(moves[1].end, Xyz::new(5.0, 5.0, 3.0));
 }
+
+/// A handler that moves, then reads a watch of the interpreter that is running it (as the
+/// simulated camera does).
+struct MoveAndLook {
+    watch: vision_gcode::PositionWatch,
+    seen: Vec<Xyz>,
+}
+
+impl vision_gcode::MCodeHandler for MoveAndLook {
+    fn call(
+        &mut self,
+        _call: &vision_gcode::UserMCode<'_>,
+        ctx: &mut vision_gcode::Context<'_>,
+    ) -> Result<Vec<String>, vision_gcode::HandlerError> {
+        self.seen.push(self.watch.get());
+        ctx.execute("G0 X2 Y3")?;
+        self.seen.push(self.watch.get());
+        Ok(Vec::new())
+    }
+}
+
+#[test]
+fn a_position_watch_reads_what_the_interpreter_commits_and_nothing_else() {
+    let mut interp = inch();
+    interp.set_machine_position(Xyz::new(1.0, 1.0, 0.0)).expect("finite");
+    let watch = interp.watch_position();
+    assert_eq!(watch.get(), Xyz::new(1.0, 1.0, 0.0));
+    // A G52 re-derives the program point; the machine stays.
+    run(&mut interp, "G90 G52 X5\nG0 X1 Y-1");
+    assert_eq!(watch.get(), Xyz::new(6.0, -1.0, 0.0));
+    // A failing line changes nothing, so the watch does not move either.
+    run_err(&mut interp, "G0 X7 Q1");
+    assert_eq!(watch.get(), Xyz::new(6.0, -1.0, 0.0));
+    // A host placing the machine (no event) is seen too.
+    interp.set_machine_position(Xyz::new(0.5, 0.25, -1.0)).expect("finite");
+    assert_eq!(watch.get(), Xyz::new(0.5, 0.25, -1.0));
+    // A clone is a separate machine: its moves are not published.
+    let mut copy = interp.clone();
+    run(&mut copy, "G0 X9");
+    assert_eq!(watch.get(), Xyz::new(0.5, 0.25, -1.0));
+    // Inside a handler, G-code it runs is published before it returns.
+    let mut look = MoveAndLook { watch: interp.watch_position(), seen: Vec::new() };
+    interp.run("G52 X0\nM100", Some(&mut look), &mut Vec::new()).expect("runs");
+    assert_eq!(look.seen, vec![Xyz::new(0.5, 0.25, -1.0), Xyz::new(2.0, 3.0, -1.0)]);
+    assert_eq!(watch.get(), interp.machine_position());
+}

@@ -17,7 +17,7 @@
 //! let commanded = [Point2::new(0.0, 0.0), Point2::new(6.0, 0.0), Point2::new(6.0, 4.0), Point2::new(0.0, 4.0)];
 //! let observed = [Point2::new(0.10, 0.05), Point2::new(6.10, 0.08), Point2::new(6.07, 4.08), Point2::new(0.07, 4.05)];
 //! let fit = fit_rectangle(&commanded, &observed)?;
-//! let chain = fit.chain().expect("a rectangle fit is expressible as G51/G68/G52");
+//! let chain = fit.transform.chain().expect("a rectangle fit is expressible as G51/G68/G52");
 //! for (n, o) in commanded.iter().zip(&observed) {
 //!     assert!((chain.apply(*n) - o).norm() <= fit.max_residual + 1e-12);
 //! }

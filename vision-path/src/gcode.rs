@@ -54,8 +54,8 @@ impl<T: AsRef<str>> GcodeItems<T> {
     }
 
     /// Where the machine is before the program runs (the planner's start), machine units.
-    pub fn start_position(&self) -> [f64; 3] {
-        self.interp.machine_position().to_array()
+    pub fn start_position(&self) -> Xyz {
+        self.interp.machine_position()
     }
 
     /// Run the next line, queueing its items.
@@ -144,14 +144,14 @@ impl PathFollower {
         let at = self.status().position;
         let fresh = || -> Result<Interpreter, PathError> {
             let mut interp = Interpreter::new(config.clone());
-            interp.set_machine_position(Xyz::from(at)).map_err(|e| program_error(&e, 0))?;
+            interp.set_machine_position(at).map_err(|e| program_error(&e, 0))?;
             Ok(interp)
         };
         // The interpreter names the tool of every M3/M4/M5 (`$n` or its active tool), so no
         // selection needs tracking here.
         for item in GcodeItems::new(fresh()?, text.as_str()) {
             if let Item::Event { line, event: Event::Output(command) } = check_axes(&self.config().axes, item?)? {
-                self.config().tools.resolve(line, None, command)?;
+                crate::tools::resolve(&self.config().tools, line, None, command)?;
             }
         }
         self.start(GcodeItems::new(fresh()?, text), max_path_accel, sink, pace)
@@ -161,24 +161,19 @@ impl PathFollower {
 /// The planner item for one interpreter event, tagged with `line`.
 pub fn item(event: &GEvent, line: usize) -> Item {
     match event {
-        GEvent::Linear(m) => Item::Move(Segment {
-            line,
-            start: m.start.to_array(),
-            end: m.end.to_array(),
-            shape: Shape::Line,
-            rate: m.rate,
-            mode: m.path,
-        }),
+        GEvent::Linear(m) => {
+            Item::Move(Segment { line, start: m.start, end: m.end, shape: Shape::Line, rate: m.rate, mode: m.path })
+        }
         GEvent::Arc(a) => Item::Move(Segment {
             line,
-            start: a.start.to_array(),
-            end: a.end.to_array(),
+            start: a.start,
+            end: a.end,
             shape: Shape::Arc(ArcShape {
-                centre: a.center.to_array(),
+                centre: a.center,
                 normal: match a.plane {
-                    Plane::Xy => [0.0, 0.0, 1.0],
-                    Plane::Zx => [0.0, 1.0, 0.0],
-                    Plane::Yz => [1.0, 0.0, 0.0],
+                    Plane::Xy => Xyz::new(0.0, 0.0, 1.0),
+                    Plane::Zx => Xyz::new(0.0, 1.0, 0.0),
+                    Plane::Yz => Xyz::new(1.0, 0.0, 0.0),
                 },
                 sweep: a.direction.sign() * a.angle,
             }),

@@ -1,6 +1,8 @@
 //! Speed and acceleration limits, the sampling period, and how a piece of path turns them
 //! into a speed cap and a tangential acceleration.
 
+use vision_gcode::Xyz;
+
 use crate::PathError;
 
 /// One axis's limits (those of the drive mapped to it).
@@ -56,7 +58,7 @@ pub struct PlanConfig {
     /// tiny segments that fills it is slowed so it can always stop at the window's end.
     pub lookahead: usize,
     /// Where the machine is when the path starts, machine coordinates.
-    pub start: [f64; 3],
+    pub start: Xyz,
 }
 
 impl PlanConfig {
@@ -64,7 +66,7 @@ impl PlanConfig {
     pub const DEFAULT_LOOKAHEAD: usize = 8192;
 
     /// A configuration with the default look-ahead.
-    pub fn new(limits: Limits, period: f64, start: [f64; 3]) -> PlanConfig {
+    pub fn new(limits: Limits, period: f64, start: Xyz) -> PlanConfig {
         PlanConfig { limits, period, lookahead: Self::DEFAULT_LOOKAHEAD, start }
     }
 
@@ -85,7 +87,7 @@ impl PlanConfig {
                 reason: "must be at least 8",
             });
         }
-        for v in self.start {
+        for v in self.start.to_array() {
             if !v.is_finite() {
                 return Err(PathError::InvalidConfig {
                     what: "start position (units)",
@@ -216,13 +218,13 @@ mod tests {
         assert!(err.to_string().contains("max path acceleration"), "{err}");
         let err = Limits::uniform(1.0, f64::NAN, 1.0).validate().unwrap_err();
         assert!(err.to_string().contains("axis max speed"), "{err}");
-        let mut c = PlanConfig::new(Limits::uniform(1.0, 1.0, 1.0), 0.0, [0.0; 3]);
+        let mut c = PlanConfig::new(Limits::uniform(1.0, 1.0, 1.0), 0.0, [0.0; 3].into());
         assert!(matches!(c.validate(), Err(PathError::InvalidConfig { what: "setpoint period (s)", .. })));
         c.period = 0.001;
         c.lookahead = 2;
         assert!(c.validate().is_err());
         c.lookahead = 8;
-        c.start = [0.0, f64::INFINITY, 0.0];
+        c.start = [0.0, f64::INFINITY, 0.0].into();
         assert!(c.validate().is_err());
     }
 }

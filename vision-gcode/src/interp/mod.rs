@@ -20,6 +20,7 @@ use crate::handler::{Context, HandlerError, MCodeHandler, UserMCode};
 use crate::params::{Params, ACTIVE_SYSTEM, G92_OFFSET, POSITION, TOOL_NUMBER, TOOL_OFFSET};
 use crate::parse::Parser;
 use crate::tools::{Tool, ToolTable};
+use crate::watch::{PositionWatch, Publisher};
 use crate::words::{evaluate, Target, Words};
 use line::{is_builtin_m, Flow, LineRun, Pending};
 use modal::{is_work_offset, work_offset_base, Modal};
@@ -67,6 +68,8 @@ pub struct Interpreter {
     stack: Vec<f64>,
     assigns: Vec<(Target, f64)>,
     pending: Vec<Pending>,
+    /// Where the machine position is published for [`PositionWatch`]es (not shared by clones).
+    publisher: Publisher,
 }
 
 impl Interpreter {
@@ -84,6 +87,7 @@ impl Interpreter {
             stack: Vec::new(),
             assigns: Vec::new(),
             pending: Vec::new(),
+            publisher: Publisher::default(),
         };
         interp.refresh_mirrors();
         interp
@@ -288,9 +292,11 @@ impl Interpreter {
         }
     }
 
-    /// Updates the read-only parameters that report the state (current units).
+    /// Updates the read-only parameters that report the state (current units) and publishes
+    /// the machine position. Every change of the state ends here.
     fn refresh_mirrors(&mut self) {
         let st = self.modal;
+        self.publisher.publish(st.machine);
         self.params.set_mirror(ACTIVE_SYSTEM, f64::from(st.system));
         self.params.set_mirror(TOOL_NUMBER, f64::from(st.tool));
         let off = self.current(st.tool_offset);
@@ -313,6 +319,14 @@ impl Interpreter {
     #[must_use]
     pub fn machine_position(&self) -> Xyz {
         self.modal.machine
+    }
+
+    /// A shared, read-only view of [`Interpreter::machine_position`] that follows this
+    /// interpreter from now on (every watch of it reads the same cell), for a reader that
+    /// cannot borrow the interpreter — a simulated camera triggered from inside an M-code
+    /// handler. A clone of the interpreter does not update it.
+    pub fn watch_position(&mut self) -> PositionWatch {
+        self.publisher.watch(self.modal.machine)
     }
 
     /// The current point in the program frame (before G51/G68/G52), current units.

@@ -8,6 +8,10 @@
 //! Blanks (space, tab, CR) are ignored everywhere outside comments, as in LinuxCNC: `G 1 X 1 . 5`
 //! is `G1 X1.5`. Letters are case-insensitive.
 
+// Private unless the `bench-internals` feature exposes the module; the accessors only the unit
+// tests and that benchmark read are then unused.
+#![cfg_attr(not(feature = "bench-internals"), allow(unreachable_pub, dead_code))]
+
 mod expr;
 mod number;
 
@@ -90,12 +94,6 @@ impl Word {
     pub fn value(&self) -> Value {
         self.value
     }
-
-    /// Byte offset of the letter in the line.
-    #[must_use]
-    pub fn offset(&self) -> usize {
-        self.at as usize
-    }
 }
 
 /// `#target = value`: the parameter number is itself an expression.
@@ -117,12 +115,6 @@ impl Assignment {
     #[must_use]
     pub fn value(&self) -> Value {
         self.value
-    }
-
-    /// Byte offset of the `#` in the line.
-    #[must_use]
-    pub fn offset(&self) -> usize {
-        self.at as usize
     }
 }
 
@@ -200,12 +192,6 @@ impl<'p, 's> Block<'p, 's> {
         self.comments.iter().map(move |s| text.get(s.start as usize..s.end as usize).unwrap_or(""))
     }
 
-    /// The source text of the line.
-    #[must_use]
-    pub fn text(&self) -> &'s str {
-        self.text
-    }
-
     /// True when the line has no words and no assignments (blank, comments only, or `%`).
     #[must_use]
     pub fn is_empty(&self) -> bool {
@@ -221,12 +207,6 @@ impl<'p, 's> Block<'p, 's> {
     /// The postfix nodes of `expr`.
     pub(crate) fn nodes(&self, expr: Expr) -> &'p [Node] {
         self.nodes.get(expr.start as usize..expr.end as usize).unwrap_or(&[])
-    }
-
-    /// The 1-based character column of byte `offset`.
-    #[must_use]
-    pub fn column(&self, offset: usize) -> u32 {
-        column(self.text, offset)
     }
 }
 

@@ -8,7 +8,7 @@ use crate::module::{Pieces, RunMode};
 #[test]
 fn disabled_refuses_all_five_and_changes_nothing() {
     let mut rig = Rig::new();
-    rig.module.params.enabled = false;
+    rig.module.params.config.enabled = false;
     let before = rig.module.params().clone();
     let m = &mut rig.machine;
     assert_eq!(rig.module.m280(m, RunMode::Rectangle).map(|_| ()), Err(VisionError::NotEnabled));
@@ -48,7 +48,7 @@ fn m284_switches_jobs_only_with_select_job() {
     assert_eq!(r.report.job, 5);
     rig.module.m284(Some(0)).expect("P0");
     assert_eq!(rig.world().jobs, vec![5, 5, 5]);
-    assert!(matches!(rig.module.m284(Some(1000)), Err(VisionError::BadWord { .. })));
+    assert!(matches!(rig.module.m284(Some(1000)), Err(VisionError::InvalidParam { .. })));
     // A camera-side refusal leaves ActiveJob alone.
     rig.world().select_job = true;
     let mut fresh = Rig::new();
@@ -82,13 +82,13 @@ fn driver_errors_reach_the_operator_in_the_drivers_words() {
     rig.world().script.push_back(Err(DriverError::new(DriverErrorKind::Refused, closed)));
     let e = rig.module.m281(&mut rig.machine, false).expect_err("refused");
     assert_eq!(e.to_string(), closed);
-    assert_eq!(rig.module.params().last_status(), closed);
-    assert_eq!(rig.module.params().last_judgment(), -1);
+    assert_eq!(rig.module.telemetry().last_status(), closed);
+    assert_eq!(rig.module.telemetry().last_judgment(), -1);
     let refusal = "camera refused the trigger — switch the camera to Run mode";
     rig.world().script.push_back(Err(DriverError::new(DriverErrorKind::Rejected, refusal)));
     let e = rig.module.m281(&mut rig.machine, false).expect_err("rejected");
     assert_eq!(e.to_string(), refusal);
-    assert_eq!(rig.module.params().last_status(), refusal);
+    assert_eq!(rig.module.telemetry().last_status(), refusal);
     // The driver's typed error survives the trip through the core.
     let VisionError::Driver(d) = e else { panic!("{e:?}") };
     assert_eq!(d.kind(), DriverErrorKind::Rejected);
@@ -102,8 +102,8 @@ fn the_drivers_warning_about_a_reading_reaches_the_operator() {
     let capture = rig.module.m281(&mut rig.machine, false).expect("a usable reading").report;
     let warning = "the fake camera saw 2 marks and reported the nearest";
     assert_eq!(capture.warning.as_deref(), Some(warning));
-    assert_eq!(rig.module.params().last_status(), format!("OK (warning: {warning})"));
-    assert_eq!(rig.module.params().last_judgment(), 1);
+    assert_eq!(rig.module.telemetry().last_status(), format!("OK (warning: {warning})"));
+    assert_eq!(rig.module.telemetry().last_judgment(), 1);
     // With the image warning of M281 D1 as well, both are kept.
     rig.world().script.push_back(Ok(Reading { count: Some(2), ..seen }));
     let capture = rig.module.m281(&mut rig.machine, true).expect("a usable reading").report;
@@ -112,7 +112,7 @@ fn the_drivers_warning_about_a_reading_reaches_the_operator() {
     // One mark: nothing to say.
     rig.world().script.push_back(Ok(seen));
     assert_eq!(rig.module.m281(&mut rig.machine, false).expect("one mark").report.warning, None);
-    assert_eq!(rig.module.params().last_status(), "OK");
+    assert_eq!(rig.module.telemetry().last_status(), "OK");
 }
 
 #[test]
