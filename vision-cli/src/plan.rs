@@ -14,7 +14,7 @@ use vision_gcode::{Interpreter, InterpreterConfig};
 use vision_math::{LengthUnit, MM_PER_INCH};
 use vision_path::{Event, GcodeItems, Limits, OutputCommand, PathError, PlanConfig, Setpoints, Step};
 
-use crate::trace::{read_program, UnitArg};
+use crate::trace::{read_program, DialectArg, UnitArg};
 use crate::Failure;
 
 /// Arguments of `mach-vision plan`.
@@ -42,6 +42,9 @@ pub(crate) struct PlanArgs {
     /// The machine's coordinate unit; the program's G20/G21 are converted.
     #[arg(long, value_enum, default_value_t = UnitArg::In)]
     machine_units: UnitArg,
+    /// Whose G-code rules apply where the controllers differ (as in `trace`).
+    #[arg(long, value_enum, default_value_t = DialectArg::Machinemotion)]
+    dialect: DialectArg,
     /// The G-code program; standard input when `-`.
     program: PathBuf,
 }
@@ -68,6 +71,7 @@ pub(crate) fn run(args: &PlanArgs) -> Result<String, Failure> {
     let text = read_program(&args.program)?;
     let mut config = InterpreterConfig::new(unit);
     config.default_feed = args.default_feed;
+    config.dialect = args.dialect.dialect();
     let items = GcodeItems::new(Interpreter::new(config), text.as_str());
     let plan = PlanConfig::new(limits, args.period / 1000.0, items.start_position());
     let stream = Setpoints::new(&plan, items).map_err(|e| Failure::Input(e.to_string()))?;

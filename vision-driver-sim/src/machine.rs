@@ -242,7 +242,7 @@ mod tests {
         let setup = chain.gcode().expect("finite").to_vec();
         assert!(m.cut_error(&setup, "demo target", p).expect("cut") < 1e-6);
         assert!(matches!(m.cut_error(&[], "nope", p), Err(SimError::UnknownFixture { .. })));
-        assert!(matches!(m.cut_error(&["G99".into()], "demo target", p), Err(SimError::Machine { .. })));
+        assert!(matches!(m.cut_error(&["G6".into()], "demo target", p), Err(SimError::Machine { .. })));
         assert_eq!(m.interpreter().active_tool(), 1, "the question ran on a copy");
     }
 }

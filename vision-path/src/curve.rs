@@ -101,7 +101,10 @@ impl ArcCurve {
         let e1 = rs_p * (1.0 / r0);
         let e2 = axis.cross(e1);
         let base = centre + axis * rs.dot(axis);
-        let k_r = (r1 - r0) / sweep;
+        // Radii equal but for rounding (a circle whose centre and ends were converted between
+        // units) make a circle, not a spiral: the two are planned with different shares of
+        // the axis acceleration, so rounding must not pick one.
+        let k_r = if (r1 - r0).abs() <= 1e-9 * scale { 0.0 } else { (r1 - r0) / sweep };
         let k_z = (end - start).dot(axis) / sweep;
         let arc = ArcCurve::build(base, e1, e2, axis, r0, k_r, k_z, (0.0, sweep), start, end);
         // The end is returned exactly; the sweep must reach it (as closely as the continuity

@@ -1,5 +1,7 @@
 //! The adapter from the G-code interpreter (`vision-gcode`) to the planner: program text in,
-//! [`Item`]s out, one line at a time, so memory stays bounded by one line's events.
+//! [`Item`]s out, one line at a time, so memory stays bounded by one line's events. From the
+//! first line that needs control flow (an o-word, M98, M99: [`vision_gcode::needs_program`])
+//! the rest of the text runs in one call and its items are queued whole.
 //!
 //! | interpreter event | planner item |
 //! | --- | --- |
@@ -8,7 +10,7 @@
 //! | `Dwell` (G4) | [`Item::Dwell`] |
 //! | `ToolChange` (M6) | [`Event::ToolChange`] |
 //! | `Output` (M3/M4/M5) | [`Event::Output`]: the tool (or the explicit port) and the M-code |
-//! | `Stop` (M0/M1), `UserMCode` (reported, not executed) | a zero-second dwell: an exact stop there |
+//! | `Stop` (M0/M1), `UserMCode` (reported, not executed), `Spindle` (M3/M4/M5 without a tool), `Coolant` (M7/M8/M9) | a zero-second dwell: an exact stop there |
 //! | `ProgramEnd` (M2/M30) | [`Item::End`] |
 //! | an error at a line | `Err(PathError::Program { line, .. })` |
 //!
@@ -19,7 +21,9 @@
 
 use std::collections::VecDeque;
 
-use vision_gcode::{Event as GEvent, GcodeError, Interpreter, InterpreterConfig, Plane, Rate, RunOutcome, Xyz};
+use vision_gcode::{
+    needs_program, Event as GEvent, GcodeError, Interpreter, InterpreterConfig, Plane, Rate, RunOutcome, Xyz,
+};
 
 use crate::follower::check_axes;
 use crate::input::{ArcShape, Event, Item, OutputCommand, Segment, Shape};
@@ -71,6 +75,24 @@ impl<T: AsRef<str>> GcodeItems<T> {
         self.line = self.line.saturating_add(1);
         let line = self.line;
         let queue = &mut self.queue;
+        if needs_program(raw) {
+            // Control flow needs the rest of the text at once (its subroutines may come later):
+            // from here the items are queued whole, not streamed.
+            let base = line - 1;
+            let outcome = self.interp.run(rest, None, &mut |e: &GEvent| {
+                queue.push_back(Ok(item(e, base.saturating_add(e.line()) as usize)));
+            });
+            self.done = true;
+            match outcome {
+                Ok(RunOutcome::Completed { lines }) => {
+                    self.line = base.saturating_add(lines);
+                    self.queue.push_back(Ok(Item::End { line: self.line as usize }));
+                }
+                Ok(RunOutcome::Ended { .. }) => {}
+                Err(e) => self.queue.push_back(Err(program_error(&e, base.saturating_add(e.line())))),
+            }
+            return;
+        }
         let outcome = self.interp.run(raw, None, &mut |e: &GEvent| queue.push_back(Ok(item(e, line as usize))));
         match outcome {
             Ok(RunOutcome::Completed { .. }) => {}
@@ -167,7 +189,10 @@ pub fn item(event: &GEvent, line: usize) -> Item {
             };
             Item::Event { line, event: Event::Output(command) }
         }
-        GEvent::Stop { .. } | GEvent::UserMCode(_) => Item::Dwell { line, seconds: 0.0 },
+        // A spindle or coolant switch waits for the motion before it (a stop, like M0).
+        GEvent::Stop { .. } | GEvent::UserMCode(_) | GEvent::Spindle { .. } | GEvent::Coolant { .. } => {
+            Item::Dwell { line, seconds: 0.0 }
+        }
         GEvent::ProgramEnd { .. } => Item::End { line },
     }
 }
