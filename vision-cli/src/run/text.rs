@@ -127,6 +127,24 @@ fn step(s: &mut String, step: &Step, world_unit: &str) {
                     writeln!(s, "              mark {} residual {} (|r| {})", i + 1, xy(r.x, r.y), l(r.x.hypot(r.y)));
             }
             let _ = writeln!(s, "              rms {} {unit}, max {} {unit}", l(a.rms), l(a.max_residual));
+            if let Some(d) = &a.dropped {
+                let _ = writeln!(
+                    s,
+                    "              mark {} left out: {} {unit} from the others' fit, over {} x the noise {} {unit}",
+                    d.mark,
+                    l(d.residual),
+                    vision_math::chain::fixed(d.residual / d.noise, 1),
+                    l(d.noise)
+                );
+            }
+            let p = &a.predicted;
+            let _ = writeln!(
+                s,
+                "              predicted cut error over the marks: {} {unit} (1 sigma), below {} {unit} (99 %), noise {} {unit}",
+                l(p.sigma),
+                l(p.bound99),
+                l(p.noise)
+            );
             for g in gcode {
                 let _ = writeln!(s, "              | {g}");
             }

@@ -38,7 +38,7 @@ use crate::registry::DriverRegistry;
 
 pub use capture::Capture;
 pub use m280::RunMode;
-pub use m282::{AlignReport, Pieces};
+pub use m282::{AlignReport, DroppedMark, Pieces, PredictedError};
 pub use m284::{JobReport, MAX_JOB};
 
 /// What an entry point hands back: the G-code it ran, then a report.
