@@ -384,3 +384,24 @@ fn world_motion_limits_outside_the_planner_range_are_refused_at_load() {
         assert!(err.contains(field) && err.contains("invalid"), "{to}: {err}");
     }
 }
+
+/// Re-centring costs machine time: on example 4 (the built-in machine, K from example 1) it
+/// adds at most 25 % to the alignment time (M280 to M282) of the seed's one-shot captures.
+#[test]
+fn recentring_adds_at_most_a_quarter_to_example_4s_alignment_time() {
+    let dir = scratch("recentre");
+    let profile = dir.join("p.toml");
+    let with_profile = ["--json", "--profile", profile.to_str().expect("utf-8")];
+    json(&run(&with_profile, &[&example("01-calibrate-sheet.nc")]));
+    let time = || {
+        let r = json(&run(&with_profile, &[&example("04-rectangle-fit.nc")]));
+        f(&r["programs"][0]["alignment_time_s"])
+    };
+    let recentred = time();
+    let text = std::fs::read_to_string(&profile).expect("profile saved");
+    assert!(text.contains("VisionRecenterPasses = 2"), "{text}");
+    std::fs::write(&profile, text.replace("VisionRecenterPasses = 2", "VisionRecenterPasses = 0")).expect("write");
+    let one_shot = time();
+    println!("example 4 alignment time: one shot {one_shot:.3} s, re-centred {recentred:.3} s");
+    assert!(recentred > one_shot && recentred <= 1.25 * one_shot, "{one_shot} s → {recentred} s");
+}

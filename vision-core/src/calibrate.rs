@@ -228,6 +228,14 @@ struct Shot {
     dot: usize,
 }
 
+/// The lines of an incremental rapid by `d` (program frame), back to G90 after it (the Vision
+/// M-codes expect absolute programs, as the manual's do).
+pub(crate) fn relative_move(d: vision_math::Vector2<f64>) -> Vec<String> {
+    let x = fixed(d.x, MOVE_DECIMALS);
+    let y = fixed(d.y, MOVE_DECIMALS);
+    vec![format!("G91 G0 X{x} Y{y}"), "G90".to_string()]
+}
+
 /// Moves, dwells and triggers.
 pub(crate) struct Walker<'a> {
     machine: &'a mut dyn Machine,
@@ -265,10 +273,7 @@ impl<'a> Walker<'a> {
 
     /// Incremental move to `target` (program frame), then back to G90, then settle.
     fn move_to(&mut self, target: Point2<f64>) -> Result<(), VisionError> {
-        let d = target - self.position();
-        let x = fixed(d.x, MOVE_DECIMALS);
-        let y = fixed(d.y, MOVE_DECIMALS);
-        self.run(vec![format!("G91 G0 X{x} Y{y}"), "G90".to_string()])
+        self.run(relative_move(target - self.position()))
     }
 
     /// Absolute G90 move to `target`, then settle.

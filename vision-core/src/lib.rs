@@ -85,7 +85,8 @@ pub use driver::{CameraDriver, Capabilities, DriverError, DriverErrorKind, Judgm
 pub use error::VisionError;
 pub use machine::{Machine, MachineError, Timestamp};
 pub use module::{
-    AlignReport, Capture, Dot, DroppedMark, JobReport, Pieces, PredictedError, Reply, Run, RunMode, VisionModule,
+    AlignReport, Capture, Dot, DroppedMark, JobReport, Pieces, PredictedError, Recentred, Reply, Run, RunMode,
+    VisionModule,
 };
 pub use params::{Access, Calibration, Config, ParamKind, ParamSpec, ParamValue, Params, Section, Telemetry};
 pub use pound::{PoundBlock, PoundReport, SlotValues};

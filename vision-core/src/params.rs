@@ -325,6 +325,13 @@ fn noise_px(v: &f64) -> Result<(), String> {
         Err("must be between 0 and 10 pixels".into())
     }
 }
+fn passes(v: &i64) -> Result<(), String> {
+    if (0..=10).contains(v) {
+        Ok(())
+    } else {
+        Err("must be 0..10 passes (0 reads in one shot)".into())
+    }
+}
 fn port(v: &i64) -> Result<(), String> {
     if (1..=65_535).contains(v) {
         Ok(())
@@ -533,6 +540,17 @@ profile_part! {
         /// Default 0.1 px: what a sub-pixel pattern search on a sharp dot typically repeats
         /// to, and the simulator's σ in the acceptance tests.
         (Connection) camera_noise_px: f64 => f64 = 0.1, "VisionCameraNoisePx", noise_px;
+        /// `VisionRecenterPasses`: how many times M281 may move the camera over a mark it saw
+        /// off the image centre and trigger again (0 = read in one shot, as the seed did).
+        /// Default 2: one pass brings the mark to within K's error times its first distance,
+        /// the second to the noise.
+        (Connection) recenter_passes: i64 => i64 = 2, "VisionRecenterPasses", passes;
+        /// `VisionRecenterTolerance`: M281 re-centres while the mark is farther than this from
+        /// the image centre, pixels. Default 16 px: with the part 4 % closer or farther than at
+        /// calibration a mark 16 px off centre is read 0.64 px (0.0013 in at 0.002 in/px) wrong,
+        /// and the acceptance runs at ±4 % then cut within 0.002 in; on example 4 it re-reads
+        /// one mark of four, adding 21 % to the alignment time (the issue allows 25 %).
+        (Connection) recenter_tolerance_px: f64 => f64 = 16.0, "VisionRecenterTolerance", non_negative;
         /// `VisionCameraToolNumber`: the camera's tool number; M280–M283 require it active. 0
         /// disables the check.
         (Output) camera_tool_number: i64 => i64 = 0, "VisionCameraToolNumber", tool;

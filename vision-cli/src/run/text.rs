@@ -66,6 +66,9 @@ fn program(s: &mut String, p: &ProgramReport, world_unit: &str) {
     for step in &p.steps {
         self::step(s, step, world_unit);
     }
+    if let Some(t) = p.alignment_time_s {
+        let _ = writeln!(s, "  alignment time (M280 to M282) {t:.3} s");
+    }
     if let Some(t) = &p.calibration_truth {
         let _ = writeln!(
             s,
@@ -99,6 +102,16 @@ fn step(s: &mut String, step: &Step, world_unit: &str) {
                 c.unit.short_name(),
                 c.judgment.label()
             );
+            if let Some(r) = &c.recentred {
+                let _ = writeln!(
+                    s,
+                    "              re-centred in {} pass{}: first seen at pixels {:+.3} {:+.3}",
+                    r.passes,
+                    if r.passes == 1 { "" } else { "es" },
+                    r.first_px.x,
+                    r.first_px.y
+                );
+            }
             if let Some(w) = &c.warning {
                 let _ = writeln!(s, "              warning: {w}");
             }

@@ -4,8 +4,9 @@ use std::time::Duration;
 
 use vision_math::Point2;
 
-use super::capture::{mark_size, observe, pixel_chain, require_mark, Capture};
+use super::capture::{mark_size, observe, pixel_chain, require_mark, Capture, Recentred};
 use super::{Dot, Reply, VisionModule};
+use crate::calibrate::relative_move;
 use crate::error::VisionError;
 use crate::image_grab;
 use crate::machine::Machine;
@@ -13,6 +14,12 @@ use crate::pound::{PoundBlock, SlotValues, SLOTS};
 
 impl VisionModule {
     /// **M281**: triggers at the current commanded position and stores the observed point.
+    ///
+    /// Re-centring: while the mark is more than `VisionRecenterTolerance` pixels from the image
+    /// centre and fewer than `VisionRecenterPasses` passes ran, the camera moves over the point
+    /// just observed (an incremental `G91 G0`, then `G90`), settles `VisionTriggerSettleSec` and
+    /// triggers again; the last reading is the capture, `commanded` stays where the program put
+    /// the camera, and the reply lists the moves. `VisionRecenterPasses` = 0 reads in one shot.
     ///
     /// `O = C + K·R·(p − res/2 − PxCenterOffset)` with K converted from `Cal_Units` to the
     /// machine's unit; with an alignment active, `O` is reported in the program frame (SPEC §2).
@@ -41,21 +48,27 @@ impl VisionModule {
         let unit = machine.units();
         let chain = pixel_chain(&self.params, unit)?;
         let trigger_time = machine.now();
-        let reading = match self.driver_mut()?.trigger() {
-            Ok(r) => r,
-            Err(e) => {
-                let e = VisionError::from(e);
-                self.publish_failure(Some(-1), &e);
-                return Err(e);
-            }
-        };
-        if let Err(e) = require_mark(&reading) {
-            self.publish_failure(Some(i64::from(reading.judgment.code())), &e);
-            return Err(e);
+        let mut reading = self.trigger_mark()?;
+        let mut native = Point2::new(reading.x_px, reading.y_px);
+        let mut offset = chain.delta(native);
+        let (commanded, mut observed) = observe(machine, offset)?;
+        // Re-centring: a mark read far off the image centre carries K's error times that
+        // distance (a part closer or farther than the calibration height); read over it again.
+        let first_px = chain.centred(native);
+        let tolerance = self.params.recenter_tolerance_px();
+        let mut gcode = Vec::new();
+        let mut passes = 0;
+        while passes < self.params.recenter_passes() && chain.centred(native).norm() > tolerance {
+            let lines = relative_move(observed - machine.program_position());
+            machine.run_gcode(&lines)?;
+            gcode.extend(lines);
+            machine.dwell(self.params.trigger_settle_s());
+            reading = self.trigger_mark()?;
+            native = Point2::new(reading.x_px, reading.y_px);
+            offset = chain.delta(native);
+            observed = observe(machine, offset)?.1;
+            passes += 1;
         }
-        let native = Point2::new(reading.x_px, reading.y_px);
-        let offset = chain.delta(native);
-        let (commanded, observed) = observe(machine, offset)?;
         let (width, height) = mark_size(&chain, &reading);
         let values = SlotValues {
             x: observed.x,
@@ -127,7 +140,7 @@ impl VisionModule {
             self.telemetry.last_status = format!("OK (warning: {w})");
         }
         Ok(Reply {
-            gcode: Vec::new(),
+            gcode,
             report: Capture {
                 unit,
                 commanded,
@@ -143,8 +156,26 @@ impl VisionModule {
                 slot,
                 image,
                 warning,
+                recentred: (passes > 0).then_some(Recentred { passes, first_px }),
             },
         })
+    }
+
+    /// Triggers; a failed trigger or no mark is recorded in `LastJudgment` / `LastStatus`.
+    fn trigger_mark(&mut self) -> Result<crate::driver::Reading, VisionError> {
+        let reading = match self.driver_mut()?.trigger() {
+            Ok(r) => r,
+            Err(e) => {
+                let e = VisionError::from(e);
+                self.publish_failure(Some(-1), &e);
+                return Err(e);
+            }
+        };
+        if let Err(e) = require_mark(&reading) {
+            self.publish_failure(Some(i64::from(reading.judgment.code())), &e);
+            return Err(e);
+        }
+        Ok(reading)
     }
 }
 

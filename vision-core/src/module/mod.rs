@@ -36,7 +36,7 @@ use crate::params::{ParamValue, Params, Telemetry};
 use crate::profile::ProfileStore;
 use crate::registry::DriverRegistry;
 
-pub use capture::Capture;
+pub use capture::{Capture, Recentred};
 pub use m280::RunMode;
 pub use m282::{AlignReport, DroppedMark, Pieces, PredictedError};
 pub use m284::{JobReport, MAX_JOB};

@@ -92,6 +92,7 @@ fn m280_refuses_a_reserved_pound_base() {
 fn m281_outside_a_run_writes_slot_zero_and_telemetry_only() {
     let mut rig = Rig::new();
     rig.world().marks = vec![Point2::new(1.1, 0.9)];
+    rig.module.set_param("VisionRecenterPasses", 0).expect("one shot, as the seed");
     rig.go(1.0, 1.0);
     let c = rig.module.m281(&mut rig.machine, false).expect("capture").report;
     assert!((c.observed - Point2::new(1.1, 0.9)).norm() < 1e-12, "{c:?}");
@@ -360,6 +361,7 @@ fn every_fit_predicts_its_error_from_the_camera_noise_and_the_residuals() {
 fn k_in_inches_reports_millimetres_under_g21() {
     let mut rig = Rig::new();
     rig.world().marks = vec![Point2::new(1.1, 0.9)];
+    rig.module.set_param("VisionRecenterPasses", 0).expect("one shot");
     rig.run(&["G21".to_string()]);
     rig.go(25.4, 25.4);
     let c = rig.module.m281(&mut rig.machine, false).expect("capture").report;
@@ -413,4 +415,26 @@ fn failed_captures_change_nothing_but_the_last_status() {
     assert_eq!(e.to_string(), "K matrix is zero — run M283 to calibrate first (M283 C1 or M283 Q)");
     assert_eq!(rig.world().triggers, triggers);
     assert_eq!(block(&rig), pounds);
+}
+
+#[test]
+fn m281_recentres_over_a_mark_seen_off_centre() {
+    let mut rig = Rig::new();
+    rig.world().marks = vec![Point2::new(1.1, 0.9)];
+    rig.go(1.0, 1.0);
+    let r = rig.module.m281(&mut rig.machine, false).expect("capture");
+    let c = r.report;
+    assert!((c.observed - Point2::new(1.1, 0.9)).norm() < 1e-9, "{c:?}");
+    assert_eq!(c.commanded, Point2::new(1.0, 1.0), "the dot keeps where the program put the camera");
+    let recentred = c.recentred.expect("re-centred");
+    assert_eq!(recentred.passes, 1);
+    assert!((recentred.first_px.norm() - 0.1f64.hypot(0.1) / 0.00203).abs() < 1e-6, "{recentred:?}");
+    assert!(c.centred_px.norm() < 1e-6, "{c:?}");
+    assert_eq!(r.gcode, vec!["G91 G0 X0.1000000 Y-0.1000000".to_string(), "G90".to_string()]);
+    assert!((rig.machine.program_position() - Point2::new(1.1, 0.9)).norm() < 1e-9);
+    // Within the tolerance: no move.
+    rig.module.set_param("VisionRecenterTolerance", 100.0).expect("set");
+    rig.go(1.0, 1.0);
+    let r = rig.module.m281(&mut rig.machine, false).expect("capture");
+    assert_eq!((r.report.recentred, r.gcode.len()), (None, 0));
 }
