@@ -2,6 +2,7 @@
 //! M280–M284 handler, and a report of everything it did — and, because the simulator knows the
 //! truth, how far the result is from it.
 
+mod pictures;
 mod report;
 mod text;
 
@@ -58,6 +59,10 @@ pub(crate) struct RunArgs {
     /// Print the report as one JSON object.
     #[arg(long)]
     json: bool,
+    /// Also write one SVG picture per fit and per sheet calibration into this folder
+    /// (created if missing).
+    #[arg(long, value_name = "DIR")]
+    report: Option<PathBuf>,
 }
 
 /// Everything a run needs, set up.
@@ -226,6 +231,9 @@ pub(crate) fn run(args: &RunArgs) -> Result<String, Failure> {
         pound: pound(&session.machine, params)?,
         telemetry: session.handler.module().telemetry().clone(),
     };
+    if let Some(dir) = &args.report {
+        pictures::write(&report, dir)?;
+    }
     let output = if args.json {
         let mut s = serde_json::to_string_pretty(&report).map_err(|e| Failure::Input(e.to_string()))?;
         s.push('\n');
