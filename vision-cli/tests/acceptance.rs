@@ -451,25 +451,28 @@ fn the_gates_refuse_what_cannot_cut_and_accept_the_manuals_workflow() {
     }
 }
 
-/// Calibrated at the reference working distance, the part at `height` × it (a thicker part,
-/// a resurfaced spoilboard): the worst cut error of a rectangle and a similarity run with
-/// `VisionRecenterPasses` = `passes`.
-fn cut_at_height(case: u64, height: f64, passes: i64) -> f64 {
+/// A random world calibrated (perfectly) at the reference working distance, the camera now at
+/// `height` × it (a thicker part, a resurfaced spoilboard), only `present` on the table.
+fn rig_at_height(case: u64, height: f64, present: &str) -> Rig {
     let mut w = random_world(case, 0.1, 1.0);
     w.machine.camera_table_offset = None;
     w.camera.reference_working_distance = Some(w.camera.working_distance);
     let params = Rig::new(w.clone(), true).handler.module().params().clone();
     w.camera.working_distance *= height;
+    w.fixtures.iter_mut().for_each(|f| f.present = f.name == present);
+    let mut rig = Rig::new(w, false);
+    for (name, value) in params.config_values() {
+        rig.handler.module_mut().set_param(name, value).expect("calibration");
+    }
+    rig
+}
+
+/// The worst cut error of a rectangle and a similarity run at `height` (see [`rig_at_height`])
+/// with `VisionRecenterPasses` = `passes`.
+fn cut_at_height(case: u64, height: f64, passes: i64) -> f64 {
     let mut worst: f64 = 0.0;
     for (fixture, program, size) in [("rectangle part", EX4, (6.0, 4.0)), ("similarity part", EX5, (8.0, 6.0))] {
-        let mut w = w.clone();
-        w.fixtures.iter_mut().for_each(|f| f.present = f.name == fixture);
-        let mut rig = Rig::new(w, false);
-        for (name, value) in params.config_values() {
-            if name.starts_with("VisionCal") || name.starts_with("VisionCamera") {
-                rig.handler.module_mut().set_param(name, value).expect("calibration");
-            }
-        }
+        let mut rig = rig_at_height(case, height, fixture);
         rig.handler.module_mut().set_param("VisionRecenterPasses", passes).expect("set");
         let records = rig.run(program);
         worst = worst.max(rig.max_cut_error(&records, fixture, &grid(size.0, size.1)));
@@ -498,4 +501,33 @@ fn recentring_keeps_the_cut_when_the_part_is_higher_or_lower_than_calibrated() {
          re-centred worst {worst:.5} in"
     );
     assert!(one_shot_misses > 0, "the scenario must be one the seed fails");
+}
+
+/// The height check: with the part 4 % farther or closer than at calibration, every capture of
+/// the 0.25 in marks warns with the implied working-distance change; at the calibration height
+/// none does.
+#[test]
+fn the_mark_size_tells_a_height_change() {
+    for (height, expected) in [(1.0, None), (1.04, Some("farther")), (0.96, Some("closer"))] {
+        let mut rig = rig_at_height(700, height, "rectangle part");
+        rig.handler.module_mut().set_param("VisionMarkDiameter", 0.25).expect("set");
+        let records = rig.run(EX4);
+        let warnings: Vec<Option<String>> = records
+            .iter()
+            .filter_map(|r| match &r.result {
+                Ok(Outcome::Capture(reply)) => Some(reply.report.warning.clone()),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(warnings.len(), 4);
+        for w in &warnings {
+            match expected {
+                None => assert_eq!(w, &None, "height ×{height}"),
+                Some(word) => {
+                    let w = w.as_deref().unwrap_or_default();
+                    assert!(w.contains(word) && w.contains("VisionMarkDiameter"), "height ×{height}: {w}");
+                }
+            }
+        }
+    }
 }

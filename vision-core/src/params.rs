@@ -551,6 +551,15 @@ profile_part! {
         /// and the acceptance runs at ±4 % then cut within 0.002 in; on example 4 it re-reads
         /// one mark of four, adding 21 % to the alignment time (the issue allows 25 %).
         (Connection) recenter_tolerance_px: f64 => f64 = 16.0, "VisionRecenterTolerance", non_negative;
+        /// `VisionMarkDiameter`: the fiducial's true diameter, inches (0 disables the height
+        /// check). M281 compares the measured mark size with it and warns when they differ by
+        /// more than `VisionMarkSizeTolerance`, with the implied working-distance change.
+        (Connection) mark_diameter_in: f64 => f64 = 0.0, "VisionMarkDiameter", non_negative;
+        /// `VisionMarkSizeTolerance`: the height check's threshold, percent of the diameter.
+        /// Default 2 %: a mark's edge is found to a fraction of a pixel, so 2 % of a 0.25 in
+        /// dot (~2.5 px at 0.002 in/px) is a real height change of about 2 %, the change at
+        /// which a mark half a field (0.9 in) off centre is read 0.018 in wrong in one shot.
+        (Connection) mark_size_tolerance_pct: f64 => f64 = 2.0, "VisionMarkSizeTolerance", non_negative;
         /// `VisionCameraToolNumber`: the camera's tool number; M280–M283 require it active. 0
         /// disables the check.
         (Output) camera_tool_number: i64 => i64 = 0, "VisionCameraToolNumber", tool;

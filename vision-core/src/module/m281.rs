@@ -2,7 +2,7 @@
 
 use std::time::Duration;
 
-use vision_math::Point2;
+use vision_math::{LengthUnit, Point2};
 
 use super::capture::{mark_size, observe, pixel_chain, require_mark, Capture, Recentred};
 use super::{Dot, Reply, VisionModule};
@@ -42,11 +42,19 @@ impl VisionModule {
     /// trigger); a failed pound-variable write (the variables already written are restored). The dot list, the slots and `Run_DotCount` change only on
     /// success.
     pub fn m281(&mut self, machine: &mut dyn Machine, keep_image: bool) -> Result<Reply<Capture>, VisionError> {
-        self.check_enabled()?;
-        self.check_tool(machine)?;
-        let block = PoundBlock::on_machine(self.params.pound_var_base(), machine)?;
+        let ready = self.check_enabled().and_then(|()| self.check_tool(machine)).and_then(|()| {
+            let block = PoundBlock::on_machine(self.params.pound_var_base(), machine)?;
+            Ok((block, pixel_chain(&self.params, machine.units())?))
+        });
+        let (block, chain) = match ready {
+            Ok(r) => r,
+            Err(e) => {
+                // The DRO shows why nothing was read.
+                self.publish_failure(None, &e);
+                return Err(e);
+            }
+        };
         let unit = machine.units();
-        let chain = pixel_chain(&self.params, unit)?;
         let trigger_time = machine.now();
         let mut reading = self.trigger_mark()?;
         let mut native = Point2::new(reading.x_px, reading.y_px);
@@ -133,7 +141,12 @@ impl VisionModule {
                 }
             }
         }
-        if let Some(note) = self.driver.as_deref().and_then(|d| d.reading_warning(&reading)) {
+        let notes = [
+            self.driver.as_deref().and_then(|d| d.reading_warning(&reading)),
+            self.resolution_note(native),
+            self.height_note(width, height, unit),
+        ];
+        for note in notes.into_iter().flatten() {
             warning = Some(warning.map_or_else(|| note.clone(), |w| format!("{note}; {w}")));
         }
         if let Some(w) = &warning {
@@ -176,6 +189,45 @@ impl VisionModule {
             return Err(e);
         }
         Ok(reading)
+    }
+
+    /// A reading outside the image `VisionCameraResX` × `VisionCameraResY` says the resolution
+    /// setting does not match the camera (every offset would then be measured from the wrong
+    /// centre).
+    fn resolution_note(&self, native: Point2<f64>) -> Option<String> {
+        let res = super::capture::resolution(&self.params);
+        let inside = (0.0..=res.x).contains(&native.x) && (0.0..=res.y).contains(&native.y);
+        (!inside).then(|| {
+            format!(
+                "the mark was reported at pixel ({:.1}, {:.1}), outside the {} x {} image of VisionCameraResX/ResY: \
+                 set them to the camera's resolution",
+                native.x, native.y, res.x, res.y
+            )
+        })
+    }
+
+    /// The height check: the mark's measured size against `VisionMarkDiameter`. The image scale
+    /// follows the working distance, so a mark measuring `m` instead of `d` sits about
+    /// `d / m − 1` closer (negative) or farther than where K was calibrated.
+    fn height_note(&self, width: f64, height: f64, unit: LengthUnit) -> Option<String> {
+        let diameter = LengthUnit::Inch.convert(self.params.mark_diameter_in(), unit);
+        let tolerance = self.params.mark_size_tolerance_pct();
+        let measured = (width.abs() + height.abs()) / 2.0;
+        if !(diameter > 0.0 && tolerance > 0.0 && measured > 0.0) {
+            return None;
+        }
+        let off_pct = (measured / diameter - 1.0) * 100.0;
+        let distance_pct = (diameter / measured - 1.0) * 100.0;
+        (off_pct.abs() > tolerance).then(|| {
+            let u = unit.short_name();
+            format!(
+                "the mark measures {measured:.4} {u} against VisionMarkDiameter {diameter:.4} {u} ({off_pct:+.2} %): \
+                 the part is about {:.1} % {} than where K was calibrated; offsets far from the image centre carry \
+                 that error (re-centring removes it) — check the part's height or recalibrate at it",
+                distance_pct.abs(),
+                if distance_pct < 0.0 { "closer to the camera" } else { "farther from the camera" }
+            )
+        })
     }
 }
 

@@ -395,6 +395,12 @@ fn failed_captures_change_nothing_but_the_last_status() {
     assert!(e.to_string().starts_with("NG / no mark found"));
     assert_eq!(rig.module.telemetry().last_judgment(), 0);
     assert_eq!(rig.module.telemetry().last_status(), e.to_string());
+    // The previous mark's offsets and size are not left on the DRO.
+    let t = rig.module.telemetry();
+    assert_eq!(
+        (t.last_offset_x(), t.last_offset_y(), t.last_offset_px_x(), t.last_width(), t.last_score()),
+        (0.0, 0.0, 0.0, 0.0, 0.0)
+    );
     // Count 0.
     rig.world().script.push_back(Ok(Reading { count: Some(0), ..Reading::position(1.0, 1.0) }));
     assert_eq!(rig.module.m281(&mut rig.machine, false).map(|_| ()), Err(VisionError::NoMark));
@@ -413,6 +419,7 @@ fn failed_captures_change_nothing_but_the_last_status() {
     let e = rig.module.m281(&mut rig.machine, false).expect_err("zero K");
     assert_eq!(e, VisionError::NotCalibrated);
     assert_eq!(e.to_string(), "K matrix is zero — run M283 to calibrate first (M283 C1 or M283 Q)");
+    assert_eq!(rig.module.telemetry().last_status(), e.to_string(), "a refusal before the trigger is shown too");
     assert_eq!(rig.world().triggers, triggers);
     assert_eq!(block(&rig), pounds);
 }
@@ -437,4 +444,27 @@ fn m281_recentres_over_a_mark_seen_off_centre() {
     rig.go(1.0, 1.0);
     let r = rig.module.m281(&mut rig.machine, false).expect("capture");
     assert_eq!((r.report.recentred, r.gcode.len()), (None, 0));
+}
+
+#[test]
+fn the_mark_size_and_the_pixel_range_warn_about_height_and_resolution() {
+    let mut rig = Rig::new();
+    rig.world().marks = vec![Point2::new(1.0, 1.0)];
+    rig.go(1.0, 1.0);
+    // The fake camera's mark is 0.5 in: within 2 % of 0.5, not of 0.52.
+    rig.module.set_param("VisionMarkDiameter", 0.5).expect("set");
+    assert_eq!(rig.module.m281(&mut rig.machine, false).expect("capture").report.warning, None);
+    rig.module.set_param("VisionMarkDiameter", 0.52).expect("set");
+    let w = rig.module.m281(&mut rig.machine, false).expect("capture").report.warning.expect("height warning");
+    assert!(w.contains("-3.85 %") && w.contains("4.0 % farther from the camera"), "{w}");
+    assert!(rig.module.telemetry().last_status().starts_with("OK (warning: the mark measures"));
+    rig.module.set_param("VisionMarkDiameter", 0.0).expect("off");
+    // The profile says 1000 × 1000 but the camera reports beyond it (0.3 in ≈ 148 px right
+    // of its own 1776-pixel centre).
+    rig.module.set_param("VisionCameraResX", 1000).expect("set");
+    rig.module.set_param("VisionCameraResY", 1000).expect("set");
+    rig.module.set_param("VisionRecenterPasses", 0).expect("one shot");
+    rig.world().marks = vec![Point2::new(1.3, 1.0)];
+    let w = rig.module.m281(&mut rig.machine, false).expect("capture").report.warning.expect("resolution warning");
+    assert!(w.contains("outside the 1000 x 1000 image") && w.contains("VisionCameraResX"), "{w}");
 }
