@@ -246,17 +246,19 @@ pub(crate) struct Walker<'a> {
     triggers: usize,
     /// Every line run on the machine, in order (M283's reply lists them).
     ran: Vec<String>,
+    /// The last trigger's reading (a failed one too), for the `Last*` telemetry.
+    last: Option<Reading>,
 }
 
 impl<'a> Walker<'a> {
     pub(crate) fn new(machine: &'a mut dyn Machine, driver: &'a mut dyn CameraDriver, settle_s: f64) -> Self {
         let unit = machine.units();
-        Walker { machine, driver, settle_s, unit, shots: Vec::new(), triggers: 0, ran: Vec::new() }
+        Walker { machine, driver, settle_s, unit, shots: Vec::new(), triggers: 0, ran: Vec::new(), last: None }
     }
 
-    /// The lines run so far, in order.
-    pub(crate) fn into_ran(self) -> Vec<String> {
-        self.ran
+    /// The lines run so far, in order, and the last trigger's reading.
+    pub(crate) fn into_ran(self) -> (Vec<String>, Option<Reading>) {
+        (self.ran, self.last)
     }
 
     /// Runs `lines` on the machine and records them.
@@ -287,6 +289,7 @@ impl<'a> Walker<'a> {
     fn shoot(&mut self, dot: usize) -> Result<usize, VisionError> {
         self.triggers += 1;
         let reading = self.driver.trigger()?;
+        self.last = Some(reading);
         require_mark(&reading).map_err(|_| {
             fail(format!(
                 "the camera lost the mark (NG / no mark) at X{} Y{} — keep the dot in view, check lighting and \

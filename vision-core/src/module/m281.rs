@@ -101,18 +101,8 @@ impl VisionModule {
             self.run.dots.push(Dot { commanded, observed, unit });
             self.publish_run();
         }
-        let p = &mut self.telemetry;
+        self.publish_reading(&chain, &reading);
         let centred = chain.centred(native);
-        p.last_judgment = i64::from(reading.judgment.code());
-        p.last_offset_px_x = centred.x;
-        p.last_offset_px_y = centred.y;
-        p.last_offset_x = offset.x;
-        p.last_offset_y = offset.y;
-        p.last_width = width;
-        p.last_height = height;
-        p.last_angle = reading.angle_deg;
-        p.last_score = reading.score;
-        p.last_status = "OK".to_string();
 
         let mut image = None;
         let mut warning = None;
@@ -172,6 +162,25 @@ impl VisionModule {
                 recentred: (passes > 0).then_some(Recentred { passes, first_px }),
             },
         })
+    }
+
+    /// Writes a usable reading to the `Last*` telemetry through `chain`, `LastStatus` = `OK`.
+    pub(crate) fn publish_reading(&mut self, chain: &vision_math::PixelChain, reading: &crate::driver::Reading) {
+        let native = Point2::new(reading.x_px, reading.y_px);
+        let centred = chain.centred(native);
+        let offset = chain.delta(native);
+        let (width, height) = mark_size(chain, reading);
+        let p = &mut self.telemetry;
+        p.last_judgment = i64::from(reading.judgment.code());
+        p.last_offset_px_x = centred.x;
+        p.last_offset_px_y = centred.y;
+        p.last_offset_x = offset.x;
+        p.last_offset_y = offset.y;
+        p.last_width = width;
+        p.last_height = height;
+        p.last_angle = reading.angle_deg;
+        p.last_score = reading.score;
+        p.last_status = "OK".to_string();
     }
 
     /// Triggers; a failed trigger or no mark is recorded in `LastJudgment` / `LastStatus`.
