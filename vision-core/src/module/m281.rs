@@ -36,11 +36,13 @@ impl VisionModule {
     /// # Errors
     /// [`VisionError::NotEnabled`], [`VisionError::WrongTool`],
     /// [`VisionError::PoundBaseReserved`], [`VisionError::PoundBlockMissing`],
-    /// [`VisionError::NotCalibrated`] (all before the trigger: nothing changes);
-    /// [`VisionError::NoDriver`]; after the trigger [`VisionError::Driver`] or
-    /// [`VisionError::NoMark`] (only `LastJudgment` and `LastStatus` change, recording the failed
-    /// trigger); a failed pound-variable write (the variables already written are restored). The dot list, the slots and `Run_DotCount` change only on
-    /// success.
+    /// [`VisionError::NotCalibrated`] (all before the trigger: only `LastStatus` changes);
+    /// [`VisionError::NoDriver`]; after a trigger [`VisionError::Driver`] or
+    /// [`VisionError::NoMark`] (`LastJudgment` and `LastStatus` record the failed trigger and the
+    /// other `Last*` values are cleared); [`VisionError::Machine`] for a refused re-centring move
+    /// (a camera that re-centred stays where it moved); a failed pound-variable write (the
+    /// variables already written are restored). The dot list, the slots and `Run_DotCount`
+    /// change only on success.
     pub fn m281(&mut self, machine: &mut dyn Machine, keep_image: bool) -> Result<Reply<Capture>, VisionError> {
         let ready = self.check_enabled().and_then(|()| self.check_tool(machine)).and_then(|()| {
             let block = PoundBlock::on_machine(self.params.pound_var_base(), machine)?;
@@ -55,7 +57,7 @@ impl VisionModule {
             }
         };
         let unit = machine.units();
-        let trigger_time = machine.now();
+        let mut trigger_time = machine.now();
         let mut reading = self.trigger_mark()?;
         let mut native = Point2::new(reading.x_px, reading.y_px);
         let mut offset = chain.delta(native);
@@ -68,9 +70,15 @@ impl VisionModule {
         let mut passes = 0;
         while passes < self.params.recenter_passes() && chain.centred(native).norm() > tolerance {
             let lines = relative_move(observed - machine.program_position());
-            machine.run_gcode(&lines)?;
+            if let Err(e) = machine.run_gcode(&lines) {
+                let e = VisionError::from(e);
+                self.publish_failure(None, &e);
+                return Err(e);
+            }
             gcode.extend(lines);
             machine.dwell(self.params.trigger_settle_s());
+            // M281 D1 keeps the image of the reading reported.
+            trigger_time = machine.now();
             reading = self.trigger_mark()?;
             native = Point2::new(reading.x_px, reading.y_px);
             offset = chain.delta(native);

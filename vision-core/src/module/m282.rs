@@ -73,7 +73,7 @@ pub struct AlignReport {
     pub rms: f64,
     /// Largest residual length under the emitted chain (of the marks the fit used).
     pub max_residual: f64,
-    /// The cut error the fit predicts over the marks' bounding box.
+    /// The cut error the full fit (`fit`) predicts over the bounding box of the marks it used.
     pub predicted: PredictedError,
     /// The mark left out of the fit as an outlier, if any (its residual is still listed).
     pub dropped: Option<DroppedMark>,
