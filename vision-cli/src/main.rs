@@ -5,7 +5,6 @@
 
 mod emulate;
 mod fit;
-#[allow(dead_code)] // wired into `run --report` once the report types serialize themselves
 mod picture;
 mod plan;
 mod run;

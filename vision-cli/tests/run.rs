@@ -384,3 +384,52 @@ fn world_motion_limits_outside_the_planner_range_are_refused_at_load() {
         assert!(err.contains(field) && err.contains("invalid"), "{to}: {err}");
     }
 }
+
+/// Re-centring costs machine time: on example 4 (the built-in machine, K from example 1) it
+/// adds at most 25 % to the alignment time (M280 to M282) of the seed's one-shot captures.
+#[test]
+fn recentring_adds_at_most_a_quarter_to_example_4s_alignment_time() {
+    let dir = scratch("recentre");
+    let profile = dir.join("p.toml");
+    let with_profile = ["--json", "--profile", profile.to_str().expect("utf-8")];
+    json(&run(&with_profile, &[&example("01-calibrate-sheet.nc")]));
+    let time = || {
+        let r = json(&run(&with_profile, &[&example("04-rectangle-fit.nc")]));
+        f(&r["programs"][0]["alignment_time_s"])
+    };
+    let recentred = time();
+    let text = std::fs::read_to_string(&profile).expect("profile saved");
+    assert!(text.contains("VisionRecenterPasses = 2"), "{text}");
+    std::fs::write(&profile, text.replace("VisionRecenterPasses = 2", "VisionRecenterPasses = 0")).expect("write");
+    let one_shot = time();
+    println!("example 4 alignment time: one shot {one_shot:.3} s, re-centred {recentred:.3} s");
+    assert!(recentred > one_shot && recentred <= 1.25 * one_shot, "{one_shot} s → {recentred} s");
+}
+
+/// `run --report DIR` writes one SVG per sheet calibration and per fit, and each shows its
+/// marks, residual arrows, the predicted band and the truth.
+#[test]
+fn run_report_writes_a_picture_per_fit_and_calibration() {
+    let dir = scratch("pictures");
+    let out = run(
+        &["--report", dir.to_str().expect("utf-8")],
+        &[&example("01-calibrate-sheet.nc"), &example("04-rectangle-fit.nc")],
+    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .expect("report folder")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["01-calibrate-sheet-line12-calibration.svg", "04-rectangle-fit-line20-fit.svg"]);
+    let fit = std::fs::read_to_string(dir.join(&names[1])).expect("svg");
+    let doc = roxmltree::Document::parse(&fit).expect("the SVG parses");
+    let class = |c: &str| doc.descendants().filter(|n| n.attribute("class") == Some(c)).count();
+    assert_eq!((class("commanded"), class("observed"), class("residual"), class("band")), (4, 4, 4, 1));
+    let text: String = doc.descendants().filter(|n| n.is_text()).map(|n| n.text().unwrap_or("")).collect();
+    assert!(text.contains("M282 rectangle fit, line 20"), "{text}");
+    assert!(text.contains("predicted 99 % bound") && text.contains("true error (simulator)"), "{text}");
+    let cal = std::fs::read_to_string(dir.join(&names[0])).expect("svg");
+    let doc = roxmltree::Document::parse(&cal).expect("the SVG parses");
+    assert_eq!(doc.descendants().filter(|n| n.attribute("class") == Some("commanded")).count(), 5);
+}

@@ -228,6 +228,14 @@ struct Shot {
     dot: usize,
 }
 
+/// The lines of an incremental rapid by `d` (program frame), back to G90 after it (the Vision
+/// M-codes expect absolute programs, as the manual's do).
+pub(crate) fn relative_move(d: vision_math::Vector2<f64>) -> Vec<String> {
+    let x = fixed(d.x, MOVE_DECIMALS);
+    let y = fixed(d.y, MOVE_DECIMALS);
+    vec![format!("G91 G0 X{x} Y{y}"), "G90".to_string()]
+}
+
 /// Moves, dwells and triggers.
 pub(crate) struct Walker<'a> {
     machine: &'a mut dyn Machine,
@@ -238,17 +246,19 @@ pub(crate) struct Walker<'a> {
     triggers: usize,
     /// Every line run on the machine, in order (M283's reply lists them).
     ran: Vec<String>,
+    /// The last trigger's reading (a failed one too), for the `Last*` telemetry.
+    last: Option<Reading>,
 }
 
 impl<'a> Walker<'a> {
     pub(crate) fn new(machine: &'a mut dyn Machine, driver: &'a mut dyn CameraDriver, settle_s: f64) -> Self {
         let unit = machine.units();
-        Walker { machine, driver, settle_s, unit, shots: Vec::new(), triggers: 0, ran: Vec::new() }
+        Walker { machine, driver, settle_s, unit, shots: Vec::new(), triggers: 0, ran: Vec::new(), last: None }
     }
 
-    /// The lines run so far, in order.
-    pub(crate) fn into_ran(self) -> Vec<String> {
-        self.ran
+    /// The lines run so far, in order, and the last trigger's reading.
+    pub(crate) fn into_ran(self) -> (Vec<String>, Option<Reading>) {
+        (self.ran, self.last)
     }
 
     /// Runs `lines` on the machine and records them.
@@ -265,10 +275,7 @@ impl<'a> Walker<'a> {
 
     /// Incremental move to `target` (program frame), then back to G90, then settle.
     fn move_to(&mut self, target: Point2<f64>) -> Result<(), VisionError> {
-        let d = target - self.position();
-        let x = fixed(d.x, MOVE_DECIMALS);
-        let y = fixed(d.y, MOVE_DECIMALS);
-        self.run(vec![format!("G91 G0 X{x} Y{y}"), "G90".to_string()])
+        self.run(relative_move(target - self.position()))
     }
 
     /// Absolute G90 move to `target`, then settle.
@@ -282,6 +289,7 @@ impl<'a> Walker<'a> {
     fn shoot(&mut self, dot: usize) -> Result<usize, VisionError> {
         self.triggers += 1;
         let reading = self.driver.trigger()?;
+        self.last = Some(reading);
         require_mark(&reading).map_err(|_| {
             fail(format!(
                 "the camera lost the mark (NG / no mark) at X{} Y{} — keep the dot in view, check lighting and \

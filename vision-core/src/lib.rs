@@ -84,7 +84,10 @@ pub use calibrate::{AxisReport, CalReport, Calibrate, DotVerify, QuickReport, Sh
 pub use driver::{CameraDriver, Capabilities, DriverError, DriverErrorKind, Judgment, Reading};
 pub use error::VisionError;
 pub use machine::{Machine, MachineError, Timestamp};
-pub use module::{AlignReport, Capture, Dot, JobReport, Pieces, Reply, Run, RunMode, VisionModule};
+pub use module::{
+    AlignReport, Capture, Dot, DroppedMark, JobReport, Pieces, PredictedError, Recentred, Reply, Run, RunMode,
+    VisionModule,
+};
 pub use params::{Access, Calibration, Config, ParamKind, ParamSpec, ParamValue, Params, Section, Telemetry};
 pub use pound::{PoundBlock, PoundReport, SlotValues};
 pub use profile::{ProfileFs, ProfileStore, StdFs};

@@ -16,8 +16,10 @@
 //! Units: lengths follow the parameter's doc (K and the pixel centre offset are per `Cal_Units`;
 //! the fit gates are in inches and are converted to millimetres under G21); times are seconds.
 //!
-//! Decision: the three fit quality gates (`VisionFitMaxScaleDev` in percent, `VisionFitMaxShift`
-//! and `VisionFitMaxResidual` in inches) are additions to the manual's set; 0 disables a gate.
+//! Decision: the fit quality gates (`VisionFitMaxScaleDev` in percent, `VisionFitMaxShift`,
+//! `VisionFitMaxResidual` and `VisionFitMaxAxisScaleError` in inches), `VisionOutlierFactor` and
+//! `VisionCameraNoisePx` are additions to the manual's set; 0 disables a gate. Each default
+//! says why it was chosen.
 
 use std::fmt;
 
@@ -316,6 +318,20 @@ fn pixel_offset(v: &f64) -> Result<(), String> {
         Err("must be a finite number of pixels (|v| ≤ 100000)".into())
     }
 }
+fn noise_px(v: &f64) -> Result<(), String> {
+    if v.is_finite() && (0.0..=10.0).contains(v) {
+        Ok(())
+    } else {
+        Err("must be between 0 and 10 pixels".into())
+    }
+}
+fn passes(v: &i64) -> Result<(), String> {
+    if (0..=10).contains(v) {
+        Ok(())
+    } else {
+        Err("must be 0..10 passes (0 reads in one shot)".into())
+    }
+}
 fn port(v: &i64) -> Result<(), String> {
     if (1..=65_535).contains(v) {
         Ok(())
@@ -518,6 +534,32 @@ profile_part! {
         (Connection) camera_res_y: i64 => i64 = 1776, "VisionCameraResY", resolution;
         /// `VisionTriggerSettleSec`: dwell M283 inserts after each move before triggering, seconds.
         (Connection) trigger_settle_s: f64 => f64 = 0.25, "VisionTriggerSettleSec", seconds_60;
+        /// `VisionCameraNoisePx`: the camera's repeatability, the standard deviation of a
+        /// reported mark centre on each pixel axis, pixels. M282 turns it into machine units
+        /// with K for the fit's predicted error (the residuals' own σ is used when larger).
+        /// Default 0.1 px: what a sub-pixel pattern search on a sharp dot typically repeats
+        /// to, and the simulator's σ in the acceptance tests.
+        (Connection) camera_noise_px: f64 => f64 = 0.1, "VisionCameraNoisePx", noise_px;
+        /// `VisionRecenterPasses`: how many times M281 may move the camera over a mark it saw
+        /// off the image centre and trigger again (0 = read in one shot, as the seed did).
+        /// Default 2: one pass brings the mark to within K's error times its first distance,
+        /// the second to the noise.
+        (Connection) recenter_passes: i64 => i64 = 2, "VisionRecenterPasses", passes;
+        /// `VisionRecenterTolerance`: M281 re-centres while the mark is farther than this from
+        /// the image centre, pixels. Default 16 px: with the part 4 % closer or farther than at
+        /// calibration a mark 16 px off centre is read 0.64 px (0.0013 in at 0.002 in/px) wrong,
+        /// and the acceptance runs at ±4 % then cut within 0.002 in; on example 4 it re-reads
+        /// one mark of four, adding 21 % to the alignment time (the issue allows 25 %).
+        (Connection) recenter_tolerance_px: f64 => f64 = 16.0, "VisionRecenterTolerance", non_negative;
+        /// `VisionMarkDiameter`: the fiducial's true diameter, inches (0 disables the height
+        /// check). M281 compares the measured mark size with it and warns when they differ by
+        /// more than `VisionMarkSizeTolerance`, with the implied working-distance change.
+        (Connection) mark_diameter_in: f64 => f64 = 0.0, "VisionMarkDiameter", non_negative;
+        /// `VisionMarkSizeTolerance`: the height check's threshold, percent of the diameter.
+        /// Default 2 %: a mark's edge is found to a fraction of a pixel, so 2 % of a 0.25 in
+        /// dot (~2.5 px at 0.002 in/px) is a real height change of about 2 %, the change at
+        /// which a mark half a field (0.9 in) off centre is read 0.018 in wrong in one shot.
+        (Connection) mark_size_tolerance_pct: f64 => f64 = 2.0, "VisionMarkSizeTolerance", non_negative;
         /// `VisionCameraToolNumber`: the camera's tool number; M280–M283 require it active. 0
         /// disables the check.
         (Output) camera_tool_number: i64 => i64 = 0, "VisionCameraToolNumber", tool;
@@ -525,14 +567,29 @@ profile_part! {
         /// B ≥ 100, block outside 5061..5081 and 5201..5500.
         (Output) pound_var_base: i64 => i64 = 500, "VisionPoundVarBase", pound_base;
         /// `VisionFitMaxScaleDev`: M282 refuses a fit whose X or Y scale deviates from 1 by more
-        /// than this, percent (0 disables).
+        /// than this, percent (0 disables). Default 2 %: prints and sheet goods stay well inside
+        /// it, while a wrong unit (25.4×) or a wrong mark is far outside.
         (Quality) fit_max_scale_dev_pct: f64 => f64 = 2.0, "VisionFitMaxScaleDev", non_negative;
         /// `VisionFitMaxShift`: M282 refuses a fit whose shift (observed centroid − commanded
         /// centroid) is longer than this, inches (25.4 mm per inch under G21; 0 disables).
-        (Quality) fit_max_shift_in: f64 => f64 = 1.0, "VisionFitMaxShift", non_negative;
+        /// Default 2.5 in: the manual's workflow places parts within roughly 2 in of nominal,
+        /// and a capture that far off is still a real mark, not a sign of the wrong program.
+        (Quality) fit_max_shift_in: f64 => f64 = 2.5, "VisionFitMaxShift", non_negative;
         /// `VisionFitMaxResidual`: M282 refuses a fit whose worst mark residual exceeds this,
-        /// inches (0 disables).
+        /// inches (0 disables). Default 0.020 in: a mark the model cannot follow (a burr, a
+        /// wrong feature) beyond ten times the cut budget; the finer model error is
+        /// `VisionFitMaxAxisScaleError`'s, a single bad mark `VisionOutlierFactor`'s.
         (Quality) fit_max_residual_in: f64 => f64 = 0.020, "VisionFitMaxResidual", non_negative;
+        /// `VisionFitMaxAxisScaleError`: M282 refuses a similarity fit when the marks show X
+        /// and Y scaled differently by enough to miss a mark by more than this, inches (0
+        /// disables). Default 0.002 in: the cut-error budget; such a part needs rectangle mode.
+        (Quality) fit_max_axis_scale_error_in: f64 => f64 = 0.002, "VisionFitMaxAxisScaleError", non_negative;
+        /// `VisionOutlierFactor`: with five marks or more, M282 leaves out the one mark whose
+        /// distance from the fit of the others exceeds this many times the noise (the larger
+        /// of the camera's and the others' residual σ), and reports it; 0 disables. Default
+        /// 6: clean marks stay under it (at most 1 % false alarms in vision-math's test of 500
+        /// noisy six-mark fits), while a 0.05 in slip is over a hundred σ of a 0.1 px camera.
+        (Quality) outlier_factor: f64 => f64 = 6.0, "VisionOutlierFactor", non_negative;
     }
 }
 
@@ -617,6 +674,12 @@ param_struct! {
         (RunState) run_center_x: f64 => f64 = 0.0, "VisionRun_CenterX", any;
         /// `VisionRun_CenterY`: emitted G68 Y rotation centre, current units.
         (RunState) run_center_y: f64 => f64 = 0.0, "VisionRun_CenterY", any;
+        /// `VisionRun_PredictedSigma`: the last fit's predicted cut error over the marks'
+        /// bounding box, 1σ (root-mean-square length), current units.
+        (RunState) run_predicted_sigma: f64 => f64 = 0.0, "VisionRun_PredictedSigma", any;
+        /// `VisionRun_PredictedBound`: a radius that holds the last fit's largest cut error over
+        /// the marks' bounding box with ≥ 99 % probability, current units.
+        (RunState) run_predicted_bound: f64 => f64 = 0.0, "VisionRun_PredictedBound", any;
     }
 }
 
@@ -824,7 +887,9 @@ mod tests {
         assert_eq!(p.get("visionenabled"), Ok(ParamValue::Bool(false)));
         assert_eq!(p.get("VisionCal_Units"), Ok(ParamValue::Text("in".into())));
         assert_eq!(p.fit_max_scale_dev_pct(), 2.0);
-        assert_eq!(p.fit_max_shift_in(), 1.0);
+        assert_eq!(p.fit_max_shift_in(), 2.5);
+        assert_eq!(p.outlier_factor(), 6.0);
+        assert_eq!(p.camera_noise_px(), 0.1);
         assert_eq!(p.fit_max_residual_in(), 0.020);
         // Every name carries the prefix, is unique, and is read by the part its access says.
         let specs: Vec<_> = Params::specs().collect();

@@ -48,6 +48,8 @@ fn handler(offsets: &[Vector2<f64>], enabled: bool) -> (VisionHandler, Arc<Mutex
     let mut params = Params::default();
     params.set("VisionEnabled", enabled).expect("set");
     params.set("VisionCameraToolNumber", 98).expect("set");
+    // The scripted camera answers one reading per mark: read each in one shot.
+    params.set("VisionRecenterPasses", 0).expect("set");
     params.set_cal_k(Matrix2::new(K, 0.0, 0.0, K)).expect("k");
     params.set_remap(Remap { invert_y: true, ..Remap::IDENTITY });
     let chain =

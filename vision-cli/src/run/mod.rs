@@ -2,6 +2,7 @@
 //! M280–M284 handler, and a report of everything it did — and, because the simulator knows the
 //! truth, how far the result is from it.
 
+mod pictures;
 mod report;
 mod text;
 
@@ -58,6 +59,10 @@ pub(crate) struct RunArgs {
     /// Print the report as one JSON object.
     #[arg(long)]
     json: bool,
+    /// Also write one SVG picture per fit and per sheet calibration into this folder
+    /// (created if missing).
+    #[arg(long, value_name = "DIR")]
+    report: Option<PathBuf>,
 }
 
 /// Everything a run needs, set up.
@@ -139,9 +144,10 @@ impl Session {
             items.push(vision_path::item(e, usize::try_from(e.line()).unwrap_or(usize::MAX)));
         };
         let result = self.machine.run_program(text, Some(&mut self.handler), &mut collect);
-        let cycle = self.cycle_time(items, start);
         let records = self.handler.take_records();
         let steps = steps(&records, &self.sim, &self.machine);
+        let alignment_time_s = self.alignment_time(&items, &steps, start);
+        let cycle = self.cycle_time(items, start);
         let calibrated =
             steps.iter().any(|s| matches!(s, Step::SheetCalibration { .. } | Step::QuickCalibration { .. }));
         let calibration_truth =
@@ -157,10 +163,30 @@ impl Session {
             moves,
             cycle_time_s: cycle.as_ref().ok().copied(),
             cycle_note: cycle.err(),
+            alignment_time_s,
             steps,
             calibration_truth,
             error,
         }
+    }
+
+    /// The time from the last M280 to the M282 after it (the motion, settles and re-centring
+    /// of the alignment), seconds: the plan up to the M282's line minus the plan before the
+    /// M280's. `None` without such a pair or when the motion cannot be planned.
+    fn alignment_time(&self, items: &[vision_path::Item], steps: &[Step], start: vision_path::Xyz) -> Option<f64> {
+        let begin = steps.iter().rev().find_map(|s| match s {
+            Step::Begin { line, .. } => Some(*line),
+            _ => None,
+        })?;
+        let fit = steps.iter().find_map(|s| match s {
+            Step::Fit { line, .. } if *line > begin => Some(*line),
+            _ => None,
+        })?;
+        let until = |last: u32| {
+            let prefix: Vec<vision_path::Item> = items.iter().filter(|i| i.line() <= last as usize).cloned().collect();
+            self.cycle_time(prefix, start).ok()
+        };
+        Some(until(fit)? - until(begin.saturating_sub(1))?)
     }
 
     /// The time the motion (moves, dwells, calibration settles) takes on the world's machine:
@@ -205,6 +231,9 @@ pub(crate) fn run(args: &RunArgs) -> Result<String, Failure> {
         pound: pound(&session.machine, params)?,
         telemetry: session.handler.module().telemetry().clone(),
     };
+    if let Some(dir) = &args.report {
+        pictures::write(&report, dir)?;
+    }
     let output = if args.json {
         let mut s = serde_json::to_string_pretty(&report).map_err(|e| Failure::Input(e.to_string()))?;
         s.push('\n');

@@ -43,6 +43,8 @@ pub(crate) struct ProgramReport {
     pub cycle_time_s: Option<f64>,
     /// Why there is no cycle time, if there is none.
     pub cycle_note: Option<String>,
+    /// The time from the program's last M280 to the M282 after it, seconds (null without).
+    pub alignment_time_s: Option<f64>,
     /// Every Vision M-code, in order.
     pub steps: Vec<Step>,
     /// What the simulator knows about the calibration after the program, when it calibrated.

@@ -66,6 +66,9 @@ fn program(s: &mut String, p: &ProgramReport, world_unit: &str) {
     for step in &p.steps {
         self::step(s, step, world_unit);
     }
+    if let Some(t) = p.alignment_time_s {
+        let _ = writeln!(s, "  alignment time (M280 to M282) {t:.3} s");
+    }
     if let Some(t) = &p.calibration_truth {
         let _ = writeln!(
             s,
@@ -99,6 +102,16 @@ fn step(s: &mut String, step: &Step, world_unit: &str) {
                 c.unit.short_name(),
                 c.judgment.label()
             );
+            if let Some(r) = &c.recentred {
+                let _ = writeln!(
+                    s,
+                    "              re-centred in {} pass{}: first seen at pixels {:+.3} {:+.3}",
+                    r.passes,
+                    if r.passes == 1 { "" } else { "es" },
+                    r.first_px.x,
+                    r.first_px.y
+                );
+            }
             if let Some(w) = &c.warning {
                 let _ = writeln!(s, "              warning: {w}");
             }
@@ -127,6 +140,24 @@ fn step(s: &mut String, step: &Step, world_unit: &str) {
                     writeln!(s, "              mark {} residual {} (|r| {})", i + 1, xy(r.x, r.y), l(r.x.hypot(r.y)));
             }
             let _ = writeln!(s, "              rms {} {unit}, max {} {unit}", l(a.rms), l(a.max_residual));
+            if let Some(d) = &a.dropped {
+                let _ = writeln!(
+                    s,
+                    "              mark {} left out: {} {unit} from the others' fit, over {} x the noise {} {unit}",
+                    d.mark,
+                    l(d.residual),
+                    vision_math::chain::fixed(d.residual / d.noise, 1),
+                    l(d.noise)
+                );
+            }
+            let p = &a.predicted;
+            let _ = writeln!(
+                s,
+                "              predicted cut error over the marks: {} {unit} (1 sigma), below {} {unit} (99 %), noise {} {unit}",
+                l(p.sigma),
+                l(p.bound99),
+                l(p.noise)
+            );
             for g in gcode {
                 let _ = writeln!(s, "              | {g}");
             }

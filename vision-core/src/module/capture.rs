@@ -47,6 +47,18 @@ pub struct Capture {
     pub image: Option<PathBuf>,
     /// A non-fatal problem (e.g. no image appeared); also in `VisionLastStatus`.
     pub warning: Option<String>,
+    /// How M281 re-centred over the mark before this reading, `None` when it read in one shot.
+    pub recentred: Option<Recentred>,
+}
+
+/// M281's re-centring of one capture (`VisionRecenterPasses`).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Recentred {
+    /// Moves over the mark and triggers after the first.
+    pub passes: i64,
+    /// The centred pixel offset of the first reading, pixels.
+    #[serde(serialize_with = "ser::vector")]
+    pub first_px: Vector2<f64>,
 }
 
 /// K converted from `Cal_Units` to `unit` (units per pixel).

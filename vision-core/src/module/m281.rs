@@ -2,10 +2,11 @@
 
 use std::time::Duration;
 
-use vision_math::Point2;
+use vision_math::{LengthUnit, Point2};
 
-use super::capture::{mark_size, observe, pixel_chain, require_mark, Capture};
+use super::capture::{mark_size, observe, pixel_chain, require_mark, Capture, Recentred};
 use super::{Dot, Reply, VisionModule};
+use crate::calibrate::relative_move;
 use crate::error::VisionError;
 use crate::image_grab;
 use crate::machine::Machine;
@@ -13,6 +14,12 @@ use crate::pound::{PoundBlock, SlotValues, SLOTS};
 
 impl VisionModule {
     /// **M281**: triggers at the current commanded position and stores the observed point.
+    ///
+    /// Re-centring: while the mark is more than `VisionRecenterTolerance` pixels from the image
+    /// centre and fewer than `VisionRecenterPasses` passes ran, the camera moves over the point
+    /// just observed (an incremental `G91 G0`, then `G90`), settles `VisionTriggerSettleSec` and
+    /// triggers again; the last reading is the capture, `commanded` stays where the program put
+    /// the camera, and the reply lists the moves. `VisionRecenterPasses` = 0 reads in one shot.
     ///
     /// `O = C + K·R·(p − res/2 − PxCenterOffset)` with K converted from `Cal_Units` to the
     /// machine's unit; with an alignment active, `O` is reported in the program frame (SPEC §2).
@@ -29,33 +36,55 @@ impl VisionModule {
     /// # Errors
     /// [`VisionError::NotEnabled`], [`VisionError::WrongTool`],
     /// [`VisionError::PoundBaseReserved`], [`VisionError::PoundBlockMissing`],
-    /// [`VisionError::NotCalibrated`] (all before the trigger: nothing changes);
-    /// [`VisionError::NoDriver`]; after the trigger [`VisionError::Driver`] or
-    /// [`VisionError::NoMark`] (only `LastJudgment` and `LastStatus` change, recording the failed
-    /// trigger); a failed pound-variable write (the variables already written are restored). The dot list, the slots and `Run_DotCount` change only on
-    /// success.
+    /// [`VisionError::NotCalibrated`] (all before the trigger: only `LastStatus` changes);
+    /// [`VisionError::NoDriver`]; after a trigger [`VisionError::Driver`] or
+    /// [`VisionError::NoMark`] (`LastJudgment` and `LastStatus` record the failed trigger and the
+    /// other `Last*` values are cleared); [`VisionError::Machine`] for a refused re-centring move
+    /// (a camera that re-centred stays where it moved); a failed pound-variable write (the
+    /// variables already written are restored). The dot list, the slots and `Run_DotCount`
+    /// change only on success.
     pub fn m281(&mut self, machine: &mut dyn Machine, keep_image: bool) -> Result<Reply<Capture>, VisionError> {
-        self.check_enabled()?;
-        self.check_tool(machine)?;
-        let block = PoundBlock::on_machine(self.params.pound_var_base(), machine)?;
-        let unit = machine.units();
-        let chain = pixel_chain(&self.params, unit)?;
-        let trigger_time = machine.now();
-        let reading = match self.driver_mut()?.trigger() {
+        let ready = self.check_enabled().and_then(|()| self.check_tool(machine)).and_then(|()| {
+            let block = PoundBlock::on_machine(self.params.pound_var_base(), machine)?;
+            Ok((block, pixel_chain(&self.params, machine.units())?))
+        });
+        let (block, chain) = match ready {
             Ok(r) => r,
             Err(e) => {
-                let e = VisionError::from(e);
-                self.publish_failure(Some(-1), &e);
+                // The DRO shows why nothing was read.
+                self.publish_failure(None, &e);
                 return Err(e);
             }
         };
-        if let Err(e) = require_mark(&reading) {
-            self.publish_failure(Some(i64::from(reading.judgment.code())), &e);
-            return Err(e);
+        let unit = machine.units();
+        let mut trigger_time = machine.now();
+        let mut reading = self.trigger_mark()?;
+        let mut native = Point2::new(reading.x_px, reading.y_px);
+        let mut offset = chain.delta(native);
+        let (commanded, mut observed) = observe(machine, offset)?;
+        // Re-centring: a mark read far off the image centre carries K's error times that
+        // distance (a part closer or farther than the calibration height); read over it again.
+        let first_px = chain.centred(native);
+        let tolerance = self.params.recenter_tolerance_px();
+        let mut gcode = Vec::new();
+        let mut passes = 0;
+        while passes < self.params.recenter_passes() && chain.centred(native).norm() > tolerance {
+            let lines = relative_move(observed - machine.program_position());
+            if let Err(e) = machine.run_gcode(&lines) {
+                let e = VisionError::from(e);
+                self.publish_failure(None, &e);
+                return Err(e);
+            }
+            gcode.extend(lines);
+            machine.dwell(self.params.trigger_settle_s());
+            // M281 D1 keeps the image of the reading reported.
+            trigger_time = machine.now();
+            reading = self.trigger_mark()?;
+            native = Point2::new(reading.x_px, reading.y_px);
+            offset = chain.delta(native);
+            observed = observe(machine, offset)?.1;
+            passes += 1;
         }
-        let native = Point2::new(reading.x_px, reading.y_px);
-        let offset = chain.delta(native);
-        let (commanded, observed) = observe(machine, offset)?;
         let (width, height) = mark_size(&chain, &reading);
         let values = SlotValues {
             x: observed.x,
@@ -80,18 +109,8 @@ impl VisionModule {
             self.run.dots.push(Dot { commanded, observed, unit });
             self.publish_run();
         }
-        let p = &mut self.telemetry;
+        self.publish_reading(&chain, &reading);
         let centred = chain.centred(native);
-        p.last_judgment = i64::from(reading.judgment.code());
-        p.last_offset_px_x = centred.x;
-        p.last_offset_px_y = centred.y;
-        p.last_offset_x = offset.x;
-        p.last_offset_y = offset.y;
-        p.last_width = width;
-        p.last_height = height;
-        p.last_angle = reading.angle_deg;
-        p.last_score = reading.score;
-        p.last_status = "OK".to_string();
 
         let mut image = None;
         let mut warning = None;
@@ -120,14 +139,19 @@ impl VisionModule {
                 }
             }
         }
-        if let Some(note) = self.driver.as_deref().and_then(|d| d.reading_warning(&reading)) {
+        let notes = [
+            self.driver.as_deref().and_then(|d| d.reading_warning(&reading)),
+            self.resolution_note(native),
+            self.height_note(width, height, unit),
+        ];
+        for note in notes.into_iter().flatten() {
             warning = Some(warning.map_or_else(|| note.clone(), |w| format!("{note}; {w}")));
         }
         if let Some(w) = &warning {
             self.telemetry.last_status = format!("OK (warning: {w})");
         }
         Ok(Reply {
-            gcode: Vec::new(),
+            gcode,
             report: Capture {
                 unit,
                 commanded,
@@ -143,7 +167,83 @@ impl VisionModule {
                 slot,
                 image,
                 warning,
+                recentred: (passes > 0).then_some(Recentred { passes, first_px }),
             },
+        })
+    }
+
+    /// Writes a usable reading to the `Last*` telemetry through `chain`, `LastStatus` = `OK`.
+    pub(crate) fn publish_reading(&mut self, chain: &vision_math::PixelChain, reading: &crate::driver::Reading) {
+        let native = Point2::new(reading.x_px, reading.y_px);
+        let centred = chain.centred(native);
+        let offset = chain.delta(native);
+        let (width, height) = mark_size(chain, reading);
+        let p = &mut self.telemetry;
+        p.last_judgment = i64::from(reading.judgment.code());
+        p.last_offset_px_x = centred.x;
+        p.last_offset_px_y = centred.y;
+        p.last_offset_x = offset.x;
+        p.last_offset_y = offset.y;
+        p.last_width = width;
+        p.last_height = height;
+        p.last_angle = reading.angle_deg;
+        p.last_score = reading.score;
+        p.last_status = "OK".to_string();
+    }
+
+    /// Triggers; a failed trigger or no mark is recorded in `LastJudgment` / `LastStatus`.
+    fn trigger_mark(&mut self) -> Result<crate::driver::Reading, VisionError> {
+        let reading = match self.driver_mut()?.trigger() {
+            Ok(r) => r,
+            Err(e) => {
+                let e = VisionError::from(e);
+                self.publish_failure(Some(-1), &e);
+                return Err(e);
+            }
+        };
+        if let Err(e) = require_mark(&reading) {
+            self.publish_failure(Some(i64::from(reading.judgment.code())), &e);
+            return Err(e);
+        }
+        Ok(reading)
+    }
+
+    /// A reading outside the image `VisionCameraResX` × `VisionCameraResY` says the resolution
+    /// setting does not match the camera (every offset would then be measured from the wrong
+    /// centre).
+    fn resolution_note(&self, native: Point2<f64>) -> Option<String> {
+        let res = super::capture::resolution(&self.params);
+        let inside = (0.0..=res.x).contains(&native.x) && (0.0..=res.y).contains(&native.y);
+        (!inside).then(|| {
+            format!(
+                "the mark was reported at pixel ({:.1}, {:.1}), outside the {} x {} image of VisionCameraResX/ResY: \
+                 set them to the camera's resolution",
+                native.x, native.y, res.x, res.y
+            )
+        })
+    }
+
+    /// The height check: the mark's measured size against `VisionMarkDiameter`. The image scale
+    /// follows the working distance, so a mark measuring `m` instead of `d` sits about
+    /// `d / m − 1` closer (negative) or farther than where K was calibrated.
+    fn height_note(&self, width: f64, height: f64, unit: LengthUnit) -> Option<String> {
+        let diameter = LengthUnit::Inch.convert(self.params.mark_diameter_in(), unit);
+        let tolerance = self.params.mark_size_tolerance_pct();
+        let measured = (width.abs() + height.abs()) / 2.0;
+        if !(diameter > 0.0 && tolerance > 0.0 && measured > 0.0) {
+            return None;
+        }
+        let off_pct = (measured / diameter - 1.0) * 100.0;
+        let distance_pct = (diameter / measured - 1.0) * 100.0;
+        (off_pct.abs() > tolerance).then(|| {
+            let u = unit.short_name();
+            format!(
+                "the mark measures {measured:.4} {u} against VisionMarkDiameter {diameter:.4} {u} ({off_pct:+.2} %): \
+                 the part is about {:.1} % {} than where K was calibrated; offsets far from the image centre carry \
+                 that error (re-centring removes it) — check the part's height or recalibrate at it",
+                distance_pct.abs(),
+                if distance_pct < 0.0 { "closer to the camera" } else { "farther from the camera" }
+            )
         })
     }
 }

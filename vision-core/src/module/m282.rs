@@ -1,6 +1,9 @@
 //! M282: solve the run's fit and emit it as modal G51 / G68 / G52.
 
-use vision_math::{fit_piece, fit_rectangle, fit_similarity, AlignmentChain, Fit, LengthUnit, Piece, Point2, Vector2};
+use vision_math::fit::{find_outlier, residual_sigma};
+use vision_math::{
+    fit_piece, fit_rectangle, fit_similarity, AlignmentChain, Fit, LengthUnit, Model, Piece, Point2, Vector2,
+};
 
 use super::m280::RunMode;
 use super::{Reply, VisionModule};
@@ -68,8 +71,40 @@ pub struct AlignReport {
     pub residuals: Vec<Vector2<f64>>,
     /// RMS residual length under the emitted chain, `sqrt(Σ‖rᵢ‖² / N)`.
     pub rms: f64,
-    /// Largest residual length under the emitted chain.
+    /// Largest residual length under the emitted chain (of the marks the fit used).
     pub max_residual: f64,
+    /// The cut error the full fit (`fit`) predicts over the bounding box of the marks it used.
+    pub predicted: PredictedError,
+    /// The mark left out of the fit as an outlier, if any (its residual is still listed).
+    pub dropped: Option<DroppedMark>,
+}
+
+/// The cut error a fit predicts over the part (see [`vision_math::fit::Prediction`]): from the
+/// parameters' covariance given a per-coordinate noise σ, at the worst corner of the marks'
+/// bounding box. The fit's own error only: a wrong K or camera offset is not in it. Lengths in
+/// the report's unit.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct PredictedError {
+    /// The noise σ per observed coordinate used: the larger of the camera's
+    /// (`VisionCameraNoisePx` through K) and the residuals' own.
+    pub noise: f64,
+    /// The camera's part of it: `VisionCameraNoisePx` × K's largest singular value.
+    pub camera_noise: f64,
+    /// Root-mean-square length of the cut error at the worst corner, 1σ.
+    pub sigma: f64,
+    /// A radius holding the largest cut error over the region with ≥ 99 % probability.
+    pub bound99: f64,
+}
+
+/// A mark M282 left out of the fit (see [`vision_math::fit::find_outlier`]).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct DroppedMark {
+    /// Its 1-based index in the run's dot list.
+    pub mark: usize,
+    /// Its distance from the fit of the other marks, the report's unit.
+    pub residual: f64,
+    /// The noise it was judged against (`VisionOutlierFactor` × this was exceeded).
+    pub noise: f64,
 }
 
 impl VisionModule {
@@ -79,10 +114,19 @@ impl VisionModule {
     /// `Run_Sx/Sy` = G51, `Run_CenterX/Y` = G68 X/Y), closes the run (`Run_Active` = 0) and runs
     /// the four lines of [`AlignmentChain::gcode`] on the machine; the reply lists them.
     ///
+    /// With five marks or more, the one mark whose distance from the fit of the others exceeds
+    /// `VisionOutlierFactor` × the noise is left out first and reported
+    /// ([`AlignReport::dropped`]).
+    ///
     /// Quality gates, judged on the full fit of the run's model whatever `pieces` is emitted
     /// (0 disables a gate): X or Y scale off 1 by more than `VisionFitMaxScaleDev` percent;
     /// shift ‖observed centroid − commanded centroid‖ above `VisionFitMaxShift`; worst mark
-    /// residual above `VisionFitMaxResidual` (both inches, ×25.4 under G21).
+    /// residual above `VisionFitMaxResidual`; for a similarity fit, marks scaled differently in
+    /// X and Y by enough to miss one by more than `VisionFitMaxAxisScaleError` (the refusal
+    /// advises rectangle mode). Lengths in inches, ×25.4 under G21.
+    ///
+    /// Every accepted fit predicts its cut error over the marks' bounding box
+    /// ([`AlignReport::predicted`], `VisionRun_PredictedSigma` / `…Bound`).
     ///
     /// Works after a run's M282 too (the dot list stays until the next M280), so a second M282
     /// can emit another selection from the same captures; the output replaces, never compounds.
@@ -103,13 +147,24 @@ impl VisionModule {
             return Err(VisionError::TooFewDots { mode: mode.name(), needed, got: self.run.dots.len() });
         }
         let unit = machine.units();
-        let (commanded, observed): (Vec<Point2<f64>>, Vec<Point2<f64>>) =
+        let (all_commanded, all_observed): (Vec<Point2<f64>>, Vec<Point2<f64>>) =
             self.run.dots.iter().map(|d| d.in_unit(unit)).unzip();
+        let model = match mode {
+            RunMode::Rectangle => Model::Rectangle,
+            RunMode::Similarity => Model::Similarity,
+        };
+        let camera_noise = self.camera_noise(unit);
+        let dropped = self.find_dropped(model, &all_commanded, &all_observed, camera_noise)?;
+        let kept = |v: &[Point2<f64>]| -> Vec<Point2<f64>> {
+            v.iter().enumerate().filter(|(i, _)| dropped.is_none_or(|d| d.mark != i + 1)).map(|(_, p)| *p).collect()
+        };
+        let (commanded, observed) = (kept(&all_commanded), kept(&all_observed));
         let fit = match mode {
             RunMode::Rectangle => fit_rectangle(&commanded, &observed)?,
             RunMode::Similarity => fit_similarity(&commanded, &observed)?,
         };
-        self.check_gates(&fit, unit)?;
+        self.check_gates(&fit, &commanded, &observed, unit)?;
+        let predicted = predict(&fit, &commanded, camera_noise)?;
         let chain = match pieces {
             Pieces::All => {
                 fit.transform.chain().ok_or(VisionError::Math(vision_math::MathError::DegenerateObserved))?
@@ -122,10 +177,17 @@ impl VisionModule {
         };
         let gcode = chain.gcode()?.to_vec();
         machine.run_gcode(&gcode)?;
-        let residuals: Vec<Vector2<f64>> = commanded.iter().zip(&observed).map(|(n, o)| chain.apply(*n) - o).collect();
-        let max_residual = residuals.iter().map(|r| r.norm()).fold(0.0, f64::max);
+        let residuals: Vec<Vector2<f64>> =
+            all_commanded.iter().zip(&all_observed).map(|(n, o)| chain.apply(*n) - o).collect();
+        let used: Vec<f64> = residuals
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| dropped.is_none_or(|d| d.mark != i + 1))
+            .map(|(_, r)| r.norm())
+            .collect();
+        let max_residual = used.iter().copied().fold(0.0, f64::max);
         #[allow(clippy::cast_precision_loss)] // a handful of marks
-        let rms = (residuals.iter().map(Vector2::norm_squared).sum::<f64>() / residuals.len() as f64).sqrt();
+        let rms = (used.iter().map(|r| r * r).sum::<f64>() / used.len() as f64).sqrt();
 
         self.run.active = false;
         self.publish_run();
@@ -137,11 +199,54 @@ impl VisionModule {
         p.run_sy = chain.scale.y;
         p.run_center_x = chain.center.x;
         p.run_center_y = chain.center.y;
-        Ok(Reply { gcode, report: AlignReport { unit, mode, pieces, fit, chain, residuals, rms, max_residual } })
+        p.run_predicted_sigma = predicted.sigma;
+        p.run_predicted_bound = predicted.bound99;
+        Ok(Reply {
+            gcode,
+            report: AlignReport { unit, mode, pieces, fit, chain, residuals, rms, max_residual, predicted, dropped },
+        })
+    }
+
+    /// The camera's noise per observed coordinate in `unit`: `VisionCameraNoisePx` times K's
+    /// largest singular value (the worst direction), 0 while K is unset.
+    fn camera_noise(&self, unit: LengthUnit) -> f64 {
+        let k = self.params.cal_k();
+        let largest = k.singular_values().max();
+        let noise = self.params.camera_noise_px() * largest * self.params.cal_units().factor_to(unit);
+        if noise.is_finite() {
+            noise
+        } else {
+            0.0
+        }
+    }
+
+    /// The outlier to leave out (`VisionOutlierFactor`, 0 disables; five marks or more).
+    fn find_dropped(
+        &self,
+        model: Model,
+        commanded: &[Point2<f64>],
+        observed: &[Point2<f64>],
+        camera_noise: f64,
+    ) -> Result<Option<DroppedMark>, VisionError> {
+        let factor = self.params.outlier_factor();
+        if factor <= 0.0 {
+            return Ok(None);
+        }
+        Ok(find_outlier(model, commanded, observed, camera_noise, factor)?.map(|o| DroppedMark {
+            mark: o.index + 1,
+            residual: o.residual,
+            noise: o.noise,
+        }))
     }
 
     /// The `VisionFitMax*` gates (see [`VisionModule::m282`]).
-    fn check_gates(&self, fit: &Fit, unit: LengthUnit) -> Result<(), VisionError> {
+    fn check_gates(
+        &self,
+        fit: &Fit,
+        commanded: &[Point2<f64>],
+        observed: &[Point2<f64>],
+        unit: LengthUnit,
+    ) -> Result<(), VisionError> {
         let u = unit.short_name();
         let max_dev = self.params.fit_max_scale_dev_pct();
         let dev = (fit.transform.scale.x - 1.0).abs().max((fit.transform.scale.y - 1.0).abs()) * 100.0;
@@ -169,6 +274,44 @@ impl VisionModule {
                 ),
             });
         }
-        Ok(())
+        let gate = LengthUnit::Inch.convert(self.params.fit_max_axis_scale_error_in(), unit);
+        match axis_scale_miss(fit, commanded, observed) {
+            Some((sx, sy, miss)) if gate > 0.0 && miss > gate => Err(VisionError::FitRejected {
+                reason: format!(
+                    "the marks show X and Y scaled differently (X {sx:.5}, Y {sy:.5}): a similarity fit \
+                     misses by up to {miss:.4} {u}, more than VisionFitMaxAxisScaleError = {gate:.4} {u}; \
+                     align this part in rectangle mode (M280 P4) with four marks"
+                ),
+            }),
+            _ => Ok(()),
+        }
     }
+}
+
+/// For a similarity fit: the per-axis scales `(sx, sy)` the rectangle fit of the same marks
+/// measures, and how far the similarity misses a mark because it can follow only their mean
+/// (`|sx − sy| / 2` times the mark's distance from the centroid, the farthest mark's).
+/// `None` for other models and for marks that determine no per-axis scale.
+fn axis_scale_miss(fit: &Fit, commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Option<(f64, f64, f64)> {
+    if fit.transform.model != Model::Similarity || commanded.len() < Model::Rectangle.min_points() {
+        return None;
+    }
+    let rectangle = fit_rectangle(commanded, observed).ok()?;
+    let (sx, sy) = (rectangle.transform.scale.x, rectangle.transform.scale.y);
+    let reach = commanded.iter().map(|n| (n - fit.transform.commanded_centroid).norm()).fold(0.0, f64::max);
+    Some((sx, sy, (sx - sy).abs() / 2.0 * reach))
+}
+
+/// The prediction of `fit` over the bounding box of `commanded`, with the larger of the camera's
+/// noise and the residuals' own σ.
+fn predict(fit: &Fit, commanded: &[Point2<f64>], camera_noise: f64) -> Result<PredictedError, VisionError> {
+    let model = fit.transform.model;
+    let noise = residual_sigma(model, fit.len, fit.rms).map_or(camera_noise, |s| s.max(camera_noise));
+    let (lo, hi) = commanded.iter().fold(
+        (Point2::new(f64::INFINITY, f64::INFINITY), Point2::new(f64::NEG_INFINITY, f64::NEG_INFINITY)),
+        |(lo, hi), p| (Point2::new(lo.x.min(p.x), lo.y.min(p.y)), Point2::new(hi.x.max(p.x), hi.y.max(p.y))),
+    );
+    let corners = [lo, Point2::new(hi.x, lo.y), hi, Point2::new(lo.x, hi.y)];
+    let p = fit.transform.predict(commanded, noise, &corners)?;
+    Ok(PredictedError { noise, camera_noise, sigma: p.sigma, bound99: p.bound99 })
 }

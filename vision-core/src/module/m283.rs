@@ -3,6 +3,7 @@
 use vision_math::chain::fixed;
 use vision_math::{AlignmentChain, Point2, Vector2};
 
+use super::capture::pixel_chain;
 use super::{Reply, VisionModule};
 use crate::calibrate::{quick, sheet_walk, CalReport, Calibrate, Solution, Walker};
 use crate::error::VisionError;
@@ -39,7 +40,9 @@ impl VisionModule {
     /// when the save then fails, the old offset is written back and the error is the save's. If
     /// that restore fails too, the error says so and gives the offset to set by hand. The G-code
     /// runs through [`Machine::run_gcode`] as the walk goes; the reply lists every line run.
-    /// `LastStatus` is `OK` on success.
+    /// `LastStatus` is `OK` on success, and the `Last*` values show the routine's last trigger
+    /// read through the new K (a failed routine's last trigger, when it found no mark, clears
+    /// them).
     ///
     /// # Errors
     /// [`VisionError::NotEnabled`], [`VisionError::WrongTool`], [`VisionError::UnknownSheet`],
@@ -74,8 +77,15 @@ impl VisionModule {
             };
             (outcome, walker.into_ran())
         };
+        let (ran, last) = ran;
         match outcome.and_then(|solution| self.apply_calibration(machine, solution)) {
             Ok(report) => {
+                // The DRO shows the last trigger as M281 would, with the K just written.
+                if let Some(reading) = last.filter(crate::driver::Reading::found) {
+                    if let Ok(chain) = pixel_chain(&self.params, machine.units()) {
+                        self.publish_reading(&chain, &reading);
+                    }
+                }
                 self.telemetry.last_status = "OK".to_string();
                 Ok(Reply { gcode: ran, report })
             }
@@ -83,7 +93,7 @@ impl VisionModule {
                 if let Some(driver) = self.driver.as_deref_mut() {
                     let _ = Walker::new(machine, driver, 0.0).move_abs(start);
                 }
-                self.publish_failure(None, &e);
+                self.publish_failure(last.map(|r| i64::from(r.judgment.code())), &e);
                 Err(e)
             }
         }

@@ -36,9 +36,9 @@ use crate::params::{ParamValue, Params, Telemetry};
 use crate::profile::ProfileStore;
 use crate::registry::DriverRegistry;
 
-pub use capture::Capture;
+pub use capture::{Capture, Recentred};
 pub use m280::RunMode;
-pub use m282::{AlignReport, Pieces};
+pub use m282::{AlignReport, DroppedMark, Pieces, PredictedError};
 pub use m284::{JobReport, MAX_JOB};
 
 /// What an entry point hands back: the G-code it ran, then a report.
@@ -249,10 +249,20 @@ impl VisionModule {
         t.run_dot_count = i64::try_from(self.run.dots.len()).unwrap_or(i64::MAX);
     }
 
-    /// Records a failed operation in `LastStatus` (and, for a failed trigger, `LastJudgment`).
+    /// Records a failed operation in `LastStatus`; for a failed trigger also `LastJudgment`, and
+    /// the offsets, size, angle and score are cleared so a DRO never shows the previous mark's.
     pub(crate) fn publish_failure(&mut self, judgment: Option<i64>, e: &VisionError) {
         if let Some(j) = judgment {
-            self.telemetry.last_judgment = j;
+            let t = &mut self.telemetry;
+            t.last_judgment = j;
+            t.last_offset_px_x = 0.0;
+            t.last_offset_px_y = 0.0;
+            t.last_offset_x = 0.0;
+            t.last_offset_y = 0.0;
+            t.last_width = 0.0;
+            t.last_height = 0.0;
+            t.last_angle = 0.0;
+            t.last_score = 0.0;
         }
         self.telemetry.last_status = e.to_string();
     }

@@ -92,6 +92,7 @@ fn m280_refuses_a_reserved_pound_base() {
 fn m281_outside_a_run_writes_slot_zero_and_telemetry_only() {
     let mut rig = Rig::new();
     rig.world().marks = vec![Point2::new(1.1, 0.9)];
+    rig.module.set_param("VisionRecenterPasses", 0).expect("one shot, as the seed");
     rig.go(1.0, 1.0);
     let c = rig.module.m281(&mut rig.machine, false).expect("capture").report;
     assert!((c.observed - Point2::new(1.1, 0.9)).norm() < 1e-12, "{c:?}");
@@ -268,13 +269,16 @@ fn quality_gates_refuse_bad_fits_and_zero_disables_them() {
     rig.module.set_param("VisionFitMaxScaleDev", 0.0).expect("disable");
     assert!(rig.module.m282(&mut rig.machine, Pieces::All).is_ok());
 
-    // Shift 1.2 in: refused by the 1.0 in gate.
-    let shifted = AlignmentChain { shift: Vector2::new(1.2, 0.0), ..AlignmentChain::IDENTITY };
+    // Shift 1.5 in (the manual's "within roughly two inches") passes the default 2.5 in gate,
+    // not a 1.2 in one.
+    let shifted = AlignmentChain { shift: Vector2::new(1.5, 0.0), ..AlignmentChain::IDENTITY };
     let world =
         World { marks: PART.iter().map(|(x, y)| shifted.apply(Point2::new(*x, *y))).collect(), ..World::default() };
     let mut rig = Rig::with_world(world);
     rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect("m280");
     capture_all(&mut rig, &PART);
+    assert!(rig.module.m282(&mut rig.machine, Pieces::All).is_ok());
+    rig.module.set_param("VisionFitMaxShift", 1.2).expect("set");
     let e = rig.module.m282(&mut rig.machine, Pieces::All).expect_err("shift gate");
     assert!(e.to_string().contains("VisionFitMaxShift"), "{e}");
 
@@ -290,9 +294,74 @@ fn quality_gates_refuse_bad_fits_and_zero_disables_them() {
 }
 
 #[test]
+fn a_similarity_fit_of_a_part_stretched_in_x_is_refused_with_advice() {
+    // 0.5 % large in X only: a similarity fit would miss by ~0.01 in at the corners.
+    let stretched = |(x, y): (f64, f64)| Point2::new(x * 1.005, y);
+    let mut rig = Rig::with_world(World { marks: PART.iter().copied().map(stretched).collect(), ..World::default() });
+    rig.module.m280(&mut rig.machine, RunMode::Similarity).expect("m280");
+    capture_all(&mut rig, &PART);
+    let e = rig.module.m282(&mut rig.machine, Pieces::All).expect_err("axis scale gate");
+    assert!(e.to_string().contains("VisionFitMaxAxisScaleError") && e.to_string().contains("M280 P4"), "{e}");
+    // The same part in rectangle mode follows the stretch.
+    rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect("m280");
+    capture_all(&mut rig, &PART);
+    let fit = rig.module.m282(&mut rig.machine, Pieces::All).expect("rectangle").report.fit;
+    assert!((fit.transform.scale.x - 1.005).abs() < 1e-9, "{fit:?}");
+    // A uniform 0.5 % is what a similarity fit is for.
+    let grown = |(x, y): (f64, f64)| Point2::new(x * 1.005, y * 1.005);
+    let mut rig = Rig::with_world(World { marks: PART.iter().copied().map(grown).collect(), ..World::default() });
+    rig.module.m280(&mut rig.machine, RunMode::Similarity).expect("m280");
+    capture_all(&mut rig, &PART);
+    assert!(rig.module.m282(&mut rig.machine, Pieces::All).is_ok());
+}
+
+#[test]
+fn a_slipped_mark_among_six_is_dropped_and_reported() {
+    let nominal = [(0.0, 0.0), (3.0, 0.0), (6.0, 0.0), (6.0, 4.0), (3.0, 4.0), (0.0, 4.0)];
+    let part = true_part();
+    let mut marks: Vec<_> = nominal.iter().map(|(x, y)| part.apply(Point2::new(*x, *y))).collect();
+    marks[4] += Vector2::new(0.03, -0.04);
+    let mut rig = Rig::with_world(World { marks, ..World::default() });
+    rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect("m280");
+    capture_all(&mut rig, &nominal);
+    let a = rig.module.m282(&mut rig.machine, Pieces::All).expect("m282").report;
+    let dropped = a.dropped.expect("mark 5 dropped");
+    assert_eq!(dropped.mark, 5);
+    assert!((dropped.residual - 0.05).abs() < 1e-6, "{dropped:?}");
+    assert_eq!(a.fit.len, 5);
+    assert!(a.max_residual < 1e-9 && (a.residuals[4].norm() - 0.05).abs() < 1e-6, "{a:?}");
+    assert!((a.chain.apply(Point2::new(6.0, 4.0)) - part.apply(Point2::new(6.0, 4.0))).norm() < 1e-9);
+    // Disabled: the slip is fitted with the others, pulls the fit and trips the residual gate.
+    rig.module.set_param("VisionOutlierFactor", 0.0).expect("disable");
+    let e = rig.module.m282(&mut rig.machine, Pieces::All).expect_err("residual gate");
+    assert!(e.to_string().contains("VisionFitMaxResidual"), "{e}");
+}
+
+#[test]
+fn every_fit_predicts_its_error_from_the_camera_noise_and_the_residuals() {
+    let mut rig = Rig::new();
+    rig.world().marks = PART.iter().map(|(x, y)| true_part().apply(Point2::new(*x, *y))).collect();
+    rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect("m280");
+    capture_all(&mut rig, &PART);
+    let a = rig.module.m282(&mut rig.machine, Pieces::All).expect("m282").report;
+    let k = rig.module.params().cal_k().singular_values().max();
+    let p = a.predicted;
+    // Exact marks: the camera's 0.1 px is the noise.
+    assert!((p.camera_noise - 0.1 * k).abs() < 1e-15 && p.noise == p.camera_noise, "{p:?}");
+    assert!(p.sigma > 0.0 && p.bound99 > 2.0 * p.sigma, "{p:?}");
+    let t = rig.module.telemetry();
+    assert_eq!((t.run_predicted_sigma(), t.run_predicted_bound()), (p.sigma, p.bound99));
+    // Twice the noise, twice the prediction.
+    rig.module.set_param("VisionCameraNoisePx", 0.2).expect("set");
+    let q = rig.module.m282(&mut rig.machine, Pieces::All).expect("m282").report.predicted;
+    assert!((q.bound99 / p.bound99 - 2.0).abs() < 1e-9, "{p:?} {q:?}");
+}
+
+#[test]
 fn k_in_inches_reports_millimetres_under_g21() {
     let mut rig = Rig::new();
     rig.world().marks = vec![Point2::new(1.1, 0.9)];
+    rig.module.set_param("VisionRecenterPasses", 0).expect("one shot");
     rig.run(&["G21".to_string()]);
     rig.go(25.4, 25.4);
     let c = rig.module.m281(&mut rig.machine, false).expect("capture").report;
@@ -326,6 +395,12 @@ fn failed_captures_change_nothing_but_the_last_status() {
     assert!(e.to_string().starts_with("NG / no mark found"));
     assert_eq!(rig.module.telemetry().last_judgment(), 0);
     assert_eq!(rig.module.telemetry().last_status(), e.to_string());
+    // The previous mark's offsets and size are not left on the DRO.
+    let t = rig.module.telemetry();
+    assert_eq!(
+        (t.last_offset_x(), t.last_offset_y(), t.last_offset_px_x(), t.last_width(), t.last_score()),
+        (0.0, 0.0, 0.0, 0.0, 0.0)
+    );
     // Count 0.
     rig.world().script.push_back(Ok(Reading { count: Some(0), ..Reading::position(1.0, 1.0) }));
     assert_eq!(rig.module.m281(&mut rig.machine, false).map(|_| ()), Err(VisionError::NoMark));
@@ -344,6 +419,52 @@ fn failed_captures_change_nothing_but_the_last_status() {
     let e = rig.module.m281(&mut rig.machine, false).expect_err("zero K");
     assert_eq!(e, VisionError::NotCalibrated);
     assert_eq!(e.to_string(), "K matrix is zero — run M283 to calibrate first (M283 C1 or M283 Q)");
+    assert_eq!(rig.module.telemetry().last_status(), e.to_string(), "a refusal before the trigger is shown too");
     assert_eq!(rig.world().triggers, triggers);
     assert_eq!(block(&rig), pounds);
+}
+
+#[test]
+fn m281_recentres_over_a_mark_seen_off_centre() {
+    let mut rig = Rig::new();
+    rig.world().marks = vec![Point2::new(1.1, 0.9)];
+    rig.go(1.0, 1.0);
+    let r = rig.module.m281(&mut rig.machine, false).expect("capture");
+    let c = r.report;
+    assert!((c.observed - Point2::new(1.1, 0.9)).norm() < 1e-9, "{c:?}");
+    assert_eq!(c.commanded, Point2::new(1.0, 1.0), "the dot keeps where the program put the camera");
+    let recentred = c.recentred.expect("re-centred");
+    assert_eq!(recentred.passes, 1);
+    assert!((recentred.first_px.norm() - 0.1f64.hypot(0.1) / 0.00203).abs() < 1e-6, "{recentred:?}");
+    assert!(c.centred_px.norm() < 1e-6, "{c:?}");
+    assert_eq!(r.gcode, vec!["G91 G0 X0.1000000 Y-0.1000000".to_string(), "G90".to_string()]);
+    assert!((rig.machine.program_position() - Point2::new(1.1, 0.9)).norm() < 1e-9);
+    // Within the tolerance: no move.
+    rig.module.set_param("VisionRecenterTolerance", 100.0).expect("set");
+    rig.go(1.0, 1.0);
+    let r = rig.module.m281(&mut rig.machine, false).expect("capture");
+    assert_eq!((r.report.recentred, r.gcode.len()), (None, 0));
+}
+
+#[test]
+fn the_mark_size_and_the_pixel_range_warn_about_height_and_resolution() {
+    let mut rig = Rig::new();
+    rig.world().marks = vec![Point2::new(1.0, 1.0)];
+    rig.go(1.0, 1.0);
+    // The fake camera's mark is 0.5 in: within 2 % of 0.5, not of 0.52.
+    rig.module.set_param("VisionMarkDiameter", 0.5).expect("set");
+    assert_eq!(rig.module.m281(&mut rig.machine, false).expect("capture").report.warning, None);
+    rig.module.set_param("VisionMarkDiameter", 0.52).expect("set");
+    let w = rig.module.m281(&mut rig.machine, false).expect("capture").report.warning.expect("height warning");
+    assert!(w.contains("-3.85 %") && w.contains("4.0 % farther from the camera"), "{w}");
+    assert!(rig.module.telemetry().last_status().starts_with("OK (warning: the mark measures"));
+    rig.module.set_param("VisionMarkDiameter", 0.0).expect("off");
+    // The profile says 1000 × 1000 but the camera reports beyond it (0.3 in ≈ 148 px right
+    // of its own 1776-pixel centre).
+    rig.module.set_param("VisionCameraResX", 1000).expect("set");
+    rig.module.set_param("VisionCameraResY", 1000).expect("set");
+    rig.module.set_param("VisionRecenterPasses", 0).expect("one shot");
+    rig.world().marks = vec![Point2::new(1.3, 1.0)];
+    let w = rig.module.m281(&mut rig.machine, false).expect("capture").report.warning.expect("resolution warning");
+    assert!(w.contains("outside the 1000 x 1000 image") && w.contains("VisionCameraResX"), "{w}");
 }

@@ -105,6 +105,12 @@ fn sheet_walk_recovers_k_and_offset_for_all_eight_mountings() {
         assert!((rep.scale.x - true_k(optics).column(0).norm() * f).abs() < 1e-12 * f, "mounting {i}");
         assert_eq!(p.cal_date(), "2023-11-14T23:13:20+01:00");
         assert_eq!(rig.module.telemetry().last_status(), "OK");
+        // The DRO shows the walk's last trigger (the verify re-walk's dot 5, read through the
+        // new K): a mark, its size, almost on the camera axis.
+        let t = rig.module.telemetry();
+        assert_eq!(t.last_judgment(), 1, "mounting {i}");
+        assert!(t.last_width() > 0.0 && t.last_score() > 0.0, "mounting {i}: {t:?}");
+        assert!(t.last_offset_x().hypot(t.last_offset_y()) < 0.05 * f, "mounting {i}: {t:?}");
         // With the new offset the camera lands on what it is commanded to: dot 5 at 0, 0.
         assert!((rig.world().camera_axis() - Point2::origin()).norm() < 1e-9);
         // The bump was 0.1 in (2.54 mm) and settling was dwelt after every move.
@@ -204,6 +210,9 @@ fn a_failed_walk_restores_k_flags_offset_and_position() {
     assert!(e.to_string().ends_with("the tool offsets were left unchanged"), "{e}");
     assert_untouched(&rig, start);
     assert_eq!(rig.module.telemetry().last_status(), e.to_string());
+    // The trigger that lost the mark is on the DRO: no mark, nothing stale.
+    let t = rig.module.telemetry();
+    assert_eq!((t.last_judgment(), t.last_width(), t.last_offset_x()), (0, 0.0, 0.0), "{t:?}");
 }
 
 #[test]

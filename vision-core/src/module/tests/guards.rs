@@ -97,6 +97,7 @@ fn driver_errors_reach_the_operator_in_the_drivers_words() {
 #[test]
 fn the_drivers_warning_about_a_reading_reaches_the_operator() {
     let mut rig = Rig::new();
+    rig.module.set_param("VisionRecenterPasses", 0).expect("one scripted reading");
     let seen = Reading { judgment: Judgment::Ok, count: Some(1), ..Reading::position(700.0, 650.0) };
     rig.world().script.push_back(Ok(Reading { count: Some(2), ..seen }));
     let capture = rig.module.m281(&mut rig.machine, false).expect("a usable reading").report;
