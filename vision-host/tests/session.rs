@@ -1,0 +1,83 @@
+//! The session on the simulated machine gives what `mach-vision run` gives.
+
+use vision_core::Params;
+use vision_host::testkit::{example, reference, sim, through_session, Trace};
+use vision_host::{registry, HostError, Session};
+use vision_mcode::McodeError;
+
+fn assert_same(program: &str, params: impl Fn() -> Option<Params>) -> Trace {
+    let want = reference(program, params());
+    let got = through_session(program, params());
+    got.assert_matches(&want);
+    got
+}
+
+#[test]
+fn alignment_examples_emit_the_same_gcode_and_cut_the_same() {
+    for (name, marks) in [("04-rectangle-fit.nc", 4), ("05-similarity-fit.nc", 3)] {
+        let trace = assert_same(&example(name), || None);
+        assert_eq!(trace.end, Ok("ended"), "{name}");
+        let m281 = trace.calls.iter().filter(|c| c.mcode == 281 && c.result.is_ok()).count();
+        assert_eq!(m281, marks, "{name}");
+        let m282 = trace.calls.iter().find(|c| c.mcode == 282).expect("M282");
+        let gcode = m282.result.as_ref().expect("M282 succeeds");
+        assert_eq!(gcode.len(), 4, "{name}: {gcode:?}");
+        assert!(gcode[2].starts_with("G68 X"), "{name}: {gcode:?}");
+        let (_, worst) = trace.cut_errors.iter().find(|(f, _)| f == "demo target").expect("the demo part");
+        assert!(*worst < 2e-3, "{name}: cut error {worst} in");
+    }
+}
+
+#[test]
+fn calibration_verify_and_job_examples_match_the_cli() {
+    for name in ["01-calibrate-sheet.nc", "02-verify-calibration.nc", "07-switch-jobs.nc"] {
+        let trace = assert_same(&example(name), || None);
+        assert_eq!(trace.end, Ok("ended"), "{name}");
+        assert!(trace.calls.iter().all(|c| c.result.is_ok()), "{name}: {:?}", trace.calls);
+    }
+}
+
+/// The error paths stop the program at the M-code with the manual's message and leave the
+/// pound block as it was.
+#[test]
+fn refusals_stop_the_program_and_change_nothing() {
+    let not_calibrated = || {
+        let s = sim();
+        let mut p = Params::default();
+        p.set("VisionEnabled", true).expect("bool");
+        p.set("VisionDriver", "Sim").expect("string");
+        p.set("VisionCameraToolNumber", i64::from(s.world().machine.camera_tool)).expect("int");
+        Some(p)
+    };
+    type Params0<'a> = &'a dyn Fn() -> Option<Params>;
+    let cases: [(&str, &str, Params0<'_>); 3] = [
+        ("G90 G20\nT98 M6\nG0 X30 Y30\nM281\nG0 X1\nM30\n", "no mark", &|| None),
+        ("G90 G20\nT98 M6\nM281\nM30\n", "K matrix is zero", &not_calibrated),
+        ("G90 G20\nT98 M6\nM280\nT1 M6\nM281\nM30\n", "tool", &|| None),
+    ];
+    for (program, says, params) in cases {
+        let trace = assert_same(program, params);
+        let last = trace.calls.last().expect("a Vision call");
+        let message = last.result.as_ref().expect_err("refused");
+        assert!(message.contains(says), "{program:?}: {message}");
+        let end = trace.end.as_ref().expect_err("stopped");
+        assert!(end.contains(message.as_str()), "{end}");
+        assert!(trace.pound.iter().all(|v| *v == 0.0), "{program:?}: {:?}", trace.pound);
+    }
+}
+
+#[test]
+fn a_fresh_profile_is_disabled_until_enabled() {
+    let path = std::env::temp_dir().join(format!("vision-host-fresh-{}.toml", std::process::id()));
+    let mut session = Session::open(&path, &registry()).expect("a missing profile is a fresh one");
+    let sim = sim();
+    let mut machine = vision_driver_sim::SimMachine::new(&sim, vision_host::testkit::clock()).expect("machine");
+    let mut host = vision_host::testkit::MachineHost::new(&mut machine);
+    let e = session.mcode(&mut host, 280, &[]).expect_err("disabled");
+    assert!(matches!(e, HostError::Mcode(McodeError::Vision(_))), "{e:?}");
+    assert!(e.to_string().contains("not enabled"), "{e}");
+    let e = session.mcode(&mut host, 281, &[('X', 1.0)]).expect_err("bad word");
+    assert!(matches!(e, HostError::Mcode(McodeError::UnknownWord { .. })), "{e:?}");
+    assert!(host.messages.is_empty());
+    assert!(!path.exists(), "a refusal saves nothing");
+}
