@@ -97,6 +97,47 @@ pub fn sim_params(sim: &Sim) -> Params {
     params
 }
 
+/// Vision enabled with the simulated camera and the world's camera tool, but K never
+/// calibrated (all zero).
+///
+/// # Panics
+/// Never: the values are valid.
+#[must_use]
+pub fn uncalibrated_params(sim: &Sim) -> Params {
+    let mut p = Params::default();
+    p.set("VisionEnabled", true).expect("a yes/no parameter");
+    p.set("VisionDriver", "Sim").expect("a string parameter");
+    p.set("VisionCameraToolNumber", i64::from(sim.world().machine.camera_tool)).expect("a tool number");
+    p
+}
+
+/// A program a Vision M-code refuses.
+#[derive(Debug, Clone, Copy)]
+pub struct Refusal {
+    /// The program (the refused M-code is its last Vision call).
+    pub program: &'static str,
+    /// A piece of the manual's message.
+    pub says: &'static str,
+    /// Run it with [`uncalibrated_params`] instead of [`sim_params`].
+    pub uncalibrated: bool,
+}
+
+impl Refusal {
+    /// The parameters to run it with (`None`: [`sim_params`]).
+    #[must_use]
+    pub fn params(&self) -> Option<Params> {
+        self.uncalibrated.then(|| uncalibrated_params(&sim()))
+    }
+}
+
+/// The error paths every host must handle: an NG capture (no mark in view), K not
+/// calibrated, the wrong tool in the spindle.
+pub const REFUSALS: [Refusal; 3] = [
+    Refusal { program: "G90 G20\nT98 M6\nG0 X30 Y30\nM281\nG0 X1\nM30\n", says: "no mark", uncalibrated: false },
+    Refusal { program: "G90 G20\nT98 M6\nM281\nM30\n", says: "K matrix is zero", uncalibrated: true },
+    Refusal { program: "G90 G20\nT98 M6\nM280\nT1 M6\nM281 D1\nM30\n", says: "tool", uncalibrated: false },
+];
+
 /// A registry with the simulated camera of `sim` under `Sim`.
 #[must_use]
 pub fn sim_registry(sim: &Sim) -> DriverRegistry {

@@ -1,7 +1,7 @@
 //! The session on the simulated machine gives what `mach-vision run` gives.
 
 use vision_core::Params;
-use vision_host::testkit::{example, reference, sim, through_session, Trace};
+use vision_host::testkit::{example, reference, sim, through_session, Trace, REFUSALS};
 use vision_host::{registry, HostError, Session};
 use vision_mcode::McodeError;
 
@@ -41,22 +41,9 @@ fn calibration_verify_and_job_examples_match_the_cli() {
 /// pound block as it was.
 #[test]
 fn refusals_stop_the_program_and_change_nothing() {
-    let not_calibrated = || {
-        let s = sim();
-        let mut p = Params::default();
-        p.set("VisionEnabled", true).expect("bool");
-        p.set("VisionDriver", "Sim").expect("string");
-        p.set("VisionCameraToolNumber", i64::from(s.world().machine.camera_tool)).expect("int");
-        Some(p)
-    };
-    type Params0<'a> = &'a dyn Fn() -> Option<Params>;
-    let cases: [(&str, &str, Params0<'_>); 3] = [
-        ("G90 G20\nT98 M6\nG0 X30 Y30\nM281\nG0 X1\nM30\n", "no mark", &|| None),
-        ("G90 G20\nT98 M6\nM281\nM30\n", "K matrix is zero", &not_calibrated),
-        ("G90 G20\nT98 M6\nM280\nT1 M6\nM281\nM30\n", "tool", &|| None),
-    ];
-    for (program, says, params) in cases {
-        let trace = assert_same(program, params);
+    for case in REFUSALS {
+        let (program, says) = (case.program, case.says);
+        let trace = assert_same(program, || case.params());
         let last = trace.calls.last().expect("a Vision call");
         let message = last.result.as_ref().expect_err("refused");
         assert!(message.contains(says), "{program:?}: {message}");
