@@ -3,6 +3,7 @@
 //! two by.
 
 use vision_core::{DriverRegistry, Machine, Params, Timestamp, VisionModule};
+use vision_driver_keyence::emulator::{DriverSource, Emulator, EmulatorHandle, NumberStyle, OutputFormat};
 use vision_driver_sim::{Sim, SimMachine, World};
 use vision_gcode::{Context, HandlerError, MCodeHandler, RunOutcome, UserMCode};
 use vision_math::{LengthUnit, Point2, Vector2};
@@ -138,21 +139,65 @@ pub const REFUSALS: [Refusal; 3] = [
     Refusal { program: "G90 G20\nT98 M6\nM280\nT1 M6\nM281 D1\nM30\n", says: "tool", uncalibrated: false },
 ];
 
-/// A registry with the simulated camera of `sim` under `Sim`.
-#[must_use]
-pub fn sim_registry(sim: &Sim) -> DriverRegistry {
-    let mut registry = DriverRegistry::new();
-    sim.register(&mut registry);
-    registry
+/// Which camera answers the triggers in a test run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Camera {
+    /// The simulated camera, called directly.
+    Sim,
+    /// The Keyence driver over TCP to an emulated VS camera on loopback whose results come from
+    /// the simulated camera (the recommended 8-field format, fixed-width numbers).
+    Keyence,
 }
 
-/// The Vision module over `sim` with `params`.
-///
-/// # Panics
-/// When `params` name a driver other than `Sim` (a test bug).
-#[must_use]
-pub fn sim_module(sim: &Sim, params: Params) -> VisionModule {
-    VisionModule::from_registry(params, &sim_registry(sim)).expect("the simulated camera")
+/// A fresh simulation of the built-in world and its camera, as `mach-vision run` sets them up.
+pub struct Rig {
+    /// The simulation.
+    pub sim: Sim,
+    /// Keeps the loopback camera alive for the run.
+    pub emulator: Option<EmulatorHandle>,
+}
+
+impl Rig {
+    /// The rig for `camera`, and a Vision module on it with `params` (`None`: [`sim_params`]).
+    ///
+    /// # Panics
+    /// When the loopback emulator cannot start or `params` name another driver (test bugs).
+    #[must_use]
+    pub fn new(params: Option<Params>, camera: Camera) -> (Rig, VisionModule) {
+        let sim = sim();
+        let mut params = params.unwrap_or_else(|| sim_params(&sim));
+        let emulator = match camera {
+            Camera::Sim => None,
+            Camera::Keyence => {
+                let emulator = Emulator::builder()
+                    .source(DriverSource(Box::new(sim.camera())))
+                    .format(OutputFormat::Full)
+                    .numbers(NumberStyle::FixedWidth)
+                    .bind("127.0.0.1:0")
+                    .expect("a loopback port");
+                params.set("VisionDriver", "Keyence").expect("a string parameter");
+                params.set("VisionIP", "127.0.0.1").expect("an address");
+                params.set("VisionPort", i64::from(emulator.addr().port())).expect("a port");
+                Some(emulator)
+            }
+        };
+        let mut registry = DriverRegistry::new();
+        sim.register(&mut registry);
+        vision_driver_keyence::register(&mut registry);
+        let module = VisionModule::from_registry(params, &registry).expect("the camera's driver");
+        (Rig { sim, emulator }, module)
+    }
+
+    /// Runs `program` on a fresh machine of the rig with `handler`; the machine afterwards (for
+    /// [`Trace::collect`]) and how the program ended.
+    ///
+    /// # Panics
+    /// Never for the built-in world.
+    pub fn run(&self, program: &str, handler: &mut dyn MCodeHandler) -> (SimMachine, Result<RunOutcome, String>) {
+        let mut machine = SimMachine::new(&self.sim, clock()).expect("the built-in machine");
+        let end = machine.run_program(program, Some(handler), &mut |_: &vision_gcode::Event| {});
+        (machine, end.map_err(|e| e.to_string()))
+    }
 }
 
 /// One Vision M-code of a program: the G-code it emitted, or the operator's message.
@@ -243,23 +288,18 @@ impl Trace {
 }
 
 /// `program` as `mach-vision run` runs it (the [`VisionHandler`] inside the interpreter) on a
-/// fresh simulation of the built-in world with `params` (`None`: [`sim_params`]).
-///
-/// # Panics
-/// Never for the built-in world.
+/// fresh [`Rig`].
 #[must_use]
-pub fn reference(program: &str, params: Option<Params>) -> Trace {
-    let sim = sim();
-    let params = params.unwrap_or_else(|| sim_params(&sim));
-    let mut handler = VisionHandler::new(sim_module(&sim, params), clock());
-    let mut machine = SimMachine::new(&sim, clock()).expect("the built-in machine");
-    let end = machine.run_program(program, Some(&mut handler), &mut |_: &vision_gcode::Event| {});
+pub fn reference(program: &str, params: Option<Params>, camera: Camera) -> Trace {
+    let (rig, module) = Rig::new(params, camera);
+    let mut handler = VisionHandler::new(module, clock());
+    let (machine, end) = rig.run(program, &mut handler);
     let calls = handler
         .take_records()
         .into_iter()
         .map(|r| Call { mcode: r.mcode, result: r.result.map(|o| o.gcode().to_vec()).map_err(|e| e.to_string()) })
         .collect();
-    Trace::collect(&machine, calls, end.map_err(|e| e.to_string()))
+    Trace::collect(&machine, calls, end)
 }
 
 /// The interpreter's M280–M284 handler that runs each call through a [`Session`] on the
@@ -292,19 +332,13 @@ impl MCodeHandler for SessionHandler {
     }
 }
 
-/// `program` run through a [`Session`] (no bridge) on a fresh simulation, `params` as in
-/// [`reference`].
-///
-/// # Panics
-/// Never for the built-in world.
+/// `program` run through a [`Session`] (no bridge) on a fresh [`Rig`].
 #[must_use]
-pub fn through_session(program: &str, params: Option<Params>) -> Trace {
-    let sim = sim();
-    let params = params.unwrap_or_else(|| sim_params(&sim));
-    let mut handler = SessionHandler::new(Session::new(sim_module(&sim, params)));
-    let mut machine = SimMachine::new(&sim, clock()).expect("the built-in machine");
-    let end = machine.run_program(program, Some(&mut handler), &mut |_: &vision_gcode::Event| {});
-    Trace::collect(&machine, handler.calls, end.map_err(|e| e.to_string()))
+pub fn through_session(program: &str, params: Option<Params>, camera: Camera) -> Trace {
+    let (rig, module) = Rig::new(params, camera);
+    let mut handler = SessionHandler::new(Session::new(module));
+    let (machine, end) = rig.run(program, &mut handler);
+    Trace::collect(&machine, handler.calls, end)
 }
 
 /// The text of example program `name` (e.g. `04-rectangle-fit.nc`).

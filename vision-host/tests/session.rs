@@ -1,13 +1,13 @@
 //! The session on the simulated machine gives what `mach-vision run` gives.
 
 use vision_core::Params;
-use vision_host::testkit::{example, reference, sim, through_session, Trace, REFUSALS};
+use vision_host::testkit::{example, reference, sim, through_session, Camera, Trace, REFUSALS};
 use vision_host::{registry, HostError, Session};
 use vision_mcode::McodeError;
 
-fn assert_same(program: &str, params: impl Fn() -> Option<Params>) -> Trace {
-    let want = reference(program, params());
-    let got = through_session(program, params());
+fn assert_same(program: &str, params: impl Fn() -> Option<Params>, camera: Camera) -> Trace {
+    let want = reference(program, params(), camera);
+    let got = through_session(program, params(), camera);
     got.assert_matches(&want);
     got
 }
@@ -15,7 +15,7 @@ fn assert_same(program: &str, params: impl Fn() -> Option<Params>) -> Trace {
 #[test]
 fn alignment_examples_emit_the_same_gcode_and_cut_the_same() {
     for (name, marks) in [("04-rectangle-fit.nc", 4), ("05-similarity-fit.nc", 3)] {
-        let trace = assert_same(&example(name), || None);
+        let trace = assert_same(&example(name), || None, Camera::Sim);
         assert_eq!(trace.end, Ok("ended"), "{name}");
         let m281 = trace.calls.iter().filter(|c| c.mcode == 281 && c.result.is_ok()).count();
         assert_eq!(m281, marks, "{name}");
@@ -29,9 +29,16 @@ fn alignment_examples_emit_the_same_gcode_and_cut_the_same() {
 }
 
 #[test]
+fn the_keyence_driver_against_the_loopback_emulator_matches_the_cli() {
+    let trace = assert_same(&example("07-switch-jobs.nc"), || None, Camera::Keyence);
+    assert_eq!(trace.end, Ok("ended"));
+    assert!(trace.calls.iter().all(|c| c.result.is_ok()), "{:?}", trace.calls);
+}
+
+#[test]
 fn calibration_verify_and_job_examples_match_the_cli() {
     for name in ["01-calibrate-sheet.nc", "02-verify-calibration.nc", "07-switch-jobs.nc"] {
-        let trace = assert_same(&example(name), || None);
+        let trace = assert_same(&example(name), || None, Camera::Sim);
         assert_eq!(trace.end, Ok("ended"), "{name}");
         assert!(trace.calls.iter().all(|c| c.result.is_ok()), "{name}: {:?}", trace.calls);
     }
@@ -43,7 +50,7 @@ fn calibration_verify_and_job_examples_match_the_cli() {
 fn refusals_stop_the_program_and_change_nothing() {
     for case in REFUSALS {
         let (program, says) = (case.program, case.says);
-        let trace = assert_same(program, || case.params());
+        let trace = assert_same(program, || case.params(), Camera::Sim);
         let last = trace.calls.last().expect("a Vision call");
         let message = last.result.as_ref().expect_err("refused");
         assert!(message.contains(says), "{program:?}: {message}");

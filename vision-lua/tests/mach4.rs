@@ -7,9 +7,8 @@ use std::path::Path;
 
 use mlua::{Function, Lua, Table, Value};
 use vision_core::Params;
-use vision_driver_sim::SimMachine;
 use vision_gcode::{Context, HandlerError, MCodeHandler, UserMCode};
-use vision_host::testkit::{clock, example, reference, sim, sim_module, sim_params, Call, Trace, REFUSALS};
+use vision_host::testkit::{example, reference, Call, Camera, Rig, Trace, REFUSALS};
 use vision_host::Session;
 use vision_mcode::VISION_MCODES;
 
@@ -152,30 +151,33 @@ impl MCodeHandler for MacroHandler {
     }
 }
 
-/// `program` through the Mach4 macros on a fresh simulation, `params` as in `reference`.
-fn through_lua(program: &str, params: Option<Params>) -> (Trace, MacroHandler) {
-    let sim = sim();
-    let params = params.unwrap_or_else(|| sim_params(&sim));
+/// `program` through the Mach4 macros on a fresh [`Rig`].
+fn through_lua(program: &str, params: Option<Params>, camera: Camera) -> (Trace, MacroHandler) {
+    let (rig, module) = Rig::new(params, camera);
     let lua = mach4_lua();
-    mach_vision::install(&lua, Session::new(sim_module(&sim, params)));
+    mach_vision::install(&lua, Session::new(module));
     let mut handler = MacroHandler { lua, calls: Vec::new(), executed: Vec::new() };
-    let mut machine = SimMachine::new(&sim, clock()).expect("the built-in machine");
-    let end = machine.run_program(program, Some(&mut handler), &mut |_: &vision_gcode::Event| {});
-    let trace = Trace::collect(&machine, handler.calls.clone(), end.map_err(|e| e.to_string()));
+    let (machine, end) = rig.run(program, &mut handler);
+    let trace = Trace::collect(&machine, handler.calls.clone(), end);
     (trace, handler)
 }
 
-fn assert_same(program: &str, params: impl Fn() -> Option<Params>) -> (Trace, MacroHandler) {
-    let want = reference(program, params());
-    let (got, handler) = through_lua(program, params());
+fn assert_same(program: &str, params: impl Fn() -> Option<Params>, camera: Camera) -> (Trace, MacroHandler) {
+    let want = reference(program, params(), camera);
+    let (got, handler) = through_lua(program, params(), camera);
     got.assert_matches(&want);
     (got, handler)
 }
 
 #[test]
 fn rectangle_and_similarity_fits_through_the_macros_match_the_cli() {
-    for (name, marks) in [("04-rectangle-fit.nc", 4), ("05-similarity-fit.nc", 3)] {
-        let (trace, handler) = assert_same(&example(name), || None);
+    for (name, marks, camera) in [
+        ("04-rectangle-fit.nc", 4, Camera::Sim),
+        ("05-similarity-fit.nc", 3, Camera::Sim),
+        ("04-rectangle-fit.nc", 4, Camera::Keyence),
+        ("05-similarity-fit.nc", 3, Camera::Keyence),
+    ] {
+        let (trace, handler) = assert_same(&example(name), || None, camera);
         assert_eq!(trace.end, Ok("ended"), "{name}");
         let captures = trace.calls.iter().filter(|c| c.mcode == 281 && c.result.is_ok()).count();
         assert_eq!(captures, marks, "{name}");
@@ -193,8 +195,13 @@ fn rectangle_and_similarity_fits_through_the_macros_match_the_cli() {
 
 #[test]
 fn calibration_verify_and_job_switch_through_the_macros_match_the_cli() {
-    for name in ["01-calibrate-sheet.nc", "02-verify-calibration.nc", "07-switch-jobs.nc"] {
-        let (trace, _) = assert_same(&example(name), || None);
+    for (name, camera) in [
+        ("01-calibrate-sheet.nc", Camera::Sim),
+        ("02-verify-calibration.nc", Camera::Sim),
+        ("07-switch-jobs.nc", Camera::Sim),
+        ("07-switch-jobs.nc", Camera::Keyence),
+    ] {
+        let (trace, _) = assert_same(&example(name), || None, camera);
         assert_eq!(trace.end, Ok("ended"), "{name}");
         assert!(trace.calls.iter().all(|c| c.result.is_ok()), "{name}: {:?}", trace.calls);
     }
@@ -204,9 +211,9 @@ fn calibration_verify_and_job_switch_through_the_macros_match_the_cli() {
 /// the cycle stopped, no G-code run by the macro, the pound block untouched.
 #[test]
 fn refusals_report_to_mach4_stop_the_program_and_change_nothing() {
-    for case in REFUSALS {
+    for (case, camera) in REFUSALS.iter().flat_map(|c| [(c, Camera::Sim), (c, Camera::Keyence)]) {
         let (program, says) = (case.program, case.says);
-        let (trace, handler) = assert_same(program, || case.params());
+        let (trace, handler) = assert_same(program, || case.params(), camera);
         let last = trace.calls.last().expect("a Vision call");
         let message = last.result.as_ref().expect_err("refused");
         assert!(message.contains(says), "{program:?}: {message}");
