@@ -69,6 +69,17 @@ pub trait Host {
     /// The controller refused the wait (e.g. stopped).
     fn dwell(&mut self, seconds: f64) -> Result<(), HostError>;
 
+    /// Whether a G51/G68/G52 alignment is active, when the controller can tell (`None`: it
+    /// cannot; the session then trusts the alignment its own M282 left, until the next M280).
+    /// A controller that answers lets the session forget an alignment the program cancelled
+    /// itself (`G69 G50 G52 X0 Y0` before M30).
+    ///
+    /// # Errors
+    /// The controller refused the read.
+    fn alignment_active(&self) -> Result<Option<bool>, HostError> {
+        Ok(None)
+    }
+
     /// Shows `text` to the operator (a status line, not an alarm).
     fn message(&mut self, text: &str);
 

@@ -9,10 +9,11 @@
 //!   G-code the module emits on the host — the one place that G-code leaves the library.
 //! * [`registry`]: the camera drivers a real machine can use, picked by `VisionDriver`.
 //!
-//! The key decision: a controller cannot report the G51/G68/G52 alignment it has active, so the
-//! session remembers the chain its own M282 emitted (M280 cancels it) and tells the module.
-//! A program that cancels the alignment itself (`G69 G50 G52 X0 Y0`) must do so after its last
-//! Vision M-code of the run, as every seed example does.
+//! The key decision: controllers do not report the G51/G68/G52 chain they have active, so the
+//! session remembers the chain its own M282 emitted (M280 cancels it) and tells the module. A
+//! host that can at least tell whether an alignment is active ([`Host::alignment_active`]) lets
+//! the session forget a chain the program cancelled itself; on one that cannot (Mach4), run M280
+//! before capturing or calibrating in a program that follows an aligned one.
 //!
 //! ```
 //! use vision_host::{registry, HostError, Session};

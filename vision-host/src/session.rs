@@ -74,6 +74,9 @@ impl Session {
     /// the call is reported even when the module itself succeeded.
     pub fn mcode(&mut self, host: &mut dyn Host, m: u32, words: &[(char, f64)]) -> Result<Outcome, HostError> {
         let call = VisionCall::parse(m, words)?;
+        if host.alignment_active()? == Some(false) {
+            self.alignment = None;
+        }
         let mut machine = HostMachine { host, alignment: self.alignment, failure: RefCell::new(None) };
         let result = call.run(&mut self.module, &mut machine);
         if let Some(failure) = machine.failure.into_inner() {
@@ -88,13 +91,16 @@ impl Session {
     /// Runs the G-code `outcome` emits on `host` and tracks the alignment it leaves active: the
     /// one path by which the module's G-code reaches a controller.
     fn emit(&mut self, host: &mut dyn Host, outcome: &Outcome) -> Result<(), HostError> {
+        if !outcome.gcode().is_empty() {
+            // Both emitters start with the cancel line: if a later line fails, what is active
+            // is unknown, and no alignment is the safer guess.
+            self.alignment = None;
+        }
         for line in outcome.gcode() {
             host.execute(line)?;
         }
-        match outcome {
-            Outcome::Begin(_) => self.alignment = None,
-            Outcome::Apply(reply) => self.alignment = Some(reply.report.chain),
-            _ => {}
+        if let Outcome::Apply(reply) = outcome {
+            self.alignment = Some(reply.report.chain);
         }
         Ok(())
     }

@@ -27,12 +27,15 @@ pub struct MachineHost<'m> {
     machine: &'m mut dyn Machine,
     /// Every message shown to the operator, in order.
     pub messages: Vec<String>,
+    /// Answer [`Host::alignment_active`] from the machine (`false`: answer "cannot tell", as
+    /// Mach4 does).
+    pub knows_alignment: bool,
 }
 
 impl<'m> MachineHost<'m> {
     /// The host over `machine`.
     pub fn new(machine: &'m mut dyn Machine) -> MachineHost<'m> {
-        MachineHost { machine, messages: Vec::new() }
+        MachineHost { machine, messages: Vec::new(), knows_alignment: false }
     }
 }
 
@@ -68,6 +71,9 @@ impl Host for MachineHost<'_> {
     fn dwell(&mut self, seconds: f64) -> Result<(), HostError> {
         self.machine.dwell(seconds);
         Ok(())
+    }
+    fn alignment_active(&self) -> Result<Option<bool>, HostError> {
+        Ok(self.knows_alignment.then(|| self.machine.active_alignment().is_some()))
     }
     fn message(&mut self, text: &str) {
         self.messages.push(text.to_string());
@@ -310,13 +316,15 @@ pub struct SessionHandler {
     clock: Clock,
     /// Every Vision call so far.
     pub calls: Vec<Call>,
+    /// Whether the host answers [`Host::alignment_active`] (see [`MachineHost`]).
+    pub knows_alignment: bool,
 }
 
 impl SessionHandler {
     /// A handler around `session`.
     #[must_use]
     pub fn new(session: Session) -> SessionHandler {
-        SessionHandler { session, clock: clock(), calls: Vec::new() }
+        SessionHandler { session, clock: clock(), calls: Vec::new(), knows_alignment: false }
     }
 }
 
@@ -324,6 +332,7 @@ impl MCodeHandler for SessionHandler {
     fn call(&mut self, call: &UserMCode<'_>, ctx: &mut Context<'_>) -> Result<Vec<String>, HandlerError> {
         let mut machine = ContextMachine::new(ctx, &self.clock);
         let mut host = MachineHost::new(&mut machine);
+        host.knows_alignment = self.knows_alignment;
         let result = self.session.mcode(&mut host, call.code(), call.words());
         let result = result.map(|o| o.gcode().to_vec()).map_err(|e| e.to_string());
         self.calls.push(Call { mcode: call.code(), result: result.clone() });

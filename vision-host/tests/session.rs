@@ -1,7 +1,9 @@
 //! The session on the simulated machine gives what `mach-vision run` gives.
 
 use vision_core::Params;
-use vision_host::testkit::{example, reference, sim, through_session, Camera, Trace, REFUSALS};
+use vision_host::testkit::{
+    clock, example, reference, sim, through_session, Camera, Rig, SessionHandler, Trace, REFUSALS,
+};
 use vision_host::{registry, HostError, Session};
 use vision_mcode::McodeError;
 
@@ -74,4 +76,32 @@ fn a_fresh_profile_is_disabled_until_enabled() {
     assert!(matches!(e, HostError::Mcode(McodeError::UnknownWord { .. })), "{e:?}");
     assert!(host.messages.is_empty());
     assert!(!path.exists(), "a refusal saves nothing");
+}
+
+/// After an aligned program that cancelled its alignment itself, a host that can tell lets the
+/// next program calibrate as `mach-vision run` does; one that cannot keeps the session's
+/// alignment, and M283 refuses until an M280.
+#[test]
+fn a_program_after_an_aligned_one_sees_the_cancel_only_when_the_host_can_tell() {
+    let first = example("04-rectangle-fit.nc");
+    // Example 1 from where example 4 left the head: back over the sheet's start dot first.
+    let second = "G90 G20 G54\nT98 M6\nG0 X-2.5 Y-4.0\nM283 C1\nM30\n".to_string();
+    for knows in [true, false] {
+        let (rig, module) = Rig::new(None, Camera::Sim);
+        let mut handler = SessionHandler::new(Session::new(module));
+        handler.knows_alignment = knows;
+        let mut machine = vision_driver_sim::SimMachine::new(&rig.sim, clock()).expect("machine");
+        for program in [&first, &second] {
+            machine.run_program(program, Some(&mut handler), &mut |_: &vision_gcode::Event| {}).ok();
+        }
+        let m283 = handler.calls.last().expect("M283");
+        assert_eq!(m283.mcode, 283);
+        if knows {
+            assert!(m283.result.is_ok(), "{m283:?}");
+            assert!(handler.session.alignment().is_none());
+        } else {
+            let message = m283.result.as_ref().expect_err("refused");
+            assert!(message.contains("M280") || message.contains("G69"), "{message}");
+        }
+    }
 }
