@@ -253,3 +253,41 @@ fn outside_mach4_there_is_no_mc_and_the_module_says_so() {
     assert!(!ok);
     assert!(message.is_some_and(|m| m.contains("no `mc` table")));
 }
+
+/// Mach4's own failures (a non-zero return code, an answer that is not a unit) reach the
+/// operator naming the call, and stop the cycle.
+#[test]
+fn mach4_return_codes_are_reported_by_name() {
+    let (_rig, module) = Rig::new(None, Camera::Sim);
+    let lua = mach4_lua();
+    mach_vision::install(&lua, Session::new(module));
+    lua.load(
+        r#"
+        function mc.mcCntlGetPoundVar(inst, n) return 0.0, mc.MERROR_NOERROR end
+        function mc.mcToolGetCurrent(inst) return 98, mc.MERROR_NOERROR end
+        function mc.mcCntlGetUnitsCurrent(inst) return fake.units, mc.MERROR_NOERROR end
+        function mc.mcAxisGetPos(inst, axis) return 0.0, mc.MERROR_NOERROR end
+        function mc.mcCntlGcodeExecuteWait(inst, code) return mc.MERROR_NOT_NOW end
+        fake.units = 200
+        "#,
+    )
+    .exec()
+    .expect("mc");
+    let run = |m: &str| -> (bool, Option<String>) {
+        let f: Function = lua.globals().get(m).expect("macro");
+        let (ok, message, _): (bool, Option<String>, Vec<String>) = f.call(H_PARAM).expect("runs");
+        (ok, message)
+    };
+    let (ok, message) = run("m280");
+    assert!(!ok);
+    let message = message.expect("a message");
+    assert!(message.contains("mc.mcCntlGcodeExecuteWait returned error code -18"), "{message}");
+    let errors: Vec<String> = fake(&lua).get("errors").expect("errors");
+    assert_eq!(errors.last(), Some(&message));
+    assert!(fake(&lua).get::<bool>("stopped").expect("flag"));
+
+    fake(&lua).set("units", 215).expect("units");
+    let (ok, message) = run("m281");
+    assert!(!ok);
+    assert!(message.is_some_and(|m| m.contains("neither 200 (G20) nor 210 (G21)")));
+}
