@@ -1,7 +1,7 @@
 //! `mach_vision`: the Vision M-codes M280–M284 as a Lua 5.3 native module for Mach4.
 //!
-//! Each `Macros/mNNN.mcs` of the profile is three lines: `require("mach_vision")` and
-//! `return vision.mcode(NNN, hParam)`. Everything else happens here: the line's words are read
+//! Each `Macros/mNNN.mcs` of the profile defines `mNNN(hParam)` with one line,
+//! `return require("mach_vision").mcode(NNN, hParam)`. Everything else happens here: the line's words are read
 //! with `mc.mcCntlGetLocalVarFlag` / `mcCntlGetLocalVar`, the call runs through
 //! [`vision_host::Session`] on [`Mach4`] (the [`vision_host::Host`] over Mach4's `mc` API), and
 //! a refusal goes to `mc.mcCntlSetLastError` followed by `mc.mcCntlCycleStop`, which stops the
@@ -18,6 +18,20 @@
 //! * `mach_vision.mcode(m, hParam)`: runs M-code `m` (280–284) with the words of `hParam`.
 //! * `mach_vision.open(path)`: (re)opens the session from profile file `path`.
 //! * `mach_vision.version`: the crate version.
+//!
+//! ```
+//! # #[cfg(feature = "vendored")] {
+//! use mlua::{Function, Lua};
+//!
+//! // Outside Mach4 there is no `mc` table: the call is refused, not a crash.
+//! let lua = Lua::new();
+//! let module = mach_vision::mach_vision(&lua)?;
+//! let mcode: Function = module.get("mcode")?;
+//! let (ok, message, _gcode): (bool, Option<String>, Vec<String>) = mcode.call((281, 7))?;
+//! assert!(!ok && message.is_some_and(|m| m.contains("no `mc` table")));
+//! # }
+//! # Ok::<(), mlua::Error>(())
+//! ```
 
 mod mach4;
 

@@ -244,16 +244,6 @@ fn without_a_session_the_module_opens_the_profile_beside_mach4s() {
     assert!(fake(&lua).get::<bool>("stopped").expect("flag"));
 }
 
-#[test]
-fn outside_mach4_there_is_no_mc_and_the_module_says_so() {
-    let lua = Lua::new();
-    let module = mach_vision::mach_vision(&lua).expect("module");
-    let (ok, message, _): (bool, Option<String>, Vec<String>) =
-        module.get::<Function>("mcode").and_then(|f| f.call((281, 7))).expect("runs");
-    assert!(!ok);
-    assert!(message.is_some_and(|m| m.contains("no `mc` table")));
-}
-
 /// Mach4's own failures (a non-zero return code, an answer that is not a unit) reach the
 /// operator naming the call, and stop the cycle.
 #[test]
