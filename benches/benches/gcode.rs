@@ -1,7 +1,8 @@
 #![allow(missing_docs)] // criterion_group!/criterion_main! generate undocumented items.
 //! vision-gcode: parse, and parse + interpret, of a generated 1 M-line program (G1/G2/G3,
 //! comments, parameters and expressions); and the public `gcode` crate parsing the same program
-//! without its parameter lines, for comparison.
+//! without its parameter lines, for comparison; and a control-flow program (an o-word
+//! subroutine called in a `while` loop).
 
 use std::hint::black_box;
 use std::time::Duration;
@@ -37,6 +38,28 @@ fn interpret(text: &str) -> u64 {
     events
 }
 
+/// Iterations of the control-flow program's loop.
+const CALLS: usize = 100_000;
+
+/// A subroutine called in a loop: per iteration a `while` test, a call with two arguments, one
+/// straight move and one arc in the subroutine, its `endsub`, an assignment and the `endwhile`
+/// — 7 lines run, 2 moves.
+fn flow_program(calls: usize) -> String {
+    format!(
+        "G20 G90 G17 F40\n\
+         o<step> sub\n\
+         G1 X[#1 * 0.0001] Y#2\n\
+         G2 X[#1 * 0.0001 + 0.1] Y#2 I0.05 J0\n\
+         o<step> endsub\n\
+         #<i> = 0\n\
+         o1 while [#<i> LT {calls}]\n\
+         o<step> call [#<i>] [[#<i> MOD 7] * 0.01]\n\
+         #<i> = [#<i> + 1]\n\
+         o1 endwhile\n\
+         M2\n"
+    )
+}
+
 fn benches(c: &mut Criterion) {
     let full = gcode_program(LINES, false);
     let literal = gcode_program(LINES, true);
@@ -53,6 +76,12 @@ fn benches(c: &mut Criterion) {
                 .sum::<usize>()
         });
     });
+    group.finish();
+
+    let flow = flow_program(CALLS);
+    let mut group = c.benchmark_group("gcode/control-flow");
+    group.sample_size(10).measurement_time(Duration::from_secs(8)).throughput(Throughput::Elements(CALLS as u64));
+    group.bench_function("subroutine-call-in-a-while-loop", |b| b.iter(|| interpret(black_box(&flow))));
     group.finish();
 }
 

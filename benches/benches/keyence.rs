@@ -9,7 +9,7 @@ use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use vision_benches::keyence::{camera, raw_trigger, InMemoryCamera, FULL_LINE};
-use vision_driver_keyence::protocol::{parse_data_line, Limits, Session};
+use vision_driver_keyence::{parse_data_line, Limits, Session};
 use vision_driver_keyence::{KeyenceConfig, KeyenceDriver};
 
 fn round_trip(c: &mut Criterion) {

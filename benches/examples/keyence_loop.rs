@@ -8,8 +8,8 @@ use std::net::TcpStream;
 use std::time::{Duration, Instant};
 
 use vision_benches::keyence::{camera, raw_trigger, InMemoryCamera};
-use vision_driver_keyence::protocol::{Limits, Session};
 use vision_driver_keyence::{KeyenceConfig, KeyenceDriver};
+use vision_driver_keyence::{Limits, Session};
 
 fn main() {
     let mode = std::env::args().nth(1).unwrap_or_else(|| "driver".into());

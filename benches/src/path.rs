@@ -1,11 +1,11 @@
 //! Inputs for the path planner benchmarks (`benches/path.rs`, `examples/path_loop.rs`).
 
-use vision_path::{Item, Limits, PathMode, PlanConfig, Rate, Segment, Shape};
+use vision_path::{Item, Limits, PathMode, PlanConfig, Rate, Segment, Shape, Xyz};
 
 /// An inch machine like the manual's router: 20 in/s² path acceleration, every axis at
 /// 10 in/s and 20 in/s², 1 ms setpoints, starting at the origin.
 #[must_use]
-pub fn router(start: [f64; 3]) -> PlanConfig {
+pub fn router(start: Xyz) -> PlanConfig {
     PlanConfig::new(Limits::uniform(20.0, 10.0, 20.0), 0.001, start)
 }
 
@@ -15,7 +15,7 @@ pub fn router(start: [f64; 3]) -> PlanConfig {
 pub fn spiral(n: usize, step: f64, feed: f64, mode: PathMode) -> impl Iterator<Item = Item> + Clone {
     let at = |theta: f64| {
         let r = 0.5 + 0.02 * theta / std::f64::consts::TAU;
-        [r * theta.cos(), r * theta.sin(), 0.0]
+        Xyz::new(r * theta.cos(), r * theta.sin(), 0.0)
     };
     let mut theta = 0.0f64;
     (0..=n).map(move |k| {
@@ -31,6 +31,6 @@ pub fn spiral(n: usize, step: f64, feed: f64, mode: PathMode) -> impl Iterator<I
 
 /// Where [`spiral`] starts.
 #[must_use]
-pub fn spiral_start() -> [f64; 3] {
-    [0.5, 0.0, 0.0]
+pub fn spiral_start() -> Xyz {
+    Xyz::new(0.5, 0.0, 0.0)
 }

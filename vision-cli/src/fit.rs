@@ -117,24 +117,25 @@ fn read_input(file: Option<&PathBuf>) -> Result<String, Failure> {
 
 fn report(fit: &Fit, commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Result<Report, Failure> {
     let residuals = fit.residuals(commanded, observed);
-    let chain = fit.chain();
+    let t = &fit.transform;
+    let chain = t.chain();
     let gcode = match &chain {
         Some(c) => Some(c.gcode().map_err(|e| Failure::Input(e.to_string()))?.to_vec()),
         None => None,
     };
-    let l = fit.linear();
-    let off = fit.offset();
+    let l = t.linear();
+    let off = t.offset();
     Ok(Report {
-        model: fit.model.name(),
+        model: t.model.name(),
         points: fit.len,
-        theta_deg: fit.theta_deg(),
-        theta_rad: fit.theta_rad(),
-        scale: [fit.scale.x, fit.scale.y],
-        shear: fit.shear,
+        theta_deg: t.theta_deg(),
+        theta_rad: t.theta_rad(),
+        scale: [t.scale.x, t.scale.y],
+        shear: t.shear,
         linear: [[l[(0, 0)], l[(0, 1)]], [l[(1, 0)], l[(1, 1)]]],
         offset: [off.x, off.y],
-        commanded_centroid: [fit.commanded_centroid.x, fit.commanded_centroid.y],
-        observed_centroid: [fit.observed_centroid.x, fit.observed_centroid.y],
+        commanded_centroid: [t.commanded_centroid.x, t.commanded_centroid.y],
+        observed_centroid: [t.observed_centroid.x, t.observed_centroid.y],
         shift: chain.map(|c| [c.shift.x, c.shift.y]),
         center: chain.map(|c| [c.center.x, c.center.y]),
         residual_lengths: residuals.iter().map(|r| r.norm()).collect(),

@@ -5,6 +5,8 @@
 
 mod emulate;
 mod fit;
+#[allow(dead_code)] // wired into `run --report` once the report types serialize themselves
+mod picture;
 mod plan;
 mod run;
 mod trace;
@@ -14,6 +16,7 @@ mod world;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use vision_core::text::{printable_line, printable_lines, MAX_MESSAGE_CHARS};
 
 /// Camera alignment for CNC machines.
 #[derive(Debug, Parser)]
@@ -71,23 +74,31 @@ fn main() -> ExitCode {
         Command::Emulate(args) => emulate::run(&args),
         Command::Trigger(args) => trigger::run(&args),
     };
+    // Every text a person reads goes through `vision_core::text`: reports and messages quote
+    // program comments, file contents and camera replies, which may hold escape sequences or
+    // megabytes (JSON output has no raw control characters, so it passes unchanged).
     match outcome {
         Ok(text) => {
-            print!("{text}");
+            print!("{}", printable_lines(&text));
             ExitCode::SUCCESS
         }
         Err(Failure::Input(message)) => {
-            eprintln!("mach-vision: {message}");
+            error_line(&message);
             ExitCode::from(2)
         }
         Err(Failure::Run(message)) => {
-            eprintln!("mach-vision: {message}");
+            error_line(&message);
             ExitCode::from(1)
         }
         Err(Failure::RunWithReport { output, message }) => {
-            print!("{output}");
-            eprintln!("mach-vision: {message}");
+            print!("{}", printable_lines(&output));
+            error_line(&message);
             ExitCode::from(1)
         }
     }
+}
+
+/// The one line on standard error that names the problem.
+fn error_line(message: &str) {
+    eprintln!("mach-vision: {}", printable_line(message, MAX_MESSAGE_CHARS));
 }

@@ -14,7 +14,7 @@ use vision_gcode::{Interpreter, InterpreterConfig};
 use vision_math::{LengthUnit, MM_PER_INCH};
 use vision_path::{Event, GcodeItems, Limits, OutputCommand, PathError, PlanConfig, Setpoints, Step};
 
-use crate::trace::{read_program, UnitArg};
+use crate::trace::{read_program, DialectArg, UnitArg};
 use crate::Failure;
 
 /// Arguments of `mach-vision plan`.
@@ -42,6 +42,9 @@ pub(crate) struct PlanArgs {
     /// The machine's coordinate unit; the program's G20/G21 are converted.
     #[arg(long, value_enum, default_value_t = UnitArg::In)]
     machine_units: UnitArg,
+    /// Whose G-code rules apply where the controllers differ (as in `trace`).
+    #[arg(long, value_enum, default_value_t = DialectArg::Machinemotion)]
+    dialect: DialectArg,
     /// The G-code program; standard input when `-`.
     program: PathBuf,
 }
@@ -54,9 +57,21 @@ pub(crate) fn run(args: &PlanArgs) -> Result<String, Failure> {
         LengthUnit::Inch => 500.0 / MM_PER_INCH,
     });
     let limits = Limits::uniform(args.accel, max_speed, args.axis_accel.unwrap_or(args.accel));
+    if let Some(f) = args.default_feed {
+        // An option, not the program: refused as bad input before anything runs.
+        let range = &Limits::SPEED_RANGE;
+        if !range.contains(&(f / 60.0)) {
+            return Err(Failure::Input(format!(
+                "--default-feed {f} is invalid: must be a feed between {} and {} units/min",
+                range.start() * 60.0,
+                range.end() * 60.0
+            )));
+        }
+    }
     let text = read_program(&args.program)?;
     let mut config = InterpreterConfig::new(unit);
     config.default_feed = args.default_feed;
+    config.dialect = args.dialect.dialect();
     let items = GcodeItems::new(Interpreter::new(config), text.as_str());
     let plan = PlanConfig::new(limits, args.period / 1000.0, items.start_position());
     let stream = Setpoints::new(&plan, items).map_err(|e| Failure::Input(e.to_string()))?;
@@ -96,7 +111,7 @@ pub(crate) fn run(args: &PlanArgs) -> Result<String, Failure> {
         let _ = writeln!(report, "cycle time  {:.3} s", s.time);
         let _ = writeln!(report, "setpoints   {setpoints}");
         let _ = writeln!(report, "events      {events}");
-        let _ = writeln!(report, "end         X{:.4} Y{:.4} Z{:.4} (line {})", p[0], p[1], p[2], s.line);
+        let _ = writeln!(report, "end         X{:.4} Y{:.4} Z{:.4} (line {})", p.x, p.y, p.z, s.line);
     }
     Ok(report)
 }
@@ -134,7 +149,7 @@ impl Csv {
         let written = match step {
             Step::Setpoint(s) => {
                 let (p, v) = (s.position, s.velocity);
-                writeln!(self.out, "{:.6},{},{},{},{},{},{},{},", s.time, s.line, p[0], p[1], p[2], v[0], v[1], v[2])
+                writeln!(self.out, "{:.6},{},{},{},{},{},{},{},", s.time, s.line, p.x, p.y, p.z, v.x, v.y, v.z)
             }
             Step::Event(e) => writeln!(self.out, "{:.6},{},,,,,,,{}", e.time, e.line, EventText(e.event)),
         };

@@ -11,7 +11,10 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 use serde_json::{json, Value};
-use vision_gcode::{ArcDirection, Event, GcodeError, Interpreter, InterpreterConfig, PathMode, Rate, RunOutcome, Xyz};
+use vision_core::text::{printable_line, MAX_MESSAGE_CHARS};
+use vision_gcode::{
+    ArcDirection, Dialect, Event, GcodeError, Interpreter, InterpreterConfig, PathMode, Rate, RunOutcome, Xyz,
+};
 use vision_math::LengthUnit;
 
 use crate::Failure;
@@ -25,8 +28,41 @@ pub(crate) struct TraceArgs {
     /// The machine's coordinate unit (events are in it); the program's G20/G21 are converted.
     #[arg(long, value_enum, default_value_t = UnitArg::In)]
     machine_units: UnitArg,
+    /// Turn the block-delete switch on: lines starting with `/` are skipped (off by default, as
+    /// on the controllers: the `/` is ignored).
+    #[arg(long)]
+    block_delete: bool,
+    /// Whose rules apply where the controllers differ.
+    #[arg(long, value_enum, default_value_t = DialectArg::Machinemotion)]
+    dialect: DialectArg,
+    /// Folders searched for `name.ngc` when `o<name> call` names a subroutine the program does
+    /// not define (LinuxCNC's SUBROUTINE_PATH); colon-separated, or repeat the option.
+    #[arg(long, value_delimiter = ':')]
+    subroutine_path: Vec<PathBuf>,
     /// The G-code program; standard input when `-`.
     program: PathBuf,
+}
+
+/// Whose G-code rules apply where the controllers differ (shared with `plan`).
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub(crate) enum DialectArg {
+    /// Seed 002's MachineMotion: G92 zeroes unnamed axes, M6 applies tool offsets, nested
+    /// comments.
+    Machinemotion,
+    /// Mach4: G92 keeps unnamed axes, G43 applies tool length offsets, flat comments.
+    Mach4,
+    /// LinuxCNC 2.9: as Mach4, without G68/G51.
+    Linuxcnc,
+}
+
+impl DialectArg {
+    pub(crate) fn dialect(self) -> Dialect {
+        match self {
+            DialectArg::Machinemotion => Dialect::MachineMotion,
+            DialectArg::Mach4 => Dialect::Mach4,
+            DialectArg::Linuxcnc => Dialect::LinuxCnc,
+        }
+    }
 }
 
 /// The machine unit on the command line (shared with `plan`).
@@ -51,7 +87,13 @@ impl UnitArg {
 pub(crate) fn run(args: &TraceArgs) -> Result<String, Failure> {
     let text = read_program(&args.program)?;
     let unit = args.machine_units.unit();
-    let mut interp = Interpreter::new(InterpreterConfig::new(unit));
+    let config = InterpreterConfig {
+        block_delete: args.block_delete,
+        dialect: args.dialect.dialect(),
+        subroutine_path: args.subroutine_path.clone(),
+        ..InterpreterConfig::new(unit)
+    };
+    let mut interp = Interpreter::new(config);
     let stdout = std::io::stdout();
     let mut out = Output { writer: BufWriter::new(stdout.lock()), json: args.json, broken: false };
     if !args.json {
@@ -80,13 +122,8 @@ pub(crate) fn read_program(path: &PathBuf) -> Result<String, Failure> {
     } else {
         std::fs::read(path).map_err(|e| Failure::Input(format!("cannot read {}: {e}", path.display())))?
     };
-    String::from_utf8(bytes).map_err(|e| {
-        Failure::Input(format!(
-            "{} is not UTF-8 text (invalid byte at offset {}); save the program as ASCII or UTF-8",
-            path.display(),
-            e.utf8_error().valid_up_to()
-        ))
-    })
+    // Controllers read programs as bytes; a comment written in Latin-1 (`(Ø 6 mm)`) is common.
+    Ok(String::from_utf8(bytes).unwrap_or_else(|e| e.into_bytes().iter().map(|&b| char::from(b)).collect()))
 }
 
 /// The output stream: text or JSON lines. A closed pipe (`| head`) stops the printing quietly.
@@ -98,6 +135,15 @@ struct Output<W: Write> {
 
 impl<W: Write> Output<W> {
     fn line(&mut self, s: &str) {
+        // Text lines quote program comments and file names: shown escaped and cut (JSON
+        // escapes them itself).
+        let printable;
+        let s = if self.json {
+            s
+        } else {
+            printable = printable_line(s, MAX_MESSAGE_CHARS);
+            printable.as_str()
+        };
         if !self.broken && writeln!(self.writer, "{s}").is_err() {
             self.broken = true;
         }
@@ -181,6 +227,10 @@ fn event_json(e: &Event) -> Value {
         Event::ToolChange { line, tool, offset } => {
             json!({"line": line, "type": "tool_change", "tool": tool, "offset": offset.to_array()})
         }
+        Event::Spindle { line, command, speed } => {
+            json!({"line": line, "type": "spindle", "command": command.gcode(), "speed": speed})
+        }
+        Event::Coolant { line, coolant } => json!({"line": line, "type": "coolant", "command": coolant.gcode()}),
         Event::Output(o) => json!({
             "line": o.line, "type": "output", "command": o.command.gcode(), "tool": o.tool,
             "writes": o.writes.iter().map(|w| json!({"device": w.device, "port": w.port, "high": w.high})).collect::<Vec<_>>(),
@@ -228,6 +278,11 @@ fn event_text(e: &Event) -> String {
             let writes = if writes.is_empty() { "no outputs wired".to_string() } else { writes.join(", ") };
             write!(s, "{}     {target}: {writes}", o.command.gcode())
         }
+        Event::Spindle { command, speed, .. } => match speed {
+            Some(rpm) => write!(s, "{}     spindle S{rpm}", command.gcode()),
+            None => write!(s, "{}     spindle", command.gcode()),
+        },
+        Event::Coolant { coolant, .. } => write!(s, "{}     coolant", coolant.gcode()),
         Event::Stop { optional, .. } => {
             write!(s, "{}", if *optional { "M1     optional stop" } else { "M0     program stop" })
         }

@@ -5,6 +5,7 @@ use std::path::Path;
 
 use vision_driver_keyence::emulator::{DriverSource, Emulator, EmulatorHandle, NumberStyle, OutputFormat};
 use vision_driver_sim::{Sim, World};
+use vision_path::Limits;
 
 use crate::{read_text, Failure};
 
@@ -12,10 +13,33 @@ use crate::{read_text, Failure};
 pub(crate) fn load(path: Option<&Path>) -> Result<World, Failure> {
     match path {
         Some(path) => {
-            World::from_toml(&read_text(path, "world")?).map_err(|e| Failure::Input(format!("{}: {e}", path.display())))
+            let world = World::from_toml(&read_text(path, "world")?)
+                .map_err(|e| Failure::Input(format!("{}: {e}", path.display())))?;
+            check_motion_limits(&world).map_err(|e| Failure::Input(format!("{}: {e}", path.display())))?;
+            Ok(world)
         }
         None => Ok(World::default_world()),
     }
+}
+
+/// The world's `machine.max_speed` / `max_accel` within the planner's physical range, so a
+/// bad value is refused at load, naming the field, rather than planned for ever or to 0 s.
+fn check_motion_limits(world: &World) -> Result<(), String> {
+    let (speed, accel) = world.machine.motion_limits(world.unit);
+    let u = world.length_unit().short_name();
+    for (field, value, range) in
+        [("machine.max_speed", speed, &Limits::SPEED_RANGE), ("machine.max_accel", accel, &Limits::ACCEL_RANGE)]
+    {
+        if !range.contains(&value) {
+            return Err(format!(
+                "{field} = {value} is invalid: the path planner accepts {} to {} {u}/s{}",
+                range.start(),
+                range.end(),
+                if field.ends_with("accel") { "²" } else { "" }
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// A Keyence VS emulator at `addr` whose results come from `sim`'s camera, in the recommended

@@ -106,6 +106,11 @@ fn bad_input_exits_2() {
         &["--accel", "1000", "--period", "0"],
         &["--accel", "1000", "--max-speed", "nan"],
         &["--accel", "1000", "--csv", "/nonexistent-dir/x.csv"],
+        // Below the physical range: these made the planner run for ever or report 0 s.
+        &["--accel", "1e-12"],
+        &["--accel", "1e-300"],
+        &["--accel", "1000", "--max-speed", "1e-12"],
+        &["--accel", "1000", "--axis-accel", "1e-300"],
     ] {
         let out = plan(args, &path);
         assert_eq!(out.status.code(), Some(2), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
@@ -113,4 +118,24 @@ fn bad_input_exits_2() {
     }
     let out = plan(&["--accel", "1000"], &PathBuf::from("/nonexistent/program.nc"));
     assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn a_bad_default_feed_is_a_bad_option_not_a_program_error() {
+    let path = program("feed.nc", "G21 G90\nG1 X10\n");
+    for feed in ["NaN", "inf", "0", "-1", "1e-12"] {
+        let out = plan(&["--accel", "1000", "--machine-units", "mm", &format!("--default-feed={feed}")], &path);
+        assert_eq!(out.status.code(), Some(2), "--default-feed {feed}");
+        let err = String::from_utf8(out.stderr).unwrap();
+        assert!(err.contains("--default-feed") && !err.contains("line 2"), "{err}");
+    }
+}
+
+#[test]
+fn a_tiny_program_feed_is_refused_at_its_line() {
+    let path = program("tiny_feed.nc", "G20 G90\nG1 X1 F1e-12\n");
+    let out = plan(&["--accel", "20"], &path);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(err.contains("line 2") && err.contains("feed"), "{err}");
 }

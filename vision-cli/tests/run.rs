@@ -80,8 +80,8 @@ fn all_seven_example_programs_run_on_the_built_in_world() {
     for (name, model) in [("04-rectangle-fit.nc", "rectangle"), ("05-similarity-fit.nc", "similarity")] {
         let r = json(&run(&["--json"], &[&example(name)]));
         let fit = steps(&r, "fit")[0];
-        assert_eq!(fit["model"], model);
-        assert!((f(&fit["theta_deg"]) - 0.3).abs() < 0.01, "{fit}");
+        assert_eq!((&fit["mode"], &fit["fit"]["model"]), (&Value::from(model), &Value::from(model)));
+        assert!((f(&fit["chain"]["rotation_deg"]) - 0.3).abs() < 0.01, "{fit}");
         assert_eq!(fit["gcode"][0], "G69 G50 G52 X0 Y0");
         let cut = &fit["cut_error"];
         assert_eq!((cut["fixture"].as_str(), cut["tool"].as_u64()), (Some("demo target"), Some(1)));
@@ -141,9 +141,8 @@ fn the_keyence_driver_against_the_emulator_gives_the_simulated_cameras_numbers()
         }
     }
     let (fa, fb) = (steps(&sim, "fit")[0], steps(&keyence, "fit")[0]);
-    for key in ["theta_deg", "rms"] {
-        assert!((f(&fa[key]) - f(&fb[key])).abs() < 1e-7, "{key}: {fa} vs {fb}");
-    }
+    assert!((f(&fa["chain"]["rotation_deg"]) - f(&fb["chain"]["rotation_deg"])).abs() < 1e-7, "{fa} vs {fb}");
+    assert!((f(&fa["rms"]) - f(&fb["rms"])).abs() < 1e-7, "{fa} vs {fb}");
     assert!((f(&fa["cut_error"]["max"]) - f(&fb["cut_error"]["max"])).abs() < 1e-8);
 }
 
@@ -260,13 +259,128 @@ fn emulate_serves_the_simulated_camera_and_trigger_reads_it() {
     // The built-in world starts with the camera over sheet dot 1, off centre by ~(0.15, −0.1) in.
     assert_eq!((r["judgment"].as_str(), r["found"].as_bool()), (Some("OK"), Some(true)), "{r}");
     assert!((f(&r["width_px"]) - 246.6).abs() < 1.0, "{r}");
-    // Nothing listens on a closed port: exit 1 with the manual's diagnosis.
+    // Nothing listens on a closed port: exit 1 with the driver's diagnosis.
     let out =
         bin().args(["trigger", "--ip", "127.0.0.1", "--port", &port, "--timeout", "1"]).output().expect("trigger");
     assert_eq!(out.status.code(), Some(1));
     assert!(
-        String::from_utf8_lossy(&out.stderr).contains("connection refused"),
+        String::from_utf8_lossy(&out.stderr).contains("refused the connection"),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+}
+
+#[test]
+fn trigger_names_its_timeout_option_when_refusing_it() {
+    for (timeout, want) in [
+        ("0", "--timeout 0 must be more than 0 s"),
+        ("-1", "--timeout -1 must be more than 0 s"),
+        ("1e30", "--timeout 1e30 s is longer than 300 s"),
+        ("301", "--timeout 301 s is longer than 300 s"),
+    ] {
+        let out = bin()
+            .args(["trigger", "--ip", "127.0.0.1", "--port", "9", &format!("--timeout={timeout}")])
+            .output()
+            .expect("trigger");
+        assert_eq!(out.status.code(), Some(2), "{timeout}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(want), "{timeout}: {err}");
+        assert!(!err.contains("VisionTimeout") && !err.contains("non-positive"), "{timeout}: {err}");
+    }
+}
+
+/// The field names the README's "JSON output of `run --json`" section documents (the backticked
+/// names in the first column of its tables).
+fn documented_fields() -> std::collections::BTreeSet<String> {
+    let readme =
+        std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../README.md")).expect("README");
+    let start = readme.find("## JSON output of `run --json`").expect("the README documents run --json");
+    let section = &readme[start..];
+    let section = &section[..section[3..].find("\n## ").map_or(section.len(), |e| e + 3)];
+    section
+        .lines()
+        .filter_map(|l| l.strip_prefix("| `"))
+        .filter_map(|l| l.split(" |").next())
+        .flat_map(|cell| cell.split(", ").map(|n| n.trim_matches('`').to_string()).collect::<Vec<_>>())
+        .collect()
+}
+
+/// Every object key in `v`, except the telemetry map's (parameter names, checked apart).
+fn keys(v: &Value, out: &mut std::collections::BTreeSet<String>) {
+    match v {
+        Value::Object(map) => {
+            for (k, v) in map {
+                out.insert(k.clone());
+                if k != "telemetry" {
+                    keys(v, out);
+                }
+            }
+        }
+        Value::Array(items) => items.iter().for_each(|v| keys(v, out)),
+        _ => {}
+    }
+}
+
+#[test]
+fn the_json_output_is_documented_field_by_field() {
+    let documented = documented_fields();
+    assert!(documented.len() > 60, "{documented:?}");
+    let mut seen = std::collections::BTreeSet::new();
+    let all: Vec<PathBuf> = (1..=7)
+        .map(|i| {
+            let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../examples/programs");
+            let name = std::fs::read_dir(&dir)
+                .expect("examples")
+                .flatten()
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .find(|n| n.starts_with(&format!("0{i}-")))
+                .expect("example");
+            dir.join(name)
+        })
+        .collect();
+    let r = json(&run(&["--json"], &all.iter().map(PathBuf::as_path).collect::<Vec<_>>()));
+    for kind in ["begin", "capture", "fit", "sheet_calibration", "quick_calibration", "job"] {
+        assert!(!steps(&r, kind).is_empty(), "the examples have a {kind} step");
+    }
+    keys(&r, &mut seen);
+    // A refused M-code (exit 1, the report still on standard output).
+    let dir = scratch("json-doc");
+    let refused = write(&dir, "refused.nc", "T98 M6\nM283 C7\n");
+    let out = run(&["--json"], &[&refused]);
+    let r2: Value = serde_json::from_slice(&out.stdout).expect("the report so far");
+    assert_eq!(steps(&r2, "refused").len(), 1);
+    keys(&r2, &mut seen);
+    let undocumented: Vec<_> = seen.difference(&documented).collect();
+    let missing: Vec<_> = documented.difference(&seen).collect();
+    assert!(undocumented.is_empty(), "fields in the output but not in the README: {undocumented:?}");
+    assert!(missing.is_empty(), "fields in the README but not in the output: {missing:?}");
+    // The telemetry map holds every telemetry parameter by its manual name.
+    let telemetry = r["telemetry"].as_object().expect("telemetry map");
+    let names: Vec<&str> = vision_core::Telemetry::SPECS.iter().map(|s| s.name).collect();
+    assert_eq!(
+        telemetry.keys().map(String::as_str).collect::<std::collections::BTreeSet<_>>(),
+        names.iter().copied().collect()
+    );
+    assert_eq!(telemetry["VisionRun_DotCount"], 4);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn world_motion_limits_outside_the_planner_range_are_refused_at_load() {
+    // 1e-12 made the cycle-time planner run for ever; 1e-300 reported the walk at a few seconds.
+    let dir = scratch("limits");
+    let world = vision_driver_sim::DEFAULT_WORLD_TOML;
+    for (from, to, field) in [
+        ("max_accel = 20.0", "max_accel = 1e-12", "machine.max_accel"),
+        ("max_speed = 8.0", "max_speed = 1e-300", "machine.max_speed"),
+        ("max_speed = 8.0", "max_speed = 1e300", "machine.max_speed"),
+    ] {
+        assert!(world.contains(from), "the built-in world sets {from}");
+        let path = write(&dir, "w.toml", &world.replace(from, to));
+        let out = run(&["--world", path.to_str().expect("utf-8")], &[&example("04-rectangle-fit.nc")]);
+        assert_eq!(out.status.code(), Some(2), "{to}");
+        assert!(out.stdout.is_empty(), "nothing ran");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(field) && err.contains("invalid"), "{to}: {err}");
+    }
 }

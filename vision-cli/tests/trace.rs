@@ -73,11 +73,11 @@ fn machine_units_and_standard_input() {
 
 #[test]
 fn a_failing_program_exits_1_naming_the_line() {
-    let out = with_stdin(&["trace", "-"], b"G90 G0 X1\nG0 X2 S1000\nG0 X3\n");
+    let out = with_stdin(&["trace", "-"], b"G90 G0 X1\nG0 X2 H1000\nG0 X3\n");
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8(out.stderr).expect("utf-8");
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
-    assert!(err.contains("line 2: `S` word is not used"), "{err}");
+    assert!(err.contains("line 2: `H` word is not used"), "{err}");
     let text = String::from_utf8(out.stdout).expect("utf-8");
     assert!(text.contains("     1  rapid  X1.0000"), "events before the failure are printed: {text}");
     assert!(!text.contains("X3.0000"));
@@ -96,8 +96,23 @@ fn bad_input_exits_2() {
     let out = bin().args(["trace", "/nonexistent/program.nc"]).output().expect("run");
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("cannot read /nonexistent/program.nc"));
-    let out = with_stdin(&["trace", "-"], b"G0 X1 (\xff)\n");
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("not UTF-8"));
-    assert!(out.stdout.is_empty());
+}
+
+#[test]
+fn latin1_comments_and_block_delete() {
+    // A comment in Latin-1 (not UTF-8) is read, not refused.
+    let out = with_stdin(&["trace", "--json", "-"], b"G0 X1 (\xd8 6 mm)\n/G0 X2\n");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout).expect("utf-8");
+    let ends: Vec<serde_json::Value> = text
+        .lines()
+        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+        .filter(|e| e["type"] == "linear")
+        .map(|e| e["end"][0].clone())
+        .collect();
+    // Block delete is off by default: the `/` line runs.
+    assert_eq!(ends, vec![serde_json::json!(1.0), serde_json::json!(2.0)]);
+    let out = with_stdin(&["trace", "--json", "--block-delete", "-"], b"G0 X1\n/G0 X2\n");
+    let text = String::from_utf8(out.stdout).expect("utf-8");
+    assert_eq!(text.lines().filter(|l| l.contains("\"linear\"")).count(), 1, "{text}");
 }

@@ -20,9 +20,15 @@
 //!    nominal dots onto the mean `D` of each dot gives `L` (reported as the sheet rotation and
 //!    measured scale, so a mis-printed sheet is visible, not baked into K) and `b`.
 //!
-//! The camera offset written is `a = o₀ − b`: commanding `P` then puts the spindle at `P − a`
-//! and the optical axis at `P`. The routine then re-walks every dot in G90 at its nominal
-//! position with the new K and offset and reports each dot's residual against the fitted sheet.
+//! The camera offset solved is `a = o₀ − b`: once written, commanding `P` puts the spindle at
+//! `P − a` and the optical axis at `P`. The routine then re-walks every dot in G90 with the new
+//! K and reports each dot's residual against the fitted sheet. The offset is not written yet, so
+//! the verify walk compensates: commanding `N + o₀ − a = N + b` puts the optical axis on `N`,
+//! and a capture there is seen at `C − b + K·R·c`, where the new offset will see it.
+//!
+//! Nothing here commits: [`sheet_walk`] and [`quick`] return a [`Solution`] (K, remap, tool
+//! offset, report) and M283 applies it in one place, or nothing (see
+//! [`crate::VisionModule::m283`]).
 //!
 //! Moves between stations are incremental (`G91 G0 X.. Y..` followed by `G90`), stations are
 //! planned so each dot lands near the image centre, and `VisionTriggerSettleSec` is dwelt after
@@ -37,6 +43,7 @@ use crate::error::VisionError;
 use crate::machine::Machine;
 use crate::module::capture::{chain_with, mark_size, require_mark};
 use crate::params::Params;
+use crate::ser;
 use crate::sheets::{cal_sheet, known_sheets};
 
 /// The axis-detect bump: 0.1 inch (2.54 mm under G21).
@@ -66,53 +73,40 @@ pub enum Calibrate {
     },
 }
 
-impl Calibrate {
-    /// The calibration for M283's words: exactly one of `Q` (diameter) and `C` (sheet).
-    ///
-    /// # Errors
-    /// [`VisionError::BadWord`] for none or both, a non-positive diameter or a non-integer
-    /// sheet number.
-    pub fn from_words(q: Option<f64>, c: Option<f64>) -> Result<Calibrate, VisionError> {
-        let bad = |word: String, reason: &str| VisionError::BadWord { mcode: "M283", word, reason: reason.into() };
-        match (q, c) {
-            (Some(d), None) if d.is_finite() && d > 0.0 => Ok(Calibrate::Quick { diameter: d }),
-            (Some(d), None) => Err(bad(format!("Q{d}"), "Q is the dot diameter and must be positive")),
-            (None, Some(n)) => crate::module::integer_word(n)
-                .and_then(|n| u32::try_from(n).ok())
-                .map(|n| Calibrate::Sheet { n })
-                .ok_or_else(|| bad(format!("C{n}"), "C is a calibration sheet number (C1)")),
-            _ => Err(bad(String::new(), "give exactly one of Qd (quick, dot diameter d) or Cn (sheet n)")),
-        }
-    }
-}
-
 /// Result of the axis-detect bump.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct AxisReport {
     /// The remap written to `VisionCameraSwapXY` / `InvertX` / `InvertY`.
+    #[serde(serialize_with = "ser::remap")]
     pub remap: Remap,
     /// The bump length, current units.
     pub bump: f64,
     /// Native pixel motion of the mark during the +X bump.
+    #[serde(serialize_with = "ser::vector")]
     pub pixels_for_x: Vector2<f64>,
     /// Native pixel motion of the mark during the +Y bump.
+    #[serde(serialize_with = "ser::vector")]
     pub pixels_for_y: Vector2<f64>,
 }
 
 /// What `M283 Qd` measured and wrote. Lengths in `unit`.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct QuickReport {
     /// The unit of every length (also the new `Cal_Units`).
+    #[serde(serialize_with = "ser::unit")]
     pub unit: LengthUnit,
     /// The axis detect.
     pub axis: AxisReport,
     /// The K written, units per pixel.
+    #[serde(serialize_with = "ser::matrix")]
     pub k: Matrix2<f64>,
     /// The dot diameter given.
     pub diameter: f64,
     /// The mark size the camera reported, pixels (native width, height).
+    #[serde(serialize_with = "ser::vector")]
     pub size_px: Vector2<f64>,
     /// The confirming trigger's mark size with the new K (width, height).
+    #[serde(serialize_with = "ser::vector")]
     pub confirm_size: Vector2<f64>,
     /// Largest `|confirm size − diameter|`.
     pub size_error: f64,
@@ -124,33 +118,40 @@ pub struct QuickReport {
 }
 
 /// One dot of the verify walk. Lengths in the report's unit, work frame.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct DotVerify {
     /// The dot's number on the sheet (1-based, walk order).
     pub dot: usize,
     /// Nominal position (the G90 target).
+    #[serde(serialize_with = "ser::point")]
     pub nominal: Point2<f64>,
     /// Where the walk's sheet fit puts the dot.
+    #[serde(serialize_with = "ser::point")]
     pub expected: Point2<f64>,
     /// Where the re-walk saw it with the new K and offset.
+    #[serde(serialize_with = "ser::point")]
     pub observed: Point2<f64>,
     /// `observed − expected`.
+    #[serde(serialize_with = "ser::vector")]
     pub residual: Vector2<f64>,
 }
 
 /// What `M283 Cn` measured and wrote: everything the manual's result popup shows. Lengths in
 /// `unit`.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct SheetReport {
     /// The sheet walked.
     pub sheet: u32,
     /// The unit of every length (also the new `Cal_Units`).
+    #[serde(serialize_with = "ser::unit")]
     pub unit: LengthUnit,
     /// The axis detect.
     pub axis: AxisReport,
     /// The K written, units per pixel.
+    #[serde(serialize_with = "ser::matrix")]
     pub k: Matrix2<f64>,
     /// Per-axis scale: units per pixel along machine X and Y (K's column norms).
+    #[serde(serialize_with = "ser::vector")]
     pub scale: Vector2<f64>,
     /// Camera rotation left in K after the remap, degrees counter-clockwise.
     pub camera_rotation_deg: f64,
@@ -159,14 +160,17 @@ pub struct SheetReport {
     /// Sheet rotation on the table, degrees counter-clockwise.
     pub sheet_rotation_deg: f64,
     /// Measured print scale of the sheet along its X and Y (1 = true size).
+    #[serde(serialize_with = "ser::vector")]
     pub sheet_scale: Vector2<f64>,
     /// RMS residual of the sheet fit over the walk, units.
     pub walk_rms: f64,
     /// The camera tool whose offset was written.
     pub tool: u32,
     /// Its X/Y offset before.
+    #[serde(serialize_with = "ser::vector")]
     pub offset_before: Vector2<f64>,
     /// Its X/Y offset written.
+    #[serde(serialize_with = "ser::vector")]
     pub offset_written: Vector2<f64>,
     /// The verify walk, one entry per dot.
     pub verify: Vec<DotVerify>,
@@ -180,8 +184,9 @@ pub struct SheetReport {
     pub date: String,
 }
 
-/// M283's report.
-#[derive(Debug, Clone, PartialEq)]
+/// M283's report (JSON: the inner report with `"mode": "quick"` or `"sheet"`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[serde(tag = "mode", rename_all = "lowercase")]
 pub enum CalReport {
     /// `Qd`.
     Quick(QuickReport),
@@ -189,11 +194,25 @@ pub enum CalReport {
     Sheet(SheetReport),
 }
 
-/// What a successful calibration asks the module to write.
+/// What a successful calibration asks the module to write; nothing is written yet.
 pub(crate) struct Solution {
+    /// K, units (the machine's, at calibration) per pixel.
     pub(crate) k: Matrix2<f64>,
     pub(crate) remap: Remap,
+    /// The camera tool and its new X/Y table offset, current units (sheet walk only).
+    pub(crate) tool_offset: Option<(u32, Vector2<f64>)>,
     pub(crate) report: CalReport,
+}
+
+impl CalReport {
+    /// The `Cal_Date` the calibration writes.
+    #[must_use]
+    pub fn date(&self) -> &str {
+        match self {
+            CalReport::Quick(r) => &r.date,
+            CalReport::Sheet(r) => &r.date,
+        }
+    }
 }
 
 fn fail(reason: impl Into<String>) -> VisionError {
@@ -217,12 +236,27 @@ pub(crate) struct Walker<'a> {
     unit: LengthUnit,
     shots: Vec<Shot>,
     triggers: usize,
+    /// Every line run on the machine, in order (M283's reply lists them).
+    ran: Vec<String>,
 }
 
 impl<'a> Walker<'a> {
     pub(crate) fn new(machine: &'a mut dyn Machine, driver: &'a mut dyn CameraDriver, settle_s: f64) -> Self {
         let unit = machine.units();
-        Walker { machine, driver, settle_s, unit, shots: Vec::new(), triggers: 0 }
+        Walker { machine, driver, settle_s, unit, shots: Vec::new(), triggers: 0, ran: Vec::new() }
+    }
+
+    /// The lines run so far, in order.
+    pub(crate) fn into_ran(self) -> Vec<String> {
+        self.ran
+    }
+
+    /// Runs `lines` on the machine and records them.
+    fn run(&mut self, lines: Vec<String>) -> Result<(), VisionError> {
+        self.machine.run_gcode(&lines)?;
+        self.ran.extend(lines);
+        self.machine.dwell(self.settle_s);
+        Ok(())
     }
 
     fn position(&self) -> Point2<f64> {
@@ -234,18 +268,14 @@ impl<'a> Walker<'a> {
         let d = target - self.position();
         let x = fixed(d.x, MOVE_DECIMALS);
         let y = fixed(d.y, MOVE_DECIMALS);
-        self.machine.run_gcode(&[format!("G91 G0 X{x} Y{y}"), "G90".to_string()])?;
-        self.machine.dwell(self.settle_s);
-        Ok(())
+        self.run(vec![format!("G91 G0 X{x} Y{y}"), "G90".to_string()])
     }
 
     /// Absolute G90 move to `target`, then settle.
     pub(crate) fn move_abs(&mut self, target: Point2<f64>) -> Result<(), VisionError> {
         let x = fixed(target.x, MOVE_DECIMALS);
         let y = fixed(target.y, MOVE_DECIMALS);
-        self.machine.run_gcode(&[format!("G90 G0 X{x} Y{y}")])?;
-        self.machine.dwell(self.settle_s);
-        Ok(())
+        self.run(vec![format!("G90 G0 X{x} Y{y}")])
     }
 
     /// Triggers and records a shot of walk dot `dot`; returns its index.
@@ -327,8 +357,8 @@ pub(crate) fn quick(walker: &mut Walker<'_>, params: &Params, diameter: f64) -> 
     let (w, h) = if remap.swap_xy { (r.height_px, r.width_px) } else { (r.width_px, r.height_px) };
     if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0) {
         return Err(fail(
-            "the camera job does not report the mark's width and height — M283 Q needs the full Data Output \
-             (judgment,count,x,y,width,height,angle,score); or use M283 C1",
+            "the camera job does not report the mark's width and height — M283 Q needs a camera \
+             output that includes them (judgment,count,x,y,width,height,angle,score); or use M283 C1",
         ));
     }
     let k = Matrix2::new(diameter / w, 0.0, 0.0, diameter / h);
@@ -349,11 +379,10 @@ pub(crate) fn quick(walker: &mut Walker<'_>, params: &Params, diameter: f64) -> 
         bump_error,
         date: walker.machine.now().iso_local(),
     };
-    Ok(Solution { k, remap, report: CalReport::Quick(report) })
+    Ok(Solution { k, remap, tool_offset: None, report: CalReport::Quick(report) })
 }
 
-/// `M283 Cn`: walk, solve, write the tool offset, verify. The caller restores the offset on
-/// error.
+/// `M283 Cn`: walk, solve, verify (compensating for the offset not yet written); writes nothing.
 pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool: u32) -> Result<Solution, VisionError> {
     let sheet = cal_sheet(n).ok_or_else(|| VisionError::UnknownSheet { sheet: n, known: known_sheets() })?;
     let unit = walker.unit;
@@ -408,26 +437,26 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
     }
     let seen: Vec<Point2<f64>> = sums.iter().map(|(sum, count)| Point2::from(sum / *count)).collect();
     let fit = fit_rectangle(&nominal, &seen).map_err(|e| fail(format!("sheet fit: {e}")))?;
-    let dev = (fit.scale.x - 1.0).abs().max((fit.scale.y - 1.0).abs());
+    let dev = (fit.transform.scale.x - 1.0).abs().max((fit.transform.scale.y - 1.0).abs());
     if dev > MAX_SHEET_SCALE_DEV {
         return Err(fail(format!(
             "the sheet measures {:.4} x {:.4} of its nominal size — wrong sheet number, a sheet printed with \
              'Fit to Page', or the camera found other marks",
-            fit.scale.x, fit.scale.y
+            fit.transform.scale.x, fit.transform.scale.y
         )));
     }
-    let b = fit.offset();
+    let b = fit.transform.offset();
     let offset_written = offset_before - b;
-    walker.machine.set_tool_offset(tool, offset_written)?;
 
-    // 5. Verify: every dot at its nominal position in G90 with the new K and offset.
+    // 5. Verify: the optical axis on every dot's nominal position in G90 with the new K, seen
+    //    as the new offset will see it (the module doc explains the `+ b`).
     let mut verify = Vec::with_capacity(nominal.len());
     for (i, n_i) in nominal.iter().enumerate() {
-        walker.move_abs(*n_i)?;
+        walker.move_abs(n_i + b)?;
         let s = walker.shoot(i)?;
         let shot = walker.shots[s];
-        let observed = shot.pos + chain.delta(shot.native);
-        let expected = fit.apply(*n_i) - b;
+        let observed = shot.pos - b + chain.delta(shot.native);
+        let expected = fit.transform.apply(*n_i) - b;
         verify.push(DotVerify { dot: i + 1, nominal: *n_i, expected, observed, residual: observed - expected });
     }
     #[allow(clippy::cast_precision_loss)]
@@ -441,8 +470,8 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
         scale: Vector2::new(k.column(0).norm(), k.column(1).norm()),
         camera_rotation_deg: (k[(1, 0)] - k[(0, 1)]).atan2(k[(0, 0)] + k[(1, 1)]).to_degrees(),
         k_rms,
-        sheet_rotation_deg: fit.theta_deg(),
-        sheet_scale: fit.scale,
+        sheet_rotation_deg: fit.transform.theta_deg(),
+        sheet_scale: fit.transform.scale,
         walk_rms: fit.rms,
         tool,
         offset_before,
@@ -453,23 +482,13 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
         triggers: walker.triggers,
         date: walker.machine.now().iso_local(),
     };
-    Ok(Solution { k, remap, report: CalReport::Sheet(report) })
+    Ok(Solution { k, remap, tool_offset: Some((tool, offset_written)), report: CalReport::Sheet(report) })
 }
 
 #[cfg(test)]
 #[allow(clippy::float_cmp)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn words_select_exactly_one_mode() {
-        assert_eq!(Calibrate::from_words(Some(0.5), None), Ok(Calibrate::Quick { diameter: 0.5 }));
-        assert_eq!(Calibrate::from_words(None, Some(1.0)), Ok(Calibrate::Sheet { n: 1 }));
-        for (q, c) in [(None, None), (Some(0.5), Some(1.0)), (Some(-1.0), None), (None, Some(1.5)), (None, Some(-1.0))]
-        {
-            assert!(matches!(Calibrate::from_words(q, c), Err(VisionError::BadWord { .. })), "{q:?} {c:?}");
-        }
-    }
 
     #[test]
     fn remap_detection_for_all_eight_mountings() {

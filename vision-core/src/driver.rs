@@ -5,6 +5,7 @@
 //! [`DriverErrorKind`] so the core can react without knowing the driver.
 
 use std::fmt;
+use std::sync::Arc;
 use std::time::Duration;
 
 /// The camera's pass/fail verdict for a trigger.
@@ -98,14 +99,15 @@ pub struct Capabilities {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[non_exhaustive]
 pub enum DriverErrorKind {
-    /// No answer within the timeout (unreachable camera, wrong IP/port, no data output).
+    /// No complete answer within the timeout (unreachable camera, wrong address, or a camera
+    /// that answered but sent no result).
     Timeout,
     /// The connection was refused or closed (not in Run mode, another client holds it).
     Refused,
     /// The camera answered, but its reply could not be understood.
     Malformed,
-    /// The camera refused the command (an `ER,…` reply or equivalent). The core shows the
-    /// driver's message as it is, so it says what the refusal means and what to do.
+    /// The camera refused the command (an error reply). The driver's message says what the
+    /// refusal means and what to do.
     Rejected,
     /// The driver does not support the operation.
     Unsupported,
@@ -115,29 +117,68 @@ pub enum DriverErrorKind {
     Other,
 }
 
-/// A driver failure: its kind, and the driver's own message (what happened, what to do).
-#[derive(Debug, Clone, PartialEq, Eq)]
+/// A driver failure: the common [`DriverErrorKind`] the core reacts to, and the driver's own
+/// typed error, kept whole as the cause.
+///
+/// `Display` is the driver's explanation as it is: what happened in the camera's terms and
+/// what to do. Only the driver knows its camera, so the core never rewrites or prefixes it.
+/// The typed error is reachable with [`DriverError::get_ref`] and [`DriverError::downcast_ref`]
+/// (like [`std::io::Error`], the wrapper is transparent: [`std::error::Error::source`] is the
+/// driver error's own source, so a report that walks the chain does not print its text twice).
+///
+/// The cause is shared ([`Arc`]) so errors stay `Clone`; two errors are equal when their kinds
+/// and texts are, which is what a caller or a test can observe.
+#[derive(Debug, Clone)]
 pub struct DriverError {
-    /// The common kind.
-    pub kind: DriverErrorKind,
-    /// The driver's message, in its own terms.
-    pub message: String,
+    kind: DriverErrorKind,
+    source: Arc<dyn std::error::Error + Send + Sync>,
 }
 
 impl DriverError {
-    /// Builds an error of `kind` with `message`.
-    pub fn new(kind: DriverErrorKind, message: impl Into<String>) -> Self {
-        DriverError { kind, message: message.into() }
+    /// An error of `kind` caused by `source`: the driver's typed error, or a message
+    /// (`&str`/`String`) for a driver without one.
+    pub fn new(kind: DriverErrorKind, source: impl Into<Box<dyn std::error::Error + Send + Sync>>) -> Self {
+        DriverError { kind, source: Arc::from(source.into()) }
+    }
+
+    /// The common kind.
+    #[must_use]
+    pub fn kind(&self) -> DriverErrorKind {
+        self.kind
+    }
+
+    /// The driver's own error.
+    #[must_use]
+    pub fn get_ref(&self) -> &(dyn std::error::Error + Send + Sync + 'static) {
+        &*self.source
+    }
+
+    /// The driver's own error as `E`, when it is one.
+    #[must_use]
+    pub fn downcast_ref<E: std::error::Error + 'static>(&self) -> Option<&E> {
+        self.source.downcast_ref::<E>()
     }
 }
 
 impl fmt::Display for DriverError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.message)
+        fmt::Display::fmt(&self.source, f)
     }
 }
 
-impl std::error::Error for DriverError {}
+impl PartialEq for DriverError {
+    fn eq(&self, other: &Self) -> bool {
+        self.kind == other.kind && self.to_string() == other.to_string()
+    }
+}
+
+impl Eq for DriverError {}
+
+impl std::error::Error for DriverError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        self.source.source()
+    }
+}
 
 /// A smart camera, seen by the core. Implemented by `vision-driver-keyence`,
 /// `vision-driver-sim`, and test fakes.
@@ -167,6 +208,15 @@ pub trait CameraDriver: Send {
     /// As [`CameraDriver::trigger`].
     fn test_connection(&mut self) -> Result<String, DriverError>;
 
+    /// What the operator should know about `reading`, a usable reading [`CameraDriver::trigger`]
+    /// just returned, in the driver's words: e.g. that the camera found several marks and which
+    /// one it reported. The core shows it as the capture's warning (`VisionLastStatus` =
+    /// `OK (warning: …)`). The default has nothing to say.
+    fn reading_warning(&self, reading: &Reading) -> Option<String> {
+        let _ = reading;
+        None
+    }
+
     /// The I/O timeout the driver applies to one exchange (for diagnostics).
     fn timeout(&self) -> Duration {
         Duration::from_secs(3)
@@ -194,5 +244,41 @@ mod tests {
         assert_eq!(Judgment::Ok.code(), 1);
         assert_eq!(Judgment::Ng.code(), 0);
         assert_eq!([Judgment::Ok, Judgment::Ng, Judgment::Unknown].map(Judgment::label), ["OK", "NG", "unknown"]);
+    }
+
+    /// A driver's own error type, with a cause of its own.
+    #[derive(Debug)]
+    struct CameraFault(std::io::Error);
+
+    impl fmt::Display for CameraFault {
+        fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+            f.write_str("the camera closed the connection — another client holds it")
+        }
+    }
+
+    impl std::error::Error for CameraFault {
+        fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+            Some(&self.0)
+        }
+    }
+
+    #[test]
+    fn the_drivers_typed_error_is_kept_whole() {
+        use std::error::Error as _;
+        let reset = std::io::Error::from(std::io::ErrorKind::ConnectionReset);
+        let e = DriverError::new(DriverErrorKind::Refused, CameraFault(reset));
+        assert_eq!(e.kind(), DriverErrorKind::Refused);
+        assert_eq!(e.to_string(), "the camera closed the connection — another client holds it");
+        let typed = e.downcast_ref::<CameraFault>().expect("the driver's own type");
+        assert_eq!(typed.0.kind(), std::io::ErrorKind::ConnectionReset);
+        assert!(e.get_ref().is::<CameraFault>());
+        // Transparent: the chain goes on with the driver error's own cause, not its text again.
+        let cause = e.source().expect("the cause's cause").to_string();
+        assert_eq!(cause, std::io::Error::from(std::io::ErrorKind::ConnectionReset).to_string());
+        // A clone shares the cause; equality is kind and text.
+        assert_eq!(e.clone(), e);
+        assert_ne!(DriverError::new(DriverErrorKind::Timeout, e.to_string()), e);
+        assert_eq!(DriverError::new(DriverErrorKind::Refused, e.to_string()), e);
+        assert!(DriverError::new(DriverErrorKind::Other, "text").downcast_ref::<CameraFault>().is_none());
     }
 }

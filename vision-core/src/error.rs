@@ -72,9 +72,11 @@ pub enum VisionError {
     )]
     NoMark,
 
-    /// The driver failed: the manual's generic fix for a timeout, refused connection, malformed
-    /// reply or unsupported operation, then the driver's own words; any other kind (a camera
-    /// refusal, an invalid argument, …) in the driver's words only, which say what to do.
+    /// The driver failed. The text is the driver's own ([`DriverError`]'s `Display`): only the
+    /// driver knows its camera, its protocol and what each refusal means, and it names the
+    /// `Vision*` parameters it reads (`VisionIP`, `VisionPort`, `VisionTimeout`). The core adds
+    /// nothing of a camera's vocabulary; it only describes the [`DriverErrorKind`] when a driver
+    /// sent no text at all.
     #[error("{}", driver_message(.0))]
     Driver(DriverError),
 
@@ -128,17 +130,6 @@ pub enum VisionError {
     SelectJobUnsupported {
         /// The driver's name.
         driver: String,
-    },
-
-    /// An M-code word out of range (e.g. `M280 P5`, `M284 P1000`).
-    #[error("{mcode} {word} is invalid: {reason}")]
-    BadWord {
-        /// The M-code (`M280`, …).
-        mcode: &'static str,
-        /// The word as given (`P5`).
-        word: String,
-        /// What is allowed.
-        reason: String,
     },
 
     /// A parameter name that does not exist.
@@ -203,34 +194,23 @@ pub enum VisionError {
     AlignmentActive,
 }
 
-/// A driver failure as the operator reads it. For the kinds whose cause and fix do not depend
-/// on the camera's protocol (timeout, refused connection, malformed reply, unsupported
-/// operation) the manual's generic fix comes first, the driver's words in parentheses; every
-/// other kind — a camera refusal ([`DriverErrorKind::Rejected`]) above all — is the driver's
-/// message as it is: only the driver knows what its camera's refusal means and what to do.
+/// A driver failure as the operator reads it: the driver's words as they are, or, when the
+/// driver said nothing, what the core knows — the kind of failure.
 fn driver_message(e: &DriverError) -> String {
-    let fix = match e.kind {
-        DriverErrorKind::Timeout => {
-            "timeout — camera unreachable, wrong IP/port, or no Data Output (Non-Procedural) tool \
-             configured to emit on TRG"
-        }
-        DriverErrorKind::Refused => {
-            "connection refused — camera not in Run Mode, or another client already holds the socket"
-        }
-        DriverErrorKind::Malformed => {
-            "malformed response — the Data Output (Non-Procedural) tool is missing, disabled, or \
-             emitting unexpected fields"
-        }
-        DriverErrorKind::Unsupported => "the camera driver does not support this operation",
-        _ => "",
-    };
-    if fix.is_empty() {
-        e.message.clone()
-    } else if e.message.is_empty() {
-        fix.to_string()
-    } else {
-        format!("{fix} ({})", e.message)
+    let text = e.to_string();
+    if !text.trim().is_empty() {
+        return text;
     }
+    match e.kind() {
+        DriverErrorKind::Timeout => "the camera did not answer within VisionTimeout",
+        DriverErrorKind::Refused => "the camera refused or closed the connection",
+        DriverErrorKind::Malformed => "the camera's reply could not be understood",
+        DriverErrorKind::Rejected => "the camera refused the command",
+        DriverErrorKind::Unsupported => "the camera driver does not support this operation",
+        DriverErrorKind::InvalidArgument => "the camera driver refused an argument before sending anything",
+        _ => "the camera driver failed",
+    }
+    .to_string()
 }
 
 impl From<DriverError> for VisionError {
@@ -270,25 +250,26 @@ mod tests {
         assert!(VisionError::NotEnabled.to_string().starts_with("Vision is not enabled"));
         let e = VisionError::WrongTool { camera: 98, active: 1 };
         assert!(e.to_string().starts_with("camera tool T98 is not the active tool"));
-        let e = VisionError::from(DriverError::new(DriverErrorKind::Timeout, "no reply in 3 s"));
-        assert!(e.to_string().starts_with("timeout — camera unreachable"), "{e}");
-        // A camera refusal is the driver's to explain: its message is shown as it is, with no
-        // protocol table of the core's in front of it.
-        for message in [
-            "ER,TRG,06",
-            "camera replied ER,TRG,01",
-            "ER,PL,07",
-            "ER,TRG,99 odd",
-            "camera replied ER,PL,03 to PL — argument out of range: the job number does not exist on the camera",
+        // A driver error reads as the driver words it, whatever its kind: the core puts no
+        // generic advice of its own in front of the driver's specific advice.
+        for kind in [
+            DriverErrorKind::Timeout,
+            DriverErrorKind::Refused,
+            DriverErrorKind::Malformed,
+            DriverErrorKind::Rejected,
+            DriverErrorKind::Unsupported,
+            DriverErrorKind::InvalidArgument,
+            DriverErrorKind::Other,
         ] {
-            let e = VisionError::from(DriverError::new(DriverErrorKind::Rejected, message));
-            assert_eq!(e.to_string(), message);
+            let message = "the camera answered but sent no data — add an output to the camera job";
+            let e = VisionError::from(DriverError::new(kind, message));
+            assert_eq!(e.to_string(), message, "{kind:?}");
+            // Said nothing: the kind, in the core's words.
+            let silent = VisionError::from(DriverError::new(kind, "")).to_string();
+            assert!(silent.starts_with("the camera"), "{kind:?}: {silent}");
         }
-        let e = VisionError::from(DriverError::new(DriverErrorKind::Unsupported, "no PL"));
-        assert_eq!(e.to_string(), "the camera driver does not support this operation (no PL)");
-        let e = VisionError::from(DriverError::new(DriverErrorKind::Malformed, "reply \"abc\""));
-        assert!(e.to_string().starts_with("malformed response — the Data Output"), "{e}");
-        assert_eq!(VisionError::from(DriverError::new(DriverErrorKind::Rejected, "ER,")).to_string(), "ER,");
+        let timeout = VisionError::from(DriverError::new(DriverErrorKind::Timeout, " "));
+        assert_eq!(timeout.to_string(), "the camera did not answer within VisionTimeout");
         assert!(VisionError::PoundBaseReserved { base: 5050, end: 5089 }
             .to_string()
             .starts_with("VisionPoundVarBase is in reserved range"));

@@ -4,22 +4,25 @@
 //!
 //! * [`driver`]: the camera trait; drivers return native pixels, all math lives here.
 //! * [`machine`]: the host trait (positions, G-code, tools, units, pound variables, clock).
-//! * [`params`]: the OEM parameters under the manual's names; [`profile`]: their TOML file.
+//! * [`params`]: the OEM parameters under the manual's names, in three parts ([`Config`],
+//!   [`Calibration`], [`Telemetry`]); [`profile`]: the TOML file of the first two ([`Params`]).
 //! * [`module`]: [`VisionModule`] with the typed entry points `m280` … `m284`.
 //! * [`pound`]: the pound-variable block; [`image_grab`]: M281 D1.
 //! * [`calibrate`]: M283's axis detect, quick calibration and sheet walk; [`sheets`]: `CAL_SHEETS`.
 //! * [`registry`]: drivers by name for the CLI.
+//! * [`text`]: messages and reports made safe to show a person (control characters, huge input).
 //!
 //! The crate depends on `vision-math` only (plus `thiserror`, `serde`, `toml`); it knows no
 //! driver, no G-code interpreter and no CLI.
 //!
 //! # How a host uses it
 //!
-//! The M-code adapter parses `M280 P3`, `M281 D1`, … into typed calls
-//! ([`RunMode::from_p`], [`Pieces::from_p`], [`Calibrate::from_words`]), calls
-//! [`VisionModule::m280`] … [`VisionModule::m284`] with the host's [`Machine`], runs the
-//! [`Reply::gcode`] lines it gets back (M280's cancel line, M282's four modal lines) and shows
-//! the report. The CLI picks the driver by `VisionDriver` through a [`DriverRegistry`] and
+//! The M-code adapter (`vision-mcode`) parses `M280 P3`, `M281 D1`, … into typed values
+//! ([`RunMode`], [`Pieces`], [`Calibrate`], a job number, a keep-image flag), calls
+//! [`VisionModule::m280`] … [`VisionModule::m284`] with the host's [`Machine`] and shows the
+//! report. The module runs its own G-code through [`Machine::run_gcode`] (M280's cancel line,
+//! M282's four modal lines, M283's moves); [`Reply::gcode`] lists what it ran. The run's state is typed ([`Run`]); the `Last*` / `Run_*` telemetry is written
+//! from it after each operation and never read back. The CLI picks the driver by `VisionDriver` through a [`DriverRegistry`] and
 //! loads/saves parameters with a [`ProfileStore`].
 //!
 //! # Decisions where the spec is open
@@ -36,9 +39,12 @@
 //! * M282 needs the run mode's 4 (rectangle) or 3 (similarity) captures; more are fitted by least
 //!   squares, slots keep the first four; the dot list stays until the next M280.
 //! * Pound fields 6–7 are never written. `Run_*` hold the **emitted** chain.
-//! * M283 refuses while an alignment is active, leaves the machine in G90, writes the offset to
-//!   `VisionCameraToolNumber` (or the active tool when that is 0), saves the profile, and undoes
-//!   everything on failure (including a failed save). See [`calibrate`] for the solve.
+//! * M284's job above 999 is refused as an invalid `VisionActiveJob` before the camera is
+//!   contacted; word syntax (`P1.5`) is the adapter's to refuse.
+//! * M283 refuses while an alignment is active and leaves the machine in G90. The walk commits
+//!   nothing; M283 then writes the offset to `VisionCameraToolNumber` (or the active tool when
+//!   that is 0), saves the profile, and takes the new calibration — all or nothing, the tool
+//!   table first (see [`VisionModule::m283`]). See [`calibrate`] for the solve.
 //! * M284 with job 0 (stored or given) does not contact the camera; the tool check does not
 //!   apply to M284. M281 D1 needs a driver advertising `grab_image`.
 //! * The `VisionFitMax*` gates are in percent and inches (converted under G21).
@@ -55,6 +61,8 @@
 //! assert!(matches!(params.set("VisionLastStatus", "OK"), Err(VisionError::ReadOnlyParam { .. })));
 //! let module = VisionModule::new(params);
 //! assert!(module.dots().is_empty());
+//! // A DRO reads every parameter by name, telemetry included.
+//! assert_eq!(module.param("VisionRun_Active")?, vision_core::ParamValue::Int(0));
 //! # Ok::<(), VisionError>(())
 //! ```
 
@@ -68,15 +76,17 @@ pub mod params;
 pub mod pound;
 pub mod profile;
 pub mod registry;
+mod ser;
 pub mod sheets;
+pub mod text;
 
 pub use calibrate::{AxisReport, CalReport, Calibrate, DotVerify, QuickReport, SheetReport};
 pub use driver::{CameraDriver, Capabilities, DriverError, DriverErrorKind, Judgment, Reading};
 pub use error::VisionError;
 pub use machine::{Machine, MachineError, Timestamp};
-pub use module::{AlignReport, Capture, Dot, JobReport, Pieces, Reply, RunMode, VisionModule};
-pub use params::{Access, ParamKind, ParamSpec, ParamValue, Params, Section};
-pub use pound::{PoundBlock, SlotValues};
+pub use module::{AlignReport, Capture, Dot, JobReport, Pieces, Reply, Run, RunMode, VisionModule};
+pub use params::{Access, Calibration, Config, ParamKind, ParamSpec, ParamValue, Params, Section, Telemetry};
+pub use pound::{PoundBlock, PoundReport, SlotValues};
 pub use profile::{ProfileFs, ProfileStore, StdFs};
 pub use registry::{DriverFactory, DriverRegistry};
 pub use sheets::{cal_sheet, CalSheet, CAL_SHEETS};

@@ -1,9 +1,17 @@
 //! The OEM parameters (SPEC §5, manual appendix A) under the manual's own names.
 //!
-//! [`Params`] holds every parameter, typed, with the manual's defaults. Read them with the typed
-//! getters (`params.cal_k()`, `params.pound_var_base()`, …) or by name with [`Params::get`];
-//! write them by name with [`Params::set`], which validates the value and refuses read-only
-//! telemetry. The Vision module writes telemetry itself.
+//! The parameters fall into three parts with one owner each:
+//! * [`Config`]: connection, camera, output and quality gates — the operator's settings;
+//! * [`Calibration`]: K, the axis flags, `Cal_Units`, `Cal_Date`, the pixel centre offset —
+//!   replaced as a whole by M283;
+//! * [`Telemetry`]: `Last*` and `Run_*` — written by the module after each operation, read-only
+//!   by name, never persisted and never read back to decide anything.
+//!
+//! [`Params`] is the persisted profile (configuration and calibration). The alignment run's
+//! state (mode, open or not, the dot list) is typed in [`crate::module::Run`], not here.
+//! Read parameters with the typed getters (`params.cal_k()`, `params.pound_var_base()`, …) or by
+//! name with [`Params::get`] (case-insensitive); write them by name with [`Params::set`], which
+//! validates the value and refuses telemetry.
 //!
 //! Units: lengths follow the parameter's doc (K and the pixel centre offset are per `Cal_Units`;
 //! the fit gates are in inches and are converted to millimetres under G21); times are seconds.
@@ -13,7 +21,7 @@
 
 use std::fmt;
 
-use vision_math::{LengthUnit, Matrix2, Remap};
+use vision_math::{LengthUnit, Matrix2, Remap, Vector2};
 
 use crate::error::VisionError;
 use crate::pound::PoundBlock;
@@ -126,7 +134,7 @@ pub enum Access {
 pub enum Section {
     /// Connection and camera setup.
     Connection,
-    /// K matrix and pixel centre.
+    /// K matrix, camera axis flags and pixel centre.
     Calibration,
     /// Pound-variable output and camera tool.
     Output,
@@ -369,27 +377,32 @@ fn short_text(v: &String) -> Result<(), String> {
     }
 }
 
-macro_rules! params {
-    ($(
-        $(#[doc = $doc:literal])+
-        ($section:ident, $access:ident) $field:ident : $ty:ty => $ret:ty = $default:expr, $name:literal, $check:expr;
-    )*) => {
-        /// Every Vision parameter, typed, with the manual's defaults (see the module doc).
-        ///
-        /// Fields are private so that every external write goes through [`Params::set`]
-        /// (validated, telemetry refused); read them with the typed getters.
+/// Declares one part of the parameter set: a struct with one private field per parameter, its
+/// typed getters, its [`ParamSpec`] table and by-name read/write. Adding a parameter is one
+/// entry here (name, type, default, range check); the profile, the CLI and the DRO views follow.
+macro_rules! param_struct {
+    (
+        $(#[doc = $sdoc:literal])+
+        $Struct:ident ($access:ident) {
+            $(
+                $(#[doc = $doc:literal])+
+                ($section:ident) $field:ident : $ty:ty => $ret:ty = $default:expr, $name:literal, $check:expr;
+            )*
+        }
+    ) => {
+        $(#[doc = $sdoc])+
         #[derive(Debug, Clone, PartialEq)]
-        pub struct Params {
+        pub struct $Struct {
             $( pub(crate) $field: $ty, )*
         }
 
-        impl Default for Params {
+        impl Default for $Struct {
             fn default() -> Self {
-                Params { $( $field: $default, )* }
+                $Struct { $( $field: $default, )* }
             }
         }
 
-        impl Params {
+        impl $Struct {
             $(
                 $(#[doc = $doc])+
                 #[must_use]
@@ -398,7 +411,7 @@ macro_rules! params {
                 }
             )*
 
-            /// Every parameter, in the manual's order.
+            /// This part's parameters, in the manual's order.
             pub const SPECS: &'static [ParamSpec] = &[$(
                 ParamSpec {
                     name: $name,
@@ -409,15 +422,19 @@ macro_rules! params {
                 },
             )*];
 
-            fn get_raw(&self, name: &str) -> Option<ParamValue> {
+            /// Reads parameter `name` (case-insensitive); `None` when it is not in this part.
+            #[must_use]
+            pub fn get(&self, name: &str) -> Option<ParamValue> {
                 $( if name.eq_ignore_ascii_case($name) { return Some(ParamType::to_value(&self.$field)); } )*
                 None
             }
 
-            /// Sets `spec.name` to `value` after type and range checks; access is not checked.
-            fn set_raw(&mut self, spec: &ParamSpec, value: &ParamValue) -> Result<(), VisionError> {
+            /// Sets `name` (case-insensitive) to `value` after type and range checks; `Ok(false)`
+            /// when `name` is not in this part. Access is the caller's business.
+            #[allow(dead_code)] // telemetry is never written by name
+            fn set_raw(&mut self, name: &str, value: &ParamValue) -> Result<bool, VisionError> {
                 $(
-                    if spec.name == $name {
+                    if name.eq_ignore_ascii_case($name) {
                         let invalid = |reason: String| VisionError::InvalidParam {
                             name: $name.to_string(),
                             value: value.to_string(),
@@ -428,11 +445,36 @@ macro_rules! params {
                         let check: Check<$ty> = $check;
                         check(&v).map_err(invalid)?;
                         self.$field = v;
-                        return Ok(());
+                        return Ok(true);
                     }
                 )*
-                Err(VisionError::UnknownParam { name: spec.name.to_string() })
+                Ok(false)
             }
+        }
+    };
+}
+
+/// A persisted part of [`Params`]: [`param_struct!`] plus getters on [`Params`] that read
+/// through to the part (one value, two ways to name the reader).
+macro_rules! profile_part {
+    ($(#[doc = $sdoc:literal])+ $Struct:ident in $via:ident { $($body:tt)* }) => {
+        param_struct! { $(#[doc = $sdoc])+ $Struct (Config) { $($body)* } }
+        profile_part!(@getters $via { $($body)* });
+    };
+    (@getters $via:ident {
+        $(
+            $(#[doc = $doc:literal])+
+            ($section:ident) $field:ident : $ty:ty => $ret:ty = $default:expr, $name:literal, $check:expr;
+        )*
+    }) => {
+        impl Params {
+            $(
+                $(#[doc = $doc])+
+                #[must_use]
+                pub fn $field(&self) -> $ret {
+                    self.$via.$field()
+                }
+            )*
         }
     };
 }
@@ -447,133 +489,176 @@ fn kind_reason(kind: ParamKind) -> String {
     }
 }
 
-params! {
-    /// `VisionEnabled`: master enable. When No, every Vision M-code fails with "Vision is not
-    /// enabled" and no driver is loaded.
-    (Connection, Config) enabled: bool => bool = false, "VisionEnabled", any;
-    /// `VisionDriver`: the camera driver's registry name (default `Keyence`).
-    (Connection, Config) driver: String => &str = "Keyence".to_string(), "VisionDriver", driver_name;
-    /// `VisionIP`: camera IP address or host name.
-    (Connection, Config) ip: String => &str = "192.168.208.80".to_string(), "VisionIP", host;
-    /// `VisionPort`: camera TCP port (Keyence VS default 8500).
-    (Connection, Config) port: i64 => i64 = 8500, "VisionPort", port;
-    /// `VisionTimeout`: per-command socket I/O timeout, seconds.
-    (Connection, Config) timeout_s: f64 => f64 = 3.0, "VisionTimeout", timeout_s;
-    /// `VisionActiveJob`: camera job 0..999 applied by M284 without P; written by M284. 0 =
-    /// leave the camera on its loaded job.
-    (Connection, Config) active_job: i64 => i64 = 0, "VisionActiveJob", job;
-    /// `VisionImageWatchDir`: folder the camera FTP-pushes images into; empty disables M281 D1.
-    (Connection, Config) image_watch_dir: String => &str = String::new(), "VisionImageWatchDir", short_text;
-    /// `VisionImageGrabTimeout`: how long M281 D1 waits for a fresh image, seconds.
-    (Connection, Config) image_grab_timeout_s: f64 => f64 = 2.0, "VisionImageGrabTimeout", seconds_60;
-    /// `VisionCameraResX`: image width, pixels.
-    (Connection, Config) camera_res_x: i64 => i64 = 1776, "VisionCameraResX", resolution;
-    /// `VisionCameraResY`: image height, pixels.
-    (Connection, Config) camera_res_y: i64 => i64 = 1776, "VisionCameraResY", resolution;
-    /// `VisionTriggerSettleSec`: dwell M283 inserts after each move before triggering, seconds.
-    (Connection, Config) trigger_settle_s: f64 => f64 = 0.25, "VisionTriggerSettleSec", seconds_60;
-    /// `VisionCameraSwapXY`: swap the centred pixel x and y (set by M283's axis detect).
-    (Connection, Config) camera_swap_xy: bool => bool = false, "VisionCameraSwapXY", any;
-    /// `VisionCameraInvertX`: negate pixel x after the swap (set by M283).
-    (Connection, Config) camera_invert_x: bool => bool = false, "VisionCameraInvertX", any;
-    /// `VisionCameraInvertY`: negate pixel y after the swap (set by M283).
-    (Connection, Config) camera_invert_y: bool => bool = false, "VisionCameraInvertY", any;
-    /// `VisionCameraToolNumber`: the camera's tool number; M280–M283 require it active. 0
-    /// disables the check.
-    (Output, Config) camera_tool_number: i64 => i64 = 0, "VisionCameraToolNumber", tool;
+profile_part! {
+    /// The persisted configuration: connection, camera, pound-variable output and the fit
+    /// quality gates. Written by the operator (profile, CLI, DRO) and by M284
+    /// (`VisionActiveJob`).
+    Config in config {
+        /// `VisionEnabled`: master enable. When No, every Vision M-code fails with "Vision is not
+        /// enabled" and no driver is loaded.
+        (Connection) enabled: bool => bool = false, "VisionEnabled", any;
+        /// `VisionDriver`: the camera driver's registry name (default `Keyence`).
+        (Connection) driver: String => &str = "Keyence".to_string(), "VisionDriver", driver_name;
+        /// `VisionIP`: camera IP address or host name.
+        (Connection) ip: String => &str = "192.168.208.80".to_string(), "VisionIP", host;
+        /// `VisionPort`: camera TCP port (Keyence VS default 8500).
+        (Connection) port: i64 => i64 = 8500, "VisionPort", port;
+        /// `VisionTimeout`: per-command socket I/O timeout, seconds.
+        (Connection) timeout_s: f64 => f64 = 3.0, "VisionTimeout", timeout_s;
+        /// `VisionActiveJob`: camera job 0..999 applied by M284 without P; written by M284. 0 =
+        /// leave the camera on its loaded job.
+        (Connection) active_job: i64 => i64 = 0, "VisionActiveJob", job;
+        /// `VisionImageWatchDir`: folder the camera FTP-pushes images into; empty disables M281 D1.
+        (Connection) image_watch_dir: String => &str = String::new(), "VisionImageWatchDir", short_text;
+        /// `VisionImageGrabTimeout`: how long M281 D1 waits for a fresh image, seconds.
+        (Connection) image_grab_timeout_s: f64 => f64 = 2.0, "VisionImageGrabTimeout", seconds_60;
+        /// `VisionCameraResX`: image width, pixels.
+        (Connection) camera_res_x: i64 => i64 = 1776, "VisionCameraResX", resolution;
+        /// `VisionCameraResY`: image height, pixels.
+        (Connection) camera_res_y: i64 => i64 = 1776, "VisionCameraResY", resolution;
+        /// `VisionTriggerSettleSec`: dwell M283 inserts after each move before triggering, seconds.
+        (Connection) trigger_settle_s: f64 => f64 = 0.25, "VisionTriggerSettleSec", seconds_60;
+        /// `VisionCameraToolNumber`: the camera's tool number; M280–M283 require it active. 0
+        /// disables the check.
+        (Output) camera_tool_number: i64 => i64 = 0, "VisionCameraToolNumber", tool;
+        /// `VisionPoundVarBase`: base B of the 5-slot × 8-field pound-variable block `#B..#B+39`.
+        /// B ≥ 100, block outside 5061..5081 and 5201..5500.
+        (Output) pound_var_base: i64 => i64 = 500, "VisionPoundVarBase", pound_base;
+        /// `VisionFitMaxScaleDev`: M282 refuses a fit whose X or Y scale deviates from 1 by more
+        /// than this, percent (0 disables).
+        (Quality) fit_max_scale_dev_pct: f64 => f64 = 2.0, "VisionFitMaxScaleDev", non_negative;
+        /// `VisionFitMaxShift`: M282 refuses a fit whose shift (observed centroid − commanded
+        /// centroid) is longer than this, inches (25.4 mm per inch under G21; 0 disables).
+        (Quality) fit_max_shift_in: f64 => f64 = 1.0, "VisionFitMaxShift", non_negative;
+        /// `VisionFitMaxResidual`: M282 refuses a fit whose worst mark residual exceeds this,
+        /// inches (0 disables).
+        (Quality) fit_max_residual_in: f64 => f64 = 0.020, "VisionFitMaxResidual", non_negative;
+    }
+}
 
-    /// `VisionCal_K11`: K row 1 column 1, `Cal_Units` per pixel.
-    (Calibration, Config) cal_k11: f64 => f64 = 0.0, "VisionCal_K11", finite;
-    /// `VisionCal_K12`: K row 1 column 2, `Cal_Units` per pixel.
-    (Calibration, Config) cal_k12: f64 => f64 = 0.0, "VisionCal_K12", finite;
-    /// `VisionCal_K21`: K row 2 column 1, `Cal_Units` per pixel.
-    (Calibration, Config) cal_k21: f64 => f64 = 0.0, "VisionCal_K21", finite;
-    /// `VisionCal_K22`: K row 2 column 2, `Cal_Units` per pixel.
-    (Calibration, Config) cal_k22: f64 => f64 = 0.0, "VisionCal_K22", finite;
-    /// `VisionCal_Date`: ISO local time of the last successful calibration (empty = never).
-    (Calibration, Config) cal_date: String => &str = String::new(), "VisionCal_Date", short_text;
-    /// `VisionCal_Units`: the unit K is calibrated in (`in` or `mm`).
-    (Calibration, Config) cal_units: LengthUnit => LengthUnit = LengthUnit::Inch, "VisionCal_Units", any;
-    /// `VisionPxCenterOffsetX`: optical-centre bias subtracted after the image-centre shift,
-    /// pixels.
-    (Calibration, Config) px_center_offset_x: f64 => f64 = 0.0, "VisionPxCenterOffsetX", pixel_offset;
-    /// `VisionPxCenterOffsetY`: same, Y, pixels.
-    (Calibration, Config) px_center_offset_y: f64 => f64 = 0.0, "VisionPxCenterOffsetY", pixel_offset;
+profile_part! {
+    /// The calibration: K, the camera axis flags, `Cal_Units`, `Cal_Date` and the pixel centre
+    /// offset. M283 replaces it as a whole (see [`crate::calibrate`]).
+    ///
+    /// Decision: `VisionPxCenterOffsetX/Y` belong here, as the manual lists them: they describe
+    /// the camera's optics like K does, and are persisted with it. M283 does not solve them
+    /// (the sheet walk absorbs a centre bias into the camera tool offset), so a calibration
+    /// keeps the offset it had.
+    Calibration in calibration {
+        /// `VisionCameraSwapXY`: swap the centred pixel x and y (set by M283's axis detect).
+        (Calibration) camera_swap_xy: bool => bool = false, "VisionCameraSwapXY", any;
+        /// `VisionCameraInvertX`: negate pixel x after the swap (set by M283).
+        (Calibration) camera_invert_x: bool => bool = false, "VisionCameraInvertX", any;
+        /// `VisionCameraInvertY`: negate pixel y after the swap (set by M283).
+        (Calibration) camera_invert_y: bool => bool = false, "VisionCameraInvertY", any;
+        /// `VisionCal_K11`: K row 1 column 1, `Cal_Units` per pixel.
+        (Calibration) cal_k11: f64 => f64 = 0.0, "VisionCal_K11", finite;
+        /// `VisionCal_K12`: K row 1 column 2, `Cal_Units` per pixel.
+        (Calibration) cal_k12: f64 => f64 = 0.0, "VisionCal_K12", finite;
+        /// `VisionCal_K21`: K row 2 column 1, `Cal_Units` per pixel.
+        (Calibration) cal_k21: f64 => f64 = 0.0, "VisionCal_K21", finite;
+        /// `VisionCal_K22`: K row 2 column 2, `Cal_Units` per pixel.
+        (Calibration) cal_k22: f64 => f64 = 0.0, "VisionCal_K22", finite;
+        /// `VisionCal_Date`: ISO local time of the last successful calibration (empty = never).
+        (Calibration) cal_date: String => &str = String::new(), "VisionCal_Date", short_text;
+        /// `VisionCal_Units`: the unit K is calibrated in (`in` or `mm`).
+        (Calibration) cal_units: LengthUnit => LengthUnit = LengthUnit::Inch, "VisionCal_Units", any;
+        /// `VisionPxCenterOffsetX`: optical-centre bias subtracted after the image-centre shift,
+        /// pixels.
+        (Calibration) px_center_offset_x: f64 => f64 = 0.0, "VisionPxCenterOffsetX", pixel_offset;
+        /// `VisionPxCenterOffsetY`: same, Y, pixels.
+        (Calibration) px_center_offset_y: f64 => f64 = 0.0, "VisionPxCenterOffsetY", pixel_offset;
+    }
+}
 
-    /// `VisionPoundVarBase`: base B of the 5-slot × 8-field pound-variable block `#B..#B+39`.
-    /// B ≥ 100, block outside 5061..5081 and 5201..5500.
-    (Output, Config) pound_var_base: i64 => i64 = 500, "VisionPoundVarBase", pound_base;
+param_struct! {
+    /// Telemetry: what the last operation measured and emitted, written by the module after
+    /// each operation and never read back to decide anything (the run's own state is
+    /// [`crate::module::Run`]). Read-only by name; never persisted.
+    Telemetry (Telemetry) {
+        /// `VisionLastJudgment`: 1 OK, 0 NG, −1 unknown, of the last trigger.
+        (LastResult) last_judgment: i64 => i64 = -1, "VisionLastJudgment", any;
+        /// `VisionLastOffsetPxX`: last centred pixel x (after the centre shift, before remap and K),
+        /// pixels.
+        (LastResult) last_offset_px_x: f64 => f64 = 0.0, "VisionLastOffsetPxX", any;
+        /// `VisionLastOffsetPxY`: last centred pixel y, pixels.
+        (LastResult) last_offset_px_y: f64 => f64 = 0.0, "VisionLastOffsetPxY", any;
+        /// `VisionLastOffsetX`: last offset `d` from the camera to the mark, X, current units.
+        (LastResult) last_offset_x: f64 => f64 = 0.0, "VisionLastOffsetX", any;
+        /// `VisionLastOffsetY`: same, Y, current units.
+        (LastResult) last_offset_y: f64 => f64 = 0.0, "VisionLastOffsetY", any;
+        /// `VisionLastWidth`: last mark width, current units.
+        (LastResult) last_width: f64 => f64 = 0.0, "VisionLastWidth", any;
+        /// `VisionLastHeight`: last mark height, current units.
+        (LastResult) last_height: f64 => f64 = 0.0, "VisionLastHeight", any;
+        /// `VisionLastAngle`: last mark angle, degrees.
+        (LastResult) last_angle: f64 => f64 = 0.0, "VisionLastAngle", any;
+        /// `VisionLastScore`: last match score (driver scale).
+        (LastResult) last_score: f64 => f64 = 0.0, "VisionLastScore", any;
+        /// `VisionLastStatus`: `OK` (possibly with a warning) or the last error text.
+        (LastResult) last_status: String => &str = String::new(), "VisionLastStatus", any;
+        /// `VisionRun_Active`: 1 between M280 and a successful M282, else 0 (from the run).
+        (RunState) run_active: i64 => i64 = 0, "VisionRun_Active", any;
+        /// `VisionRun_Mode`: 4 rectangle, 3 similarity (from the run).
+        (RunState) run_mode: i64 => i64 = 4, "VisionRun_Mode", any;
+        /// `VisionRun_DotCount`: captures taken in the current run (the dot list's length).
+        (RunState) run_dot_count: i64 => i64 = 0, "VisionRun_DotCount", any;
+        /// `VisionRun_Tx`: emitted G52 X shift, current units.
+        (RunState) run_tx: f64 => f64 = 0.0, "VisionRun_Tx", any;
+        /// `VisionRun_Ty`: emitted G52 Y shift, current units.
+        (RunState) run_ty: f64 => f64 = 0.0, "VisionRun_Ty", any;
+        /// `VisionRun_Theta`: emitted rotation, radians (G68 R is its value in degrees).
+        (RunState) run_theta: f64 => f64 = 0.0, "VisionRun_Theta", any;
+        /// `VisionRun_Sx`: emitted G51 X factor.
+        (RunState) run_sx: f64 => f64 = 1.0, "VisionRun_Sx", any;
+        /// `VisionRun_Sy`: emitted G51 Y factor.
+        (RunState) run_sy: f64 => f64 = 1.0, "VisionRun_Sy", any;
+        /// `VisionRun_CenterX`: emitted G68 X rotation centre, current units.
+        (RunState) run_center_x: f64 => f64 = 0.0, "VisionRun_CenterX", any;
+        /// `VisionRun_CenterY`: emitted G68 Y rotation centre, current units.
+        (RunState) run_center_y: f64 => f64 = 0.0, "VisionRun_CenterY", any;
+    }
+}
 
-    /// `VisionFitMaxScaleDev`: M282 refuses a fit whose X or Y scale deviates from 1 by more
-    /// than this, percent (0 disables).
-    (Quality, Config) fit_max_scale_dev_pct: f64 => f64 = 2.0, "VisionFitMaxScaleDev", non_negative;
-    /// `VisionFitMaxShift`: M282 refuses a fit whose shift (observed centroid − commanded
-    /// centroid) is longer than this, inches (25.4 mm per inch under G21; 0 disables).
-    (Quality, Config) fit_max_shift_in: f64 => f64 = 1.0, "VisionFitMaxShift", non_negative;
-    /// `VisionFitMaxResidual`: M282 refuses a fit whose worst mark residual exceeds this,
-    /// inches (0 disables).
-    (Quality, Config) fit_max_residual_in: f64 => f64 = 0.020, "VisionFitMaxResidual", non_negative;
-
-    /// `VisionLastJudgment`: 1 OK, 0 NG, −1 unknown, of the last trigger.
-    (LastResult, Telemetry) last_judgment: i64 => i64 = -1, "VisionLastJudgment", any;
-    /// `VisionLastOffsetPxX`: last centred pixel x (after the centre shift, before remap and K),
-    /// pixels.
-    (LastResult, Telemetry) last_offset_px_x: f64 => f64 = 0.0, "VisionLastOffsetPxX", any;
-    /// `VisionLastOffsetPxY`: last centred pixel y, pixels.
-    (LastResult, Telemetry) last_offset_px_y: f64 => f64 = 0.0, "VisionLastOffsetPxY", any;
-    /// `VisionLastOffsetX`: last offset `d` from the camera to the mark, X, current units.
-    (LastResult, Telemetry) last_offset_x: f64 => f64 = 0.0, "VisionLastOffsetX", any;
-    /// `VisionLastOffsetY`: same, Y, current units.
-    (LastResult, Telemetry) last_offset_y: f64 => f64 = 0.0, "VisionLastOffsetY", any;
-    /// `VisionLastWidth`: last mark width, current units.
-    (LastResult, Telemetry) last_width: f64 => f64 = 0.0, "VisionLastWidth", any;
-    /// `VisionLastHeight`: last mark height, current units.
-    (LastResult, Telemetry) last_height: f64 => f64 = 0.0, "VisionLastHeight", any;
-    /// `VisionLastAngle`: last mark angle, degrees.
-    (LastResult, Telemetry) last_angle: f64 => f64 = 0.0, "VisionLastAngle", any;
-    /// `VisionLastScore`: last match score (driver scale).
-    (LastResult, Telemetry) last_score: f64 => f64 = 0.0, "VisionLastScore", any;
-    /// `VisionLastStatus`: `OK` (possibly with a warning) or the last error text.
-    (LastResult, Telemetry) last_status: String => &str = String::new(), "VisionLastStatus", any;
-
-    /// `VisionRun_Active`: 1 between M280 and a successful M282, else 0.
-    (RunState, Telemetry) run_active: i64 => i64 = 0, "VisionRun_Active", any;
-    /// `VisionRun_Mode`: 4 rectangle, 3 similarity.
-    (RunState, Telemetry) run_mode: i64 => i64 = 4, "VisionRun_Mode", any;
-    /// `VisionRun_DotCount`: captures taken in the current run.
-    (RunState, Telemetry) run_dot_count: i64 => i64 = 0, "VisionRun_DotCount", any;
-    /// `VisionRun_Tx`: emitted G52 X shift, current units.
-    (RunState, Telemetry) run_tx: f64 => f64 = 0.0, "VisionRun_Tx", any;
-    /// `VisionRun_Ty`: emitted G52 Y shift, current units.
-    (RunState, Telemetry) run_ty: f64 => f64 = 0.0, "VisionRun_Ty", any;
-    /// `VisionRun_Theta`: emitted rotation, radians (G68 R is its value in degrees).
-    (RunState, Telemetry) run_theta: f64 => f64 = 0.0, "VisionRun_Theta", any;
-    /// `VisionRun_Sx`: emitted G51 X factor.
-    (RunState, Telemetry) run_sx: f64 => f64 = 1.0, "VisionRun_Sx", any;
-    /// `VisionRun_Sy`: emitted G51 Y factor.
-    (RunState, Telemetry) run_sy: f64 => f64 = 1.0, "VisionRun_Sy", any;
-    /// `VisionRun_CenterX`: emitted G68 X rotation centre, current units.
-    (RunState, Telemetry) run_center_x: f64 => f64 = 0.0, "VisionRun_CenterX", any;
-    /// `VisionRun_CenterY`: emitted G68 Y rotation centre, current units.
-    (RunState, Telemetry) run_center_y: f64 => f64 = 0.0, "VisionRun_CenterY", any;
+/// The persisted profile (SPEC §5): the [`Config`] and the [`Calibration`], read and written by
+/// the manual's names. The module's run state and its [`Telemetry`] are not part of it.
+///
+/// Every configuration and calibration getter is also available on `Params` directly
+/// (`params.ip()`, `params.cal_k()`).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Params {
+    /// Connection, camera, output and quality gates.
+    pub config: Config,
+    /// K, the axis flags, `Cal_Units`, `Cal_Date` and the pixel centre offset.
+    pub calibration: Calibration,
 }
 
 impl Params {
-    /// The spec of parameter `name` (case-insensitive).
+    /// Every parameter: configuration, calibration, then telemetry.
+    pub fn specs() -> impl Iterator<Item = &'static ParamSpec> {
+        Config::SPECS.iter().chain(Calibration::SPECS).chain(Telemetry::SPECS)
+    }
+
+    /// The spec of parameter `name` (case-insensitive), telemetry included.
     #[must_use]
     pub fn spec(name: &str) -> Option<&'static ParamSpec> {
-        Params::SPECS.iter().find(|s| s.name.eq_ignore_ascii_case(name))
+        Params::specs().find(|s| s.name.eq_ignore_ascii_case(name))
     }
 
-    /// Reads parameter `name` (case-insensitive).
+    /// Reads configuration or calibration parameter `name` (case-insensitive). Telemetry is
+    /// not in the profile: read it with [`Telemetry::get`] or [`crate::VisionModule::param`].
     ///
     /// # Errors
-    /// [`VisionError::UnknownParam`].
+    /// [`VisionError::UnknownParam`] (also for a telemetry name).
     pub fn get(&self, name: &str) -> Result<ParamValue, VisionError> {
-        self.get_raw(name).ok_or_else(|| VisionError::UnknownParam { name: name.to_string() })
+        self.config
+            .get(name)
+            .or_else(|| self.calibration.get(name))
+            .ok_or_else(|| VisionError::UnknownParam { name: name.to_string() })
     }
 
-    /// Writes configuration parameter `name` (case-insensitive) after validating `value`.
+    /// Writes configuration or calibration parameter `name` (case-insensitive) after
+    /// validating `value`.
     ///
     /// Text is accepted for every type (`"Yes"`, `"8500"`, `"0.00203"`, `"mm"`), so a CLI can
     /// pass what the user typed.
@@ -583,13 +668,74 @@ impl Params {
     /// [`VisionError::InvalidParam`] for a wrong type or an out-of-range value; on error the
     /// parameter keeps its value.
     pub fn set(&mut self, name: &str, value: impl Into<ParamValue>) -> Result<(), VisionError> {
-        let spec = Params::spec(name).ok_or_else(|| VisionError::UnknownParam { name: name.to_string() })?;
-        if spec.access == Access::Telemetry {
-            return Err(VisionError::ReadOnlyParam { name: spec.name.to_string() });
+        let value = value.into();
+        if self.config.set_raw(name, &value)? || self.calibration.set_raw(name, &value)? {
+            return Ok(());
         }
-        self.set_raw(spec, &value.into())
+        match Telemetry::SPECS.iter().find(|s| s.name.eq_ignore_ascii_case(name)) {
+            Some(spec) => Err(VisionError::ReadOnlyParam { name: spec.name.to_string() }),
+            None => Err(VisionError::UnknownParam { name: name.to_string() }),
+        }
     }
 
+    /// K as a matrix `[[K11, K12], [K21, K22]]`, `Cal_Units` per pixel.
+    #[must_use]
+    pub fn cal_k(&self) -> Matrix2<f64> {
+        self.calibration.cal_k()
+    }
+
+    /// As [`Calibration::set_cal_k`].
+    ///
+    /// # Errors
+    /// [`VisionError::InvalidParam`] for a non-finite entry.
+    pub fn set_cal_k(&mut self, k: Matrix2<f64>) -> Result<(), VisionError> {
+        self.calibration.set_cal_k(k)
+    }
+
+    /// The axis remap from the three `VisionCamera*` flags.
+    #[must_use]
+    pub fn remap(&self) -> Remap {
+        self.calibration.remap()
+    }
+
+    /// As [`Calibration::set_remap`].
+    pub fn set_remap(&mut self, r: Remap) {
+        self.calibration.set_remap(r);
+    }
+
+    /// The camera tool number, or `None` when the check is disabled (0).
+    #[must_use]
+    pub fn camera_tool(&self) -> Option<u32> {
+        self.config.camera_tool()
+    }
+
+    /// Every persisted parameter with its value: configuration, then calibration.
+    #[must_use]
+    pub fn config_values(&self) -> Vec<(&'static str, ParamValue)> {
+        Config::SPECS
+            .iter()
+            .filter_map(|s| self.config.get(s.name).map(|v| (s.name, v)))
+            .chain(Calibration::SPECS.iter().filter_map(|s| self.calibration.get(s.name).map(|v| (s.name, v))))
+            .collect()
+    }
+}
+
+impl serde::Serialize for Telemetry {
+    /// A map from each telemetry parameter's manual name to its value, in the manual's order.
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        crate::ser::named_values(Telemetry::SPECS, |name| self.get(name), s)
+    }
+}
+
+impl Config {
+    /// The camera tool number, or `None` when the check is disabled (0).
+    #[must_use]
+    pub fn camera_tool(&self) -> Option<u32> {
+        u32::try_from(self.camera_tool_number).ok().filter(|t| *t != 0)
+    }
+}
+
+impl Calibration {
     /// K as a matrix `[[K11, K12], [K21, K22]]`, `Cal_Units` per pixel.
     #[must_use]
     pub fn cal_k(&self) -> Matrix2<f64> {
@@ -629,31 +775,30 @@ impl Params {
         self.camera_invert_y = r.invert_y;
     }
 
-    /// The camera tool number, or `None` when the check is disabled (0).
+    /// The pixel centre offset, pixels.
     #[must_use]
-    pub fn camera_tool(&self) -> Option<u32> {
-        u32::try_from(self.camera_tool_number).ok().filter(|t| *t != 0)
+    pub fn center_offset(&self) -> Vector2<f64> {
+        Vector2::new(self.px_center_offset_x, self.px_center_offset_y)
     }
 
-    /// Every configuration (persisted) parameter with its value, in the manual's order.
-    #[must_use]
-    pub fn config_values(&self) -> Vec<(&'static str, ParamValue)> {
-        Params::SPECS
-            .iter()
-            .filter(|s| s.access == Access::Config)
-            .filter_map(|s| self.get_raw(s.name).map(|v| (s.name, v)))
-            .collect()
-    }
-
-    /// Resets all telemetry to its defaults (configuration untouched).
-    pub fn reset_telemetry(&mut self) {
-        let d = Params::default();
-        for spec in Params::SPECS.iter().filter(|s| s.access == Access::Telemetry) {
-            if let Some(v) = d.get_raw(spec.name) {
-                // Defaults always pass their own checks.
-                let _ = self.set_raw(spec, &v);
-            }
-        }
+    /// This calibration with a new K, remap, unit and date (the pixel centre offset is kept).
+    ///
+    /// # Errors
+    /// [`VisionError::InvalidParam`] for a non-finite K or a date longer than the profile
+    /// allows; `self` is unchanged either way.
+    pub fn solved(
+        &self,
+        k: Matrix2<f64>,
+        remap: Remap,
+        units: LengthUnit,
+        date: &str,
+    ) -> Result<Calibration, VisionError> {
+        let mut next = self.clone();
+        next.set_cal_k(k)?;
+        next.set_remap(remap);
+        next.cal_units = units;
+        next.set_raw("VisionCal_Date", &ParamValue::from(date))?;
+        Ok(next)
     }
 }
 
@@ -674,18 +819,23 @@ mod tests {
         assert_eq!(p.pound_var_base(), 500);
         assert_eq!(p.cal_units(), LengthUnit::Inch);
         assert_eq!(p.cal_k(), Matrix2::zeros());
-        assert_eq!(p.last_judgment(), -1);
+        assert_eq!(Telemetry::default().last_judgment(), -1);
+        assert_eq!(Telemetry::default().get("visionrun_mode"), Some(ParamValue::Int(4)));
         assert_eq!(p.get("visionenabled"), Ok(ParamValue::Bool(false)));
         assert_eq!(p.get("VisionCal_Units"), Ok(ParamValue::Text("in".into())));
         assert_eq!(p.fit_max_scale_dev_pct(), 2.0);
         assert_eq!(p.fit_max_shift_in(), 1.0);
         assert_eq!(p.fit_max_residual_in(), 0.020);
-        // Every name carries the prefix and is unique.
-        for (i, s) in Params::SPECS.iter().enumerate() {
+        // Every name carries the prefix, is unique, and is read by the part its access says.
+        let specs: Vec<_> = Params::specs().collect();
+        for (i, s) in specs.iter().enumerate() {
             assert!(s.name.starts_with("Vision"), "{}", s.name);
-            assert!(Params::SPECS[i + 1..].iter().all(|t| t.name != s.name));
-            assert!(p.get(s.name).is_ok());
+            assert!(specs[i + 1..].iter().all(|t| !t.name.eq_ignore_ascii_case(s.name)));
+            assert_eq!(p.get(s.name).is_ok(), s.access == Access::Config, "{}", s.name);
+            assert_eq!(Telemetry::default().get(s.name).is_some(), s.access == Access::Telemetry, "{}", s.name);
+            assert_eq!(Params::spec(&s.name.to_ascii_lowercase()), Some(*s));
         }
+        assert!(matches!(p.get("VisionLastStatus"), Err(VisionError::UnknownParam { .. })));
     }
 
     #[test]
@@ -733,10 +883,17 @@ mod tests {
         assert_eq!(p.camera_tool(), None);
         p.set("VisionCameraToolNumber", 98).expect("tool");
         assert_eq!(p.camera_tool(), Some(98));
-        p.last_status = "x".into();
-        p.reset_telemetry();
-        assert_eq!(p.last_status(), "");
-        assert_eq!(p.cal_k(), k);
         assert!(p.config_values().iter().all(|(n, _)| Params::spec(n).map(|s| s.access) == Some(Access::Config)));
+        assert_eq!(p.config_values().len(), Config::SPECS.len() + Calibration::SPECS.len());
+        // A solved calibration keeps the pixel centre offset and leaves the original alone.
+        p.set("VisionPxCenterOffsetX", 3.5).expect("offset");
+        let next = p.calibration.solved(Matrix2::identity(), Remap::IDENTITY, LengthUnit::Millimetre, "D").expect("ok");
+        assert_eq!(
+            (next.cal_k(), next.cal_units(), next.cal_date()),
+            (Matrix2::identity(), LengthUnit::Millimetre, "D")
+        );
+        assert_eq!(next.center_offset(), Vector2::new(3.5, 0.0));
+        assert_eq!(p.cal_k(), k);
+        assert!(p.calibration.solved(Matrix2::from_element(f64::NAN), Remap::IDENTITY, LengthUnit::Inch, "").is_err());
     }
 }

@@ -115,6 +115,29 @@ impl PoundBlock {
         ];
         fields.iter().filter_map(|(f, val)| self.address(slot, *f).map(|a| (a, *val))).collect()
     }
+
+    /// The whole block as `read` gives each variable now (e.g. `|a| machine.pound(a).ok()`); a
+    /// variable it cannot read shows as 0.
+    #[must_use]
+    pub fn report(self, read: impl Fn(u32) -> Option<f64>) -> PoundReport {
+        let slots = (0..SLOTS)
+            .map(|s| {
+                std::array::from_fn(|f| {
+                    self.address(s, u32::try_from(f).unwrap_or(FIELDS)).and_then(&read).unwrap_or(0.0)
+                })
+            })
+            .collect();
+        PoundReport { base: self.base, slots }
+    }
+}
+
+/// The pound-variable block as read back from the machine.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct PoundReport {
+    /// The base B (`VisionPoundVarBase`).
+    pub base: u32,
+    /// Slots 0–4, fields 0–7 each (X, Y, width, height, angle, score, reserved, reserved).
+    pub slots: Vec<[f64; 8]>,
 }
 
 #[cfg(test)]

@@ -168,9 +168,25 @@ impl CameraDriver for KeyenceDriver {
         self.firmware_version().map_err(DriverError::from)
     }
 
+    /// Several marks: the Data Output reports one result of the job's tool, so say which.
+    fn reading_warning(&self, reading: &Reading) -> Option<String> {
+        several_marks(reading)
+    }
+
     fn timeout(&self) -> Duration {
         self.config.timeout
     }
+}
+
+/// The warning for a reading whose count says the camera found more than one mark: the Data
+/// Output carries one result, the first in the tool's result order.
+fn several_marks(reading: &Reading) -> Option<String> {
+    let n = reading.count.filter(|n| *n > 1)?;
+    Some(format!(
+        "the camera found {n} marks and reported one, the first in its tool's result order, at x {:.3} y {:.3} px \
+         — narrow the job's search region so it finds one mark",
+        reading.x_px, reading.y_px
+    ))
 }
 
 /// Registers the driver under [`DRIVER_NAME`]; the factory reads `VisionIP`, `VisionPort` and
@@ -180,4 +196,22 @@ pub fn register(registry: &mut DriverRegistry) {
         let driver = KeyenceDriver::from_params(params).map_err(DriverError::from)?;
         Ok(Box::new(driver) as Box<dyn CameraDriver>)
     });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn several_marks_say_which_one_was_taken() {
+        let mut r = Reading { count: Some(2), ..Reading::position(812.125, 903.5) };
+        let driver = KeyenceDriver::new(KeyenceConfig::new("127.0.0.1", 8500)).expect("config");
+        let warning = driver.reading_warning(&r).expect("two marks");
+        assert!(warning.starts_with("the camera found 2 marks and reported one"), "{warning}");
+        assert!(warning.contains("at x 812.125 y 903.500 px"), "{warning}");
+        for count in [None, Some(0), Some(1)] {
+            r.count = count;
+            assert_eq!(driver.reading_warning(&r), None, "{count:?}");
+        }
+    }
 }

@@ -9,12 +9,10 @@ use vision_core::{DriverError, DriverErrorKind};
 /// Why a Keyence command failed.
 ///
 /// Each variant says what happened ([`KeyenceError::what`]) and what to do
-/// ([`KeyenceError::fix`]); `Display` prints both. [`KeyenceError::kind`] maps it to the core's
-/// [`DriverErrorKind`]. `From<KeyenceError> for DriverError` sends the whole text for a
-/// camera refusal ([`KeyenceError::Rejected`]: the raw `ER,<cmd>,<nn>` reply, what the code means
-/// and what to do for that command), which the core shows as it is; for a timeout, a refused or
-/// closed connection and a malformed reply it sends only what happened, because the core puts its
-/// generic fix for those kinds in front.
+/// ([`KeyenceError::fix`]); `Display` prints both, and is what the operator reads: the core shows
+/// a driver error as the driver words it. [`KeyenceError::kind`] maps it to the core's
+/// [`DriverErrorKind`]; `From<KeyenceError> for DriverError` keeps the typed error whole as the
+/// cause ([`DriverError::downcast_ref`] gets it back).
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[non_exhaustive]
 pub enum KeyenceError {
@@ -78,7 +76,7 @@ pub enum KeyenceError {
     Closed {
         /// The command sent.
         command: String,
-        /// What was still missing.
+        /// What was still missing (for `connect`, the address).
         waiting_for: String,
     },
 
@@ -168,13 +166,19 @@ impl KeyenceError {
             }
             KeyenceError::Unreachable { addr, reason } => format!("camera at {addr} is unreachable ({reason})"),
             KeyenceError::Refused { addr, reason } => format!("camera at {addr} refused the connection ({reason})"),
-            KeyenceError::Timeout { command, timeout, waiting_for, ignored, .. } => {
-                let mut s =
-                    format!("no complete reply to {command} within {}: {waiting_for} never came", secs(*timeout));
+            KeyenceError::Timeout { command, timeout, waiting_for, echoed, ignored } => {
+                let mut s = if *echoed {
+                    format!("the camera echoed {command} but sent no data within {}", secs(*timeout))
+                } else {
+                    format!("no complete reply to {command} within {}: {waiting_for} never came", secs(*timeout))
+                };
                 if let Some(line) = ignored {
                     s.push_str(&format!("; ignored a line that answered no command: {line}"));
                 }
                 s
+            }
+            KeyenceError::Closed { command, waiting_for } if command == "connect" => {
+                format!("camera at {waiting_for} closed the connection as it was made")
             }
             KeyenceError::Closed { command, waiting_for } => {
                 format!("camera closed the connection during {command} ({waiting_for} never came)")
@@ -222,8 +226,8 @@ impl KeyenceError {
             }
             KeyenceError::Timeout { echoed, .. } => {
                 if *echoed {
-                    "the camera accepted the command but sent no data: add a Data Output (Non-Procedural) tool to \
-                     the job, or raise VisionTimeout if the inspection takes longer"
+                    "the camera answered but sent no data: add a Data Output (Non-Procedural) tool to the job, or \
+                     raise VisionTimeout if the inspection takes longer"
                         .into()
                 } else {
                     "check the camera is reachable and in Run mode, and that VisionIP and VisionPort point at its \
@@ -232,16 +236,14 @@ impl KeyenceError {
                 }
             }
             KeyenceError::Closed { .. } => {
-                "another client may hold the camera's only command socket, or the camera left Run mode; the \
-                 next command reconnects"
+                "another client probably holds the camera's only command socket (close it), or the camera left \
+                 Run mode; the next command reconnects"
                     .into()
             }
             KeyenceError::Io { .. } => "check the network link to the camera; the next command reconnects".into(),
-            KeyenceError::Malformed { .. } | KeyenceError::LineTooLong { .. } | KeyenceError::TooManyLines { .. } => {
-                "the Data Output (Non-Procedural) tool must emit x,y or judgment,x,y or \
-                 judgment,count,x,y,width,height,angle,score, ending in CR"
-                    .into()
-            }
+            KeyenceError::Malformed { command, .. }
+            | KeyenceError::LineTooLong { command, .. }
+            | KeyenceError::TooManyLines { command, .. } => reply_advice(command).into(),
             KeyenceError::Rejected { command, code, .. } => rejection_advice(command, code),
             KeyenceError::InvalidJob { .. } => "use a camera job number 0–999".into(),
         }
@@ -281,7 +283,10 @@ pub fn er_meaning(code: &str) -> Option<&'static str> {
 fn rejection_advice(command: &str, code: &str) -> String {
     let meaning = er_meaning(code).unwrap_or("an error code the VS manual does not list");
     let todo = match (command, code) {
-        ("TRG", "01") => "switch the camera to Run mode; in Setup mode it does not accept TRG",
+        ("TRG", "01") => {
+            "switch the camera to Run mode (in Setup mode it does not accept TRG); a CV-X or IV camera does \
+             not know TRG at all: this driver needs a VS-series camera"
+        }
         ("TRG", "06") => "switch the camera to Run mode and set the job's trigger source to Communication",
         ("TRG", "07") => {
             "the measurement did not complete within the camera's configured window; check the job and retry"
@@ -297,6 +302,21 @@ fn rejection_advice(command: &str, code: &str) -> String {
     format!("{meaning}: {todo}")
 }
 
+/// What to do about a reply the driver could not read, by the command it answered.
+fn reply_advice(command: &str) -> &'static str {
+    match command {
+        "TRG" => {
+            "set the job's Data Output (Non-Procedural) tool to emit the mark in image pixels: x,y or \
+             judgment,x,y or judgment,count,x,y,width,height,angle,score, ending in CR"
+        }
+        "PR" | "PL" | "PW" => {
+            "job switching (M284) expects PR,<device>,<job> to PR and a bare PL or PW to PL/PW, as VS, CV-X and \
+             IV cameras answer: check the camera model, or leave the camera's job alone with M284 P0"
+        }
+        _ => "check that VisionPort is the camera's Non-Procedural command port (8500 by default)",
+    }
+}
+
 fn secs(d: Duration) -> String {
     let s = d.as_secs_f64();
     if s >= 1.0 && (s - s.round()).abs() < 1e-9 {
@@ -306,18 +326,9 @@ fn secs(d: Duration) -> String {
     }
 }
 
-/// Whether the core puts its own generic fix in front of this error (see `vision-core`'s
-/// `VisionError::Driver`: timeout, refused, malformed): then the driver sends only what
-/// happened, so the user does not read the advice twice. A camera refusal is never among them:
-/// only the driver knows what an `ER` code means for the command it sent.
-fn core_explains(e: &KeyenceError) -> bool {
-    matches!(e.kind(), DriverErrorKind::Timeout | DriverErrorKind::Refused | DriverErrorKind::Malformed)
-}
-
 impl From<KeyenceError> for DriverError {
     fn from(e: KeyenceError) -> Self {
-        let message = if core_explains(&e) { e.what() } else { e.to_string() };
-        DriverError::new(e.kind(), message)
+        DriverError::new(e.kind(), e)
     }
 }
 
@@ -370,7 +381,8 @@ mod tests {
         assert!(!user.contains("0–999"), "{user}");
         // The manual's error table for TRG.
         let user = user_text(rejected("TRG", "01"));
-        assert!(user.contains("switch the camera to Run mode; in Setup mode it does not accept TRG"), "{user}");
+        assert!(user.contains("switch the camera to Run mode (in Setup mode it does not accept TRG)"), "{user}");
+        assert!(user.contains("a CV-X or IV camera does not know TRG"), "{user}");
         let user = user_text(rejected("TRG", "07"));
         assert!(user.contains("did not complete within the camera's configured window"), "{user}");
         let user = user_text(rejected("PL", "07"));
@@ -397,39 +409,82 @@ mod tests {
         assert!(e.fix().contains("neither PL"));
     }
 
-    #[test]
-    fn timeout_and_closed_are_not_told_twice() {
-        let timeout = |waiting_for: &str, echoed: bool| KeyenceError::Timeout {
+    fn timeout(waiting_for: &str, echoed: bool) -> KeyenceError {
+        KeyenceError::Timeout {
             command: "TRG".into(),
             timeout: Duration::from_secs(3),
             waiting_for: waiting_for.into(),
             echoed,
             ignored: None,
-        };
-        let e = timeout("the data line (the TRG echo arrived)", true);
-        assert!(e.fix().contains("Data Output"));
-        // The advice follows whether the echo came, not the wording of what was missing.
-        let silent = timeout("the TRG echo", false);
-        assert!(silent.fix().starts_with("check the camera is reachable and in Run mode"), "{silent}");
-        assert_eq!(timeout("the data line (the TRG echo arrived)", false).fix(), silent.fix());
-        let user = user_text(e);
+        }
+    }
+
+    #[test]
+    fn a_timeout_after_the_echo_says_the_camera_answered() {
+        let user = user_text(timeout("the data line (the TRG echo arrived)", true));
         assert_eq!(
             user,
-            "timeout — camera unreachable, wrong IP/port, or no Data Output (Non-Procedural) tool configured to \
-             emit on TRG (no complete reply to TRG within 3 s: the data line (the TRG echo arrived) never came)"
+            "the camera echoed TRG but sent no data within 3 s — the camera answered but sent no data: add a Data \
+             Output (Non-Procedural) tool to the job, or raise VisionTimeout if the inspection takes longer"
         );
+        assert!(!user.contains("unreachable"), "{user}");
+        // No echo: the camera may not be there at all.
+        let silent = user_text(timeout("the TRG echo", false));
+        assert!(
+            silent.starts_with(
+                "no complete reply to TRG within 3 s: the TRG echo never came — check the camera is reachable"
+            ),
+            "{silent}"
+        );
+        // The advice follows whether the echo came, not the wording of what was missing.
+        let e = timeout("the data line (the TRG echo arrived)", false);
+        assert_eq!(e.fix(), timeout("the TRG echo", false).fix());
+    }
+
+    #[test]
+    fn a_closed_connection_says_another_client_may_hold_the_camera() {
         let e = KeyenceError::Closed { command: "TRG".into(), waiting_for: "the TRG echo".into() };
         assert_eq!(e.kind(), DriverErrorKind::Refused);
         let user = user_text(e);
-        assert!(user.starts_with("connection refused — "), "{user}");
-        assert_eq!(user.matches("Run").count(), 1, "{user}");
+        assert!(user.starts_with("camera closed the connection during TRG (the TRG echo never came) — "), "{user}");
+        assert!(user.contains("another client probably holds the camera's only command socket"), "{user}");
+        assert!(!user.contains("refused"), "{user}");
+    }
+
+    #[test]
+    fn an_unreadable_reply_is_explained_by_the_command_it_answered() {
+        let malformed = |command: &str, line: &str| KeyenceError::Malformed {
+            command: command.into(),
+            line: line.into(),
+            reason: "x".into(),
+        };
+        let trg = user_text(malformed("TRG", "1,2,3,4"));
+        assert!(trg.contains("Data Output"), "{trg}");
+        for command in ["PR", "PL", "PW"] {
+            let user = user_text(malformed(command, "PR,9"));
+            assert!(user.contains("job switching (M284)"), "{user}");
+            assert!(!user.contains("Data Output"), "{user}");
+        }
+        let fvr = user_text(KeyenceError::TooManyLines { command: "FVR".into(), limit: 8 });
+        assert!(fvr.contains("Non-Procedural command port") && !fvr.contains("Data Output"), "{fvr}");
+        let trg = user_text(KeyenceError::LineTooLong { command: "TRG".into(), limit: 512 });
+        assert!(trg.contains("Data Output"), "{trg}");
+    }
+
+    #[test]
+    fn the_typed_error_survives_the_core() {
+        let e = rejected("PL", "03");
+        let d = DriverError::from(e.clone());
+        assert_eq!(d.kind(), DriverErrorKind::Rejected);
+        assert_eq!(d.downcast_ref::<KeyenceError>(), Some(&e));
+        assert_eq!(d.to_string(), e.to_string());
     }
 
     #[test]
     fn invalid_arguments_carry_their_own_fix() {
         let d = DriverError::from(KeyenceError::InvalidJob { job: 1000 });
-        assert_eq!(d.kind, DriverErrorKind::InvalidArgument);
-        assert_eq!(d.message, "camera job 1000 is out of range (0–999) — use a camera job number 0–999");
+        assert_eq!(d.kind(), DriverErrorKind::InvalidArgument);
+        assert_eq!(d.to_string(), "camera job 1000 is out of range (0–999) — use a camera job number 0–999");
         assert_eq!(secs(Duration::from_millis(250)), "0.250 s");
     }
 }

@@ -5,10 +5,11 @@
 //!   `PL`, falling back to `PW`), one persistent connection, typed errors; [`register`] adds
 //!   it to a [`vision_core::DriverRegistry`] as `Keyence`.
 //! * [`KeyenceConfig`]: address, timeout and bounds, from the `Vision*` parameters.
-//! * [`protocol`]: the pure part — framing, reply parsing and the command/reply state machine
-//!   over any `Read + Write` ([`protocol::Session`]); the socket is a thin edge around it.
-//! * [`emulator`]: a TCP server that answers like a VS camera, with pluggable results and
-//!   fault injection.
+//! * [`Session`]: the pure part — framing, reply parsing and the command/reply state machine
+//!   over any `Read + Write` (a transport of your own, e.g. a serial link); the socket is a thin
+//!   edge around it. [`parse_data_line`] reads one Data Output line.
+//! * `emulator` (cargo feature `emulator`): a TCP server that answers like a VS camera, with
+//!   pluggable results and fault injection.
 //!
 //! ```
 //! use vision_core::{DriverRegistry, Params};
@@ -39,7 +40,8 @@
 //! | `judgment,count,x,y,width,height,angle,score` (recommended; count 0 = no mark) | `1,1,812.125,903.5,40.25,39.75,-12.5,97.25` |
 //!
 //! Numbers plain (`150.0`) or Keyence fixed width (`+0000000888.123000`); judgment `1`/`OK` or
-//! `0`/`NG`. NG and count 0 are readings (the core turns them into "NG / no mark").
+//! `0`/`NG`. NG (a bare `0`/`NG` too) and count 0 are readings (the core turns them into
+//! "NG / no mark").
 //!
 //! # Timeouts
 //!
@@ -55,18 +57,20 @@
 //! | `ConnectTimeout`, `Unreachable` | Timeout | nothing answered at `VisionIP:VisionPort` |
 //! | `Timeout` | Timeout | connected, but the reply did not complete; says whether the echo came (no echo: camera not answering; echo but no data: no Data Output tool) |
 //! | `Refused` | Refused | nothing listens on the port |
-//! | `Closed` | Refused | the camera closed or reset the connection mid-command (another client holds the camera, or it left Run mode) |
+//! | `Closed` | Refused | the camera closed or reset the connection as it was made or mid-command (another client holds the camera, or it left Run mode) |
 //! | `Rejected` | Rejected | `ER,<cmd>,<nn>`, with the code's meaning and the fix for that command; the raw reply is kept in the message |
-//! | `Malformed`, `LineTooLong`, `TooManyLines` | Malformed | the reply is not one of the formats, or breaks the bounds (512 bytes a line, 8 lines a reply) |
+//! | `Malformed`, `LineTooLong`, `TooManyLines` | Malformed | the reply is not one of the formats, or breaks the bounds (512 bytes a line, 8 lines a reply); the advice follows the command (`TRG`: the Data Output; `PR`/`PL`/`PW`: job switching) |
 //! | `Config`, `InvalidJob` | InvalidArgument | refused before anything was sent |
 //! | `Resolve`, `Io` | Other | host name does not resolve; another socket error |
 //!
-//! Through `vision_core::VisionError::Driver` the core puts its generic fix in front of Timeout,
-//! Refused and Malformed errors (their causes do not depend on the protocol); for those the
-//! driver sends only what happened, so the operator reads each piece of advice once. A
-//! `Rejected` error carries the driver's whole text — the raw `ER,<cmd>,<nn>` reply, what the
-//! code means and what to do for that command (e.g. `ER,PL,03`: the job does not exist on the
-//! camera) — and the core shows it as it is.
+//! Every error reads "what happened — what to do", in the camera's terms; a `Rejected` error
+//! keeps the raw `ER,<cmd>,<nn>` reply and says what the code means for that command (e.g.
+//! `ER,PL,03`: the job does not exist on the camera). The core shows that text as it is
+//! (`vision_core::VisionError::Driver`), and the typed [`KeyenceError`] travels inside the
+//! [`vision_core::DriverError`] as its cause.
+//!
+//! A reading whose count says the camera found several marks is used, with a warning
+//! ([`vision_core::CameraDriver::reading_warning`]) naming the mark the camera reported.
 //!
 //! # Never twice
 //!
@@ -110,12 +114,13 @@
 
 mod config;
 mod driver;
+#[cfg(feature = "emulator")]
 pub mod emulator;
 mod error;
-pub mod protocol;
+mod protocol;
 mod transport;
 
 pub use config::{KeyenceConfig, DEFAULT_PORT, DEFAULT_TIMEOUT, MAX_TIMEOUT};
 pub use driver::{register, KeyenceDriver, DRIVER_NAME};
 pub use error::{er_meaning, KeyenceError};
-pub use protocol::{JobCommand, Limits, Program};
+pub use protocol::{parse_data_line, JobCommand, Limits, Program, Session};

@@ -164,14 +164,21 @@ fn connect_one(addr: SocketAddr, timeout: Duration, config: &KeyenceConfig) -> R
         let keepalive = keepalive.with_retries(3);
         socket.set_tcp_keepalive(&keepalive).map_err(io)?;
     }
-    socket.connect_timeout(&addr.into(), timeout).map_err(|e| match e.kind() {
-        io::ErrorKind::ConnectionRefused => KeyenceError::Refused { addr: at.clone(), reason: e.to_string() },
-        io::ErrorKind::TimedOut | io::ErrorKind::WouldBlock => {
-            KeyenceError::ConnectTimeout { addr: at.clone(), timeout: config.timeout }
-        }
-        _ => KeyenceError::Unreachable { addr: at.clone(), reason: e.to_string() },
-    })?;
+    socket.connect_timeout(&addr.into(), timeout).map_err(|e| connect_error(&e, at, config.timeout))?;
     Ok(socket.into())
+}
+
+/// What a failed connect means: nothing listening, nothing answering, or — a reset — a camera
+/// that took the connection and closed it (another client holds its only command socket).
+fn connect_error(e: &io::Error, addr: String, timeout: Duration) -> KeyenceError {
+    match e.kind() {
+        io::ErrorKind::ConnectionRefused => KeyenceError::Refused { addr, reason: e.to_string() },
+        io::ErrorKind::TimedOut | io::ErrorKind::WouldBlock => KeyenceError::ConnectTimeout { addr, timeout },
+        io::ErrorKind::ConnectionReset | io::ErrorKind::ConnectionAborted | io::ErrorKind::UnexpectedEof => {
+            KeyenceError::Closed { command: "connect".into(), waiting_for: addr }
+        }
+        _ => KeyenceError::Unreachable { addr, reason: e.to_string() },
+    }
 }
 
 #[cfg(test)]
@@ -185,5 +192,20 @@ mod tests {
         assert_eq!(timeout_update(Some(ms(300)), ms(299)), None);
         assert_eq!(timeout_update(Some(ms(300)), ms(290)), Some(ms(290)));
         assert_eq!(timeout_update(None, Duration::from_micros(10)), Some(ms(1)));
+    }
+
+    #[test]
+    fn a_reset_while_connecting_is_a_closed_connection() {
+        let at = || "127.0.0.1:8500".to_string();
+        let t = Duration::from_secs(3);
+        for kind in [io::ErrorKind::ConnectionReset, io::ErrorKind::ConnectionAborted] {
+            let e = connect_error(&io::Error::from(kind), at(), t);
+            assert!(matches!(e, KeyenceError::Closed { .. }), "{kind:?}: {e:?}");
+            assert!(e.to_string().contains("another client probably holds"), "{e}");
+        }
+        let refused = connect_error(&io::Error::from(io::ErrorKind::ConnectionRefused), at(), t);
+        assert!(matches!(refused, KeyenceError::Refused { .. }), "{refused:?}");
+        let silent = connect_error(&io::Error::from(io::ErrorKind::TimedOut), at(), t);
+        assert_eq!(silent, KeyenceError::ConnectTimeout { addr: at(), timeout: t });
     }
 }

@@ -9,7 +9,7 @@ use std::time::Duration;
 
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
-use vision_driver_keyence::protocol::{Limits, Session};
+use vision_driver_keyence::{Limits, Session};
 
 struct Counting;
 

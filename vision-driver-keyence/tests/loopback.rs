@@ -114,7 +114,7 @@ fn setup_mode_refuses_trg_with_06() {
     let mut d = driver(&em, T);
     let e = d.measure().expect_err("setup");
     assert_eq!(e.code(), Some("06"));
-    assert_eq!(vision_core::DriverError::from(e).kind, DriverErrorKind::Rejected);
+    assert_eq!(vision_core::DriverError::from(e).kind(), DriverErrorKind::Rejected);
     em.set_mode(Mode::Run);
     assert_eq!(d.measure().expect("run").x_px, 888.0);
 }
@@ -258,9 +258,49 @@ fn fault_byte_by_byte_one_segment_and_stray_lf_still_read() {
 #[test]
 fn fault_silence_after_the_echo_names_the_data_output() {
     match fault(Fault::Silence, T) {
-        Err(e @ KeyenceError::Timeout { echoed: true, .. }) => assert!(e.fix().contains("Data Output"), "{e}"),
+        Err(e @ KeyenceError::Timeout { echoed: true, .. }) => {
+            assert!(e.fix().contains("Data Output"), "{e}");
+            // What the operator reads: the camera answered, it is not unreachable.
+            let user = VisionError::from(vision_core::DriverError::from(e)).to_string();
+            assert!(user.starts_with("the camera echoed TRG but sent no data within"), "{user}");
+            assert!(user.contains("the camera answered but sent no data"), "{user}");
+            assert!(!user.contains("unreachable") && !user.contains("wrong IP"), "{user}");
+        }
         other => panic!("{other:?}"),
     }
+}
+
+#[test]
+fn a_bare_ng_is_an_ng_reading_not_a_malformed_reply() {
+    let em =
+        start(Emulator::builder().source(ListSource::cycling(vec![Shot::Line("0".into()), Shot::Line("NG".into())])));
+    let mut d = driver(&em, T);
+    for _ in 0..2 {
+        let r = d.measure().expect("an NG reading");
+        assert_eq!(r.judgment, Judgment::Ng);
+        assert!(!r.found());
+    }
+}
+
+#[test]
+fn a_robot_pose_output_is_named_as_such() {
+    let em = start(Emulator::builder().source(ListSource::cycling(vec![Shot::Line("1,10.5,20.5,30,0,0,90".into())])));
+    let e = driver(&em, T).measure().expect_err("a robot pose");
+    assert_eq!(e.kind(), DriverErrorKind::Malformed);
+    let user = VisionError::from(vision_core::DriverError::from(e)).to_string();
+    assert!(user.contains("the Data Output looks set to a robot pose"), "{user}");
+    assert!(user.contains("the mark in image pixels: x,y or judgment,x,y or judgment,count,x,y"), "{user}");
+}
+
+#[test]
+fn several_marks_are_used_with_a_warning() {
+    let two = Reading { count: Some(2), ..mark() };
+    let em = start(Emulator::builder().source(ListSource::readings([two])));
+    let mut d = driver(&em, T);
+    let r = d.measure().expect("a reading");
+    assert_eq!(r, two);
+    let warning = d.reading_warning(&r).expect("a warning");
+    assert!(warning.contains("found 2 marks") && warning.contains("x 812.125 y -903.500 px"), "{warning}");
 }
 
 #[test]
@@ -315,6 +355,35 @@ fn a_second_client_is_turned_away() {
 }
 
 #[test]
+fn clients_queued_behind_a_held_camera_all_hear_it_is_taken() {
+    let em = start(Emulator::builder());
+    let mut holder = driver(&em, T);
+    holder.measure().expect("the first client holds the camera");
+    // Several clients at once: each must learn the camera closed the connection, within its
+    // timeout, not one grace per client ahead of it (which timed most of them out).
+    let clients: Vec<_> = (0..8)
+        .map(|_| {
+            let mut d = driver(&em, T);
+            std::thread::spawn(move || {
+                let t0 = Instant::now();
+                let e = d.measure().expect_err("camera taken");
+                (t0.elapsed(), e)
+            })
+        })
+        .collect();
+    for c in clients {
+        let (took, e) = c.join().expect("client thread");
+        assert!(matches!(e, KeyenceError::Closed { .. }), "after {took:?}: {e}");
+        assert!(took < T, "took {took:?}: {e}");
+        let user = VisionError::from(vision_core::DriverError::from(e)).to_string();
+        assert!(user.contains("camera closed the connection"), "{user}");
+        assert!(user.contains("another client probably holds the camera's only command socket"), "{user}");
+    }
+    assert_eq!(em.stats().rejected, 8);
+    holder.measure().expect("the first client is still served");
+}
+
+#[test]
 fn nothing_listening_is_refused_at_once() {
     let port = {
         let l = std::net::TcpListener::bind("127.0.0.1:0").expect("bind");
@@ -325,8 +394,9 @@ fn nothing_listening_is_refused_at_once() {
     let e = d.measure().expect_err("refused");
     assert_within(t0, T, "refused");
     assert!(matches!(e, KeyenceError::Refused { .. }), "{e}");
-    let user = VisionError::from(vision_core::DriverError::from(e)).to_string();
-    assert!(user.starts_with("connection refused — camera not in Run Mode"), "{user}");
+    let user = VisionError::from(vision_core::DriverError::from(e.clone())).to_string();
+    assert_eq!(user, e.to_string(), "the driver's words, as they are");
+    assert!(user.starts_with("camera at 127.0.0.1:") && user.contains("refused the connection"), "{user}");
 }
 
 #[test]

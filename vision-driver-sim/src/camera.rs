@@ -116,14 +116,17 @@ fn normalize_deg(deg: f64) -> f64 {
 mod tests {
     use super::*;
     use crate::World;
-    use nalgebra::Point3;
+    use vision_gcode::{Interpreter, InterpreterConfig, Xyz};
     use vision_math::Vector2;
 
-    /// Puts the optical axis over machine point `at`.
+    /// Puts the optical axis over machine point `at`: a bare interpreter in the world's unit
+    /// drives the head there.
     fn look_at(sim: &Sim, at: Point2<f64>) {
         let o = Vector2::from(sim.world().camera.offset);
         let p = at - o;
-        sim.set_spindle(Point3::new(p.x, p.y, 0.0));
+        let mut interp = Interpreter::new(InterpreterConfig::new(sim.unit()));
+        sim.follow(interp.watch_position());
+        interp.set_machine_position(Xyz::new(p.x, p.y, 0.0)).expect("finite");
     }
 
     fn quiet_world() -> World {
@@ -182,9 +185,9 @@ mod tests {
         let noisy = cam.trigger().expect("r");
         assert!((noisy.x_px - exact.x_px).abs() > 1e-6);
         let e = cam.select_job(7).expect_err("no job 7");
-        assert_eq!(e.kind, DriverErrorKind::Rejected);
-        assert!(e.message.contains("jobs 1, 2"), "{e}");
-        assert_eq!(cam.select_job(1000).expect_err("range").kind, DriverErrorKind::InvalidArgument);
+        assert_eq!(e.kind(), DriverErrorKind::Rejected);
+        assert!(e.to_string().contains("jobs 1, 2"), "{e}");
+        assert_eq!(cam.select_job(1000).expect_err("range").kind(), DriverErrorKind::InvalidArgument);
         assert_eq!(sim.job(), 1, "a refused switch keeps the job");
     }
 

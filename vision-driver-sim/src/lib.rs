@@ -8,13 +8,23 @@
 //!   commented example.
 //! * [`Sim`]: one running world (shared by the camera and the machine).
 //! * [`SimMachine`]: the G-code interpreter set up from the world as a CNC whose moves move the
-//!   head; a [`vision_core::Machine`], and it runs whole programs.
+//!   head; it runs whole programs, and gives host access through its interpreter's `Context`.
 //! * [`SimCamera`]: a [`vision_core::CameraDriver`] that sees the table from the head's true
 //!   position through the true optics ([`Optics`]).
 //! * Truth: [`Sim::true_k`], [`Sim::true_camera_offset`], [`Sim::calibration_error`],
 //!   [`SimMachine::cut_error`].
 //!
 //! # Decisions
+//! * **The interpreter is the machine.** The head is where the interpreter's machine position
+//!   is: the camera reads the position the interpreter publishes
+//!   (`vision_gcode::Interpreter::watch_position`) whenever it triggers, including from inside
+//!   an M-code handler while the interpreter is busy running it. Nothing mirrors the position
+//!   from motion events, so a move, a host placing the machine and a tool change can never
+//!   disagree with what the camera sees; a clone of the interpreter (a "where would this go?"
+//!   question) moves nothing. Without a machine the head stays at the world's start.
+//! * The crate depends on `vision-core` and `vision-gcode` only. [`SimMachine`] is not itself a
+//!   [`vision_core::Machine`]: the one bridge from an interpreter to that trait is
+//!   `vision_mcode::ContextMachine`, which a host wraps around [`SimMachine::context`].
 //! * The camera reports the in-view mark nearest the image centre (count = marks in view).
 //! * A fixture's pose is `R·diag(scale)·(nominal − pivot) + pivot + shift` in the work frame of
 //!   the world's G54; a sheet pivots about its origin (where the operator zeroed the spindle),

@@ -1,77 +1,28 @@
 //! [`SimMachine`]: the interpreter as a simulated CNC, moving the simulated head.
 
-use std::cell::RefCell;
-
-use nalgebra::Point3;
-use vision_core::{Machine, MachineError, Timestamp};
 use vision_gcode::params::WORK_OFFSET_BASE;
-use vision_gcode::{Event, EventSink, GcodeError, Interpreter, InterpreterConfig, MCodeHandler, RunOutcome, Tool, Xyz};
-use vision_math::{AlignmentChain, LengthUnit, Point2, Vector2};
-use vision_mcode::{Clock, ContextMachine};
+use vision_gcode::{
+    Context, Event, EventSink, GcodeError, Interpreter, InterpreterConfig, MCodeHandler, RunOutcome, Tool, Xyz,
+};
+use vision_math::{Point2, Vector2};
 
 use crate::error::SimError;
 use crate::sim::Sim;
 
-/// Keeps the simulated head where the machine's motion left it.
-#[derive(Debug)]
-struct Head {
-    sim: Sim,
-}
-
-impl Head {
-    fn follow(&self, event: &Event) {
-        let end = match event {
-            Event::Linear(mv) => mv.end,
-            Event::Arc(arc) => arc.end,
-            _ => return,
-        };
-        self.sim.set_spindle(Point3::new(end.x, end.y, end.z));
-    }
-}
-
-impl EventSink for Head {
-    fn event(&mut self, event: &Event) {
-        self.follow(event);
-    }
-}
-
-/// The head, then another sink.
-struct Tee<'a> {
-    head: &'a Head,
-    next: &'a mut dyn EventSink,
-}
-
-impl EventSink for Tee<'_> {
-    fn event(&mut self, event: &Event) {
-        self.head.follow(event);
-        self.next.event(event);
-    }
-}
-
-#[derive(Debug)]
-struct Inner {
-    interp: Interpreter,
-    head: Head,
-}
-
 /// A simulated CNC: the G-code interpreter set up from the world (machine unit = the world's
 /// unit, G54 = `machine.work_offset`, the tool table with the world's tools and the camera tool,
-/// the spindle at `machine.start`, `machine.start_tool` loaded), whose every move moves the
-/// simulated head, so [`crate::SimCamera`] sees what the real camera would.
+/// the spindle at `machine.start`, `machine.start_tool` loaded). The head is where the
+/// interpreter is: [`crate::SimCamera`] reads the interpreter's published machine position
+/// ([`Interpreter::watch_position`]), so it sees what the real camera would, also when
+/// triggered from inside an M-code handler.
 ///
-/// It implements [`vision_core::Machine`] through [`vision_mcode::ContextMachine`] (the same
-/// bridge the M-code handler uses inside a program), and runs whole programs with
-/// [`SimMachine::run_program`].
+/// It is not itself a [`vision_core::Machine`]: the one bridge from an interpreter to that trait
+/// is `vision_mcode::ContextMachine`, which a host wraps around [`SimMachine::context`]. This
+/// crate stays below the M-code layer.
+#[derive(Debug)]
 pub struct SimMachine {
     sim: Sim,
-    inner: RefCell<Inner>,
-    clock: Clock,
-}
-
-impl std::fmt::Debug for SimMachine {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("SimMachine").field("sim", &self.sim).field("inner", &self.inner).finish_non_exhaustive()
-    }
+    interp: Interpreter,
 }
 
 fn gcode_error(e: &GcodeError) -> SimError {
@@ -79,12 +30,13 @@ fn gcode_error(e: &GcodeError) -> SimError {
 }
 
 impl SimMachine {
-    /// The machine of `sim`'s world, telling time by `clock`.
+    /// The machine of `sim`'s world; from now on `sim`'s head follows it (a later machine on the
+    /// same `sim` takes the head over).
     ///
     /// # Errors
     /// [`SimError::Machine`] if the world's set-up cannot be applied (it can for a validated
     /// world).
-    pub fn new(sim: &Sim, clock: Clock) -> Result<SimMachine, SimError> {
+    pub fn new(sim: &Sim) -> Result<SimMachine, SimError> {
         let world = sim.world();
         let unit = world.length_unit();
         let mut config = InterpreterConfig::new(unit);
@@ -108,15 +60,15 @@ impl SimMachine {
         }
         let [x, y, z] = world.machine.start;
         interp.set_machine_position(Xyz::new(x, y, z)).map_err(|e| gcode_error(&e))?;
-        let mut head = Head { sim: sim.clone() };
-        head.sim.set_spindle(Point3::new(x, y, z));
         if world.machine.start_tool != 0 {
+            let mut ignore = |_: &Event| {};
             interp
-                .context(&mut head)
+                .context(&mut ignore)
                 .execute(&format!("T{} M6", world.machine.start_tool))
                 .map_err(|e| gcode_error(&e))?;
         }
-        Ok(SimMachine { sim: sim.clone(), inner: RefCell::new(Inner { interp, head }), clock })
+        sim.follow(interp.watch_position());
+        Ok(SimMachine { sim: sim.clone(), interp })
     }
 
     /// The simulated world this machine moves in.
@@ -125,20 +77,22 @@ impl SimMachine {
         &self.sim
     }
 
-    /// A copy of the interpreter's state (positions, modals, parameters, tool table).
+    /// The interpreter: the machine's state (positions, modals, parameters, tool table). Clone
+    /// it to ask "where would this go?" without moving the machine.
     #[must_use]
-    pub fn interpreter(&self) -> Interpreter {
-        self.inner.borrow().interp.clone()
+    pub fn interpreter(&self) -> &Interpreter {
+        &self.interp
     }
 
-    /// The clock.
-    #[must_use]
-    pub fn clock(&self) -> &Clock {
-        &self.clock
+    /// Host access to the machine outside a program: G-code, dwells, parameters, tool offsets
+    /// (events go to `sink`). `vision_mcode::ContextMachine::new(&mut machine.context(sink),
+    /// &clock)` makes it a [`vision_core::Machine`].
+    pub fn context<'a>(&'a mut self, sink: &'a mut dyn EventSink) -> Context<'a> {
+        self.interp.context(sink)
     }
 
-    /// Runs a whole program: user M-codes go to `handler` (`None`: reported, not run), every
-    /// event moves the head and then reaches `sink`.
+    /// Runs a whole program: user M-codes go to `handler` (`None`: reported, not run), events
+    /// go to `sink`.
     ///
     /// # Errors
     /// The first failing line (see `vision_gcode::Interpreter::run`).
@@ -148,17 +102,7 @@ impl SimMachine {
         handler: Option<&mut dyn MCodeHandler>,
         sink: &mut dyn EventSink,
     ) -> Result<RunOutcome, GcodeError> {
-        let inner = self.inner.get_mut();
-        let mut tee = Tee { head: &inner.head, next: sink };
-        inner.interp.run(text, handler, &mut tee)
-    }
-
-    /// Runs `f` on the [`ContextMachine`] of this machine.
-    fn with<R>(&self, f: impl FnOnce(&mut ContextMachine<'_, '_>) -> R) -> R {
-        let mut inner = self.inner.borrow_mut();
-        let Inner { interp, head } = &mut *inner;
-        let mut ctx = interp.context(head);
-        f(&mut ContextMachine::new(&mut ctx, &self.clock))
+        self.interp.run(text, handler, sink)
     }
 
     /// The machine (spindle) position where commanding program point `p` (current units,
@@ -168,7 +112,7 @@ impl SimMachine {
     /// # Errors
     /// [`SimError::Machine`] if `setup` or the move fails.
     pub fn machine_point_for(&self, setup: &[String], p: Point2<f64>) -> Result<Xyz, SimError> {
-        let mut copy = self.interpreter();
+        let mut copy = self.interp.clone();
         let mut ignore = |_: &Event| {};
         let mut ctx = copy.context(&mut ignore);
         ctx.execute(&setup.join("\n")).map_err(|e| gcode_error(&e))?;
@@ -192,9 +136,9 @@ impl SimMachine {
             name: fixture.to_string(),
             known: world.fixtures.iter().map(|f| f.name.clone()).collect::<Vec<_>>().join(", "),
         })?;
-        let units = self.units();
+        let units = self.interp.units();
         let spindle = self.machine_point_for(setup, nominal * unit.factor_to(units))?;
-        let tool = self.active_tool();
+        let tool = self.interp.active_tool();
         let tool_offset = if tool == world.machine.camera_tool {
             self.sim.true_camera_offset(Vector2::zeros(), unit)
         } else {
@@ -211,91 +155,77 @@ impl SimMachine {
     }
 }
 
-impl Machine for SimMachine {
-    fn program_position(&self) -> Point2<f64> {
-        self.with(|m| m.program_position())
-    }
-
-    fn active_alignment(&self) -> Option<AlignmentChain> {
-        self.with(|m| m.active_alignment())
-    }
-
-    fn run_gcode(&mut self, lines: &[String]) -> Result<(), MachineError> {
-        self.with(|m| m.run_gcode(lines))
-    }
-
-    fn active_tool(&self) -> u32 {
-        self.with(|m| m.active_tool())
-    }
-
-    fn tool_offset(&self, tool: u32) -> Result<Vector2<f64>, MachineError> {
-        self.with(|m| m.tool_offset(tool))
-    }
-
-    fn set_tool_offset(&mut self, tool: u32, offset: Vector2<f64>) -> Result<(), MachineError> {
-        self.with(|m| m.set_tool_offset(tool, offset))
-    }
-
-    fn units(&self) -> LengthUnit {
-        self.with(|m| m.units())
-    }
-
-    fn pound(&self, index: u32) -> Result<f64, MachineError> {
-        self.with(|m| m.pound(index))
-    }
-
-    fn set_pound(&mut self, index: u32, value: f64) -> Result<(), MachineError> {
-        self.with(|m| m.set_pound(index, value))
-    }
-
-    fn dwell(&mut self, seconds: f64) {
-        self.with(|m| m.dwell(seconds));
-    }
-
-    fn now(&self) -> Timestamp {
-        (self.clock)()
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::World;
-    use vision_core::CameraDriver;
-    use vision_mcode::fixed_clock;
+    use vision_core::{CameraDriver, Reading};
+    use vision_gcode::{HandlerError, UserMCode};
+    use vision_math::{AlignmentChain, LengthUnit};
 
     fn machine() -> (Sim, SimMachine) {
         let sim = Sim::new(World::default_world()).expect("sim");
-        let m = SimMachine::new(&sim, fixed_clock(Timestamp::from_unix(1_800_000_000, 0))).expect("machine");
+        let m = SimMachine::new(&sim).expect("machine");
         (sim, m)
+    }
+
+    fn execute(m: &mut SimMachine, gcode: &str) {
+        let mut ignore = |_: &Event| {};
+        m.context(&mut ignore).execute(gcode).expect("runs");
+    }
+
+    /// The reading of a centred mark: the image centre, to half a pixel (noise).
+    fn centred(sim: &Sim, r: &Reading) -> bool {
+        let want = sim.optics().resolution() * 0.5;
+        (r.x_px - want.x).abs() < 0.5 && (r.y_px - want.y).abs() < 0.5
     }
 
     #[test]
     fn starts_where_the_world_says_and_moves_the_head() {
         let (sim, mut m) = machine();
-        assert_eq!(m.active_tool(), 1);
+        assert_eq!(m.interpreter().active_tool(), 1);
         // Spindle at (10.9, 2.15) machine = (0.9, −5.85) in G54 work (zero at (10, 8)).
-        assert!((m.program_position() - Point2::new(0.9, -5.85)).norm() < 1e-12);
-        m.run_gcode(&["T98 M6".into(), "G90 G0 X0 Y0".into()]).expect("moves");
+        assert!((m.interpreter().program_position().xy() - Point2::new(0.9, -5.85)).norm() < 1e-12);
+        execute(&mut m, "T98 M6\nG90 G0 X0 Y0");
         // With the calibrated camera tool active, (0, 0) puts the camera's reference pixel over
         // work zero: sheet dot 5 images at the image centre.
         let r = sim.camera().trigger().expect("reading");
-        let want = sim.optics().resolution() * 0.5;
-        assert!((r.x_px - want.x).abs() < 0.5 && (r.y_px - want.y).abs() < 0.5, "{r:?}");
-        assert_eq!(m.units(), LengthUnit::Inch);
-        m.run_gcode(&["G21".into()]).expect("mm");
-        assert!(m.program_position().coords.norm() < 1e-9);
-        assert!(
-            (m.tool_offset(98).expect("tool").x - sim.true_camera_offset(Vector2::zeros(), LengthUnit::Millimetre).x)
-                .abs()
-                < 1e-9
-        );
+        assert!(centred(&sim, &r), "{r:?}");
+        assert_eq!(m.interpreter().units(), LengthUnit::Inch);
+        execute(&mut m, "G21");
+        assert!(m.interpreter().program_position().norm() < 1e-9);
+        let camera = m.interpreter().tool_offset(98).expect("tool");
+        assert!((camera.x - sim.true_camera_offset(Vector2::zeros(), LengthUnit::Millimetre).x).abs() < 1e-9);
+    }
+
+    /// Moves the camera over work zero, then triggers: what a calibration does inside M283.
+    struct MoveAndTrigger(crate::SimCamera, Vec<Reading>);
+
+    impl MCodeHandler for MoveAndTrigger {
+        fn call(&mut self, _call: &UserMCode<'_>, ctx: &mut Context<'_>) -> Result<Vec<String>, HandlerError> {
+            ctx.execute("T98 M6\nG90 G0 X0 Y0")?;
+            let reading = self.0.trigger().map_err(|e| HandlerError::Failed(e.to_string()))?;
+            self.1.push(reading);
+            Ok(Vec::new())
+        }
+    }
+
+    #[test]
+    fn the_camera_sees_where_the_interpreter_is_inside_a_handler_and_questions_move_nothing() {
+        let (sim, mut m) = machine();
+        let mut handler = MoveAndTrigger(sim.camera(), Vec::new());
+        m.run_program("M300", Some(&mut handler), &mut Vec::new()).expect("runs");
+        assert!(centred(&sim, &handler.1[0]), "{:?}", handler.1);
+        // A question on a copy of the interpreter does not move the head.
+        let far = m.machine_point_for(&[], Point2::new(-50.0, -50.0)).expect("moves");
+        assert!((far.xy() - m.interpreter().machine_position().xy()).norm() > 10.0);
+        assert!(centred(&sim, &sim.camera().trigger().expect("reading")));
     }
 
     #[test]
     fn cut_error_is_zero_for_a_perfect_alignment_and_the_pose_without_one() {
         let (sim, mut m) = machine();
-        m.run_gcode(&["T1 M6".into()]).expect("cutter");
+        execute(&mut m, "T1 M6");
         let f = &sim.world().fixtures[0];
         let p = Point2::new(6.0, 4.0);
         let truth = f.true_point(p, LengthUnit::Inch);
@@ -312,7 +242,7 @@ mod tests {
         let setup = chain.gcode().expect("finite").to_vec();
         assert!(m.cut_error(&setup, "demo target", p).expect("cut") < 1e-6);
         assert!(matches!(m.cut_error(&[], "nope", p), Err(SimError::UnknownFixture { .. })));
-        assert!(matches!(m.cut_error(&["G99".into()], "demo target", p), Err(SimError::Machine { .. })));
-        assert_eq!(m.active_tool(), 1, "the question ran on a copy");
+        assert!(matches!(m.cut_error(&["G6".into()], "demo target", p), Err(SimError::Machine { .. })));
+        assert_eq!(m.interpreter().active_tool(), 1, "the question ran on a copy");
     }
 }

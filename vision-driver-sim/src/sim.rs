@@ -1,9 +1,10 @@
-//! The shared simulated world: the truth, the head's position, the noise source and the camera
+//! The shared simulated world: the truth, where the head is, the noise source and the camera
 //! job, behind one cheap-to-clone handle that the camera and the machine both hold.
 
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use nalgebra::Point3;
+use vision_gcode::PositionWatch;
 use vision_math::{LengthUnit, Point2, Vector2};
 
 use crate::error::SimError;
@@ -19,15 +20,38 @@ pub(crate) struct State {
     pub(crate) optics: Optics,
     /// Marks of every present fixture, machine coordinates.
     pub(crate) marks: Vec<TrueMark>,
-    /// Spindle position, machine coordinates.
-    pub(crate) spindle: Point3<f64>,
+    /// Where the spindle is.
+    pub(crate) head: Head,
     pub(crate) rng: Rng,
     /// The selected camera job (0 = the base settings).
     pub(crate) job: u32,
     pub(crate) triggers: u64,
 }
 
+/// Where the spindle is: at the world's start until a machine drives it, then wherever that
+/// machine's interpreter says (its published position, machine coordinates in the world unit:
+/// the interpreter runs in the world's unit). The interpreter is the one source; nothing here
+/// keeps a copy of its position.
+#[derive(Debug)]
+pub(crate) enum Head {
+    /// No machine: the spindle stays at this point (machine coordinates, world unit).
+    Parked(Point3<f64>),
+    /// The machine whose interpreter publishes to this watch.
+    Driven(PositionWatch),
+}
+
 impl State {
+    /// Spindle position, machine coordinates, world unit.
+    pub(crate) fn spindle(&self) -> Point3<f64> {
+        match &self.head {
+            Head::Parked(p) => *p,
+            Head::Driven(watch) => {
+                let p = watch.get();
+                Point3::new(p.x, p.y, p.z)
+            }
+        }
+    }
+
     /// The settings of the selected job (noise σ, margin), pixels.
     pub(crate) fn job_settings(&self) -> (f64, f64) {
         let c = &self.world.camera;
@@ -37,7 +61,8 @@ impl State {
 
     /// The optical axis, machine coordinates.
     pub(crate) fn camera_axis(&self) -> Point2<f64> {
-        Point2::new(self.spindle.x, self.spindle.y) + Vector2::from(self.world.camera.offset)
+        let spindle = self.spindle();
+        Point2::new(spindle.x, spindle.y) + Vector2::from(self.world.camera.offset)
     }
 }
 
@@ -69,7 +94,7 @@ impl Sim {
         let state = State {
             optics: Optics::new(&world.camera),
             marks: place(&world),
-            spindle: Point3::from(world.machine.start),
+            head: Head::Parked(Point3::from(world.machine.start)),
             rng: Rng::new(world.seed),
             job: 0,
             triggers: 0,
@@ -102,16 +127,17 @@ impl Sim {
         self.lock().optics
     }
 
-    /// Spindle position, machine coordinates, world unit.
+    /// Spindle position, machine coordinates, world unit: the world's start, or where the
+    /// [`crate::SimMachine`] on this world is.
     #[must_use]
     pub fn spindle(&self) -> Point3<f64> {
-        self.lock().spindle
+        self.lock().spindle()
     }
 
-    /// Moves the head: the spindle is now at `p` (machine coordinates, world unit). The
-    /// simulated machine calls this after every motion.
-    pub fn set_spindle(&self, p: Point3<f64>) {
-        self.lock().spindle = p;
+    /// From now on the head is where the interpreter behind `watch` is (its machine unit must be
+    /// the world's).
+    pub(crate) fn follow(&self, watch: PositionWatch) {
+        self.lock().head = Head::Driven(watch);
     }
 
     /// The camera's optical axis, machine coordinates, world unit.

@@ -66,6 +66,7 @@ fn default_seed() -> u64 {
 pub struct CameraMount {
     /// Optical axis minus spindle, machine X/Y axes, world unit. (The camera tool's true X/Y
     /// tool-table offset when the reference pixel is the optical centre.)
+    #[serde(deserialize_with = "exact::array")]
     pub offset: [f64; 2],
     /// Rotation of the image about +Z, degrees counter-clockwise: 0 means image +x along machine
     /// +X and image +y (down) along machine −Y. Any angle is allowed (90° multiples included).
@@ -81,11 +82,11 @@ pub struct CameraMount {
     #[serde(default = "one")]
     pub pixel_aspect: f64,
     /// Image size `[ResX, ResY]`, pixels.
-    #[serde(default = "default_resolution")]
+    #[serde(default = "default_resolution", deserialize_with = "exact::array")]
     pub resolution: [u32; 2],
     /// Optical centre minus image centre `[x, y]`, native pixels (a lens not centred on the
     /// sensor).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact::array")]
     pub center_bias_px: [f64; 2],
     /// Lens-to-surface distance now, world unit. The scale on the table is proportional to it.
     pub working_distance: f64,
@@ -137,18 +138,18 @@ pub struct Job {
 #[serde(deny_unknown_fields)]
 pub struct MachineSetup {
     /// Spindle position at start, machine coordinates `[X, Y, Z]`, world unit.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact::array")]
     pub start: [f64; 3],
     /// G54: the machine position of work zero `[X, Y, Z]`, world unit. Fixture poses are given
     /// in this work frame.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact::array")]
     pub work_offset: [f64; 3],
     /// The camera's tool number (`VisionCameraToolNumber`).
     #[serde(default = "default_camera_tool")]
     pub camera_tool: u32,
     /// The camera tool's X/Y in the control's tool table at start, world unit. Omitted: the true
     /// offset, as a calibration would have left it.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact::option")]
     pub camera_table_offset: Option<[f64; 2]>,
     /// The tool the machine starts with (0 = none).
     #[serde(default)]
@@ -191,7 +192,7 @@ pub struct Tool {
     /// Tool number (≥ 1, not the camera tool).
     pub number: u32,
     /// Tool tip minus spindle `[X, Y, Z]`, world unit (true, and what the table holds).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact::array")]
     pub offset: [f64; 3],
 }
 
@@ -211,23 +212,23 @@ pub struct Fixture {
     #[serde(default)]
     pub sheet: Option<u32>,
     /// Further marks, nominal work coordinates, world unit.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact::list")]
     pub marks: Vec<[f64; 2]>,
     /// Printed mark diameter, world unit (default: the sheet's, else 0.25 in).
     #[serde(default)]
     pub diameter: Option<f64>,
     /// True shift, world unit.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact::array")]
     pub shift: [f64; 2],
     /// True rotation, degrees counter-clockwise.
     #[serde(default)]
     pub rotation_deg: f64,
     /// True scale along the fixture's X and Y (a print scale error, or a part that grew).
-    #[serde(default = "unit_scale")]
+    #[serde(default = "unit_scale", deserialize_with = "exact::array")]
     pub scale: [f64; 2],
     /// Pivot of the rotation and scale, nominal work coordinates (default: the sheet origin for
     /// a sheet, else the centroid of the marks).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact::option")]
     pub center: Option<[f64; 2]>,
     /// Whether the fixture is on the table (a world can hold fixtures that tests swap in).
     #[serde(default = "yes")]
@@ -291,21 +292,22 @@ impl World {
     /// [`SimError::Invalid`] naming the first bad field.
     pub fn validate(&self) -> Result<(), SimError> {
         let c = &self.camera;
-        finite("camera.offset", &c.offset)?;
-        finite("camera.rotation_deg", &[c.rotation_deg])?;
-        positive("camera.units_per_pixel", c.units_per_pixel)?;
-        positive("camera.pixel_aspect", c.pixel_aspect)?;
-        positive("camera.working_distance", c.working_distance)?;
+        lengths("camera.offset", &c.offset)?;
+        angle("camera.rotation_deg", c.rotation_deg)?;
+        // At most 10 units per pixel: a 1776-pixel image then spans 17 760 units.
+        positive("camera.units_per_pixel", c.units_per_pixel, 10.0)?;
+        between("camera.pixel_aspect", c.pixel_aspect, 0.1, 10.0)?;
+        positive("camera.working_distance", c.working_distance, MAX_LENGTH)?;
         if let Some(r) = c.reference_working_distance {
-            positive("camera.reference_working_distance", r)?;
+            positive("camera.reference_working_distance", r, MAX_LENGTH)?;
         }
         for (i, r) in c.resolution.iter().enumerate() {
             if !(2..=100_000).contains(r) {
                 return invalid(format!("camera.resolution[{i}]"), "must be 2..100000 pixels");
             }
         }
-        finite("camera.center_bias_px", &c.center_bias_px)?;
-        non_negative("camera.noise_px", c.noise_px)?;
+        pixels("camera.center_bias_px", &c.center_bias_px, false)?;
+        pixels("camera.noise_px", &[c.noise_px], true)?;
         let half = f64::from(c.resolution[0].min(c.resolution[1])) / 2.0;
         let margin_ok = |m: f64| m.is_finite() && m >= 0.0 && m < half;
         if !margin_ok(c.margin_px) {
@@ -318,17 +320,17 @@ impl World {
             }
             ids.push(j.id);
             if let Some(n) = j.noise_px {
-                non_negative("camera.job.noise_px", n)?;
+                pixels("camera.job.noise_px", &[n], true)?;
             }
             if j.margin_px.is_some_and(|m| !margin_ok(m)) {
                 return invalid("camera.job.margin_px", "must be ≥ 0 and less than half the smaller image side");
             }
         }
         let m = &self.machine;
-        finite("machine.start", &m.start)?;
-        finite("machine.work_offset", &m.work_offset)?;
+        lengths("machine.start", &m.start)?;
+        lengths("machine.work_offset", &m.work_offset)?;
         if let Some(o) = &m.camera_table_offset {
-            finite("machine.camera_table_offset", o)?;
+            lengths("machine.camera_table_offset", o)?;
         }
         if m.camera_tool == 0 {
             return invalid("machine.camera_tool", "the camera needs a tool number ≥ 1");
@@ -342,13 +344,14 @@ impl World {
                 );
             }
             numbers.push(t.number);
-            finite("machine.tool.offset", &t.offset)?;
+            lengths("machine.tool.offset", &t.offset)?;
         }
         if let Some(v) = m.max_speed {
-            positive("machine.max_speed", v)?;
+            // The planner's own range is checked where cycle times are planned.
+            positive("machine.max_speed", v, f64::MAX)?;
         }
         if let Some(v) = m.max_accel {
-            positive("machine.max_accel", v)?;
+            positive("machine.max_accel", v, f64::MAX)?;
         }
         if m.start_tool != 0 && !numbers.contains(&m.start_tool) {
             return invalid("machine.start_tool", "must be 0, the camera tool or a listed tool");
@@ -371,17 +374,17 @@ impl Fixture {
             return invalid(at("marks"), "a fixture needs marks or a sheet");
         }
         for m in &self.marks {
-            finite(&at("marks"), m)?;
+            lengths(&at("marks"), m)?;
         }
         if let Some(d) = self.diameter {
-            positive(&at("diameter"), d)?;
+            positive(&at("diameter"), d, MAX_LENGTH)?;
         }
-        finite(&at("shift"), &self.shift)?;
-        finite(&at("rotation_deg"), &[self.rotation_deg])?;
-        positive(&at("scale[0]"), self.scale[0])?;
-        positive(&at("scale[1]"), self.scale[1])?;
+        lengths(&at("shift"), &self.shift)?;
+        angle(&at("rotation_deg"), self.rotation_deg)?;
+        between(&at("scale[0]"), self.scale[0], 0.1, 10.0)?;
+        between(&at("scale[1]"), self.scale[1], 0.1, 10.0)?;
         if let Some(c) = &self.center {
-            finite(&at("center"), c)?;
+            lengths(&at("center"), c)?;
         }
         Ok(())
     }
@@ -391,27 +394,93 @@ fn invalid<T>(field: impl Into<String>, reason: impl Into<String>) -> Result<T, 
     Err(SimError::Invalid { field: field.into(), reason: reason.into() })
 }
 
-fn finite(field: &str, values: &[f64]) -> Result<(), SimError> {
-    if values.iter().all(|v| v.is_finite()) {
+/// The largest coordinate, offset or distance a world may give, world units.
+///
+/// Decision: a world describes a machine on a table; a kilometre in millimetres (40 000 in in
+/// inches) is beyond any machine, and bounding every length keeps the simulation's sums and
+/// squares exact enough that an absurd value is refused here, naming its field, not later.
+pub const MAX_LENGTH: f64 = 1e6;
+/// The largest angle, degrees (a thousand turns: any orientation, and still precise).
+pub const MAX_ANGLE_DEG: f64 = 360_000.0;
+/// The largest pixel quantity (bias, noise), pixels.
+pub const MAX_PIXELS: f64 = 100_000.0;
+
+/// Lengths (coordinates, offsets): finite and within ±[`MAX_LENGTH`].
+fn lengths(field: &str, values: &[f64]) -> Result<(), SimError> {
+    if values.iter().all(|v| v.is_finite() && v.abs() <= MAX_LENGTH) {
         Ok(())
     } else {
-        invalid(field, "must be finite numbers")
+        invalid(field, format!("must be finite numbers within ±{MAX_LENGTH} world units"))
     }
 }
 
-fn positive(field: &str, v: f64) -> Result<(), SimError> {
-    if v.is_finite() && v > 0.0 {
+fn angle(field: &str, v: f64) -> Result<(), SimError> {
+    if v.is_finite() && v.abs() <= MAX_ANGLE_DEG {
         Ok(())
     } else {
-        invalid(field, "must be a positive number")
+        invalid(field, format!("must be an angle within ±{MAX_ANGLE_DEG} degrees"))
     }
 }
 
-fn non_negative(field: &str, v: f64) -> Result<(), SimError> {
-    if v.is_finite() && v >= 0.0 {
+/// A number in `(0, max]`.
+fn positive(field: &str, v: f64, max: f64) -> Result<(), SimError> {
+    if v.is_finite() && v > 0.0 && v <= max {
         Ok(())
     } else {
-        invalid(field, "must be a number ≥ 0")
+        invalid(field, format!("must be a positive number, at most {max}"))
+    }
+}
+
+/// A number in `[min, max]` (a ratio or a factor).
+fn between(field: &str, v: f64, min: f64, max: f64) -> Result<(), SimError> {
+    if (min..=max).contains(&v) {
+        Ok(())
+    } else {
+        invalid(field, format!("must be between {min} and {max}"))
+    }
+}
+
+/// Pixel quantities: finite, within ±[`MAX_PIXELS`] (and ≥ 0 when `non_negative`).
+fn pixels(field: &str, values: &[f64], non_negative: bool) -> Result<(), SimError> {
+    let lo = if non_negative { 0.0 } else { -MAX_PIXELS };
+    if values.iter().all(|v| (lo..=MAX_PIXELS).contains(v)) {
+        Ok(())
+    } else {
+        invalid(field, format!("must be between {lo} and {MAX_PIXELS} pixels"))
+    }
+}
+
+/// Fixed-size arrays that refuse extra or missing elements (the TOML reader drops extras).
+mod exact {
+    use serde::de::{Deserialize, Deserializer, Error};
+
+    fn fixed<'de, D: Deserializer<'de>, T: Deserialize<'de>, const N: usize>(v: Vec<T>) -> Result<[T; N], D::Error> {
+        let n = v.len();
+        v.try_into().map_err(|_| D::Error::invalid_length(n, &format!("an array of {N} elements").as_str()))
+    }
+
+    pub(super) fn array<'de, D, T, const N: usize>(d: D) -> Result<[T; N], D::Error>
+    where
+        D: Deserializer<'de>,
+        T: Deserialize<'de>,
+    {
+        fixed::<D, T, N>(Vec::deserialize(d)?)
+    }
+
+    pub(super) fn option<'de, D, T, const N: usize>(d: D) -> Result<Option<[T; N]>, D::Error>
+    where
+        D: Deserializer<'de>,
+        T: Deserialize<'de>,
+    {
+        Option::<Vec<T>>::deserialize(d)?.map(fixed::<D, T, N>).transpose()
+    }
+
+    pub(super) fn list<'de, D, T, const N: usize>(d: D) -> Result<Vec<[T; N]>, D::Error>
+    where
+        D: Deserializer<'de>,
+        T: Deserialize<'de>,
+    {
+        Vec::<Vec<T>>::deserialize(d)?.into_iter().map(fixed::<D, T, N>).collect()
     }
 }
 
@@ -452,6 +521,50 @@ mod tests {
             w.fixtures[0].marks.clear();
         })
         .contains("marks"));
+        // Absurd but finite values are refused here, naming the field, not later elsewhere.
+        assert_eq!(bad(&|w| w.camera.units_per_pixel = 1e300), "camera.units_per_pixel");
+        assert_eq!(bad(&|w| w.camera.rotation_deg = 1e300), "camera.rotation_deg");
+        assert_eq!(bad(&|w| w.camera.offset = [1e300, 0.0]), "camera.offset");
+        assert_eq!(bad(&|w| w.camera.working_distance = 1e300), "camera.working_distance");
+        assert_eq!(bad(&|w| w.camera.center_bias_px = [0.0, 1e300]), "camera.center_bias_px");
+        assert_eq!(bad(&|w| w.camera.noise_px = 1e300), "camera.noise_px");
+        assert_eq!(bad(&|w| w.machine.work_offset = [0.0, 0.0, 1e300]), "machine.work_offset");
+        assert!(bad(&|w| w.fixtures[0].rotation_deg = -1e300).contains("rotation_deg"));
+        assert!(bad(&|w| w.fixtures[0].scale = [1.0, 1e300]).contains("scale[1]"));
+        assert!(bad(&|w| w.fixtures[0].shift = [1e300, 0.0]).contains("shift"));
+    }
+
+    #[test]
+    fn arrays_with_extra_or_missing_elements_are_refused() {
+        let offset = DEFAULT_WORLD_TOML.lines().find(|l| l.starts_with("offset = ")).expect("camera offset line");
+        for (edit, what) in [
+            ("offset = [-3.25, 1.75, 99, \"junk\"]", "junk"),
+            ("offset = [-3.25, 1.75, 99]", "3"),
+            ("offset = [-3.25]", "1"),
+        ] {
+            let text = DEFAULT_WORLD_TOML.replacen(offset, edit, 1);
+            match World::from_toml(&text) {
+                Err(SimError::Parse { reason }) => assert!(reason.contains(what), "{edit}: {reason}"),
+                other => panic!("{edit}: expected a parse error, got {other:?}"),
+            }
+        }
+        for (from, to) in [
+            ("start = [10.9, 2.15, 0.0]", "start = [10.9, 2.15, 0.0, 1.0]"),
+            ("offset = [0.0, 0.0, 0.0]", "offset = [0.0, 0.0]"),
+            ("# camera_table_offset omitted", "camera_table_offset = [0.0] #"),
+            ("# camera_table_offset omitted", "camera_table_offset = [0.0, 1.0, 2.0] #"),
+        ] {
+            assert!(DEFAULT_WORLD_TOML.contains(from), "{from}");
+            let text = DEFAULT_WORLD_TOML.replacen(from, to, 1);
+            assert!(matches!(World::from_toml(&text), Err(SimError::Parse { .. })), "{to}");
+        }
+        let text =
+            DEFAULT_WORLD_TOML.replacen("# camera_table_offset omitted", "camera_table_offset = [0.0, 1.0] #", 1);
+        assert_eq!(World::from_toml(&text).map(|w| w.machine.camera_table_offset), Ok(Some([0.0, 1.0])));
+        assert_eq!(
+            World::from_toml(DEFAULT_WORLD_TOML).map(|w| w.camera.offset),
+            Ok(World::default_world().camera.offset)
+        );
     }
 
     #[test]

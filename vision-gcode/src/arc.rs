@@ -1,10 +1,12 @@
 //! Arc geometry in the program frame (machine units): centre from I/J/K or R, the swept angle,
 //! points along the arc and the polyline a non-uniform scale needs. Pure functions.
 //!
-//! Checks follow LinuxCNC (`interp_arc.cc`): the radii to start and end may differ by at most
-//! the centre tolerance (0.002 828 in, or 0.028 28 mm under G21); a radius below a tenth of it
-//! is a zero-radius arc; `R` may fall short of half the chord by at most the radius tolerance
-//! (0.000 05 in / 0.001 27 mm) and is then taken as a semicircle.
+//! Checks follow LinuxCNC 2.9 (`interp_arc.cc`, `arc_data_ijk` / `arc_data_r`): the radii to
+//! start and end may differ by more than the centre tolerance (0.002 828 in, or 0.028 28 mm
+//! under G21) only while that is within 0.1 % of the larger radius, and never by more than 100
+//! times it; a radius below the radius tolerance (0.000 05 in / 0.001 27 mm) is too small; `R`
+//! may fall short of half the chord by at most the radius tolerance and is then taken as a
+//! semicircle.
 
 use std::f64::consts::{FRAC_PI_2, TAU};
 
@@ -20,11 +22,15 @@ pub const RADIUS_TOLERANCE_INCH: f64 = 0.000_05;
 /// The same for millimetre programs.
 pub const RADIUS_TOLERANCE_MM: f64 = 0.000_05 * 25.4;
 
-/// A tolerance in machine units, and the factor that turns machine units into the program's
-/// units for error messages.
+/// LinuxCNC's relative limit on the start/end radius difference of a centre-format arc (0.1 %).
+const SPIRAL_RELATIVE_TOLERANCE: f64 = 0.001;
+
+/// A tolerance in machine units, the smallest radius allowed (machine units), and the factor
+/// that turns machine units into the program's units for error messages.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Tolerance {
     pub(crate) machine: f64,
+    pub(crate) min_radius: f64,
     pub(crate) to_user: f64,
 }
 
@@ -67,10 +73,12 @@ impl Arc {
         if !(r0.is_finite() && r1.is_finite()) {
             return Err(RunProblem::NonFinite { what: "the arc radius" });
         }
-        if r0 < 0.1 * tolerance || r1 < 0.1 * tolerance {
+        if r0 < tol.min_radius || r1 < tol.min_radius {
             return Err(RunProblem::ArcZeroRadius);
         }
-        if (r0 - r1).abs() > tolerance {
+        let abs_err = (r0 - r1).abs();
+        let rel_err = abs_err / r0.max(r1);
+        if abs_err > 100.0 * tolerance || (rel_err > SPIRAL_RELATIVE_TOLERANCE && abs_err > tolerance) {
             return Err(RunProblem::ArcRadiusMismatch { start_radius: r0 * to_user, end_radius: r1 * to_user });
         }
         let (ea, eb) = in_plane(plane, end);
@@ -206,9 +214,9 @@ mod tests {
     use super::*;
     use std::f64::consts::PI;
 
-    const T3: Tolerance = Tolerance { machine: 0.03, to_user: 1.0 };
-    const T4: Tolerance = Tolerance { machine: 1e-3, to_user: 1.0 };
-    const T5: Tolerance = Tolerance { machine: 1e-4, to_user: 1.0 };
+    const T3: Tolerance = Tolerance { machine: 0.03, min_radius: 0.001, to_user: 1.0 };
+    const T4: Tolerance = Tolerance { machine: 1e-3, min_radius: 1e-5, to_user: 1.0 };
+    const T5: Tolerance = Tolerance { machine: 1e-4, min_radius: 1e-5, to_user: 1.0 };
 
     #[test]
     fn centre_format_angles() {

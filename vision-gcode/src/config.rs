@@ -1,6 +1,7 @@
 //! How the interpreter is set up: machine unit, start-up modes, tolerances, tools, user M-codes.
 
 use std::ops::RangeInclusive;
+use std::path::PathBuf;
 
 use vision_math::LengthUnit;
 
@@ -13,6 +14,33 @@ pub const CHORD_TOLERANCE_INCH: f64 = 0.0001;
 pub const CHORD_TOLERANCE_MM: f64 = 0.0025;
 /// The default limit on polyline segments for one arc.
 pub const MAX_ARC_SEGMENTS: u64 = 10_000_000;
+
+/// Whose rules apply where the controllers differ.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Dialect {
+    /// Seed 002's MachineMotion path following: `G92` zeroes the axes it does not name, tool
+    /// offsets apply from `M6` on, parentheses nest inside comments. The default.
+    #[default]
+    MachineMotion,
+    /// Mach4 (the alignment plug-in's controller): `G92` keeps the axes it does not name, tool
+    /// length offsets apply from `G43` only, comments end at the first `)`.
+    Mach4,
+    /// LinuxCNC 2.9: as Mach4, and `G68`/`G69`/`G51`/`G50` (which LinuxCNC does not have) are
+    /// refused.
+    LinuxCnc,
+}
+
+impl Dialect {
+    /// Its name on the command line: `machinemotion`, `mach4`, `linuxcnc`.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Dialect::MachineMotion => "machinemotion",
+            Dialect::Mach4 => "mach4",
+            Dialect::LinuxCnc => "linuxcnc",
+        }
+    }
+}
 
 /// Set-up of an [`crate::Interpreter`].
 #[derive(Debug, Clone, PartialEq)]
@@ -40,6 +68,17 @@ pub struct InterpreterConfig {
     /// interpreter keeps this one copy up to date: its `config().tools` is the live table, the
     /// same as [`crate::Interpreter::tools`].
     pub tools: ToolTable,
+    /// The block-delete switch: when on, lines starting with `/` are skipped; when off (the
+    /// default, as on the controllers) the `/` is ignored and the line runs.
+    pub block_delete: bool,
+    /// Whose rules apply where the controllers differ. Default [`Dialect::MachineMotion`].
+    pub dialect: Dialect,
+    /// Folders searched, in order, for `name.ngc` when `o<name> call` names a subroutine the
+    /// program does not define (LinuxCNC's `SUBROUTINE_PATH`). Default: none.
+    pub subroutine_path: Vec<PathBuf>,
+    /// Most loop iterations (`while`, `do`, `repeat`, `continue`) one run may make, so that a
+    /// runaway loop ends with an error rather than hanging. Default 10 million.
+    pub max_loop_iterations: u64,
 }
 
 impl Default for InterpreterConfig {
@@ -64,6 +103,10 @@ impl InterpreterConfig {
             max_arc_segments: MAX_ARC_SEGMENTS,
             user_mcodes: 100..=999,
             tools: ToolTable::numbered(1, 254),
+            block_delete: false,
+            dialect: Dialect::MachineMotion,
+            subroutine_path: Vec::new(),
+            max_loop_iterations: 10_000_000,
         }
     }
 }

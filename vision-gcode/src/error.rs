@@ -149,6 +149,21 @@ pub enum SyntaxProblem {
     /// `N` with a fraction, a sign or an expression.
     #[error("the line number `N` must be a whole number, e.g. N10")]
     BadLineNumber,
+    /// LinuxCNC's polar coordinate words.
+    #[error("polar coordinates (`@` radius, `^` angle) are not supported: post-process with X and Y")]
+    PolarCoordinates,
+    /// An `o` word after other words.
+    #[error("an o-word (`o100 sub`, `o<name> call`, `o1 if [...]`) must start its line (after `/` and `N` only)")]
+    OWordNotFirst,
+    /// A malformed o-word line.
+    #[error("o-word line: {detail}")]
+    BadOWord {
+        /// What is wrong.
+        detail: String,
+    },
+    /// `#<` without its `>`, or an empty name.
+    #[error("named parameter `#<` is not closed: write #<name>")]
+    UnclosedName,
     /// The same letter twice (G and M may repeat).
     #[error("two `{letter}` words on one line: keep one")]
     DuplicateWord {
@@ -163,7 +178,7 @@ pub enum SyntaxProblem {
 #[non_exhaustive]
 pub enum RunProblem {
     /// A G-code this interpreter does not implement.
-    #[error("{code} is not supported: this machine knows G0 G1 G2 G3 G4 G10 G17 G18 G19 G20 G21 G28 G28.1 G50 G51 G52 G54-G59 G61 G64 G68 G69 G90 G90.1 G91 G91.1 G92 G94")]
+    #[error("{code} is not supported: this machine knows G0 G1 G2 G3 G4 G10 G17 G18 G19 G20 G21 G28 G28.1 G30 G30.1 G40 G43 G43.1 G49 G50 G51 G52 G53 G54-G59 G61 G61.1 G64 G68 G69 G73 G80-G83 G85 G89 G90 G90.1 G91 G91.1 G92 G92.1 G92.2 G94 G97 G98 G99")]
     UnknownGCode {
         /// The code.
         code: GCode,
@@ -176,7 +191,7 @@ pub enum RunProblem {
     },
     /// An M-code that is neither built in nor in the user range.
     #[error(
-        "M{code} is not supported: built in are M0 M1 M2 M3 M4 M5 M6 M30, user M-codes are M{user_low}-M{user_high}"
+        "M{code} is not supported: built in are M0 M1 M2 M3 M4 M5 M6 M7 M8 M9 M30, user M-codes are M{user_low}-M{user_high}"
     )]
     UnknownMCode {
         /// The M number.
@@ -339,8 +354,9 @@ pub enum RunProblem {
         /// The motion code.
         code: &'static str,
     },
-    /// The arc's centre coincides with its start.
-    #[error("arc centre coincides with the start point: check the centre words and G90.1/G91.1")]
+    /// The arc's radius (to its start or its end) is below LinuxCNC's minimum (0.000 05 in,
+    /// 0.001 27 mm), or `R0`.
+    #[error("arc radius too small: the radius to the start or the end is below 0.00005 in (0.00127 mm); check the centre words, R and G90.1/G91.1")]
     ArcZeroRadius,
     /// Start and end radii differ beyond tolerance.
     #[error("radius to the arc end ({end_radius:.6}) differs from the radius to its start ({start_radius:.6}) by more than the tolerance: check the centre words, the end point and G90.1/G91.1")]
@@ -349,6 +365,35 @@ pub enum RunProblem {
         start_radius: f64,
         /// Radius at the end, current units.
         end_radius: f64,
+    },
+    /// A code this interpreter deliberately does not implement, named with its feature.
+    #[error("{code} is not supported: {feature} is not available on this machine; remove it from the program (or post-process for a 3-axis mill)")]
+    Unsupported {
+        /// The code as written (`G41`, `M62`).
+        code: String,
+        /// What it does, e.g. "cutter radius compensation".
+        feature: &'static str,
+    },
+    /// A feed move with a zero feed rate.
+    #[error("{code} with feed rate F0: the move would never end; program a positive F")]
+    ZeroFeedRate {
+        /// The motion code.
+        code: &'static str,
+    },
+    /// G53 with a motion mode other than G0/G1, or under G91.
+    #[error("G53 moves in machine coordinates with G0 or G1 under G90 only: {hint}")]
+    G53Form {
+        /// What to change.
+        hint: &'static str,
+    },
+    /// G80 with axis words.
+    #[error("G80 cancels canned cycles and takes no axis words: put the move on its own line")]
+    G80AxisWords,
+    /// A canned cycle whose retract plane R lies below its bottom Z.
+    #[error("{code}: the retract plane R is below the hole bottom Z; R must be at or above Z")]
+    CycleRBelowZ {
+        /// The cycle.
+        code: &'static str,
     },
     /// R smaller than half the chord.
     #[error("arc radius R{radius} is too small to reach the end point {half_chord:.6} away (half the chord): use a larger R")]
@@ -391,6 +436,46 @@ pub enum RunProblem {
         /// The index as computed.
         index: f64,
     },
+    /// A named parameter read before any value was assigned to it.
+    #[error("named parameter #<{name}> is not defined: assign it first, e.g. #<{name}> = 0")]
+    UndefinedName {
+        /// The name (lower case).
+        name: String,
+    },
+    /// `endsub` or `return` with no call to return from.
+    #[error("endsub/return outside a subroutine call")]
+    FlowOutsideCall,
+    /// o-word calls nested too deeply.
+    #[error("subroutine calls nest more than {limit} deep: check for unintended recursion")]
+    CallsTooDeep {
+        /// The limit.
+        limit: usize,
+    },
+    /// A subroutine neither in the program nor on the subroutine path.
+    #[error(
+        "subroutine o<{label}> is not defined in the program and no {label}.ngc on the subroutine path defines it"
+    )]
+    UnknownSubroutine {
+        /// The label.
+        label: String,
+    },
+    /// A subroutine file that does not read.
+    #[error("subroutine file {file}: {message}")]
+    SubroutineFile {
+        /// The file.
+        file: String,
+        /// Its problem.
+        message: String,
+    },
+    /// A loop ran more often than allowed.
+    #[error("loops ran more than {limit} iterations: the program probably never leaves a loop")]
+    TooManyIterations {
+        /// The limit.
+        limit: u64,
+    },
+    /// An o-word in G-code a handler runs.
+    #[error("o-words (subroutines and control flow) cannot appear in G-code run by a handler")]
+    FlowInHandler,
     /// A write to a read-only parameter.
     #[error("#{index} is read-only ({what}); write to another parameter")]
     ReadOnlyParameter {

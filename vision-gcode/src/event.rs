@@ -151,6 +151,29 @@ pub struct OutputChange {
     pub writes: Vec<OutputWrite>,
 }
 
+/// M7 / M8 / M9.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Coolant {
+    /// M7: mist on.
+    Mist,
+    /// M8: flood on.
+    Flood,
+    /// M9: all coolant off.
+    Off,
+}
+
+impl Coolant {
+    /// The M-code: `"M7"`, `"M8"` or `"M9"`.
+    #[must_use]
+    pub fn gcode(self) -> &'static str {
+        match self {
+            Coolant::Mist => "M7",
+            Coolant::Flood => "M8",
+            Coolant::Off => "M9",
+        }
+    }
+}
+
 /// A user M-code met with no handler attached (reported, not executed).
 #[derive(Debug, Clone, PartialEq)]
 pub struct UserCall {
@@ -187,8 +210,26 @@ pub enum Event {
         /// Its X/Y offset and Z length, machine units.
         offset: Xyz,
     },
-    /// M3 / M4 / M5.
+    /// M3 / M4 / M5 acting on a tool's outputs (the tool named by `$n` or loaded by M6) or on an
+    /// explicit port.
     Output(OutputChange),
+    /// M3 / M4 / M5 with no tool loaded and no `$n` or port: a plain spindle, as in CAM
+    /// programs (`M3 S12000`). Nothing is wired to it here; a host with a spindle drives it.
+    Spindle {
+        /// Source line.
+        line: u32,
+        /// Start clockwise, counter-clockwise, or stop.
+        command: SpindleCommand,
+        /// The last `S` (revolutions per minute), `None` before any.
+        speed: Option<f64>,
+    },
+    /// M7 / M8 / M9.
+    Coolant {
+        /// Source line.
+        line: u32,
+        /// Which coolant, or off.
+        coolant: Coolant,
+    },
     /// M0 (program stop) or M1 (optional stop): the host decides whether to wait.
     Stop {
         /// Source line.
@@ -218,6 +259,8 @@ impl Event {
             Event::UserMCode(c) => c.line,
             Event::Dwell { line, .. }
             | Event::ToolChange { line, .. }
+            | Event::Spindle { line, .. }
+            | Event::Coolant { line, .. }
             | Event::Stop { line, .. }
             | Event::ProgramEnd { line, .. } => *line,
         }

@@ -13,11 +13,11 @@ use crate::error::RunProblem;
 use crate::params::Params;
 
 /// Two numbers compare equal (`EQ`, `NE`, `LE`, `GE`) when they differ by less than this.
-pub const EQUAL_TOLERANCE: f64 = 1e-6;
+pub(crate) const EQUAL_TOLERANCE: f64 = 1e-6;
 
 /// A one-argument function, `NAME[x]`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Func {
+pub(crate) enum Func {
     /// Absolute value.
     Abs,
     /// Arc cosine, degrees.
@@ -63,7 +63,7 @@ impl Func {
 
     /// The function's name as written.
     #[must_use]
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         Func::ALL.iter().find(|(f, _)| *f == self).map_or("?", |(_, n)| n)
     }
 
@@ -71,7 +71,7 @@ impl Func {
     ///
     /// # Errors
     /// Arguments outside the domain (ACOS/ASIN outside [-1, 1], LN of x ≤ 0, SQRT of x < 0).
-    pub fn apply(self, x: f64) -> Result<f64, RunProblem> {
+    pub(crate) fn apply(self, x: f64) -> Result<f64, RunProblem> {
         let domain = |hint| Err(RunProblem::Domain { function: self.name(), argument: x, hint });
         Ok(match self {
             Func::Abs => x.abs(),
@@ -96,7 +96,7 @@ impl Func {
 
 /// A binary operator.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum BinOp {
+pub(crate) enum BinOp {
     /// `**`
     Pow,
     /// `*`
@@ -147,7 +147,7 @@ impl BinOp {
     /// Binding strength, LinuxCNC's five levels: `**` 4; `* / MOD` 3; `+ -` 2; comparisons 1;
     /// `AND OR XOR` 0. Operators of one level associate to the left.
     #[must_use]
-    pub fn precedence(self) -> u8 {
+    pub(crate) fn precedence(self) -> u8 {
         match self {
             BinOp::Pow => 4,
             BinOp::Mul | BinOp::Div | BinOp::Mod => 3,
@@ -159,7 +159,7 @@ impl BinOp {
 
     /// The operator as written.
     #[must_use]
-    pub fn symbol(self) -> &'static str {
+    pub(crate) fn symbol(self) -> &'static str {
         match self {
             BinOp::Pow => "**",
             BinOp::Mul => "*",
@@ -178,7 +178,7 @@ impl BinOp {
     ///
     /// # Errors
     /// Division by zero; a negative number to a non-integer power.
-    pub fn apply(self, a: f64, b: f64) -> Result<f64, RunProblem> {
+    pub(crate) fn apply(self, a: f64, b: f64) -> Result<f64, RunProblem> {
         let truth = |t: bool| if t { 1.0 } else { 0.0 };
         Ok(match self {
             BinOp::Pow if a < 0.0 && b.floor() != b => {
@@ -223,6 +223,8 @@ pub(crate) enum Node {
     Num(f64),
     /// Pop an index, push that parameter's value.
     Param,
+    /// Push named parameter number `n` of the line's names (`#<name>`).
+    Named(u32),
     /// Negate the top.
     Neg,
     /// Apply a function to the top.
@@ -237,12 +239,18 @@ pub(crate) enum Node {
 ///
 /// # Errors
 /// Domain errors, division by zero, a bad parameter index, or a non-finite intermediate value.
-pub(crate) fn eval(nodes: &[Node], params: &Params, stack: &mut Vec<f64>) -> Result<f64, RunProblem> {
+pub(crate) fn eval(
+    nodes: &[Node],
+    names: &[Box<str>],
+    params: &Params,
+    stack: &mut Vec<f64>,
+) -> Result<f64, RunProblem> {
     stack.clear();
     for node in nodes {
         let value = match *node {
             Node::Num(v) => v,
             Node::Param => params.read(pop(stack)?)?,
+            Node::Named(i) => params.read_named(names.get(i as usize).map_or("", |n| n))?,
             Node::Neg => -pop(stack)?,
             Node::Func(f) => f.apply(pop(stack)?)?,
             Node::Atan => {
@@ -269,13 +277,16 @@ pub(crate) fn eval(nodes: &[Node], params: &Params, stack: &mut Vec<f64>) -> Res
 }
 
 fn pop(stack: &mut Vec<f64>) -> Result<f64, RunProblem> {
-    stack.pop().ok_or(RunProblem::NonFinite { what: "a malformed expression" })
+    match stack.pop() {
+        Some(v) => Ok(v),
+        None => Err(RunProblem::NonFinite { what: "a malformed expression" }),
+    }
 }
 
 fn node_name(node: Node) -> &'static str {
     match node {
         Node::Num(_) => "a number",
-        Node::Param => "a parameter",
+        Node::Param | Node::Named(_) => "a parameter",
         Node::Neg => "a negation",
         Node::Func(f) => f.name(),
         Node::Atan => "ATAN",
@@ -318,11 +329,11 @@ mod tests {
         let mut stack = Vec::new();
         // [2 + 3 * 4]
         let nodes = [Node::Num(2.0), Node::Num(3.0), Node::Num(4.0), Node::Bin(BinOp::Mul), Node::Bin(BinOp::Add)];
-        assert_eq!(eval(&nodes, &params, &mut stack), Ok(14.0));
+        assert_eq!(eval(&nodes, &[], &params, &mut stack), Ok(14.0));
         let nodes = [Node::Num(1e300), Node::Num(1e300), Node::Bin(BinOp::Mul)];
-        assert_eq!(eval(&nodes, &params, &mut stack), Err(RunProblem::NonFinite { what: "*" }));
+        assert_eq!(eval(&nodes, &[], &params, &mut stack), Err(RunProblem::NonFinite { what: "*" }));
         let nodes = [Node::Num(1.0), Node::Num(1.0), Node::Atan];
-        assert!((eval(&nodes, &params, &mut stack).expect("atan") - 45.0).abs() < 1e-12);
-        assert!(eval(&[Node::Bin(BinOp::Add)], &params, &mut stack).is_err());
+        assert!((eval(&nodes, &[], &params, &mut stack).expect("atan") - 45.0).abs() < 1e-12);
+        assert!(eval(&[Node::Bin(BinOp::Add)], &[], &params, &mut stack).is_err());
     }
 }

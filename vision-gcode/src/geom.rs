@@ -1,6 +1,6 @@
 //! Small geometric types: a 3-axis triple, the arc planes and directions.
 
-use std::ops::{Add, Sub};
+use std::ops::{Add, Mul, Neg, Sub};
 
 use vision_math::{LengthUnit, Point2};
 
@@ -15,35 +15,42 @@ pub struct Xyz {
     pub z: f64,
 }
 
+// Small and called across crates in the path planner's inner loops: `#[inline]` lets them inline
+// there as they did when the planner had its own vector type.
 impl Xyz {
     /// All three zero.
     pub const ZERO: Xyz = Xyz { x: 0.0, y: 0.0, z: 0.0 };
 
     /// A triple.
+    #[inline]
     #[must_use]
     pub const fn new(x: f64, y: f64, z: f64) -> Xyz {
         Xyz { x, y, z }
     }
 
-    /// Every component multiplied by `k` (a unit conversion factor).
+    /// Every component multiplied by `k` (a unit conversion factor); the same as `self * k`.
+    #[inline]
     #[must_use]
     pub fn scaled(self, k: f64) -> Xyz {
-        Xyz { x: self.x * k, y: self.y * k, z: self.z * k }
+        self * k
     }
 
     /// Every component converted from `from` to `to` (exactly as [`LengthUnit::convert`]).
+    #[inline]
     #[must_use]
     pub fn convert(self, from: LengthUnit, to: LengthUnit) -> Xyz {
         Xyz { x: from.convert(self.x, to), y: from.convert(self.y, to), z: from.convert(self.z, to) }
     }
 
     /// The X/Y part.
+    #[inline]
     #[must_use]
     pub fn xy(self) -> Point2<f64> {
         Point2::new(self.x, self.y)
     }
 
     /// Component `axis` (0 = X, 1 = Y, 2 = Z).
+    #[inline]
     #[must_use]
     pub fn axis(self, axis: usize) -> f64 {
         match axis {
@@ -54,6 +61,7 @@ impl Xyz {
     }
 
     /// Sets component `axis` (0 = X, 1 = Y, 2 = Z).
+    #[inline]
     pub fn set_axis(&mut self, axis: usize, value: f64) {
         match axis {
             0 => self.x = value,
@@ -63,18 +71,57 @@ impl Xyz {
     }
 
     /// True when all three components are finite.
+    #[inline]
     #[must_use]
     pub fn is_finite(self) -> bool {
         self.x.is_finite() && self.y.is_finite() && self.z.is_finite()
     }
 
     /// Euclidean length.
+    #[inline]
     #[must_use]
     pub fn norm(self) -> f64 {
-        (self.x * self.x + self.y * self.y + self.z * self.z).sqrt()
+        self.dot(self).sqrt()
+    }
+
+    /// The dot product.
+    #[inline]
+    #[must_use]
+    pub fn dot(self, o: Xyz) -> f64 {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+
+    /// The cross product `self × o`.
+    #[inline]
+    #[must_use]
+    pub fn cross(self, o: Xyz) -> Xyz {
+        Xyz::new(self.y * o.z - self.z * o.y, self.z * o.x - self.x * o.z, self.x * o.y - self.y * o.x)
+    }
+
+    /// The unit vector along `self`, or `None` for a (near-)zero or non-finite vector.
+    #[inline]
+    #[must_use]
+    pub fn unit(self) -> Option<Xyz> {
+        let n = self.norm();
+        (n.is_finite() && n > 1e-300).then(|| self * (1.0 / n))
+    }
+
+    /// The largest absolute component (a length scale for relative tolerances).
+    #[inline]
+    #[must_use]
+    pub fn max_abs(self) -> f64 {
+        self.x.abs().max(self.y.abs()).max(self.z.abs())
+    }
+
+    /// The angle between two unit vectors, radians in `[0, π]` (accurate near 0 and π).
+    #[inline]
+    #[must_use]
+    pub fn angle_to(self, o: Xyz) -> f64 {
+        self.cross(o).norm().atan2(self.dot(o))
     }
 
     /// `[x, y, z]`.
+    #[inline]
     #[must_use]
     pub const fn to_array(self) -> [f64; 3] {
         [self.x, self.y, self.z]
@@ -82,12 +129,14 @@ impl Xyz {
 }
 
 impl From<[f64; 3]> for Xyz {
+    #[inline]
     fn from([x, y, z]: [f64; 3]) -> Xyz {
         Xyz { x, y, z }
     }
 }
 
 impl From<Xyz> for [f64; 3] {
+    #[inline]
     fn from(p: Xyz) -> [f64; 3] {
         p.to_array()
     }
@@ -95,6 +144,7 @@ impl From<Xyz> for [f64; 3] {
 
 impl Add for Xyz {
     type Output = Xyz;
+    #[inline]
     fn add(self, o: Xyz) -> Xyz {
         Xyz { x: self.x + o.x, y: self.y + o.y, z: self.z + o.z }
     }
@@ -102,8 +152,25 @@ impl Add for Xyz {
 
 impl Sub for Xyz {
     type Output = Xyz;
+    #[inline]
     fn sub(self, o: Xyz) -> Xyz {
         Xyz { x: self.x - o.x, y: self.y - o.y, z: self.z - o.z }
+    }
+}
+
+impl Mul<f64> for Xyz {
+    type Output = Xyz;
+    #[inline]
+    fn mul(self, k: f64) -> Xyz {
+        Xyz { x: self.x * k, y: self.y * k, z: self.z * k }
+    }
+}
+
+impl Neg for Xyz {
+    type Output = Xyz;
+    #[inline]
+    fn neg(self) -> Xyz {
+        Xyz { x: -self.x, y: -self.y, z: -self.z }
     }
 }
 

@@ -4,11 +4,13 @@
 //! simulated machine. It knows nothing of vision: user M-codes (M280–M284 among them) go to an
 //! [`MCodeHandler`].
 //!
-//! * [`parse`]: the hand-written line parser (words, `#` parameters, `[expressions]`, comments).
+//! * A hand-written line parser (words, `#` parameters, `[expressions]`, comments), private.
 //! * [`Interpreter`]: modal state, the frame chain, arcs, tools, outputs; streams [`Event`]s in
 //!   machine coordinates to an [`EventSink`], each tagged with its source line.
 //! * [`MCodeHandler`] / [`Context`]: the extension point; a handler reads and writes parameters,
 //!   reads positions, writes tool offsets and runs G-code synchronously.
+//! * [`PositionWatch`] ([`Interpreter::watch_position`]): the machine position, published by
+//!   the interpreter for readers that cannot borrow it (a simulated camera).
 //!
 //! ```
 //! use vision_gcode::{Event, Interpreter, InterpreterConfig, Xyz};
@@ -52,18 +54,48 @@
 //!   only when the whole line succeeded. A failing line changes nothing and emits nothing.
 //!   Exception: a user M-code line writes its assignments before the call, and whatever G-code
 //!   the handler ran stays done (each of its lines atomic in turn).
-//! * **Order within a line:** G20/G21, F, T, M6, M3/M4/M5, G4, G17–G19, G54–G59, G61/G64,
-//!   G90/G91, G90.1/G91.1, G69/G50, G10/G28/G28.1/G52/G92, G68, G51, motion, M0/M1/M2/M30.
-//!   Only one code per line may own the axis words (motion, G10, G28, G52, G92, G68, G51); as
-//!   in LinuxCNC, a motion code beside one of the others is refused even on a line without axis
-//!   words (`G0 G92 X1` is an error, not a silent G92).
+//! * **Order within a line:** G20/G21, F, S, T, M6, M3/M4/M5, M7/M8/M9, G4, G17–G19,
+//!   G43/G43.1/G49, G54–G59, G61/G64, G90/G91, G90.1/G91.1, G98/G99, G69/G50,
+//!   G10/G28/G30/G52/G92, G68, G51, motion (G53 with it), M0/M1/M2/M30. Only one code per line
+//!   may own the axis words (motion, G10, G28, G30, G43.1, G52, G92, G68, G51); as in LinuxCNC,
+//!   a motion code beside one of the others is refused even on a line without axis words
+//!   (`G0 G92 X1` is an error, not a silent G92). `G80` may share a line with a motion code,
+//!   which wins (post-processors write `G80 G0`).
+//! * **LinuxCNC's G-code** (checked move by move against its `rs274`, see
+//!   `tools/linuxcnc-oracle`): G40, G49, G80, G94, G97 and G61.1 are accepted; a motion code
+//!   alone moves to the current point (`G0`), or makes a full circle from centre words (`G2 I1`);
+//!   G28/G30 always make their first leg; G53 moves (with G0/G1, under G90) in machine
+//!   coordinates; the canned cycles G73, G81, G82, G83, G85, G89 (XY plane, G98/G99, R, Q, P, L,
+//!   G91 repeats) expand into straight moves and dwells in exact-stop mode; `%` on the first
+//!   non-blank line makes the next `%` line end the program; `/` at the start of a line is
+//!   block delete (skipped only with [`InterpreterConfig::block_delete`]). Features left out
+//!   (cutter compensation, lathe modes and cycles, threading, NURBS, probing, inverse-time feed,
+//!   HAL M-codes, …) are refused with a message naming them ([`RunProblem::Unsupported`]).
+//! * **o-words** (LinuxCNC): `sub`/`endsub`/`call`/`return` (arguments in #1–#30, local to the
+//!   call and restored after it; `endsub [v]`/`return [v]` set `#<_value>`), `if`/`elseif`/
+//!   `else`/`endif`, `while`/`endwhile`, `do`/`while`, `repeat`/`endrepeat`, `break`/`continue`
+//!   (in `while` and `do` loops, as LinuxCNC), and `o<name> call` of a file `name.ngc` on
+//!   [`InterpreterConfig::subroutine_path`]. A program streams line by line until its first
+//!   o-word line; from there its text is indexed once and run with a program counter. Loops stop
+//!   with an error after [`InterpreterConfig::max_loop_iterations`]; calls nest 10 deep.
+//! * **Fanuc/Mach subprograms:** `M98 P<n> [L<count>]` calls the program that starts at the
+//!   line `O<n>` of the same text (leading zeros ignored), `M99` returns (in the main program it
+//!   is an error, not Fanuc's endless restart). They share #1–#30 with their caller.
+//! * **Named parameters** `#<name>` (case and blanks ignored): local to the call that wrote
+//!   them, global when the name starts with `_`; reading one never written is an error.
 //! * **Frame changes never move the machine** (G54–G59, G10 on the active system, G92, G52,
 //!   G68/G69, G51/G50, M6, a tool-offset or offset-parameter write): the program position is
 //!   re-derived from the machine position, and the next move goes to the new frame.
 //! * **Tools.** A tool's X/Y offset is where its point lies relative to the spindle (commanding
 //!   P puts the tool at P, the spindle at P − offset); its Z value is a length, positive below
 //!   the spindle (commanding Z puts the tip at Z, the spindle at Z + length). Offsets apply from
-//!   M6 on (the dialect has no G43). The default table holds tools 1–254 with zero offsets.
+//!   M6 on (seed 002 has no G43); G43 `H` replaces them with a table entry's (the loaded tool's
+//!   without `H`), G43.1 `Z` with a length given in the program, G49 with none. The default
+//!   table holds tools 1–254 with zero offsets.
+//! * **Dialects** ([`InterpreterConfig::dialect`], default seed 002's MachineMotion) where the
+//!   controllers differ: G92 on some axes (seed 002 zeroes the others, Mach4 and LinuxCNC keep
+//!   them), tool offsets from M6 (seed 002) or from G43 only (Mach4, LinuxCNC), nested comments
+//!   (seed 002) or comments ending at the first `)`, G68/G51 (refused under LinuxCNC).
 //! * **G92** with an axis word missing zeroes that axis's G92 offset (seed 002); G52, G51 and
 //!   G10 L2 leave unmentioned axes unchanged. G92 and G10 L20 make the current point read exactly
 //!   the given values.
@@ -76,10 +108,13 @@
 //!   most [`InterpreterConfig::chord_tolerance`]; their interior vertices are not programmed
 //!   points, so those segments blend (G64 with the chord tolerance) and only the last one carries
 //!   the line's G61/G64. Radius checks follow LinuxCNC
-//!   ([`CENTRE_TOLERANCE_INCH`], [`RADIUS_TOLERANCE_INCH`]); under G90.1 both centre words are
-//!   required (seed 002). `P` on G2/G3 counts full turns.
-//! * **G28** follows LinuxCNC: with axis words, a rapid to that intermediate point, then those
-//!   axes (all, without words) go to the G28.1 position (#5161–#5163, machine coordinates).
+//!   ([`CENTRE_TOLERANCE_INCH`], [`RADIUS_TOLERANCE_INCH`]): start and end radius may differ by
+//!   more than the centre tolerance only within 0.1 % of the radius, never by more than 100
+//!   times it; a radius below the radius tolerance is "too small". Under G90.1 both centre
+//!   words are required (seed 002). `P` on G2/G3 counts full turns (with `R` too).
+//! * **G28/G30** follow LinuxCNC: a rapid to the intermediate point the axis words name (the
+//!   current point without them), then those axes (all, without words) go to the G28.1/G30.1
+//!   position (#5161–#5163 / #5181–#5183, machine coordinates).
 //! * **Parameters** `#1`–`#9999` (0 by default). The offsets live in LinuxCNC's addresses in
 //!   machine units (G28 #5161, G92 #5211, G54… #5221 + 20·(n − 1)); #5220, #5400–#5409 and
 //!   #5420–#5428 report the state in current units and are read-only.
@@ -87,10 +122,13 @@
 //!   G91.1, the path mode, the motion mode, G51/G68/G52 and G92; outputs are the host's to
 //!   switch off. At start no motion mode is active: axis words before G0–G3 are an error.
 //! * **Feed.** A feed move before any `F` is an error unless
-//!   [`InterpreterConfig::default_feed`] is set (the seed-002 snippets need one).
+//!   [`InterpreterConfig::default_feed`] is set (the seed-002 snippets need one); so is one at
+//!   `F0`, as in LinuxCNC.
 //! * **Outputs.** M3/M4 first release the tool's other output, then drive the requested one; M5
 //!   releases both. A tool with no outputs wired still yields an [`Event::Output`] (no writes).
-//!   The explicit form needs both `A` and `P`. `S` is not supported: tools are outputs.
+//!   The explicit form needs both `A` and `P`. With no tool loaded and no `$n` (a CAM program's
+//!   `M3 S12000`) M3/M4/M5 yield an [`Event::Spindle`] with the last `S`; M7/M8/M9 yield
+//!   [`Event::Coolant`]. Nothing is wired to either here.
 //! * **User M-codes** (default M100–M999; built-ins win) must be alone on their line with their
 //!   argument words (any letter but G, M, N). G-code a handler runs or returns is tagged with the
 //!   M-code's line; its own errors are numbered within that text and wrapped
@@ -108,23 +146,31 @@ mod arc;
 pub mod config;
 pub mod error;
 pub mod event;
-pub mod expr;
+mod expr;
 mod frame;
 pub mod geom;
 pub mod handler;
 mod interp;
 pub mod params;
+/// The line parser is crate-private; the `bench-internals` feature exposes it (unstable, not
+/// part of the API) for the parse-only benchmark.
+#[cfg(feature = "bench-internals")]
+#[doc(hidden)]
 pub mod parse;
+#[cfg(not(feature = "bench-internals"))]
+mod parse;
 pub mod tools;
+mod watch;
 mod words;
 
 pub use arc::{CENTRE_TOLERANCE_INCH, CENTRE_TOLERANCE_MM, RADIUS_TOLERANCE_INCH, RADIUS_TOLERANCE_MM};
-pub use config::InterpreterConfig;
+pub use config::{Dialect, InterpreterConfig};
 pub use error::{GCode, GcodeError, RunProblem, SyntaxProblem};
 pub use event::{
-    ArcMove, Event, EventSink, LinearMove, OutputChange, OutputWrite, PathMode, Rate, SpindleCommand, UserCall,
+    ArcMove, Coolant, Event, EventSink, LinearMove, OutputChange, OutputWrite, PathMode, Rate, SpindleCommand, UserCall,
 };
 pub use geom::{ArcDirection, Plane, Xyz};
 pub use handler::{Context, HandlerError, MCodeHandler, UserMCode};
-pub use interp::{Interpreter, MotionMode, RunOutcome};
+pub use interp::{needs_program, Interpreter, MotionMode, RunOutcome};
 pub use tools::{DigitalOutput, Tool, ToolOutputs, ToolTable};
+pub use watch::PositionWatch;

@@ -5,6 +5,8 @@
 //! hold **machine units**. The read-only parameters report the state in **current units** and
 //! are refreshed after every line.
 
+use std::collections::HashMap;
+
 use crate::error::RunProblem;
 use crate::words::whole_in;
 
@@ -12,6 +14,8 @@ use crate::words::whole_in;
 pub const MAX_PARAMETER: u32 = 9999;
 /// `#5161`–`#5163`: the G28 position (machine coordinates, machine units).
 pub const G28_POSITION: u32 = 5161;
+/// `#5181`–`#5183`: the G30 position (machine coordinates, machine units).
+pub const G30_POSITION: u32 = 5181;
 /// `#5211`–`#5213`: the G92 offset (machine units).
 pub const G92_OFFSET: u32 = 5211;
 /// `#5220`: the active coordinate system, 1 (G54) … 6 (G59). Read-only.
@@ -31,10 +35,18 @@ pub const POSITION: u32 = 5420;
 const INDEX_TOLERANCE: f64 = 1e-4;
 
 /// The parameter table with an undo log, so a failing line leaves no write behind.
+///
+/// Named parameters (`#<name>`): a name starting with `_` is global; any other is local to the
+/// subroutine call that wrote it (the main program has its own frame).
 #[derive(Debug, Clone)]
 pub(crate) struct Params {
     values: Box<[f64]>,
     undo: Vec<(u32, f64)>,
+    globals: HashMap<Box<str>, f64>,
+    /// Local names, one map per active call (the first for the main program).
+    frames: Vec<HashMap<Box<str>, f64>>,
+    /// (name, previous value) of named writes since [`Params::begin`].
+    named_undo: Vec<(Box<str>, Option<f64>)>,
 }
 
 impl Default for Params {
@@ -47,7 +59,13 @@ impl Params {
     /// All parameters zero.
     #[must_use]
     pub(crate) fn new() -> Params {
-        Params { values: vec![0.0; MAX_PARAMETER as usize + 1].into_boxed_slice(), undo: Vec::new() }
+        Params {
+            values: vec![0.0; MAX_PARAMETER as usize + 1].into_boxed_slice(),
+            undo: Vec::new(),
+            globals: HashMap::new(),
+            frames: vec![HashMap::new()],
+            named_undo: Vec::new(),
+        }
     }
 
     /// The parameter number `index` stands for.
@@ -64,6 +82,43 @@ impl Params {
     /// [`RunProblem::BadParameter`] for an index outside 1–9999.
     pub(crate) fn read(&self, index: f64) -> Result<f64, RunProblem> {
         Ok(self.get(Params::index(index)?))
+    }
+
+    /// Reads `#<name>` (lower case).
+    ///
+    /// # Errors
+    /// [`RunProblem::UndefinedName`] when nothing was assigned to it (in this call, for a local).
+    pub(crate) fn read_named(&self, name: &str) -> Result<f64, RunProblem> {
+        let value =
+            if name.starts_with('_') { self.globals.get(name) } else { self.frames.last().and_then(|f| f.get(name)) };
+        value.copied().ok_or_else(|| RunProblem::UndefinedName { name: name.to_string() })
+    }
+
+    /// Writes `#<name>` (global when it starts with `_`, else local to the current call).
+    ///
+    /// # Errors
+    /// [`RunProblem::NonFinite`] for a NaN or infinite value.
+    pub(crate) fn write_named(&mut self, name: &str, value: f64) -> Result<(), RunProblem> {
+        if !value.is_finite() {
+            return Err(RunProblem::NonFinite { what: "the value written to a parameter" });
+        }
+        let map =
+            if name.starts_with('_') { &mut self.globals } else { self.frames.last_mut().unwrap_or(&mut self.globals) };
+        let old = map.insert(name.into(), value);
+        self.named_undo.push((name.into(), old));
+        Ok(())
+    }
+
+    /// A subroutine call starts: a fresh frame of local names.
+    pub(crate) fn push_frame(&mut self) {
+        self.frames.push(HashMap::new());
+    }
+
+    /// The call returns: its local names go.
+    pub(crate) fn pop_frame(&mut self) {
+        if self.frames.len() > 1 {
+            self.frames.pop();
+        }
     }
 
     /// The value of `#n` (0 for numbers outside the table).
@@ -127,6 +182,7 @@ impl Params {
     /// Starts a line: forget the previous line's undo log.
     pub(crate) fn begin(&mut self) {
         self.undo.clear();
+        self.named_undo.clear();
     }
 
     /// Undoes every write since [`Params::begin`], newest first.
@@ -135,6 +191,17 @@ impl Params {
             if let Some(slot) = self.values.get_mut(n as usize) {
                 *slot = old;
             }
+        }
+        while let Some((name, old)) = self.named_undo.pop() {
+            let map = if name.starts_with('_') {
+                &mut self.globals
+            } else {
+                self.frames.last_mut().unwrap_or(&mut self.globals)
+            };
+            match old {
+                Some(v) => map.insert(name, v),
+                None => map.remove(&name),
+            };
         }
     }
 }

@@ -1,7 +1,7 @@
 //! A parsed line with every value evaluated: the "reads" of a line, done before any write.
 
 use crate::error::{GCode, RunProblem};
-use crate::expr::eval;
+use crate::expr::{eval, Node};
 use crate::params::Params;
 use crate::parse::{Block, Value};
 
@@ -117,8 +117,17 @@ impl Words {
     }
 }
 
-/// Evaluates `block`'s words into `words` and its assignments into `assigns` (parameter number,
-/// value), all against the parameters as they were before the line.
+/// What an assignment writes: `#n` or `#<name>`.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum Target {
+    /// `#n`.
+    Number(u32),
+    /// `#<name>` (lower case).
+    Named(Box<str>),
+}
+
+/// Evaluates `block`'s words into `words` and its assignments into `assigns` (target, value),
+/// all against the parameters as they were before the line.
 ///
 /// # Errors
 /// Expression errors, bad parameter numbers, non-finite values, malformed G/M numbers.
@@ -127,12 +136,12 @@ pub(crate) fn evaluate(
     params: &Params,
     stack: &mut Vec<f64>,
     words: &mut Words,
-    assigns: &mut Vec<(u32, f64)>,
+    assigns: &mut Vec<(Target, f64)>,
 ) -> Result<(), RunProblem> {
     assigns.clear();
     let value = |v: Value, stack: &mut Vec<f64>| match v {
         Value::Number(n) => Ok(n),
-        Value::Expr(e) => eval(block.nodes(e), params, stack),
+        Value::Expr(e) => eval(block.nodes(e), block.names(), params, stack),
     };
     for word in block.words() {
         let v = value(word.value(), stack)?;
@@ -161,12 +170,15 @@ pub(crate) fn evaluate(
         }
     }
     for a in block.assignments() {
-        let index = Params::index(eval(block.nodes(a.target()), params, stack)?)?;
+        let target = match block.nodes(a.target()) {
+            [Node::Named(i)] => Target::Named(block.names().get(*i as usize).cloned().unwrap_or_default()),
+            nodes => Target::Number(Params::index(eval(nodes, block.names(), params, stack)?)?),
+        };
         let v = value(a.value(), stack)?;
         if !v.is_finite() {
             return Err(RunProblem::NonFinite { what: "the value assigned" });
         }
-        assigns.push((index, v));
+        assigns.push((target, v));
     }
     Ok(())
 }
@@ -190,12 +202,19 @@ pub(crate) fn whole_in(value: f64, tolerance: f64, max: u32) -> Option<u32> {
 
 /// A G value in tenths (`90.1` → 901).
 fn g_code(v: f64) -> Result<u16, RunProblem> {
-    whole_in(v * 10.0, 1e-6, 9999).and_then(|t| u16::try_from(t).ok()).ok_or(RunProblem::BadGCode { value: v })
+    // A `match`, not `ok_or`: no error value is built (and dropped) for every G word.
+    match whole_in(v * 10.0, 1e-6, 9999).and_then(|t| u16::try_from(t).ok()) {
+        Some(code) => Ok(code),
+        None => Err(RunProblem::BadGCode { value: v }),
+    }
 }
 
 /// An M value: a whole, non-negative number.
 fn m_code(v: f64) -> Result<u32, RunProblem> {
-    whole_in(v, 1e-6, 999_999).ok_or(RunProblem::BadMCode { value: v })
+    match whole_in(v, 1e-6, 999_999) {
+        Some(code) => Ok(code),
+        None => Err(RunProblem::BadMCode { value: v }),
+    }
 }
 
 /// A word value that must be a whole, non-negative number (tool, port, coordinate system).
@@ -203,7 +222,7 @@ fn m_code(v: f64) -> Result<u32, RunProblem> {
 /// # Errors
 /// [`RunProblem::NotWhole`].
 pub(crate) fn whole(letter: u8, v: f64) -> Result<u32, RunProblem> {
-    whole_in(v, 1e-4, u32::MAX).ok_or(RunProblem::NotWhole { letter: char::from(letter), value: v })
+    whole_in(v, 1e-4, u32::MAX).ok_or_else(|| RunProblem::NotWhole { letter: char::from(letter), value: v })
 }
 
 #[cfg(test)]
@@ -221,7 +240,7 @@ mod tests {
         let mut words = Words::default();
         let mut assigns = Vec::new();
         evaluate(&block, &params, &mut Vec::new(), &mut words, &mut assigns).expect("evaluates");
-        assert_eq!(assigns, vec![(1, 7.0), (2, 3.0)]);
+        assert_eq!(assigns, vec![(Target::Number(1), 7.0), (Target::Number(2), 3.0)]);
         assert_eq!(words.g.as_slice(), &[901]);
         assert_eq!(words.m.as_slice(), &[3]);
         assert!(words.has(b'X'));

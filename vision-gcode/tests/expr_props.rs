@@ -4,7 +4,6 @@
 #![allow(clippy::float_cmp)]
 
 use proptest::prelude::*;
-use vision_gcode::expr::{BinOp, Func};
 use vision_gcode::{Interpreter, InterpreterConfig};
 
 #[derive(Debug, Clone)]
@@ -12,42 +11,33 @@ enum E {
     Num(f64),
     Param(u32),
     Neg(Box<E>),
-    Func(Func, Box<E>),
+    Func(&'static str, Box<E>),
     Atan(Box<E>, Box<E>),
-    Bin(BinOp, Box<E>, Box<E>),
+    Bin((&'static str, u8), Box<E>, Box<E>),
 }
 
-const FUNCS: [Func; 12] = [
-    Func::Abs,
-    Func::Acos,
-    Func::Asin,
-    Func::Cos,
-    Func::Exp,
-    Func::Fix,
-    Func::Fup,
-    Func::Ln,
-    Func::Round,
-    Func::Sin,
-    Func::Sqrt,
-    Func::Tan,
-];
+/// LinuxCNC's one-argument functions, as written `NAME[x]` (the test's own list, so that a
+/// wrong name in the interpreter fails here).
+const FUNCS: [&str; 12] = ["ABS", "ACOS", "ASIN", "COS", "EXP", "FIX", "FUP", "LN", "ROUND", "SIN", "SQRT", "TAN"];
 
-const OPS: [BinOp; 15] = [
-    BinOp::Pow,
-    BinOp::Mul,
-    BinOp::Div,
-    BinOp::Mod,
-    BinOp::Add,
-    BinOp::Sub,
-    BinOp::Eq,
-    BinOp::Ne,
-    BinOp::Gt,
-    BinOp::Ge,
-    BinOp::Lt,
-    BinOp::Le,
-    BinOp::And,
-    BinOp::Or,
-    BinOp::Xor,
+/// LinuxCNC's binary operators as written, with their binding strength (five levels: `**` 4;
+/// `* / MOD` 3; `+ -` 2; comparisons 1; `AND OR XOR` 0), left-associative within a level.
+const OPS: [(&str, u8); 15] = [
+    ("**", 4),
+    ("*", 3),
+    ("/", 3),
+    ("MOD", 3),
+    ("+", 2),
+    ("-", 2),
+    ("EQ", 1),
+    ("NE", 1),
+    ("GT", 1),
+    ("GE", 1),
+    ("LT", 1),
+    ("LE", 1),
+    ("AND", 0),
+    ("OR", 0),
+    ("XOR", 0),
 ];
 
 const PARAMS: u32 = 6;
@@ -74,7 +64,7 @@ fn expr() -> impl Strategy<Value = E> {
 /// Binding strength of a node: binary operators by precedence, everything else is an operand.
 fn strength(e: &E) -> u8 {
     match e {
-        E::Bin(op, ..) => op.precedence(),
+        E::Bin((_, strength), ..) => *strength,
         _ => u8::MAX,
     }
 }
@@ -85,13 +75,13 @@ fn render(e: &E) -> String {
         E::Num(v) => format!("{v}"),
         E::Param(n) => format!("#{n}"),
         E::Neg(a) => format!("-{}", operand(a)),
-        E::Func(f, a) => format!("{}[{}]", f.name(), render(a)),
+        E::Func(name, a) => format!("{name}[{}]", render(a)),
         E::Atan(a, b) => format!("ATAN[{}]/[{}]", render(a), render(b)),
-        E::Bin(op, a, b) => {
-            let p = op.precedence();
+        E::Bin((symbol, p), a, b) => {
+            let p = *p;
             let left = if strength(a) < p { format!("[{}]", render(a)) } else { render(a) };
             let right = if strength(b) <= p { format!("[{}]", render(b)) } else { render(b) };
-            format!("{left} {} {right}", op.symbol())
+            format!("{left} {symbol} {right}")
         }
     }
 }
@@ -112,19 +102,20 @@ fn reference(e: &E, params: &[f64]) -> Option<f64> {
         E::Neg(a) => -reference(a, params)?,
         E::Func(f, a) => {
             let x = reference(a, params)?;
-            match f {
-                Func::Abs => x.abs(),
-                Func::Acos => (-1.0..=1.0).contains(&x).then(|| x.acos().to_degrees())?,
-                Func::Asin => (-1.0..=1.0).contains(&x).then(|| x.asin().to_degrees())?,
-                Func::Cos => x.to_radians().cos(),
-                Func::Exp => x.exp(),
-                Func::Fix => x.floor(),
-                Func::Fup => x.ceil(),
-                Func::Ln => (x > 0.0).then(|| x.ln())?,
-                Func::Round => x.round(),
-                Func::Sin => x.to_radians().sin(),
-                Func::Sqrt => (x >= 0.0).then(|| x.sqrt())?,
-                Func::Tan => x.to_radians().tan(),
+            match *f {
+                "ABS" => x.abs(),
+                "ACOS" => (-1.0..=1.0).contains(&x).then(|| x.acos().to_degrees())?,
+                "ASIN" => (-1.0..=1.0).contains(&x).then(|| x.asin().to_degrees())?,
+                "COS" => x.to_radians().cos(),
+                "EXP" => x.exp(),
+                "FIX" => x.floor(),
+                "FUP" => x.ceil(),
+                "LN" => (x > 0.0).then(|| x.ln())?,
+                "ROUND" => x.round(),
+                "SIN" => x.to_radians().sin(),
+                "SQRT" => (x >= 0.0).then(|| x.sqrt())?,
+                "TAN" => x.to_radians().tan(),
+                other => unreachable!("no function {other}"),
             }
         }
         E::Atan(a, b) => reference(a, params)?.atan2(reference(b, params)?).to_degrees(),
@@ -132,11 +123,11 @@ fn reference(e: &E, params: &[f64]) -> Option<f64> {
             let (x, y) = (reference(a, params)?, reference(b, params)?);
             let t = |c: bool| if c { 1.0 } else { 0.0 };
             let near = (x - y).abs() < 1e-6;
-            match op {
-                BinOp::Pow => (x >= 0.0 || y.floor() == y).then(|| x.powf(y))?,
-                BinOp::Mul => x * y,
-                BinOp::Div => (y != 0.0).then(|| x / y)?,
-                BinOp::Mod => (y != 0.0).then(|| {
+            match op.0 {
+                "**" => (x >= 0.0 || y.floor() == y).then(|| x.powf(y))?,
+                "*" => x * y,
+                "/" => (y != 0.0).then(|| x / y)?,
+                "MOD" => (y != 0.0).then(|| {
                     let r = x % y;
                     if r < 0.0 {
                         r + y.abs()
@@ -144,17 +135,18 @@ fn reference(e: &E, params: &[f64]) -> Option<f64> {
                         r
                     }
                 })?,
-                BinOp::Add => x + y,
-                BinOp::Sub => x - y,
-                BinOp::Eq => t(near),
-                BinOp::Ne => t(!near),
-                BinOp::Gt => t(x > y),
-                BinOp::Ge => t(near || x >= y),
-                BinOp::Lt => t(x < y),
-                BinOp::Le => t(near || x <= y),
-                BinOp::And => t(x != 0.0 && y != 0.0),
-                BinOp::Or => t(x != 0.0 || y != 0.0),
-                BinOp::Xor => t((x != 0.0) != (y != 0.0)),
+                "+" => x + y,
+                "-" => x - y,
+                "EQ" => t(near),
+                "NE" => t(!near),
+                "GT" => t(x > y),
+                "GE" => t(near || x >= y),
+                "LT" => t(x < y),
+                "LE" => t(near || x <= y),
+                "AND" => t(x != 0.0 && y != 0.0),
+                "OR" => t(x != 0.0 || y != 0.0),
+                "XOR" => t((x != 0.0) != (y != 0.0)),
+                other => unreachable!("no operator {other}"),
             }
         }
     };
@@ -214,16 +206,16 @@ proptest! {
 #[test]
 fn rendering_relies_on_precedence() {
     let e = E::Bin(
-        BinOp::Sub,
+        ("-", 2),
         Box::new(E::Num(10.0)),
-        Box::new(E::Bin(BinOp::Sub, Box::new(E::Num(4.0)), Box::new(E::Num(3.0)))),
+        Box::new(E::Bin(("-", 2), Box::new(E::Num(4.0)), Box::new(E::Num(3.0)))),
     );
     assert_eq!(render(&e), "10 - [4 - 3]");
     assert_eq!(reference(&e, &[]), Some(9.0));
     let e = E::Bin(
-        BinOp::Add,
+        ("+", 2),
         Box::new(E::Num(1.0)),
-        Box::new(E::Bin(BinOp::Mul, Box::new(E::Num(2.0)), Box::new(E::Num(3.0)))),
+        Box::new(E::Bin(("*", 3), Box::new(E::Num(2.0)), Box::new(E::Num(3.0)))),
     );
     assert_eq!(render(&e), "1 + 2 * 3");
 }

@@ -2,7 +2,6 @@
 //! text or bytes, or on mutated valid programs, and never emit a non-finite number.
 
 use proptest::prelude::*;
-use vision_gcode::parse::Parser;
 use vision_gcode::{Context, Event, HandlerError, Interpreter, InterpreterConfig, MCodeHandler, UserMCode};
 
 /// Panics if an event carries NaN or infinity.
@@ -19,7 +18,8 @@ fn check_finite(event: &Event) {
         Event::Dwell { seconds, .. } => seconds.is_finite(),
         Event::ToolChange { offset, .. } => offset.is_finite(),
         Event::UserMCode(c) => c.words.iter().all(|(_, v)| v.is_finite()),
-        Event::Output(_) | Event::Stop { .. } | Event::ProgramEnd { .. } => true,
+        Event::Spindle { speed, .. } => speed.is_none_or(f64::is_finite),
+        Event::Output(_) | Event::Coolant { .. } | Event::Stop { .. } | Event::ProgramEnd { .. } => true,
     };
     assert!(ok, "non-finite event {event:?}");
 }
@@ -59,15 +59,24 @@ impl MCodeHandler for Echo {
 }
 
 fn exercise(text: &str) {
-    let mut parser = Parser::new();
-    for (i, line) in text.split('\n').enumerate() {
-        let _ = parser.parse_line(line, u32::try_from(i + 1).unwrap_or(u32::MAX));
+    let config =
+        InterpreterConfig { max_arc_segments: 100_000, max_loop_iterations: 10_000, ..InterpreterConfig::default() };
+    // A run stops at its first bad line; one run per line parses every line.
+    let mut per_line = Interpreter::new(config.clone());
+    for line in text.split('\n') {
+        let _ = per_line.run(line, None, &mut |e: &Event| check_finite(e));
     }
-    let mut interp = Interpreter::new(InterpreterConfig { max_arc_segments: 100_000, ..InterpreterConfig::default() });
+    let mut interp = Interpreter::new(config);
     let _ = interp.run(text, Some(&mut Echo), &mut |e: &Event| check_finite(e));
     assert!(interp.machine_position().is_finite());
     assert!(interp.program_position().is_finite());
     let _ = interp.run(text, None, &mut |e: &Event| check_finite(e));
+    let mut linuxcnc = Interpreter::new(InterpreterConfig {
+        dialect: vision_gcode::Dialect::LinuxCnc,
+        max_loop_iterations: 10_000,
+        ..InterpreterConfig::default()
+    });
+    let _ = linuxcnc.run(text, None, &mut |e: &Event| check_finite(e));
 }
 
 const PROGRAMS: &[&str] = &[
@@ -81,6 +90,10 @@ const PROGRAMS: &[&str] = &[
     "G90 G20 F10\nG52 X0.1 Y0.2\nG68 X3 Y2 R0.5\nG51 X1.001 Y0.999\nG0 X6 Y4\nG2 X0 Y4 I-3 J0\nG69 G50 G52 X0 Y0",
     "#1 = [2 * ATAN[1]/[2]] #2 = [#1 MOD 7 ** 2]\nG1 X[#1 / 3] Y-#2 Z[SQRT[ABS[#2]]] F[100 + #1]\nG10 L20 P0 X0\nG92 Y1\nG28.1\nG28 X2",
     "T1 M6 M3\nG4 P0.5\nM4 $1\nM5 A1 P2\nM0\nM1\nM2",
+    include_str!("programs/linuxcnc_flow.ngc"),
+    "%\nO0001\nG0 X0\nM98 P1000 L3\nM98 P2000\nM30\nO1000\nG91 G1 X1 F100\nG90\nM99\nO2000\nM98 P1000\nM99\n%",
+    "o<s> sub\n#<l> = #1\no1 if [#<l> GT 1]\nG0 X#<l>\no1 else\nG1 Y1 F9\no1 endif\no<s> endsub\no2 repeat [3]\no<s> call [2]\no2 endrepeat\no3 do\n#<_k> = [#<_k> + 1]\no3 while [#<_k> LT 3]",
+    "%\nG17 G40 G49 G80 G90 G20\nT2 M6\nS12000 M3\nG43 H2 M8\nG53 G0 Z0\n/G0 X1\nG0 X0.5 Y0.5 Z0.2\nG98 G81 X1 Y1 Z-0.3 R0.1 F20\nX2\nG99 G83 X3 Q0.1 Z-0.5 R0.1 L2\nG91 G73 X0.5 Z-0.2 R-0.1 Q0.05 L3\nG90 G82 P0.2 Z-0.1 R0.1 X1\nG85 X2\nG89 X3 P0.1\nG80 G0 Z1\nG2 I0.5 F30\nG3 X1 Y1 R0.5 P2\nG64 P0.01 Q0.01\nG43.1 Z0.1\nG49 M9\nG30 G92.1\nM5\n%\nG1 X9",
 ];
 
 /// 384 cases per property in CI; `FUZZ_CASES=100000 cargo test --release --test fuzz` for a
@@ -103,7 +116,7 @@ proptest! {
     }
 
     #[test]
-    fn gcode_shaped_text_never_panics(text in "[GMXYZIJKRPFTLNQS#$\\[\\]0-9.+*/ ()=;EQANDORSINMCOS\n-]{0,300}") {
+    fn gcode_shaped_text_never_panics(text in "[GMXYZIJKRPFTLNQSHO#$%<>\\[\\]0-9.+*/ ()=;EQANDORSINMCOS\n-]{0,300}") {
         exercise(&text);
     }
 

@@ -182,8 +182,11 @@ fn assignments_take_effect_after_the_reads_of_their_line() {
 #[test]
 fn errors_name_the_line_and_the_problem() {
     let cases: &[(&str, RunProblem)] = &[
-        ("G40", RunProblem::UnknownGCode { code: vision_gcode::GCode(400) }),
-        ("M7", RunProblem::UnknownMCode { code: 7, user_low: 100, user_high: 999 }),
+        ("G12", RunProblem::Unsupported { code: "G12".into(), feature: "circular pocket cycles (G12/G13)" }),
+        ("G41", RunProblem::Unsupported { code: "G41".into(), feature: "cutter radius compensation (G41/G42)" }),
+        ("M62 P1", RunProblem::Unsupported { code: "M62".into(), feature: "HAL digital/analog I/O (M62-M68)" }),
+        ("G6", RunProblem::UnknownGCode { code: vision_gcode::GCode(60) }),
+        ("M11", RunProblem::UnknownMCode { code: 11, user_low: 100, user_high: 999 }),
         ("G1.25", RunProblem::BadGCode { value: 1.25 }),
         ("G0 G1 X1", RunProblem::ModalConflict { first: "G0".into(), second: "G1".into() }),
         ("G52 X1 G92", RunProblem::ModalConflict { first: "G52".into(), second: "G92".into() }),
@@ -193,7 +196,8 @@ fn errors_name_the_line_and_the_problem() {
         ("G2 G92 X3 I1", RunProblem::AxisWordConflict { first: "G2".into(), second: "G92".into() }),
         ("X1", RunProblem::NoMotionMode),
         ("G1 X1", RunProblem::NoFeedRate { code: "G1" }),
-        ("G0 X1 S1000", RunProblem::UnusedWord { letter: 'S' }),
+        ("G0 X1 H1", RunProblem::UnusedWord { letter: 'H' }),
+        ("F0 G1 X1", RunProblem::ZeroFeedRate { code: "G1" }),
         ("G0 X1 R2", RunProblem::UnusedWord { letter: 'R' }),
         ("G0 A1", RunProblem::AxisNotSupported { letter: 'A' }),
         ("G4", RunProblem::MissingWord { code: "G4", letter: 'P', hint: "the dwell time in seconds, e.g. G4 P0.5" }),
@@ -227,12 +231,12 @@ fn errors_name_the_line_and_the_problem() {
         ),
         ("G10 L1 P1 X1", RunProblem::G10Form { l: 1.0 }),
         ("T1.5", RunProblem::NotWhole { letter: 'T', value: 1.5 }),
-        ("M3", RunProblem::NoSpindleTool { code: "M3" }),
+        ("M3 $0", RunProblem::NoSpindleTool { code: "M3" }),
         ("M3 A1", RunProblem::OutputForm { code: "M3" }),
         ("G2 X1 F10", RunProblem::ArcNoCentre { code: "G2", centre: "I and J" }),
         ("G2 X1 I1 K1 F10", RunProblem::ArcCentreWord { letter: 'K', plane: "G17", centre: "I and J" }),
         ("G2 X1 R1 I1 F10", RunProblem::ArcBothForms { code: "G2" }),
-        ("G2 I1 J1 F10", RunProblem::ArcNoEnd { code: "G2" }),
+        ("G2 R1 F10", RunProblem::ArcRFullCircle),
         ("G2 X1 Y1 R0.1 F10", RunProblem::ArcRadiusTooSmall { radius: 0.1, half_chord: 0.5_f64.hypot(0.5) }),
         (
             "G90.1 G2 X2 I1 F10",
@@ -405,4 +409,50 @@ fn g28_with_an_intermediate_point_homes_only_the_named_axes() {
     assert_eq!(moves.len(), 2);
     assert_eq!(moves[0].end, Xyz::new(5.0, 5.0, 4.0));
     assert_eq!(moves[1].end, Xyz::new(5.0, 5.0, 3.0));
+}
+
+/// A handler that moves, then reads a watch of the interpreter that is running it (as the
+/// simulated camera does).
+struct MoveAndLook {
+    watch: vision_gcode::PositionWatch,
+    seen: Vec<Xyz>,
+}
+
+impl vision_gcode::MCodeHandler for MoveAndLook {
+    fn call(
+        &mut self,
+        _call: &vision_gcode::UserMCode<'_>,
+        ctx: &mut vision_gcode::Context<'_>,
+    ) -> Result<Vec<String>, vision_gcode::HandlerError> {
+        self.seen.push(self.watch.get());
+        ctx.execute("G0 X2 Y3")?;
+        self.seen.push(self.watch.get());
+        Ok(Vec::new())
+    }
+}
+
+#[test]
+fn a_position_watch_reads_what_the_interpreter_commits_and_nothing_else() {
+    let mut interp = inch();
+    interp.set_machine_position(Xyz::new(1.0, 1.0, 0.0)).expect("finite");
+    let watch = interp.watch_position();
+    assert_eq!(watch.get(), Xyz::new(1.0, 1.0, 0.0));
+    // A G52 re-derives the program point; the machine stays.
+    run(&mut interp, "G90 G52 X5\nG0 X1 Y-1");
+    assert_eq!(watch.get(), Xyz::new(6.0, -1.0, 0.0));
+    // A failing line changes nothing, so the watch does not move either.
+    run_err(&mut interp, "G0 X7 Q1");
+    assert_eq!(watch.get(), Xyz::new(6.0, -1.0, 0.0));
+    // A host placing the machine (no event) is seen too.
+    interp.set_machine_position(Xyz::new(0.5, 0.25, -1.0)).expect("finite");
+    assert_eq!(watch.get(), Xyz::new(0.5, 0.25, -1.0));
+    // A clone is a separate machine: its moves are not published.
+    let mut copy = interp.clone();
+    run(&mut copy, "G0 X9");
+    assert_eq!(watch.get(), Xyz::new(0.5, 0.25, -1.0));
+    // Inside a handler, G-code it runs is published before it returns.
+    let mut look = MoveAndLook { watch: interp.watch_position(), seen: Vec::new() };
+    interp.run("G52 X0\nM100", Some(&mut look), &mut Vec::new()).expect("runs");
+    assert_eq!(look.seen, vec![Xyz::new(0.5, 0.25, -1.0), Xyz::new(2.0, 3.0, -1.0)]);
+    assert_eq!(watch.get(), interp.machine_position());
 }

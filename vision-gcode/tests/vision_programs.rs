@@ -108,7 +108,7 @@ impl MCodeHandler for FakeVision {
             282 => {
                 let (commanded, observed): (Vec<_>, Vec<_>) = self.dots.iter().copied().unzip();
                 let fit = self.model.fit(&commanded, &observed).map_err(|e| HandlerError::Failed(e.to_string()))?;
-                let chain = fit.chain().ok_or_else(|| HandlerError::Failed("no chain".into()))?;
+                let chain = fit.transform.chain().ok_or_else(|| HandlerError::Failed("no chain".into()))?;
                 self.emitted = Some(chain);
                 Ok(chain.gcode().map_err(|e| HandlerError::Failed(e.to_string()))?.to_vec())
             }
@@ -280,7 +280,7 @@ fn m282_gcode_carries_every_commanded_mark_onto_its_observation() {
         [Point2::new(0.1, 0.05), Point2::new(6.0999, 0.1024), Point2::new(6.065, 4.1023), Point2::new(0.0651, 4.0499)];
     for model in [Model::Rectangle, Model::Similarity] {
         let fit = model.fit(&commanded, &observed).expect("fits");
-        let lines = fit.chain().expect("chain").gcode().expect("finite");
+        let lines = fit.transform.chain().expect("chain").gcode().expect("finite");
         for (unit_line, k) in [("G20", 1.0), ("G21", 25.4)] {
             let mut interp = machine();
             let mut text = format!("{unit_line} G90 T98 M6\n");

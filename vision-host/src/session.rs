@@ -65,8 +65,8 @@ impl Session {
         self.alignment.as_ref()
     }
 
-    /// Runs Vision M-code `m` (280–284) with the words of its line on `host`, then runs the
-    /// G-code it emits on the host and tells the operator what happened.
+    /// Runs Vision M-code `m` (280–284) with the words of its line on `host` (the module runs
+    /// the G-code it emits on the host as it goes) and tells the operator what happened.
     ///
     /// # Errors
     /// [`HostError::Mcode`] (a bad word or the module's refusal, in the manual's words) or the
@@ -83,26 +83,20 @@ impl Session {
             return Err(failure);
         }
         let outcome = result.map_err(McodeError::from)?;
-        self.emit(host, &outcome)?;
+        self.track(&outcome);
         host.message(summary(&outcome));
         Ok(outcome)
     }
 
-    /// Runs the G-code `outcome` emits on `host` and tracks the alignment it leaves active: the
-    /// one path by which the module's G-code reaches a controller.
-    fn emit(&mut self, host: &mut dyn Host, outcome: &Outcome) -> Result<(), HostError> {
-        if !outcome.gcode().is_empty() {
-            // Both emitters start with the cancel line: if a later line fails, what is active
-            // is unknown, and no alignment is the safer guess.
-            self.alignment = None;
+    /// Tracks the alignment `outcome` leaves active. The module already ran its G-code on the
+    /// host, through [`HostMachine::run_gcode`]: the one path by which it reaches a controller
+    /// (where a host dialect of M282's output will translate it).
+    fn track(&mut self, outcome: &Outcome) {
+        match outcome {
+            Outcome::Begin(_) => self.alignment = None,
+            Outcome::Apply(reply) => self.alignment = Some(reply.report.chain),
+            _ => {}
         }
-        for line in outcome.gcode() {
-            host.execute(line)?;
-        }
-        if let Outcome::Apply(reply) = outcome {
-            self.alignment = Some(reply.report.chain);
-        }
-        Ok(())
     }
 }
 

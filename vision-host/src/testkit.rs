@@ -200,7 +200,7 @@ impl Rig {
     /// # Panics
     /// Never for the built-in world.
     pub fn run(&self, program: &str, handler: &mut dyn MCodeHandler) -> (SimMachine, Result<RunOutcome, String>) {
-        let mut machine = SimMachine::new(&self.sim, clock()).expect("the built-in machine");
+        let mut machine = SimMachine::new(&self.sim).expect("the built-in machine");
         let end = machine.run_program(program, Some(handler), &mut |_: &vision_gcode::Event| {});
         (machine, end.map_err(|e| e.to_string()))
     }
@@ -266,8 +266,11 @@ impl Trace {
         let sim = machine.sim();
         let world = sim.world();
         let unit = world.length_unit();
-        let pound = (POUND_BASE..POUND_BASE + POUND_COUNT).map(|n| machine.pound(n).unwrap_or(f64::NAN)).collect();
-        let camera_offset = machine.tool_offset(world.machine.camera_tool).unwrap_or_else(|_| Vector2::zeros());
+        let pound = (POUND_BASE..POUND_BASE + POUND_COUNT).map(|n| machine.interpreter().param(n)).collect();
+        let camera_offset = machine
+            .interpreter()
+            .tool_offset(world.machine.camera_tool)
+            .map_or_else(Vector2::zeros, |o| Vector2::new(o.x, o.y));
         let p = machine.interpreter().machine_position();
         let last_m282 = calls.iter().rev().find(|c| c.mcode == 282).and_then(|c| c.result.clone().ok());
         let cut_errors = last_m282.map_or_else(Vec::new, |gcode| {
@@ -336,7 +339,7 @@ impl MCodeHandler for SessionHandler {
         let result = self.session.mcode(&mut host, call.code(), call.words());
         let result = result.map(|o| o.gcode().to_vec()).map_err(|e| e.to_string());
         self.calls.push(Call { mcode: call.code(), result: result.clone() });
-        // The session already ran the emitted G-code on the host.
+        // The module already ran its G-code on the host.
         result.map(|_| Vec::new()).map_err(HandlerError::Failed)
     }
 }

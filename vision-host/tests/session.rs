@@ -67,7 +67,11 @@ fn a_fresh_profile_is_disabled_until_enabled() {
     let path = std::env::temp_dir().join(format!("vision-host-fresh-{}.toml", std::process::id()));
     let mut session = Session::open(&path, &registry()).expect("a missing profile is a fresh one");
     let sim = sim();
-    let mut machine = vision_driver_sim::SimMachine::new(&sim, vision_host::testkit::clock()).expect("machine");
+    let mut interp = vision_driver_sim::SimMachine::new(&sim).expect("machine").interpreter().clone();
+    let mut sink = |_: &vision_gcode::Event| {};
+    let mut ctx = interp.context(&mut sink);
+    let clock = clock();
+    let mut machine = vision_mcode::ContextMachine::new(&mut ctx, &clock);
     let mut host = vision_host::testkit::MachineHost::new(&mut machine);
     let e = session.mcode(&mut host, 280, &[]).expect_err("disabled");
     assert!(matches!(e, HostError::Mcode(McodeError::Vision(_))), "{e:?}");
@@ -90,7 +94,7 @@ fn a_program_after_an_aligned_one_sees_the_cancel_only_when_the_host_can_tell() 
         let (rig, module) = Rig::new(None, Camera::Sim);
         let mut handler = SessionHandler::new(Session::new(module));
         handler.knows_alignment = knows;
-        let mut machine = vision_driver_sim::SimMachine::new(&rig.sim, clock()).expect("machine");
+        let mut machine = vision_driver_sim::SimMachine::new(&rig.sim).expect("machine");
         for program in [&first, &second] {
             machine.run_program(program, Some(&mut handler), &mut |_: &vision_gcode::Event| {}).ok();
         }

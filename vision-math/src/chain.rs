@@ -164,18 +164,6 @@ mod tests {
     }
 
     #[test]
-    fn apply_with_its_own_rotation_matrix_is_apply() {
-        let chain = AlignmentChain {
-            scale: Vector2::new(1.0003, 0.9991),
-            center: Point2::new(3.1, 2.2),
-            rotation_deg: 0.731,
-            shift: Vector2::new(0.07, -0.11),
-        };
-        let p = Point2::new(-123.456, 78.9);
-        assert_eq!(chain.apply_with(&chain.rotation_matrix(), p), chain.apply(p));
-    }
-
-    #[test]
     fn gcode_has_fixed_decimals_and_no_negative_zero() {
         let chain = AlignmentChain {
             scale: Vector2::new(1.0, 0.999_5),

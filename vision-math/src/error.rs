@@ -42,6 +42,23 @@ pub enum MathError {
     /// The observed points carry no information about rotation (they collapse to a point).
     #[error("the observed points collapse to one point; the camera probably found the same mark every time")]
     DegenerateObserved,
+    /// The fit scales the part by more than the scale gate, and the host cannot scale (LinuxCNC
+    /// has no G51).
+    #[error(
+        "LinuxCNC cannot scale: the fit's scale X {scale_x:.6} / Y {scale_y:.6} deviates {dev_pct:.4} % from 1, \
+         more than the scale gate of {max_dev_pct} %; check that the part matches the program, or align \
+         without scale (M282 P1 shift only, P2 rotation only)"
+    )]
+    ScaleNotExpressible {
+        /// The fit's X scale (dimensionless).
+        scale_x: f64,
+        /// The fit's Y scale (dimensionless).
+        scale_y: f64,
+        /// The larger deviation of the two from 1, percent.
+        dev_pct: f64,
+        /// The gate, percent.
+        max_dev_pct: f64,
+    },
     /// K is all zero: the camera has not been calibrated.
     #[error("K matrix is zero; run M283 to calibrate first")]
     NotCalibrated,

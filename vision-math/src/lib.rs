@@ -6,6 +6,7 @@
 //!   similarity, rectangle (the true 5-parameter minimum) and affine — and the 2×2 solve
 //!   calibration needs.
 //! * [`chain`]: the `G51 → G68 → G52` modal chain M282 emits, its exact `apply`, and its text.
+//! * [`linuxcnc`]: the same alignment in LinuxCNC's dialect (`G10 L2 P0 R` + `G52`, no scale).
 //! * [`units`]: inch ↔ millimetre.
 //!
 //! No I/O, no allocation on the fit path, no NaN: every degenerate input is a [`MathError`].
@@ -17,7 +18,7 @@
 //! let commanded = [Point2::new(0.0, 0.0), Point2::new(6.0, 0.0), Point2::new(6.0, 4.0), Point2::new(0.0, 4.0)];
 //! let observed = [Point2::new(0.10, 0.05), Point2::new(6.10, 0.08), Point2::new(6.07, 4.08), Point2::new(0.07, 4.05)];
 //! let fit = fit_rectangle(&commanded, &observed)?;
-//! let chain = fit.chain().expect("a rectangle fit is expressible as G51/G68/G52");
+//! let chain = fit.transform.chain().expect("a rectangle fit is expressible as G51/G68/G52");
 //! for (n, o) in commanded.iter().zip(&observed) {
 //!     assert!((chain.apply(*n) - o).norm() <= fit.max_residual + 1e-12);
 //! }
@@ -29,6 +30,7 @@
 pub mod chain;
 mod error;
 pub mod fit;
+pub mod linuxcnc;
 pub mod pixel;
 pub mod units;
 

@@ -1,6 +1,6 @@
 //! M280–M284 words → a typed [`VisionCall`].
 
-use vision_core::{Calibrate, Pieces, RunMode, VisionError};
+use vision_core::{Calibrate, Pieces, RunMode};
 
 use crate::error::McodeError;
 
@@ -41,7 +41,7 @@ impl VisionCall {
     ///
     /// # Errors
     /// [`McodeError::NotVision`], [`McodeError::UnknownWord`], [`McodeError::RepeatedWord`],
-    /// [`McodeError::NotFinite`], or the core's [`VisionError::BadWord`] for a value out of range
+    /// [`McodeError::NotFinite`], or [`McodeError::BadWord`] for a value out of range
     /// (`M280 P5`, `M281 D2`, `M283` without exactly one of Q and C, `M284 P1.5`).
     pub fn parse(m: u32, words: &[(char, f64)]) -> Result<VisionCall, McodeError> {
         if !VISION_MCODES.contains(&m) {
@@ -64,10 +64,10 @@ impl VisionCall {
         }
         let [first, second] = values;
         Ok(match m {
-            280 => VisionCall::Begin(RunMode::from_p(first)?),
+            280 => VisionCall::Begin(run_mode_word(first)?),
             281 => VisionCall::Capture { keep_image: d_word(first)? },
-            282 => VisionCall::Apply(Pieces::from_p(first)?),
-            283 => VisionCall::Calibrate(Calibrate::from_words(first, second)?),
+            282 => VisionCall::Apply(pieces_word(first)?),
+            283 => VisionCall::Calibrate(calibrate_words(first, second)?),
             _ => VisionCall::SelectJob(job_word(first)?),
         })
     }
@@ -85,31 +85,71 @@ impl VisionCall {
     }
 }
 
-fn d_word(d: Option<f64>) -> Result<bool, VisionError> {
+/// An M-code word's value as an integer; `None` for a fraction or a value too large to be one.
+fn integer_word(v: f64) -> Option<i64> {
+    #[allow(clippy::cast_possible_truncation)] // checked integral and in range
+    (v.is_finite() && v.fract() == 0.0 && v.abs() < 1e15).then_some(v as i64)
+}
+
+fn bad(mcode: &'static str, word: String, reason: &str) -> McodeError {
+    McodeError::BadWord { mcode, word, reason: reason.into() }
+}
+
+/// M280's `P`: 3 similarity, 4 or omitted rectangle.
+fn run_mode_word(p: Option<f64>) -> Result<RunMode, McodeError> {
+    match p.map(|v| (v, integer_word(v))) {
+        None | Some((_, Some(4))) => Ok(RunMode::Rectangle),
+        Some((_, Some(3))) => Ok(RunMode::Similarity),
+        Some((v, _)) => Err(bad("M280", format!("P{v}"), "P must be 3 (similarity) or 4 / omitted (rectangle)")),
+    }
+}
+
+/// M282's `P`: 0 or omitted all, 1 shift, 2 rotation, 3 scale.
+fn pieces_word(p: Option<f64>) -> Result<Pieces, McodeError> {
+    match p.map(|v| (v, integer_word(v))) {
+        None | Some((_, Some(0))) => Ok(Pieces::All),
+        Some((_, Some(1))) => Ok(Pieces::Shift),
+        Some((_, Some(2))) => Ok(Pieces::Rotation),
+        Some((_, Some(3))) => Ok(Pieces::Scale),
+        Some((v, _)) => {
+            Err(bad("M282", format!("P{v}"), "P must be 0 / omitted (all), 1 (shift), 2 (rotation) or 3 (scale)"))
+        }
+    }
+}
+
+/// M283's words: exactly one of `Q` (dot diameter, positive) and `C` (sheet number).
+fn calibrate_words(q: Option<f64>, c: Option<f64>) -> Result<Calibrate, McodeError> {
+    match (q, c) {
+        (Some(d), None) if d > 0.0 => Ok(Calibrate::Quick { diameter: d }),
+        (Some(d), None) => Err(bad("M283", format!("Q{d}"), "Q is the dot diameter and must be positive")),
+        (None, Some(n)) => integer_word(n)
+            .and_then(|n| u32::try_from(n).ok())
+            .map(|n| Calibrate::Sheet { n })
+            .ok_or_else(|| bad("M283", format!("C{n}"), "C is a calibration sheet number (C1)")),
+        _ => Err(bad("M283", String::new(), "give exactly one of Qd (quick, dot diameter d) or Cn (sheet n)")),
+    }
+}
+
+/// M281's `D`: 0 or omitted discards the image, 1 keeps it.
+fn d_word(d: Option<f64>) -> Result<bool, McodeError> {
     match d {
         None => Ok(false),
         Some(0.0) => Ok(false),
         Some(1.0) => Ok(true),
-        Some(v) => Err(VisionError::BadWord {
-            mcode: "M281",
-            word: format!("D{v}"),
-            reason: "D must be 0 / omitted (discard the image) or 1 (keep it)".into(),
-        }),
+        Some(v) => Err(bad("M281", format!("D{v}"), "D must be 0 / omitted (discard the image) or 1 (keep it)")),
     }
 }
 
-fn job_word(p: Option<f64>) -> Result<Option<u32>, VisionError> {
-    match p {
+/// M284's `P`: a whole camera job 0..=999, or omitted (the stored `VisionActiveJob`).
+fn job_word(p: Option<f64>) -> Result<Option<u32>, McodeError> {
+    match p.map(|v| (v, integer_word(v))) {
         None => Ok(None),
-        Some(v) if v.fract() == 0.0 && (0.0..=999.0).contains(&v) => {
-            #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)] // checked: integral, 0..=999
-            Ok(Some(v as u32))
-        }
-        Some(v) => Err(VisionError::BadWord {
-            mcode: "M284",
-            word: format!("P{v}"),
-            reason: "P is the camera job and must be a whole number 0..999".into(),
-        }),
+        Some((v, Some(j))) => u32::try_from(j)
+            .ok()
+            .filter(|j| *j <= vision_core::module::MAX_JOB)
+            .map(Some)
+            .ok_or_else(|| bad("M284", format!("P{v}"), "P is the camera job and must be a whole number 0..999")),
+        Some((v, None)) => Err(bad("M284", format!("P{v}"), "P is the camera job and must be a whole number 0..999")),
     }
 }
 
@@ -130,6 +170,12 @@ mod tests {
         assert_eq!(p(283, &[('Q', 0.5)]), Ok(VisionCall::Calibrate(Calibrate::Quick { diameter: 0.5 })));
         assert_eq!(p(284, &[]), Ok(VisionCall::SelectJob(None)));
         assert_eq!(p(284, &[('P', 2.0)]), Ok(VisionCall::SelectJob(Some(2))));
+        assert_eq!(p(284, &[('P', 999.0)]), Ok(VisionCall::SelectJob(Some(999))));
+        assert_eq!(p(280, &[('P', 4.0)]), Ok(VisionCall::Begin(RunMode::Rectangle)));
+        assert_eq!(p(282, &[]), Ok(VisionCall::Apply(Pieces::All)));
+        assert_eq!(p(282, &[('P', 0.0)]), Ok(VisionCall::Apply(Pieces::All)));
+        assert_eq!(p(282, &[('P', 1.0)]), Ok(VisionCall::Apply(Pieces::Shift)));
+        assert_eq!(p(282, &[('P', 3.0)]), Ok(VisionCall::Apply(Pieces::Scale)));
         for m in VISION_MCODES {
             let call = p(m, if m == 283 { &[('C', 1.0)] } else { &[] }).expect("valid");
             assert_eq!(call.mcode(), m);
@@ -145,6 +191,10 @@ mod tests {
         assert_eq!(p(280, &[('P', 3.0), ('P', 4.0)]), Err(McodeError::RepeatedWord { m: 280, letter: 'P' }));
         assert_eq!(p(282, &[('P', f64::NAN)]), Err(McodeError::NotFinite { m: 282, letter: 'P' }));
         assert_eq!(p(279, &[]), Err(McodeError::NotVision { m: 279 }));
+        assert_eq!(
+            p(280, &[('P', 5.0)]).expect_err("P5").to_string(),
+            "M280 P5 is invalid: P must be 3 (similarity) or 4 / omitted (rectangle)"
+        );
         for (m, words) in [
             (280, vec![('P', 5.0)]),
             (281, vec![('D', 2.0)]),
@@ -152,12 +202,16 @@ mod tests {
             (283, vec![]),
             (283, vec![('Q', 0.5), ('C', 1.0)]),
             (283, vec![('Q', -0.5)]),
+            (283, vec![('C', 1.5)]),
+            (283, vec![('C', -1.0)]),
+            (280, vec![('P', 3.5)]),
+            (282, vec![('P', -1.0)]),
             (284, vec![('P', 1.5)]),
             (284, vec![('P', 1000.0)]),
             (284, vec![('P', -1.0)]),
         ] {
             let e = p(m, &words).expect_err("out of range");
-            assert!(matches!(e, McodeError::Vision(VisionError::BadWord { .. })), "M{m} {words:?}: {e}");
+            assert!(matches!(e, McodeError::BadWord { .. }), "M{m} {words:?}: {e}");
             assert!(e.to_string().starts_with(&format!("M{m} ")), "{e}");
         }
     }

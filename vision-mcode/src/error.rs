@@ -38,6 +38,16 @@ pub enum McodeError {
         /// The letter.
         letter: char,
     },
+    /// A word whose value the M-code does not accept (e.g. `M280 P5`, `M284 P1000`).
+    #[error("{mcode} {word} is invalid: {reason}")]
+    BadWord {
+        /// The M-code (`M280`, …).
+        mcode: &'static str,
+        /// The word as given (`P5`).
+        word: String,
+        /// What is allowed.
+        reason: String,
+    },
     /// The Vision module refused (its message is the manual's).
     #[error("{0}")]
     Vision(#[from] VisionError),

@@ -20,8 +20,8 @@ pub struct Record {
 }
 
 /// The interpreter's handler for M280–M284: parses the words, runs the Vision module on the
-/// interpreter as its host ([`ContextMachine`]), hands back the G-code the module emits (run in
-/// place by the interpreter), and keeps a [`Record`] of every call for reports.
+/// interpreter as its host ([`ContextMachine`]; the module runs its own G-code through it, in
+/// place, at the M-code's line), and keeps a [`Record`] of every call for reports.
 ///
 /// A refused call stops the program at its line with the module's message.
 pub struct VisionHandler {
@@ -100,7 +100,8 @@ impl VisionHandler {
 impl MCodeHandler for VisionHandler {
     fn call(&mut self, call: &UserMCode<'_>, ctx: &mut Context<'_>) -> Result<Vec<String>, HandlerError> {
         match self.dispatch(call.code(), call.words(), ctx) {
-            Ok(outcome) => Ok(outcome.gcode().to_vec()),
+            // The module ran its G-code on the interpreter already (`Context::execute`).
+            Ok(_) => Ok(Vec::new()),
             Err(e) => Err(HandlerError::Failed(e.to_string())),
         }
     }

@@ -3,11 +3,11 @@
 //! * [`VisionCall::parse`]: an M-code and the words of its line → a typed call (unknown
 //!   letters, repeated words, non-finite and out-of-range values refused with a clear message).
 //! * [`VisionCall::run`]: dispatches to [`vision_core::VisionModule`] and returns an
-//!   [`Outcome`]: the module's report, and the G-code it emits ([`Outcome::gcode`]), already
-//!   formatted by `vision_math::AlignmentChain::gcode` (fixed decimals that move no point by
-//!   more than 1e-6 units; never NaN, inf or `-0`).
-//! * [`VisionHandler`]: the interpreter's user M-code handler for M280–M284 (returns the emitted
-//!   G-code for the interpreter to run in place, keeps a [`Record`] of every call).
+//!   [`Outcome`]: the module's report, and the G-code it ran on the machine
+//!   ([`Outcome::gcode`]; M282's lines formatted by `vision_math::AlignmentChain::gcode`: fixed
+//!   decimals that move no point by more than 1e-6 units; never NaN, inf or `-0`).
+//! * [`VisionHandler`]: the interpreter's user M-code handler for M280–M284 (the module runs
+//!   its G-code in place through [`ContextMachine`]; keeps a [`Record`] of every call).
 //! * [`ContextMachine`]: the one [`vision_core::Machine`] over the interpreter — inside a handler,
 //!   or around a standalone interpreter — so the module's moves run synchronously on it.
 //!

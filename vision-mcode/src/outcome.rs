@@ -4,7 +4,7 @@ use vision_core::{AlignReport, CalReport, Capture, JobReport, Machine, Reply, Ru
 
 use crate::call::VisionCall;
 
-/// What a Vision M-code did: the module's reply (G-code to run next, and the report).
+/// What a Vision M-code did: the module's reply (the G-code it ran, and the report).
 #[derive(Debug, Clone, PartialEq)]
 pub enum Outcome {
     /// M280.
@@ -20,8 +20,8 @@ pub enum Outcome {
 }
 
 impl Outcome {
-    /// The G-code lines the host must run next, in order (M280's cancel line, M282's four
-    /// modal lines; empty for the others).
+    /// The G-code lines the module ran on the machine, in order (M280's cancel line, M282's
+    /// four modal lines, M283's moves; empty for M281 and M284). Not to be run again.
     #[must_use]
     pub fn gcode(&self) -> &[String] {
         match self {

@@ -12,7 +12,7 @@
 //!   shrunk) against the programmed path.
 
 use crate::curve::Curve;
-use crate::vec3::Vec3;
+use vision_gcode::Xyz;
 
 /// A corner blend: trim `s1` off the end of the incoming piece and `s2` off the start of the
 /// outgoing one, and insert `pieces` between them.
@@ -175,7 +175,7 @@ fn path_deviation(pieces: &[Curve], tail: &Curve, head: &Curve) -> f64 {
 
 /// Two circular arcs (or lines) from `a` leaving along `ta` to `b` arriving along `tb`,
 /// tangent-continuous where they meet (the equal-tangent-length biarc).
-fn biarc(a: Vec3, ta: Vec3, b: Vec3, tb: Vec3) -> Option<Vec<Curve>> {
+fn biarc(a: Xyz, ta: Xyz, b: Xyz, tb: Xyz) -> Option<Vec<Curve>> {
     let v = b - a;
     let t = ta + tb;
     let qa = 2.0 * (ta.dot(tb) - 1.0);
@@ -219,7 +219,7 @@ mod tests {
         let c2 = line([100.0, 0.0, 0.0], [100.0, 100.0, 0.0]);
         let b = blend(&c1, 50.0, &c2, 50.0, Some(1.0), f64::INFINITY).unwrap();
         assert_eq!(b.pieces.len(), 1);
-        let dev = b.pieces[0].distance_to(Vec3::new(100.0, 0.0, 0.0));
+        let dev = b.pieces[0].distance_to(Xyz::new(100.0, 0.0, 0.0));
         assert!((dev - 1.0).abs() < 1e-9, "{dev}");
         // ℓ = P / tan(22.5°), radius ℓ / tan(45°) = ℓ.
         let ell = 1.0 / (std::f64::consts::PI / 8.0).tan();
@@ -257,17 +257,17 @@ mod tests {
         let c1 = line([60.0, 110.0, 0.0], [110.0, 110.0, 0.0]);
         let c2 = Curve::Arc(
             ArcCurve::program(
-                Vec3::new(110.0, 110.0, 0.0),
-                Vec3::new(110.0, 10.0, 0.0),
-                Vec3::new(100.0, 60.0, 0.0),
-                Vec3::new(0.0, 0.0, 1.0),
+                Xyz::new(110.0, 110.0, 0.0),
+                Xyz::new(110.0, 10.0, 0.0),
+                Xyz::new(100.0, 60.0, 0.0),
+                Xyz::new(0.0, 0.0, 1.0),
                 -2.0 * 50f64.atan2(10.0),
             )
             .unwrap(),
         );
         let b = blend(&c1, c1.len() / 2.0, &c2, c2.len() / 2.0, Some(0.5), f64::INFINITY).unwrap();
         assert_eq!(b.pieces.len(), 2);
-        let corner = Vec3::new(110.0, 110.0, 0.0);
+        let corner = Xyz::new(110.0, 110.0, 0.0);
         let dev = b.pieces.iter().map(|p| p.distance_to(corner)).fold(f64::INFINITY, f64::min);
         assert!(dev <= 0.5 && dev > 0.4, "the search should use most of the tolerance: {dev}");
         let a = c1.point(c1.len() - b.s1);
@@ -279,13 +279,9 @@ mod tests {
 
     #[test]
     fn a_biarc_between_symmetric_tangents_is_one_circle() {
-        let pieces = biarc(
-            Vec3::new(-1.0, 0.0, 0.0),
-            Vec3::new(1.0, 0.0, 0.0),
-            Vec3::new(0.0, 1.0, 0.0),
-            Vec3::new(0.0, 1.0, 0.0),
-        )
-        .unwrap();
+        let pieces =
+            biarc(Xyz::new(-1.0, 0.0, 0.0), Xyz::new(1.0, 0.0, 0.0), Xyz::new(0.0, 1.0, 0.0), Xyz::new(0.0, 1.0, 0.0))
+                .unwrap();
         for p in &pieces {
             assert!((p.radius() - 1.0).abs() < 1e-12);
         }

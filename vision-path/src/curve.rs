@@ -7,7 +7,7 @@
 use std::f64::consts::TAU;
 
 use crate::limits::ShapeFactors;
-use crate::vec3::Vec3;
+use vision_gcode::Xyz;
 
 /// A line or an arc.
 #[derive(Debug, Clone, PartialEq)]
@@ -19,10 +19,10 @@ pub(crate) enum Curve {
 /// A straight line.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct LineCurve {
-    start: Vec3,
-    end: Vec3,
+    start: Xyz,
+    end: Xyz,
     /// Unit direction.
-    dir: Vec3,
+    dir: Xyz,
     len: f64,
 }
 
@@ -34,10 +34,10 @@ pub(crate) struct LineCurve {
 /// Circles and helices (`k_r = 0`) have `h` constant: `s` is the arc length.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct ArcCurve {
-    base: Vec3,
-    e1: Vec3,
-    e2: Vec3,
-    axis: Vec3,
+    base: Xyz,
+    e1: Xyz,
+    e2: Xyz,
+    axis: Xyz,
     r0: f64,
     k_r: f64,
     k_z: f64,
@@ -50,8 +50,8 @@ pub(crate) struct ArcCurve {
     dh: f64,
     /// `s` at `phi_b`, machine units.
     len: f64,
-    start: Vec3,
-    end: Vec3,
+    start: Xyz,
+    end: Xyz,
     factors: ShapeFactors,
 }
 
@@ -72,7 +72,7 @@ pub(crate) const MAX_SWEEP: f64 = 1e6 * TAU;
 
 impl LineCurve {
     /// The line from `start` to `end`, or `None` when they coincide.
-    pub(crate) fn new(start: Vec3, end: Vec3) -> Option<LineCurve> {
+    pub(crate) fn new(start: Xyz, end: Xyz) -> Option<LineCurve> {
         let d = end - start;
         let len = d.norm();
         (len > 0.0 && len.is_finite()).then(|| LineCurve { start, end, dir: d * (1.0 / len), len })
@@ -82,13 +82,7 @@ impl LineCurve {
 impl ArcCurve {
     /// A G2/G3 arc from `start` to `end` about `centre`, turning `sweep` radians about
     /// `normal` (see [`crate::ArcShape`]). The sweep must take the arc to `end`.
-    pub(crate) fn program(
-        start: Vec3,
-        end: Vec3,
-        centre: Vec3,
-        normal: Vec3,
-        sweep: f64,
-    ) -> Result<ArcCurve, ArcProblem> {
+    pub(crate) fn program(start: Xyz, end: Xyz, centre: Xyz, normal: Xyz, sweep: f64) -> Result<ArcCurve, ArcProblem> {
         let n = normal.unit().ok_or(ArcProblem::NoPlane)?;
         if !(sweep.is_finite() && sweep != 0.0 && sweep.abs() <= MAX_SWEEP) {
             return Err(ArcProblem::BadSweep);
@@ -107,7 +101,10 @@ impl ArcCurve {
         let e1 = rs_p * (1.0 / r0);
         let e2 = axis.cross(e1);
         let base = centre + axis * rs.dot(axis);
-        let k_r = (r1 - r0) / sweep;
+        // Radii equal but for rounding (a circle whose centre and ends were converted between
+        // units) make a circle, not a spiral: the two are planned with different shares of
+        // the axis acceleration, so rounding must not pick one.
+        let k_r = if (r1 - r0).abs() <= 1e-9 * scale { 0.0 } else { (r1 - r0) / sweep };
         let k_z = (end - start).dot(axis) / sweep;
         let arc = ArcCurve::build(base, e1, e2, axis, r0, k_r, k_z, (0.0, sweep), start, end);
         // The end is returned exactly; the sweep must reach it (as closely as the continuity
@@ -125,16 +122,16 @@ impl ArcCurve {
     /// The arc over `phi ∈ [range.0, range.1]` (radians from `e1`) with exact ends.
     #[allow(clippy::too_many_arguments)]
     fn build(
-        base: Vec3,
-        e1: Vec3,
-        e2: Vec3,
-        axis: Vec3,
+        base: Xyz,
+        e1: Xyz,
+        e2: Xyz,
+        axis: Xyz,
         r0: f64,
         k_r: f64,
         k_z: f64,
         (phi_a, phi_b): (f64, f64),
-        start: Vec3,
-        end: Vec3,
+        start: Xyz,
+        end: Xyz,
     ) -> ArcCurve {
         let (r_a, r_b) = (r0 + k_r * phi_a, r0 + k_r * phi_b);
         let side2 = k_r * k_r + k_z * k_z;
@@ -156,28 +153,28 @@ impl ArcCurve {
         (self.phi_a + 2.0 * s / (self.h_a + h), h)
     }
 
-    fn radial(&self, phi: f64) -> (Vec3, Vec3) {
+    fn radial(&self, phi: f64) -> (Xyz, Xyz) {
         let (sin, cos) = phi.sin_cos();
         (self.e1 * cos + self.e2 * sin, self.e2 * cos - self.e1 * sin)
     }
 
     /// The point at angle `phi`, whose radial direction is `radial`.
-    fn position(&self, radial: Vec3, phi: f64) -> Vec3 {
+    fn position(&self, radial: Xyz, phi: f64) -> Xyz {
         self.base + radial * (self.r0 + self.k_r * phi) + self.axis * (self.k_z * phi)
     }
 
     /// `dp/ds` at angle `phi` (radial and tangential directions `dirs`), where `ds/dφ = h`.
-    fn direction(&self, (radial, tangential): (Vec3, Vec3), phi: f64, h: f64) -> Vec3 {
+    fn direction(&self, (radial, tangential): (Xyz, Xyz), phi: f64, h: f64) -> Xyz {
         (tangential * (self.r0 + self.k_r * phi) + radial * self.k_r + self.axis * self.k_z) * (1.0 / h)
     }
 
-    fn at_phi(&self, phi: f64) -> Vec3 {
+    fn at_phi(&self, phi: f64) -> Xyz {
         self.position(self.radial(phi).0, phi)
     }
 
     /// Distance from `p` to this arc: exact for circles; for spirals the radius at the
     /// point's angle is used (exact to first order in the radius change). Not for helices.
-    fn distance_planar(&self, p: Vec3) -> f64 {
+    fn distance_planar(&self, p: Xyz) -> f64 {
         let d = p - self.base;
         let h = d.dot(self.axis);
         let dp = d - self.axis * h;
@@ -207,7 +204,7 @@ impl ArcCurve {
 /// * axis `i` sees `p′_i ≤ q_i·√(r² + k_r²) + |axis_i|·|k_z|` with `q_i` the length of its
 ///   projection on the plane, divided by `h ≥ g` (`c`), and `d²p_i/ds²` at most
 ///   `q_i·kappa + |axis_i|·|k_z|·|dh|/h_min³` (the rise term only on spiral helices) (`q`).
-fn arc_factors(axis: Vec3, (r_a, r_b): (f64, f64), k_r: f64, k_z: f64, h_min: f64, dh: f64) -> ShapeFactors {
+fn arc_factors(axis: Xyz, (r_a, r_b): (f64, f64), k_r: f64, k_z: f64, h_min: f64, dh: f64) -> ShapeFactors {
     let (r_max, r_min) = (r_a.max(r_b), r_a.min(r_b));
     let (kr2, kz2) = (k_r * k_r, k_z * k_z);
     let in_plane = ((r_max * r_max + kr2) / (r_max * r_max + kr2 + kz2)).sqrt();
@@ -229,7 +226,7 @@ impl Curve {
     /// The planar circular arc that leaves `start` along the unit `tangent` and reaches `end`;
     /// a straight line when `end` lies (nearly) on the tangent. `None` when the points coincide
     /// or `end` lies behind `start` on the tangent.
-    pub(crate) fn from_tangent(start: Vec3, tangent: Vec3, end: Vec3) -> Option<Curve> {
+    pub(crate) fn from_tangent(start: Xyz, tangent: Xyz, end: Xyz) -> Option<Curve> {
         let chord = end - start;
         let c2 = chord.dot(chord);
         let off = chord - tangent * chord.dot(tangent);
@@ -272,7 +269,7 @@ impl Curve {
     }
 
     /// The exact start point.
-    pub(crate) fn start(&self) -> Vec3 {
+    pub(crate) fn start(&self) -> Xyz {
         match self {
             Curve::Line(l) => l.start,
             Curve::Arc(a) => a.start,
@@ -280,7 +277,7 @@ impl Curve {
     }
 
     /// The exact end point.
-    pub(crate) fn end(&self) -> Vec3 {
+    pub(crate) fn end(&self) -> Xyz {
         match self {
             Curve::Line(l) => l.end,
             Curve::Arc(a) => a.end,
@@ -288,7 +285,7 @@ impl Curve {
     }
 
     /// The point at parameter `s` (clamped; the ends are exact).
-    pub(crate) fn point(&self, s: f64) -> Vec3 {
+    pub(crate) fn point(&self, s: f64) -> Xyz {
         if s <= 0.0 {
             return self.start();
         }
@@ -302,7 +299,7 @@ impl Curve {
     }
 
     /// `dp/ds` at parameter `s` (a unit vector except inside spirals, where `|dp/ds| ≤ 1`).
-    pub(crate) fn deriv(&self, s: f64) -> Vec3 {
+    pub(crate) fn deriv(&self, s: f64) -> Xyz {
         match self {
             Curve::Line(l) => l.dir,
             Curve::Arc(a) => {
@@ -314,7 +311,7 @@ impl Curve {
 
     /// [`Curve::point`] and [`Curve::deriv`] at `s` together, bit for bit, evaluating an
     /// arc's angle once (the setpoint hot path).
-    pub(crate) fn point_and_deriv(&self, s: f64) -> (Vec3, Vec3) {
+    pub(crate) fn point_and_deriv(&self, s: f64) -> (Xyz, Xyz) {
         match self {
             Curve::Line(l) => (self.point(s), l.dir),
             Curve::Arc(a) => {
@@ -333,13 +330,13 @@ impl Curve {
     }
 
     /// Unit tangent at the start.
-    pub(crate) fn start_tangent(&self) -> Vec3 {
+    pub(crate) fn start_tangent(&self) -> Xyz {
         let d = self.deriv(0.0);
         d.unit().unwrap_or(d)
     }
 
     /// Unit tangent at the end.
-    pub(crate) fn end_tangent(&self) -> Vec3 {
+    pub(crate) fn end_tangent(&self) -> Xyz {
         let d = self.deriv(self.len());
         d.unit().unwrap_or(d)
     }
@@ -397,7 +394,7 @@ impl Curve {
     }
 
     /// Distance from `p` to this curve, for lines and planar arcs (not helices).
-    pub(crate) fn distance_to(&self, p: Vec3) -> f64 {
+    pub(crate) fn distance_to(&self, p: Xyz) -> f64 {
         match self {
             Curve::Line(l) => {
                 let t = (p - l.start).dot(l.dir).clamp(0.0, l.len);
@@ -413,7 +410,7 @@ mod tests {
     use super::*;
     use std::f64::consts::{FRAC_PI_2, PI};
 
-    fn close(a: Vec3, b: Vec3, tol: f64) -> bool {
+    fn close(a: Xyz, b: Xyz, tol: f64) -> bool {
         (a - b).norm() <= tol
     }
 
@@ -421,9 +418,9 @@ mod tests {
     fn a_nearly_straight_tangent_arc_is_as_long_as_its_chord_and_runs_along_it() {
         // A biarc piece a planner run produced (radius 7.4 km, 0.13 mm long): its sweep came
         // out 2.5 times too large, so the path ran 0.2 mm past the piece's end and jumped back.
-        let start = Vec3::new(-4.111846120672503, 0.6365548900226443, 3.0);
-        let end = Vec3::new(-4.242390796453222, 0.6147396097029565, 3.0);
-        let tangent = Vec3::new(-0.9863229716703146, -0.16482413523340556, 0.0);
+        let start = Xyz::new(-4.111846120672503, 0.6365548900226443, 3.0);
+        let end = Xyz::new(-4.242390796453222, 0.6147396097029565, 3.0);
+        let tangent = Xyz::new(-0.9863229716703146, -0.16482413523340556, 0.0);
         let arc = Curve::from_tangent(start, tangent, end).unwrap();
         assert!(matches!(arc, Curve::Arc(_)) && arc.radius() > 1e6, "{arc:?}");
         let chord = (end - start).norm();
@@ -434,33 +431,33 @@ mod tests {
             assert!(close(arc.point(s), along, 1e-9), "{k}: {:?} vs {along:?}", arc.point(s));
         }
         // And an ordinary one: a half circle of radius 1.
-        let half = Curve::from_tangent(Vec3::ZERO, Vec3::new(0.0, 1.0, 0.0), Vec3::new(2.0, 0.0, 0.0)).unwrap();
+        let half = Curve::from_tangent(Xyz::ZERO, Xyz::new(0.0, 1.0, 0.0), Xyz::new(2.0, 0.0, 0.0)).unwrap();
         assert!((half.len() - PI).abs() < 1e-12 && (half.radius() - 1.0).abs() < 1e-12);
-        assert!(close(half.point(FRAC_PI_2), Vec3::new(1.0, 1.0, 0.0), 1e-12));
+        assert!(close(half.point(FRAC_PI_2), Xyz::new(1.0, 1.0, 0.0), 1e-12));
     }
 
     #[test]
     fn a_quarter_circle_g3_in_xy_runs_counter_clockwise_with_exact_ends() {
-        let (s, e, c) = (Vec3::new(10.0, 0.0, 0.0), Vec3::new(0.0, 10.0, 0.0), Vec3::ZERO);
-        let arc = Curve::Arc(ArcCurve::program(s, e, c, Vec3::new(0.0, 0.0, 1.0), FRAC_PI_2).unwrap());
+        let (s, e, c) = (Xyz::new(10.0, 0.0, 0.0), Xyz::new(0.0, 10.0, 0.0), Xyz::ZERO);
+        let arc = Curve::Arc(ArcCurve::program(s, e, c, Xyz::new(0.0, 0.0, 1.0), FRAC_PI_2).unwrap());
         assert!((arc.len() - 10.0 * FRAC_PI_2).abs() < 1e-12);
         assert_eq!(arc.point(arc.len()), e);
         assert_eq!(arc.point(0.0), s);
         let mid = arc.point(arc.len() / 2.0);
-        assert!(close(mid, Vec3::new(10.0 / 2f64.sqrt(), 10.0 / 2f64.sqrt(), 0.0), 1e-12));
-        assert!(close(arc.start_tangent(), Vec3::new(0.0, 1.0, 0.0), 1e-12));
-        assert!(close(arc.end_tangent(), Vec3::new(-1.0, 0.0, 0.0), 1e-12));
+        assert!(close(mid, Xyz::new(10.0 / 2f64.sqrt(), 10.0 / 2f64.sqrt(), 0.0), 1e-12));
+        assert!(close(arc.start_tangent(), Xyz::new(0.0, 1.0, 0.0), 1e-12));
+        assert!(close(arc.end_tangent(), Xyz::new(-1.0, 0.0, 0.0), 1e-12));
     }
 
     #[test]
     fn g2_goes_the_other_way_round_and_equal_ends_make_a_full_circle() {
-        let (s, e, c) = (Vec3::new(10.0, 0.0, 0.0), Vec3::new(0.0, 10.0, 0.0), Vec3::ZERO);
-        let cw = Curve::Arc(ArcCurve::program(s, e, c, Vec3::new(0.0, 0.0, 1.0), -3.0 * FRAC_PI_2).unwrap());
+        let (s, e, c) = (Xyz::new(10.0, 0.0, 0.0), Xyz::new(0.0, 10.0, 0.0), Xyz::ZERO);
+        let cw = Curve::Arc(ArcCurve::program(s, e, c, Xyz::new(0.0, 0.0, 1.0), -3.0 * FRAC_PI_2).unwrap());
         assert!((cw.len() - 10.0 * 3.0 * FRAC_PI_2).abs() < 1e-9);
-        assert!(close(cw.point(cw.len() / 3.0), Vec3::new(0.0, -10.0, 0.0), 1e-9));
-        let full = Curve::Arc(ArcCurve::program(s, s, c, Vec3::new(0.0, 0.0, 1.0), TAU).unwrap());
+        assert!(close(cw.point(cw.len() / 3.0), Xyz::new(0.0, -10.0, 0.0), 1e-9));
+        let full = Curve::Arc(ArcCurve::program(s, s, c, Xyz::new(0.0, 0.0, 1.0), TAU).unwrap());
         assert!((full.len() - 20.0 * PI).abs() < 1e-9);
-        let two = Curve::Arc(ArcCurve::program(s, s, c, Vec3::new(0.0, 0.0, 1.0), 2.0 * TAU).unwrap());
+        let two = Curve::Arc(ArcCurve::program(s, s, c, Xyz::new(0.0, 0.0, 1.0), 2.0 * TAU).unwrap());
         assert!((two.len() - 40.0 * PI).abs() < 1e-9);
     }
 
@@ -469,10 +466,10 @@ mod tests {
         // G18: normal +Y; counter-clockwise goes from +Z towards +X.
         let arc = Curve::Arc(
             ArcCurve::program(
-                Vec3::new(0.0, 0.0, 5.0),
-                Vec3::new(5.0, 0.0, 0.0),
-                Vec3::ZERO,
-                Vec3::new(0.0, 1.0, 0.0),
+                Xyz::new(0.0, 0.0, 5.0),
+                Xyz::new(5.0, 0.0, 0.0),
+                Xyz::ZERO,
+                Xyz::new(0.0, 1.0, 0.0),
                 FRAC_PI_2,
             )
             .unwrap(),
@@ -481,10 +478,10 @@ mod tests {
         // G19: normal +X; counter-clockwise goes from +Y towards +Z.
         let arc = Curve::Arc(
             ArcCurve::program(
-                Vec3::new(0.0, 5.0, 0.0),
-                Vec3::new(0.0, 0.0, 5.0),
-                Vec3::ZERO,
-                Vec3::new(1.0, 0.0, 0.0),
+                Xyz::new(0.0, 5.0, 0.0),
+                Xyz::new(0.0, 0.0, 5.0),
+                Xyz::ZERO,
+                Xyz::new(1.0, 0.0, 0.0),
                 FRAC_PI_2,
             )
             .unwrap(),
@@ -494,9 +491,9 @@ mod tests {
 
     #[test]
     fn a_helix_rises_linearly_and_its_length_includes_the_rise() {
-        let s = Vec3::new(10.0, 0.0, 0.0);
-        let e = Vec3::new(-10.0, 0.0, 4.0);
-        let arc = Curve::Arc(ArcCurve::program(s, e, Vec3::ZERO, Vec3::new(0.0, 0.0, 1.0), PI).unwrap());
+        let s = Xyz::new(10.0, 0.0, 0.0);
+        let e = Xyz::new(-10.0, 0.0, 4.0);
+        let arc = Curve::Arc(ArcCurve::program(s, e, Xyz::ZERO, Xyz::new(0.0, 0.0, 1.0), PI).unwrap());
         let expected = ((10.0 * PI).powi(2) + 16.0f64).sqrt();
         assert!((arc.len() - expected).abs() < 1e-9);
         assert!((arc.point(arc.len() / 2.0).z - 2.0).abs() < 1e-12);
@@ -507,9 +504,9 @@ mod tests {
 
     #[test]
     fn a_spiral_keeps_its_parameter_speed_at_most_one_and_exactly_one_at_its_ends() {
-        let s = Vec3::new(10.0, 0.0, 0.0);
-        let e = Vec3::new(0.0, 10.01, 0.0);
-        let arc = Curve::Arc(ArcCurve::program(s, e, Vec3::ZERO, Vec3::new(0.0, 0.0, 1.0), FRAC_PI_2).unwrap());
+        let s = Xyz::new(10.0, 0.0, 0.0);
+        let e = Xyz::new(0.0, 10.01, 0.0);
+        let arc = Curve::Arc(ArcCurve::program(s, e, Xyz::ZERO, Xyz::new(0.0, 0.0, 1.0), FRAC_PI_2).unwrap());
         for k in 0..=20 {
             let d = arc.deriv(arc.len() * f64::from(k) / 20.0).norm();
             assert!(d <= 1.0 + 1e-15 && d > 0.999, "{d}");
@@ -530,11 +527,11 @@ mod tests {
     /// orientations, and along parts of them.
     #[test]
     fn the_shape_factors_bound_the_derivatives_of_every_arc() {
-        let normals = [Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.3, -0.5, 0.8)];
+        let normals = [Xyz::new(0.0, 0.0, 1.0), Xyz::new(0.0, 1.0, 0.0), Xyz::new(0.3, -0.5, 0.8)];
         let mut checked = 0;
         for normal in normals {
             let n = normal.unit().unwrap();
-            let e1 = Vec3::new(1.0, 2.0, -0.5).cross(n).unit().unwrap();
+            let e1 = Xyz::new(1.0, 2.0, -0.5).cross(n).unit().unwrap();
             let e2 = n.cross(e1);
             for (r0, r1) in [(2.0, 2.0), (1.0, 1.5), (1.5, 1.0), (0.1, 0.128), (3.0, 1.0), (1.0, 3.0)] {
                 for rise in [0.0, 0.7, -4.0] {
@@ -543,7 +540,7 @@ mod tests {
                         let (sin, cos) = sweep.abs().sin_cos();
                         let turn = if sweep < 0.0 { -1.0 } else { 1.0 };
                         let end = (e1 * cos + e2 * (turn * sin)) * r1 + n * rise;
-                        let arc = Curve::Arc(ArcCurve::program(start, end, Vec3::ZERO, normal, sweep).unwrap());
+                        let arc = Curve::Arc(ArcCurve::program(start, end, Xyz::ZERO, normal, sweep).unwrap());
                         for piece in [arc.sub(0.0, arc.len()), arc.sub(0.3 * arc.len(), 0.7 * arc.len())] {
                             check_factors(&piece);
                             checked += 1;
@@ -584,9 +581,9 @@ mod tests {
 
     #[test]
     fn point_and_deriv_are_point_and_deriv() {
-        let s = Vec3::new(10.0, 0.0, 0.0);
-        let e = Vec3::new(0.0, 10.5, 3.0);
-        let spiral = Curve::Arc(ArcCurve::program(s, e, Vec3::ZERO, Vec3::new(0.0, 0.0, 1.0), FRAC_PI_2).unwrap());
+        let s = Xyz::new(10.0, 0.0, 0.0);
+        let e = Xyz::new(0.0, 10.5, 3.0);
+        let spiral = Curve::Arc(ArcCurve::program(s, e, Xyz::ZERO, Xyz::new(0.0, 0.0, 1.0), FRAC_PI_2).unwrap());
         let line = Curve::Line(LineCurve::new(s, e).unwrap());
         for c in [spiral.clone(), spiral.sub(2.0, 9.0), line] {
             for k in -2..=42 {
@@ -598,60 +595,60 @@ mod tests {
 
     #[test]
     fn degenerate_arcs_are_reported() {
-        let s = Vec3::new(1.0, 0.0, 0.0);
-        let z = Vec3::new(0.0, 0.0, 1.0);
+        let s = Xyz::new(1.0, 0.0, 0.0);
+        let z = Xyz::new(0.0, 0.0, 1.0);
         assert_eq!(ArcCurve::program(s, s, s, z, TAU), Err(ArcProblem::OnCentre));
-        assert_eq!(ArcCurve::program(s, s, Vec3::ZERO, Vec3::ZERO, TAU), Err(ArcProblem::NoPlane));
+        assert_eq!(ArcCurve::program(s, s, Xyz::ZERO, Xyz::ZERO, TAU), Err(ArcProblem::NoPlane));
         for sweep in [0.0, -0.0, f64::NAN, f64::INFINITY, 2.0 * MAX_SWEEP] {
-            assert_eq!(ArcCurve::program(s, s, Vec3::ZERO, z, sweep), Err(ArcProblem::BadSweep), "{sweep}");
+            assert_eq!(ArcCurve::program(s, s, Xyz::ZERO, z, sweep), Err(ArcProblem::BadSweep), "{sweep}");
         }
         // A quarter turn does not reach the opposite point.
-        let e = Vec3::new(-1.0, 0.0, 0.0);
-        assert_eq!(ArcCurve::program(s, e, Vec3::ZERO, z, FRAC_PI_2), Err(ArcProblem::MissesEnd));
+        let e = Xyz::new(-1.0, 0.0, 0.0);
+        assert_eq!(ArcCurve::program(s, e, Xyz::ZERO, z, FRAC_PI_2), Err(ArcProblem::MissesEnd));
         // A rise of 5 over next to no angle: the pitch or the length overflows.
-        let up = Vec3::new(1.0, 0.0, 5.0);
-        assert_eq!(ArcCurve::program(s, up, Vec3::ZERO, z, 1e-308), Err(ArcProblem::MissesEnd));
-        assert_eq!(ArcCurve::program(s, up, Vec3::ZERO, z, 1e-300), Err(ArcProblem::BadSweep));
+        let up = Xyz::new(1.0, 0.0, 5.0);
+        assert_eq!(ArcCurve::program(s, up, Xyz::ZERO, z, 1e-308), Err(ArcProblem::MissesEnd));
+        assert_eq!(ArcCurve::program(s, up, Xyz::ZERO, z, 1e-300), Err(ArcProblem::BadSweep));
     }
 
     #[test]
     fn the_sweep_decides_the_arc_not_a_full_circle_rule() {
         // The interpreter's `G0 X10 Y0 / G3 X10 Y0.00000001 I-10 J0`: a 1e-9 rad arc, not a
         // full circle.
-        let (s, e) = (Vec3::new(10.0, 0.0, 0.0), Vec3::new(10.0, 1e-8, 0.0));
-        let z = Vec3::new(0.0, 0.0, 1.0);
-        let tiny = Curve::Arc(ArcCurve::program(s, e, Vec3::ZERO, z, 1e-9).unwrap());
+        let (s, e) = (Xyz::new(10.0, 0.0, 0.0), Xyz::new(10.0, 1e-8, 0.0));
+        let z = Xyz::new(0.0, 0.0, 1.0);
+        let tiny = Curve::Arc(ArcCurve::program(s, e, Xyz::ZERO, z, 1e-9).unwrap());
         assert!((tiny.len() - 1e-8).abs() < 1e-20, "{}", tiny.len());
         // The same points with a sweep of one turn more: the full circle (plus the sliver).
-        let full = Curve::Arc(ArcCurve::program(s, e, Vec3::ZERO, z, TAU + 1e-9).unwrap());
+        let full = Curve::Arc(ArcCurve::program(s, e, Xyz::ZERO, z, TAU + 1e-9).unwrap());
         assert!((full.len() - 10.0 * (TAU + 1e-9)).abs() < 1e-9);
         // Clockwise the long way round.
-        let back = Curve::Arc(ArcCurve::program(s, e, Vec3::ZERO, z, 1e-9 - TAU).unwrap());
+        let back = Curve::Arc(ArcCurve::program(s, e, Xyz::ZERO, z, 1e-9 - TAU).unwrap());
         assert!((back.len() - 10.0 * (TAU - 1e-9)).abs() < 1e-9);
-        assert!(close(back.point(back.len() / 4.0), Vec3::new(0.0, -10.0, 0.0), 1e-6));
+        assert!(close(back.point(back.len() / 4.0), Xyz::new(0.0, -10.0, 0.0), 1e-6));
     }
 
     #[test]
     fn an_arc_from_a_tangent_is_tangent_there_and_ends_at_the_target() {
-        let start = Vec3::new(-1.0, 0.0, 0.0);
-        let end = Vec3::new(0.0, 1.0, 0.0);
-        let c = Curve::from_tangent(start, Vec3::new(1.0, 0.0, 0.0), end).unwrap();
+        let start = Xyz::new(-1.0, 0.0, 0.0);
+        let end = Xyz::new(0.0, 1.0, 0.0);
+        let c = Curve::from_tangent(start, Xyz::new(1.0, 0.0, 0.0), end).unwrap();
         assert!((c.radius() - 1.0).abs() < 1e-12);
-        assert!(close(c.end_tangent(), Vec3::new(0.0, 1.0, 0.0), 1e-12));
-        assert!((c.distance_to(Vec3::ZERO) - (2f64.sqrt() - 1.0)).abs() < 1e-12);
-        let line = Curve::from_tangent(start, Vec3::new(1.0, 0.0, 0.0), Vec3::new(3.0, 0.0, 0.0)).unwrap();
+        assert!(close(c.end_tangent(), Xyz::new(0.0, 1.0, 0.0), 1e-12));
+        assert!((c.distance_to(Xyz::ZERO) - (2f64.sqrt() - 1.0)).abs() < 1e-12);
+        let line = Curve::from_tangent(start, Xyz::new(1.0, 0.0, 0.0), Xyz::new(3.0, 0.0, 0.0)).unwrap();
         assert!(matches!(line, Curve::Line(_)));
-        assert!(Curve::from_tangent(start, Vec3::new(1.0, 0.0, 0.0), Vec3::new(-3.0, 0.0, 0.0)).is_none());
+        assert!(Curve::from_tangent(start, Xyz::new(1.0, 0.0, 0.0), Xyz::new(-3.0, 0.0, 0.0)).is_none());
     }
 
     #[test]
     fn a_sub_curve_keeps_the_geometry_between_its_parameters() {
         let arc = Curve::Arc(
             ArcCurve::program(
-                Vec3::new(10.0, 0.0, 0.0),
-                Vec3::new(-10.0, 0.0, 0.0),
-                Vec3::ZERO,
-                Vec3::new(0.0, 0.0, 1.0),
+                Xyz::new(10.0, 0.0, 0.0),
+                Xyz::new(-10.0, 0.0, 0.0),
+                Xyz::ZERO,
+                Xyz::new(0.0, 0.0, 1.0),
                 PI,
             )
             .unwrap(),

@@ -13,12 +13,12 @@ use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use vision_gcode::OutputWrite;
+use vision_gcode::{OutputWrite, ToolTable, Xyz};
 
 use crate::input::{Event, Item, Segment, Shape};
 use crate::limits::{AxisLimits, Limits, PlanConfig};
 use crate::sampler::{Setpoint, Setpoints, Step};
-use crate::tools::ToolTable;
+use crate::tools;
 use crate::PathError;
 
 /// A G-code axis.
@@ -114,7 +114,7 @@ pub enum Pace {
 pub struct FollowerConfig {
     /// Axis → drive.
     pub axes: AxisMap,
-    /// Tool number → outputs.
+    /// The tools (the interpreter's table; only their outputs matter here).
     pub tools: ToolTable,
     /// X, Y, Z speed and acceleration limits (those of the mapped drives).
     pub axis_limits: [AxisLimits; 3],
@@ -123,7 +123,7 @@ pub struct FollowerConfig {
     /// Look-ahead window, pieces (see [`PlanConfig::lookahead`]).
     pub lookahead: usize,
     /// Where the machine is before the first path, machine units.
-    pub start: [f64; 3],
+    pub start: Xyz,
 }
 
 impl FollowerConfig {
@@ -135,7 +135,7 @@ impl FollowerConfig {
             axis_limits,
             period: 0.001,
             lookahead: PlanConfig::DEFAULT_LOOKAHEAD,
-            start: [0.0; 3],
+            start: Xyz::ZERO,
         }
     }
 }
@@ -165,7 +165,7 @@ pub struct PathStatus {
     /// Source line of the last setpoint sent.
     pub line: usize,
     /// Position of the last setpoint sent, machine units.
-    pub position: [f64; 3],
+    pub position: Xyz,
     /// Path time of the last setpoint sent, seconds since the start.
     pub elapsed: f64,
     /// Why the path failed, when it did.
@@ -309,6 +309,7 @@ fn plan_config(config: &FollowerConfig, max_path_accel: f64) -> PlanConfig {
         period: config.period,
         lookahead: config.lookahead,
         start: config.start,
+        max_setpoints: PlanConfig::DEFAULT_MAX_SETPOINTS,
     }
 }
 
@@ -327,15 +328,14 @@ pub(crate) fn check_axes(axes: &AxisMap, item: Item) -> Result<Item, PathError> 
 /// Whether a segment moves axis `i`: its end differs, or it is an arc whose plane contains
 /// (part of) the axis.
 fn moves(seg: &Segment, i: usize) -> bool {
-    if seg.end[i] != seg.start[i] {
+    if seg.end.axis(i) != seg.start.axis(i) {
         return true;
     }
     match seg.shape {
         Shape::Line => false,
         Shape::Arc(arc) => {
             let n = arc.normal;
-            let len2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
-            n[i] * n[i] < len2 * (1.0 - 1e-12)
+            n.axis(i) * n.axis(i) < n.dot(n) * (1.0 - 1e-12)
         }
     }
 }
@@ -410,7 +410,7 @@ impl Worker {
         let mut n = 0;
         for axis in Axis::ALL {
             if let Some(drive) = self.axes.drive(axis) {
-                drives[n] = DrivePosition { drive, position: s.position[axis.index()] };
+                drives[n] = DrivePosition { drive, position: s.position.axis(axis.index()) };
                 n += 1;
             }
         }
@@ -428,7 +428,7 @@ impl Worker {
         command: crate::OutputCommand,
         sink: &mut S,
     ) -> Result<(), PathError> {
-        for w in self.tools.resolve(line, self.selected, command)? {
+        for w in tools::resolve(&self.tools, line, self.selected, command)? {
             self.write(w, sink)?;
         }
         Ok(())
@@ -444,7 +444,7 @@ impl Worker {
     /// The level that switches a port off: the opposite of a tool's active value; low for a
     /// port that belongs to no tool (the explicit `M3/M4 A… P…` form drives it high).
     fn inactive_level(&self, device: u32, port: u32) -> bool {
-        self.tools.outputs().find(|o| o.device == device && o.port == port).is_some_and(|o| !o.active_high)
+        tools::outputs(&self.tools).find(|o| o.device == device && o.port == port).is_some_and(|o| !o.active_high)
     }
 
     /// Drive every output this path left active inactive.

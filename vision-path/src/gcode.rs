@@ -1,5 +1,7 @@
 //! The adapter from the G-code interpreter (`vision-gcode`) to the planner: program text in,
-//! [`Item`]s out, one line at a time, so memory stays bounded by one line's events.
+//! [`Item`]s out, one line at a time, so memory stays bounded by one line's events. From the
+//! first line that needs control flow (an o-word, M98, M99: [`vision_gcode::needs_program`])
+//! the rest of the text runs in one call and its items are queued whole.
 //!
 //! | interpreter event | planner item |
 //! | --- | --- |
@@ -8,7 +10,7 @@
 //! | `Dwell` (G4) | [`Item::Dwell`] |
 //! | `ToolChange` (M6) | [`Event::ToolChange`] |
 //! | `Output` (M3/M4/M5) | [`Event::Output`]: the tool (or the explicit port) and the M-code |
-//! | `Stop` (M0/M1), `UserMCode` (reported, not executed) | a zero-second dwell: an exact stop there |
+//! | `Stop` (M0/M1), `UserMCode` (reported, not executed), `Spindle` (M3/M4/M5 without a tool), `Coolant` (M7/M8/M9) | a zero-second dwell: an exact stop there |
 //! | `ProgramEnd` (M2/M30) | [`Item::End`] |
 //! | an error at a line | `Err(PathError::Program { line, .. })` |
 //!
@@ -19,7 +21,9 @@
 
 use std::collections::VecDeque;
 
-use vision_gcode::{Event as GEvent, GcodeError, Interpreter, InterpreterConfig, Plane, Rate, RunOutcome, Xyz};
+use vision_gcode::{
+    needs_program, Event as GEvent, GcodeError, Interpreter, InterpreterConfig, Plane, Rate, RunOutcome, Xyz,
+};
 
 use crate::follower::check_axes;
 use crate::input::{ArcShape, Event, Item, OutputCommand, Segment, Shape};
@@ -50,8 +54,8 @@ impl<T: AsRef<str>> GcodeItems<T> {
     }
 
     /// Where the machine is before the program runs (the planner's start), machine units.
-    pub fn start_position(&self) -> [f64; 3] {
-        self.interp.machine_position().to_array()
+    pub fn start_position(&self) -> Xyz {
+        self.interp.machine_position()
     }
 
     /// Run the next line, queueing its items.
@@ -71,6 +75,24 @@ impl<T: AsRef<str>> GcodeItems<T> {
         self.line = self.line.saturating_add(1);
         let line = self.line;
         let queue = &mut self.queue;
+        if needs_program(raw) {
+            // Control flow needs the rest of the text at once (its subroutines may come later):
+            // from here the items are queued whole, not streamed.
+            let base = line - 1;
+            let outcome = self.interp.run(rest, None, &mut |e: &GEvent| {
+                queue.push_back(Ok(item(e, base.saturating_add(e.line()) as usize)));
+            });
+            self.done = true;
+            match outcome {
+                Ok(RunOutcome::Completed { lines }) => {
+                    self.line = base.saturating_add(lines);
+                    self.queue.push_back(Ok(Item::End { line: self.line as usize }));
+                }
+                Ok(RunOutcome::Ended { .. }) => {}
+                Err(e) => self.queue.push_back(Err(program_error(&e, base.saturating_add(e.line())))),
+            }
+            return;
+        }
         let outcome = self.interp.run(raw, None, &mut |e: &GEvent| queue.push_back(Ok(item(e, line as usize))));
         match outcome {
             Ok(RunOutcome::Completed { .. }) => {}
@@ -122,14 +144,14 @@ impl PathFollower {
         let at = self.status().position;
         let fresh = || -> Result<Interpreter, PathError> {
             let mut interp = Interpreter::new(config.clone());
-            interp.set_machine_position(Xyz::from(at)).map_err(|e| program_error(&e, 0))?;
+            interp.set_machine_position(at).map_err(|e| program_error(&e, 0))?;
             Ok(interp)
         };
         // The interpreter names the tool of every M3/M4/M5 (`$n` or its active tool), so no
         // selection needs tracking here.
         for item in GcodeItems::new(fresh()?, text.as_str()) {
             if let Item::Event { line, event: Event::Output(command) } = check_axes(&self.config().axes, item?)? {
-                self.config().tools.resolve(line, None, command)?;
+                crate::tools::resolve(&self.config().tools, line, None, command)?;
             }
         }
         self.start(GcodeItems::new(fresh()?, text), max_path_accel, sink, pace)
@@ -139,24 +161,19 @@ impl PathFollower {
 /// The planner item for one interpreter event, tagged with `line`.
 pub fn item(event: &GEvent, line: usize) -> Item {
     match event {
-        GEvent::Linear(m) => Item::Move(Segment {
-            line,
-            start: m.start.to_array(),
-            end: m.end.to_array(),
-            shape: Shape::Line,
-            rate: m.rate,
-            mode: m.path,
-        }),
+        GEvent::Linear(m) => {
+            Item::Move(Segment { line, start: m.start, end: m.end, shape: Shape::Line, rate: m.rate, mode: m.path })
+        }
         GEvent::Arc(a) => Item::Move(Segment {
             line,
-            start: a.start.to_array(),
-            end: a.end.to_array(),
+            start: a.start,
+            end: a.end,
             shape: Shape::Arc(ArcShape {
-                centre: a.center.to_array(),
+                centre: a.center,
                 normal: match a.plane {
-                    Plane::Xy => [0.0, 0.0, 1.0],
-                    Plane::Zx => [0.0, 1.0, 0.0],
-                    Plane::Yz => [1.0, 0.0, 0.0],
+                    Plane::Xy => Xyz::new(0.0, 0.0, 1.0),
+                    Plane::Zx => Xyz::new(0.0, 1.0, 0.0),
+                    Plane::Yz => Xyz::new(1.0, 0.0, 0.0),
                 },
                 sweep: a.direction.sign() * a.angle,
             }),
@@ -172,7 +189,10 @@ pub fn item(event: &GEvent, line: usize) -> Item {
             };
             Item::Event { line, event: Event::Output(command) }
         }
-        GEvent::Stop { .. } | GEvent::UserMCode(_) => Item::Dwell { line, seconds: 0.0 },
+        // A spindle or coolant switch waits for the motion before it (a stop, like M0).
+        GEvent::Stop { .. } | GEvent::UserMCode(_) | GEvent::Spindle { .. } | GEvent::Coolant { .. } => {
+            Item::Dwell { line, seconds: 0.0 }
+        }
         GEvent::ProgramEnd { .. } => Item::End { line },
     }
 }

@@ -5,7 +5,7 @@
 //! machine units per minute (G94), times are seconds. The rate, the path mode and the tool
 //! command are the interpreter's own types ([`Rate`], [`PathMode`], [`SpindleCommand`]).
 
-use vision_gcode::{PathMode, Rate, SpindleCommand};
+use vision_gcode::{PathMode, Rate, SpindleCommand, Xyz};
 
 /// One item of a program, as the planner consumes it.
 #[derive(Debug, Clone, PartialEq)]
@@ -50,9 +50,9 @@ pub struct Segment {
     /// Source line.
     pub line: usize,
     /// Where the move starts (must be where the previous move ended), machine units.
-    pub start: [f64; 3],
+    pub start: Xyz,
     /// Where the move ends, machine units.
-    pub end: [f64; 3],
+    pub end: Xyz,
     /// Straight line or arc.
     pub shape: Shape,
     /// Programmed feed (machine units per minute) or rapid.
@@ -77,10 +77,10 @@ pub enum Shape {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ArcShape {
     /// The centre, machine units (its component along `normal` is ignored).
-    pub centre: [f64; 3],
+    pub centre: Xyz,
     /// The plane normal, any length: +Z for G17, +Y for G18, +X for G19. Counter-clockwise
     /// (G3) is a positive rotation about it (right-hand rule).
-    pub normal: [f64; 3],
+    pub normal: Xyz,
     /// The angle the arc turns about `normal`, radians: positive counter-clockwise (G3),
     /// negative clockwise (G2); beyond ±2π for multi-turn arcs (G2/G3 `P`), ±2π for a full
     /// circle. It is what the interpreter reports (`ArcMove::angle` with the direction's

@@ -20,14 +20,14 @@
 //! `maxPathAcceleration` is mm/s² on a metric machine), times in seconds.
 //!
 //! ```
-//! use vision_path::{Item, Limits, PathMode, PlanConfig, Rate, Segment, Setpoints, Shape};
+//! use vision_path::{Item, Limits, PathMode, PlanConfig, Rate, Segment, Setpoints, Shape, Xyz};
 //!
 //! // One 100 mm feed move at F6000 (100 mm/s), a = 1000 mm/s², 1 ms setpoints.
-//! let config = PlanConfig::new(Limits::uniform(1000.0, 500.0, 1000.0), 0.001, [0.0; 3]);
+//! let config = PlanConfig::new(Limits::uniform(1000.0, 500.0, 1000.0), 0.001, Xyz::ZERO);
 //! let program = vec![Item::Move(Segment {
 //!     line: 1,
-//!     start: [0.0; 3],
-//!     end: [100.0, 0.0, 0.0],
+//!     start: Xyz::ZERO,
+//!     end: Xyz::new(100.0, 0.0, 0.0),
 //!     shape: Shape::Line,
 //!     rate: Rate::Feed(6000.0),
 //!     mode: PathMode::ExactStop,
@@ -35,7 +35,7 @@
 //! let summary = Setpoints::from_items(&config, program)?.run_to_end()?;
 //! // Trapezoid: 0.1 s up, 0.9 s at 100 mm/s, 0.1 s down.
 //! assert!((summary.cycle_time - 1.1).abs() < 1e-9);
-//! assert_eq!(summary.end, [100.0, 0.0, 0.0]);
+//! assert_eq!(summary.end, Xyz::new(100.0, 0.0, 0.0));
 //! # Ok::<(), vision_path::PathError>(())
 //! ```
 //!
@@ -91,11 +91,11 @@
 //! * **M0/M1** and user M-codes (reported, never executed: see [`GcodeItems`]) are exact stops (a
 //!   zero-second dwell); the follower does not wait for an operator.
 //! * **Tools**: a bare M3/M4/M5 acts on the tool of the last `T… M6`; `M3 $n` acts on `n`
-//!   without selecting it (as the interpreter does). Switching a tool on first drives its
-//!   other direction inactive. When a followed path ends — completed, stopped or failed —
-//!   every output it drove active is driven inactive (as M2/M30 stop a spindle). Seed 002 says
-//!   nothing about outputs when a path stops or fails; leaving a tool running on a machine at
-//!   rest is the unsafe choice.
+//!   without selecting it (as the interpreter does); a tool wired to no outputs writes nothing
+//!   (as in the interpreter). Switching a tool on first drives its other direction inactive.
+//!   When a followed path ends — completed, stopped or failed — every output it drove active is
+//!   driven inactive (as M2/M30 stop a spindle). Seed 002 says nothing about outputs when a path
+//!   stops or fails; leaving a tool running on a machine at rest is the unsafe choice.
 //! * **Axes**: a move of an axis no drive is mapped to is an error at its line; the follower's
 //!   `start_gcode` checks the whole program (streaming, no handler) before anything moves.
 //! * Arcs whose start and end radius differ slightly (rounded G-code) are spirals with
@@ -119,7 +119,6 @@ mod profile;
 mod sampler;
 mod shaper;
 mod tools;
-mod vec3;
 
 pub use error::PathError;
 pub use follower::{
@@ -129,9 +128,9 @@ pub use gcode::{item, GcodeItems};
 pub use input::{ArcShape, Event, Item, OutputCommand, Segment, Shape};
 pub use limits::{AxisLimits, Limits, PlanConfig};
 pub use sampler::{Setpoint, Setpoints, Step, Summary, TimedEvent};
-pub use tools::ToolTable;
-/// The interpreter's types this crate's API uses as they are: a segment's [`Rate`] (feed in
-/// machine units per minute, or rapid) and [`PathMode`] (G61, or G64 with `P` in machine
-/// units), an output event's [`SpindleCommand`] (M3/M4/M5), a tool's [`ToolOutputs`] (its
+/// The interpreter's types this crate's API uses as they are: positions and directions
+/// ([`Xyz`], machine units), a segment's [`Rate`] (feed in machine units per minute, or rapid)
+/// and [`PathMode`] (G61, or G64 with `P` in machine units), an output event's
+/// [`SpindleCommand`] (M3/M4/M5), the [`ToolTable`] (a [`Tool`]'s [`ToolOutputs`], its
 /// [`DigitalOutput`]s) and the [`OutputWrite`]s a [`MotionSink`] receives.
-pub use vision_gcode::{DigitalOutput, OutputWrite, PathMode, Rate, SpindleCommand, ToolOutputs};
+pub use vision_gcode::{DigitalOutput, OutputWrite, PathMode, Rate, SpindleCommand, Tool, ToolOutputs, ToolTable, Xyz};

@@ -1,6 +1,8 @@
 //! Speed and acceleration limits, the sampling period, and how a piece of path turns them
 //! into a speed cap and a tangential acceleration.
 
+use vision_gcode::Xyz;
+
 use crate::PathError;
 
 /// One axis's limits (those of the drive mapped to it).
@@ -27,18 +29,36 @@ pub struct Limits {
 }
 
 impl Limits {
+    /// The speeds (axis maximum speeds and programmed feeds) the planner accepts, machine units
+    /// per second.
+    ///
+    /// Decision: one range for millimetre and inch machines, wide enough for both. The lower
+    /// end (0.006 units/min) is below any real drive's slowest useful speed; below it a 1-unit
+    /// move would take days of setpoints and tiny values underflow the planner's arithmetic
+    /// (1e-300 gave a cycle time of 0). The upper end (100 000 units/s) is far beyond any
+    /// machine.
+    pub const SPEED_RANGE: std::ops::RangeInclusive<f64> = 1e-4..=1e5;
+    /// The accelerations (path and axes) the planner accepts, machine units per second².
+    ///
+    /// Decision: as [`Limits::SPEED_RANGE`]: from 0.001 units/s² (no real machine is slower)
+    /// to 10⁷ units/s² (1 000 g on a millimetre machine).
+    pub const ACCEL_RANGE: std::ops::RangeInclusive<f64> = 1e-3..=1e7;
+
     /// Limits with the same speed and acceleration on all three axes.
     pub fn uniform(max_path_accel: f64, axis_speed: f64, axis_accel: f64) -> Limits {
         let axis = AxisLimits { max_speed: axis_speed, max_accel: axis_accel };
         Limits { max_path_accel, axes: [axis; 3] }
     }
 
-    /// Check every number is finite and positive.
+    /// Check every speed is within [`Limits::SPEED_RANGE`] and every acceleration within
+    /// [`Limits::ACCEL_RANGE`].
     pub fn validate(&self) -> Result<(), PathError> {
-        positive("max path acceleration (units/s²)", self.max_path_accel)?;
+        const ACCEL: &str = "must be between 0.001 and 10000000 units/s²";
+        const SPEED: &str = "must be between 0.0001 and 100000 units/s";
+        in_range("max path acceleration (units/s²)", self.max_path_accel, &Self::ACCEL_RANGE, ACCEL)?;
         for a in &self.axes {
-            positive("axis max speed (units/s)", a.max_speed)?;
-            positive("axis max acceleration (units/s²)", a.max_accel)?;
+            in_range("axis max speed (units/s)", a.max_speed, &Self::SPEED_RANGE, SPEED)?;
+            in_range("axis max acceleration (units/s²)", a.max_accel, &Self::ACCEL_RANGE, ACCEL)?;
         }
         Ok(())
     }
@@ -56,16 +76,32 @@ pub struct PlanConfig {
     /// tiny segments that fills it is slowed so it can always stop at the window's end.
     pub lookahead: usize,
     /// Where the machine is when the path starts, machine coordinates.
-    pub start: [f64; 3],
+    pub start: Xyz,
+    /// The most setpoints the stream delivers; a longer path ends with an error at the line
+    /// it reached ([`PlanConfig::DEFAULT_MAX_SETPOINTS`] by default).
+    pub max_setpoints: u64,
 }
 
 impl PlanConfig {
     /// The default look-ahead window, pieces.
     pub const DEFAULT_LOOKAHEAD: usize = 8192;
 
-    /// A configuration with the default look-ahead.
-    pub fn new(limits: Limits, period: f64, start: [f64; 3]) -> PlanConfig {
-        PlanConfig { limits, period, lookahead: Self::DEFAULT_LOOKAHEAD, start }
+    /// The default bound on one stream's setpoints.
+    ///
+    /// Decision: the limits' ranges bound how slowly a move may go, not how long a program is
+    /// (coordinates reach ±10⁹ units), so this bounds the run itself: 10⁹ setpoints are
+    /// 11.6 days at 1 ms, longer than any real job, and about 20 s of planning.
+    pub const DEFAULT_MAX_SETPOINTS: u64 = 1_000_000_000;
+
+    /// A configuration with the default look-ahead and setpoint bound.
+    pub fn new(limits: Limits, period: f64, start: Xyz) -> PlanConfig {
+        PlanConfig {
+            limits,
+            period,
+            lookahead: Self::DEFAULT_LOOKAHEAD,
+            start,
+            max_setpoints: Self::DEFAULT_MAX_SETPOINTS,
+        }
     }
 
     /// Check the limits, the period, the window and the start position.
@@ -85,7 +121,7 @@ impl PlanConfig {
                 reason: "must be at least 8",
             });
         }
-        for v in self.start {
+        for v in self.start.to_array() {
             if !v.is_finite() {
                 return Err(PathError::InvalidConfig {
                     what: "start position (units)",
@@ -98,11 +134,16 @@ impl PlanConfig {
     }
 }
 
-fn positive(what: &'static str, value: f64) -> Result<(), PathError> {
-    if value.is_finite() && value > 0.0 {
+fn in_range(
+    what: &'static str,
+    value: f64,
+    range: &std::ops::RangeInclusive<f64>,
+    reason: &'static str,
+) -> Result<(), PathError> {
+    if range.contains(&value) {
         Ok(())
     } else {
-        Err(PathError::InvalidConfig { what, value, reason: "must be a finite number greater than 0" })
+        Err(PathError::InvalidConfig { what, value, reason })
     }
 }
 
@@ -216,13 +257,13 @@ mod tests {
         assert!(err.to_string().contains("max path acceleration"), "{err}");
         let err = Limits::uniform(1.0, f64::NAN, 1.0).validate().unwrap_err();
         assert!(err.to_string().contains("axis max speed"), "{err}");
-        let mut c = PlanConfig::new(Limits::uniform(1.0, 1.0, 1.0), 0.0, [0.0; 3]);
+        let mut c = PlanConfig::new(Limits::uniform(1.0, 1.0, 1.0), 0.0, [0.0; 3].into());
         assert!(matches!(c.validate(), Err(PathError::InvalidConfig { what: "setpoint period (s)", .. })));
         c.period = 0.001;
         c.lookahead = 2;
         assert!(c.validate().is_err());
         c.lookahead = 8;
-        c.start = [0.0, f64::INFINITY, 0.0];
+        c.start = [0.0, f64::INFINITY, 0.0].into();
         assert!(c.validate().is_err());
     }
 }

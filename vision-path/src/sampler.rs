@@ -11,8 +11,8 @@ use crate::input::{Event, Item};
 use crate::lookahead::{Lookahead, Ready};
 use crate::profile::Profile;
 use crate::shaper::{Marker, Piece, Shaper};
-use crate::vec3::Vec3;
 use crate::{PathError, PlanConfig};
+use vision_gcode::Xyz;
 
 /// One setpoint: where the machine must be at `time`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -20,9 +20,9 @@ pub struct Setpoint {
     /// Time since the path started, seconds (a multiple of the period).
     pub time: f64,
     /// Position in machine coordinates (X, Y, Z), machine units.
-    pub position: [f64; 3],
+    pub position: Xyz,
     /// Commanded velocity (X, Y, Z), machine units per second.
-    pub velocity: [f64; 3],
+    pub velocity: Xyz,
     /// Source line being executed.
     pub line: usize,
 }
@@ -58,7 +58,7 @@ pub struct Summary {
     /// Number of events.
     pub events: u64,
     /// Where the path ended, machine units.
-    pub end: [f64; 3],
+    pub end: Xyz,
     /// Line of the last setpoint.
     pub line: usize,
 }
@@ -67,7 +67,7 @@ pub struct Summary {
 #[allow(clippy::large_enum_variant)]
 enum Span {
     Motion { piece: Piece, profile: Profile, t0: f64, t1: f64 },
-    Rest { pos: Vec3, line: usize, t1: f64 },
+    Rest { pos: Xyz, line: usize, t1: f64 },
 }
 
 /// The setpoint stream of a program: an iterator of [`Step`]s at a fixed period, with bounded
@@ -80,6 +80,8 @@ pub struct Setpoints<I> {
     planner: Lookahead<I>,
     period: f64,
     tick: u64,
+    /// [`PlanConfig::max_setpoints`].
+    max_setpoints: u64,
     span: Span,
     /// Speed carried from a braking piece into the next (after [`Setpoints::stop`]).
     carry: f64,
@@ -107,11 +109,12 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Setpoints<I> {
     /// Plan `items` (read lazily) under `config`.
     pub fn new(config: &PlanConfig, items: I) -> Result<Setpoints<I>, PathError> {
         config.validate()?;
-        let start = Vec3::from(config.start);
+        let start = config.start;
         let shaper = Shaper::new(items, config.limits, start);
         Ok(Setpoints {
             planner: Lookahead::new(shaper, config.lookahead),
             period: config.period,
+            max_setpoints: config.max_setpoints,
             tick: 0,
             span: Span::Rest { pos: start, line: 0, t1: 0.0 },
             carry: 0.0,
@@ -154,7 +157,7 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Setpoints<I> {
 
     /// Drain the stream and summarise it (cycle time, counts, end position).
     pub fn run_to_end(mut self) -> Result<Summary, PathError> {
-        let mut summary = Summary { cycle_time: 0.0, setpoints: 0, events: 0, end: [0.0; 3], line: 0 };
+        let mut summary = Summary { cycle_time: 0.0, setpoints: 0, events: 0, end: Xyz::ZERO, line: 0 };
         for step in &mut self {
             match step? {
                 Step::Setpoint(s) => {
@@ -186,14 +189,14 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Setpoints<I> {
     }
 
     /// Where the current span leaves the machine and its line.
-    fn span_exit(&self) -> (Vec3, usize) {
+    fn span_exit(&self) -> (Xyz, usize) {
         match &self.span {
             Span::Motion { piece, profile, .. } => (piece.curve.point(profile.end_s()), piece.line),
             Span::Rest { pos, line, .. } => (*pos, *line),
         }
     }
 
-    fn position_line(&self, t: f64) -> (Vec3, usize) {
+    fn position_line(&self, t: f64) -> (Xyz, usize) {
         match &self.span {
             Span::Motion { piece, profile, t0, .. } => (piece.curve.point(profile.at(t - t0).0), piece.line),
             Span::Rest { pos, line, .. } => (*pos, *line),
@@ -272,9 +275,9 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Setpoints<I> {
                 let (point, deriv) = piece.curve.point_and_deriv(s);
                 (point, deriv * v, piece.line)
             }
-            Span::Rest { pos, line, .. } => (*pos, Vec3::ZERO, *line),
+            Span::Rest { pos, line, .. } => (*pos, Xyz::ZERO, *line),
         };
-        Setpoint { time: t, position: position.into(), velocity: velocity.into(), line }
+        Setpoint { time: t, position, velocity, line }
     }
 }
 
@@ -287,6 +290,22 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Iterator for Setpoints<I> {
         }
         if self.finished {
             return None;
+        }
+        if self.tick >= self.max_setpoints {
+            self.finished = true;
+            let line = match &self.span {
+                Span::Motion { piece, .. } => piece.line,
+                Span::Rest { line, .. } => *line,
+            };
+            let days = self.max_setpoints as f64 * self.period / 86_400.0;
+            return Some(Err(PathError::InvalidItem {
+                line,
+                reason: format!(
+                    "the path runs longer than {} setpoints ({days:.1} days at this period); check the \
+                     feeds, the limits and the program's units",
+                    self.max_setpoints
+                ),
+            }));
         }
         let t = self.tick as f64 * self.period;
         // `>=`: stops and events due at exactly `t` are taken before sampling `t`.

@@ -13,8 +13,8 @@ use crate::blend::blend;
 use crate::curve::{ArcCurve, ArcProblem, Curve, LineCurve};
 use crate::input::{Event, Item, Segment, Shape};
 use crate::limits::{speed_and_accel, Limits, NORMAL_SHARE};
-use crate::vec3::Vec3;
 use crate::PathError;
+use vision_gcode::Xyz;
 
 /// Two pieces whose tangents differ by at most this angle (radians) join without stopping;
 /// the velocity jump it allows (`v·θ`) is far below anything a drive can see.
@@ -77,7 +77,7 @@ struct Pending {
 pub(crate) struct Shaper<I> {
     input: I,
     limits: Limits,
-    pos: Vec3,
+    pos: Xyz,
     last_line: usize,
     pending: Option<Pending>,
     out: VecDeque<Shaped>,
@@ -85,7 +85,7 @@ pub(crate) struct Shaper<I> {
 }
 
 impl<I: Iterator<Item = Result<Item, PathError>>> Shaper<I> {
-    pub(crate) fn new(input: I, limits: Limits, start: Vec3) -> Shaper<I> {
+    pub(crate) fn new(input: I, limits: Limits, start: Xyz) -> Shaper<I> {
         Shaper { input, limits, pos: start, last_line: 0, pending: None, out: VecDeque::new(), done: false }
     }
 
@@ -145,8 +145,8 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Shaper<I> {
 
     fn take_move(&mut self, seg: &Segment) -> Result<(), PathError> {
         let line = seg.line;
-        let start = Vec3::from(seg.start);
-        let end = Vec3::from(seg.end);
+        let start = seg.start;
+        let end = seg.end;
         if !(start.is_finite() && end.is_finite()) {
             return Err(invalid(line, "a coordinate is not a finite number".into()));
         }
@@ -162,15 +162,23 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Shaper<I> {
                 line,
                 format!(
                     "the move starts at {:?} but the previous one ended at {:?}; segments must be continuous",
-                    seg.start,
-                    <[f64; 3]>::from(self.pos)
+                    seg.start, self.pos
                 ),
             ));
         }
         let requested = match seg.rate {
             Rate::Rapid => f64::INFINITY,
-            Rate::Feed(f) if f > 0.0 && f <= MAX_COORDINATE => f / 60.0,
-            Rate::Feed(f) => return Err(invalid(line, format!("feed F{f} is invalid; program a feed greater than 0"))),
+            Rate::Feed(f) if Limits::SPEED_RANGE.contains(&(f / 60.0)) => f / 60.0,
+            Rate::Feed(f) => {
+                return Err(invalid(
+                    line,
+                    format!(
+                        "feed F{f} is invalid; program a feed between {} and {} units/min",
+                        Limits::SPEED_RANGE.start() * 60.0,
+                        Limits::SPEED_RANGE.end() * 60.0
+                    ),
+                ))
+            }
         };
         if let PathMode::Blend { tolerance: Some(p) } = seg.mode {
             if !(0.0..=MAX_COORDINATE).contains(&p) {
@@ -183,8 +191,8 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Shaper<I> {
                 None => return Ok(()), // no motion
             },
             Shape::Arc(arc) => {
-                let centre = Vec3::from(arc.centre);
-                let normal = Vec3::from(arc.normal);
+                let centre = arc.centre;
+                let normal = arc.normal;
                 if !(centre.is_finite() && normal.is_finite()) || centre.max_abs() > MAX_COORDINATE {
                     return Err(invalid(line, "an arc centre or normal is not a finite number in range".into()));
                 }

@@ -3,6 +3,7 @@
 //! is always the last thing it yields.
 
 use proptest::prelude::*;
+use vision_path::Xyz;
 use vision_path::{
     ArcShape, Event, Item, Limits, OutputCommand, PathMode, PlanConfig, Rate, Segment, Setpoints, Shape,
     SpindleCommand, Step,
@@ -15,8 +16,8 @@ fn number() -> impl Strategy<Value = f64> {
     ]
 }
 
-fn xyz() -> impl Strategy<Value = [f64; 3]> {
-    prop::array::uniform3(number())
+fn xyz() -> impl Strategy<Value = Xyz> {
+    prop::array::uniform3(number()).prop_map(Xyz::from)
 }
 
 fn item() -> impl Strategy<Value = Item> {
@@ -43,7 +44,7 @@ fn item() -> impl Strategy<Value = Item> {
 
 /// Makes most moves continuous (each starts where the previous one ended), so the planner
 /// gets past the continuity check and meets the other hostile numbers.
-fn chain(mut items: Vec<Item>, start: [f64; 3], keep: &[bool]) -> Vec<Item> {
+fn chain(mut items: Vec<Item>, start: Xyz, keep: &[bool]) -> Vec<Item> {
     let mut pos = start;
     for (item, keep) in items.iter_mut().zip(keep.iter().cycle()) {
         if let Item::Move(seg) = item {
@@ -70,8 +71,8 @@ proptest! {
         keep in prop::collection::vec(prop::bool::weighted(0.1), 1..4),
         period in prop::sample::select(vec![1e-5, 0.001, 0.01, 1.0]),
     ) {
-        let config = PlanConfig::new(Limits::uniform(1000.0, 500.0, 1000.0), period, [0.0; 3]);
-        let items = chain(items, [0.0; 3], &keep);
+        let config = PlanConfig::new(Limits::uniform(1000.0, 500.0, 1000.0), period, Xyz::ZERO);
+        let items = chain(items, Xyz::ZERO, &keep);
         let mut stream = Setpoints::from_items(&config, items).unwrap();
         let mut failed = false;
         // Enough steps for the interesting part; a valid program may legitimately run far longer.
@@ -80,7 +81,7 @@ proptest! {
             match step {
                 Ok(Step::Setpoint(s)) => {
                     prop_assert!(s.time.is_finite());
-                    prop_assert!(s.position.iter().chain(&s.velocity).all(|v| v.is_finite()), "{:?}", s);
+                    prop_assert!(s.position.is_finite() && s.velocity.is_finite(), "{:?}", s);
                 }
                 Ok(Step::Event(e)) => prop_assert!(e.time.is_finite()),
                 Err(e) => {

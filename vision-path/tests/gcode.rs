@@ -4,7 +4,7 @@
 mod common;
 
 use common::{worst_second_difference, Run};
-use vision_gcode::{Interpreter, InterpreterConfig};
+use vision_gcode::{Interpreter, InterpreterConfig, Xyz};
 use vision_math::LengthUnit;
 use vision_path::{GcodeItems, Limits, PlanConfig, Setpoints};
 
@@ -29,15 +29,15 @@ fn an_arc_of_a_nanoradian_is_not_driven_as_a_full_circle() {
     let arc: Vec<_> = p.setpoints.iter().filter(|s| s.line == 3).collect();
     assert!(arc.len() <= 2, "a 1e-8 mm arc takes at most a period or two: {}", arc.len());
     for s in &p.setpoints {
-        assert!(s.position[0] <= 10.0 + 1e-12 && s.position[1].abs() <= 1e-8, "{s:?}");
+        assert!(s.position.x <= 10.0 + 1e-12 && s.position.y.abs() <= 1e-8, "{s:?}");
     }
-    assert_eq!(p.setpoints.last().unwrap().position, [10.0, 1e-8, 0.0]);
+    assert_eq!(p.setpoints.last().unwrap().position, Xyz::new(10.0, 1e-8, 0.0));
     // The whole program is the rapid's trapezoid: 10 mm at a = 1000 is a triangle of 0.2 s.
     let t = p.setpoints.last().unwrap().time;
     assert!(t < 0.21, "{t}");
     // With one full turn more (P2), the circle is driven.
     let p = plan("G21 G90 G17\nG0 X10 Y0\nG3 X10 Y0.00000001 I-10 J0 P2 F600");
-    assert!(p.setpoints.iter().any(|s| s.position[0] < -9.99), "the P2 arc goes round");
+    assert!(p.setpoints.iter().any(|s| s.position.x < -9.99), "the P2 arc goes round");
     assert!(worst_second_difference(&p.setpoints).0 <= A * T * T * (1.0 + 1e-6) + 1e-9);
 }
 
@@ -54,5 +54,5 @@ fn a_rounded_arc_that_is_slightly_a_spiral_keeps_the_acceleration_bound_where_it
     assert!(axes.iter().all(|&d| d <= A * T * T * (1.0 + 1e-6) + 1e-9), "{axes:?}");
     assert!(p.setpoints.iter().any(|s| s.line == 4), "the spiral is driven");
     assert_eq!(common::interior_rests(&p.setpoints), 0, "the corner is blended, the spiral's joins pass");
-    assert_eq!(p.setpoints.last().unwrap().position, [-0.128, -10.0, 0.0]);
+    assert_eq!(p.setpoints.last().unwrap().position, Xyz::new(-0.128, -10.0, 0.0));
 }

@@ -11,7 +11,7 @@ use std::fmt::Write as _;
 
 use common::{norm, sub};
 use proptest::prelude::*;
-use vision_gcode::{Interpreter, InterpreterConfig};
+use vision_gcode::{Interpreter, InterpreterConfig, Xyz};
 use vision_math::LengthUnit;
 use vision_path::{GcodeItems, Item, Limits, PathError, PlanConfig, Setpoint, Setpoints, Step};
 
@@ -142,17 +142,17 @@ proptest! {
         for w in setpoints.windows(3) {
             let dd = sub(sub(w[2].position, w[1].position), sub(w[1].position, w[0].position));
             prop_assert!(norm(dd) <= A * T * T * (1.0 + 1e-6) + 1e-9, "acceleration at {} (line {})\n{text}", w[1].time, w[1].line);
-            for c in dd {
+            for c in dd.to_array() {
                 prop_assert!(c.abs() <= 1500.0 * T * T * (1.0 + 1e-6) + 1e-9);
             }
         }
         for w in setpoints.windows(2) {
-            for c in sub(w[1].position, w[0].position) {
+            for c in sub(w[1].position, w[0].position).to_array() {
                 prop_assert!(c.abs() <= 300.0 * T * (1.0 + 1e-6) + 1e-9);
             }
         }
         let last = setpoints.last().unwrap();
-        prop_assert_eq!(last.velocity, [0.0; 3]);
+        prop_assert_eq!(last.velocity, Xyz::ZERO);
         let ran: Vec<Item> = items.into_iter().map_while(Result::ok).collect();
         let (rests, allowed) = (common::interior_rests(&setpoints), common::allowed_rests(&ran));
         prop_assert!(rests <= allowed, "{} stops inside the path, at most {} allowed\n{}", rests, allowed, text);
@@ -160,7 +160,7 @@ proptest! {
         let mut interp = Interpreter::new(config);
         let outcome = interp.run(&text, None, &mut |_: &vision_gcode::Event| {});
         let m = interp.machine_position();
-        prop_assert_eq!(last.position, m.to_array(), "\n{}", text);
+        prop_assert_eq!(last.position, m, "\n{}", text);
         match (outcome, failure) {
             (Ok(_), None) => {}
             (Err(e), Some(PathError::Program { line, message })) => {

@@ -17,6 +17,7 @@ mod common;
 
 use common::{distance, norm, segments, sub, tangent, Program, Run, PLANES};
 use proptest::prelude::*;
+use vision_path::Xyz;
 use vision_path::{AxisLimits, Event, Item, Limits, OutputCommand, PathMode, PlanConfig, Rate, SpindleCommand};
 
 const REL: f64 = 1e-6;
@@ -89,14 +90,14 @@ fn limits() -> impl Strategy<Value = (Limits, f64)> {
 }
 
 fn build(ops: &[Op], mode: PathMode, feed: f64) -> Vec<Item> {
-    let mut p = Program::new([1.0, 2.0, 3.0], mode);
+    let mut p = Program::new(Xyz::new(1.0, 2.0, 3.0), mode);
     for op in ops {
         match *op {
             Op::Line { to, rapid } => {
-                p.line_to(to, if rapid { Rate::Rapid } else { Rate::Feed(feed) });
+                p.line_to(Xyz::from(to), if rapid { Rate::Rapid } else { Rate::Feed(feed) });
             }
             Op::Nudge(d) => {
-                p.line_to(common::add(p.pos, d), Rate::Feed(feed));
+                p.line_to(common::add(p.pos, Xyz::from(d)), Rate::Feed(feed));
             }
             Op::Arc { plane, dir, radius, angle, rise, grow } => {
                 // The centre lies `radius` away from the current point, in the arc's plane.
@@ -105,15 +106,18 @@ fn build(ops: &[Op], mode: PathMode, feed: f64) -> Vec<Item> {
                     1 => ([0.0, 0.0, 1.0], [1.0, 0.0, 0.0]),
                     _ => ([0.0, 1.0, 0.0], [0.0, 0.0, 1.0]),
                 };
-                let off = common::add(common::scale(b1, radius * dir.cos()), common::scale(b2, radius * dir.sin()));
+                let off = common::add(
+                    common::scale(Xyz::from(b1), radius * dir.cos()),
+                    common::scale(Xyz::from(b2), radius * dir.sin()),
+                );
                 let centre = common::add(p.pos, off);
                 debug_assert!(common::dot(off, PLANES[plane]).abs() < 1e-12);
                 p.spiral(plane, centre, angle, rise, grow, Rate::Feed(feed));
             }
             Op::TangentSpiral { heading, lead, r0, grow, angle } => {
                 let u = [heading.cos(), heading.sin(), 0.0];
-                p.line_to(common::add(p.pos, common::scale(u, lead)), Rate::Feed(feed));
-                p.tangent_spiral(u, r0, r0 * grow, angle, Rate::Feed(feed));
+                p.line_to(common::add(p.pos, common::scale(Xyz::from(u), lead)), Rate::Feed(feed));
+                p.tangent_spiral(Xyz::from(u), r0, r0 * grow, angle, Rate::Feed(feed));
                 let out = segments(&p.items).last().map(|s| tangent(s, true)).expect("the spiral");
                 p.line_to(common::add(p.pos, common::scale(out, lead)), Rate::Feed(feed));
             }
@@ -160,9 +164,9 @@ fn check_kinematics(run: &Run, items: &[Item], limits: &Limits, period: f64) -> 
         );
         for (i, axis) in limits.axes.iter().enumerate() {
             prop_assert!(
-                d[i].abs() <= axis.max_speed * period * (1.0 + REL) + ABS,
+                d.axis(i).abs() <= axis.max_speed * period * (1.0 + REL) + ABS,
                 "axis {i} step {} at t = {}",
-                d[i],
+                d.axis(i),
                 w[1].time
             );
         }
@@ -181,9 +185,9 @@ fn check_kinematics(run: &Run, items: &[Item], limits: &Limits, period: f64) -> 
         );
         for (i, axis) in limits.axes.iter().enumerate() {
             prop_assert!(
-                dd[i].abs() <= axis.max_accel * t2 * (1.0 + REL) + ABS,
+                dd.axis(i).abs() <= axis.max_accel * t2 * (1.0 + REL) + ABS,
                 "axis {i} second difference {} at t = {}",
-                dd[i],
+                dd.axis(i),
                 w[1].time
             );
         }
@@ -193,10 +197,10 @@ fn check_kinematics(run: &Run, items: &[Item], limits: &Limits, period: f64) -> 
 
 fn check_end_events_dwells(run: &Run, items: &[Item], period: f64) -> Result<(), TestCaseError> {
     let last = run.setpoints.last().expect("at least one setpoint");
-    let end = segments(items).last().map_or([1.0, 2.0, 3.0], |s| s.end);
+    let end = segments(items).last().map_or(Xyz::new(1.0, 2.0, 3.0), |s| s.end);
     prop_assert_eq!(last.position, end, "the path ends exactly at the programmed end");
-    prop_assert_eq!(last.velocity, [0.0; 3]);
-    let mut pos = [1.0, 2.0, 3.0];
+    prop_assert_eq!(last.velocity, Xyz::ZERO);
+    let mut pos = Xyz::new(1.0, 2.0, 3.0);
     let mut events = run.events.iter();
     for item in items {
         match item {
@@ -207,7 +211,7 @@ fn check_end_events_dwells(run: &Run, items: &[Item], period: f64) -> Result<(),
                 prop_assert_eq!(ev.event, *event);
                 let at = run.setpoints.iter().find(|s| s.time == ev.time).expect("a setpoint at the event's time");
                 prop_assert_eq!(at.position, pos, "events happen at the programmed point");
-                prop_assert_eq!(at.velocity, [0.0; 3]);
+                prop_assert_eq!(at.velocity, Xyz::ZERO);
             }
             Item::Dwell { line, seconds } if *seconds > 0.0 => {
                 let held: Vec<_> = run.setpoints.iter().filter(|s| s.line == *line).collect();
@@ -223,7 +227,7 @@ fn check_end_events_dwells(run: &Run, items: &[Item], period: f64) -> Result<(),
 }
 
 fn config(limits: Limits, period: f64) -> PlanConfig {
-    PlanConfig::new(limits, period, [1.0, 2.0, 3.0])
+    PlanConfig::new(limits, period, Xyz::new(1.0, 2.0, 3.0))
 }
 
 proptest! {
@@ -243,7 +247,7 @@ proptest! {
             if let (Item::Move(a), Item::Move(b)) = (&w[0], &w[1]) {
                 let turn = common::dot(tangent(a, true), tangent(b, false)).clamp(-1.0, 1.0).acos();
                 if turn > 1e-6 {
-                    let hit = run.setpoints.iter().any(|s| s.position == a.end && s.velocity == [0.0; 3]);
+                    let hit = run.setpoints.iter().any(|s| s.position == a.end && s.velocity == Xyz::ZERO);
                     prop_assert!(hit, "no rest setpoint at the G61 corner {:?} (line {})", a.end, a.line);
                 }
             }
@@ -279,12 +283,12 @@ proptest! {
         feed in prop::option::of(600.0..60000.0f64),
     ) {
         let start = [1.0, 2.0, 3.0];
-        let d = sub(to, start);
+        let d = sub(Xyz::from(to), Xyz::from(start));
         let len = norm(d);
         prop_assume!(len > 1.0);
         let mut v = feed.map_or(f64::INFINITY, |f| f / 60.0);
         let mut a = limits.max_path_accel;
-        for (di, axis) in d.iter().zip(&limits.axes) {
+        for (di, axis) in d.to_array().iter().zip(&limits.axes) {
             let c = di.abs() / len;
             if c > 0.0 {
                 v = v.min(axis.max_speed / c);
@@ -292,8 +296,8 @@ proptest! {
             }
         }
         let analytic = if len >= v * v / a { len / v + v / a } else { 2.0 * (len / a).sqrt() };
-        let mut p = Program::new(start, PathMode::ExactStop);
-        p.line_to(to, feed.map_or(Rate::Rapid, Rate::Feed));
+        let mut p = Program::new(Xyz::from(start), PathMode::ExactStop);
+        p.line_to(Xyz::from(to), feed.map_or(Rate::Rapid, Rate::Feed));
         let summary = vision_path::Setpoints::from_items(&config(limits, period), p.items.clone())
             .unwrap()
             .run_to_end()
@@ -303,6 +307,6 @@ proptest! {
         if analytic >= 100.0 * period {
             prop_assert!((summary.cycle_time - analytic).abs() <= 0.01 * analytic);
         }
-        prop_assert_eq!(summary.end, to);
+        prop_assert_eq!(summary.end, Xyz::from(to));
     }
 }

@@ -6,12 +6,12 @@
 mod common;
 
 use common::{interior_rests, norm, sub, Run};
-use vision_gcode::{Interpreter, InterpreterConfig, Tool as GTool, ToolTable as GTools, Xyz};
+use vision_gcode::{Interpreter, InterpreterConfig};
 use vision_math::LengthUnit;
 use vision_path::{
     Axis, AxisLimits, AxisMap, DigitalOutput, Event, FollowerConfig, GcodeItems, Limits, MotionSink, OutputCommand,
-    OutputWrite, Pace, PathError, PathFollower, PlanConfig, RunState, Setpoint, Setpoints, SpindleCommand, ToolOutputs,
-    ToolTable,
+    OutputWrite, Pace, PathError, PathFollower, PlanConfig, RunState, Setpoint, Setpoints, SpindleCommand, Tool,
+    ToolOutputs, ToolTable, Xyz,
 };
 
 const A: f64 = 1000.0;
@@ -23,10 +23,15 @@ fn seed_tool() -> ToolOutputs {
     ToolOutputs { clockwise: out(0), counter_clockwise: out(1) }
 }
 
+/// The seed's tool table: tool 1 only. The interpreter and the follower share it.
+fn seed_tools() -> ToolTable {
+    ToolTable::new().with(1, Tool { offset: Xyz::ZERO, outputs: Some(seed_tool()) })
+}
+
 fn machine_motion() -> InterpreterConfig {
     let mut config = InterpreterConfig::new(LengthUnit::Millimetre);
     config.default_feed = Some(1000.0);
-    config.tools = GTools::new().with(1, GTool { offset: Xyz::ZERO, outputs: Some(seed_tool()) });
+    config.tools = seed_tools();
     config
 }
 
@@ -39,7 +44,7 @@ fn plan(program: &str) -> Run {
     let sp = &planned.setpoints;
     for w in sp.windows(2) {
         let d = sub(w[1].position, w[0].position);
-        assert!(d.iter().all(|c| c.abs() <= 500.0 * T * (1.0 + 1e-6) + 1e-9), "axis speed at {}", w[1].time);
+        assert!(d.to_array().iter().all(|c| c.abs() <= 500.0 * T * (1.0 + 1e-6) + 1e-9), "axis speed at {}", w[1].time);
     }
     for w in sp.windows(3) {
         let dd = sub(sub(w[2].position, w[1].position), sub(w[1].position, w[0].position));
@@ -48,13 +53,13 @@ fn plan(program: &str) -> Run {
     let mut interp = Interpreter::new(machine_motion());
     interp.run(program, None, &mut |_: &vision_gcode::Event| {}).unwrap();
     let m = interp.machine_position();
-    assert_eq!(sp.last().unwrap().position, m.to_array(), "ends exactly where the interpreter does");
-    assert_eq!(sp.last().unwrap().velocity, [0.0; 3]);
+    assert_eq!(sp.last().unwrap().position, m, "ends exactly where the interpreter does");
+    assert_eq!(sp.last().unwrap().velocity, Xyz::ZERO);
     planned
 }
 
 fn rests_at(p: &Run, at: [f64; 3]) -> bool {
-    p.setpoints.iter().any(|s| s.position == at && s.velocity == [0.0; 3])
+    p.setpoints.iter().any(|s| s.position == Xyz::from(at) && s.velocity == Xyz::ZERO)
 }
 
 /// Setpoints strictly between the first and the last (the path's interior).
@@ -69,12 +74,13 @@ fn g61_square_stops_at_every_corner_and_g64_p10_blends_them() {
         assert!(rests_at(&exact, c), "G61 stops at {c:?}");
     }
     let blended = plan("G91 G21 G64 P10.0\nG0 X500\nY500\nX-500\nY-500");
-    let moving_from = blended.setpoints.iter().position(|s| s.position[0] > 1.0).unwrap();
-    let moving_to = blended.setpoints.iter().rposition(|s| s.position[1] > 1.0).unwrap();
+    let moving_from = blended.setpoints.iter().position(|s| s.position.x > 1.0).unwrap();
+    let moving_to = blended.setpoints.iter().rposition(|s| s.position.y > 1.0).unwrap();
     assert!(blended.setpoints[moving_from..moving_to].iter().all(|s| norm(s.velocity) > 0.0));
     let corners = [[500.0, 0.0, 0.0], [500.0, 500.0, 0.0], [0.0, 500.0, 0.0]];
     for c in corners {
-        let nearest = blended.setpoints.iter().map(|s| norm(sub(s.position, c))).fold(f64::INFINITY, f64::min);
+        let nearest =
+            blended.setpoints.iter().map(|s| norm(sub(s.position, Xyz::from(c)))).fold(f64::INFINITY, f64::min);
         assert!(nearest > 9.9 && nearest < 10.01, "passes P10 from {c:?}: {nearest}");
     }
     let te = exact.setpoints.last().unwrap().time;
@@ -86,8 +92,8 @@ fn g61_square_stops_at_every_corner_and_g64_p10_blends_them() {
 fn g90_and_g91_squares_with_a_z_lift() {
     let abs = plan("G21 G90 G64 P1\nG0 Z500\nX500\nY500\nX-500\nY-500");
     let inc = plan("G21 G91 G64 P1\nG0 Z500\nX500\nY500\nX-500\nY-500");
-    assert_eq!(abs.setpoints.last().unwrap().position, [-500.0, -500.0, 500.0]);
-    assert_eq!(inc.setpoints.last().unwrap().position, [0.0, 0.0, 500.0]);
+    assert_eq!(abs.setpoints.last().unwrap().position, Xyz::new(-500.0, -500.0, 500.0));
+    assert_eq!(inc.setpoints.last().unwrap().position, Xyz::new(0.0, 0.0, 500.0));
     // G64 P1 blends every corner (all are 90° or 45°): neither square stops before its end.
     assert_eq!(interior_rests(&abs.setpoints), 0);
     assert_eq!(interior_rests(&inc.setpoints), 0);
@@ -98,8 +104,8 @@ fn g90_and_g91_squares_with_a_z_lift() {
 fn on_circle(p: &Run, line: usize, centre: [f64; 3], normal: usize, radius: f64) {
     let mut n = 0;
     for s in p.setpoints.iter().filter(|s| s.line == line) {
-        let mut d = sub(s.position, centre);
-        d[normal] = 0.0;
+        let mut d = sub(s.position, Xyz::from(centre));
+        d.set_axis(normal, 0.0);
         assert!((norm(d) - radius).abs() < 1e-9, "line {line} at {:?} is {} from the centre", s.position, norm(d));
         n += 1;
     }
@@ -112,26 +118,26 @@ fn arcs_in_all_three_planes_stay_on_their_circles() {
     on_circle(&xy, 3, [250.0, 250.0, 0.0], 2, 250.0);
     on_circle(&xy, 4, [250.0, 250.0, 0.0], 2, 250.0);
     // G3 from (500, 250) about (250, 250) to (0, 250) goes through +Y first.
-    assert!(xy.setpoints.iter().filter(|s| s.line == 3).any(|s| s.position[1] > 499.0));
+    assert!(xy.setpoints.iter().filter(|s| s.line == 3).any(|s| s.position.y > 499.0));
     let inc = plan("G90 G21 G61 G17 G91.1\nG0 X500 Y250 Z500\nG3 X0 Y250 I-250 J0\nG3 X500 Y250 I250 J0");
     on_circle(&inc, 3, [250.0, 250.0, 0.0], 2, 250.0);
     let zx = plan("G90 G21 G61 G18 G90.1\nG0 X500 Y500 Z250\nG3 X0 Z250 I250 K250\nG3 X500 Z250 I250 K250");
     on_circle(&zx, 3, [250.0, 0.0, 250.0], 1, 250.0);
     // G18 counter-clockwise runs Z → X: from (X500, Z250) it goes through Z < 250 first.
-    assert!(zx.setpoints.iter().filter(|s| s.line == 3).any(|s| s.position[2] < 1.0));
+    assert!(zx.setpoints.iter().filter(|s| s.line == 3).any(|s| s.position.z < 1.0));
     let yz = plan("G90 G21 G61 G19 G90.1\nG0 X250 Y500 Z250\nG3 Y0 Z250 J250 K250\nG3 Y500 Z250 J250 K250");
     on_circle(&yz, 3, [0.0, 250.0, 250.0], 0, 250.0);
     let g2 = plan("G61 G21 G17\nG90\nG90.1\nG0 X500\nG0 Y250 Z500\nG2 X0 Y250 I250 J250");
     on_circle(&g2, 6, [250.0, 250.0, 0.0], 2, 250.0);
-    assert!(g2.setpoints.iter().filter(|s| s.line == 6).any(|s| s.position[1] < 1.0), "G2 goes through −Y");
+    assert!(g2.setpoints.iter().filter(|s| s.line == 6).any(|s| s.position.y < 1.0), "G2 goes through −Y");
 }
 
 #[test]
 fn g28_g92_rapid_and_linear_snippets() {
     let g28 = plan("G90 G21 G61\nG0 X500\nY500\nZ500\nG28.1\nG0 Y0\nX0\nG28");
-    assert_eq!(g28.setpoints.last().unwrap().position, [500.0, 500.0, 500.0]);
+    assert_eq!(g28.setpoints.last().unwrap().position, Xyz::new(500.0, 500.0, 500.0));
     let g92 = plan("G90 G21 G64 P10.0\nG0 X500\nY500 Z500\nG92 X0 Y0 Z0\nG0 X-250 Y-250 Z-250");
-    assert_eq!(g92.setpoints.last().unwrap().position, [250.0, 250.0, 250.0]);
+    assert_eq!(g92.setpoints.last().unwrap().position, Xyz::new(250.0, 250.0, 250.0));
     let rapid = plan("G90 G21 G64 P10.0\nG0 X500 Y500 F1000\nZ500\nX0 Y0\nZ0 F500");
     let g1 = plan("G90 G21 G64 P10.0\nG1 Y500 Z500 F1000\nX500\nY0 Z0\nX0 F500");
     // G64 P10 blends every corner of these three (G92 moves no axis, so it is no stop either).
@@ -157,7 +163,7 @@ fn tool_snippets_switch_at_rest_at_their_programmed_points() {
     );
     let m3 = implicit.events[1];
     let at = implicit.setpoints.iter().find(|s| s.time == m3.time).unwrap();
-    assert_eq!(at.position, [100.0, 100.0, 0.0]);
+    assert_eq!(at.position, Xyz::new(100.0, 100.0, 0.0));
     let explicit = plan("G90 G21\nG0 X100 Y100\nM3 A1 P0\nG1 X200 Y200\nM5 A1 P0");
     let port = |port, command| Event::Output(OutputCommand::Port { device: 1, port, command });
     assert_eq!(explicit.events[0].event, port(0, SpindleCommand::Clockwise));
@@ -178,8 +184,8 @@ fn the_python_example_stays_within_half_a_millimetre_and_dwells_a_second() {
     let p = plan(&seed_example());
     // The corners it blends are line → arc and arc → line; every setpoint on the cut (lines
     // 13–16) stays within P0.5 of the programmed contour.
-    let contour = |x: [f64; 3]| -> f64 {
-        let (px, py) = (x[0], x[1]);
+    let contour = |x: Xyz| -> f64 {
+        let (px, py) = (x.x, x.y);
         let seg = |a: (f64, f64), b: (f64, f64)| {
             let (dx, dy) = (b.0 - a.0, b.1 - a.1);
             let t = (((px - a.0) * dx + (py - a.1) * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
@@ -205,7 +211,7 @@ fn the_python_example_stays_within_half_a_millimetre_and_dwells_a_second() {
     // It comes to rest twice on the way: for M3 (line 12) and for G4 + M5 (lines 17–18). The
     // cut's corners are blended, so the cut itself never stops.
     assert_eq!(interior_rests(&p.setpoints), 2);
-    assert!(cut[1..cut.len() - 1].iter().all(|s| s.velocity != [0.0; 3]), "the cut stops at a corner");
+    assert!(cut[1..cut.len() - 1].iter().all(|s| s.velocity != Xyz::ZERO), "the cut stops at a corner");
 }
 
 #[derive(Clone, Default)]
@@ -223,10 +229,8 @@ impl MotionSink for Writes {
 
 fn seed_follower() -> PathFollower {
     let axes = AxisMap::new(&[(Axis::X, 1), (Axis::Y, 3)]).unwrap();
-    let mut tools = ToolTable::new();
-    tools.insert(1, seed_tool()).unwrap();
     let limits = [AxisLimits { max_speed: 500.0, max_accel: 1000.0 }; 3];
-    PathFollower::new(FollowerConfig::new(axes, tools, limits)).unwrap()
+    PathFollower::new(FollowerConfig::new(axes, seed_tools(), limits)).unwrap()
 }
 
 #[test]
@@ -236,7 +240,7 @@ fn start_gcode_follows_the_python_example_like_start_path() {
     follower.start_gcode(&machine_motion(), seed_example(), 1000.0, writes.clone(), Pace::Unpaced).unwrap();
     let status = follower.wait();
     assert_eq!(status.state, RunState::Completed, "{:?}", status.error);
-    assert_eq!(status.position, [1.0, 1.0, 0.0]);
+    assert_eq!(status.position, Xyz::new(1.0, 1.0, 0.0));
     assert_eq!(status.line, 19, "the last line of the text");
     let w = |port, high| OutputWrite { device: 1, port, high };
     assert_eq!(*writes.0.lock().unwrap(), vec![w(1, false), w(0, true), w(0, false), w(1, false)]);
@@ -258,11 +262,11 @@ fn start_gcode_checks_the_whole_program_before_anything_moves() {
     }
     // The interpreter knows tools 1–254; the follower's table has only tool 1 wired.
     let mut config = machine_motion();
-    config.tools = GTools::numbered(1, 254).with(1, config.tools.get(1).unwrap());
+    config.tools = ToolTable::numbered(1, 254).with(1, config.tools.get(1).unwrap());
     let err = follower.start_gcode(&config, "G21\nT2 M6\nM3", 1000.0, Writes::default(), Pace::Unpaced);
     assert_eq!(err, Err(PathError::UnknownTool { line: 3, tool: 2 }));
     assert_eq!(follower.status().state, RunState::Idle);
-    assert_eq!(follower.status().position, [0.0; 3]);
+    assert_eq!(follower.status().position, Xyz::ZERO);
 }
 
 #[test]
@@ -277,7 +281,7 @@ fn a_gcode_path_that_fails_mid_program_halts_at_rest_and_switches_its_tool_off()
     let status = follower.wait();
     assert_eq!(status.state, RunState::Failed);
     assert!(matches!(status.error, Some(PathError::Program { line: 4, .. })), "{:?}", status.error);
-    assert_eq!(status.position, [10.0, 0.0, 0.0]);
+    assert_eq!(status.position, Xyz::new(10.0, 0.0, 0.0));
     let w = |port, high| OutputWrite { device: 1, port, high };
     assert_eq!(*writes.0.lock().unwrap(), vec![w(1, false), w(0, true), w(0, false)]);
 }

@@ -16,7 +16,7 @@ use vision_mcode::{system_clock, VisionHandler};
 use vision_path::{Limits, PlanConfig, Setpoints};
 
 use crate::{read_text, world, Failure};
-use report::{calibration_truth, pound, steps, telemetry, ProgramReport, Report, Step};
+use report::{calibration_truth, pound, steps, ProgramReport, Report, Step};
 
 /// Setpoint period of the cycle-time planning, seconds.
 const CYCLE_PERIOD_S: f64 = 0.001;
@@ -123,7 +123,7 @@ impl Session {
             module = module.with_profile(ProfileStore::new(path));
         }
         let clock = system_clock();
-        let machine = SimMachine::new(&sim, clock.clone()).map_err(|e| Failure::Input(e.to_string()))?;
+        let machine = SimMachine::new(&sim).map_err(|e| Failure::Input(e.to_string()))?;
         Ok(Session { sim, machine, handler: VisionHandler::new(module, clock), camera, _emulator: emulator })
     }
 
@@ -139,7 +139,7 @@ impl Session {
             items.push(vision_path::item(e, usize::try_from(e.line()).unwrap_or(usize::MAX)));
         };
         let result = self.machine.run_program(text, Some(&mut self.handler), &mut collect);
-        let cycle = self.cycle_time(items, [start.x, start.y, start.z]);
+        let cycle = self.cycle_time(items, start);
         let records = self.handler.take_records();
         let steps = steps(&records, &self.sim, &self.machine);
         let calibrated =
@@ -165,7 +165,7 @@ impl Session {
 
     /// The time the motion (moves, dwells, calibration settles) takes on the world's machine:
     /// the path planner at a 1 ms period within `machine.max_speed` / `max_accel`.
-    fn cycle_time(&self, items: Vec<vision_path::Item>, start: [f64; 3]) -> Result<f64, String> {
+    fn cycle_time(&self, items: Vec<vision_path::Item>, start: vision_path::Xyz) -> Result<f64, String> {
         let world = self.sim.world();
         let (speed, accel) = world.machine.motion_limits(world.unit);
         let config = PlanConfig::new(Limits::uniform(accel, speed, accel), CYCLE_PERIOD_S, start);
@@ -202,8 +202,8 @@ pub(crate) fn run(args: &RunArgs) -> Result<String, Failure> {
         camera: session.camera.clone(),
         profile: args.profile.as_ref().map(|p| p.display().to_string()),
         programs,
-        pound: pound(&session.machine, params),
-        telemetry: telemetry(params),
+        pound: pound(&session.machine, params)?,
+        telemetry: session.handler.module().telemetry().clone(),
     };
     let output = if args.json {
         let mut s = serde_json::to_string_pretty(&report).map_err(|e| Failure::Input(e.to_string()))?;

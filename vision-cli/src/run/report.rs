@@ -2,9 +2,14 @@
 //! truth. Serialised as-is for `--json`; [`super::text`] renders it for people.
 
 use serde::Serialize;
-use vision_core::{CalReport, Machine, ParamValue, Params, Pieces};
+use vision_core::{
+    AlignReport, CalReport, Capture, JobReport, Params, PoundBlock, PoundReport, QuickReport, RunMode, SheetReport,
+    Telemetry,
+};
 use vision_driver_sim::{Sim, SimMachine};
 use vision_math::{LengthUnit, Point2, Vector2};
+
+use crate::Failure;
 use vision_mcode::{Outcome, Record};
 
 /// The whole run.
@@ -22,8 +27,8 @@ pub(crate) struct Report {
     pub programs: Vec<ProgramReport>,
     /// The pound-variable block after the last program.
     pub pound: PoundReport,
-    /// Every telemetry parameter after the last program.
-    pub telemetry: Vec<Telemetry>,
+    /// Every telemetry parameter after the last program, by its manual name.
+    pub telemetry: Telemetry,
 }
 
 /// One program.
@@ -46,101 +51,47 @@ pub(crate) struct ProgramReport {
     pub error: Option<String>,
 }
 
-/// One Vision M-code.
+/// One Vision M-code: the line, and the core's own report for it (flattened into the step).
 #[derive(Debug, Serialize)]
 #[serde(tag = "type", rename_all = "snake_case")]
 pub(crate) enum Step {
     Begin {
         line: u32,
-        mode: &'static str,
+        mode: RunMode,
     },
     Capture {
         line: u32,
-        unit: &'static str,
-        commanded: [f64; 2],
-        /// Centred pixels (after the centre shift, before remap and K).
-        pixels: [f64; 2],
-        observed: [f64; 2],
-        offset: [f64; 2],
-        width: f64,
-        height: f64,
-        angle_deg: f64,
-        score: f64,
-        judgment: &'static str,
-        dot: Option<usize>,
-        slot: Option<u32>,
-        warning: Option<String>,
+        #[serde(flatten)]
+        report: Capture,
     },
     Fit {
         line: u32,
-        unit: &'static str,
-        model: &'static str,
-        pieces: &'static str,
-        marks: usize,
-        theta_deg: f64,
-        scale: [f64; 2],
-        shift: [f64; 2],
-        center: [f64; 2],
-        /// Residual of each mark under the emitted chain, capture order.
-        residuals: Vec<[f64; 2]>,
-        rms: f64,
-        max_residual: f64,
+        #[serde(flatten)]
+        report: AlignReport,
+        /// The lines M282 ran.
         gcode: Vec<String>,
         cut_error: Option<CutError>,
     },
     SheetCalibration {
         line: u32,
-        unit: &'static str,
-        sheet: u32,
-        swap_xy: bool,
-        invert_x: bool,
-        invert_y: bool,
-        k: [[f64; 2]; 2],
-        scale: [f64; 2],
-        camera_rotation_deg: f64,
-        sheet_rotation_deg: f64,
-        sheet_scale: [f64; 2],
-        walk_rms: f64,
-        tool: u32,
-        offset_before: [f64; 2],
-        offset_written: [f64; 2],
-        verify: Vec<VerifyDot>,
-        verify_rms: f64,
-        verify_max: f64,
-        triggers: usize,
-        date: String,
+        #[serde(flatten)]
+        report: SheetReport,
     },
     QuickCalibration {
         line: u32,
-        unit: &'static str,
-        swap_xy: bool,
-        invert_x: bool,
-        invert_y: bool,
-        k: [[f64; 2]; 2],
-        diameter: f64,
-        size_px: [f64; 2],
-        size_error: f64,
-        bump_error: f64,
-        date: String,
+        #[serde(flatten)]
+        report: QuickReport,
     },
     Job {
         line: u32,
-        job: u32,
-        switched: bool,
+        #[serde(flatten)]
+        report: JobReport,
     },
     Refused {
         line: u32,
         mcode: u32,
         message: String,
     },
-}
-
-/// One dot of the calibration's verify walk.
-#[derive(Debug, Serialize)]
-pub(crate) struct VerifyDot {
-    pub dot: usize,
-    pub nominal: [f64; 2],
-    pub residual: [f64; 2],
 }
 
 /// The simulator's verdict on a fit: how far the cutter lands from the real part.
@@ -166,45 +117,6 @@ pub(crate) struct CalibrationTruth {
     pub remap_matches: bool,
 }
 
-/// The pound-variable block.
-#[derive(Debug, Serialize)]
-pub(crate) struct PoundReport {
-    pub base: i64,
-    /// Slots 0–4, fields 0–7 (X, Y, width, height, angle, score, reserved, reserved).
-    pub slots: Vec<[f64; 8]>,
-}
-
-/// One telemetry parameter.
-#[derive(Debug, Serialize)]
-pub(crate) struct Telemetry {
-    pub name: &'static str,
-    pub value: serde_json::Value,
-}
-
-fn xy(p: Point2<f64>) -> [f64; 2] {
-    [p.x, p.y]
-}
-
-fn v2(v: Vector2<f64>) -> [f64; 2] {
-    [v.x, v.y]
-}
-
-fn pieces(p: Pieces) -> &'static str {
-    match p {
-        Pieces::All => "all",
-        Pieces::Shift => "shift",
-        Pieces::Rotation => "rotation",
-        Pieces::Scale => "scale",
-    }
-}
-
-/// RMS length of `residuals` (0 for none).
-fn rms(residuals: &[Vector2<f64>]) -> f64 {
-    #[allow(clippy::cast_precision_loss)] // a handful of marks
-    let n = residuals.len().max(1) as f64;
-    (residuals.iter().map(Vector2::norm_squared).sum::<f64>() / n).sqrt()
-}
-
 /// The steps of one program's records, with the cut error of every fit.
 pub(crate) fn steps(records: &[Record], sim: &Sim, machine: &SimMachine) -> Vec<Step> {
     let mut run_marks: Vec<(Point2<f64>, LengthUnit)> = Vec::new();
@@ -215,91 +127,26 @@ pub(crate) fn steps(records: &[Record], sim: &Sim, machine: &SimMachine) -> Vec<
             Err(e) => Step::Refused { line, mcode: r.mcode, message: e.to_string() },
             Ok(Outcome::Begin(reply)) => {
                 run_marks.clear();
-                Step::Begin { line, mode: reply.report.name() }
+                Step::Begin { line, mode: reply.report }
             }
             Ok(Outcome::Capture(reply)) => {
                 let c = &reply.report;
                 if c.dot_index.is_some() {
                     run_marks.push((c.commanded, c.unit));
                 }
-                Step::Capture {
-                    line,
-                    unit: c.unit.short_name(),
-                    commanded: xy(c.commanded),
-                    pixels: v2(c.centred_px),
-                    observed: xy(c.observed),
-                    offset: v2(c.offset),
-                    width: c.width,
-                    height: c.height,
-                    angle_deg: c.angle_deg,
-                    score: c.score,
-                    judgment: c.judgment.label(),
-                    dot: c.dot_index,
-                    slot: c.slot,
-                    warning: c.warning.clone(),
-                }
+                Step::Capture { line, report: c.clone() }
             }
-            Ok(Outcome::Apply(reply)) => {
-                let a = &reply.report;
-                Step::Fit {
-                    line,
-                    unit: a.unit.short_name(),
-                    model: a.mode.name(),
-                    pieces: pieces(a.pieces),
-                    marks: a.fit.len,
-                    theta_deg: a.chain.rotation_deg,
-                    scale: v2(a.chain.scale),
-                    shift: v2(a.chain.shift),
-                    center: xy(a.chain.center),
-                    residuals: a.residuals.iter().map(|r| v2(*r)).collect(),
-                    rms: rms(&a.residuals),
-                    max_residual: a.max_residual,
-                    gcode: reply.gcode.clone(),
-                    cut_error: cut_error(sim, machine, &reply.gcode, &run_marks),
-                }
-            }
-            Ok(Outcome::Calibrate(reply)) => match &reply.report {
-                CalReport::Sheet(s) => Step::SheetCalibration {
-                    line,
-                    unit: s.unit.short_name(),
-                    sheet: s.sheet,
-                    swap_xy: s.axis.remap.swap_xy,
-                    invert_x: s.axis.remap.invert_x,
-                    invert_y: s.axis.remap.invert_y,
-                    k: [[s.k[(0, 0)], s.k[(0, 1)]], [s.k[(1, 0)], s.k[(1, 1)]]],
-                    scale: v2(s.scale),
-                    camera_rotation_deg: s.camera_rotation_deg,
-                    sheet_rotation_deg: s.sheet_rotation_deg,
-                    sheet_scale: v2(s.sheet_scale),
-                    walk_rms: s.walk_rms,
-                    tool: s.tool,
-                    offset_before: v2(s.offset_before),
-                    offset_written: v2(s.offset_written),
-                    verify: s
-                        .verify
-                        .iter()
-                        .map(|v| VerifyDot { dot: v.dot, nominal: xy(v.nominal), residual: v2(v.residual) })
-                        .collect(),
-                    verify_rms: s.verify_rms,
-                    verify_max: s.verify_max,
-                    triggers: s.triggers,
-                    date: s.date.clone(),
-                },
-                CalReport::Quick(q) => Step::QuickCalibration {
-                    line,
-                    unit: q.unit.short_name(),
-                    swap_xy: q.axis.remap.swap_xy,
-                    invert_x: q.axis.remap.invert_x,
-                    invert_y: q.axis.remap.invert_y,
-                    k: [[q.k[(0, 0)], q.k[(0, 1)]], [q.k[(1, 0)], q.k[(1, 1)]]],
-                    diameter: q.diameter,
-                    size_px: v2(q.size_px),
-                    size_error: q.size_error,
-                    bump_error: q.bump_error,
-                    date: q.date.clone(),
-                },
+            Ok(Outcome::Apply(reply)) => Step::Fit {
+                line,
+                report: reply.report.clone(),
+                gcode: reply.gcode.clone(),
+                cut_error: cut_error(sim, machine, &reply.gcode, &run_marks),
             },
-            Ok(Outcome::SelectJob(reply)) => Step::Job { line, job: reply.report.job, switched: reply.report.switched },
+            Ok(Outcome::Calibrate(reply)) => match &reply.report {
+                CalReport::Sheet(s) => Step::SheetCalibration { line, report: s.clone() },
+                CalReport::Quick(q) => Step::QuickCalibration { line, report: q.clone() },
+            },
+            Ok(Outcome::SelectJob(reply)) => Step::Job { line, report: reply.report },
         };
         out.push(step);
     }
@@ -338,14 +185,15 @@ fn cut_error(
     for p in &grid {
         max = max.max(machine.cut_error(gcode, &fixture.name, *p).ok()?);
     }
-    Some(CutError { fixture: fixture.name.clone(), tool: machine.active_tool(), points: grid.len(), max })
+    Some(CutError { fixture: fixture.name.clone(), tool: machine.interpreter().active_tool(), points: grid.len(), max })
 }
 
 /// The calibration truth now (after a program that calibrated).
 pub(crate) fn calibration_truth(sim: &Sim, machine: &SimMachine, params: &Params) -> Option<CalibrationTruth> {
-    let unit = machine.units();
-    let tool = params.camera_tool().unwrap_or_else(|| machine.active_tool());
-    let offset = machine.tool_offset(tool).ok()?;
+    let interp = machine.interpreter();
+    let unit = interp.units();
+    let tool = params.camera_tool().unwrap_or_else(|| interp.active_tool());
+    let offset = interp.tool_offset(tool)?.xy().coords;
     let e = sim.calibration_error(params, offset, unit);
     Some(CalibrationTruth {
         k_relative: e.k_relative,
@@ -355,33 +203,9 @@ pub(crate) fn calibration_truth(sim: &Sim, machine: &SimMachine, params: &Params
     })
 }
 
-/// The pound block at `params`' base.
-pub(crate) fn pound(machine: &SimMachine, params: &Params) -> PoundReport {
-    let base = params.pound_var_base();
-    let slots = (0..5u32)
-        .map(|s| {
-            std::array::from_fn(|f| {
-                let at = u32::try_from(base).ok().map(|b| b + 8 * s + u32::try_from(f).unwrap_or(0));
-                at.and_then(|a| machine.pound(a).ok()).unwrap_or(0.0)
-            })
-        })
-        .collect();
-    PoundReport { base, slots }
-}
-
-/// Every telemetry parameter.
-pub(crate) fn telemetry(params: &Params) -> Vec<Telemetry> {
-    Params::SPECS
-        .iter()
-        .filter(|s| s.access == vision_core::Access::Telemetry)
-        .filter_map(|s| {
-            let value = match params.get(s.name).ok()? {
-                ParamValue::Bool(b) => serde_json::Value::from(b),
-                ParamValue::Int(i) => serde_json::Value::from(i),
-                ParamValue::Float(f) => serde_json::Value::from(f),
-                ParamValue::Text(t) => serde_json::Value::from(t),
-            };
-            Some(Telemetry { name: s.name, value })
-        })
-        .collect()
+/// The pound block at `params`' base (validated when the profile was loaded).
+pub(crate) fn pound(machine: &SimMachine, params: &Params) -> Result<PoundReport, Failure> {
+    let block = PoundBlock::new(params.pound_var_base()).map_err(|e| Failure::Input(e.to_string()))?;
+    let interp = machine.interpreter();
+    Ok(block.report(|a| Some(interp.param(a))))
 }

@@ -2,6 +2,9 @@
 
 use std::fmt::Write as _;
 
+use vision_core::{ParamValue, Telemetry};
+use vision_math::{Matrix2, Remap};
+
 use super::report::{ProgramReport, Report, Step};
 
 /// Lengths: 5 decimals (0.01 thou in inches, 10 nm in millimetres).
@@ -9,8 +12,9 @@ fn l(v: f64) -> String {
     vision_math::chain::fixed(v, 5)
 }
 
-fn xy(p: [f64; 2]) -> String {
-    format!("X{} Y{}", l(p[0]), l(p[1]))
+/// `X… Y…` of a point or a vector.
+fn xy(x: f64, y: f64) -> String {
+    format!("X{} Y{}", l(x), l(y))
 }
 
 /// Renders the whole report.
@@ -29,7 +33,7 @@ pub(crate) fn render(r: &Report) -> String {
         let _ = writeln!(
             s,
             "  slot {i} #{:<5} {:>11} {:>11} {:>9} {:>9} {:>9} {:>7}",
-            r.pound.base + 8 * i64::try_from(i).unwrap_or(0),
+            r.pound.base + 8 * u32::try_from(i).unwrap_or(0),
             l(slot[0]),
             l(slot[1]),
             l(slot[2]),
@@ -39,16 +43,16 @@ pub(crate) fn render(r: &Report) -> String {
         );
     }
     let _ = writeln!(s, "\ntelemetry:");
-    for t in &r.telemetry {
-        let value = match &t.value {
+    for spec in Telemetry::SPECS {
+        let value = match r.telemetry.get(spec.name) {
             // Integers as they are; reals to 6 decimals (full precision is in --json).
-            serde_json::Value::Number(n) if n.is_f64() => {
-                n.as_f64().map_or_else(|| n.to_string(), |f| vision_math::chain::fixed(f, 6))
-            }
-            serde_json::Value::Number(n) => n.to_string(),
-            other => other.to_string(),
+            Some(ParamValue::Float(f)) => vision_math::chain::fixed(f, 6),
+            Some(ParamValue::Int(i)) => i.to_string(),
+            Some(ParamValue::Bool(b)) => b.to_string(),
+            Some(ParamValue::Text(t)) => serde_json::Value::from(t).to_string(),
+            None => continue,
         };
-        let _ = writeln!(s, "  {:<22} {value}", t.name);
+        let _ = writeln!(s, "  {:<22} {value}", spec.name);
     }
     s
 }
@@ -81,51 +85,48 @@ fn program(s: &mut String, p: &ProgramReport, world_unit: &str) {
 fn step(s: &mut String, step: &Step, world_unit: &str) {
     match step {
         Step::Begin { line, mode } => {
-            let _ = writeln!(s, "  line {line:>4}  M280  begin a {mode} run");
+            let _ = writeln!(s, "  line {line:>4}  M280  begin a {} run", mode.name());
         }
-        Step::Capture { line, unit, commanded, pixels, observed, judgment, dot, warning, .. } => {
-            let which = dot.map_or_else(|| "outside a run".to_string(), |d| format!("dot {d}"));
+        Step::Capture { line, report: c } => {
+            let which = c.dot_index.map_or_else(|| "outside a run".to_string(), |d| format!("dot {d}"));
             let _ = writeln!(
                 s,
-                "  line {line:>4}  M281  {which}: commanded {} -> pixels {:+.3} {:+.3} -> observed {} {unit} [{judgment}]",
-                xy(*commanded),
-                pixels[0],
-                pixels[1],
-                xy(*observed)
+                "  line {line:>4}  M281  {which}: commanded {} -> pixels {:+.3} {:+.3} -> observed {} {} [{}]",
+                xy(c.commanded.x, c.commanded.y),
+                c.centred_px.x,
+                c.centred_px.y,
+                xy(c.observed.x, c.observed.y),
+                c.unit.short_name(),
+                c.judgment.label()
             );
-            if let Some(w) = warning {
+            if let Some(w) = &c.warning {
                 let _ = writeln!(s, "              warning: {w}");
             }
         }
-        Step::Fit {
-            line,
-            unit,
-            model,
-            pieces,
-            marks,
-            theta_deg,
-            scale,
-            shift,
-            center,
-            residuals,
-            rms,
-            max_residual,
-            gcode,
-            cut_error,
-        } => {
-            let _ = writeln!(s, "  line {line:>4}  M282  {model} fit of {marks} marks, {pieces} pieces emitted:");
+        Step::Fit { line, report: a, gcode, cut_error } => {
+            let unit = a.unit.short_name();
+            let chain = &a.chain;
             let _ = writeln!(
                 s,
-                "              rotation {theta_deg:.6} deg, scale X {:.7} Y {:.7}, shift {}, centre {} ({unit})",
-                scale[0],
-                scale[1],
-                xy(*shift),
-                xy(*center)
+                "  line {line:>4}  M282  {} fit of {} marks, {} pieces emitted:",
+                a.mode.name(),
+                a.fit.len,
+                a.pieces.name()
             );
-            for (i, r) in residuals.iter().enumerate() {
-                let _ = writeln!(s, "              mark {} residual {} (|r| {})", i + 1, xy(*r), l(r[0].hypot(r[1])));
+            let _ = writeln!(
+                s,
+                "              rotation {:.6} deg, scale X {:.7} Y {:.7}, shift {}, centre {} ({unit})",
+                chain.rotation_deg,
+                chain.scale.x,
+                chain.scale.y,
+                xy(chain.shift.x, chain.shift.y),
+                xy(chain.center.x, chain.center.y)
+            );
+            for (i, r) in a.residuals.iter().enumerate() {
+                let _ =
+                    writeln!(s, "              mark {} residual {} (|r| {})", i + 1, xy(r.x, r.y), l(r.x.hypot(r.y)));
             }
-            let _ = writeln!(s, "              rms {} {unit}, max {} {unit}", l(*rms), l(*max_residual));
+            let _ = writeln!(s, "              rms {} {unit}, max {} {unit}", l(a.rms), l(a.max_residual));
             for g in gcode {
                 let _ = writeln!(s, "              | {g}");
             }
@@ -145,90 +146,82 @@ fn step(s: &mut String, step: &Step, world_unit: &str) {
                 }
             }
         }
-        Step::SheetCalibration {
-            line,
-            unit,
-            sheet,
-            swap_xy,
-            invert_x,
-            invert_y,
-            k,
-            scale,
-            camera_rotation_deg,
-            sheet_rotation_deg,
-            sheet_scale,
-            walk_rms,
-            tool,
-            offset_before,
-            offset_written,
-            verify,
-            verify_rms,
-            verify_max,
-            triggers,
-            date,
-        } => {
-            let _ = writeln!(s, "  line {line:>4}  M283  calibration sheet {sheet}: {triggers} triggers, {date}");
-            let _ = writeln!(s, "              axes: SwapXY {swap_xy}, InvertX {invert_x}, InvertY {invert_y}");
+        Step::SheetCalibration { line, report: r } => {
+            let unit = r.unit.short_name();
             let _ = writeln!(
                 s,
-                "              K = [{:.8} {:.8}; {:.8} {:.8}] {unit}/px",
-                k[0][0], k[0][1], k[1][0], k[1][1]
+                "  line {line:>4}  M283  calibration sheet {}: {} triggers, {}",
+                r.sheet, r.triggers, r.date
+            );
+            axes(s, r.axis.remap);
+            let _ = writeln!(s, "              K = [{}] {unit}/px", k_text(&r.k));
+            let _ = writeln!(
+                s,
+                "              scale X {:.8} Y {:.8} {unit}/px ({:+.3} %), camera rotation {:.4} deg",
+                r.scale.x,
+                r.scale.y,
+                (r.scale.x / r.scale.y - 1.0) * 100.0,
+                r.camera_rotation_deg
             );
             let _ = writeln!(
                 s,
-                "              scale X {:.8} Y {:.8} {unit}/px ({:+.3} %), camera rotation {camera_rotation_deg:.4} deg",
-                scale[0],
-                scale[1],
-                (scale[0] / scale[1] - 1.0) * 100.0
+                "              sheet rotation {:.4} deg, printed scale X {:.5} Y {:.5}, walk rms {} {unit}",
+                r.sheet_rotation_deg,
+                r.sheet_scale.x,
+                r.sheet_scale.y,
+                l(r.walk_rms)
             );
-            let _ = writeln!(
-                s,
-                "              sheet rotation {sheet_rotation_deg:.4} deg, printed scale X {:.5} Y {:.5}, walk rms {} {unit}",
-                sheet_scale[0],
-                sheet_scale[1],
-                l(*walk_rms)
-            );
-            let _ =
-                writeln!(s, "              T{tool} offset {} -> {} {unit}", xy(*offset_before), xy(*offset_written));
-            for v in verify {
-                let _ =
-                    writeln!(s, "              verify dot {} at {}: residual {}", v.dot, xy(v.nominal), xy(v.residual));
+            let (b, w) = (r.offset_before, r.offset_written);
+            let _ = writeln!(s, "              T{} offset {} -> {} {unit}", r.tool, xy(b.x, b.y), xy(w.x, w.y));
+            for v in &r.verify {
+                let _ = writeln!(
+                    s,
+                    "              verify dot {} at {}: residual {}",
+                    v.dot,
+                    xy(v.nominal.x, v.nominal.y),
+                    xy(v.residual.x, v.residual.y)
+                );
             }
-            let _ = writeln!(s, "              verify rms {} {unit}, max {} {unit}", l(*verify_rms), l(*verify_max));
+            let _ = writeln!(s, "              verify rms {} {unit}, max {} {unit}", l(r.verify_rms), l(r.verify_max));
         }
-        Step::QuickCalibration {
-            line,
-            unit,
-            swap_xy,
-            invert_x,
-            invert_y,
-            k,
-            diameter,
-            size_px,
-            size_error,
-            bump_error,
-            date,
-        } => {
-            let _ = writeln!(s, "  line {line:>4}  M283  quick calibration on a {diameter} {unit} dot, {date}");
-            let _ = writeln!(s, "              axes: SwapXY {swap_xy}, InvertX {invert_x}, InvertY {invert_y}");
+        Step::QuickCalibration { line, report: q } => {
+            let unit = q.unit.short_name();
+            let _ = writeln!(s, "  line {line:>4}  M283  quick calibration on a {} {unit} dot, {}", q.diameter, q.date);
+            axes(s, q.axis.remap);
             let _ = writeln!(
                 s,
-                "              dot {:.2} x {:.2} px -> K = [{:.8} {:.8}; {:.8} {:.8}] {unit}/px",
-                size_px[0], size_px[1], k[0][0], k[0][1], k[1][0], k[1][1]
+                "              dot {:.2} x {:.2} px -> K = [{}] {unit}/px",
+                q.size_px.x,
+                q.size_px.y,
+                k_text(&q.k)
             );
             let _ = writeln!(
                 s,
                 "              confirm size error {} {unit}, bump error {} {unit}",
-                l(*size_error),
-                l(*bump_error)
+                l(q.size_error),
+                l(q.bump_error)
             );
         }
-        Step::Job { line, job, switched } => {
-            let what = if *switched { format!("camera job {job}") } else { "camera left on its job".to_string() };
+        Step::Job { line, report } => {
+            let what = if report.switched {
+                format!("camera job {}", report.job)
+            } else {
+                "camera left on its job".to_string()
+            };
             let _ = writeln!(s, "  line {line:>4}  M284  {what}");
         }
         Step::Refused { line, mcode, message } => {
             let _ = writeln!(s, "  line {line:>4}  M{mcode}  refused: {message}");
         }
     }
+}
+
+/// The axis flags line of both calibrations.
+fn axes(s: &mut String, r: Remap) {
+    let _ = writeln!(s, "              axes: SwapXY {}, InvertX {}, InvertY {}", r.swap_xy, r.invert_x, r.invert_y);
+}
+
+/// `K11 K12; K21 K22` to 8 decimals.
+fn k_text(k: &Matrix2<f64>) -> String {
+    format!("{:.8} {:.8}; {:.8} {:.8}", k[(0, 0)], k[(0, 1)], k[(1, 0)], k[(1, 1)])
 }

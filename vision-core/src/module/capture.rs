@@ -8,19 +8,25 @@ use crate::driver::{Judgment, Reading};
 use crate::error::VisionError;
 use crate::machine::Machine;
 use crate::params::Params;
+use crate::ser;
 
 /// A capture as M281 reports it. Lengths in the machine's current units (`unit`), program frame.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Capture {
     /// The machine unit every length below is in.
+    #[serde(serialize_with = "ser::unit")]
     pub unit: LengthUnit,
     /// Commanded camera position `C`, program frame.
+    #[serde(serialize_with = "ser::point")]
     pub commanded: Point2<f64>,
     /// Observed mark centre `O`, program frame (mapped through the active alignment, SPEC §2).
+    #[serde(serialize_with = "ser::point")]
     pub observed: Point2<f64>,
     /// Offset `d = K·R·c` from the camera to the mark, work-frame axes.
+    #[serde(serialize_with = "ser::vector")]
     pub offset: Vector2<f64>,
     /// Centred pixel offset `c` (after the centre shift, before remap and K), pixels.
+    #[serde(serialize_with = "ser::vector")]
     pub centred_px: Vector2<f64>,
     /// Mark width along the camera's native x axis.
     pub width: f64,
@@ -31,6 +37,7 @@ pub struct Capture {
     /// Match score (0 when not reported).
     pub score: f64,
     /// The camera's judgment (never NG here: NG is an error).
+    #[serde(serialize_with = "ser::judgment")]
     pub judgment: Judgment,
     /// 1-based index in the run's dot list, `None` outside a run.
     pub dot_index: Option<usize>,

@@ -2,54 +2,29 @@
 
 use vision_math::chain::CANCEL_LINE;
 
-use super::{integer_word, Reply, VisionModule};
+use super::{Reply, Run, VisionModule};
 use crate::error::VisionError;
 use crate::machine::Machine;
 use crate::pound::PoundBlock;
 
 /// The fit an alignment run solves at M282.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
 pub enum RunMode {
     /// `P4` or omitted: rectangle fit (shift, rotation, X and Y scale); needs 4 marks.
+    #[default]
     Rectangle,
     /// `P3`: similarity fit (shift, rotation, one uniform scale); needs 3 marks.
     Similarity,
 }
 
 impl RunMode {
-    /// The mode for M280's `P` word (`None` = omitted = rectangle).
-    ///
-    /// # Errors
-    /// [`VisionError::BadWord`] for anything but 3 or 4.
-    pub fn from_p(p: Option<f64>) -> Result<RunMode, VisionError> {
-        match p.map(integer_word) {
-            None => Ok(RunMode::Rectangle),
-            Some(Some(4)) => Ok(RunMode::Rectangle),
-            Some(Some(3)) => Ok(RunMode::Similarity),
-            Some(_) => Err(VisionError::BadWord {
-                mcode: "M280",
-                word: format!("P{}", p.unwrap_or(f64::NAN)),
-                reason: "P must be 3 (similarity) or 4 / omitted (rectangle)".into(),
-            }),
-        }
-    }
-
     /// The manual's code (`VisionRun_Mode`): 4 rectangle, 3 similarity.
     #[must_use]
     pub fn code(self) -> i64 {
         match self {
             RunMode::Rectangle => 4,
             RunMode::Similarity => 3,
-        }
-    }
-
-    /// The mode for a `VisionRun_Mode` code (anything but 3 is rectangle).
-    #[must_use]
-    pub fn from_code(code: i64) -> RunMode {
-        if code == 3 {
-            RunMode::Similarity
-        } else {
-            RunMode::Rectangle
         }
     }
 
@@ -75,27 +50,28 @@ impl RunMode {
 impl VisionModule {
     /// **M280**: begins an alignment run in `mode`.
     ///
-    /// Validates the pound-variable base, clears the dot list, sets `Run_Active` = 1,
-    /// `Run_Mode`, `Run_DotCount` = 0, and returns `G69 G50 G52 X0 Y0` for the adapter to run
-    /// (cancelling any earlier alignment). Needs no camera and no calibration.
+    /// Validates the pound-variable base, runs `G69 G50 G52 X0 Y0` on the machine (cancelling
+    /// any earlier alignment), then opens a fresh [`Run`] (empty dot list) and writes
+    /// `Run_Active` = 1, `Run_Mode`, `Run_DotCount` = 0. Needs no camera and no calibration.
     ///
     /// # Errors
     /// [`VisionError::NotEnabled`], [`VisionError::WrongTool`],
-    /// [`VisionError::PoundBaseReserved`], [`VisionError::PoundBlockMissing`]; nothing changes.
+    /// [`VisionError::PoundBaseReserved`], [`VisionError::PoundBlockMissing`], or the machine's
+    /// refusal of the cancel line ([`VisionError::Machine`]); the run is unchanged.
     pub fn m280(&mut self, machine: &mut dyn Machine, mode: RunMode) -> Result<Reply<RunMode>, VisionError> {
         self.check_enabled()?;
         self.check_tool(machine)?;
         PoundBlock::on_machine(self.params.pound_var_base(), machine)?;
-        self.dots.clear();
-        self.params.run_active = 1;
-        self.params.run_mode = mode.code();
-        self.params.run_dot_count = 0;
-        Ok(Reply { gcode: vec![CANCEL_LINE.to_string()], report: mode })
+        let gcode = vec![CANCEL_LINE.to_string()];
+        machine.run_gcode(&gcode)?;
+        self.run = Run { mode, active: true, dots: Vec::new() };
+        self.publish_run();
+        Ok(Reply { gcode, report: mode })
     }
 
     /// True between M280 and a successful M282.
     #[must_use]
     pub fn run_active(&self) -> bool {
-        self.params.run_active != 0
+        self.run.active
     }
 }

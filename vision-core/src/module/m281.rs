@@ -45,14 +45,12 @@ impl VisionModule {
             Ok(r) => r,
             Err(e) => {
                 let e = VisionError::from(e);
-                self.params.last_judgment = -1;
-                self.params.last_status = e.to_string();
+                self.publish_failure(Some(-1), &e);
                 return Err(e);
             }
         };
         if let Err(e) = require_mark(&reading) {
-            self.params.last_judgment = i64::from(reading.judgment.code());
-            self.params.last_status = e.to_string();
+            self.publish_failure(Some(i64::from(reading.judgment.code())), &e);
             return Err(e);
         }
         let native = Point2::new(reading.x_px, reading.y_px);
@@ -69,7 +67,7 @@ impl VisionModule {
         };
 
         let in_run = self.run_active();
-        let dot_index = in_run.then(|| self.dots.len() + 1);
+        let dot_index = in_run.then(|| self.run.dots.len() + 1);
         let slot = dot_index.and_then(|i| u32::try_from(i).ok()).filter(|s| *s < SLOTS);
         let mut writes = block.slot_writes(0, &values);
         if let Some(s) = slot {
@@ -79,10 +77,10 @@ impl VisionModule {
 
         // Committed: the capture counts from here on.
         if in_run {
-            self.dots.push(Dot { commanded, observed, unit });
-            self.params.run_dot_count = i64::try_from(self.dots.len()).unwrap_or(i64::MAX);
+            self.run.dots.push(Dot { commanded, observed, unit });
+            self.publish_run();
         }
-        let p = &mut self.params;
+        let p = &mut self.telemetry;
         let centred = chain.centred(native);
         p.last_judgment = i64::from(reading.judgment.code());
         p.last_offset_px_x = centred.x;
@@ -122,8 +120,11 @@ impl VisionModule {
                 }
             }
         }
+        if let Some(note) = self.driver.as_deref().and_then(|d| d.reading_warning(&reading)) {
+            warning = Some(warning.map_or_else(|| note.clone(), |w| format!("{note}; {w}")));
+        }
         if let Some(w) = &warning {
-            self.params.last_status = format!("OK (warning: {w})");
+            self.telemetry.last_status = format!("OK (warning: {w})");
         }
         Ok(Reply {
             gcode: Vec::new(),

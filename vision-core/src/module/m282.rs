@@ -3,9 +3,10 @@
 use vision_math::{fit_piece, fit_rectangle, fit_similarity, AlignmentChain, Fit, LengthUnit, Piece, Point2, Vector2};
 
 use super::m280::RunMode;
-use super::{integer_word, Reply, VisionModule};
+use super::{Reply, VisionModule};
 use crate::error::VisionError;
 use crate::machine::Machine;
+use crate::ser;
 
 /// Which pieces of the fit M282 emits (`P` word).
 ///
@@ -20,7 +21,8 @@ use crate::machine::Machine;
 ///
 /// Every mode emits the same four lines ([`AlignmentChain::gcode`]) with the other pieces at
 /// identity, so a later M282 always replaces, never compounds.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Pieces {
     /// `P0` / omitted: shift, rotation and scale.
     All,
@@ -33,41 +35,39 @@ pub enum Pieces {
 }
 
 impl Pieces {
-    /// The selection for M282's `P` word (`None` = omitted = all).
-    ///
-    /// # Errors
-    /// [`VisionError::BadWord`] for anything but 0–3.
-    pub fn from_p(p: Option<f64>) -> Result<Pieces, VisionError> {
-        match p.map(integer_word) {
-            None => Ok(Pieces::All),
-            Some(Some(0)) => Ok(Pieces::All),
-            Some(Some(1)) => Ok(Pieces::Shift),
-            Some(Some(2)) => Ok(Pieces::Rotation),
-            Some(Some(3)) => Ok(Pieces::Scale),
-            Some(_) => Err(VisionError::BadWord {
-                mcode: "M282",
-                word: format!("P{}", p.unwrap_or(f64::NAN)),
-                reason: "P must be 0 / omitted (all), 1 (shift), 2 (rotation) or 3 (scale)".into(),
-            }),
+    /// The selection's name (`all`, `shift`, `rotation`, `scale`), as in the JSON.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Pieces::All => "all",
+            Pieces::Shift => "shift",
+            Pieces::Rotation => "rotation",
+            Pieces::Scale => "scale",
         }
     }
 }
 
 /// What M282 solved and emitted. Lengths in the machine's current units (`unit`).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct AlignReport {
     /// The unit of every length below.
+    #[serde(serialize_with = "ser::unit")]
     pub unit: LengthUnit,
     /// The run's fit model.
     pub mode: RunMode,
     /// The pieces emitted.
     pub pieces: Pieces,
     /// The full fit of the run's model over every capture (what the quality gates judged).
+    #[serde(serialize_with = "ser::fit")]
     pub fit: Fit,
-    /// The chain emitted (equal to `fit.chain()` for [`Pieces::All`]).
+    /// The chain emitted (equal to `fit.transform.chain()` for [`Pieces::All`]).
+    #[serde(serialize_with = "ser::chain")]
     pub chain: AlignmentChain,
     /// Residual `chain(nᵢ) − oᵢ` of each capture under the emitted chain, in capture order.
+    #[serde(serialize_with = "ser::vectors")]
     pub residuals: Vec<Vector2<f64>>,
+    /// RMS residual length under the emitted chain, `sqrt(Σ‖rᵢ‖² / N)`.
+    pub rms: f64,
     /// Largest residual length under the emitted chain.
     pub max_residual: f64,
 }
@@ -76,8 +76,8 @@ impl VisionModule {
     /// **M282**: solves the fit commanded → observed over every capture of the run (least
     /// squares when there are more marks than the minimum), checks the quality gates, writes
     /// `Run_*` (the emitted chain: `Run_Tx/Ty` = G52, `Run_Theta` = G68 R in radians,
-    /// `Run_Sx/Sy` = G51, `Run_CenterX/Y` = G68 X/Y), sets `Run_Active` = 0 and returns the four
-    /// lines of [`AlignmentChain::gcode`] for the adapter to run.
+    /// `Run_Sx/Sy` = G51, `Run_CenterX/Y` = G68 X/Y), closes the run (`Run_Active` = 0) and runs
+    /// the four lines of [`AlignmentChain::gcode`] on the machine; the reply lists them.
     ///
     /// Quality gates, judged on the full fit of the run's model whatever `pieces` is emitted
     /// (0 disables a gate): X or Y scale off 1 by more than `VisionFitMaxScaleDev` percent;
@@ -90,25 +90,30 @@ impl VisionModule {
     /// # Errors
     /// [`VisionError::NotEnabled`], [`VisionError::WrongTool`], [`VisionError::TooFewDots`],
     /// [`VisionError::Math`] (degenerate marks), [`VisionError::FitRejected`]; nothing is
-    /// emitted and nothing changes.
+    /// emitted and nothing changes. [`VisionError::Machine`] when the machine refuses a line:
+    /// the run stays open and the telemetry unchanged, but the lines before the refused one have
+    /// run (the first is the cancel line, so at worst the machine is left unaligned); run M282
+    /// again once the machine accepts G-code.
     pub fn m282(&mut self, machine: &mut dyn Machine, pieces: Pieces) -> Result<Reply<AlignReport>, VisionError> {
         self.check_enabled()?;
         self.check_tool(machine)?;
-        let mode = RunMode::from_code(self.params.run_mode());
+        let mode = self.run.mode;
         let needed = mode.min_marks();
-        if self.dots.len() < needed {
-            return Err(VisionError::TooFewDots { mode: mode.name(), needed, got: self.dots.len() });
+        if self.run.dots.len() < needed {
+            return Err(VisionError::TooFewDots { mode: mode.name(), needed, got: self.run.dots.len() });
         }
         let unit = machine.units();
         let (commanded, observed): (Vec<Point2<f64>>, Vec<Point2<f64>>) =
-            self.dots.iter().map(|d| d.in_unit(unit)).unzip();
+            self.run.dots.iter().map(|d| d.in_unit(unit)).unzip();
         let fit = match mode {
             RunMode::Rectangle => fit_rectangle(&commanded, &observed)?,
             RunMode::Similarity => fit_similarity(&commanded, &observed)?,
         };
         self.check_gates(&fit, unit)?;
         let chain = match pieces {
-            Pieces::All => fit.chain().ok_or(VisionError::Math(vision_math::MathError::DegenerateObserved))?,
+            Pieces::All => {
+                fit.transform.chain().ok_or(VisionError::Math(vision_math::MathError::DegenerateObserved))?
+            }
             Pieces::Shift => fit_piece(Piece::Shift, &commanded, &observed)?.chain,
             Pieces::Rotation => fit_piece(Piece::Rotation, &commanded, &observed)?.chain,
             Pieces::Scale => {
@@ -116,10 +121,15 @@ impl VisionModule {
             }
         };
         let gcode = chain.gcode()?.to_vec();
+        machine.run_gcode(&gcode)?;
         let residuals: Vec<Vector2<f64>> = commanded.iter().zip(&observed).map(|(n, o)| chain.apply(*n) - o).collect();
         let max_residual = residuals.iter().map(|r| r.norm()).fold(0.0, f64::max);
+        #[allow(clippy::cast_precision_loss)] // a handful of marks
+        let rms = (residuals.iter().map(Vector2::norm_squared).sum::<f64>() / residuals.len() as f64).sqrt();
 
-        let p = &mut self.params;
+        self.run.active = false;
+        self.publish_run();
+        let p = &mut self.telemetry;
         p.run_tx = chain.shift.x;
         p.run_ty = chain.shift.y;
         p.run_theta = chain.rotation_deg.to_radians();
@@ -127,25 +137,24 @@ impl VisionModule {
         p.run_sy = chain.scale.y;
         p.run_center_x = chain.center.x;
         p.run_center_y = chain.center.y;
-        p.run_active = 0;
-        Ok(Reply { gcode, report: AlignReport { unit, mode, pieces, fit, chain, residuals, max_residual } })
+        Ok(Reply { gcode, report: AlignReport { unit, mode, pieces, fit, chain, residuals, rms, max_residual } })
     }
 
     /// The `VisionFitMax*` gates (see [`VisionModule::m282`]).
     fn check_gates(&self, fit: &Fit, unit: LengthUnit) -> Result<(), VisionError> {
         let u = unit.short_name();
         let max_dev = self.params.fit_max_scale_dev_pct();
-        let dev = (fit.scale.x - 1.0).abs().max((fit.scale.y - 1.0).abs()) * 100.0;
+        let dev = (fit.transform.scale.x - 1.0).abs().max((fit.transform.scale.y - 1.0).abs()) * 100.0;
         if max_dev > 0.0 && dev > max_dev {
             return Err(VisionError::FitRejected {
                 reason: format!(
                     "scale X {:.5} / Y {:.5} deviates {dev:.3} % from 1, more than VisionFitMaxScaleDev = {max_dev} %",
-                    fit.scale.x, fit.scale.y
+                    fit.transform.scale.x, fit.transform.scale.y
                 ),
             });
         }
         let max_shift = LengthUnit::Inch.convert(self.params.fit_max_shift_in(), unit);
-        let shift = (fit.observed_centroid - fit.commanded_centroid).norm();
+        let shift = (fit.transform.observed_centroid - fit.transform.commanded_centroid).norm();
         if max_shift > 0.0 && shift > max_shift {
             return Err(VisionError::FitRejected {
                 reason: format!("shift {shift:.4} {u} exceeds VisionFitMaxShift = {max_shift:.4} {u}"),

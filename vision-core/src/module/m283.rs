@@ -1,11 +1,13 @@
 //! M283: calibrate K (and, for `Cn`, the camera tool offset).
 
+use vision_math::chain::fixed;
 use vision_math::{AlignmentChain, Point2, Vector2};
 
 use super::{Reply, VisionModule};
-use crate::calibrate::{quick, sheet_walk, CalReport, Calibrate, Walker};
+use crate::calibrate::{quick, sheet_walk, CalReport, Calibrate, Solution, Walker};
 use crate::error::VisionError;
-use crate::machine::Machine;
+use crate::machine::{Machine, MachineError};
+use crate::params::Params;
 use crate::sheets::{cal_sheet, known_sheets};
 
 /// True when `chain` moves no point (within 1e-12).
@@ -16,28 +18,36 @@ fn is_identity(chain: &AlignmentChain) -> bool {
 
 impl VisionModule {
     /// **M283**: calibrates. Both modes start with the axis-detect bump (+0.1″ X, trigger,
-    /// +0.1″ Y, trigger, back; 2.54 mm under G21) and write `VisionCameraSwapXY` /
+    /// +0.1″ Y, trigger, back; 2.54 mm under G21) that finds `VisionCameraSwapXY` /
     /// `InvertX` / `InvertY`.
     ///
     /// * [`Calibrate::Quick`]: K = diag(d/width_px, d/height_px) (width and height along the
     ///   remapped axes), then re-triggers to confirm; no tool offset is written.
     /// * [`Calibrate::Sheet`]: walks the sheet, solves the full K, the sheet pose and the camera
-    ///   tool's X/Y offset by least squares, writes them, re-walks every dot in G90 and reports
-    ///   (see [`crate::calibrate`]). The offset goes to `VisionCameraToolNumber`, or to the
-    ///   active tool when that is 0.
+    ///   tool's X/Y offset by least squares, re-walks every dot in G90 and reports (see
+    ///   [`crate::calibrate`]). The offset goes to `VisionCameraToolNumber`, or to the active
+    ///   tool when that is 0.
     ///
-    /// On success K11..K22, the remap flags, `Cal_Date` (ISO local time from the machine clock)
-    /// and `Cal_Units` (the machine's unit) are written together and the profile is saved
-    /// atomically; `LastStatus` is `OK`. G-code runs inside the call (the reply's `gcode` is
-    /// empty).
+    /// The walk writes nothing; its solution is applied here, in one place, or not at all:
+    /// 1. the new [`crate::Calibration`] (K11..K22, the remap flags, `Cal_Date` from the machine
+    ///    clock, `Cal_Units` = the machine's unit; the pixel centre offset is kept) is built and
+    ///    validated;
+    /// 2. the camera tool's offset is written to the machine's tool table (sheet walk only);
+    /// 3. the profile is saved atomically, and only then the module takes the new calibration.
+    ///
+    /// Decision: the tool table goes first because undoing it is one write of a value we hold;
+    /// when the save then fails, the old offset is written back and the error is the save's. If
+    /// that restore fails too, the error says so and gives the offset to set by hand. The G-code
+    /// runs through [`Machine::run_gcode`] as the walk goes; the reply lists every line run.
+    /// `LastStatus` is `OK` on success.
     ///
     /// # Errors
     /// [`VisionError::NotEnabled`], [`VisionError::WrongTool`], [`VisionError::UnknownSheet`],
     /// [`VisionError::AlignmentActive`] (calibration moves must not be scaled or rotated),
     /// [`VisionError::NoDriver`] — nothing changes; then [`VisionError::Calibration`],
     /// [`VisionError::Driver`], [`VisionError::Machine`] or [`VisionError::Profile`] during the
-    /// routine: K, the remap flags, `Cal_*` and the tool offset are restored, the machine is sent
-    /// back to its start position (best effort) and `LastStatus` holds the error.
+    /// routine: K, the remap flags, `Cal_*` and the tool offset keep their values, the machine is
+    /// sent back to its start position (best effort) and `LastStatus` holds the error.
     pub fn m283(&mut self, machine: &mut dyn Machine, mode: Calibrate) -> Result<Reply<CalReport>, VisionError> {
         self.check_enabled()?;
         self.check_tool(machine)?;
@@ -51,50 +61,59 @@ impl VisionModule {
         }
         self.driver_mut()?;
         let tool = self.params.camera_tool().unwrap_or_else(|| machine.active_tool());
-        let offset_before = match mode {
-            Calibrate::Sheet { .. } => Some(machine.tool_offset(tool)?),
-            Calibrate::Quick { .. } => None,
-        };
         let start: Point2<f64> = machine.program_position();
-        let snapshot = self.params.clone();
 
-        let outcome = {
+        let (outcome, ran) = {
             let Some(driver) = self.driver.as_deref_mut() else {
                 return Err(VisionError::NoDriver { name: self.params.driver().to_string() });
             };
             let mut walker = Walker::new(machine, driver, self.params.trigger_settle_s());
-            match mode {
+            let outcome = match mode {
                 Calibrate::Quick { diameter } => quick(&mut walker, &self.params, diameter),
                 Calibrate::Sheet { n } => sheet_walk(&mut walker, &self.params, n, tool),
-            }
-        };
-        let result = outcome.and_then(|solution| {
-            self.params.set_cal_k(solution.k)?;
-            self.params.set_remap(solution.remap);
-            self.params.cal_units = machine.units();
-            self.params.cal_date = match &solution.report {
-                CalReport::Quick(r) => r.date.clone(),
-                CalReport::Sheet(r) => r.date.clone(),
             };
-            self.save_profile()?;
-            Ok(solution.report)
-        });
-        match result {
+            (outcome, walker.into_ran())
+        };
+        match outcome.and_then(|solution| self.apply_calibration(machine, solution)) {
             Ok(report) => {
-                self.params.last_status = "OK".to_string();
-                Ok(Reply { gcode: Vec::new(), report })
+                self.telemetry.last_status = "OK".to_string();
+                Ok(Reply { gcode: ran, report })
             }
             Err(e) => {
-                self.params = snapshot;
-                if let Some(offset) = offset_before {
-                    let _ = machine.set_tool_offset(tool, offset);
-                }
                 if let Some(driver) = self.driver.as_deref_mut() {
                     let _ = Walker::new(machine, driver, 0.0).move_abs(start);
                 }
-                self.params.last_status = e.to_string();
+                self.publish_failure(None, &e);
                 Err(e)
             }
         }
+    }
+
+    /// Applies a calibration solution: all of it, or nothing (see [`VisionModule::m283`]).
+    fn apply_calibration(&mut self, machine: &mut dyn Machine, solution: Solution) -> Result<CalReport, VisionError> {
+        let calibration =
+            self.params.calibration.solved(solution.k, solution.remap, machine.units(), solution.report.date())?;
+        let next = Params { calibration, ..self.params.clone() };
+        let restore = match solution.tool_offset {
+            Some((tool, offset)) => {
+                let before = machine.tool_offset(tool)?;
+                machine.set_tool_offset(tool, offset)?;
+                Some((tool, before))
+            }
+            None => None,
+        };
+        if let Err(save) = self.commit_params(next) {
+            let Some((tool, before)) = restore else { return Err(save) };
+            if let Err(e) = machine.set_tool_offset(tool, before) {
+                return Err(VisionError::Machine(MachineError::new(format!(
+                    "{save}; restoring tool {tool}'s offset then failed too ({e}) — set its X/Y offset back to \
+                     X{} Y{} by hand",
+                    fixed(before.x, 6),
+                    fixed(before.y, 6)
+                ))));
+            }
+            return Err(save);
+        }
+        Ok(solution.report)
     }
 }

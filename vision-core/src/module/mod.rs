@@ -1,9 +1,15 @@
 //! The Vision module: the typed entry points behind M280–M284.
 //!
-//! The M-code adapter parses the words and calls [`VisionModule::m280`] … [`VisionModule::m284`];
-//! each returns a [`Reply`] with the G-code lines the adapter must run next (possibly none) and
-//! a typed report. A refused call returns a [`VisionError`] and changes nothing it promises to
-//! keep (see each entry point); the G-code of a refused call is never produced.
+//! The M-code adapter parses the words and calls [`VisionModule::m280`] … [`VisionModule::m284`]
+//! with typed values; each returns a [`Reply`] with a typed report and the G-code lines the
+//! module ran. A refused call returns a [`VisionError`] and changes nothing it promises to keep
+//! (see each entry point).
+//!
+//! Decision: every entry point delivers its G-code the same way — it runs the lines itself
+//! through [`Machine::run_gcode`], in order, while it works (M280's cancel line, M282's four
+//! modal lines, M283's moves), and [`Reply::gcode`] lists what it ran. A host never runs a
+//! reply's lines again. Running them inside the call is what M283 needs anyway (it moves, then
+//! triggers), and it lets M280/M282 commit their state only after the machine took the lines.
 //!
 //! Common checks, in order, for every entry point: `VisionEnabled` ("Vision is not enabled");
 //! for M280–M283 the camera-tool check (`VisionCameraToolNumber` ≠ 0 and another tool active).
@@ -26,7 +32,7 @@ use vision_math::{LengthUnit, Point2};
 use crate::driver::CameraDriver;
 use crate::error::VisionError;
 use crate::machine::Machine;
-use crate::params::{ParamValue, Params};
+use crate::params::{ParamValue, Params, Telemetry};
 use crate::profile::ProfileStore;
 use crate::registry::DriverRegistry;
 
@@ -35,10 +41,11 @@ pub use m280::RunMode;
 pub use m282::{AlignReport, Pieces};
 pub use m284::{JobReport, MAX_JOB};
 
-/// What an entry point hands back: G-code for the adapter to run, then a report.
+/// What an entry point hands back: the G-code it ran, then a report.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Reply<R> {
-    /// Lines the adapter must run, in order, after the call returns (empty when none).
+    /// Lines the module ran on the machine through [`Machine::run_gcode`], in order (empty
+    /// when none). Informational: the host must not run them again.
     pub gcode: Vec<String>,
     /// What happened.
     pub report: R,
@@ -64,12 +71,26 @@ impl Dot {
     }
 }
 
-/// The Vision module: parameters, the current run's dot list, the camera driver and the
-/// profile it persists to.
+/// The alignment run (SPEC §3): the one place the run's mode, whether it is open, and its dot
+/// list live. `VisionRun_Active`, `VisionRun_Mode` and `VisionRun_DotCount` are written from it.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Run {
+    /// The fit M280 chose (rectangle before the first M280).
+    pub mode: RunMode,
+    /// True between M280 and a successful M282 (captures join the dot list only then).
+    pub active: bool,
+    /// The run's captures, in order (all of them, not only the four in the slots); kept after
+    /// M282 until the next M280, so a second M282 can emit another selection.
+    pub dots: Vec<Dot>,
+}
+
+/// The Vision module: the profile's parameters, the current run, the telemetry it writes, the
+/// camera driver and the profile store it persists to.
 pub struct VisionModule {
     pub(crate) params: Params,
+    pub(crate) telemetry: Telemetry,
     pub(crate) driver: Option<Box<dyn CameraDriver>>,
-    pub(crate) dots: Vec<Dot>,
+    pub(crate) run: Run,
     pub(crate) profile: Option<ProfileStore>,
     pub(crate) images_dir: PathBuf,
 }
@@ -78,8 +99,9 @@ impl std::fmt::Debug for VisionModule {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("VisionModule")
             .field("params", &self.params)
+            .field("telemetry", &self.telemetry)
             .field("driver", &self.driver.as_ref().map(|d| d.name().to_string()))
-            .field("dots", &self.dots)
+            .field("run", &self.run)
             .field("profile", &self.profile)
             .field("images_dir", &self.images_dir)
             .finish()
@@ -95,8 +117,9 @@ impl VisionModule {
     pub fn new(params: Params) -> VisionModule {
         VisionModule {
             params,
+            telemetry: Telemetry::default(),
             driver: None,
-            dots: Vec::new(),
+            run: Run::default(),
             profile: None,
             images_dir: PathBuf::from(DEFAULT_IMAGES_DIR),
         }
@@ -154,10 +177,31 @@ impl VisionModule {
         &self.images_dir
     }
 
-    /// All parameters (read-only view; telemetry included).
+    /// The profile's parameters: configuration and calibration (read-only view).
     #[must_use]
     pub fn params(&self) -> &Params {
         &self.params
+    }
+
+    /// The telemetry written after the last operation (read-only view).
+    #[must_use]
+    pub fn telemetry(&self) -> &Telemetry {
+        &self.telemetry
+    }
+
+    /// Reads any parameter by its manual name (case-insensitive): configuration, calibration or
+    /// telemetry, as a host DRO shows them.
+    ///
+    /// # Errors
+    /// [`VisionError::UnknownParam`].
+    pub fn param(&self, name: &str) -> Result<ParamValue, VisionError> {
+        self.params.get(name).or_else(|e| self.telemetry.get(name).ok_or(e))
+    }
+
+    /// The alignment run: mode, open or not, dot list.
+    #[must_use]
+    pub fn run(&self) -> &Run {
+        &self.run
     }
 
     /// Writes configuration parameter `name` (validated; telemetry refused). Call
@@ -172,7 +216,7 @@ impl VisionModule {
     /// The current run's captures, in order (all of them, not only the four in the slots).
     #[must_use]
     pub fn dots(&self) -> &[Dot] {
-        &self.dots
+        &self.run.dots
     }
 
     /// Saves the configuration to the attached profile (atomically); no-op without a profile.
@@ -184,6 +228,33 @@ impl VisionModule {
             Some(store) => store.save(&self.params),
             None => Ok(()),
         }
+    }
+
+    /// Makes `next` the module's parameters: saved to the attached profile first (atomically),
+    /// then taken in memory, so the file and the module never disagree. On a failed save
+    /// nothing changes.
+    pub(crate) fn commit_params(&mut self, next: Params) -> Result<(), VisionError> {
+        if let Some(store) = self.profile.as_mut() {
+            store.save(&next)?;
+        }
+        self.params = next;
+        Ok(())
+    }
+
+    /// Writes the run's telemetry (`Run_Active`, `Run_Mode`, `Run_DotCount`) from [`Run`].
+    pub(crate) fn publish_run(&mut self) {
+        let t = &mut self.telemetry;
+        t.run_active = i64::from(self.run.active);
+        t.run_mode = self.run.mode.code();
+        t.run_dot_count = i64::try_from(self.run.dots.len()).unwrap_or(i64::MAX);
+    }
+
+    /// Records a failed operation in `LastStatus` (and, for a failed trigger, `LastJudgment`).
+    pub(crate) fn publish_failure(&mut self, judgment: Option<i64>, e: &VisionError) {
+        if let Some(j) = judgment {
+            self.telemetry.last_judgment = j;
+        }
+        self.telemetry.last_status = e.to_string();
     }
 
     /// Refuses when Vision is disabled.
@@ -210,11 +281,4 @@ impl VisionModule {
         let name = self.params.driver().to_string();
         self.driver.as_deref_mut().ok_or(VisionError::NoDriver { name })
     }
-}
-
-/// An M-code word's value as an integer, `None` for a fraction or a non-finite number (and
-/// `Some(i64::MIN)` never occurs: out-of-range values are `None` too).
-pub(crate) fn integer_word(v: f64) -> Option<i64> {
-    #[allow(clippy::cast_possible_truncation)] // checked integral and in range
-    (v.is_finite() && v.fract() == 0.0 && v.abs() < 1e15).then_some(v as i64)
 }

@@ -22,8 +22,9 @@
 //! **One client at a time.** A second client is accepted by the operating system, then, if
 //! the first is still connected after [`EmulatorSettings::handover_grace`] (100 ms), its
 //! connection is reset (TCP RST): it sees the connection closed or reset before any reply,
-//! which the driver reports as a refused/closed connection. The grace lets a client that has
-//! just dropped its connection (after a timeout) reconnect at once.
+//! which the driver reports as the camera closing the connection. The grace lets a client that
+//! has just dropped its connection (after a timeout) reconnect at once; clients queued behind a
+//! waiting one share its grace, so each hears at once that the camera is taken.
 //!
 //! **Faults** ([`Fault`]) are queued with [`EmulatorHandle::inject`] or
 //! [`EmulatorBuilder::faults`]; each `TRG` consumes the next one.

@@ -46,16 +46,30 @@ impl Shared {
 /// Accepts clients one at a time until shutdown. A client that arrives while another is
 /// connected waits up to the handover grace for it to leave, then is reset (like a camera whose
 /// only command socket is taken).
+///
+/// Clients queued behind a waiting one share its grace window: once it has passed, each of
+/// them is reset at once, so none waits out the graces of the clients ahead of it (and times
+/// out instead of learning that the camera is taken). The window closes when the queue is
+/// empty or a client gets the camera.
 pub(crate) fn accept_loop(listener: TcpListener, shared: Arc<Shared>) {
     let mut current: Option<JoinHandle<()>> = None;
-    for conn in listener.incoming() {
+    let mut window: Option<Instant> = None;
+    loop {
+        let queued = if window.is_some() { accept_queued(&listener) } else { None };
+        if queued.is_none() {
+            window = None;
+        }
+        let conn = match queued {
+            Some(stream) => Ok(stream),
+            None => listener.accept().map(|(stream, _)| stream),
+        };
         if shared.stopping() {
             break;
         }
         let Ok(stream) = conn else { continue };
         let grace = lock(&shared.camera).settings.handover_grace;
         if let Some(h) = &current {
-            let until = Instant::now() + grace;
+            let until = *window.get_or_insert_with(|| Instant::now() + grace);
             while !h.is_finished() && Instant::now() < until {
                 thread::sleep(POLL);
             }
@@ -69,6 +83,7 @@ pub(crate) fn accept_loop(listener: TcpListener, shared: Arc<Shared>) {
         if let Some(h) = current.take() {
             let _ = h.join();
         }
+        window = None;
         lock(&shared.stats).connections += 1;
         *lock(&shared.client) = stream.try_clone().ok();
         let s = Arc::clone(&shared);
@@ -80,6 +95,17 @@ pub(crate) fn accept_loop(listener: TcpListener, shared: Arc<Shared>) {
     if let Some(h) = current {
         let _ = h.join();
     }
+}
+
+/// A connection already waiting in the listen queue, without blocking.
+fn accept_queued(listener: &TcpListener) -> Option<TcpStream> {
+    listener.set_nonblocking(true).ok()?;
+    let got = listener.accept();
+    let blocking = listener.set_nonblocking(false);
+    let (stream, _) = got.ok()?;
+    blocking.ok()?;
+    stream.set_nonblocking(false).ok()?;
+    Some(stream)
 }
 
 /// One client's connection.

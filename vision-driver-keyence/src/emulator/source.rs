@@ -1,8 +1,8 @@
 //! Where the emulated camera's results come from.
 
-use vision_core::{CameraDriver, DriverErrorKind, Reading};
+use vision_core::{CameraDriver, DriverError, DriverErrorKind, Reading};
 
-use crate::protocol::parse_error_reply;
+use crate::error::KeyenceError;
 
 /// What the camera answers to one `TRG`.
 #[derive(Debug, Clone, PartialEq)]
@@ -99,11 +99,10 @@ impl<F: FnMut() -> Shot + Send> ResultSource for FnSource<F> {
 /// [`CameraDriver::select_job`]. Plug in the simulated camera to emulate a camera that sees
 /// a simulated part.
 ///
-/// A failed trigger answers with the code of the first `ER,TRG,<nn>` word in the driver's
-/// message when there is one (a word being text between spaces, brackets and punctuation
-/// stripped, that reads as a whole `ER` reply), else `ER,TRG,07` (the measurement did not
-/// complete). A failed job switch answers `03`
-/// for an invalid argument, `01` when the driver cannot switch jobs, else `05`.
+/// A failure answers the `ER` code a camera would: a Keyence driver's refusal
+/// ([`KeyenceError::Rejected`]) its own code; else, for a trigger, `07` (the measurement did not
+/// complete); for a job switch, `03` when the driver refused the job (it does not exist, or is
+/// out of range), `01` when the driver cannot switch jobs, else `05` (not acceptable now).
 pub struct DriverSource(pub Box<dyn CameraDriver>);
 
 impl std::fmt::Debug for DriverSource {
@@ -116,27 +115,24 @@ impl ResultSource for DriverSource {
     fn trigger(&mut self) -> Shot {
         match self.0.trigger() {
             Ok(r) => Shot::Reading(r),
-            Err(e) => Shot::Reject(trigger_refusal(&e.message).unwrap_or(7)),
+            Err(e) => Shot::Reject(camera_code(&e).unwrap_or(7)),
         }
     }
 
     fn select_job(&mut self, job: u32) -> Result<(), u8> {
-        self.0.select_job(job).map_err(|e| match e.kind {
-            DriverErrorKind::InvalidArgument => 3,
-            DriverErrorKind::Unsupported => 1,
-            _ => 5,
+        self.0.select_job(job).map_err(|e| {
+            camera_code(&e).unwrap_or(match e.kind() {
+                DriverErrorKind::Rejected | DriverErrorKind::InvalidArgument => 3,
+                DriverErrorKind::Unsupported => 1,
+                _ => 5,
+            })
         })
     }
 }
 
-/// The code of the first whole `ER,TRG,<nn>` reply quoted in `message`.
-fn trigger_refusal(message: &str) -> Option<u8> {
-    message.split_whitespace().find_map(|word| {
-        match parse_error_reply(word.trim_matches(|c: char| !c.is_ascii_alphanumeric())) {
-            Some(Ok(r)) if r.command == "TRG" => r.code.parse().ok(),
-            _ => None,
-        }
-    })
+/// The `ER` code of a Keyence camera's refusal behind `e`.
+fn camera_code(e: &DriverError) -> Option<u8> {
+    e.downcast_ref::<KeyenceError>()?.code()?.parse().ok()
 }
 
 #[cfg(test)]
@@ -179,40 +175,30 @@ mod tests {
 
     #[test]
     fn driver_failures_become_er_codes() {
-        let mut s =
-            DriverSource(Box::new(Failing(DriverError::new(DriverErrorKind::Rejected, "camera replied ER,TRG,06"))));
+        let refusal = |code: &str| KeyenceError::Rejected {
+            command: "TRG".into(),
+            code: code.into(),
+            reply: format!("ER,TRG,{code}"),
+            previous: vec!["ER,PL,01".into()],
+        };
+        // A Keyence refusal keeps its code, for a trigger and a job switch alike.
+        let mut s = DriverSource(Box::new(Failing(refusal("06").into())));
         assert_eq!(s.trigger(), Shot::Reject(6));
-        assert_eq!(s.select_job(1), Err(5));
-        let mut s = DriverSource(Box::new(Failing(DriverError::new(DriverErrorKind::Unsupported, "no"))));
+        assert_eq!(s.select_job(1), Err(6));
+        let mut s = DriverSource(Box::new(Failing(refusal("04").into())));
+        assert_eq!(s.trigger(), Shot::Reject(4));
+        // Another driver's errors, by kind; a text that quotes an ER reply is not a code.
+        let mut s = DriverSource(Box::new(Failing(DriverError::new(DriverErrorKind::Unsupported, "ER,TRG,05"))));
         assert_eq!(s.trigger(), Shot::Reject(7));
         assert_eq!(s.select_job(1), Err(1));
         let mut s = DriverSource(Box::new(Failing(DriverError::new(DriverErrorKind::InvalidArgument, "ER,"))));
         assert_eq!(s.trigger(), Shot::Reject(7));
         assert_eq!(s.select_job(1), Err(3));
+        // A camera without the job: ER,PL,03 (the job does not exist), not 05.
+        let mut s = DriverSource(Box::new(Failing(DriverError::new(DriverErrorKind::Rejected, "no job 7"))));
+        assert_eq!(s.select_job(7), Err(3));
+        let mut s = DriverSource(Box::new(Failing(DriverError::new(DriverErrorKind::Timeout, "busy"))));
+        assert_eq!(s.select_job(7), Err(5));
         assert_eq!(format!("{s:?}"), "DriverSource(Failing)");
-    }
-
-    #[test]
-    fn er_replies_are_read_whole_whatever_the_command_length() {
-        for (message, code) in [
-            ("camera replied ER,TRG,06 to TRG — not executable", Some(6)),
-            ("no mark (camera replied ER,TRG,05)", Some(5)),
-            ("ER,TRG,07: camera-side timeout", Some(7)),
-            // A two-letter command first: the TRG refusal after it is still found.
-            ("camera replied ER,PL,01 then ER,TRG,03 to TRG", Some(3)),
-            // Refusals of other commands, whatever their length, are not TRG's.
-            ("camera replied ER,PL,03 to PL", None),
-            ("camera replied ER,TRGX,06", None),
-            // Not a whole ER reply.
-            ("ER,TRG,06x", None),
-            ("ER,TRG,6", None),
-            ("ER,TRG", None),
-            ("ER,", None),
-            ("", None),
-        ] {
-            assert_eq!(trigger_refusal(message), code, "{message}");
-        }
-        let refusal = DriverError::new(DriverErrorKind::Rejected, "camera replied ER,PL,01 then ER,TRG,04");
-        assert_eq!(DriverSource(Box::new(Failing(refusal))).trigger(), Shot::Reject(4));
     }
 }

@@ -4,9 +4,9 @@ use std::io::{self, Read};
 use std::ops::RangeInclusive;
 
 /// Carriage return, the Keyence delimiter.
-pub const CR: u8 = b'\r';
+pub(crate) const CR: u8 = b'\r';
 /// Line feed, accepted as a delimiter too.
-pub const LF: u8 = b'\n';
+pub(crate) const LF: u8 = b'\n';
 
 /// Bounds on what a peer may send, so a broken or hostile camera cannot grow memory.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -9,9 +9,11 @@ mod mock;
 mod reply;
 mod session;
 
-pub use framing::{Limits, CR, LF};
-pub use reply::{
-    parse_data_line, parse_error_reply, parse_program, parse_version, quote, quote_bytes, ErrorReply,
-    MAX_ABS_ANGLE_DEG, MAX_ABS_PIXELS, MAX_ABS_SCORE, MAX_COUNT,
-};
-pub use session::{JobCommand, Program, Session, MAX_COMMAND_LEN, MAX_JOB};
+pub use framing::Limits;
+#[cfg(feature = "emulator")]
+pub(crate) use framing::{CR, LF};
+pub use reply::parse_data_line;
+#[cfg(feature = "emulator")]
+pub(crate) use session::MAX_COMMAND_LEN;
+pub(crate) use session::MAX_JOB;
+pub use session::{JobCommand, Program, Session};

@@ -7,13 +7,13 @@ use vision_core::{Judgment, Reading};
 
 /// Largest coordinate, width or height accepted from a camera that reports a mark, pixels
 /// (the largest image `VisionCameraResX/Y` allows is 100 000 px).
-pub const MAX_ABS_PIXELS: f64 = 1.0e6;
+pub(crate) const MAX_ABS_PIXELS: f64 = 1.0e6;
 /// Largest mark angle accepted, degrees (Keyence reports −180…180 or 0…360).
-pub const MAX_ABS_ANGLE_DEG: f64 = 360.0;
+pub(crate) const MAX_ABS_ANGLE_DEG: f64 = 360.0;
 /// Largest match score accepted (Keyence scores are 0–100 or 0–1000).
-pub const MAX_ABS_SCORE: f64 = 1.0e6;
+pub(crate) const MAX_ABS_SCORE: f64 = 1.0e6;
 /// Largest mark count accepted.
-pub const MAX_COUNT: u32 = 1_000_000;
+pub(crate) const MAX_COUNT: u32 = 1_000_000;
 /// Longest numeric field accepted, characters (a fixed-width number is 18).
 const MAX_NUMBER_LEN: usize = 32;
 /// Longest line quoted in an error message, characters.
@@ -21,18 +21,18 @@ const MAX_QUOTE: usize = 120;
 
 /// A camera refusal, `ER,<cmd>,<nn>`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct ErrorReply<'a> {
+pub(crate) struct ErrorReply<'a> {
     /// The refused command's name.
-    pub command: &'a str,
+    pub(crate) command: &'a str,
     /// The two-digit code.
-    pub code: &'a str,
+    pub(crate) code: &'a str,
 }
 
 /// Reads `ER,<cmd>,<nn>`; `None` when the line is not an error reply.
 ///
 /// `Some(Err(..))` is a line that starts `ER,` but is not of that form.
 #[must_use]
-pub fn parse_error_reply(line: &str) -> Option<Result<ErrorReply<'_>, String>> {
+pub(crate) fn parse_error_reply(line: &str) -> Option<Result<ErrorReply<'_>, String>> {
     let rest = line.strip_prefix("ER,")?;
     let mut fields = rest.split(',');
     let command = fields.next().unwrap_or("");
@@ -50,16 +50,17 @@ pub fn parse_error_reply(line: &str) -> Option<Result<ErrorReply<'_>, String>> {
 }
 
 /// Parses one Data Output line: `x,y`, `judgment,x,y`, or
-/// `judgment,count,x,y,width,height,angle,score`.
+/// `judgment,count,x,y,width,height,angle,score`; or a bare NG judgment (`0`/`NG`: a camera
+/// whose job found nothing may send only that), read as an NG reading at (0, 0).
 ///
 /// Numbers may be plain (`150.0`, `-3`) or Keyence fixed width (`+0000000888.123000`); spaces
 /// around a field are ignored; exponents, `inf` and `NaN` are refused. The judgment is `1`/`OK`
 /// or `0`/`NG` (any case, or a number equal to 1 or 0). The count is a whole number ≥ 0.
 ///
 /// A reading that claims a mark (not NG, count not 0) must have coordinates, width and height
-/// within [`MAX_ABS_PIXELS`] (width and height ≥ 0), angle within [`MAX_ABS_ANGLE_DEG`] and score
-/// within [`MAX_ABS_SCORE`]. NG and count-0 readings keep whatever finite numbers the camera
-/// sent: a camera that found nothing may report sentinels, and the core ignores them.
+/// within ±10⁶ px (width and height ≥ 0), angle within ±360° and score within ±10⁶; the count
+/// is at most 10⁶. NG and count-0 readings keep whatever finite numbers the camera sent: a
+/// camera that found nothing may report sentinels, and the core ignores them.
 ///
 /// # Errors
 /// The reason, as text.
@@ -74,6 +75,11 @@ pub fn parse_data_line(line: &str) -> Result<Reading, String> {
         n += 1;
     }
     let reading = match n {
+        1 => match judgment(fields[0]) {
+            Ok(Judgment::Ng) => Reading { judgment: Judgment::Ng, ..Reading::position(0.0, 0.0) },
+            Ok(_) => return Err("1 field: an OK judgment without the mark's position".into()),
+            Err(_) => return Err("1 field".into()),
+        },
         2 => Reading::position(number(fields[0], "x")?, number(fields[1], "y")?),
         3 => Reading {
             judgment: judgment(fields[0])?,
@@ -89,11 +95,12 @@ pub fn parse_data_line(line: &str) -> Result<Reading, String> {
             angle_deg: number(fields[6], "angle")?,
             score: number(fields[7], "score")?,
         },
-        _ => {
-            return Err(format!(
-                "{n} fields; expected 2 (x,y), 3 (judgment,x,y) or 8 (judgment,count,x,y,width,height,angle,score)"
-            ))
+        7 => {
+            return Err("7 fields, the shape of a robot pose (a judgment, X, Y, Z and three rotations): the Data \
+                        Output looks set to a robot pose, not to the mark in image pixels"
+                .into())
         }
+        _ => return Err(format!("{n} fields, not 2, 3 or 8")),
     };
     if reading.judgment != Judgment::Ng && reading.count != Some(0) {
         check_range(&reading)?;
@@ -123,7 +130,7 @@ fn check_range(r: &Reading) -> Result<(), String> {
 /// or `NaN` reaches the standard parser, which then reads the value (correctly rounded).
 fn number(field: &str, name: &str) -> Result<f64, String> {
     let t = field.trim_matches(' ');
-    let bad = || format!("{name} {:?} is not a number", quote(t));
+    let bad = || format!("{name} \"{}\" is not a number", quote(t));
     if t.len() > MAX_NUMBER_LEN {
         return Err(bad());
     }
@@ -152,7 +159,7 @@ fn judgment(field: &str) -> Result<Judgment, String> {
     match number(t, "judgment") {
         Ok(1.0) => Ok(Judgment::Ok),
         Ok(0.0) => Ok(Judgment::Ng),
-        _ => Err(format!("judgment {:?} is not 1/OK or 0/NG", quote(t))),
+        _ => Err(format!("judgment \"{}\" is not 1/OK or 0/NG", quote(t))),
     }
 }
 
@@ -171,7 +178,7 @@ fn count(field: &str) -> Result<u32, String> {
 ///
 /// # Errors
 /// The reason, as text.
-pub fn parse_program(line: &str) -> Result<(u8, u32), String> {
+pub(crate) fn parse_program(line: &str) -> Result<(u8, u32), String> {
     let mut f = line.split(',');
     let (Some("PR"), Some(d), Some(n), None) = (f.next(), f.next(), f.next(), f.next()) else {
         return Err("expected PR,<device>,<job>".into());
@@ -179,7 +186,7 @@ pub fn parse_program(line: &str) -> Result<(u8, u32), String> {
     let device = match d.trim_matches(' ') {
         "1" => 1,
         "2" => 2,
-        _ => return Err(format!("memory device {:?} is not 1 or 2", quote(d))),
+        _ => return Err(format!("memory device \"{}\" is not 1 or 2", quote(d))),
     };
     let n = n.trim_matches(' ');
     let job = if !n.is_empty() && n.len() <= 4 && n.bytes().all(|b| b.is_ascii_digit()) {
@@ -187,7 +194,7 @@ pub fn parse_program(line: &str) -> Result<(u8, u32), String> {
     } else {
         None
     };
-    let job = job.ok_or_else(|| format!("job {:?} is not 0..=999", quote(n)))?;
+    let job = job.ok_or_else(|| format!("job \"{}\" is not 0..=999", quote(n)))?;
     Ok((device, job))
 }
 
@@ -195,7 +202,7 @@ pub fn parse_program(line: &str) -> Result<(u8, u32), String> {
 ///
 /// # Errors
 /// The reason, as text.
-pub fn parse_version(line: &str) -> Result<String, String> {
+pub(crate) fn parse_version(line: &str) -> Result<String, String> {
     match line.strip_prefix("FVR,") {
         Some(v) if !v.trim().is_empty() && v.bytes().all(|b| (0x20..0x7f).contains(&b)) => Ok(v.trim().to_string()),
         _ => Err("expected FVR,<version>".into()),
@@ -205,13 +212,13 @@ pub fn parse_version(line: &str) -> Result<String, String> {
 /// A line as an operator should see it: printable ASCII kept, anything else escaped, long lines
 /// shortened.
 #[must_use]
-pub fn quote(line: &str) -> String {
+pub(crate) fn quote(line: &str) -> String {
     quote_bytes(line.as_bytes())
 }
 
 /// [`quote`] for raw bytes (a line that is not valid text).
 #[must_use]
-pub fn quote_bytes(line: &[u8]) -> String {
+pub(crate) fn quote_bytes(line: &[u8]) -> String {
     let mut s = String::new();
     for &b in line {
         if s.len() >= MAX_QUOTE {
@@ -270,8 +277,11 @@ mod tests {
     #[test]
     fn bad_lines_are_refused_with_a_reason() {
         for (line, why) in [
-            ("", "1 fields"),
-            ("150.0", "1 fields"),
+            ("", "1 field"),
+            ("150.0", "1 field"),
+            ("1", "an OK judgment without the mark's position"),
+            ("OK", "an OK judgment without the mark's position"),
+            ("1,2,3,4,5,6,7", "the Data Output looks set to a robot pose"),
             ("1,2,3,4", "4 fields"),
             ("1,2,3,4,5,6,7,8,9", "more than 8"),
             ("nan,1", "x \"nan\""),
@@ -293,6 +303,25 @@ mod tests {
             let e = parse_data_line(line).expect_err(line);
             assert!(e.contains(why), "{line:?}: {e}");
         }
+    }
+
+    #[test]
+    fn a_bare_ng_is_an_ng_reading() {
+        for line in ["0", "NG", "ng", " 0 ", "+0000000000.000000"] {
+            let r = parse_data_line(line).expect(line);
+            assert_eq!(r.judgment, Judgment::Ng, "{line}");
+            assert!(!r.found());
+            assert!(r.x_px.is_finite() && r.y_px.is_finite());
+        }
+    }
+
+    #[test]
+    fn reasons_read_as_english() {
+        assert_eq!(parse_data_line("150.0").expect_err("one field"), "1 field");
+        assert_eq!(parse_data_line("1,2,3,4").expect_err("four"), "4 fields, not 2, 3 or 8");
+        // A quoted byte is escaped once, not again by a debug format.
+        assert_eq!(parse_data_line("1\x00,2").expect_err("nul"), "x \"1\\x00\" is not a number");
+        assert_eq!(parse_program("PR,\x01,5").expect_err("device"), "memory device \"\\x01\" is not 1 or 2");
     }
 
     #[test]

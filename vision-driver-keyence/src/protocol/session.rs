@@ -24,10 +24,10 @@ use super::reply::{parse_data_line, parse_error_reply, parse_program, parse_vers
 use crate::error::KeyenceError;
 
 /// Longest command the camera accepts, bytes, delimiter included (SPEC §7).
-pub const MAX_COMMAND_LEN: usize = 500;
+pub(crate) const MAX_COMMAND_LEN: usize = 500;
 
 /// Highest camera job number.
-pub const MAX_JOB: u32 = 999;
+pub(crate) const MAX_JOB: u32 = 999;
 
 /// The command that switches jobs: `PL` on the VS series, `PW` on CV-X and IV.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -73,7 +73,7 @@ enum Want {
 /// ```
 /// use std::io::{self, Read, Write};
 /// use std::time::Duration;
-/// use vision_driver_keyence::protocol::{Limits, Session};
+/// use vision_driver_keyence::{Limits, Session};
 ///
 /// /// A camera that answers every command with the echo and one data line.
 /// struct Canned(io::Cursor<&'static [u8]>);
@@ -559,6 +559,21 @@ mod tests {
         s.into_inner().done();
         let mut s = session(vec![Step::write(b"FVR\r"), Step::read(b"FVR\r")]);
         assert!(matches!(s.version(), Err(KeyenceError::Malformed { .. })));
+    }
+
+    #[test]
+    fn an_unreadable_job_reply_speaks_of_job_switching() {
+        let mut s = session(vec![Step::write(b"PR\r"), Step::read(b"PR,9\r")]);
+        let e = s.program().expect_err("not PR,<device>,<job>");
+        assert!(matches!(e, KeyenceError::Malformed { .. }), "{e:?}");
+        let text = e.to_string();
+        assert!(text.contains("job switching (M284)") && !text.contains("Data Output"), "{text}");
+        let mut s = session(vec![Step::write(b"PL,1,005\r"), Step::read(b"PL,1\r")]);
+        let text = s.load_program(JobCommand::Pl, 1, 5).expect_err("not a bare PL").to_string();
+        assert!(text.contains("job switching (M284)") && !text.contains("Data Output"), "{text}");
+        // A bare NG after the echo is a reading, not a broken reply.
+        let mut s = session(trg(b"TRG\r0\r"));
+        assert_eq!(s.trigger().expect("NG").judgment, Judgment::Ng);
     }
 
     #[test]

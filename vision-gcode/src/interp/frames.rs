@@ -4,6 +4,7 @@ use vision_math::Point2;
 
 use super::line::LineRun;
 use super::modal::{work_offset_base, SYSTEMS};
+use crate::config::Dialect;
 use crate::error::RunProblem;
 use crate::frame::Placement;
 use crate::geom::{Xyz, AXIS_LETTERS};
@@ -16,6 +17,8 @@ impl LineRun<'_> {
         let given = AXIS_LETTERS.map(|l| self.w.has(l));
         if given.iter().any(|g| *g) {
             Ok(given)
+        } else if let Some(&letter) = b"ABCUVW".iter().find(|&&l| self.w.has(l)) {
+            Err(RunProblem::AxisNotSupported { letter: char::from(letter) })
         } else {
             Err(RunProblem::NoAxisWords { code: owner })
         }
@@ -57,6 +60,17 @@ impl LineRun<'_> {
             system = self.st.system;
         }
         let base = work_offset_base(system);
+        // LinuxCNC's coordinate-system rotation: only "no rotation" is possible here.
+        match self.w.take(b'R', "G10")? {
+            Some(r) if r != 0.0 => {
+                return Err(RunProblem::Unsupported {
+                    code: "G10 L2 R".into(),
+                    feature: "coordinate-system rotation (use G68 instead)",
+                })
+            }
+            Some(_) if !AXIS_LETTERS.iter().any(|&l| self.w.has(l)) => return Ok(()),
+            _ => {}
+        }
         let (v, given) = self.absolute_point("G10")?;
         if l == 2.0 {
             for axis in (0..3).filter(|&a| given[a]) {
@@ -96,10 +110,12 @@ impl LineRun<'_> {
 
     pub(super) fn g92(&mut self) -> Result<(), RunProblem> {
         let given = self.given_axes("G92")?;
-        // Seed 002: an axis without a word gets a zero G92 offset. Do that first, so the given
-        // axes are computed in the frame that will hold.
-        for axis in (0..3).filter(|&a| !given[a]) {
-            self.params.set(G92_OFFSET + axis as u32, 0.0);
+        // Seed 002: an axis without a word gets a zero G92 offset (Mach4 and LinuxCNC keep it).
+        // Do that first, so the given axes are computed in the frame that will hold.
+        if self.cfg.dialect == Dialect::MachineMotion {
+            for axis in (0..3).filter(|&a| !given[a]) {
+                self.params.set(G92_OFFSET + axis as u32, 0.0);
+            }
         }
         self.st.rederive_program(self.params);
         let (v, given) = self.absolute_point("G92")?;
@@ -110,6 +126,14 @@ impl LineRun<'_> {
         self.st.rederive_program(self.params);
         self.keep_given(v, given);
         Ok(())
+    }
+
+    /// G92.1 / G92.2: the G92 offset back to zero (the program point is re-derived).
+    pub(super) fn g92_reset(&mut self) {
+        for axis in 0..3 {
+            self.params.set(G92_OFFSET + axis, 0.0);
+        }
+        self.st.rederive_program(self.params);
     }
 
     pub(super) fn g52(&mut self) -> Result<(), RunProblem> {

@@ -4,13 +4,13 @@
 //! once the whole line succeeded, so a failing line emits nothing and changes nothing.
 
 use super::motion::Polyline;
-use crate::config::InterpreterConfig;
+use crate::config::{Dialect, InterpreterConfig};
 use crate::error::{GCode, RunProblem};
-use crate::event::{Event, OutputChange, OutputWrite, PathMode, SpindleCommand};
+use crate::event::{Coolant, Event, OutputChange, OutputWrite, PathMode, SpindleCommand};
 use crate::frame::Placement;
-use crate::geom::Plane;
+use crate::geom::{Plane, Xyz};
 use crate::interp::modal::Modal;
-use crate::params::Params;
+use crate::params::{Params, G28_POSITION, G30_POSITION};
 use crate::words::{whole, Words};
 use vision_math::{LengthUnit, Point2};
 
@@ -21,6 +21,19 @@ pub(crate) enum Flow {
     Continue,
     /// M2 / M30 ended the program.
     End(u32),
+    /// A `%` delimiter line.
+    Percent,
+    /// An o-word line: control flow takes over.
+    OWord,
+    /// M98: call program `O<program>` `repeats` times.
+    Call {
+        /// The program number (`P`).
+        program: u32,
+        /// How many times (`L`, default 1).
+        repeats: u32,
+    },
+    /// M99: return from a program called by M98.
+    Return,
 }
 
 /// An action queued until the line commits.
@@ -44,23 +57,69 @@ enum Group {
     NonModal,
     Rotation,
     Scale,
+    CutterComp,
+    ToolLength,
+    Retract,
+    SpindleMode,
 }
 
-const GROUP_COUNT: usize = 11;
+const GROUP_COUNT: usize = 15;
 
 fn group_of(code: u16) -> Option<Group> {
     Some(match code {
-        0 | 10 | 20 | 30 => Group::Motion,
-        40 | 100 | 280 | 281 | 520 | 920 => Group::NonModal,
+        0 | 10 | 20 | 30 | 800 | 730 | 810 | 820 | 830 | 850 | 890 => Group::Motion,
+        40 | 100 | 280 | 281 | 300 | 301 | 520 | 530 | 920 | 921 | 922 => Group::NonModal,
         170 | 180 | 190 => Group::Plane,
         200 | 210 => Group::Units,
+        400 => Group::CutterComp,
+        430 | 431 | 490 => Group::ToolLength,
         500 | 510 => Group::Scale,
         540 | 550 | 560 | 570 | 580 | 590 => Group::System,
-        610 | 640 => Group::Path,
+        610 | 611 | 640 => Group::Path,
         680 | 690 => Group::Rotation,
         900 | 910 => Group::Distance,
         901 | 911 => Group::ArcDistance,
         940 => Group::FeedMode,
+        970 => Group::SpindleMode,
+        980 | 990 => Group::Retract,
+        _ => return None,
+    })
+}
+
+/// The feature of a G-code this interpreter deliberately leaves out, for a message that names
+/// it (rather than "unknown code").
+fn unsupported_g(code: u16) -> Option<&'static str> {
+    Some(match code {
+        50..=53 | 62 => "spline and NURBS interpolation (G5, G5.1, G5.2, G6.2)",
+        70 | 80 => "lathe diameter/radius mode (G7/G8)",
+        120 | 130 => "circular pocket cycles (G12/G13)",
+        150 | 160 => "polar coordinates (G15/G16)",
+        330 | 331 => "spindle-synchronised motion (G33/G33.1 threading and rigid tapping)",
+        382..=385 => "probing (G38.2-G38.5)",
+        410 | 411 | 420 | 421 => "cutter radius compensation (G41/G42)",
+        432 => "additional tool length offsets (G43.2)",
+        591..=593 => "coordinate systems G59.1-G59.3",
+        700 | 710 | 711 | 720 | 721 => "lathe roughing and finishing cycles (G70-G72)",
+        740 | 840 => "tapping cycles (G74/G84)",
+        760 => "the lathe threading cycle (G76)",
+        860 | 870 | 880 => "boring cycles with spindle stop (G86-G88)",
+        923 => "restoring G92 offsets (G92.3)",
+        930 => "inverse-time feed (G93)",
+        950 => "feed per revolution (G95)",
+        960 => "constant surface speed (G96)",
+        _ => return None,
+    })
+}
+
+/// The same for M-codes below the user range.
+fn unsupported_m(code: u32) -> Option<&'static str> {
+    Some(match code {
+        19 => "spindle orientation (M19)",
+        48..=53 => "feed and speed override control (M48-M53)",
+        60 => "pallet change (M60)",
+        61 => "setting the tool without a change (M61)",
+        62..=68 => "HAL digital/analog I/O (M62-M68)",
+        70..=73 => "saving and restoring the modal state (M70-M73)",
         _ => return None,
     })
 }
@@ -81,16 +140,19 @@ struct MCodes {
     stop: Option<u32>,
     spindle: Option<u32>,
     change: bool,
+    mist: bool,
+    flood: bool,
+    coolant_off: bool,
 }
 
 /// Whether `code` is a built-in M-code.
 pub(crate) fn is_builtin_m(code: u32) -> bool {
-    matches!(code, 0..=6 | 30)
+    matches!(code, 0..=9 | 30 | 98 | 99)
 }
 
 /// The G-codes that take the axis words for themselves (besides motion).
 fn axis_consumer(code: u16) -> bool {
-    matches!(code, 100 | 280 | 520 | 920 | 680 | 510)
+    matches!(code, 100 | 280 | 300 | 431 | 520 | 920 | 680 | 510)
 }
 
 /// One line at work.
@@ -118,12 +180,16 @@ impl LineRun<'_> {
             self.st.units = if code == 200 { LengthUnit::Inch } else { LengthUnit::Millimetre };
         }
         self.feed_rate()?;
+        self.spindle_speed()?;
         self.select_tool()?;
         if ms.change {
             self.change_tool()?;
         }
         if let Some(code) = ms.spindle {
             self.spindle(code)?;
+        }
+        if ms.mist || ms.flood || ms.coolant_off {
+            self.coolant(&ms);
         }
         if groups.get(Group::NonModal) == Some(40) {
             self.dwell()?;
@@ -134,6 +200,11 @@ impl LineRun<'_> {
                 180 => Plane::Zx,
                 _ => Plane::Yz,
             };
+        }
+        // G40 (the only cutter-compensation state) and G97 (the only spindle mode) change
+        // nothing.
+        if let Some(code) = groups.get(Group::ToolLength) {
+            self.tool_length(code)?;
         }
         if let Some(code) = groups.get(Group::System) {
             self.st.system = u32::from(code / 10 - 53);
@@ -148,6 +219,9 @@ impl LineRun<'_> {
         if let Some(code) = groups.get(Group::ArcDistance) {
             self.st.arc_absolute = code == 901;
         }
+        if let Some(code) = groups.get(Group::Retract) {
+            self.st.retract_to_r = code == 990;
+        }
         // G94 (group FeedMode) is the only feed mode: nothing to do.
         if groups.get(Group::Rotation) == Some(690) {
             self.st.frame.set_rotation(Point2::origin(), 0.0);
@@ -159,10 +233,13 @@ impl LineRun<'_> {
         }
         match groups.get(Group::NonModal) {
             Some(100) => self.g10()?,
-            Some(280) => self.g28()?,
-            Some(281) => self.g28_1(),
+            Some(280) => self.g28(G28_POSITION, "G28")?,
+            Some(281) => self.g28_1(G28_POSITION),
+            Some(300) => self.g28(G30_POSITION, "G30")?,
+            Some(301) => self.g28_1(G30_POSITION),
             Some(520) => self.g52()?,
             Some(920) => self.g92()?,
+            Some(921 | 922) => self.g92_reset(),
             _ => {}
         }
         if groups.get(Group::Rotation) == Some(680) {
@@ -171,7 +248,7 @@ impl LineRun<'_> {
         if groups.get(Group::Scale) == Some(510) {
             self.g51()?;
         }
-        self.motion(groups.get(Group::Motion), explicit)?;
+        self.motion(groups.get(Group::Motion), explicit, groups.get(Group::NonModal) == Some(530))?;
         let flow = self.stop(ms.stop)?;
         match self.w.unused() {
             None => Ok(flow),
@@ -183,8 +260,25 @@ impl LineRun<'_> {
     fn classify_g(&self) -> Result<Groups, RunProblem> {
         let mut groups = Groups::default();
         for &code in self.w.g.as_slice() {
-            let group = group_of(code).ok_or(RunProblem::UnknownGCode { code: GCode(code) })?;
+            let group = group_of(code).ok_or_else(|| match unsupported_g(code) {
+                Some(feature) => RunProblem::Unsupported { code: GCode(code).to_string(), feature },
+                None => RunProblem::UnknownGCode { code: GCode(code) },
+            })?;
+            if matches!(group, Group::Rotation | Group::Scale) && self.cfg.dialect == Dialect::LinuxCnc {
+                return Err(RunProblem::Unsupported {
+                    code: GCode(code).to_string(),
+                    feature: "scaling and rotation (G50/G51, G68/G69: Mach and Fanuc codes LinuxCNC does not have)",
+                });
+            }
             let slot = &mut groups.0[group as usize];
+            // LinuxCNC lets G80 share a line with a motion code (post-processors write
+            // `G80 G0`); the motion code wins.
+            if group == Group::Motion && (code == 800 || *slot == Some(800)) {
+                if code != 800 || slot.is_none() {
+                    *slot = Some(code);
+                }
+                continue;
+            }
             if let Some(first) = *slot {
                 return Err(RunProblem::ModalConflict {
                     first: GCode(first).to_string(),
@@ -200,13 +294,43 @@ impl LineRun<'_> {
         let mut ms = MCodes::default();
         for &code in self.w.m.as_slice() {
             let slot = match code {
-                0 | 1 | 2 | 30 => &mut ms.stop,
+                0 | 1 | 2 | 30 | 98 | 99 => &mut ms.stop,
                 3..=5 => &mut ms.spindle,
                 6 if !ms.change => {
                     ms.change = true;
                     continue;
                 }
                 6 => return Err(RunProblem::ModalConflict { first: "M6".into(), second: "M6".into() }),
+                7..=9 => {
+                    let (mist, flood, off) = (ms.mist, ms.flood, ms.coolant_off);
+                    let clash = match code {
+                        7 => (mist || off).then_some(if mist { 7 } else { 9 }),
+                        8 => (flood || off).then_some(if flood { 8 } else { 9 }),
+                        _ => (mist || flood || off).then_some(if mist {
+                            7
+                        } else if flood {
+                            8
+                        } else {
+                            9
+                        }),
+                    };
+                    if let Some(first) = clash {
+                        return Err(RunProblem::ModalConflict {
+                            first: format!("M{first}"),
+                            second: format!("M{code}"),
+                        });
+                    }
+                    match code {
+                        7 => ms.mist = true,
+                        8 => ms.flood = true,
+                        _ => ms.coolant_off = true,
+                    }
+                    continue;
+                }
+                _ if unsupported_m(code).is_some() => {
+                    let feature = unsupported_m(code).unwrap_or_default();
+                    return Err(RunProblem::Unsupported { code: format!("M{code}"), feature });
+                }
                 _ => {
                     return Err(RunProblem::UnknownMCode {
                         code,
@@ -229,9 +353,15 @@ impl LineRun<'_> {
     fn axis_owner(&self, groups: &Groups) -> Result<bool, RunProblem> {
         let mut owner: Option<u16> = None;
         // The motion group comes first, so a motion code is always named first.
-        let owners =
-            groups.0.iter().flatten().copied().filter(|&c| axis_consumer(c) || group_of(c) == Some(Group::Motion));
-        for code in owners {
+        let consumer = |g: Group| groups.get(g).filter(|&c| axis_consumer(c));
+        let owners = [
+            groups.get(Group::Motion),
+            consumer(Group::NonModal),
+            consumer(Group::Rotation),
+            consumer(Group::Scale),
+            consumer(Group::ToolLength),
+        ];
+        for code in owners.into_iter().flatten() {
             if let Some(first) = owner {
                 return Err(RunProblem::AxisWordConflict {
                     first: GCode(first).to_string(),
@@ -251,6 +381,17 @@ impl LineRun<'_> {
     /// A length word in machine units.
     pub(super) fn length(&mut self, letter: u8, owner: &'static str) -> Result<Option<f64>, RunProblem> {
         Ok(self.w.take(letter, owner)?.map(|v| self.conv(v)))
+    }
+
+    /// A count word (turns, repeats): a whole number ≥ 1, 1 when absent.
+    pub(super) fn count(&mut self, letter: u8, code: &'static str, hint: &'static str) -> Result<u32, RunProblem> {
+        match self.w.take(letter, code)? {
+            None => Ok(1),
+            Some(v) => match whole(letter, v)? {
+                0 => Err(RunProblem::OutOfRange { code, letter: char::from(letter), value: v, hint }),
+                n => Ok(n),
+            },
+        }
     }
 
     /// A word the code cannot do without.
@@ -276,6 +417,54 @@ impl LineRun<'_> {
         Ok(())
     }
 
+    fn spindle_speed(&mut self) -> Result<(), RunProblem> {
+        if let Some(s) = self.w.take(b'S', "S")? {
+            if s < 0.0 {
+                return Err(RunProblem::Negative { code: "S", letter: 'S', value: s });
+            }
+            self.st.speed = Some(s);
+        }
+        Ok(())
+    }
+
+    /// M7 / M8 / M9, in that order (M7 and M8 may share a line).
+    fn coolant(&mut self, ms: &MCodes) {
+        for (on, coolant) in [(ms.mist, Coolant::Mist), (ms.flood, Coolant::Flood), (ms.coolant_off, Coolant::Off)] {
+            if on {
+                self.emit(Event::Coolant { line: self.line, coolant });
+            }
+        }
+    }
+
+    /// G43 `H` (a tool's offsets from the table; the loaded tool without `H`), G43.1 `Z` (a
+    /// length given here, current units), G49 (none).
+    fn tool_length(&mut self, code: u16) -> Result<(), RunProblem> {
+        self.st.tool_offset = match code {
+            430 => {
+                let tool = match self.w.take(b'H', "G43")? {
+                    Some(h) => whole(b'H', h)?,
+                    None => self.st.tool,
+                };
+                if tool == 0 {
+                    Xyz::ZERO
+                } else {
+                    self.cfg.tools.get(tool).ok_or(RunProblem::UnknownTool { tool })?.offset
+                }
+            }
+            431 => {
+                let z = self.length(b'Z', "G43.1")?.ok_or(RunProblem::MissingWord {
+                    code: "G43.1",
+                    letter: 'Z',
+                    hint: "the tool length, e.g. G43.1 Z1.5",
+                })?;
+                Xyz::new(0.0, 0.0, z)
+            }
+            _ => Xyz::ZERO,
+        };
+        self.st.rederive_program(self.params);
+        Ok(())
+    }
+
     fn select_tool(&mut self) -> Result<(), RunProblem> {
         if let Some(t) = self.w.take(b'T', "T")? {
             let tool = whole(b'T', t)?;
@@ -291,8 +480,11 @@ impl LineRun<'_> {
         let tool = self.st.selected_tool;
         let entry = self.cfg.tools.get(tool).ok_or(RunProblem::UnknownTool { tool })?;
         self.st.tool = tool;
-        self.st.tool_offset = entry.offset;
-        self.st.rederive_program(self.params);
+        // Seed 002 has no G43: the tool's offsets apply from M6. Mach4 and LinuxCNC wait for G43.
+        if self.cfg.dialect == Dialect::MachineMotion {
+            self.st.tool_offset = entry.offset;
+            self.st.rederive_program(self.params);
+        }
         self.emit(Event::ToolChange { line: self.line, tool, offset: entry.offset });
         Ok(())
     }
@@ -305,7 +497,9 @@ impl LineRun<'_> {
         };
         let name = command.gcode();
         let dollar = self.w.take(b'$', name)?;
-        let change = if self.w.has(b'A') {
+        // Seed 002's explicit `A<device> P<port>` form; elsewhere a lone A is the rotary axis.
+        let explicit = self.w.has(b'A') && (self.cfg.dialect == Dialect::MachineMotion || self.w.has(b'P'));
+        let change = if explicit {
             let (Some(a), Some(p)) = (self.w.take(b'A', name)?, self.w.take(b'P', name)?) else {
                 return Err(RunProblem::OutputForm { code: name });
             };
@@ -319,6 +513,11 @@ impl LineRun<'_> {
                 Some(d) => whole(b'$', d)?,
                 None => self.st.tool,
             };
+            if tool == 0 && dollar.is_none() {
+                // No tool to drive outputs of: a plain spindle (CAM programs' `M3 S12000`).
+                self.emit(Event::Spindle { line: self.line, command, speed: self.st.speed });
+                return Ok(());
+            }
             if tool == 0 {
                 return Err(RunProblem::NoSpindleTool { code: name });
             }
@@ -340,12 +539,17 @@ impl LineRun<'_> {
     }
 
     fn path_mode(&mut self, code: u16) -> Result<(), RunProblem> {
-        self.st.path = if code == 610 {
+        self.st.path = if code == 610 || code == 611 {
             PathMode::ExactStop
         } else {
             let tolerance = self.w.take(b'P', "G64")?;
             if let Some(p) = tolerance.filter(|p| *p < 0.0) {
                 return Err(RunProblem::Negative { code: "G64", letter: 'P', value: p });
+            }
+            // Q, LinuxCNC's naive-CAM tolerance, merges nearly co-linear feeds in the
+            // controller; the path stays within P either way, so it is accepted and not used.
+            if let Some(q) = self.w.take(b'Q', "G64")?.filter(|q| *q < 0.0) {
+                return Err(RunProblem::Negative { code: "G64", letter: 'Q', value: q });
             }
             PathMode::Blend { tolerance: tolerance.map(|p| self.conv(p)) }
         };
@@ -359,6 +563,14 @@ impl LineRun<'_> {
                 self.emit(Event::Stop { line: self.line, optional: c == 1 });
                 Ok(Flow::Continue)
             }
+            Some(98 | 99) if self.nested => Err(RunProblem::FlowInHandler),
+            Some(98) => {
+                let p = self.require(b'P', "M98", "the program number to call, e.g. M98 P1000 for O1000")?;
+                let program = whole(b'P', p)?;
+                let repeats = self.count(b'L', "M98", "L counts calls and must be at least 1")?;
+                Ok(Flow::Call { program, repeats })
+            }
+            Some(99) => Ok(Flow::Return),
             Some(c) if self.nested => Err(RunProblem::EndInHandler { code: c }),
             Some(c) => {
                 self.emit(Event::ProgramEnd { line: self.line, code: c });

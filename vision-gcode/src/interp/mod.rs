@@ -1,5 +1,7 @@
 //! The interpreter: runs text line by line, keeps the modal state, streams events.
 
+mod cycles;
+mod flow;
 mod frames;
 mod line;
 mod modal;
@@ -7,9 +9,10 @@ mod motion;
 
 use vision_math::{AlignmentChain, LengthUnit, Point2, Vector2};
 
+pub use flow::needs_program;
 pub use modal::MotionMode;
 
-use crate::config::InterpreterConfig;
+use crate::config::{Dialect, InterpreterConfig};
 use crate::error::{GcodeError, RunProblem};
 use crate::event::{Event, EventSink, PathMode, UserCall};
 use crate::geom::{Plane, Xyz};
@@ -17,7 +20,8 @@ use crate::handler::{Context, HandlerError, MCodeHandler, UserMCode};
 use crate::params::{Params, ACTIVE_SYSTEM, G92_OFFSET, POSITION, TOOL_NUMBER, TOOL_OFFSET};
 use crate::parse::Parser;
 use crate::tools::{Tool, ToolTable};
-use crate::words::{evaluate, Words};
+use crate::watch::{PositionWatch, Publisher};
+use crate::words::{evaluate, Target, Words};
 use line::{is_builtin_m, Flow, LineRun, Pending};
 use modal::{is_work_offset, work_offset_base, Modal};
 
@@ -62,8 +66,10 @@ pub struct Interpreter {
     modal: Modal,
     parser: Parser,
     stack: Vec<f64>,
-    assigns: Vec<(u32, f64)>,
+    assigns: Vec<(Target, f64)>,
     pending: Vec<Pending>,
+    /// Where the machine position is published for [`PositionWatch`]es (not shared by clones).
+    publisher: Publisher,
 }
 
 impl Interpreter {
@@ -71,14 +77,17 @@ impl Interpreter {
     #[must_use]
     pub fn new(config: InterpreterConfig) -> Interpreter {
         let modal = Modal::initial(&config);
+        let parser =
+            if config.dialect == Dialect::MachineMotion { Parser::new() } else { Parser::with_flat_comments() };
         let mut interp = Interpreter {
             config,
             params: Params::new(),
             modal,
-            parser: Parser::new(),
+            parser,
             stack: Vec::new(),
             assigns: Vec::new(),
             pending: Vec::new(),
+            publisher: Publisher::default(),
         };
         interp.refresh_mirrors();
         interp
@@ -106,11 +115,23 @@ impl Interpreter {
         sink: &mut dyn EventSink,
     ) -> Result<RunOutcome, GcodeError> {
         let mut lines = 0;
+        // `%` on the first non-blank line opens a delimited program; the next `%` ends it.
+        let (mut started, mut delimited) = (false, false);
         for (i, raw) in text.split('\n').enumerate() {
             let line = u32::try_from(i + 1).unwrap_or(u32::MAX);
             let at = At { line, tag: line, nested: false };
-            if let Flow::End(code) = self.exec_line(raw, at, handler.as_deref_mut(), sink)? {
-                return Ok(RunOutcome::Ended { line, code });
+            match self.exec_line(raw, at, handler.as_deref_mut(), sink)? {
+                Flow::End(code) => return Ok(RunOutcome::Ended { line, code }),
+                Flow::Percent if delimited => return Ok(RunOutcome::Completed { lines: line }),
+                Flow::Percent => delimited = !started,
+                Flow::OWord => return self.run_flow(text, i, None, delimited, handler, sink),
+                call @ (Flow::Call { .. } | Flow::Return) => {
+                    return self.run_flow(text, i + 1, Some(call), delimited, handler, sink)
+                }
+                Flow::Continue => {}
+            }
+            if !started {
+                started = !raw.trim().is_empty();
             }
             lines = line;
         }
@@ -137,7 +158,12 @@ impl Interpreter {
     pub(crate) fn run_nested(&mut self, text: &str, tag: u32, sink: &mut dyn EventSink) -> Result<(), GcodeError> {
         for (i, raw) in text.split('\n').enumerate() {
             let line = u32::try_from(i + 1).unwrap_or(u32::MAX);
-            self.exec_line(raw, At { line, tag: line_tag(tag, line), nested: true }, None, sink)?;
+            match self.exec_line(raw, At { line, tag: line_tag(tag, line), nested: true }, None, sink)? {
+                Flow::OWord | Flow::Call { .. } | Flow::Return => {
+                    return Err(GcodeError::run(line, RunProblem::FlowInHandler))
+                }
+                _ => {}
+            }
         }
         Ok(())
     }
@@ -152,8 +178,14 @@ impl Interpreter {
     ) -> Result<Flow, GcodeError> {
         let line = at.line;
         let block = self.parser.parse_line(text, line)?;
-        if block.is_empty() {
-            return Ok(Flow::Continue);
+        if block.is_empty() || (self.config.block_delete && block.block_delete()) {
+            return Ok(if block.is_percent() {
+                Flow::Percent
+            } else if block.is_oword() && !(self.config.block_delete && block.block_delete()) {
+                Flow::OWord
+            } else {
+                Flow::Continue
+            });
         }
         let mut words = Words::default();
         self.params.begin();
@@ -164,13 +196,18 @@ impl Interpreter {
         let comments: Vec<&str> = if user.is_some() { block.comments().collect() } else { Vec::new() };
         read.map_err(|p| GcodeError::run(line, p))?;
         let mut offsets_written = false;
-        for i in 0..self.assigns.len() {
-            let (n, v) = self.assigns[i];
-            if let Err(p) = self.params.write(n, v) {
+        for (target, v) in &self.assigns {
+            let written = match target {
+                Target::Number(n) => {
+                    offsets_written |= affects_frame(*n);
+                    self.params.write(*n, *v)
+                }
+                Target::Named(name) => self.params.write_named(name, *v),
+            };
+            if let Err(p) = written {
                 self.params.rollback();
                 return Err(GcodeError::run(line, p));
             }
-            offsets_written |= affects_frame(n);
         }
         if let Some(code) = user {
             if let Err(problem) = user_line_alone(code, &words, at.nested) {
@@ -255,9 +292,11 @@ impl Interpreter {
         }
     }
 
-    /// Updates the read-only parameters that report the state (current units).
+    /// Updates the read-only parameters that report the state (current units) and publishes
+    /// the machine position. Every change of the state ends here.
     fn refresh_mirrors(&mut self) {
         let st = self.modal;
+        self.publisher.publish(st.machine);
         self.params.set_mirror(ACTIVE_SYSTEM, f64::from(st.system));
         self.params.set_mirror(TOOL_NUMBER, f64::from(st.tool));
         let off = self.current(st.tool_offset);
@@ -280,6 +319,14 @@ impl Interpreter {
     #[must_use]
     pub fn machine_position(&self) -> Xyz {
         self.modal.machine
+    }
+
+    /// A shared, read-only view of [`Interpreter::machine_position`] that follows this
+    /// interpreter from now on (every watch of it reads the same cell), for a reader that
+    /// cannot borrow the interpreter — a simulated camera triggered from inside an M-code
+    /// handler. A clone of the interpreter does not update it.
+    pub fn watch_position(&mut self) -> PositionWatch {
+        self.publisher.watch(self.modal.machine)
     }
 
     /// The current point in the program frame (before G51/G68/G52), current units.

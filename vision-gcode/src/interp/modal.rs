@@ -2,7 +2,9 @@
 
 use vision_math::LengthUnit;
 
+use super::cycles::CycleState;
 use crate::config::InterpreterConfig;
+use crate::error::GCode;
 use crate::event::PathMode;
 use crate::frame::{Frame, Placement};
 use crate::geom::{ArcDirection, Plane, Xyz};
@@ -17,6 +19,8 @@ pub enum MotionMode {
     Linear,
     /// G2 / G3.
     Arc(ArcDirection),
+    /// A canned cycle: G73, G81, G82, G83, G85 or G89.
+    Cycle(GCode),
 }
 
 /// The modal state. `Copy`, so a line works on a copy and commits it only when it succeeds.
@@ -41,6 +45,12 @@ pub(crate) struct Modal {
     /// Its offset and length, machine units (cached from the tool table).
     pub(crate) tool_offset: Xyz,
     pub(crate) frame: Frame,
+    /// Spindle speed `S` (revolutions per minute), `None` before any `S`.
+    pub(crate) speed: Option<f64>,
+    /// G99 (true: canned cycles retract to R) / G98 (to the level the series started at).
+    pub(crate) retract_to_r: bool,
+    /// What a series of canned cycles remembers.
+    pub(crate) cycle: CycleState,
     /// Current point in the program frame, machine units.
     pub(crate) program: Xyz,
     /// Current machine position (the spindle), machine units.
@@ -63,6 +73,9 @@ impl Modal {
             tool: 0,
             tool_offset: Xyz::ZERO,
             frame: Frame::identity(),
+            speed: None,
+            retract_to_r: true,
+            cycle: CycleState::default(),
             program: Xyz::ZERO,
             machine: Xyz::ZERO,
         }

@@ -1,16 +1,15 @@
-//! Moves: G0/G1, G2/G3 (exact arcs or polylines), G28/G28.1.
+//! Moves: G0/G1, G2/G3 (exact arcs or polylines), G28/G28.1, G30/G30.1, G53.
 
 use crate::arc::{
     Arc, Tolerance, CENTRE_TOLERANCE_INCH, CENTRE_TOLERANCE_MM, RADIUS_TOLERANCE_INCH, RADIUS_TOLERANCE_MM,
 };
-use crate::error::RunProblem;
+use crate::error::{GCode, RunProblem};
 use crate::event::{ArcMove, Event, EventSink, LinearMove, PathMode, Rate};
 use crate::frame::Placement;
 use crate::geom::{ArcDirection, Plane, Xyz, AXIS_LETTERS, CENTRE_LETTERS};
-use crate::params::G28_POSITION;
-use crate::words::whole;
 use vision_math::LengthUnit;
 
+use super::cycles::cycle_name;
 use super::line::{LineRun, Pending};
 use super::modal::MotionMode;
 
@@ -61,6 +60,7 @@ fn motion_name(mode: MotionMode) -> &'static str {
         MotionMode::Linear => "G1",
         MotionMode::Arc(ArcDirection::Clockwise) => "G2",
         MotionMode::Arc(ArcDirection::CounterClockwise) => "G3",
+        MotionMode::Cycle(code) => cycle_name(code),
     }
 }
 
@@ -76,15 +76,16 @@ impl LineRun<'_> {
         Ok(t)
     }
 
-    pub(super) fn g28(&mut self) -> Result<(), RunProblem> {
+    /// G28 / G30: via the point the axis words name (if any) to the position stored at
+    /// `#home`…`#home + 2`.
+    pub(super) fn g28(&mut self, home: u32, name: &'static str) -> Result<(), RunProblem> {
         let given = AXIS_LETTERS.map(|l| self.w.has(l));
         let pl = self.placement();
-        if given.iter().any(|g| *g) {
-            let via = self.target("G28")?;
-            let m = self.checked(pl.machine_of(via))?;
-            self.rapid_to_machine(m);
-        }
-        let home = self.params.triple(G28_POSITION);
+        // As LinuxCNC, always a first leg, to the current point when no axis word names one.
+        let via = self.target(name)?;
+        let m = self.checked(pl.machine_of(via))?;
+        self.rapid_to_machine(m);
+        let home = self.params.triple(home);
         let mut m = self.st.machine;
         let all = !given.iter().any(|g| *g);
         for axis in (0..3).filter(|&a| all || given[a]) {
@@ -101,10 +102,11 @@ impl LineRun<'_> {
         self.st.machine = end;
     }
 
-    pub(super) fn g28_1(&mut self) {
+    /// G28.1 / G30.1: stores the machine position at `#home`…`#home + 2`.
+    pub(super) fn g28_1(&mut self, home: u32) {
         let m = self.st.machine;
         for axis in 0..3 {
-            self.params.set(G28_POSITION + axis as u32, m.axis(axis));
+            self.params.set(home + axis as u32, m.axis(axis));
         }
     }
 
@@ -116,17 +118,41 @@ impl LineRun<'_> {
         }
     }
 
-    pub(super) fn motion(&mut self, code: Option<u16>, axes_taken: bool) -> Result<(), RunProblem> {
+    /// The line's motion: `code` is its motion-group code (if any), `axes_taken` whether another
+    /// code owns the axis words, `g53` whether the line has G53.
+    pub(super) fn motion(&mut self, code: Option<u16>, axes_taken: bool, g53: bool) -> Result<(), RunProblem> {
+        let previous = self.st.motion;
         if let Some(code) = code {
-            self.st.motion = Some(match code {
-                0 => MotionMode::Rapid,
-                10 => MotionMode::Linear,
-                20 => MotionMode::Arc(ArcDirection::Clockwise),
-                _ => MotionMode::Arc(ArcDirection::CounterClockwise),
-            });
+            self.st.motion = match code {
+                0 => Some(MotionMode::Rapid),
+                10 => Some(MotionMode::Linear),
+                20 => Some(MotionMode::Arc(ArcDirection::Clockwise)),
+                30 => Some(MotionMode::Arc(ArcDirection::CounterClockwise)),
+                800 => None,
+                cycle => Some(MotionMode::Cycle(GCode(cycle))),
+            };
         }
         let has_axes = self.w.has(b'X') || self.w.has(b'Y') || self.w.has(b'Z');
-        if axes_taken || !has_axes {
+        if g53 {
+            return self.g53();
+        }
+        if code == Some(800) {
+            self.st.cycle.initial_level = None;
+            if has_axes && !axes_taken {
+                return Err(RunProblem::G80AxisWords);
+            }
+        }
+        if let (Some(MotionMode::Cycle(cycle)), false) = (self.st.motion, axes_taken) {
+            // A cycle runs on axis words, or where its code is written.
+            if has_axes || code.is_some() {
+                return self.canned_cycle(cycle, previous);
+            }
+            return Ok(());
+        }
+        // LinuxCNC moves wherever a motion code is written: `G0` alone is a move to the current
+        // point, `G2 I1` a full circle.
+        let written = matches!(code, Some(0 | 10 | 20 | 30));
+        if axes_taken || !(has_axes || written) {
             if let (false, Some(MotionMode::Arc(dir))) = (axes_taken, self.st.motion) {
                 if [b'I', b'J', b'K', b'R'].iter().any(|&l| self.w.has(l)) {
                     return Err(RunProblem::ArcNoEnd { code: motion_name(MotionMode::Arc(dir)) });
@@ -134,17 +160,62 @@ impl LineRun<'_> {
             }
             return Ok(());
         }
-        let mode = self.st.motion.ok_or(RunProblem::NoMotionMode)?;
+        // A `let … else`, not `ok_or`: no error value is built (and dropped) on every move.
+        let Some(mode) = self.st.motion else { return Err(RunProblem::NoMotionMode) };
         let name = motion_name(mode);
-        let target = self.target(name)?;
+        self.st.cycle.initial_level = None;
         match mode {
-            MotionMode::Rapid => self.linear(target, Rate::Rapid),
+            MotionMode::Rapid => {
+                let target = self.target(name)?;
+                self.linear(target, Rate::Rapid)
+            }
             MotionMode::Linear => {
-                let feed = self.st.feed.ok_or(RunProblem::NoFeedRate { code: name })?;
+                let target = self.target(name)?;
+                let feed = self.feed(name)?;
                 self.linear(target, Rate::Feed(feed))
             }
-            MotionMode::Arc(direction) => self.arc(target, direction, name),
+            MotionMode::Arc(direction) => {
+                let target = self.target(name)?;
+                self.arc(target, direction, name)
+            }
+            MotionMode::Cycle(cycle) => self.canned_cycle(cycle, previous),
         }
+    }
+
+    /// The feed rate for a feed move: set and positive.
+    pub(super) fn feed(&self, code: &'static str) -> Result<f64, RunProblem> {
+        match self.st.feed {
+            None => Err(RunProblem::NoFeedRate { code }),
+            Some(f) if f <= 0.0 => Err(RunProblem::ZeroFeedRate { code }),
+            Some(f) => Ok(f),
+        }
+    }
+
+    /// G53 with G0/G1: a straight move to the given machine coordinates (absolute, current
+    /// units; unmentioned axes stay).
+    fn g53(&mut self) -> Result<(), RunProblem> {
+        let mode = self.st.motion;
+        let rate = match mode {
+            Some(MotionMode::Rapid) => Rate::Rapid,
+            Some(MotionMode::Linear) => Rate::Feed(self.feed("G1")?),
+            _ => return Err(RunProblem::G53Form { hint: "program G0 or G1 on the G53 line" }),
+        };
+        if !self.st.absolute {
+            return Err(RunProblem::G53Form { hint: "switch to G90 first" });
+        }
+        let owner = if rate == Rate::Rapid { "G53 G0" } else { "G53 G1" };
+        let mut end = self.st.machine;
+        for (axis, &letter) in AXIS_LETTERS.iter().enumerate() {
+            if let Some(v) = self.length(letter, owner)? {
+                end.set_axis(axis, v);
+            }
+        }
+        let end = self.checked(end)?;
+        let start = self.st.machine;
+        self.emit(Event::Linear(LinearMove { line: self.line, start, end, rate, path: self.st.path }));
+        self.st.machine = end;
+        self.st.rederive_program(self.params);
+        Ok(())
     }
 
     pub(super) fn linear(&mut self, target: Xyz, rate: Rate) -> Result<(), RunProblem> {
@@ -171,38 +242,16 @@ impl LineRun<'_> {
         let radius = self.length(b'R', name)?;
         let ca = self.length(la, name)?;
         let cb = self.length(lb, name)?;
-        let turns = match self.w.take(b'P', name)? {
-            None => 1,
-            Some(p) => match whole(b'P', p)? {
-                0 => {
-                    return Err(RunProblem::OutOfRange {
-                        code: name,
-                        letter: 'P',
-                        value: p,
-                        hint: "P counts full turns and must be at least 1",
-                    })
-                }
-                t => t,
-            },
-        };
-        let feed = self.st.feed.ok_or(RunProblem::NoFeedRate { code: name })?;
+        let turns = self.count(b'P', name, "P counts full turns and must be at least 1")?;
+        let feed = self.feed(name)?;
         let start = self.st.program;
         let to_user = self.cfg.machine_unit.factor_to(self.st.units);
         let inch = self.st.units == LengthUnit::Inch;
+        let min_radius = self.conv(if inch { RADIUS_TOLERANCE_INCH } else { RADIUS_TOLERANCE_MM });
+        let tolerance = Tolerance { machine: min_radius, min_radius, to_user };
         let center = match (radius, ca, cb) {
             (Some(_), Some(_), _) | (Some(_), _, Some(_)) => return Err(RunProblem::ArcBothForms { code: name }),
-            (Some(r), None, None) => {
-                if turns != 1 {
-                    return Err(RunProblem::OutOfRange {
-                        code: name,
-                        letter: 'P',
-                        value: f64::from(turns),
-                        hint: "multi-turn arcs need the centre form (I/J/K)",
-                    });
-                }
-                let machine = self.conv(if inch { RADIUS_TOLERANCE_INCH } else { RADIUS_TOLERANCE_MM });
-                Arc::centre_from_radius(plane, start, target, r, direction, Tolerance { machine, to_user })?
-            }
+            (Some(r), None, None) => Arc::centre_from_radius(plane, start, target, r, direction, tolerance)?,
             (None, None, None) => {
                 return Err(RunProblem::ArcNoCentre { code: name, centre: plane.centre_words() });
             }
@@ -220,7 +269,8 @@ impl LineRun<'_> {
             (None, ca, cb) => (start.axis(a) + ca.unwrap_or(0.0), start.axis(b) + cb.unwrap_or(0.0)),
         };
         let machine = self.conv(if inch { CENTRE_TOLERANCE_INCH } else { CENTRE_TOLERANCE_MM });
-        let arc = Arc::from_centre(plane, start, target, center, direction, turns, Tolerance { machine, to_user })?;
+        let tolerance = Tolerance { machine, ..tolerance };
+        let arc = Arc::from_centre(plane, start, target, center, direction, turns, tolerance)?;
         let pl = self.placement();
         let end = self.checked(pl.machine_of(target))?;
         let machine_start = self.st.machine;

@@ -3,7 +3,7 @@
 //! Recursion is bounded: each bracket, `#`, sign or function call costs one level of
 //! [`MAX_DEPTH`], and a chain of operators on one level is a loop, not a recursion.
 
-use super::{number, Cursor, PResult, Parser, MAX_DEPTH};
+use super::{is_blank, number, Cursor, PResult, Parser, MAX_DEPTH};
 use crate::error::SyntaxProblem;
 use crate::expr::{BinOp, Func, Node};
 
@@ -53,6 +53,29 @@ fn binop_at(cur: &Cursor<'_>) -> Option<(BinOp, usize)> {
 }
 
 impl Parser {
+    /// `<name>` after a `#`: pushes [`Node::Named`] and returns true; false (nothing consumed)
+    /// when no `<` follows. Names are case-insensitive and blanks inside are ignored, as in
+    /// LinuxCNC.
+    pub(super) fn named(&mut self, cur: &mut Cursor<'_>) -> PResult<bool> {
+        let mut probe = *cur;
+        probe.skip_blanks();
+        if probe.peek() != Some(b'<') {
+            return Ok(false);
+        }
+        let open = probe.pos;
+        let close = cur.bytes[open..].iter().position(|&b| b == b'>').ok_or((open, SyntaxProblem::UnclosedName))?;
+        let raw = &cur.bytes[open + 1..open + close];
+        let name: String = raw.iter().filter(|b| !is_blank(**b)).map(|b| char::from(b.to_ascii_lowercase())).collect();
+        if name.is_empty() {
+            return Err((open, SyntaxProblem::UnclosedName));
+        }
+        let index = u32::try_from(self.names.len()).unwrap_or(u32::MAX);
+        self.names.push(name.into_boxed_str());
+        self.nodes.push(Node::Named(index));
+        cur.pos = open + close + 1;
+        Ok(true)
+    }
+
     /// One operand: a number, `#operand`, `-operand`, `+operand`, `[expr]` or a function.
     pub(super) fn operand(&mut self, cur: &mut Cursor<'_>, depth: u32) -> PResult<()> {
         if depth > MAX_DEPTH {
@@ -76,8 +99,10 @@ impl Parser {
             }
             Some(b'#') => {
                 cur.pos += 1;
-                self.operand(cur, depth + 1)?;
-                self.nodes.push(Node::Param);
+                if !self.named(cur)? {
+                    self.operand(cur, depth + 1)?;
+                    self.nodes.push(Node::Param);
+                }
             }
             Some(b'[') => {
                 cur.pos += 1;

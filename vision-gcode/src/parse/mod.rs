@@ -8,6 +8,10 @@
 //! Blanks (space, tab, CR) are ignored everywhere outside comments, as in LinuxCNC: `G 1 X 1 . 5`
 //! is `G1 X1.5`. Letters are case-insensitive.
 
+// Private unless the `bench-internals` feature exposes the module; the accessors only the unit
+// tests and that benchmark read are then unused.
+#![cfg_attr(not(feature = "bench-internals"), allow(unreachable_pub, dead_code))]
+
 mod expr;
 mod number;
 
@@ -90,12 +94,6 @@ impl Word {
     pub fn value(&self) -> Value {
         self.value
     }
-
-    /// Byte offset of the letter in the line.
-    #[must_use]
-    pub fn offset(&self) -> usize {
-        self.at as usize
-    }
 }
 
 /// `#target = value`: the parameter number is itself an expression.
@@ -118,12 +116,6 @@ impl Assignment {
     pub fn value(&self) -> Value {
         self.value
     }
-
-    /// Byte offset of the `#` in the line.
-    #[must_use]
-    pub fn offset(&self) -> usize {
-        self.at as usize
-    }
 }
 
 /// A comment's byte range in the line (the text inside `( )` or after `;`).
@@ -139,10 +131,12 @@ pub struct Block<'p, 's> {
     text: &'s str,
     line: u32,
     number: Option<u32>,
+    marks: Marks,
     words: &'p [Word],
     assignments: &'p [Assignment],
     comments: &'p [Span],
     nodes: &'p [Node],
+    names: &'p [Box<str>],
 }
 
 impl<'p, 's> Block<'p, 's> {
@@ -156,6 +150,25 @@ impl<'p, 's> Block<'p, 's> {
     #[must_use]
     pub fn line_number(&self) -> Option<u32> {
         self.number
+    }
+
+    /// Whether the line starts with `/` (block delete: skipped when the switch is on).
+    #[must_use]
+    pub fn block_delete(&self) -> bool {
+        self.marks.block_delete
+    }
+
+    /// Whether the line is an o-word line (`o100 sub`, `o<name> call [1]`, …): its text is
+    /// left to the control-flow reader; only `/` and `N` before the `o` are parsed.
+    #[must_use]
+    pub fn is_oword(&self) -> bool {
+        self.marks.oword
+    }
+
+    /// Whether the line is a `%` program delimiter.
+    #[must_use]
+    pub fn is_percent(&self) -> bool {
+        self.marks.percent
     }
 
     /// The words in order of appearance.
@@ -179,27 +192,21 @@ impl<'p, 's> Block<'p, 's> {
         self.comments.iter().map(move |s| text.get(s.start as usize..s.end as usize).unwrap_or(""))
     }
 
-    /// The source text of the line.
-    #[must_use]
-    pub fn text(&self) -> &'s str {
-        self.text
-    }
-
     /// True when the line has no words and no assignments (blank, comments only, or `%`).
     #[must_use]
     pub fn is_empty(&self) -> bool {
         self.words.is_empty() && self.assignments.is_empty()
     }
 
+    /// The named parameters the line mentions (lower case, blanks removed), by
+    /// [`Node::Named`] index.
+    pub(crate) fn names(&self) -> &'p [Box<str>] {
+        self.names
+    }
+
     /// The postfix nodes of `expr`.
     pub(crate) fn nodes(&self, expr: Expr) -> &'p [Node] {
         self.nodes.get(expr.start as usize..expr.end as usize).unwrap_or(&[])
-    }
-
-    /// The 1-based character column of byte `offset`.
-    #[must_use]
-    pub fn column(&self, offset: usize) -> u32 {
-        column(self.text, offset)
     }
 }
 
@@ -212,13 +219,25 @@ fn column(text: &str, offset: usize) -> u32 {
     u32::try_from(text[..end].chars().count() + 1).unwrap_or(u32::MAX)
 }
 
+/// The marks a line can start with.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+struct Marks {
+    block_delete: bool,
+    percent: bool,
+    oword: bool,
+}
+
 /// The reusable line parser.
 #[derive(Debug, Clone, Default)]
 pub struct Parser {
+    /// Whether parentheses nest inside comments (seed 002) or the first `)` closes (Mach4,
+    /// LinuxCNC).
+    flat_comments: bool,
     words: Vec<Word>,
     assignments: Vec<Assignment>,
     comments: Vec<Span>,
     nodes: Vec<Node>,
+    names: Vec<Box<str>>,
 }
 
 impl Parser {
@@ -228,31 +247,53 @@ impl Parser {
         Parser::default()
     }
 
+    /// A parser whose comments end at their first `)` (Mach4, LinuxCNC), where [`Parser::new`]
+    /// nests parentheses inside comments (seed 002's manual writes `( … (x, y) )`).
+    #[must_use]
+    pub fn with_flat_comments() -> Parser {
+        Parser { flat_comments: true, ..Parser::default() }
+    }
+
     /// Parses one line of text (without its line break).
     ///
     /// # Errors
     /// [`GcodeError::Syntax`] with `line` and the column of the problem.
     pub fn parse_line<'p, 's>(&'p mut self, text: &'s str, line: u32) -> Result<Block<'p, 's>, GcodeError> {
+        self.parse_with(text, line, Parser::items)
+    }
+
+    /// Clears the buffers, runs `read` over `text` and wraps what it left in a [`Block`].
+    #[inline]
+    fn parse_with<'p, 's>(
+        &'p mut self,
+        text: &'s str,
+        line: u32,
+        read: impl FnOnce(&mut Parser, &mut Cursor<'_>, &mut Marks) -> PResult<Option<u32>>,
+    ) -> Result<Block<'p, 's>, GcodeError> {
         self.words.clear();
         self.assignments.clear();
         self.comments.clear();
         self.nodes.clear();
+        self.names.clear();
         let mut cur = Cursor::new(text);
-        match self.items(&mut cur) {
+        let mut marks = Marks::default();
+        match read(self, &mut cur, &mut marks) {
             Ok(number) => Ok(Block {
                 text,
                 line,
                 number,
+                marks,
                 words: &self.words,
                 assignments: &self.assignments,
                 comments: &self.comments,
                 nodes: &self.nodes,
+                names: &self.names,
             }),
             Err((at, problem)) => Err(GcodeError::Syntax { line, column: column(text, at), problem }),
         }
     }
 
-    fn items(&mut self, cur: &mut Cursor<'_>) -> PResult<Option<u32>> {
+    fn items(&mut self, cur: &mut Cursor<'_>, marks: &mut Marks) -> PResult<Option<u32>> {
         let mut number = None;
         let mut seen: u32 = 0;
         let mut first = true;
@@ -262,7 +303,8 @@ impl Parser {
             let at = cur.pos;
             match b {
                 b'(' => {
-                    let close = comment_end(cur.bytes, at).ok_or((at, SyntaxProblem::UnclosedComment))?;
+                    let close =
+                        comment_end(cur.bytes, at, self.flat_comments).ok_or((at, SyntaxProblem::UnclosedComment))?;
                     self.comments.push(span(at + 1, close));
                     cur.pos = close + 1;
                     continue;
@@ -276,11 +318,18 @@ impl Parser {
                     // Program delimiter: the line holds nothing else but comments.
                     cur.pos += 1;
                     first = false;
+                    marks.percent = true;
+                    continue;
+                }
+                b'/' if first && !marks.block_delete => {
+                    // Block delete: the line's first character; `N` may follow.
+                    cur.pos += 1;
+                    marks.block_delete = true;
                     continue;
                 }
                 b'#' => {
                     cur.pos += 1;
-                    let target = self.expr_of(cur, |p, c| p.operand(c, 1))?;
+                    let target = self.expr_of(cur, |p, c| if p.named(c)? { Ok(()) } else { p.operand(c, 1) })?;
                     cur.skip_blanks();
                     if cur.peek() != Some(b'=') {
                         return Err((cur.pos, SyntaxProblem::ExpectedEquals));
@@ -289,10 +338,18 @@ impl Parser {
                     let value = self.value(cur, b'=', cur.pos)?;
                     self.assignments.push(Assignment { target, value, at: offset(at) });
                 }
+                b'@' | b'^' => return Err((at, SyntaxProblem::PolarCoordinates)),
                 _ => {
                     let letter = b.to_ascii_uppercase();
                     if !(letter.is_ascii_uppercase() || letter == b'$') {
                         return Err((at, unexpected(cur, at)));
+                    }
+                    if letter == b'O' {
+                        if !self.words.is_empty() || !self.assignments.is_empty() {
+                            return Err((at, SyntaxProblem::OWordNotFirst));
+                        }
+                        marks.oword = true;
+                        return Ok(number);
                     }
                     cur.pos += 1;
                     if letter == b'N' {
@@ -317,6 +374,40 @@ impl Parser {
             first = false;
         }
         Ok(number)
+    }
+
+    /// The bracketed arguments of an o-word line (`[1] [#2 * 3]`, comments allowed), each as a
+    /// word with the letter `[`.
+    ///
+    /// # Errors
+    /// [`GcodeError::Syntax`] for anything but brackets and comments.
+    pub(crate) fn parse_args<'p, 's>(&'p mut self, text: &'s str, line: u32) -> Result<Block<'p, 's>, GcodeError> {
+        self.parse_with(text, line, |p, cur, _| p.args(cur).map(|()| None))
+    }
+
+    fn args(&mut self, cur: &mut Cursor<'_>) -> PResult<()> {
+        loop {
+            cur.skip_blanks();
+            let at = cur.pos;
+            match cur.peek() {
+                None => return Ok(()),
+                Some(b'(') => {
+                    let close =
+                        comment_end(cur.bytes, at, self.flat_comments).ok_or((at, SyntaxProblem::UnclosedComment))?;
+                    self.comments.push(span(at + 1, close));
+                    cur.pos = close + 1;
+                }
+                Some(b';') => {
+                    self.comments.push(span(at + 1, cur.bytes.len()));
+                    return Ok(());
+                }
+                Some(b'[') => {
+                    let value = self.value(cur, b'[', at)?;
+                    self.words.push(Word { letter: b'[', value, at: offset(at) });
+                }
+                Some(_) => return Err((at, unexpected(cur, at))),
+            }
+        }
     }
 
     /// A word's (or an assignment's) value: a literal on the fast path, else an expression.
@@ -358,9 +449,12 @@ impl Parser {
     }
 }
 
-/// The `)` that closes the comment opened at `open`. Parentheses inside a comment nest (the
-/// manual's own programs write `( ... (lower-left -2.5,-4.0) )`).
-fn comment_end(bytes: &[u8], open: usize) -> Option<usize> {
+/// The `)` that closes the comment opened at `open`: the first one when `flat`, else the one
+/// that balances it (the manual's own programs write `( ... (lower-left -2.5,-4.0) )`).
+fn comment_end(bytes: &[u8], open: usize, flat: bool) -> Option<usize> {
+    if flat {
+        return bytes[open..].iter().position(|&b| b == b')').map(|i| open + i);
+    }
     let mut depth = 0usize;
     for (i, &b) in bytes.iter().enumerate().skip(open) {
         match b {

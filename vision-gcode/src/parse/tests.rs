@@ -16,7 +16,7 @@ fn words(text: &str, params: &Params) -> Vec<(char, f64)> {
         .map(|w| {
             let v = match w.value() {
                 Value::Number(v) => v,
-                Value::Expr(e) => eval(block.nodes(e), params, &mut stack).expect("evaluates"),
+                Value::Expr(e) => eval(block.nodes(e), block.names(), params, &mut stack).expect("evaluates"),
             };
             (w.letter(), v)
         })
@@ -106,15 +106,18 @@ fn assignments_are_collected_in_order() {
     assert_eq!(block.words().len(), 2);
     let p = Params::new();
     let mut stack = Vec::new();
-    let targets: Vec<f64> =
-        block.assignments().iter().map(|a| eval(block.nodes(a.target()), &p, &mut stack).expect("target")).collect();
+    let targets: Vec<f64> = block
+        .assignments()
+        .iter()
+        .map(|a| eval(block.nodes(a.target()), block.names(), &p, &mut stack).expect("target"))
+        .collect();
     assert_eq!(targets, vec![1.0, 2.0, 3.0]);
     let values: Vec<f64> = block
         .assignments()
         .iter()
         .map(|a| match a.value() {
             Value::Number(v) => v,
-            Value::Expr(e) => eval(block.nodes(e), &p, &mut stack).expect("value"),
+            Value::Expr(e) => eval(block.nodes(e), block.names(), &p, &mut stack).expect("value"),
         })
         .collect();
     assert_eq!(values, vec![2.0, 12.0, -0.0]);
@@ -137,7 +140,8 @@ fn syntax_errors_say_where_and_what() {
     assert_eq!(syntax("#1 G0"), (4, SyntaxProblem::ExpectedEquals));
     assert_eq!(syntax("G0 N10"), (4, SyntaxProblem::LineNumberNotFirst));
     assert_eq!(syntax("N1.5"), (2, SyntaxProblem::BadLineNumber));
-    assert_eq!(syntax("G0 @"), (4, SyntaxProblem::Unexpected { found: '@' }));
+    assert_eq!(syntax("G0 @"), (4, SyntaxProblem::PolarCoordinates));
+    assert_eq!(syntax("G0 &"), (4, SyntaxProblem::Unexpected { found: '&' }));
     assert_eq!(syntax("Gé"), (1, SyntaxProblem::MissingValue { letter: 'G' }));
     assert_eq!(syntax("é"), (1, SyntaxProblem::Unexpected { found: 'é' }));
     assert_eq!(syntax("(é) ü"), (5, SyntaxProblem::Unexpected { found: 'ü' }));

@@ -17,6 +17,7 @@
 mod affine;
 mod linear;
 mod partial;
+mod quality;
 mod rectangle;
 mod rigid;
 mod similarity;
@@ -24,6 +25,7 @@ mod similarity;
 pub use affine::fit_affine;
 pub use linear::{solve_linear, LinearFit};
 pub use partial::{fit_piece, PartialFit, Piece};
+pub use quality::{find_outlier, residual_sigma, Outlier, Prediction, MIN_MARKS_FOR_OUTLIERS};
 pub use rectangle::fit_rectangle;
 pub use rigid::fit_rigid;
 pub use similarity::fit_similarity;
@@ -154,9 +156,9 @@ pub struct Transform {
     pub model: Model,
     /// Rotation `R(θ)`, counter-clockwise seen from +Z.
     pub rotation: UnitComplex<f64>,
-    /// `(sx, sy)`, dimensionless.
+    /// `(sx, sy)`: scale along the commanded X and Y axes (dimensionless; 1 = true size).
     pub scale: Vector2<f64>,
-    /// Shear (dimensionless); 0 for every model but affine.
+    /// Shear of `U = [[sx, shear], [0, sy]]` (dimensionless); 0 for every model but affine.
     pub shear: f64,
     /// Centroid `n̄` of the commanded points, machine units.
     pub commanded_centroid: Point2<f64>,
@@ -196,21 +198,11 @@ impl Params {
     }
 }
 
-/// A solved fit: parameters, quality, and the way back to the points.
+/// A solved fit: the parameters, their quality, and the way back to the points.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Fit {
-    /// Which model was solved.
-    pub model: Model,
-    /// Rotation `R(θ)`, counter-clockwise seen from +Z.
-    pub rotation: UnitComplex<f64>,
-    /// `(sx, sy)`: scale along the commanded X and Y axes (dimensionless; 1 = true size).
-    pub scale: Vector2<f64>,
-    /// Shear of `U = [[sx, shear], [0, sy]]` (dimensionless); 0 for every model but affine.
-    pub shear: f64,
-    /// Centroid of the commanded points, machine units.
-    pub commanded_centroid: Point2<f64>,
-    /// Centroid of the observed points, machine units.
-    pub observed_centroid: Point2<f64>,
+    /// The solved parameters (what [`Model::transform`] gives without the residual pass).
+    pub transform: Transform,
     /// Number of point pairs the fit used.
     pub len: usize,
     /// Root-mean-square residual length `sqrt(Σ‖rᵢ‖² / N)`, machine units.
@@ -219,7 +211,7 @@ pub struct Fit {
     pub max_residual: f64,
 }
 
-impl Fit {
+impl Transform {
     /// The linear part `L = R(θ)·[[sx, shear], [0, sy]]`.
     #[must_use]
     pub fn linear(&self) -> Matrix2<f64> {
@@ -246,27 +238,14 @@ impl Fit {
         self.theta_rad().to_degrees()
     }
 
-    /// Where the fit puts commanded point `n` (machine units).
+    /// Where the transform puts commanded point `n` (machine units).
     #[must_use]
     pub fn apply(&self, n: Point2<f64>) -> Point2<f64> {
         self.observed_centroid + self.linear() * (n - self.commanded_centroid)
     }
 
-    /// Per-point residuals `apply(nᵢ) − oᵢ`, machine units, in input order.
-    ///
-    /// Pass the same slices the fit was solved from.
-    #[must_use]
-    pub fn residuals(&self, commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Vec<Vector2<f64>> {
-        let l = self.linear();
-        commanded
-            .iter()
-            .zip(observed)
-            .map(|(n, o)| l * (n - self.commanded_centroid) - (o - self.observed_centroid))
-            .collect()
-    }
-
-    /// The G51 → G68 → G52 chain that executes this fit, rotating about the commanded centroid;
-    /// `None` for an affine fit, whose shear those modals cannot express.
+    /// The G51 → G68 → G52 chain that executes this transform, rotating about the commanded
+    /// centroid; `None` for an affine fit, whose shear those modals cannot express.
     #[must_use]
     pub fn chain(&self) -> Option<AlignmentChain> {
         if self.model == Model::Affine {
@@ -279,6 +258,22 @@ impl Fit {
             self.commanded_centroid,
             self.observed_centroid,
         ))
+    }
+}
+
+impl Fit {
+    /// Per-point residuals `apply(nᵢ) − oᵢ`, machine units, in input order.
+    ///
+    /// Pass the same slices the fit was solved from.
+    #[must_use]
+    pub fn residuals(&self, commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Vec<Vector2<f64>> {
+        let t = &self.transform;
+        let l = t.linear();
+        commanded
+            .iter()
+            .zip(observed)
+            .map(|(n, o)| l * (n - t.commanded_centroid) - (o - t.observed_centroid))
+            .collect()
     }
 }
 
@@ -419,12 +414,14 @@ impl Moments {
             return Err(MathError::NonFinite { what: "a residual (coordinates too large)" });
         }
         Ok(Fit {
-            model,
-            rotation,
-            scale,
-            shear,
-            commanded_centroid: Point2::from(self.cn),
-            observed_centroid: Point2::from(self.co),
+            transform: Transform {
+                model,
+                rotation,
+                scale,
+                shear,
+                commanded_centroid: Point2::from(self.cn),
+                observed_centroid: Point2::from(self.co),
+            },
             len: self.len,
             rms,
             max_residual: max2.sqrt(),

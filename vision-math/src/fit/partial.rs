@@ -142,7 +142,7 @@ mod tests {
         let o2: Vec<_> = o.iter().map(|p| p + Vector2::new(0.3, 0.1)).collect();
         let f2 = fit_piece(Piece::Rotation, &n, &o2).expect("fit");
         let rigid = fit_rigid(&n, &o2).expect("rigid");
-        assert_relative_eq!(f2.chain.rotation_deg, rigid.theta_deg(), epsilon = 1e-12);
+        assert_relative_eq!(f2.chain.rotation_deg, rigid.transform.theta_deg(), epsilon = 1e-12);
     }
 
     #[test]

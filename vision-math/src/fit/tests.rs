@@ -68,17 +68,16 @@ proptest! {
             let o: Vec<_> = n.iter().map(&map).collect();
             let fit = model.fit(&n, &o).expect("well-posed");
             let t = model.transform(&n, &o).expect("well-posed");
-            prop_assert_eq!((t.model, t.rotation, t.scale, t.shear), (fit.model, fit.rotation, fit.scale, fit.shear));
-            prop_assert_eq!((t.commanded_centroid, t.observed_centroid), (fit.commanded_centroid, fit.observed_centroid));
-            prop_assert!(angle_diff(fit.theta_rad(), theta) <= tol, "{model}: θ {} vs {theta}", fit.theta_rad());
-            prop_assert!((fit.scale.x - sx).abs() <= tol * sx, "{model}: sx {} vs {sx}", fit.scale.x);
-            prop_assert!((fit.scale.y - sy).abs() <= tol * sy, "{model}: sy {} vs {sy}", fit.scale.y);
-            prop_assert!(fit.shear.abs() <= tol, "{model}: shear {}", fit.shear);
+            prop_assert_eq!(t, fit.transform);
+            prop_assert!(angle_diff(fit.transform.theta_rad(), theta) <= tol, "{model}: θ {} vs {theta}", fit.transform.theta_rad());
+            prop_assert!((fit.transform.scale.x - sx).abs() <= tol * sx, "{model}: sx {} vs {sx}", fit.transform.scale.x);
+            prop_assert!((fit.transform.scale.y - sy).abs() <= tol * sy, "{model}: sy {} vs {sy}", fit.transform.scale.y);
+            prop_assert!(fit.transform.shear.abs() <= tol, "{model}: shear {}", fit.transform.shear);
             let size = spread * sx.max(sy) + shift.norm() + centre.norm() * 2.0;
-            prop_assert!((fit.offset() - shift).norm() <= tol * size, "{model}: offset {:?} vs {shift:?}", fit.offset());
+            prop_assert!((fit.transform.offset() - shift).norm() <= tol * size, "{model}: offset {:?} vs {shift:?}", fit.transform.offset());
             prop_assert!(fit.rms <= tol * spread * 2.0, "{model}: rms {}", fit.rms);
             // The G51 → G68 → G52 chain lands every commanded point on its observed point.
-            if let Some(chain) = fit.chain() {
+            if let Some(chain) = fit.transform.chain() {
                 for (ni, oi) in n.iter().zip(&o) {
                     let d = (chain.apply(*ni) - oi).norm();
                     prop_assert!(d <= tol * size, "{model}: chain misses by {d}");
@@ -107,14 +106,14 @@ proptest! {
         prop_assert!(rect.rms <= sim.rms + slack, "rectangle {} > similarity {}", rect.rms, sim.rms);
         // Gradient of the rectangle objective at the solution, each component normalised by its
         // Cauchy–Schwarz bound, is zero.
-        let (c, s) = (rect.rotation.re, rect.rotation.im);
-        let l = rect.linear();
-        let dr = Matrix2::new(-s, -c, c, -s) * Matrix2::new(rect.scale.x, 0.0, 0.0, rect.scale.y);
+        let (c, s) = (rect.transform.rotation.re, rect.transform.rotation.im);
+        let l = rect.transform.linear();
+        let dr = Matrix2::new(-s, -c, c, -s) * Matrix2::new(rect.transform.scale.x, 0.0, 0.0, rect.transform.scale.y);
         let (mut g_theta, mut g_sx, mut g_sy, mut g_b) = (0.0, 0.0, 0.0, Vector2::zeros());
         let (mut r_norm2, mut a_norm2, mut ax2, mut ay2) = (0.0, 0.0, 0.0, 0.0);
         for (ni, oi) in n.iter().zip(&o) {
-            let a = ni - rect.commanded_centroid;
-            let r = l * a - (oi - rect.observed_centroid);
+            let a = ni - rect.transform.commanded_centroid;
+            let r = l * a - (oi - rect.transform.observed_centroid);
             g_theta += r.dot(&(dr * a));
             g_sx += a.x * r.dot(&Vector2::new(c, s));
             g_sy += a.y * r.dot(&Vector2::new(-s, c));
@@ -156,7 +155,7 @@ proptest! {
         let map = truth_map(theta, sx, sy, shift);
         let o: Vec<_> = n.iter().map(&map).collect();
         let fit = fit_rectangle(&n, &o).expect("rectangle");
-        let lines = fit.chain().expect("chain").gcode().expect("finite");
+        let lines = fit.transform.chain().expect("chain").gcode().expect("finite");
         let parsed = parse_chain(&lines);
         for (ni, oi) in n.iter().zip(&o) {
             let d = (parsed.apply(*ni) - oi).norm();
@@ -200,10 +199,12 @@ fn rectangle_is_the_global_minimum_over_theta() {
         Point2::new(-0.05, 4.09),
         Point2::new(3.06, 2.31),
     ];
+    // The rectangle objective at a solution's θ, scales and offset (its shear left out).
+    let at = |t: &Transform| objective(t.theta_rad(), t.scale.x, t.scale.y, t.offset(), &n, &o);
     let fit = fit_rectangle(&n, &o).expect("rectangle");
-    let best = objective(fit.theta_rad(), fit.scale.x, fit.scale.y, fit.offset(), &n, &o);
+    let best = at(&fit.transform);
     // For every θ on a fine grid, the best sx, sy, b (linear least squares) do no better.
-    let (cn, co) = (fit.commanded_centroid.coords, fit.observed_centroid.coords);
+    let (cn, co) = (fit.transform.commanded_centroid.coords, fit.transform.observed_centroid.coords);
     for i in 0..36_000 {
         let theta = f64::from(i) * std::f64::consts::TAU / 36_000.0;
         let r = rot(theta);
@@ -222,8 +223,7 @@ fn rectangle_is_the_global_minimum_over_theta() {
     }
     // Dropping the shear of the affine fit is not the rectangle minimum.
     let aff = fit_affine(&n, &o).expect("affine");
-    let dropped = objective(aff.theta_rad(), aff.scale.x, aff.scale.y, aff.offset(), &n, &o);
-    assert!(dropped > best);
+    assert!(at(&aff.transform) > best);
 }
 
 #[test]
@@ -233,9 +233,9 @@ fn manual_example_4_geometry() {
     let map = truth_map(0.5f64.to_radians(), 1.001, 1.0, Vector2::new(0.1, 0.05));
     let o: Vec<_> = n.iter().map(&map).collect();
     let fit = fit_rectangle(&n, &o).expect("rectangle");
-    assert!((fit.theta_deg() - 0.5).abs() < 1e-12);
-    assert!((fit.scale.x - 1.001).abs() < 1e-12 && (fit.scale.y - 1.0).abs() < 1e-12);
-    let chain = fit.chain().expect("chain");
+    assert!((fit.transform.theta_deg() - 0.5).abs() < 1e-12);
+    assert!((fit.transform.scale.x - 1.001).abs() < 1e-12 && (fit.transform.scale.y - 1.0).abs() < 1e-12);
+    let chain = fit.transform.chain().expect("chain");
     assert!((chain.center - Point2::new(3.0, 2.0)).norm() < 1e-15, "G68 centre is the commanded centroid");
     for (ni, oi) in n.iter().zip(&o) {
         assert!((chain.apply(*ni) - oi).norm() < 1e-12);
@@ -257,8 +257,8 @@ fn seed_sheet_1_under_a_small_rotation() {
     let map = truth_map(0.3f64.to_radians(), 1.0, 1.0, Vector2::new(0.02, -0.01));
     let o: Vec<_> = n.iter().map(&map).collect();
     let rigid = fit_rigid(&n, &o).expect("rigid");
-    assert!((rigid.theta_deg() - 0.3).abs() < 1e-12);
-    assert!((rigid.apply(n[4]) - o[4]).norm() < 1e-14, "the centre dot lands");
+    assert!((rigid.transform.theta_deg() - 0.3).abs() < 1e-12);
+    assert!((rigid.transform.apply(n[4]) - o[4]).norm() < 1e-14, "the centre dot lands");
 }
 
 #[test]
@@ -313,8 +313,8 @@ proptest! {
             }
             if let Ok(fit) = model.fit(&n, &o) {
                 prop_assert!(fit.rms.is_finite() && fit.max_residual.is_finite());
-                prop_assert!(fit.theta_rad().is_finite() && fit.scale.iter().all(|v| v.is_finite()));
-                if let Some(chain) = fit.chain() {
+                prop_assert!(fit.transform.theta_rad().is_finite() && fit.transform.scale.iter().all(|v| v.is_finite()));
+                if let Some(chain) = fit.transform.chain() {
                     prop_assert!(chain.gcode().is_ok());
                 }
             }

@@ -3,25 +3,27 @@
 
 use std::f64::consts::{PI, TAU};
 
-use vision_path::{ArcShape, Item, PathError, PathMode, PlanConfig, Rate, Segment, Setpoint, Setpoints, Shape, Step};
+use vision_path::{
+    ArcShape, Item, PathError, PathMode, PlanConfig, Rate, Segment, Setpoint, Setpoints, Shape, Step, Xyz,
+};
 
 /// `PROPTEST_CASES` overrides a property's default case count (for deeper local runs).
 pub fn cases(default: u32) -> u32 {
     std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(default)
 }
 
-pub const PLANES: [[f64; 3]; 3] = [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]];
+pub const PLANES: [Xyz; 3] = [Xyz::new(0.0, 0.0, 1.0), Xyz::new(0.0, 1.0, 0.0), Xyz::new(1.0, 0.0, 0.0)];
 
 /// Builds a continuous program segment by segment.
 pub struct Program {
     pub items: Vec<Item>,
-    pub pos: [f64; 3],
+    pub pos: Xyz,
     pub line: usize,
     pub mode: PathMode,
 }
 
 impl Program {
-    pub fn new(start: [f64; 3], mode: PathMode) -> Program {
+    pub fn new(start: Xyz, mode: PathMode) -> Program {
         Program { items: Vec::new(), pos: start, line: 0, mode }
     }
 
@@ -30,7 +32,7 @@ impl Program {
         self.line
     }
 
-    pub fn line_to(&mut self, end: [f64; 3], rate: Rate) -> &mut Program {
+    pub fn line_to(&mut self, end: Xyz, rate: Rate) -> &mut Program {
         let line = self.next_line();
         self.items.push(Item::Move(Segment { line, start: self.pos, end, shape: Shape::Line, rate, mode: self.mode }));
         self.pos = end;
@@ -39,21 +41,13 @@ impl Program {
 
     /// An arc about `centre` in the plane with normal `PLANES[plane]`, sweeping `angle`
     /// radians (positive = counter-clockwise), rising `rise` along the normal.
-    pub fn arc(&mut self, plane: usize, centre: [f64; 3], angle: f64, rise: f64, rate: Rate) -> &mut Program {
+    pub fn arc(&mut self, plane: usize, centre: Xyz, angle: f64, rise: f64, rate: Rate) -> &mut Program {
         self.spiral(plane, centre, angle, rise, 1.0, rate)
     }
 
     /// [`Program::arc`] whose end radius is `grow` times its start radius (a spiral, as
     /// rounded G-code makes them).
-    pub fn spiral(
-        &mut self,
-        plane: usize,
-        centre: [f64; 3],
-        angle: f64,
-        rise: f64,
-        grow: f64,
-        rate: Rate,
-    ) -> &mut Program {
+    pub fn spiral(&mut self, plane: usize, centre: Xyz, angle: f64, rise: f64, grow: f64, rate: Rate) -> &mut Program {
         let n = PLANES[plane];
         let axis = if angle >= 0.0 { n } else { neg(n) };
         let r = sub(self.pos, centre);
@@ -79,7 +73,7 @@ impl Program {
     /// A spiral in the XY plane (G17) that leaves the current point exactly along the unit
     /// in-plane direction `u` (its radial drift included), with radius `r0` → `r1`, sweeping
     /// `angle` radians (positive = counter-clockwise).
-    pub fn tangent_spiral(&mut self, u: [f64; 3], r0: f64, r1: f64, angle: f64, rate: Rate) -> &mut Program {
+    pub fn tangent_spiral(&mut self, u: Xyz, r0: f64, r1: f64, angle: f64, rate: Rate) -> &mut Program {
         let axis = if angle >= 0.0 { PLANES[0] } else { neg(PLANES[0]) };
         // The start tangent is t·r0 + ρ̂·k_r (t = axis × ρ̂): ρ̂ is `u` turned by β − π/2.
         let beta = ((r1 - r0) / angle.abs()).atan2(r0);
@@ -90,9 +84,9 @@ impl Program {
 
     /// A G2/G3 in the XY plane (G17) to `end` about `centre`, exactly as programmed: less
     /// than a full turn (a full circle when the ends coincide), as the interpreter sweeps it.
-    pub fn g17_arc_to(&mut self, end: [f64; 3], centre: [f64; 3], clockwise: bool, rate: Rate) -> &mut Program {
-        let a0 = (self.pos[1] - centre[1]).atan2(self.pos[0] - centre[0]);
-        let a1 = (end[1] - centre[1]).atan2(end[0] - centre[0]);
+    pub fn g17_arc_to(&mut self, end: Xyz, centre: Xyz, clockwise: bool, rate: Rate) -> &mut Program {
+        let a0 = (self.pos.y - centre.y).atan2(self.pos.x - centre.x);
+        let a1 = (end.y - centre.y).atan2(end.x - centre.x);
         let mut sweep = if clockwise { a0 - a1 } else { a1 - a0 };
         if sweep <= 0.0 {
             sweep += TAU;
@@ -103,7 +97,7 @@ impl Program {
             line,
             start: self.pos,
             end,
-            shape: Shape::Arc(ArcShape { centre, normal: [0.0, 0.0, 1.0], sweep }),
+            shape: Shape::Arc(ArcShape { centre, normal: Xyz::new(0.0, 0.0, 1.0), sweep }),
             rate,
             mode: self.mode,
         }));
@@ -141,47 +135,48 @@ pub fn collect(steps: impl Iterator<Item = Result<Step, PathError>>, context: &s
     run
 }
 
-pub fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+// The test's own vector arithmetic, component by component (not the crate's `Xyz` methods).
+pub fn dot(a: Xyz, b: Xyz) -> f64 {
+    a.x * b.x + a.y * b.y + a.z * b.z
 }
-pub fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+pub fn add(a: Xyz, b: Xyz) -> Xyz {
+    Xyz::new(a.x + b.x, a.y + b.y, a.z + b.z)
 }
-pub fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+pub fn sub(a: Xyz, b: Xyz) -> Xyz {
+    Xyz::new(a.x - b.x, a.y - b.y, a.z - b.z)
 }
-pub fn scale(a: [f64; 3], k: f64) -> [f64; 3] {
-    [a[0] * k, a[1] * k, a[2] * k]
+pub fn scale(a: Xyz, k: f64) -> Xyz {
+    Xyz::new(a.x * k, a.y * k, a.z * k)
 }
-pub fn neg(a: [f64; 3]) -> [f64; 3] {
+pub fn neg(a: Xyz) -> Xyz {
     scale(a, -1.0)
 }
-pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+pub fn cross(a: Xyz, b: Xyz) -> Xyz {
+    Xyz::new(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x)
 }
-pub fn norm(a: [f64; 3]) -> f64 {
+pub fn norm(a: Xyz) -> f64 {
     dot(a, a).sqrt()
 }
-pub fn unit(a: [f64; 3]) -> [f64; 3] {
+pub fn unit(a: Xyz) -> Xyz {
     scale(a, 1.0 / norm(a))
 }
 
 /// The rotation axis (counter-clockwise positive), the start radius vector (in the plane) and
 /// the sweep (radians, ≥ 0) of an arc segment.
-fn arc_axis_sweep(seg: &Segment, arc: &ArcShape) -> ([f64; 3], [f64; 3], f64) {
+fn arc_axis_sweep(seg: &Segment, arc: &ArcShape) -> (Xyz, Xyz, f64) {
     let n = unit(arc.normal);
     let axis = if arc.sweep < 0.0 { neg(n) } else { n };
     (axis, radius_vector(seg.start, arc, axis), arc.sweep.abs())
 }
 
 /// The in-plane radius vector of `p` about the arc's centre.
-fn radius_vector(p: [f64; 3], arc: &ArcShape, axis: [f64; 3]) -> [f64; 3] {
+fn radius_vector(p: Xyz, arc: &ArcShape, axis: Xyz) -> Xyz {
     let r = sub(p, arc.centre);
     sub(r, scale(axis, dot(r, axis)))
 }
 
 /// The unit tangent of a segment at its start (`at_end = false`) or end.
-pub fn tangent(seg: &Segment, at_end: bool) -> [f64; 3] {
+pub fn tangent(seg: &Segment, at_end: bool) -> Xyz {
     match seg.shape {
         Shape::Line => unit(sub(seg.end, seg.start)),
         Shape::Arc(arc) => {
@@ -199,7 +194,7 @@ pub fn tangent(seg: &Segment, at_end: bool) -> [f64; 3] {
 
 /// Distance from `p` to a line or a planar (non-helical) arc segment (for a spiral: from the
 /// radius at `p`'s angle).
-pub fn distance(p: [f64; 3], seg: &Segment) -> f64 {
+pub fn distance(p: Xyz, seg: &Segment) -> f64 {
     match seg.shape {
         Shape::Line => {
             let d = sub(seg.end, seg.start);
@@ -237,7 +232,7 @@ pub fn worst_second_difference(setpoints: &[Setpoint]) -> (f64, [f64; 3]) {
     for w in setpoints.windows(3) {
         let dd = sub(sub(w[2].position, w[1].position), sub(w[1].position, w[0].position));
         worst.0 = worst.0.max(norm(dd));
-        for (w, d) in worst.1.iter_mut().zip(dd) {
+        for (w, d) in worst.1.iter_mut().zip(dd.to_array()) {
             *w = w.max(d.abs());
         }
     }
@@ -249,7 +244,7 @@ pub fn worst_second_difference(setpoints: &[Setpoint]) -> (f64, [f64; 3]) {
 /// ends with. An event or a dwell is one run (an event next to a dwell at the same point shares
 /// it), and so is every corner the planner stops at.
 pub fn interior_rests(setpoints: &[Setpoint]) -> usize {
-    let at_rest: Vec<bool> = setpoints.iter().map(|s| s.velocity == [0.0; 3]).collect();
+    let at_rest: Vec<bool> = setpoints.iter().map(|s| s.velocity == Xyz::ZERO).collect();
     let first = at_rest.iter().position(|r| !r).unwrap_or(at_rest.len());
     let last = at_rest.iter().rposition(|r| !r).map_or(first, |i| i + 1);
     (first..last).filter(|&i| at_rest[i] && !at_rest[i - 1]).count()

@@ -7,7 +7,8 @@ use super::fakes::{Rig, World};
 use crate::driver::{Judgment, Reading};
 use crate::error::VisionError;
 use crate::machine::Machine;
-use crate::module::{Pieces, RunMode};
+use crate::module::{Dot, Pieces, Run, RunMode};
+use crate::params::ParamValue;
 
 const PART: [(f64, f64); 4] = [(0.0, 0.0), (6.0, 0.0), (6.0, 4.0), (0.0, 4.0)];
 
@@ -45,23 +46,40 @@ fn slot(rig: &Rig, s: u32) -> [f64; 8] {
 #[test]
 fn m280_starts_a_run_and_cancels_alignment() {
     let mut rig = Rig::new();
-    rig.module.params.run_dot_count = 7;
+    // A previous run's captures are dropped by the next M280.
+    rig.module.run.dots =
+        vec![Dot { commanded: Point2::origin(), observed: Point2::origin(), unit: LengthUnit::Inch }; 7];
     let r = rig.module.m280(&mut rig.machine, RunMode::Similarity).expect("m280");
     assert_eq!(r.gcode, vec![CANCEL_LINE.to_string()]);
     assert_eq!(r.gcode[0], "G69 G50 G52 X0 Y0");
-    let p = rig.module.params();
-    assert_eq!((p.run_active(), p.run_mode(), p.run_dot_count()), (1, 3, 0));
-    assert_eq!(RunMode::from_p(None), Ok(RunMode::Rectangle));
-    assert_eq!(RunMode::from_p(Some(4.0)), Ok(RunMode::Rectangle));
-    assert_eq!(RunMode::from_p(Some(3.0)), Ok(RunMode::Similarity));
-    assert!(matches!(RunMode::from_p(Some(5.0)), Err(VisionError::BadWord { .. })));
+    assert_eq!(rig.module.run(), &Run { mode: RunMode::Similarity, active: true, dots: Vec::new() });
+    let t = rig.module.telemetry();
+    assert_eq!((t.run_active(), t.run_mode(), t.run_dot_count()), (1, 3, 0));
+    assert_eq!(rig.module.param("visionrun_mode"), Ok(ParamValue::Int(3)));
+}
+
+#[test]
+fn m280_and_m282_commit_only_after_the_machine_took_their_lines() {
+    let mut rig = rig_with_part();
+    rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect("m280");
+    capture_all(&mut rig, &PART);
+    let run = rig.module.run().clone();
+    rig.world().fail_gcode_after = Some(0);
+    let e = rig.module.m282(&mut rig.machine, Pieces::All).expect_err("e-stop");
+    assert!(matches!(e, VisionError::Machine(_)), "{e}");
+    assert_eq!(rig.module.run(), &run, "the run stays open");
+    assert_eq!(rig.module.telemetry().run_active(), 1);
+    assert_eq!(rig.module.telemetry().run_sx(), 1.0);
+    let e = rig.module.m280(&mut rig.machine, RunMode::Similarity).expect_err("e-stop");
+    assert!(matches!(e, VisionError::Machine(_)), "{e}");
+    assert_eq!(rig.module.run(), &run, "the dots survive a refused M280");
 }
 
 #[test]
 fn m280_refuses_a_reserved_pound_base() {
     let mut rig = Rig::new();
     // Bypass set() validation to model a profile written by an older version.
-    rig.module.params.pound_var_base = 5070;
+    rig.module.params.config.pound_var_base = 5070;
     let before = rig.module.params().clone();
     let e = rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect_err("reserved");
     assert_eq!(e, VisionError::PoundBaseReserved { base: 5070, end: 5109 });
@@ -86,7 +104,7 @@ fn m281_outside_a_run_writes_slot_zero_and_telemetry_only() {
     assert_eq!((s0[4], s0[5]), (1.5, 0.97));
     assert!(s0[6].is_nan() && s0[7].is_nan(), "reserved fields untouched");
     assert!(slot(&rig, 1)[0].is_nan());
-    let p = rig.module.params();
+    let p = rig.module.telemetry();
     assert_eq!(p.last_status(), "OK");
     assert_eq!(p.last_judgment(), 1);
     assert!((p.last_offset_x() - 0.1).abs() < 1e-12 && (p.last_offset_y() + 0.1).abs() < 1e-12);
@@ -107,7 +125,7 @@ fn a_run_fills_slots_in_order_and_mirrors_slot_zero() {
         assert!((s[0] - truth.x).abs() < 1e-12 && (s[1] - truth.y).abs() < 1e-12, "slot {}", i + 1);
     }
     assert_eq!(slot(&rig, 0)[..6], slot(&rig, 4)[..6]);
-    assert_eq!(rig.module.params().run_dot_count(), 4);
+    assert_eq!(rig.module.telemetry().run_dot_count(), 4);
     assert_eq!(rig.module.dots().len(), 4);
     // A fifth capture feeds the fit and slot 0 but leaves slots 1–4 alone.
     let before: Vec<_> = (1..=4).map(|s| slot(&rig, s)[..6].to_vec()).collect();
@@ -115,7 +133,7 @@ fn a_run_fills_slots_in_order_and_mirrors_slot_zero() {
     let c = rig.module.m281(&mut rig.machine, false).expect("fifth").report;
     assert_eq!((c.dot_index, c.slot), (Some(5), None));
     assert_eq!((1..=4).map(|s| slot(&rig, s)[..6].to_vec()).collect::<Vec<_>>(), before);
-    assert_eq!(rig.module.params().run_dot_count(), 5);
+    assert_eq!(rig.module.telemetry().run_dot_count(), 5);
 }
 
 #[test]
@@ -147,8 +165,9 @@ fn m282_emits_the_chain_that_carries_commanded_onto_observed() {
         let n = Point2::new(x, y);
         assert!((chain.apply(n) - part.apply(n)).norm() < 1e-9);
     }
-    let p = rig.module.params();
+    let p = rig.module.telemetry();
     assert_eq!(p.run_active(), 0);
+    assert!(!rig.module.run().active);
     assert!((p.run_theta() - 0.4f64.to_radians()).abs() < 1e-9);
     assert!((p.run_sx() - 1.001).abs() < 1e-9 && (p.run_sy() - 1.001).abs() < 1e-9);
     assert_eq!((p.run_tx(), p.run_ty()), (chain.shift.x, chain.shift.y));
@@ -163,8 +182,11 @@ fn captures_after_m282_are_in_the_program_frame() {
     rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect("m280");
     capture_all(&mut rig, &PART);
     let r = rig.module.m282(&mut rig.machine, Pieces::All).expect("m282");
-    // The host runs the emitted modals; the fake takes the chain directly.
-    rig.world().alignment = Some(r.report.chain);
+    // M282 ran its modals on the machine: the fake now applies the emitted chain.
+    let active = rig.world().alignment.expect("alignment active");
+    assert!((active.apply(Point2::new(6.0, 4.0)) - r.report.chain.apply(Point2::new(6.0, 4.0))).norm() < 1e-9);
+    let log = rig.world().log.clone();
+    assert_eq!(log[log.len() - 4..], r.gcode[..]);
     rig.go(3.0, 2.0);
     let c = rig.module.m281(&mut rig.machine, false).expect("verify").report;
     assert!((c.observed - Point2::new(3.0, 2.0)).norm() < 1e-9, "{c:?}");
@@ -198,7 +220,7 @@ fn too_few_marks_emit_nothing_and_keep_the_run() {
     capture_all(&mut rig, &PART[..3]);
     let e = rig.module.m282(&mut rig.machine, Pieces::All).expect_err("3 of 4");
     assert_eq!(e, VisionError::TooFewDots { mode: "rectangle", needed: 4, got: 3 });
-    assert_eq!(rig.module.params().run_active(), 1);
+    assert_eq!(rig.module.telemetry().run_active(), 1);
     capture_all(&mut rig, &PART[3..]);
     assert!(rig.module.m282(&mut rig.machine, Pieces::All).is_ok());
     // Collinear marks are a math error, not NaN.
@@ -227,9 +249,6 @@ fn partial_modes_emit_one_piece_in_the_same_four_lines() {
     let scale = rig.module.m282(&mut rig.machine, Pieces::Scale).expect("P3").report.chain;
     assert!((scale.scale.x - 1.001 * 0.4f64.to_radians().cos()).abs() < 1e-6);
     assert!((scale.apply(Point2::new(3.0, 2.0)) - Point2::new(3.0, 2.0)).norm() < 1e-12);
-    assert_eq!(Pieces::from_p(Some(0.0)), Ok(Pieces::All));
-    assert_eq!(Pieces::from_p(Some(3.0)), Ok(Pieces::Scale));
-    assert!(Pieces::from_p(Some(4.0)).is_err());
 }
 
 #[test]
@@ -267,7 +286,7 @@ fn quality_gates_refuse_bad_fits_and_zero_disables_them() {
     capture_all(&mut rig, &PART);
     let e = rig.module.m282(&mut rig.machine, Pieces::All).expect_err("residual gate");
     assert!(e.to_string().contains("VisionFitMaxResidual"), "{e}");
-    assert_eq!(rig.module.params().run_active(), 1);
+    assert_eq!(rig.module.telemetry().run_active(), 1);
 }
 
 #[test]
@@ -280,7 +299,7 @@ fn k_in_inches_reports_millimetres_under_g21() {
     assert_eq!(c.unit, LengthUnit::Millimetre);
     assert!((c.observed - Point2::new(27.94, 22.86)).norm() < 1e-9, "{c:?}");
     assert!((c.width - 12.7).abs() < 1e-9);
-    assert!((rig.module.params().last_offset_x() - 2.54).abs() < 1e-9);
+    assert!((rig.module.telemetry().last_offset_x() - 2.54).abs() < 1e-9);
     // And K calibrated in mm, machine in inches.
     let mut rig = Rig::new();
     rig.world().marks = vec![Point2::new(1.1, 0.9)];
@@ -305,8 +324,8 @@ fn failed_captures_change_nothing_but_the_last_status() {
     let e = rig.module.m281(&mut rig.machine, false).expect_err("NG");
     assert_eq!(e, VisionError::NoMark);
     assert!(e.to_string().starts_with("NG / no mark found"));
-    assert_eq!(rig.module.params().last_judgment(), 0);
-    assert_eq!(rig.module.params().last_status(), e.to_string());
+    assert_eq!(rig.module.telemetry().last_judgment(), 0);
+    assert_eq!(rig.module.telemetry().last_status(), e.to_string());
     // Count 0.
     rig.world().script.push_back(Ok(Reading { count: Some(0), ..Reading::position(1.0, 1.0) }));
     assert_eq!(rig.module.m281(&mut rig.machine, false).map(|_| ()), Err(VisionError::NoMark));
@@ -317,7 +336,7 @@ fn failed_captures_change_nothing_but_the_last_status() {
     rig.world().fail_pound = None;
     assert_eq!(block(&rig), pounds);
     assert_eq!(rig.module.dots(), &dots[..]);
-    assert_eq!(rig.module.params().run_dot_count(), 2);
+    assert_eq!(rig.module.telemetry().run_dot_count(), 2);
 
     // Zero K: refused before the trigger.
     let triggers = rig.world().triggers;

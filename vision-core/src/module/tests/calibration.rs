@@ -2,9 +2,10 @@
 
 use std::path::Path;
 
+use vision_math::chain::fixed;
 use vision_math::{AlignmentChain, LengthUnit, Matrix2, Point2, Remap, Vector2};
 
-use super::fakes::{Rig, World};
+use super::fakes::{Optics, Rig, World};
 use crate::calibrate::{CalReport, Calibrate, SheetReport};
 use crate::driver::Reading;
 use crate::error::VisionError;
@@ -12,10 +13,19 @@ use crate::machine::Machine;
 use crate::profile::{ProfileFs, ProfileStore, StdFs};
 use crate::sheets::cal_sheet;
 
-/// A camera rotated 1.5° with 1 % anisotropy and a little skew, inches per pixel.
-fn true_k() -> Matrix2<f64> {
-    let (s, c) = 1.5f64.to_radians().sin_cos();
-    Matrix2::new(c, -s, s, c) * Matrix2::new(0.00203, 0.00203 * 0.004, 0.0, 0.00203 * 1.01)
+/// A camera mounted `quarter_turns` × 90° + 1.5° round, optionally mirrored, with pixels 1 %
+/// longer along the sensor's y axis.
+fn tilted(quarter_turns: u8, mirrored: bool) -> Optics {
+    Optics {
+        rotation_deg: 1.5 + 90.0 * f64::from(quarter_turns),
+        pitch_in: Vector2::new(0.00203, 0.00203 * 1.01),
+        ..Optics::square(0.0, mirrored)
+    }
+}
+
+/// The K a correct calibration of `optics` holds, inches per pixel.
+fn true_k(optics: Optics) -> Matrix2<f64> {
+    optics.calibration().0
 }
 
 /// The sheet taped down rotated 0.3° (and optionally mis-printed) about the spindle zero.
@@ -26,19 +36,29 @@ fn sheet_marks(rotation_deg: f64, print: Vector2<f64>) -> Vec<Point2<f64>> {
 
 const CAMERA: Vector2<f64> = Vector2::new(3.2, -1.7);
 
-/// A rig whose camera (true K `k`, mounting `remap`, 3.2/−1.7 in from the spindle) sits with
+/// A rig whose camera (`optics`, 3.2/−1.7 in from the spindle) sits with
 /// dot 1 somewhere in view; the camera tool's table offset is `o0` (inches).
-fn sheet_rig(k: Matrix2<f64>, remap: Remap, units: LengthUnit, o0: Vector2<f64>, marks: Vec<Point2<f64>>) -> Rig {
+fn sheet_rig(optics: Optics, units: LengthUnit, o0: Vector2<f64>, marks: Vec<Point2<f64>>) -> Rig {
     let dot1 = marks[0];
     let start = dot1 + Vector2::new(0.3, -0.2) + o0 - CAMERA;
-    let mut world =
-        World { cam_k: k, cam_remap: remap, cam_offset: CAMERA, units, program: start, marks, ..World::default() };
+    let mut world = World { optics, cam_offset: CAMERA, units, program: start, marks, ..World::default() };
     world.offsets.insert(98, o0);
     let mut rig = Rig::with_world(world);
     // Start uncalibrated with the default remap flags.
     rig.module.params.set_cal_k(Matrix2::zeros()).expect("zero");
     rig.module.params.set_remap(Remap::IDENTITY);
     rig
+}
+
+/// The sheet 0.3° on the table, identity flags, the camera tool's offset (3, −1.5) in, inches.
+fn standard_rig() -> Rig {
+    sheet_rig(tilted(0, false), LengthUnit::Inch, Vector2::new(3.0, -1.5), sheet_marks(0.3, Vector2::new(1.0, 1.0)))
+}
+
+/// `rig` with a profile store in place of none.
+fn with_store(rig: &mut Rig, store: ProfileStore) {
+    let module = std::mem::replace(&mut rig.module, crate::module::VisionModule::new(Default::default()));
+    rig.module = module.with_profile(store);
 }
 
 fn sheet_report(r: CalReport) -> SheetReport {
@@ -50,37 +70,52 @@ fn sheet_report(r: CalReport) -> SheetReport {
 
 #[test]
 fn sheet_walk_recovers_k_and_offset_for_all_eight_mountings() {
-    for (i, remap) in Remap::all().into_iter().enumerate() {
+    for i in 0..8u8 {
+        let optics = tilted(i / 2, i % 2 == 1);
         let units = if i % 2 == 0 { LengthUnit::Inch } else { LengthUnit::Millimetre };
         let f = LengthUnit::Inch.factor_to(units);
         let o0 = if i % 3 == 0 { Vector2::zeros() } else { Vector2::new(3.0, -1.5) };
-        let mut rig = sheet_rig(true_k(), remap, units, o0, sheet_marks(0.3, Vector2::new(1.0, 1.0)));
+        let mut rig = sheet_rig(optics, units, o0, sheet_marks(0.3, Vector2::new(1.0, 1.0)));
         let r = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("calibrates");
-        assert!(r.gcode.is_empty());
+        // The reply lists exactly the lines the module ran on the machine.
+        assert_eq!(r.gcode, rig.world().log);
         let rep = sheet_report(r.report);
         let p = rig.module.params();
-        assert_eq!(p.remap(), remap, "mounting {i}");
-        assert!((p.cal_k() - true_k() * f).amax() < 1e-9, "mounting {i}: K {} vs {}", p.cal_k(), true_k() * f);
+        // The camera's physics: K·R maps centred pixels onto the table.
+        let kr = p.cal_k() * p.remap().matrix();
+        assert!(
+            (kr - optics.table_per_pixel() * f).amax() < 1e-9,
+            "mounting {i}: K·R {kr} vs {}",
+            optics.table_per_pixel()
+        );
+        // And the remap leaves K turned by the mount's 1.5° only (positive diagonal).
+        assert_eq!(p.remap(), optics.calibration().1, "mounting {i}");
+        assert!(p.cal_k()[(0, 0)] > 0.0 && p.cal_k()[(1, 1)] > 0.0, "mounting {i}: {}", p.cal_k());
+        assert!((p.cal_k() - true_k(optics) * f).amax() < 1e-9, "mounting {i}: K {}", p.cal_k());
         assert_eq!(p.cal_units(), units);
         let offset = rig.machine.tool_offset(98).expect("tool");
         assert!((offset - CAMERA * f).amax() < 1e-9, "mounting {i}: offset {offset:?}");
-        assert_eq!(rep.offset_written, offset);
+        assert!((rep.offset_written - offset).amax() < 1e-12, "mounting {i}");
         assert!((rep.offset_before - o0 * f).amax() < 1e-12);
         assert!((rep.sheet_rotation_deg - 0.3).abs() < 1e-9);
         assert!((rep.sheet_scale - Vector2::new(1.0, 1.0)).amax() < 1e-9);
         assert!(rep.verify_max < 1e-9 && rep.verify_rms < 1e-9 && rep.walk_rms < 1e-9 && rep.k_rms < 1e-9);
         assert_eq!(rep.verify.len(), 5);
         assert!((rep.camera_rotation_deg - 1.5).abs() < 0.3);
-        assert!((rep.scale.x - 0.00203 * f).abs() < 1e-5 * f);
+        assert!((rep.scale.x - true_k(optics).column(0).norm() * f).abs() < 1e-12 * f, "mounting {i}");
         assert_eq!(p.cal_date(), "2023-11-14T23:13:20+01:00");
-        assert_eq!(p.last_status(), "OK");
+        assert_eq!(rig.module.telemetry().last_status(), "OK");
         // With the new offset the camera lands on what it is commanded to: dot 5 at 0, 0.
         assert!((rig.world().camera_axis() - Point2::origin()).norm() < 1e-9);
         // The bump was 0.1 in (2.54 mm) and settling was dwelt after every move.
         assert!((rep.axis.bump - 0.1 * f).abs() < 1e-12);
         assert!(rig.world().dwell_s > 0.0);
         assert!(rig.world().log.iter().any(|l| l.starts_with("G91 G0 X")));
-        assert!(rig.world().log.iter().any(|l| l == "G90 G0 X0.0000000 Y0.0000000"));
+        // The verify walk ran before the offset was written, so it commanded dot 5 (at 0, 0)
+        // compensated by o₀ − a (current units).
+        let b = (o0 - CAMERA) * f;
+        let verify_5 = format!("G90 G0 X{} Y{}", fixed(b.x, 7), fixed(b.y, 7));
+        assert_eq!(rig.world().log.iter().rfind(|l| l.starts_with("G90 G0 X")), Some(&verify_5));
     }
 }
 
@@ -88,17 +123,20 @@ fn sheet_walk_recovers_k_and_offset_for_all_eight_mountings() {
 fn a_square_sheet_and_a_mis_printed_sheet_do_not_fool_k() {
     // Square sheet, square camera: every dot lands on the same pixel; the probes carry K.
     let square_k = Matrix2::new(0.00203, 0.0, 0.0, 0.00203);
-    let remap = Remap { swap_xy: false, invert_x: false, invert_y: true };
-    let mut rig =
-        sheet_rig(square_k, remap, LengthUnit::Inch, Vector2::zeros(), sheet_marks(0.0, Vector2::new(1.0, 1.0)));
+    let mut rig = sheet_rig(
+        Optics::square(0.0, true),
+        LengthUnit::Inch,
+        Vector2::zeros(),
+        sheet_marks(0.0, Vector2::new(1.0, 1.0)),
+    );
     rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("square sheet");
     assert!((rig.module.params().cal_k() - square_k).amax() < 1e-12);
 
     // Printed 1 % short in Y: K stays true, the sheet's scale shows the misprint.
     let mut rig =
-        sheet_rig(true_k(), remap, LengthUnit::Inch, Vector2::zeros(), sheet_marks(-0.2, Vector2::new(1.0, 0.99)));
+        sheet_rig(tilted(0, true), LengthUnit::Inch, Vector2::zeros(), sheet_marks(-0.2, Vector2::new(1.0, 0.99)));
     let rep = sheet_report(rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("cal").report);
-    assert!((rig.module.params().cal_k() - true_k()).amax() < 1e-12);
+    assert!((rig.module.params().cal_k() - true_k(tilted(0, true))).amax() < 1e-12);
     assert!((rep.sheet_scale - Vector2::new(1.0, 0.99)).amax() < 1e-9, "{:?}", rep.sheet_scale);
     assert!((rep.sheet_rotation_deg + 0.2).abs() < 1e-9);
     assert!((rig.machine.tool_offset(98).expect("tool") - CAMERA).amax() < 1e-9);
@@ -106,12 +144,21 @@ fn a_square_sheet_and_a_mis_printed_sheet_do_not_fool_k() {
 
 #[test]
 fn quick_calibration_for_plain_and_swapped_mountings() {
+    // Worked by hand from the optics: a mirrored image square to the table needs InvertY; a
+    // camera turned 90° counter-clockwise sees table +X along its −y and +Y along its +x, so
+    // SwapXY with InvertX, and its x pitch becomes K22.
     let k = Matrix2::new(0.00203, 0.0, 0.0, 0.00207);
-    for remap in [
-        Remap { swap_xy: false, invert_x: false, invert_y: true },
-        Remap { swap_xy: true, invert_x: true, invert_y: false },
+    for (optics, remap) in [
+        (
+            Optics { pitch_in: Vector2::new(0.00203, 0.00207), ..Optics::square(0.0, true) },
+            Remap { swap_xy: false, invert_x: false, invert_y: true },
+        ),
+        (
+            Optics { pitch_in: Vector2::new(0.00207, 0.00203), ..Optics::square(90.0, false) },
+            Remap { swap_xy: true, invert_x: true, invert_y: false },
+        ),
     ] {
-        let mut world = World { cam_k: k, cam_remap: remap, marks: vec![Point2::new(0.2, 0.1)], ..World::default() };
+        let mut world = World { optics, marks: vec![Point2::new(0.2, 0.1)], ..World::default() };
         world.program = Point2::origin();
         let mut rig = Rig::with_world(world);
         rig.module.params.set_cal_k(Matrix2::zeros()).expect("zero");
@@ -149,25 +196,19 @@ fn assert_untouched(rig: &Rig, start: Point2<f64>) {
 fn a_failed_walk_restores_k_flags_offset_and_position() {
     let mut marks = sheet_marks(0.3, Vector2::new(1.0, 1.0));
     marks.remove(2); // dot 3 is missing
-    let mut rig = sheet_rig(true_k(), Remap::IDENTITY, LengthUnit::Inch, Vector2::new(3.0, -1.5), marks);
+    let mut rig = sheet_rig(tilted(0, false), LengthUnit::Inch, Vector2::new(3.0, -1.5), marks);
     let start = rig.machine.program_position();
     let e = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect_err("lost dot 3");
     assert!(matches!(e, VisionError::Calibration { .. }), "{e}");
     assert!(e.to_string().contains("lost the mark"), "{e}");
     assert!(e.to_string().ends_with("the tool offsets were left unchanged"), "{e}");
     assert_untouched(&rig, start);
-    assert_eq!(rig.module.params().last_status(), e.to_string());
+    assert_eq!(rig.module.telemetry().last_status(), e.to_string());
 }
 
 #[test]
-fn a_failed_verify_restores_the_offset_it_already_wrote() {
-    let mut rig = sheet_rig(
-        true_k(),
-        Remap::IDENTITY,
-        LengthUnit::Inch,
-        Vector2::new(3.0, -1.5),
-        sheet_marks(0.3, Vector2::new(1.0, 1.0)),
-    );
+fn a_failed_verify_writes_nothing() {
+    let mut rig = standard_rig();
     let start = rig.machine.program_position();
     // 3 bumps + 5 × (5 + 5) walk moves = the verify's first move fails.
     rig.world().fail_gcode_after = Some(3 + 25);
@@ -201,25 +242,54 @@ impl ProfileFs for BrokenDisk {
 
 #[test]
 fn a_failed_save_undoes_the_calibration() {
-    let mut rig = sheet_rig(
-        true_k(),
-        Remap::IDENTITY,
-        LengthUnit::Inch,
-        Vector2::new(3.0, -1.5),
-        sheet_marks(0.3, Vector2::new(1.0, 1.0)),
-    );
+    let mut rig = standard_rig();
     let start = rig.machine.program_position();
-    let module = std::mem::replace(&mut rig.module, crate::module::VisionModule::new(Default::default()));
-    rig.module = module.with_profile(ProfileStore::with_fs("/nonexistent/vision.toml", Box::new(BrokenDisk)));
+    with_store(&mut rig, ProfileStore::with_fs("/nonexistent/vision.toml", Box::new(BrokenDisk)));
     let e = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect_err("save fails");
     assert!(matches!(e, VisionError::Profile { .. }), "{e}");
     assert_untouched(&rig, start);
 }
 
 #[test]
+fn a_failed_save_whose_offset_restore_fails_says_what_to_set_by_hand() {
+    let mut rig = standard_rig();
+    with_store(&mut rig, ProfileStore::with_fs("/nonexistent/vision.toml", Box::new(BrokenDisk)));
+    // The offset write succeeds, the save fails, the restoring write fails.
+    rig.world().fail_offset_after = Some(1);
+    let e = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect_err("save fails");
+    assert!(matches!(e, VisionError::Machine(_)), "{e}");
+    let text = e.to_string();
+    assert!(
+        text.contains("read-only file system") && text.contains("set its X/Y offset back to X3.000000 Y-1.500000"),
+        "{text}"
+    );
+    // The module kept its calibration; the machine kept the new offset (that is what the message is for).
+    assert_eq!(rig.module.params().cal_k(), Matrix2::zeros());
+    assert!((rig.machine.tool_offset(98).expect("tool") - CAMERA).amax() < 1e-9);
+    assert_eq!(rig.module.telemetry().last_status(), text);
+}
+
+#[test]
+fn a_refused_offset_write_commits_nothing() {
+    let mut rig = standard_rig();
+    let dir = std::env::temp_dir().join(format!("vision-core-cal-offset-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("tmp");
+    let path = dir.join("vision.toml");
+    with_store(&mut rig, ProfileStore::new(&path));
+    let start = rig.machine.program_position();
+    rig.world().fail_offset_after = Some(0);
+    let e = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect_err("tool table locked");
+    assert!(e.to_string().contains("tool table is locked"), "{e}");
+    assert_untouched(&rig, start);
+    assert!(!path.exists(), "the profile is not written when the tool table refuses");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn refusals_before_any_motion() {
     let marks = sheet_marks(0.0, Vector2::new(1.0, 1.0));
-    let mut rig = sheet_rig(true_k(), Remap::IDENTITY, LengthUnit::Inch, Vector2::new(3.0, -1.5), marks);
+    let mut rig = sheet_rig(tilted(0, false), LengthUnit::Inch, Vector2::new(3.0, -1.5), marks);
     let m = &mut rig.machine;
     assert_eq!(
         rig.module.m283(m, Calibrate::Sheet { n: 7 }).map(|_| ()),
@@ -236,7 +306,7 @@ fn refusals_before_any_motion() {
         rig.module.m283(&mut rig.machine, Calibrate::Quick { diameter: 0.5 }).map(|_| ()),
         Err(VisionError::WrongTool { camera: 98, active: 1 })
     );
-    rig.module.params.enabled = false;
+    rig.module.params.config.enabled = false;
     assert_eq!(rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).map(|_| ()), Err(VisionError::NotEnabled));
     assert_eq!(rig.world().triggers, 0);
     assert!(rig.world().log.is_empty());
@@ -245,8 +315,7 @@ fn refusals_before_any_motion() {
 #[test]
 fn a_mark_that_does_not_move_fails_the_axis_detect() {
     let mut rig = sheet_rig(
-        true_k(),
-        Remap::IDENTITY,
+        tilted(0, false),
         LengthUnit::Inch,
         Vector2::new(3.0, -1.5),
         sheet_marks(0.0, Vector2::new(1.0, 1.0)),
@@ -263,12 +332,12 @@ fn a_mark_that_does_not_move_fails_the_axis_detect() {
 #[test]
 fn pixel_noise_averages_out_in_the_least_squares_solves() {
     let marks = sheet_marks(0.3, Vector2::new(1.0, 1.0));
-    let mut rig = sheet_rig(true_k(), Remap::all()[5], LengthUnit::Inch, Vector2::zeros(), marks);
+    let mut rig = sheet_rig(tilted(1, true), LengthUnit::Inch, Vector2::zeros(), marks);
     rig.world().noise_px = 0.5;
     let rep = sheet_report(rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("noisy").report);
     let k = rig.module.params().cal_k();
     // ±0.5 px on 355 px probes: K within 0.2 %, offset and verify within a few thousandths.
-    assert!((k - true_k()).amax() < 2e-3 * 0.00203, "{k}");
+    assert!((k - true_k(tilted(1, true))).amax() < 2e-3 * 0.00203, "{k}");
     assert!((rig.machine.tool_offset(98).expect("tool") - CAMERA).amax() < 0.003);
     assert!(rep.verify_rms < 0.005 && rep.verify_rms > 0.0, "{}", rep.verify_rms);
     assert!(rep.k_rms > 0.0);
@@ -277,20 +346,35 @@ fn pixel_noise_averages_out_in_the_least_squares_solves() {
 #[test]
 fn manual_examples_one_and_two_calibrate_then_verify_at_the_centre() {
     let marks = sheet_marks(0.3, Vector2::new(1.0, 1.0));
-    let mut rig = sheet_rig(true_k(), Remap::all()[6], LengthUnit::Inch, Vector2::zeros(), marks);
+    let mut rig = sheet_rig(tilted(3, false), LengthUnit::Inch, Vector2::zeros(), marks);
     rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("example 1");
     // Example 2: 4-point run over the corners, M282, then capture the centre in the aligned frame.
-    let cancel = rig.module.m280(&mut rig.machine, crate::module::RunMode::Rectangle).expect("M280").gcode;
-    rig.run(&cancel);
+    rig.module.m280(&mut rig.machine, crate::module::RunMode::Rectangle).expect("M280");
     for (x, y) in [(-2.5, -4.0), (-2.5, 4.0), (2.5, 4.0), (2.5, -4.0)] {
         rig.go(x, y);
         rig.module.m281(&mut rig.machine, false).expect("M281");
     }
     let r = rig.module.m282(&mut rig.machine, crate::module::Pieces::All).expect("M282");
     assert!((r.report.chain.rotation_deg - 0.3).abs() < 1e-9);
-    rig.world().alignment = Some(r.report.chain);
     rig.go(0.0, 0.0);
     rig.module.m281(&mut rig.machine, false).expect("centre");
     let (x, y) = (rig.machine.pound(500).expect("#500"), rig.machine.pound(501).expect("#501"));
     assert!(x.abs() < 1e-9 && y.abs() < 1e-9, "#500 = {x}, #501 = {y}");
+}
+
+#[test]
+fn the_fake_optics_follow_the_hand_worked_geometry() {
+    let p = 0.00203;
+    // Mirrored, square to the table: +X to the right of the image, +Y up (rows count down).
+    let o = Optics::square(0.0, true);
+    assert!((o.pixel(Vector2::new(p, 0.0)) - Point2::new(889.0, 888.0)).norm() < 1e-9);
+    assert!((o.pixel(Vector2::new(0.0, p)) - Point2::new(888.0, 887.0)).norm() < 1e-9);
+    // Turned 90° counter-clockwise, not mirrored: table +X is the sensor's −y, table +Y its +x.
+    let o = Optics::square(90.0, false);
+    assert!((o.pixel(Vector2::new(p, 0.0)) - Point2::new(888.0, 887.0)).norm() < 1e-9);
+    assert!((o.pixel(Vector2::new(0.0, p)) - Point2::new(889.0, 888.0)).norm() < 1e-9);
+    // The truth matrix maps the centred pixel back onto the offset.
+    let o = tilted(2, true);
+    let d = Vector2::new(0.31, -0.17);
+    assert!((o.table_per_pixel() * (o.pixel(d) - Point2::from(o.centre_px)) - d).norm() < 1e-12);
 }

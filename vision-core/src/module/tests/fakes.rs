@@ -1,17 +1,77 @@
-//! Tiny in-test fakes: a machine that tracks position under `G0/G1 G90/G91 G20/G21 X Y`, and a
-//! camera that computes native pixels from a true camera geometry with
-//! `PixelChain::native_pixels`. The world (marks, spindle, camera) is kept in inches.
+//! Tiny in-test fakes: a machine that tracks position under `G0/G1 G90/G91 G20/G21 X Y` and
+//! M282's modal lines, and a camera that makes native pixels from its own optics model (mount
+//! rotation, mirror, pixel pitch, image centre), written from the physics and independently of
+//! `vision_math::PixelChain`. The world (marks, spindle, camera) is kept in inches.
 
 use std::collections::{BTreeMap, VecDeque};
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use vision_math::chain::CANCEL_LINE;
-use vision_math::{AlignmentChain, LengthUnit, Matrix2, PixelChain, Point2, Remap, Vector2};
+use vision_math::{AlignmentChain, LengthUnit, Matrix2, Point2, Remap, Vector2};
 
 use crate::driver::{CameraDriver, Capabilities, DriverError, DriverErrorKind, Judgment, Reading};
 use crate::machine::{Machine, MachineError, Timestamp};
 use crate::module::VisionModule;
 use crate::params::Params;
+
+/// The fake camera's optics. Sensor pixel `(u, v)` counted from the pixel the optical axis falls
+/// on sees the table at `u·pitch.x·ex + v·pitch.y·ey` from the optical axis, where `ex` is the
+/// sensor's x axis on the table (`rotation_deg` counter-clockwise from +X) and `ey` is `ex` turned
+/// 90° counter-clockwise, or clockwise for a mirrored image (rows counted downwards).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Optics {
+    /// Mount rotation: the sensor x axis on the table, degrees counter-clockwise from +X.
+    pub rotation_deg: f64,
+    /// The image is mirrored (sensor y is `ex` turned clockwise).
+    pub mirrored: bool,
+    /// Table length one pixel spans along sensor x and y, inches.
+    pub pitch_in: Vector2<f64>,
+    /// The pixel the optical axis falls on.
+    pub centre_px: Vector2<f64>,
+}
+
+impl Optics {
+    /// 0.00203 in square pixels, the optical axis at the centre of a 1776 px image.
+    pub(crate) fn square(rotation_deg: f64, mirrored: bool) -> Optics {
+        Optics {
+            rotation_deg,
+            mirrored,
+            pitch_in: Vector2::new(0.00203, 0.00203),
+            centre_px: Vector2::new(888.0, 888.0),
+        }
+    }
+
+    /// The sensor's x and y axes on the table (unit vectors).
+    fn axes(&self) -> (Vector2<f64>, Vector2<f64>) {
+        let (s, c) = self.rotation_deg.to_radians().sin_cos();
+        let ex = Vector2::new(c, s);
+        let ey = if self.mirrored { Vector2::new(s, -c) } else { Vector2::new(-s, c) };
+        (ex, ey)
+    }
+
+    /// The pixel that sees table offset `d` (inches) from the optical axis.
+    pub(crate) fn pixel(&self, d: Vector2<f64>) -> Point2<f64> {
+        let (ex, ey) = self.axes();
+        Point2::new(self.centre_px.x + d.dot(&ex) / self.pitch_in.x, self.centre_px.y + d.dot(&ey) / self.pitch_in.y)
+    }
+
+    /// Table inches per pixel from the optical axis: the matrix `K·R` of a correct calibration.
+    pub(crate) fn table_per_pixel(&self) -> Matrix2<f64> {
+        let (ex, ey) = self.axes();
+        Matrix2::from_columns(&[ex * self.pitch_in.x, ey * self.pitch_in.y])
+    }
+
+    /// The calibration a perfect M283 finds, inches per pixel: of the eight `K = (K·R)·Rᵀ`, the
+    /// one whose diagonal is positive and largest (the camera turned by less than 45° after the
+    /// remap), with its remap.
+    pub(crate) fn calibration(&self) -> (Matrix2<f64>, Remap) {
+        let m = self.table_per_pixel();
+        let k_of = |r: &Remap| m * r.matrix().transpose();
+        let score = |r: &Remap| k_of(r)[(0, 0)].min(k_of(r)[(1, 1)]);
+        let best = Remap::all().into_iter().max_by(|a, b| score(a).total_cmp(&score(b))).unwrap_or_default();
+        (k_of(&best), best)
+    }
+}
 
 /// Everything the fakes share. Lengths in inches.
 #[derive(Debug, Clone)]
@@ -35,12 +95,14 @@ pub(crate) struct World {
     pub last_pound: u32,
     /// `run_gcode` fails after this many more calls.
     pub fail_gcode_after: Option<usize>,
+    /// `set_tool_offset` fails after this many more calls.
+    pub fail_offset_after: Option<usize>,
 
     pub marks: Vec<Point2<f64>>,
     pub mark_size: f64,
-    /// True camera geometry: `d = K·R·c`, inches per pixel.
-    pub cam_k: Matrix2<f64>,
-    pub cam_remap: Remap,
+    /// The true camera.
+    pub optics: Optics,
+    /// Image size, pixels (marks outside are not seen).
     pub res: Vector2<f64>,
     /// Optical axis minus spindle, inches.
     pub cam_offset: Vector2<f64>,
@@ -70,10 +132,10 @@ impl Default for World {
             fail_pound: None,
             last_pound: 9999,
             fail_gcode_after: None,
+            fail_offset_after: None,
             marks: Vec::new(),
             mark_size: 0.5,
-            cam_k: Matrix2::new(0.00203, 0.0, 0.0, 0.00203),
-            cam_remap: Remap { swap_xy: false, invert_x: false, invert_y: true },
+            optics: Optics::square(0.0, true),
             res: Vector2::new(1776.0, 1776.0),
             cam_offset: Vector2::zeros(),
             script: VecDeque::new(),
@@ -121,12 +183,11 @@ impl World {
         r
     }
     fn see_exact(&self) -> Reading {
-        let chain = PixelChain::new(self.cam_k, self.cam_remap, self.res, Vector2::zeros()).expect("true camera");
         let axis = self.camera_axis();
         let best = self
             .marks
             .iter()
-            .map(|m| chain.native_pixels(m - axis))
+            .map(|m| self.optics.pixel(m - axis))
             .filter(|p| p.x >= 0.0 && p.y >= 0.0 && p.x < self.res.x && p.y < self.res.y)
             .min_by(|a, b| {
                 let c = Point2::from(self.res * 0.5);
@@ -134,19 +195,16 @@ impl World {
             });
         match best {
             None => Reading { judgment: Judgment::Ng, count: Some(0), ..Reading::position(0.0, 0.0) },
-            Some(p) => {
-                let kr = self.cam_k * self.cam_remap.matrix();
-                Reading {
-                    judgment: Judgment::Ok,
-                    count: Some(1),
-                    x_px: p.x,
-                    y_px: p.y,
-                    width_px: self.mark_size / kr.column(0).norm(),
-                    height_px: self.mark_size / kr.column(1).norm(),
-                    angle_deg: 1.5,
-                    score: 0.97,
-                }
-            }
+            Some(p) => Reading {
+                judgment: Judgment::Ok,
+                count: Some(1),
+                x_px: p.x,
+                y_px: p.y,
+                width_px: self.mark_size / self.optics.pitch_in.x,
+                height_px: self.mark_size / self.optics.pitch_in.y,
+                angle_deg: 1.5,
+                score: 0.97,
+            },
         }
     }
 }
@@ -193,6 +251,10 @@ impl Machine for FakeMachine {
                 w.alignment = None;
                 continue;
             }
+            if let Some(chain) = alignment_modal(&w, line)? {
+                w.alignment = Some(chain);
+                continue;
+            }
             let (mut x, mut y) = (None, None);
             for word in line.split_whitespace() {
                 let (letter, num) = word.split_at(1);
@@ -230,6 +292,12 @@ impl Machine for FakeMachine {
     }
     fn set_tool_offset(&mut self, tool: u32, offset: Vector2<f64>) -> Result<(), MachineError> {
         let mut w = self.world();
+        if let Some(n) = w.fail_offset_after {
+            if n == 0 {
+                return Err(MachineError::new("the tool table is locked"));
+            }
+            w.fail_offset_after = Some(n - 1);
+        }
         let f = w.to_inch(1.0);
         match w.offsets.get_mut(&tool) {
             Some(o) => {
@@ -265,6 +333,31 @@ impl Machine for FakeMachine {
     }
 }
 
+/// The alignment after one of M282's `G52 X Y` / `G68 X Y R` / `G51 X Y` lines (positions in
+/// current units, stored in inches); `None` for any other line.
+fn alignment_modal(w: &World, line: &str) -> Result<Option<AlignmentChain>, MachineError> {
+    let mut words = line.split_whitespace();
+    let code = words.next().unwrap_or_default();
+    if !["G52", "G68", "G51"].contains(&code) {
+        return Ok(None);
+    }
+    let mut value = |letter: char| -> Result<f64, MachineError> {
+        let word = words.next().filter(|w| w.starts_with(letter));
+        word.and_then(|w| w[1..].parse().ok())
+            .ok_or_else(|| MachineError::new(format!("{code} needs {letter} in {line:?}")))
+    };
+    let mut chain = w.alignment.unwrap_or(AlignmentChain::IDENTITY);
+    match code {
+        "G52" => chain.shift = Vector2::new(w.to_inch(value('X')?), w.to_inch(value('Y')?)),
+        "G68" => {
+            chain.center = Point2::new(w.to_inch(value('X')?), w.to_inch(value('Y')?));
+            chain.rotation_deg = value('R')?;
+        }
+        _ => chain.scale = Vector2::new(value('X')?, value('Y')?),
+    }
+    Ok(Some(chain))
+}
+
 /// The fake camera.
 pub(crate) struct FakeCamera(pub Shared);
 
@@ -294,6 +387,9 @@ impl CameraDriver for FakeCamera {
     fn test_connection(&mut self) -> Result<String, DriverError> {
         Ok("FVR,fake".into())
     }
+    fn reading_warning(&self, reading: &Reading) -> Option<String> {
+        reading.count.filter(|n| *n > 1).map(|n| format!("the fake camera saw {n} marks and reported the nearest"))
+    }
 }
 
 /// A machine, a camera and a module sharing one world.
@@ -304,7 +400,8 @@ pub(crate) struct Rig {
 }
 
 impl Rig {
-    /// Vision enabled, K = the true camera's K (0.00203 in/px, InvertY), camera tool 98 active.
+    /// Vision enabled, calibrated for the true camera (0.00203 in square pixels, a mirrored
+    /// image: K = 0.00203 in/px, InvertY), camera tool 98 active.
     pub(crate) fn new() -> Rig {
         Rig::with_world(World::default())
     }
@@ -315,11 +412,9 @@ impl Rig {
         let mut params = Params::default();
         params.set("VisionEnabled", true).expect("set");
         params.set("VisionCameraToolNumber", 98).expect("set");
-        {
-            let w = lock(&shared);
-            params.set_cal_k(w.cam_k).expect("k");
-            params.set_remap(w.cam_remap);
-        }
+        let (k, remap) = lock(&shared).optics.calibration();
+        params.set_cal_k(k).expect("k");
+        params.set_remap(remap);
         let module = VisionModule::new(params).with_driver(Box::new(FakeCamera(shared.clone())));
         Rig { machine: FakeMachine(shared.clone()), module, shared }
     }

@@ -1,14 +1,14 @@
 //! The checks every entry point shares, and M284.
 
 use super::fakes::Rig;
-use crate::driver::{DriverError, DriverErrorKind};
+use crate::driver::{DriverError, DriverErrorKind, Judgment, Reading};
 use crate::error::VisionError;
 use crate::module::{Pieces, RunMode};
 
 #[test]
 fn disabled_refuses_all_five_and_changes_nothing() {
     let mut rig = Rig::new();
-    rig.module.params.enabled = false;
+    rig.module.params.config.enabled = false;
     let before = rig.module.params().clone();
     let m = &mut rig.machine;
     assert_eq!(rig.module.m280(m, RunMode::Rectangle).map(|_| ()), Err(VisionError::NotEnabled));
@@ -48,7 +48,7 @@ fn m284_switches_jobs_only_with_select_job() {
     assert_eq!(r.report.job, 5);
     rig.module.m284(Some(0)).expect("P0");
     assert_eq!(rig.world().jobs, vec![5, 5, 5]);
-    assert!(matches!(rig.module.m284(Some(1000)), Err(VisionError::BadWord { .. })));
+    assert!(matches!(rig.module.m284(Some(1000)), Err(VisionError::InvalidParam { .. })));
     // A camera-side refusal leaves ActiveJob alone.
     rig.world().select_job = true;
     let mut fresh = Rig::new();
@@ -74,19 +74,45 @@ fn no_driver_is_a_clear_error() {
 }
 
 #[test]
-fn driver_errors_carry_the_manuals_fix() {
+fn driver_errors_reach_the_operator_in_the_drivers_words() {
     let mut rig = Rig::new();
-    rig.world().script.push_back(Err(DriverError::new(DriverErrorKind::Refused, "connect 192.168.208.80:8500")));
+    // The driver's explanation as it is, whatever the kind: the core puts no generic advice of
+    // its own in front of it.
+    let closed = "camera at 192.168.208.80:8500 closed the connection — another client holds the camera";
+    rig.world().script.push_back(Err(DriverError::new(DriverErrorKind::Refused, closed)));
     let e = rig.module.m281(&mut rig.machine, false).expect_err("refused");
-    assert!(e.to_string().starts_with("connection refused — camera not in Run Mode"), "{e}");
-    assert_eq!(rig.module.params().last_status(), e.to_string());
-    assert_eq!(rig.module.params().last_judgment(), -1);
-    // A camera refusal reaches the operator in the driver's words, with nothing of the core's.
-    let refusal = "camera replied ER,TRG,06 to TRG — switch the camera to Run mode";
+    assert_eq!(e.to_string(), closed);
+    assert_eq!(rig.module.telemetry().last_status(), closed);
+    assert_eq!(rig.module.telemetry().last_judgment(), -1);
+    let refusal = "camera refused the trigger — switch the camera to Run mode";
     rig.world().script.push_back(Err(DriverError::new(DriverErrorKind::Rejected, refusal)));
     let e = rig.module.m281(&mut rig.machine, false).expect_err("rejected");
     assert_eq!(e.to_string(), refusal);
-    assert_eq!(rig.module.params().last_status(), refusal);
+    assert_eq!(rig.module.telemetry().last_status(), refusal);
+    // The driver's typed error survives the trip through the core.
+    let VisionError::Driver(d) = e else { panic!("{e:?}") };
+    assert_eq!(d.kind(), DriverErrorKind::Rejected);
+}
+
+#[test]
+fn the_drivers_warning_about_a_reading_reaches_the_operator() {
+    let mut rig = Rig::new();
+    let seen = Reading { judgment: Judgment::Ok, count: Some(1), ..Reading::position(700.0, 650.0) };
+    rig.world().script.push_back(Ok(Reading { count: Some(2), ..seen }));
+    let capture = rig.module.m281(&mut rig.machine, false).expect("a usable reading").report;
+    let warning = "the fake camera saw 2 marks and reported the nearest";
+    assert_eq!(capture.warning.as_deref(), Some(warning));
+    assert_eq!(rig.module.telemetry().last_status(), format!("OK (warning: {warning})"));
+    assert_eq!(rig.module.telemetry().last_judgment(), 1);
+    // With the image warning of M281 D1 as well, both are kept.
+    rig.world().script.push_back(Ok(Reading { count: Some(2), ..seen }));
+    let capture = rig.module.m281(&mut rig.machine, true).expect("a usable reading").report;
+    let both = capture.warning.unwrap_or_default();
+    assert!(both.starts_with(&format!("{warning}; image not saved")), "{both}");
+    // One mark: nothing to say.
+    rig.world().script.push_back(Ok(seen));
+    assert_eq!(rig.module.m281(&mut rig.machine, false).expect("one mark").report.warning, None);
+    assert_eq!(rig.module.telemetry().last_status(), "OK");
 }
 
 #[test]

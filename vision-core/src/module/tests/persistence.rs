@@ -37,7 +37,7 @@ fn m281_d1_keeps_the_fresh_image_and_warns_when_none_comes() {
     assert_eq!(c.image, None);
     let w = c.warning.expect("warning");
     assert!(w.starts_with("image not saved: no image newer than the trigger"), "{w}");
-    assert!(rig.module.params().last_status().starts_with("OK (warning: image not saved"));
+    assert!(rig.module.telemetry().last_status().starts_with("OK (warning: image not saved"));
 
     // The camera pushed an image after the trigger (the fake clock reads 1_700_000_000 s).
     let img = watch.join("IMG_0001.bmp");
@@ -52,7 +52,7 @@ fn m281_d1_keeps_the_fresh_image_and_warns_when_none_comes() {
     assert_eq!(kept, root.join("Images").join("vision_20231114_231320_000.bmp"));
     assert_eq!(fs::read(&kept).expect("read"), b"BM...");
     assert_eq!(c.warning, None);
-    assert_eq!(rig.module.params().last_status(), "OK");
+    assert_eq!(rig.module.telemetry().last_status(), "OK");
     // D0 never touches the folder.
     rig.module.m281(&mut rig.machine, false).expect("capture");
     assert_eq!(fs::read_dir(root.join("Images")).expect("dir").count(), 1);
@@ -78,7 +78,7 @@ fn m283_and_m284_persist_to_the_profile() {
     assert_eq!(saved.active_job(), 12);
     assert_eq!(saved.cal_date(), "2023-11-14T23:13:20+01:00");
     assert!(saved.camera_invert_y());
-    assert_eq!(saved.last_status(), "", "telemetry is not persisted");
+    assert!(!fs::read_to_string(&path).expect("text").contains("VisionLast"), "telemetry is not persisted");
     let text = fs::read_to_string(&path).expect("text");
     assert!(text.contains("VisionCal_K11 = ") && text.contains("VisionCal_K22 = "), "{text}");
     let _ = fs::remove_dir_all(&root);

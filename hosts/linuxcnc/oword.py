@@ -1,0 +1,20 @@
+"""Python O-word procedures for m283.ngc (the M283 walk).
+
+O-word procedures cannot yield (rs274 stops with "Unknown error, bad error code" when one
+does), so this one only plans the next point; the capture is M289, a remap that can wait for
+the machine.
+"""
+
+from remap import host_for, is_task, session
+
+
+def vision_walk_next(self, *args):
+    """Asks the session for the next point of the walk: sets #<_vision_x>, #<_vision_y> (program
+    units) and returns 1, or returns 0 when the walk is over."""
+    if not is_task(self):
+        return 0.0
+    target = session().walk_next(host_for(self))
+    if target is None:
+        return 0.0
+    self.params["_vision_x"], self.params["_vision_y"] = target
+    return 1.0

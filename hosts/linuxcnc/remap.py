@@ -1,0 +1,206 @@
+"""LinuxCNC remap handlers for the vision M-codes M280-M284, and M289, the capture step of the
+M283 walk (m283.ngc).
+
+Thin on purpose: every decision is the session's (`mach_vision.Session`, the vision-py extension
+over vision-host). This file maps LinuxCNC's interpreter onto the `Host` interface the session
+calls, and honours read-ahead and preview:
+
+* A capture (M281, M289) first yields INTERP_EXECUTE_FINISH so that it runs where the machine
+  really is; after that yield it may not call self.execute(), so its Host refuses to.
+* In preview (self.task == 0: AXIS's preview, rs274) there is no camera: every vision M-code
+  reports and emits nothing. MACH_VISION_RS274_AS_TASK=1 makes rs274 count as the task; only
+  the tests set it.
+"""
+
+import os
+import time
+
+import emccanon
+from interpreter import INTERP_ERROR, INTERP_EXECUTE_FINISH, INTERP_OK
+
+import mach_vision
+from mach_vision import VisionError
+
+_SESSION = None
+
+
+def session():
+    """The one session of this interpreter, created at the first vision M-code."""
+    global _SESSION
+    if _SESSION is None:
+        _SESSION = mach_vision.Session(os.environ.get("MACH_VISION_PROFILE"))
+    return _SESSION
+
+
+def is_task(interp):
+    """True in the interpreter that drives the machine; False in a preview."""
+    return interp.task != 0 or os.environ.get("MACH_VISION_RS274_AS_TASK") == "1"
+
+
+class Host:
+    """What the session needs of the controller (vision_core::Machine), over LinuxCNC's
+    interpreter. Lengths are in the program's units (G20/G21), angles in degrees."""
+
+    def __init__(self, interp, synced):
+        self._interp = interp
+        # True after `yield INTERP_EXECUTE_FINISH`: the machine is where the program says, and
+        # G-code can no longer be queued from this handler.
+        self._synced = synced
+
+    def program_position(self):
+        """Commanded X, Y in the active program frame (after G52/G92, G5x and its rotation)."""
+        return (self._interp.current_x, self._interp.current_y)
+
+    def xy_rotation_deg(self):
+        """The active G5x system's rotation (G10 L2 R), degrees counter-clockwise."""
+        return self._interp.rotation_xy
+
+    def g92_offset(self):
+        """The G92/G52 X, Y offset (program units)."""
+        return (self._interp.axis_offset_x, self._interp.axis_offset_y)
+
+    def metric(self):
+        """True under G21."""
+        return self._interp.params["_metric"] == 1.0
+
+    def execute(self, line):
+        """Runs one line of G-code; VisionError when LinuxCNC refuses it or after a sync."""
+        if self._synced:
+            raise VisionError(
+                "cannot run G-code (%s) after waiting for the machine: LinuxCNC does not allow "
+                "self.execute() after yield INTERP_EXECUTE_FINISH" % line
+            )
+        if self._interp.execute(line) != INTERP_OK:
+            raise VisionError("LinuxCNC refused %r: %s" % (line, self._interp.get_errormsg()))
+
+    def tool(self):
+        """The tool in the spindle (0 when none)."""
+        return max(self._interp.current_tool, 0)
+
+    def tool_offset(self, tool):
+        """Tool-table X, Y offset of `tool` (machine units); VisionError when it is not there."""
+        status, pocket = self._interp.find_tool_pocket(tool)
+        if status != INTERP_OK:
+            raise VisionError("tool %d is not in the tool table; add it" % tool)
+        offset = self._interp.tool_table[pocket].offset
+        return (offset.x, offset.y)
+
+    def set_tool_offset(self, tool, x, y):
+        """Writes the tool-table X, Y offset of `tool` (G10 L1)."""
+        self.execute("G10 L1 P%d X%.7f Y%.7f" % (tool, x, y))
+
+    def pound(self, number):
+        """#number."""
+        return self._interp.params[number]
+
+    def set_pound(self, number, value):
+        """#number = value, at once (the interpreter's own parameter table)."""
+        self._interp.params[number] = value
+
+    def dwell(self, seconds):
+        """Waits: G4 while G-code can still be queued, a sleep after a sync."""
+        if self._synced:
+            time.sleep(seconds)
+        else:
+            self.execute("G4 P%.4f" % seconds)
+
+    def clock(self):
+        """Seconds, monotonic."""
+        return time.monotonic()
+
+    def message(self, text):
+        """A message to the operator (AXIS shows it; rs274 prints MESSAGE)."""
+        emccanon.MESSAGE(text)
+
+
+def host_for(interp, synced=False):
+    """The Host over `interp`."""
+    return Host(interp, synced)
+
+
+def _fail(interp, mcode, error):
+    interp.set_errormsg("M%d: %s" % (mcode, error))
+    return INTERP_ERROR
+
+
+def _call(interp, mcode, words, synced):
+    try:
+        session().call(mcode, words, host_for(interp, synced))
+    except VisionError as e:
+        return _fail(interp, mcode, e)
+    return INTERP_OK
+
+
+def _preview(interp, mcode):
+    emccanon.MESSAGE("M%d: preview, no camera: nothing done" % mcode)
+    return INTERP_OK
+
+
+def m280(self, **words):
+    """Begin a run: cancels any alignment (G52 X0 Y0, G10 L2 P0 R back to the rotation before)."""
+    if not is_task(self):
+        return _preview(self, 280)
+    return _call(self, 280, words, synced=False)
+
+
+def m281(self, **words):
+    """Capture where the machine is: waits for the queued motion, then triggers."""
+    if not is_task(self):
+        yield _preview(self, 281)
+        return
+    yield INTERP_EXECUTE_FINISH
+    yield _call(self, 281, words, synced=True)
+
+
+def m282(self, **words):
+    """Fit and align: the session emits G10 L2 P0 R + G52 (LinuxCNC has no G68, no G51)."""
+    if not is_task(self):
+        return _preview(self, 282)
+    return _call(self, 282, words, synced=False)
+
+
+def m284(self, **words):
+    """Switch the camera job."""
+    if not is_task(self):
+        return _preview(self, 284)
+    return _call(self, 284, words, synced=False)
+
+
+def m283_begin(self, **words):
+    """M283's prolog: the session plans the walk (Q: one dot, C: a sheet)."""
+    # C is an axis word to LinuxCNC: left on the block, `M283 C1` would also move the C axis to 1
+    # in the active motion mode (G0 or G1) after the remap. Clearing the flag keeps it a sheet
+    # number (the block's motion is then a zero-length move).
+    self.blocks[self.remap_level].c_flag = False
+    if not is_task(self):
+        return _preview(self, 283)
+    try:
+        session().walk_begin(words, host_for(self))
+    except VisionError as e:
+        return _fail(self, 283, e)
+    return INTERP_OK
+
+
+def m289(self, **words):
+    """The walk's capture, called by m283.ngc at each point: waits for the motion, triggers."""
+    if not is_task(self):
+        yield INTERP_OK
+        return
+    yield INTERP_EXECUTE_FINISH
+    try:
+        session().walk_capture(host_for(self, synced=True))
+    except VisionError as e:
+        yield _fail(self, 283, e)
+        return
+    yield INTERP_OK
+
+
+def m283_finish(self, **words):
+    """M283's epilog: solves and writes K and the camera tool offset, reports the residuals."""
+    if not is_task(self):
+        return INTERP_OK
+    try:
+        session().walk_finish(host_for(self))
+    except VisionError as e:
+        return _fail(self, 283, e)
+    return INTERP_OK

@@ -1,0 +1,369 @@
+#!/usr/bin/env python3
+"""Runs LinuxCNC's interpreter (rs274) and `mach-vision trace` on the same G-code programs and
+compares every motion, move by move, in machine coordinates.
+
+rs274 prints canonical commands in the program's units *before* offsets, with 4 decimals; this
+script applies the G5x, G92, XY-rotation and tool-length offsets it printed (as LinuxCNC's
+canon layer does: machine = g5x + rot(p + g92) + tool) and compares each STRAIGHT_TRAVERSE /
+STRAIGHT_FEED end point and each ARC_FEED end point, centre, direction and turn count with
+mach-vision's events, within 1e-4 of the printed precision (plus the half unit of the last
+printed digit).
+
+Each program gets one verdict:
+  agree          both ran; same motions
+  differ         both ran; the first different motion is shown
+  refused        rs274 ran it, mach-vision refused it (its message is shown)
+  both-refuse    rs274 stops with an error, and so does mach-vision
+  rs274-refuses  rs274 stops with an error, mach-vision runs it (not a comparison: LinuxCNC's
+                 own limits, e.g. a subroutine file run without its call)
+
+Usage: compare.py [--rs274 PATH] [--trace PATH] [--units mm|in] [--subroutine-path DIRS]
+                  [--tool-table FILE] [--random N [--seed S]] [--quiet] [PROGRAM...]
+Exit status 0 when no program differs (refusals are counted, not failures), 1 otherwise.
+"""
+
+import argparse
+import collections
+import json
+import math
+import os
+import random
+import re
+import subprocess
+import sys
+import tempfile
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+DEFAULT_RS274 = os.path.join(ROOT, "target", "linuxcnc-oracle", "x", "usr", "bin", "rs274")
+DEFAULT_TRACE = os.path.join(ROOT, "target", "debug", "mach-vision")
+MM_PER_IN = 25.4
+# 1e-4 of the printed unit, plus half of its last printed digit (rs274 rounds to 4 decimals).
+TOLERANCE = 1.5e-4
+CALL = re.compile(r"^\s*\d+\s+N\S*\s+([A-Z_0-9]+)\((.*)\)\s*$")
+
+
+def rs274_env(rs274):
+    env = dict(os.environ)
+    lib = os.path.join(os.path.dirname(os.path.dirname(rs274)), "lib")
+    env["LD_LIBRARY_PATH"] = lib + (":" + env["LD_LIBRARY_PATH"] if env.get("LD_LIBRARY_PATH") else "")
+    return env
+
+
+def numbers(args):
+    return [float(x) for x in re.split(r"[,\s]+", args.strip()) if x]
+
+
+def run_rs274(rs274, program, tool_table, subroutine_path, timeout):
+    """Returns (motions, error) with motions in machine coordinates, millimetres."""
+    with tempfile.TemporaryDirectory(prefix="oracle-") as tmp:
+        var = os.path.join(tmp, "rs274.var")
+        open(var, "w").close()
+        ini = os.path.join(tmp, "oracle.ini")
+        with open(ini, "w") as f:
+            f.write("[RS274NGC]\nSUBROUTINE_PATH = %s\n" % subroutine_path)
+        cmd = [rs274, "-g", "-i", ini, "-t", tool_table, "-v", var, program]
+        env = rs274_env(rs274)
+        env["HOME"] = tmp
+        try:
+            p = subprocess.run(cmd, env=env, capture_output=True, timeout=timeout, cwd=tmp)
+        except subprocess.TimeoutExpired:
+            return None, "rs274 timed out"
+    out = p.stdout.decode("latin-1")
+    err = p.stderr.decode("latin-1").replace("executing", "").strip()
+    if p.returncode != 0:
+        return None, err.splitlines()[0] if err else "rs274 exit %d" % p.returncode
+    scale = 1.0  # mm per printed unit
+    g5x = [0.0, 0.0, 0.0]
+    g92 = [0.0, 0.0, 0.0]
+    tool = [0.0, 0.0, 0.0]
+    rot = 0.0
+    plane = "XY"
+    motions = []
+
+    def machine(p):
+        x, y, z = p[0] * scale + g92[0], p[1] * scale + g92[1], p[2] * scale + g92[2]
+        c, s = math.cos(math.radians(rot)), math.sin(math.radians(rot))
+        x, y = x * c - y * s, x * s + y * c
+        return [x + g5x[0] + tool[0], y + g5x[1] + tool[1], z + g5x[2] + tool[2]]
+
+    for line in out.splitlines():
+        m = CALL.match(line)
+        if not m:
+            continue
+        name, args = m.group(1), m.group(2)
+        if name == "USE_LENGTH_UNITS":
+            scale = MM_PER_IN if "INCHES" in args else (10.0 if "CM" in args else 1.0)
+        elif name == "SET_G5X_OFFSET":
+            v = numbers(args)
+            g5x = [v[1] * scale, v[2] * scale, v[3] * scale]
+        elif name == "SET_G92_OFFSET":
+            g92 = [x * scale for x in numbers(args)[:3]]
+        elif name == "SET_XY_ROTATION":
+            rot = numbers(args)[0]
+        elif name == "USE_TOOL_LENGTH_OFFSET":
+            v = numbers(args)
+            tool = [v[0] * scale, v[1] * scale, v[2] * scale]
+        elif name == "SELECT_PLANE":
+            plane = args.replace("CANON_PLANE_", "").strip()
+        elif name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED"):
+            v = numbers(args)
+            motions.append({"kind": "rapid" if name == "STRAIGHT_TRAVERSE" else "feed",
+                            "end": machine(v[:3]), "unit": scale, "src": line.strip()})
+        elif name == "ARC_FEED":
+            v = numbers(args)
+            e1, e2, c1, c2, turn, ax = v[:6]
+            if plane == "XY":
+                end, centre = [e1, e2, ax], [c1, c2, None]
+            elif plane == "XZ":
+                end, centre = [e2, ax, e1], [c2, None, c1]
+            else:  # YZ
+                end, centre = [ax, e1, e2], [None, c1, c2]
+            end_m = machine(end)
+            filled = [c if c is not None else 0.0 for c in centre]
+            centre_m = machine(filled)
+            centre_m = [cm if c is not None else None for cm, c in zip(centre_m, centre)]
+            motions.append({"kind": "arc", "end": end_m, "centre": centre_m, "cw": turn < 0,
+                            "turns": int(abs(turn)), "unit": scale, "src": line.strip()})
+        elif name in ("STRAIGHT_PROBE", "RIGID_TAP", "NURBS_FEED", "SPLINE_FEED"):
+            motions.append({"kind": name.lower(), "end": None, "unit": scale, "src": line.strip()})
+    return motions, None
+
+
+def run_trace(trace, program, units, subroutine_path, timeout):
+    """Returns (motions, error) with motions in machine coordinates, millimetres."""
+    cmd = [trace, "trace", "--json", "--machine-units", units, "--dialect", "linuxcnc", "--subroutine-path", subroutine_path, program]
+    try:
+        p = subprocess.run(cmd, capture_output=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return None, "trace timed out"
+    to_mm = MM_PER_IN if units == "in" else 1.0
+    motions = []
+    error = None
+    for line in p.stdout.decode("utf-8", "replace").splitlines():
+        try:
+            e = json.loads(line)
+        except ValueError:
+            continue
+        t = e.get("type")
+        if t == "linear":
+            motions.append({"kind": e["rate"], "end": [x * to_mm for x in e["end"]], "line": e["line"]})
+        elif t == "arc":
+            motions.append({"kind": "arc", "end": [x * to_mm for x in e["end"]],
+                            "centre": [x * to_mm for x in e["center"]], "cw": e["direction"] == "cw",
+                            "turns": e["extra_turns"] + 1, "line": e["line"]})
+        elif t == "error":
+            error = e["message"]
+    if p.returncode != 0 and error is None:
+        error = p.stderr.decode("utf-8", "replace").strip().splitlines()[-1:] or ["exit %d" % p.returncode]
+        error = error[0]
+    return motions, error
+
+
+def close(a, b, unit):
+    return all(x is None or y is None or abs(x - y) / unit <= TOLERANCE for x, y in zip(a, b))
+
+
+def compare(theirs, ours):
+    """The first difference as text, or None."""
+    for i, (t, o) in enumerate(zip(theirs, ours)):
+        where = "motion %d (our line %s; rs274 %s)" % (i + 1, o.get("line"), t["src"])
+        if t["end"] is None:
+            return "%s: rs274 did %s" % (where, t["kind"])
+        if t["kind"] != o["kind"]:
+            return "%s: rs274 %s, ours %s" % (where, t["kind"], o["kind"])
+        if not close(t["end"], o["end"], t["unit"]):
+            return "%s: end %s mm, ours %s mm" % (where, fmt(t["end"]), fmt(o["end"]))
+        if t["kind"] == "arc":
+            if not close(t["centre"], o["centre"], t["unit"]):
+                return "%s: centre %s mm, ours %s mm" % (where, fmt(t["centre"]), fmt(o["centre"]))
+            if t["cw"] != o["cw"] or t["turns"] != o["turns"]:
+                return "%s: rs274 %s x%d, ours %s x%d" % (
+                    where, "cw" if t["cw"] else "ccw", t["turns"], "cw" if o["cw"] else "ccw", o["turns"])
+    if len(theirs) != len(ours):
+        return "rs274 made %d motions, ours %d" % (len(theirs), len(ours))
+    return None
+
+
+def fmt(p):
+    return "(" + ", ".join("-" if x is None else "%.4f" % x for x in p) + ")"
+
+
+def random_program(rng):
+    """A random program of the G-code both interpreters share: units, planes, G90/G91, G0-G3
+    (centre and R forms, full circles, P turns), work offsets, G92, G53, canned cycles and
+    o-word loops."""
+    f = lambda v: "%.4f" % v
+    units = rng.choice(["G20", "G21"])
+    big = 1.0 if units == "G20" else 25.4
+    lines = ["%s G90 G17 G40 G49 G80 G94 F%s" % (units, f(rng.uniform(5, 50) * big))]
+    lines.append("G10 L2 P%d X%s Y%s Z%s" % (rng.randint(1, 6), f(rng.uniform(-2, 2) * big),
+                                            f(rng.uniform(-2, 2) * big), f(rng.uniform(-1, 1) * big)))
+    pos = [0.0, 0.0, 0.0]  # the program point, tracked for arcs under G90 only
+    absolute = True
+    for _ in range(rng.randint(5, 25)):
+        kind = rng.random()
+        if kind < 0.30:
+            code = rng.choice(["G0", "G1"])
+            axes = rng.sample("XYZ", rng.randint(1, 3))
+            words = []
+            for a in axes:
+                v = rng.uniform(-3, 3) * big
+                words.append("%s%s" % (a, f(v)))
+                if absolute:
+                    pos["XYZ".index(a)] = round(v, 4)
+            lines.append("%s %s" % (code, " ".join(words)))
+            if not absolute:
+                pos = None
+        elif kind < 0.55 and absolute and pos is not None:
+            plane, (a, b), (ca, cb) = rng.choice([("G17", (0, 1), ("I", "J")), ("G18", (2, 0), ("K", "I")),
+                                                  ("G19", (1, 2), ("J", "K"))])
+            code = rng.choice(["G2", "G3"])
+            r = rng.uniform(0.2, 2) * big
+            phi0 = rng.uniform(0, 6.283)
+            centre = (pos[a] - r * math.cos(phi0), pos[b] - r * math.sin(phi0))
+            if rng.random() < 0.15:
+                # A full circle from the centre words alone, possibly several turns.
+                turns = rng.choice(["", " P2"])
+                lines.append("%s %s %s%s %s%s%s" % (plane, code, ca, f(centre[0] - pos[a]), cb,
+                                                    f(centre[1] - pos[b]), turns))
+            else:
+                phi1 = rng.uniform(0, 6.283)
+                end = [centre[0] + r * math.cos(phi1), centre[1] + r * math.sin(phi1)]
+                end = [round(end[0], 4), round(end[1], 4)]
+                letters = "XYZ"
+                normal = 3 - a - b
+                rise = rng.choice([0.0, rng.uniform(-0.5, 0.5) * big])
+                words = "%s%s %s%s" % (letters[a], f(end[0]), letters[b], f(end[1]))
+                if rise:
+                    pos[normal] = round(pos[normal] + rise, 4)
+                    words += " %s%s" % (letters[normal], f(pos[normal]))
+                if rng.random() < 0.3 and math.hypot(end[0] - pos[a], end[1] - pos[b]) > 0.01 * big:
+                    half = math.hypot(end[0] - pos[a], end[1] - pos[b]) / 2
+                    radius = max(half * rng.uniform(1.0, 3.0), half + 0.001 * big)
+                    lines.append("%s %s %s R%s" % (plane, code, words, f(rng.choice([1, -1]) * radius)))
+                else:
+                    lines.append("%s %s %s %s%s %s%s" % (plane, code, words, ca, f(centre[0] - pos[a]), cb,
+                                                         f(centre[1] - pos[b])))
+                pos[a], pos[b] = end
+            lines.append("G17")
+        elif kind < 0.62:
+            absolute = not absolute
+            lines.append("G90" if absolute else "G91")
+            if absolute:
+                lines.append("G0 X%s Y%s Z%s" % (f(pos[0] if pos else 0), f(pos[1] if pos else 0), f(pos[2] if pos else 0)))
+                pos = pos or [0.0, 0.0, 0.0]
+        elif kind < 0.68:
+            lines.append("G%d" % rng.randint(54, 59))
+            pos = None if absolute else pos
+            if absolute:
+                lines.append("G0 X0 Y0 Z0")
+                pos = [0.0, 0.0, 0.0]
+        elif kind < 0.73 and absolute:
+            lines.append("G92 X%s Y%s" % (f(rng.uniform(-1, 1) * big), f(rng.uniform(-1, 1) * big)))
+            lines.append("G0 X0 Y0 Z0")
+            pos = [0.0, 0.0, 0.0]
+        elif kind < 0.76:
+            lines.append("G92.1")
+            if absolute:
+                lines.append("G0 X0 Y0 Z0")
+                pos = [0.0, 0.0, 0.0]
+        elif kind < 0.80 and absolute:
+            lines.append("G53 G0 Z%s" % f(rng.uniform(-1, 1) * big))
+            lines.append("G0 X0 Y0 Z0")
+            pos = [0.0, 0.0, 0.0]
+        elif kind < 0.92:
+            cycle = rng.choice(["G81", "G82 P0.1", "G83 Q%s" % f(0.1 * big), "G73 Q%s" % f(0.07 * big),
+                                "G85", "G89 P0.2"])
+            retract = rng.choice(["G98", "G99"])
+            if absolute:
+                lines.append("%s %s X%s Y%s Z%s R%s L%d" % (retract, cycle, f(rng.uniform(-2, 2) * big),
+                                                          f(rng.uniform(-2, 2) * big), f(-0.4 * big),
+                                                          f(0.1 * big), rng.randint(1, 2)))
+            else:
+                lines.append("%s %s X%s Y%s Z%s R%s L%d" % (retract, cycle, f(0.3 * big), f(0.2 * big),
+                                                          f(-0.4 * big), f(0.1 * big), rng.randint(1, 3)))
+            lines.append("G80")
+            pos = None if absolute else pos
+            if absolute:
+                lines.append("G0 X0 Y0 Z0")
+                pos = [0.0, 0.0, 0.0]
+        else:
+            n = rng.randint(100, 999)
+            lines.append("#1 = 0")
+            lines.append("o%d while [#1 LT %d]" % (n, rng.randint(1, 4)))
+            lines.append("G91 G1 X%s Y[#1 * %s]" % (f(0.1 * big), f(0.05 * big)))
+            lines.append("#1 = [#1 + 1]")
+            lines.append("o%d endwhile" % n)
+            lines.append("G90 G0 X0 Y0 Z0" if absolute else "G91")
+            if absolute:
+                pos = [0.0, 0.0, 0.0]
+    lines.append("M2")
+    return "\n".join(lines) + "\n"
+
+
+def default_tool_table(directory):
+    path = os.path.join(directory, "oracle.tbl")
+    with open(path, "w") as f:
+        # Tools 1-254 with zero offsets: mach-vision's default table.
+        for t in range(1, 255):
+            f.write("T%d P%d Z0 D0\n" % (t, t))
+    return path
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--rs274", default=DEFAULT_RS274)
+    ap.add_argument("--trace", default=DEFAULT_TRACE, help="the mach-vision binary")
+    ap.add_argument("--units", default="mm", choices=["mm", "in"],
+                    help="mach-vision's --machine-units (rs274 starts in mm: use mm to compare programs "
+                         "that set no units)")
+    ap.add_argument("--subroutine-path", default=None,
+                    help="rs274's SUBROUTINE_PATH (default: each program's folder)")
+    ap.add_argument("--tool-table", default=None, help="rs274's tool table (default: tools 1-254, zero offsets)")
+    ap.add_argument("--timeout", type=float, default=30.0)
+    ap.add_argument("--quiet", action="store_true", help="print only the summary")
+    ap.add_argument("--random", type=int, default=0, metavar="N",
+                    help="also compare N random programs (written to a temporary folder, kept)")
+    ap.add_argument("--seed", type=int, default=1, help="seed of --random")
+    ap.add_argument("programs", nargs="*")
+    a = ap.parse_args()
+    if a.random:
+        rng = random.Random(a.seed)
+        folder = tempfile.mkdtemp(prefix="oracle-random-")
+        for i in range(a.random):
+            path = os.path.join(folder, "random-%04d.ngc" % i)
+            with open(path, "w") as f:
+                f.write(random_program(rng))
+            a.programs.append(path)
+    with tempfile.TemporaryDirectory(prefix="oracle-tbl-") as tbl_dir:
+        tool_table = a.tool_table or default_tool_table(tbl_dir)
+        verdicts = collections.Counter()
+        reasons = collections.Counter()
+        for program in a.programs:
+            sub_path = a.subroutine_path or os.path.dirname(os.path.abspath(program))
+            theirs, their_error = run_rs274(a.rs274, os.path.abspath(program), tool_table, sub_path, a.timeout)
+            ours, our_error = run_trace(a.trace, program, a.units, sub_path, a.timeout)
+            if their_error is not None:
+                verdict = "both-refuse" if our_error is not None else "rs274-refuses"
+                detail = their_error if our_error is None else "%s | ours: %s" % (their_error, our_error)
+            else:
+                if our_error is not None:
+                    verdict, detail = "refused", our_error
+                    reasons[re.sub(r"^.*?line \d+(, column \d+)?: ", "", our_error)[:90]] += 1
+                else:
+                    diff = compare(theirs, ours)
+                    verdict, detail = ("differ", diff) if diff else ("agree", "%d motions" % len(ours))
+            verdicts[verdict] += 1
+            if not a.quiet:
+                print("%-13s %s: %s" % (verdict, program, detail))
+        print("# %d programs: %s" % (len(a.programs), ", ".join(
+            "%d %s" % (verdicts[k], k) for k in ("agree", "differ", "refused", "both-refuse", "rs274-refuses"))))
+        if reasons and not a.quiet:
+            print("# mach-vision's refusals, most frequent first:")
+            for reason, n in reasons.most_common(25):
+                print("#   %4d  %s" % (n, reason))
+        return 1 if verdicts["differ"] else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

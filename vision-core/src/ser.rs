@@ -1,0 +1,103 @@
+//! How the report types serialize the `vision-math` values they hold (`vision-math` stays free
+//! of serde). Points and vectors are `[x, y]`, matrices are rows `[[m11, m12], [m21, m22]]`,
+//! units are `"in"` / `"mm"`. The README's "JSON output of `run --json`" documents the result.
+
+use serde::ser::{SerializeMap, SerializeStruct};
+use serde::{Serialize, Serializer};
+use vision_math::{AlignmentChain, Fit, LengthUnit, Matrix2, Point2, Remap, Vector2};
+
+use crate::driver::Judgment;
+use crate::params::ParamValue;
+
+/// `[x, y]`.
+pub(crate) fn point<S: Serializer>(p: &Point2<f64>, s: S) -> Result<S::Ok, S::Error> {
+    [p.x, p.y].serialize(s)
+}
+
+/// `[x, y]`.
+pub(crate) fn vector<S: Serializer>(v: &Vector2<f64>, s: S) -> Result<S::Ok, S::Error> {
+    [v.x, v.y].serialize(s)
+}
+
+/// `[[x, y], …]`.
+pub(crate) fn vectors<S: Serializer>(v: &[Vector2<f64>], s: S) -> Result<S::Ok, S::Error> {
+    s.collect_seq(v.iter().map(|v| [v.x, v.y]))
+}
+
+/// Rows: `[[m11, m12], [m21, m22]]`.
+pub(crate) fn matrix<S: Serializer>(m: &Matrix2<f64>, s: S) -> Result<S::Ok, S::Error> {
+    [[m[(0, 0)], m[(0, 1)]], [m[(1, 0)], m[(1, 1)]]].serialize(s)
+}
+
+/// `"in"` or `"mm"`.
+pub(crate) fn unit<S: Serializer>(u: &LengthUnit, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(u.short_name())
+}
+
+/// `"OK"`, `"NG"` or `"unknown"`: the judgment's label.
+pub(crate) fn judgment<S: Serializer>(j: &Judgment, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(j.label())
+}
+
+/// `{ swap_xy, invert_x, invert_y }`.
+pub(crate) fn remap<S: Serializer>(r: &Remap, s: S) -> Result<S::Ok, S::Error> {
+    let mut st = s.serialize_struct("Remap", 3)?;
+    st.serialize_field("swap_xy", &r.swap_xy)?;
+    st.serialize_field("invert_x", &r.invert_x)?;
+    st.serialize_field("invert_y", &r.invert_y)?;
+    st.end()
+}
+
+/// `{ shift, center, rotation_deg, scale }`: the G52 / G68 / G51 values.
+pub(crate) fn chain<S: Serializer>(c: &AlignmentChain, s: S) -> Result<S::Ok, S::Error> {
+    let mut st = s.serialize_struct("AlignmentChain", 4)?;
+    st.serialize_field("shift", &[c.shift.x, c.shift.y])?;
+    st.serialize_field("center", &[c.center.x, c.center.y])?;
+    st.serialize_field("rotation_deg", &c.rotation_deg)?;
+    st.serialize_field("scale", &[c.scale.x, c.scale.y])?;
+    st.end()
+}
+
+/// `{ model, rotation_deg, scale, shear, commanded_centroid, observed_centroid, len, rms,
+/// max_residual }`.
+pub(crate) fn fit<S: Serializer>(f: &Fit, s: S) -> Result<S::Ok, S::Error> {
+    let t = &f.transform;
+    let mut st = s.serialize_struct("Fit", 9)?;
+    st.serialize_field("model", t.model.name())?;
+    st.serialize_field("rotation_deg", &t.theta_deg())?;
+    st.serialize_field("scale", &[t.scale.x, t.scale.y])?;
+    st.serialize_field("shear", &t.shear)?;
+    st.serialize_field("commanded_centroid", &[t.commanded_centroid.x, t.commanded_centroid.y])?;
+    st.serialize_field("observed_centroid", &[t.observed_centroid.x, t.observed_centroid.y])?;
+    st.serialize_field("len", &f.len)?;
+    st.serialize_field("rms", &f.rms)?;
+    st.serialize_field("max_residual", &f.max_residual)?;
+    st.end()
+}
+
+impl Serialize for ParamValue {
+    /// A JSON boolean, integer, number or string.
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            ParamValue::Bool(b) => s.serialize_bool(*b),
+            ParamValue::Int(i) => s.serialize_i64(*i),
+            ParamValue::Float(f) => s.serialize_f64(*f),
+            ParamValue::Text(t) => s.serialize_str(t),
+        }
+    }
+}
+
+/// A map from each spec's manual name to its value, in the specs' order.
+pub(crate) fn named_values<S: Serializer>(
+    specs: &[crate::params::ParamSpec],
+    get: impl Fn(&str) -> Option<ParamValue>,
+    s: S,
+) -> Result<S::Ok, S::Error> {
+    let mut map = s.serialize_map(Some(specs.len()))?;
+    for spec in specs {
+        if let Some(v) = get(spec.name) {
+            map.serialize_entry(spec.name, &v)?;
+        }
+    }
+    map.end()
+}

@@ -1,0 +1,84 @@
+//! Making text safe to show a person: messages and reports quote what the user gave (program
+//! comments, profile values, file contents), and that input may hold terminal escape
+//! sequences, line breaks or megabytes.
+//!
+//! Decision: this is done once, where text reaches a person (the CLI's output, a host's
+//! message box), not in every message: one rule for every source of text.
+
+use std::fmt::Write as _;
+
+/// Longest message [`printable_line`] keeps whole, characters.
+pub const MAX_MESSAGE_CHARS: usize = 2000;
+
+/// `text` as one line a terminal shows as it is: every control character (line breaks,
+/// vertical tab, escape, DEL, C1) is written as a Rust-style escape (`\n`, `\u{1b}`), and text
+/// longer than `max_chars` keeps its head and tail around a `… [N characters cut] …` mark, so
+/// a message still says what went wrong and what to do when it quotes a huge input.
+#[must_use]
+pub fn printable_line(text: &str, max_chars: usize) -> String {
+    let total = text.chars().count();
+    if total <= max_chars {
+        return escape_controls(text, false);
+    }
+    let keep = max_chars / 2;
+    let head: String = text.chars().take(keep).collect();
+    let tail: String = text.chars().skip(total - keep).collect();
+    let cut = total - 2 * keep;
+    format!(
+        "{} … [{cut} character{} cut] … {}",
+        escape_controls(&head, false),
+        if cut == 1 { "" } else { "s" },
+        escape_controls(&tail, false)
+    )
+}
+
+/// `text` with every control character but the line feed escaped: for multi-line reports
+/// whose lines the program itself breaks.
+#[must_use]
+pub fn printable_lines(text: &str) -> String {
+    escape_controls(text, true)
+}
+
+fn escape_controls(text: &str, keep_newlines: bool) -> String {
+    if !text.chars().any(|c| c.is_control() && !(keep_newlines && c == '\n')) {
+        return text.to_string();
+    }
+    let mut out = String::with_capacity(text.len() + 8);
+    for c in text.chars() {
+        if c.is_control() && !(keep_newlines && c == '\n') {
+            // Writing to a String cannot fail.
+            let _ = write!(out, "{}", c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn control_characters_are_escaped() {
+        assert_eq!(printable_line("plain text — ok", 100), "plain text — ok");
+        assert_eq!(
+            printable_line("a\u{1b}[31mred\u{b}x\ny\r\u{7f}\u{9b}", 100),
+            "a\\u{1b}[31mred\\u{b}x\\ny\\r\\u{7f}\\u{9b}"
+        );
+        assert_eq!(printable_lines("one\ntwo\u{1b}\n"), "one\ntwo\\u{1b}\n");
+    }
+
+    #[test]
+    fn long_text_keeps_its_head_and_tail() {
+        let quoted = format!("VisionIP = \"{}\" is invalid: must be an IP address", "a".repeat(10_000_000));
+        let line = printable_line(&quoted, MAX_MESSAGE_CHARS);
+        assert!(line.chars().count() < MAX_MESSAGE_CHARS + 60, "{}", line.len());
+        assert!(line.starts_with("VisionIP = \"aaa"));
+        assert!(line.ends_with("is invalid: must be an IP address"));
+        assert!(line.contains(&format!("[{} characters cut]", quoted.chars().count() - MAX_MESSAGE_CHARS)));
+        let exact = "é".repeat(10);
+        assert_eq!(printable_line(&exact, 10), exact, "exactly the limit is kept whole");
+        assert_eq!(printable_line(&"é".repeat(11), 10), "ééééé … [1 character cut] … ééééé");
+    }
+}

@@ -1,0 +1,196 @@
+//! Canned drilling cycles G73, G81, G82, G83, G85 and G89 (XY plane), expanded into straight
+//! moves and dwells exactly as LinuxCNC 2.9 does (`interp_cycles.cc`, `convert_cycle_xy`).
+//!
+//! The cycle's own moves run in exact-stop mode; the path mode is restored after the line.
+
+use crate::error::{GCode, RunProblem};
+use crate::event::{Event, PathMode, Rate};
+use crate::geom::Plane;
+use vision_math::LengthUnit;
+
+use super::line::LineRun;
+use super::modal::MotionMode;
+
+/// LinuxCNC's rapid back-off of G73/G83 between pecks: 0.010 in (the 2.9 rs274 prints 0.2540 mm
+/// in a millimetre program, 0.0100 in an inch one).
+const PECK_CLEARANCE_INCH: f64 = 0.010;
+
+/// The G-code of a cycle.
+pub(crate) fn cycle_name(code: GCode) -> &'static str {
+    match code.0 {
+        730 => "G73",
+        810 => "G81",
+        820 => "G82",
+        830 => "G83",
+        850 => "G85",
+        _ => "G89",
+    }
+}
+
+/// What a series of cycle lines remembers (LinuxCNC's `cycle_r`, `cycle_cc`, `cycle_p`,
+/// `cycle_q`, `cycle_il`). Lengths in machine units, as written (incremental values stay
+/// increments).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct CycleState {
+    /// The last `R` word.
+    pub(crate) r: f64,
+    /// The last `Z` word.
+    pub(crate) z: f64,
+    /// The last `P` (seconds).
+    pub(crate) p: f64,
+    /// The last `Q` (machine units).
+    pub(crate) q: f64,
+    /// The Z where the current series of cycles started (G98 returns there); `None` once any
+    /// other motion ran.
+    pub(crate) initial_level: Option<f64>,
+}
+
+impl LineRun<'_> {
+    /// One canned-cycle line: `code` is the cycle, `previous` the motion mode before the line
+    /// (a repeated cycle may omit R, Z, P and Q).
+    pub(super) fn canned_cycle(&mut self, code: GCode, previous: Option<MotionMode>) -> Result<(), RunProblem> {
+        let name = cycle_name(code);
+        if self.st.plane != Plane::Xy {
+            return Err(RunProblem::Unsupported {
+                code: format!("{name} in {}", self.st.plane.gcode()),
+                feature: "a canned cycle outside the XY plane (G17)",
+            });
+        }
+        let feed = self.feed(name)?;
+        let repeated = previous == Some(MotionMode::Cycle(code));
+        let r_word = self.length(b'R', name)?;
+        let r_word = match (r_word, repeated) {
+            (Some(r), _) => r,
+            (None, true) => self.st.cycle.r,
+            (None, false) => {
+                return Err(RunProblem::MissingWord { code: name, letter: 'R', hint: "the retract plane, e.g. R0.1" })
+            }
+        };
+        let repeats = self.count(b'L', name, "L counts repeats and must be at least 1")?;
+        let z_word = match (self.length(b'Z', name)?, repeated) {
+            (Some(z), _) => z,
+            (None, true) => self.st.cycle.z,
+            (None, false) => {
+                return Err(RunProblem::MissingWord { code: name, letter: 'Z', hint: "the hole bottom, e.g. Z-0.5" })
+            }
+        };
+        let dwell = if matches!(code.0, 820 | 890) {
+            match (self.w.take(b'P', name)?, repeated) {
+                (Some(p), _) if p < 0.0 => return Err(RunProblem::Negative { code: name, letter: 'P', value: p }),
+                (Some(p), _) => p,
+                (None, true) => self.st.cycle.p,
+                (None, false) => {
+                    return Err(RunProblem::MissingWord {
+                        code: name,
+                        letter: 'P',
+                        hint: "the dwell in seconds, e.g. P0.5",
+                    })
+                }
+            }
+        } else {
+            0.0
+        };
+        let peck = if matches!(code.0, 730 | 830) {
+            let q = match (self.length(b'Q', name)?, repeated) {
+                (Some(q), _) => q,
+                (None, true) => self.st.cycle.q,
+                (None, false) => {
+                    return Err(RunProblem::MissingWord { code: name, letter: 'Q', hint: "the peck depth, e.g. Q0.1" })
+                }
+            };
+            if q <= 0.0 {
+                return Err(RunProblem::OutOfRange {
+                    code: name,
+                    letter: 'Q',
+                    value: q * self.cfg.machine_unit.factor_to(self.st.units),
+                    hint: "the peck depth must be positive",
+                });
+            }
+            q
+        } else {
+            0.0
+        };
+        let start = self.st.program;
+        let old_level = *self.st.cycle.initial_level.get_or_insert(start.z);
+        let (mut x, mut y, step_x, step_y, r, bottom);
+        if self.st.absolute {
+            x = self.length(b'X', name)?.unwrap_or(start.x);
+            y = self.length(b'Y', name)?.unwrap_or(start.y);
+            (step_x, step_y) = (0.0, 0.0);
+            r = r_word;
+            bottom = z_word;
+        } else {
+            step_x = self.length(b'X', name)?.unwrap_or(0.0);
+            step_y = self.length(b'Y', name)?.unwrap_or(0.0);
+            (x, y) = (start.x, start.y);
+            r = r_word + old_level;
+            bottom = r + z_word;
+        }
+        if r < bottom {
+            return Err(RunProblem::CycleRBelowZ { code: name });
+        }
+        let saved_path = self.st.path;
+        self.st.path = PathMode::ExactStop;
+        let mut level = old_level;
+        let mut current = start.z;
+        if level < r {
+            self.cycle_move(start.x, start.y, r, Rate::Rapid)?;
+            level = r;
+            current = r;
+        }
+        let clear = if self.st.retract_to_r { r } else { level };
+        let clearance = LengthUnit::Inch.convert(PECK_CLEARANCE_INCH, self.cfg.machine_unit);
+        for repeat in 0..repeats {
+            x += step_x;
+            y += step_y;
+            if repeat == 0 && current > r {
+                self.cycle_move(x, y, current, Rate::Rapid)?;
+                self.cycle_move(x, y, r, Rate::Rapid)?;
+            } else {
+                self.cycle_move(x, y, clear, Rate::Rapid)?;
+                if clear > r {
+                    self.cycle_move(x, y, r, Rate::Rapid)?;
+                }
+            }
+            match code.0 {
+                730 | 830 => {
+                    let mut depth = r - peck;
+                    while depth > bottom {
+                        self.cycle_move(x, y, depth, Rate::Feed(feed))?;
+                        if code.0 == 830 {
+                            self.cycle_move(x, y, r, Rate::Rapid)?;
+                        }
+                        self.cycle_move(x, y, depth + clearance, Rate::Rapid)?;
+                        depth -= peck;
+                    }
+                    self.cycle_move(x, y, bottom, Rate::Feed(feed))?;
+                    self.cycle_move(x, y, clear, Rate::Rapid)?;
+                }
+                850 => {
+                    self.cycle_move(x, y, bottom, Rate::Feed(feed))?;
+                    self.cycle_move(x, y, r, Rate::Feed(feed))?;
+                    self.cycle_move(x, y, clear, Rate::Rapid)?;
+                }
+                _ => {
+                    self.cycle_move(x, y, bottom, Rate::Feed(feed))?;
+                    if matches!(code.0, 820 | 890) {
+                        self.emit(Event::Dwell { line: self.line, seconds: dwell });
+                    }
+                    let out = if code.0 == 890 { Rate::Feed(feed) } else { Rate::Rapid };
+                    self.cycle_move(x, y, clear, out)?;
+                }
+            }
+        }
+        self.st.path = saved_path;
+        self.st.cycle.r = r_word;
+        self.st.cycle.z = z_word;
+        self.st.cycle.p = dwell;
+        self.st.cycle.q = peck;
+        Ok(())
+    }
+
+    /// One straight move of a cycle to program point (x, y, z).
+    fn cycle_move(&mut self, x: f64, y: f64, z: f64, rate: Rate) -> Result<(), RunProblem> {
+        self.linear(crate::geom::Xyz::new(x, y, z), rate)
+    }
+}

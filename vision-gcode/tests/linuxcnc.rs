@@ -1,0 +1,258 @@
+//! The G-code CAM post-processors and LinuxCNC programs use, checked against LinuxCNC's own
+//! interpreter: every expected position below is what `rs274` (LinuxCNC 2.9) printed for the
+//! same program (`tools/linuxcnc-oracle`), with its offsets applied.
+
+#![allow(clippy::float_cmp)]
+
+use vision_gcode::{
+    ArcDirection, Coolant, Dialect, Event, GcodeError, Interpreter, InterpreterConfig, Rate, RunOutcome, RunProblem,
+    SpindleCommand, Tool, ToolTable, Xyz,
+};
+use vision_math::LengthUnit;
+
+mod common;
+use common::moves;
+
+fn machine(unit: LengthUnit) -> Interpreter {
+    let tools = ToolTable::numbered(1, 20).with(1, Tool { offset: Xyz::new(0.0, 0.0, 0.5), outputs: None });
+    Interpreter::new(InterpreterConfig { tools, ..InterpreterConfig::new(unit) })
+}
+
+fn run(interp: &mut Interpreter, program: &str) -> Vec<Event> {
+    let mut events = Vec::new();
+    interp.run(program, None, &mut events).unwrap_or_else(|e| panic!("{e}\n{program}"));
+    events
+}
+
+fn problem(interp: &mut Interpreter, program: &str) -> RunProblem {
+    match interp.run(program, None, &mut Vec::new()) {
+        Err(GcodeError::Run { problem, .. }) => problem,
+        other => panic!("expected a run error for {program:?}, got {other:?}"),
+    }
+}
+
+fn assert_moves(got: &[(bool, [f64; 3])], want: &[(bool, [f64; 3])]) {
+    assert_eq!(got.len(), want.len(), "{got:?}");
+    for (g, w) in got.iter().zip(want) {
+        assert_eq!(g.0, w.0, "{got:?}");
+        assert!((0..3).all(|i| (g.1[i] - w.1[i]).abs() < 1e-9), "{g:?} != {w:?}");
+    }
+}
+
+const R: bool = true;
+const F: bool = false;
+
+#[test]
+fn g81_and_g83_expand_as_linuxcnc_does() {
+    let mut interp = machine(LengthUnit::Millimetre);
+    let events = run(&mut interp, "G21 G0 Z5\nG81 X1 Y1 Z-2 R1 F100\nX2\nG0 Z10\nG83 X3 Z-2.5 R1 Q1");
+    #[rustfmt::skip]
+    let want = [
+        (R, [0.0, 0.0, 5.0]),
+        (R, [1.0, 1.0, 5.0]), (R, [1.0, 1.0, 1.0]), (F, [1.0, 1.0, -2.0]), (R, [1.0, 1.0, 1.0]),
+        (R, [2.0, 1.0, 1.0]), (F, [2.0, 1.0, -2.0]), (R, [2.0, 1.0, 1.0]),
+        (R, [2.0, 1.0, 10.0]),
+        (R, [3.0, 1.0, 10.0]), (R, [3.0, 1.0, 1.0]),
+        (F, [3.0, 1.0, 0.0]), (R, [3.0, 1.0, 1.0]), (R, [3.0, 1.0, 0.254]),
+        (F, [3.0, 1.0, -1.0]), (R, [3.0, 1.0, 1.0]), (R, [3.0, 1.0, -0.746]),
+        (F, [3.0, 1.0, -2.0]), (R, [3.0, 1.0, 1.0]), (R, [3.0, 1.0, -1.746]),
+        (F, [3.0, 1.0, -2.5]), (R, [3.0, 1.0, 1.0]),
+    ];
+    assert_moves(&moves(&events), &want);
+}
+
+#[test]
+fn g73_with_g98_and_incremental_repeats() {
+    let mut interp = machine(LengthUnit::Millimetre);
+    let events = run(&mut interp, "G21 G0 Z5\nG98 G73 X3 Z-2.5 R1 Q1 F10\nG91 X1 Z-1 R-1 L2");
+    #[rustfmt::skip]
+    let want = [
+        (R, [0.0, 0.0, 5.0]),
+        (R, [3.0, 0.0, 5.0]), (R, [3.0, 0.0, 1.0]),
+        (F, [3.0, 0.0, 0.0]), (R, [3.0, 0.0, 0.254]), (F, [3.0, 0.0, -1.0]), (R, [3.0, 0.0, -0.746]),
+        (F, [3.0, 0.0, -2.0]), (R, [3.0, 0.0, -1.746]), (F, [3.0, 0.0, -2.5]), (R, [3.0, 0.0, 5.0]),
+        (R, [4.0, 0.0, 5.0]), (R, [4.0, 0.0, 4.0]), (F, [4.0, 0.0, 3.0]), (R, [4.0, 0.0, 5.0]),
+        (R, [5.0, 0.0, 5.0]), (R, [5.0, 0.0, 4.0]), (F, [5.0, 0.0, 3.0]), (R, [5.0, 0.0, 5.0]),
+    ];
+    assert_moves(&moves(&events), &want);
+    // The cycle's own moves stop exactly; the program's path mode is back afterwards.
+    assert!(matches!(events.last(), Some(Event::Linear(m)) if m.path == vision_gcode::PathMode::ExactStop));
+    assert_eq!(interp.path_mode(), vision_gcode::PathMode::Blend { tolerance: None });
+}
+
+#[test]
+fn cycles_refuse_what_linuxcnc_refuses() {
+    let mut interp = machine(LengthUnit::Inch);
+    assert!(matches!(problem(&mut interp, "F10 G81 X1 Z-1"), RunProblem::MissingWord { letter: 'R', .. }));
+    assert!(matches!(problem(&mut interp, "F10 G81 X1 R0.1"), RunProblem::MissingWord { letter: 'Z', .. }));
+    assert!(matches!(problem(&mut interp, "F10 G83 X1 R0.1 Z-1"), RunProblem::MissingWord { letter: 'Q', .. }));
+    assert!(matches!(problem(&mut interp, "F10 G82 X1 R0.1 Z-1"), RunProblem::MissingWord { letter: 'P', .. }));
+    assert!(matches!(problem(&mut interp, "F10 G81 X1 R-1 Z0"), RunProblem::CycleRBelowZ { code: "G81" }));
+    assert!(matches!(problem(&mut interp, "F10 G81 X1 R0 Z-1 L0"), RunProblem::OutOfRange { letter: 'L', .. }));
+    assert!(matches!(problem(&mut interp, "F10 G18 G81 X1 R0 Z-1"), RunProblem::Unsupported { .. }));
+    assert_eq!(problem(&mut interp, "G80 X1"), RunProblem::G80AxisWords);
+    // G82 dwells at the bottom; G89 also feeds out.
+    let events = run(&mut interp, "F10 G89 X1 R0.1 Z-1 P0.25");
+    assert!(events.iter().any(|e| matches!(e, Event::Dwell { seconds, .. } if *seconds == 0.25)));
+    assert!(matches!(events.last(), Some(Event::Linear(m)) if matches!(m.rate, Rate::Feed(_))));
+}
+
+#[test]
+fn tool_length_offsets_and_machine_coordinates() {
+    let mut interp = machine(LengthUnit::Inch);
+    // rs274: G53 G0 Z0 X0 prints (-1, -2, -3.5) before G54 (1, 2, 3) and a 0.5 tool length.
+    let events = run(&mut interp, "G20 G10 L2 P1 X1 Y2 Z3\nG43 H1\nG53 G0 Z0 X0\nG0 X0");
+    assert_moves(&moves(&events), &[(R, [0.0, 0.0, 0.0]), (R, [1.0, 0.0, 0.0])]);
+    assert_eq!(interp.program_position(), Xyz::new(0.0, -2.0, -3.5));
+    assert_eq!(problem(&mut interp, "G91 G53 G0 X1"), RunProblem::G53Form { hint: "switch to G90 first" });
+    assert!(matches!(problem(&mut interp, "G2 G53 X1 I1"), RunProblem::G53Form { .. }));
+
+    // G43 (the loaded tool), G43.1 (a length given), G49 (none): the Z the next move reaches.
+    let mut interp = machine(LengthUnit::Inch);
+    let events = run(&mut interp, "G20 T1 M6 G49\nG0 X1\nG43\nG0 X2 Z0\nG43.1 Z0.2\nG0 X3 Z0\nG49\nG0 X4 Z0");
+    assert_moves(
+        &moves(&events),
+        &[(R, [1.0, 0.0, 0.0]), (R, [2.0, 0.0, 0.5]), (R, [3.0, 0.0, 0.2]), (R, [4.0, 0.0, 0.0])],
+    );
+    assert_eq!(interp.param(5403), 0.0);
+}
+
+#[test]
+fn arcs_follow_linuxcnc_rules() {
+    // Full circle from centre words alone; R with P turns (rs274: centre (0.5, -0.866), -2).
+    let mut interp = machine(LengthUnit::Inch);
+    let events = run(&mut interp, "G20 F10\nG2 I1\nG2 X1 R1 P2");
+    let arcs: Vec<_> = events.iter().filter_map(|e| if let Event::Arc(a) = e { Some(*a) } else { None }).collect();
+    assert_eq!(arcs.len(), 2);
+    assert_eq!((arcs[0].end, arcs[0].center), (Xyz::ZERO, Xyz::new(1.0, 0.0, 0.0)));
+    assert!((arcs[0].angle - std::f64::consts::TAU).abs() < 1e-12);
+    assert_eq!((arcs[1].direction, arcs[1].extra_turns()), (ArcDirection::Clockwise, 1));
+    assert!((arcs[1].center.x - 0.5).abs() < 1e-12 && (arcs[1].center.y + 0.75_f64.sqrt()).abs() < 1e-12);
+
+    // Radius difference: within 0.1 % passes even beyond the absolute tolerance; beyond both,
+    // refused (rs274 accepts 0.02 mm of 5 mm, refuses 0.03 mm and 0.02 in of 5 in).
+    let mut mm = machine(LengthUnit::Millimetre);
+    run(&mut mm, "G21 F10\nG2 X10.02 Y0 I5 J0");
+    run(&mut mm, "G0 X0 Y0\nG2 X2000.5 I1000 J0");
+    assert!(matches!(problem(&mut mm, "G0 X0 Y0\nG2 X10.03 Y0 I5 J0"), RunProblem::ArcRadiusMismatch { .. }));
+    assert!(matches!(problem(&mut mm, "G20 G0 X0 Y0\nG2 X10.02 Y0 I5 J0"), RunProblem::ArcRadiusMismatch { .. }));
+    // Never more than 100 times the tolerance (0.2828 in), even on a huge arc.
+    let mut inch = machine(LengthUnit::Inch);
+    assert!(matches!(problem(&mut inch, "G20 F10 G2 X1000.3 I500 J0"), RunProblem::ArcRadiusMismatch { .. }));
+    run(&mut inch, "G20 F10 G2 X1000.2 I500 J0");
+    // Radius too small: below 0.00005 in (rs274: "Zero-radius arc"), named as such.
+    let mut inch = machine(LengthUnit::Inch);
+    assert_eq!(problem(&mut inch, "G20 F10 G2 X0.00008 I0.00004 J0"), RunProblem::ArcZeroRadius);
+    run(&mut inch, "G20 F10 G2 X0.0021 I0.001 J0");
+    assert_eq!(problem(&mut mm, "G21 G0 X0 Y0\nG2 X0.002 I0.001 J0"), RunProblem::ArcZeroRadius);
+    assert!(RunProblem::ArcZeroRadius.to_string().contains("radius too small"));
+}
+
+#[test]
+fn cam_preamble_spindle_and_coolant() {
+    let mut interp = machine(LengthUnit::Inch);
+    let program = "%\nG17 G40 G49 G80 G90 G20 G94 G97\nM3 S12000 M8\nG64 P0.001 Q0.001\nM7 M8\nM9 M5\n%\nG0 X5";
+    let mut events = Vec::new();
+    let outcome = interp.run(program, None, &mut events).expect("runs");
+    // The closing `%` ends the program: G0 X5 never runs.
+    assert_eq!(outcome, RunOutcome::Completed { lines: 7 });
+    assert!(events.iter().all(|e| !matches!(e, Event::Linear(_))));
+    let kinds: Vec<String> = events
+        .iter()
+        .map(|e| match e {
+            Event::Spindle { command, speed, .. } => format!("{} {speed:?}", command.gcode()),
+            Event::Coolant { coolant, .. } => coolant.gcode().to_string(),
+            other => format!("{other:?}"),
+        })
+        .collect();
+    assert_eq!(kinds, ["M3 Some(12000.0)", "M8", "M7", "M8", "M5 Some(12000.0)", "M9"]);
+    assert_eq!(problem(&mut interp, "M8 M9"), RunProblem::ModalConflict { first: "M8".into(), second: "M9".into() });
+    // With a tool loaded, M3 still drives that tool's outputs (seed 002).
+    let events = run(&mut interp, "T1 M6\nM3");
+    assert!(matches!(&events[1], Event::Output(o) if o.tool == Some(1) && o.command == SpindleCommand::Clockwise));
+    assert!(!matches!(events[1], Event::Coolant { coolant: Coolant::Off, .. }));
+}
+
+#[test]
+fn motion_codes_alone_move_as_in_linuxcnc() {
+    // rs274 prints a traverse to the current point for a bare `G0`, and G28's first leg.
+    let mut interp = machine(LengthUnit::Inch);
+    let events = run(&mut interp, "G0 X1\nG0\nG28");
+    assert_moves(&moves(&events), &[(R, [1.0, 0.0, 0.0]), (R, [1.0, 0.0, 0.0]), (R, [1.0, 0.0, 0.0]), (R, [0.0; 3])]);
+    // `G80 G0` (a common safety line) is one motion code: G0 wins.
+    run(&mut interp, "G80 G0 X2");
+    assert_eq!(interp.machine_position().x, 2.0);
+    // Block delete off (default): the `/` is ignored; on: the line is skipped.
+    run(&mut interp, "/G0 X3");
+    assert_eq!(interp.machine_position().x, 3.0);
+    let mut skip = Interpreter::new(InterpreterConfig { block_delete: true, ..InterpreterConfig::default() });
+    run(&mut skip, "/N10 G0 X3\nG0 Y1");
+    assert_eq!(skip.machine_position(), Xyz::new(0.0, 1.0, 0.0));
+}
+
+#[test]
+fn unsupported_features_are_named() {
+    let mut interp = machine(LengthUnit::Inch);
+    for (text, feature) in [
+        ("G7", "lathe"),
+        ("G33 Z1 K0.1", "spindle-synchronised"),
+        ("G76 P0.1", "threading"),
+        ("G96 S100", "constant surface speed"),
+        ("G5.2 X1 Y1", "NURBS"),
+        ("G6.2", "NURBS"),
+        ("G41 D1", "cutter radius compensation"),
+        ("G38.2 Z-1", "probing"),
+        ("G93", "inverse-time"),
+        ("M66 P0", "HAL"),
+        ("G10 L2 P1 R30", "rotation"),
+    ] {
+        let message = problem(&mut interp, text).to_string();
+        assert!(message.contains(feature), "{text}: {message}");
+    }
+}
+
+#[test]
+fn dialects_differ_where_the_controllers_do() {
+    let with = |dialect| {
+        let tools = ToolTable::numbered(1, 20).with(1, Tool { offset: Xyz::new(0.0, 0.0, 0.5), outputs: None });
+        Interpreter::new(InterpreterConfig { tools, dialect, ..InterpreterConfig::default() })
+    };
+    // G92 on some axes: seed 002 zeroes the others, Mach4 and LinuxCNC keep them.
+    for (dialect, y) in [(Dialect::MachineMotion, 0.0), (Dialect::Mach4, -1.0), (Dialect::LinuxCnc, -1.0)] {
+        let mut interp = with(dialect);
+        run(&mut interp, "G0 X1 Y1\nG92 X0 Y0\nG92 X5");
+        assert_eq!(interp.g92_offset().y, -y, "{dialect:?}");
+    }
+    // Tool length: from M6 in seed 002, from G43 on Mach4 and LinuxCNC.
+    for (dialect, z) in [(Dialect::MachineMotion, 0.5), (Dialect::Mach4, 0.0), (Dialect::LinuxCnc, 0.0)] {
+        let mut interp = with(dialect);
+        run(&mut interp, "T1 M6\nG0 Z0");
+        assert_eq!(interp.machine_position().z, z, "{dialect:?}");
+        run(&mut interp, "G43\nG0 Z0");
+        assert_eq!(interp.machine_position().z, 0.5, "{dialect:?}");
+    }
+    // Comments nest only in seed 002.
+    run(&mut with(Dialect::MachineMotion), "G0 X1 (a (b) c) Y2");
+    let err = with(Dialect::Mach4).run("G0 X1 (a (b) c) Y2", None, &mut Vec::new()).expect_err("flat comments");
+    assert!(matches!(err, GcodeError::Syntax { .. }), "{err}");
+    run(&mut with(Dialect::LinuxCnc), "G0 X1 (a (b c) Y2");
+    // G68/G51 are Mach codes.
+    run(&mut with(Dialect::Mach4), "G68 X0 Y0 R30\nG69");
+    assert!(matches!(problem(&mut with(Dialect::LinuxCnc), "G68 X0 Y0 R30"), RunProblem::Unsupported { .. }));
+    assert_eq!(Dialect::LinuxCnc.name(), "linuxcnc");
+}
+
+#[test]
+fn polar_words_and_rotary_axes_are_named_not_misread() {
+    let mut interp = Interpreter::new(InterpreterConfig { dialect: Dialect::LinuxCnc, ..InterpreterConfig::default() });
+    for text in ["G1 @1 ^30 F10", "G0 ^45"] {
+        match interp.run(text, None, &mut Vec::new()) {
+            Err(GcodeError::Syntax { problem: vision_gcode::SyntaxProblem::PolarCoordinates, .. }) => {}
+            other => panic!("{text}: {other:?}"),
+        }
+    }
+    // Under LinuxCNC a lone A beside M3 is the rotary axis, not seed 002's output device.
+    assert_eq!(problem(&mut interp, "G0 A90 M3"), RunProblem::AxisNotSupported { letter: 'A' });
+    let mut seed = machine(LengthUnit::Inch);
+    assert_eq!(problem(&mut seed, "M3 A1"), RunProblem::OutputForm { code: "M3" });
+}
