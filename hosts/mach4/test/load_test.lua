@@ -1,0 +1,56 @@
+-- Run by load-test.sh in the stock lua5.3: load mach_vision with a plain `require`, run the real
+-- m280.mcs (success: the cancel line reaches mcCntlGcodeExecuteWait) and m281.mcs (K not
+-- calibrated: mcCntlSetLastError with the manual's message, then mcCntlCycleStop).
+-- Arguments: the folder holding mach_vision.so (also used as the Mach4 folder), the Macros folder.
+local dir, macros = arg[1], arg[2]
+package.cpath = dir .. "/?.so;" .. package.cpath
+
+local log = { executed = {}, errors = {}, stopped = false, locals = {} }
+local NOERROR = 0
+mc = { MERROR_NOERROR = NOERROR, X_AXIS = 0, Y_AXIS = 1, MTOOL_MILL_X = 11, MTOOL_MILL_Y = 12,
+       SV_C = 1002, SV_D = 1003, SV_P = 1015, SV_Q = 1016 }
+function mc.mcGetInstance() return 0 end
+function mc.mcInEditor() return 0 end
+function mc.mcCntlGetMachDir(inst) return dir, NOERROR end
+function mc.mcProfileGetName(inst) return "LoadTest", NOERROR end
+function mc.mcCntlGetLocalVarFlag(inst, h, var) return (log.locals[var] and 1 or 0), NOERROR end
+function mc.mcCntlGetLocalVar(inst, h, var) return log.locals[var], NOERROR end
+function mc.mcCntlGcodeExecuteWait(inst, code) table.insert(log.executed, code); return NOERROR end
+function mc.mcCntlGetPoundVar(inst, n) return 0.0, NOERROR end
+function mc.mcCntlSetPoundVar(inst, n, v) return NOERROR end
+function mc.mcToolGetCurrent(inst) return 0, NOERROR end
+function mc.mcToolGetData(inst, field, tool) return 0.0, NOERROR end
+function mc.mcToolSetData(inst, field, tool, v) return NOERROR end
+function mc.mcAxisGetPos(inst, axis) return 0.0, NOERROR end
+function mc.mcCntlGetUnitsCurrent(inst) return 200, NOERROR end
+function mc.mcCntlSetLastError(inst, message) table.insert(log.errors, message); return NOERROR end
+function mc.mcCntlCycleStop(inst) log.stopped = true; return NOERROR end
+
+-- Vision enabled, Keyence at an address nothing answers (neither call below triggers).
+os.execute('mkdir -p "' .. dir .. '/Profiles/LoadTest"')
+local profile = assert(io.open(dir .. "/Profiles/LoadTest/MachVision.toml", "w"))
+profile:write('[vision]\nVisionEnabled = true\nVisionIP = "127.0.0.1"\n')
+profile:close()
+
+local function check(ok, what) if not ok then error("load test: " .. what, 2) end end
+
+local vision = require("mach_vision")
+check(type(vision.mcode) == "function", "require('mach_vision') returned no mcode")
+dofile(macros .. "/m280.mcs")
+dofile(macros .. "/m281.mcs")
+
+log.locals = { [mc.SV_P] = 3 }
+local ok, message, gcode = m280(7)
+check(ok, "M280 P3 refused: " .. tostring(message))
+check(gcode[1] == "G69 G50 G52 X0 Y0", "M280 emitted " .. tostring(gcode[1]))
+check(log.executed[1] == "G69 G50 G52 X0 Y0", "M280's cancel line did not reach Mach4")
+check(not log.stopped, "M280 stopped the cycle")
+
+log.locals = {}
+ok, message = m281(7)
+check(not ok and message:find("K matrix is zero", 1, true), "M281 without K: " .. tostring(message))
+check(log.errors[#log.errors] == message, "M281's refusal did not reach mcCntlSetLastError")
+check(log.stopped, "M281's refusal did not stop the cycle")
+check(#log.executed == 1, "M281's refusal ran G-code")
+
+print("load test: mach_vision " .. vision.version .. " loads in " .. _VERSION .. " and runs M280/M281")

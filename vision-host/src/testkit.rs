@@ -1,0 +1,364 @@
+//! Helpers for the tests of host bridges (feature `testkit`): the simulated machine as a
+//! [`Host`], the CLI's run path as the reference, and a [`Trace`] of a program to compare the
+//! two by.
+
+use vision_core::{DriverRegistry, Machine, Params, Timestamp, VisionModule};
+use vision_driver_keyence::emulator::{DriverSource, Emulator, EmulatorHandle, NumberStyle, OutputFormat};
+use vision_driver_sim::{Sim, SimMachine, World};
+use vision_gcode::{Context, HandlerError, MCodeHandler, RunOutcome, UserMCode};
+use vision_math::{LengthUnit, Point2, Vector2};
+use vision_mcode::{fixed_clock, Clock, ContextMachine, VisionHandler};
+
+use crate::{Host, HostError, Session};
+
+/// The clock of every test run, so both paths write the same `VisionCal_Date`.
+#[must_use]
+pub fn clock() -> Clock {
+    fixed_clock(Timestamp::from_unix(1_800_000_000, 0))
+}
+
+/// First pound variable of the Vision block (the default `VisionPoundVarBase`).
+pub const POUND_BASE: u32 = 500;
+/// Variables in the Vision block (5 slots × 8 fields).
+pub const POUND_COUNT: u32 = 40;
+
+/// A [`Host`] over any [`Machine`] (the simulator, or the interpreter inside a handler).
+pub struct MachineHost<'m> {
+    machine: &'m mut dyn Machine,
+    /// Every message shown to the operator, in order.
+    pub messages: Vec<String>,
+    /// Answer [`Host::alignment_active`] from the machine (`false`: answer "cannot tell", as
+    /// Mach4 does).
+    pub knows_alignment: bool,
+}
+
+impl<'m> MachineHost<'m> {
+    /// The host over `machine`.
+    pub fn new(machine: &'m mut dyn Machine) -> MachineHost<'m> {
+        MachineHost { machine, messages: Vec::new(), knows_alignment: false }
+    }
+}
+
+fn host(e: vision_core::MachineError) -> HostError {
+    HostError::host(e.message)
+}
+
+impl Host for MachineHost<'_> {
+    fn execute(&mut self, line: &str) -> Result<(), HostError> {
+        self.machine.run_gcode(&[line.to_string()]).map_err(host)
+    }
+    fn pound(&self, index: u32) -> Result<f64, HostError> {
+        self.machine.pound(index).map_err(host)
+    }
+    fn set_pound(&mut self, index: u32, value: f64) -> Result<(), HostError> {
+        self.machine.set_pound(index, value).map_err(host)
+    }
+    fn active_tool(&self) -> Result<u32, HostError> {
+        Ok(self.machine.active_tool())
+    }
+    fn tool_offset(&self, tool: u32) -> Result<Vector2<f64>, HostError> {
+        self.machine.tool_offset(tool).map_err(host)
+    }
+    fn set_tool_offset(&mut self, tool: u32, offset: Vector2<f64>) -> Result<(), HostError> {
+        self.machine.set_tool_offset(tool, offset).map_err(host)
+    }
+    fn position(&self) -> Result<Point2<f64>, HostError> {
+        Ok(self.machine.program_position())
+    }
+    fn units(&self) -> Result<LengthUnit, HostError> {
+        Ok(self.machine.units())
+    }
+    fn dwell(&mut self, seconds: f64) -> Result<(), HostError> {
+        self.machine.dwell(seconds);
+        Ok(())
+    }
+    fn alignment_active(&self) -> Result<Option<bool>, HostError> {
+        Ok(self.knows_alignment.then(|| self.machine.active_alignment().is_some()))
+    }
+    fn message(&mut self, text: &str) {
+        self.messages.push(text.to_string());
+    }
+    fn now(&self) -> Timestamp {
+        self.machine.now()
+    }
+}
+
+/// A simulation of the built-in world.
+///
+/// # Panics
+/// Never for the built-in world (it validates).
+#[must_use]
+pub fn sim() -> Sim {
+    Sim::new(World::default_world()).expect("the built-in world validates")
+}
+
+/// The parameters `mach-vision run` starts from without `--profile`: a perfect calibration of
+/// the world, the simulated camera as the driver.
+///
+/// # Panics
+/// Never for the built-in world.
+#[must_use]
+pub fn sim_params(sim: &Sim) -> Params {
+    let mut params = sim.calibrated_params(&Params::default()).expect("the built-in world calibrates");
+    params.set("VisionDriver", "Sim").expect("a string parameter");
+    params
+}
+
+/// Vision enabled with the simulated camera and the world's camera tool, but K never
+/// calibrated (all zero).
+///
+/// # Panics
+/// Never: the values are valid.
+#[must_use]
+pub fn uncalibrated_params(sim: &Sim) -> Params {
+    let mut p = Params::default();
+    p.set("VisionEnabled", true).expect("a yes/no parameter");
+    p.set("VisionDriver", "Sim").expect("a string parameter");
+    p.set("VisionCameraToolNumber", i64::from(sim.world().machine.camera_tool)).expect("a tool number");
+    p
+}
+
+/// A program a Vision M-code refuses.
+#[derive(Debug, Clone, Copy)]
+pub struct Refusal {
+    /// The program (the refused M-code is its last Vision call).
+    pub program: &'static str,
+    /// A piece of the manual's message.
+    pub says: &'static str,
+    /// Run it with [`uncalibrated_params`] instead of [`sim_params`].
+    pub uncalibrated: bool,
+}
+
+impl Refusal {
+    /// The parameters to run it with (`None`: [`sim_params`]).
+    #[must_use]
+    pub fn params(&self) -> Option<Params> {
+        self.uncalibrated.then(|| uncalibrated_params(&sim()))
+    }
+}
+
+/// The error paths every host must handle: an NG capture (no mark in view), K not
+/// calibrated, the wrong tool in the spindle.
+pub const REFUSALS: [Refusal; 3] = [
+    Refusal { program: "G90 G20\nT98 M6\nG0 X30 Y30\nM281\nG0 X1\nM30\n", says: "no mark", uncalibrated: false },
+    Refusal { program: "G90 G20\nT98 M6\nM281\nM30\n", says: "K matrix is zero", uncalibrated: true },
+    Refusal { program: "G90 G20\nT98 M6\nM280\nT1 M6\nM281 D1\nM30\n", says: "tool", uncalibrated: false },
+];
+
+/// Which camera answers the triggers in a test run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Camera {
+    /// The simulated camera, called directly.
+    Sim,
+    /// The Keyence driver over TCP to an emulated VS camera on loopback whose results come from
+    /// the simulated camera (the recommended 8-field format, fixed-width numbers).
+    Keyence,
+}
+
+/// A fresh simulation of the built-in world and its camera, as `mach-vision run` sets them up.
+pub struct Rig {
+    /// The simulation.
+    pub sim: Sim,
+    /// Keeps the loopback camera alive for the run.
+    pub emulator: Option<EmulatorHandle>,
+}
+
+impl Rig {
+    /// The rig for `camera`, and a Vision module on it with `params` (`None`: [`sim_params`]).
+    ///
+    /// # Panics
+    /// When the loopback emulator cannot start or `params` name another driver (test bugs).
+    #[must_use]
+    pub fn new(params: Option<Params>, camera: Camera) -> (Rig, VisionModule) {
+        let sim = sim();
+        let mut params = params.unwrap_or_else(|| sim_params(&sim));
+        let emulator = match camera {
+            Camera::Sim => None,
+            Camera::Keyence => {
+                let emulator = Emulator::builder()
+                    .source(DriverSource(Box::new(sim.camera())))
+                    .format(OutputFormat::Full)
+                    .numbers(NumberStyle::FixedWidth)
+                    .bind("127.0.0.1:0")
+                    .expect("a loopback port");
+                params.set("VisionDriver", "Keyence").expect("a string parameter");
+                params.set("VisionIP", "127.0.0.1").expect("an address");
+                params.set("VisionPort", i64::from(emulator.addr().port())).expect("a port");
+                Some(emulator)
+            }
+        };
+        let mut registry = DriverRegistry::new();
+        sim.register(&mut registry);
+        vision_driver_keyence::register(&mut registry);
+        let module = VisionModule::from_registry(params, &registry).expect("the camera's driver");
+        (Rig { sim, emulator }, module)
+    }
+
+    /// Runs `program` on a fresh machine of the rig with `handler`; the machine afterwards (for
+    /// [`Trace::collect`]) and how the program ended.
+    ///
+    /// # Panics
+    /// Never for the built-in world.
+    pub fn run(&self, program: &str, handler: &mut dyn MCodeHandler) -> (SimMachine, Result<RunOutcome, String>) {
+        let mut machine = SimMachine::new(&self.sim).expect("the built-in machine");
+        let end = machine.run_program(program, Some(handler), &mut |_: &vision_gcode::Event| {});
+        (machine, end.map_err(|e| e.to_string()))
+    }
+}
+
+/// One Vision M-code of a program: the G-code it emitted, or the operator's message.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Call {
+    /// The M number.
+    pub mcode: u32,
+    /// The emitted G-code lines, or the error message.
+    pub result: Result<Vec<String>, String>,
+}
+
+/// What a program did, in the terms every path can be compared by.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Trace {
+    /// Every Vision M-code, in order.
+    pub calls: Vec<Call>,
+    /// How the program ended: `completed`, `ended`, or the error.
+    pub end: Result<&'static str, String>,
+    /// `#500`…`#539` at the end.
+    pub pound: Vec<f64>,
+    /// The camera tool's X/Y table offset at the end, current units (M283 writes it).
+    pub camera_offset: Vector2<f64>,
+    /// The machine (spindle) position at the end, world unit.
+    pub position: [f64; 3],
+    /// Per present fixture: the largest cut error (world unit) over its nominal marks under the
+    /// last M282's G-code, measured with the tool active at the end.
+    pub cut_errors: Vec<(String, f64)>,
+}
+
+impl Trace {
+    /// Compares with `want`: the Vision calls (emitted G-code text, messages) and the end
+    /// exactly, every number within `1e-9` (a session knows the alignment it emitted exactly,
+    /// the interpreter as the G-code's fixed decimals, so a capture in the aligned frame can
+    /// differ in the last bits).
+    ///
+    /// # Panics
+    /// On the first difference, showing both.
+    pub fn assert_matches(&self, want: &Trace) {
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 || (a.is_nan() && b.is_nan());
+        assert_eq!(self.calls, want.calls);
+        assert_eq!(self.end, want.end);
+        let numbers = |t: &Trace| {
+            let mut v = t.pound.clone();
+            v.extend([t.camera_offset.x, t.camera_offset.y]);
+            v.extend(t.position);
+            v.extend(t.cut_errors.iter().map(|c| c.1));
+            v
+        };
+        let (got, wanted) = (numbers(self), numbers(want));
+        assert!(
+            got.len() == wanted.len() && got.iter().zip(&wanted).all(|(a, b)| close(*a, *b)),
+            "got {self:?}\nwant {want:?}"
+        );
+        assert!(self.cut_errors.iter().zip(&want.cut_errors).all(|(a, b)| a.0 == b.0));
+    }
+
+    /// The trace of a program that ended with `end` on `machine`, Vision calls `calls`.
+    #[must_use]
+    pub fn collect(machine: &SimMachine, calls: Vec<Call>, end: Result<RunOutcome, String>) -> Trace {
+        let sim = machine.sim();
+        let world = sim.world();
+        let unit = world.length_unit();
+        let pound = (POUND_BASE..POUND_BASE + POUND_COUNT).map(|n| machine.interpreter().param(n)).collect();
+        let camera_offset = machine
+            .interpreter()
+            .tool_offset(world.machine.camera_tool)
+            .map_or_else(Vector2::zeros, |o| Vector2::new(o.x, o.y));
+        let p = machine.interpreter().machine_position();
+        let last_m282 = calls.iter().rev().find(|c| c.mcode == 282).and_then(|c| c.result.clone().ok());
+        let cut_errors = last_m282.map_or_else(Vec::new, |gcode| {
+            world
+                .fixtures
+                .iter()
+                .filter(|f| f.present)
+                .map(|f| {
+                    let worst = f
+                        .nominal_marks(unit)
+                        .into_iter()
+                        .map(|n| machine.cut_error(&gcode, &f.name, n).unwrap_or(f64::NAN))
+                        .fold(0.0, f64::max);
+                    (f.name.clone(), worst)
+                })
+                .collect()
+        });
+        let end = end.map(|o| match o {
+            RunOutcome::Completed { .. } => "completed",
+            RunOutcome::Ended { .. } => "ended",
+        });
+        Trace { calls, end, pound, camera_offset, position: [p.x, p.y, p.z], cut_errors }
+    }
+}
+
+/// `program` as `mach-vision run` runs it (the [`VisionHandler`] inside the interpreter) on a
+/// fresh [`Rig`].
+#[must_use]
+pub fn reference(program: &str, params: Option<Params>, camera: Camera) -> Trace {
+    let (rig, module) = Rig::new(params, camera);
+    let mut handler = VisionHandler::new(module, clock());
+    let (machine, end) = rig.run(program, &mut handler);
+    let calls = handler
+        .take_records()
+        .into_iter()
+        .map(|r| Call { mcode: r.mcode, result: r.result.map(|o| o.gcode().to_vec()).map_err(|e| e.to_string()) })
+        .collect();
+    Trace::collect(&machine, calls, end)
+}
+
+/// The interpreter's M280–M284 handler that runs each call through a [`Session`] on the
+/// interpreter as its [`Host`] — the bridges' path without a bridge.
+pub struct SessionHandler {
+    /// The session.
+    pub session: Session,
+    clock: Clock,
+    /// Every Vision call so far.
+    pub calls: Vec<Call>,
+    /// Whether the host answers [`Host::alignment_active`] (see [`MachineHost`]).
+    pub knows_alignment: bool,
+}
+
+impl SessionHandler {
+    /// A handler around `session`.
+    #[must_use]
+    pub fn new(session: Session) -> SessionHandler {
+        SessionHandler { session, clock: clock(), calls: Vec::new(), knows_alignment: false }
+    }
+}
+
+impl MCodeHandler for SessionHandler {
+    fn call(&mut self, call: &UserMCode<'_>, ctx: &mut Context<'_>) -> Result<Vec<String>, HandlerError> {
+        let mut machine = ContextMachine::new(ctx, &self.clock);
+        let mut host = MachineHost::new(&mut machine);
+        host.knows_alignment = self.knows_alignment;
+        let result = self.session.mcode(&mut host, call.code(), call.words());
+        let result = result.map(|o| o.gcode().to_vec()).map_err(|e| e.to_string());
+        self.calls.push(Call { mcode: call.code(), result: result.clone() });
+        // The module already ran its G-code on the host.
+        result.map(|_| Vec::new()).map_err(HandlerError::Failed)
+    }
+}
+
+/// `program` run through a [`Session`] (no bridge) on a fresh [`Rig`].
+#[must_use]
+pub fn through_session(program: &str, params: Option<Params>, camera: Camera) -> Trace {
+    let (rig, module) = Rig::new(params, camera);
+    let mut handler = SessionHandler::new(Session::new(module));
+    let (machine, end) = rig.run(program, &mut handler);
+    Trace::collect(&machine, handler.calls, end)
+}
+
+/// The text of example program `name` (e.g. `04-rectangle-fit.nc`).
+///
+/// # Panics
+/// When the file is missing (a test bug).
+#[must_use]
+pub fn example(name: &str) -> String {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/programs").join(name);
+    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}

@@ -1,0 +1,111 @@
+//! The session on the simulated machine gives what `mach-vision run` gives.
+
+use vision_core::Params;
+use vision_host::testkit::{
+    clock, example, reference, sim, through_session, Camera, Rig, SessionHandler, Trace, REFUSALS,
+};
+use vision_host::{registry, HostError, Session};
+use vision_mcode::McodeError;
+
+fn assert_same(program: &str, params: impl Fn() -> Option<Params>, camera: Camera) -> Trace {
+    let want = reference(program, params(), camera);
+    let got = through_session(program, params(), camera);
+    got.assert_matches(&want);
+    got
+}
+
+#[test]
+fn alignment_examples_emit_the_same_gcode_and_cut_the_same() {
+    for (name, marks) in [("04-rectangle-fit.nc", 4), ("05-similarity-fit.nc", 3)] {
+        let trace = assert_same(&example(name), || None, Camera::Sim);
+        assert_eq!(trace.end, Ok("ended"), "{name}");
+        let m281 = trace.calls.iter().filter(|c| c.mcode == 281 && c.result.is_ok()).count();
+        assert_eq!(m281, marks, "{name}");
+        let m282 = trace.calls.iter().find(|c| c.mcode == 282).expect("M282");
+        let gcode = m282.result.as_ref().expect("M282 succeeds");
+        assert_eq!(gcode.len(), 4, "{name}: {gcode:?}");
+        assert!(gcode[2].starts_with("G68 X"), "{name}: {gcode:?}");
+        let (_, worst) = trace.cut_errors.iter().find(|(f, _)| f == "demo target").expect("the demo part");
+        assert!(*worst < 2e-3, "{name}: cut error {worst} in");
+    }
+}
+
+#[test]
+fn the_keyence_driver_against_the_loopback_emulator_matches_the_cli() {
+    let trace = assert_same(&example("07-switch-jobs.nc"), || None, Camera::Keyence);
+    assert_eq!(trace.end, Ok("ended"));
+    assert!(trace.calls.iter().all(|c| c.result.is_ok()), "{:?}", trace.calls);
+}
+
+#[test]
+fn calibration_verify_and_job_examples_match_the_cli() {
+    for name in ["01-calibrate-sheet.nc", "02-verify-calibration.nc", "07-switch-jobs.nc"] {
+        let trace = assert_same(&example(name), || None, Camera::Sim);
+        assert_eq!(trace.end, Ok("ended"), "{name}");
+        assert!(trace.calls.iter().all(|c| c.result.is_ok()), "{name}: {:?}", trace.calls);
+    }
+}
+
+/// The error paths stop the program at the M-code with the manual's message and leave the
+/// pound block as it was.
+#[test]
+fn refusals_stop_the_program_and_change_nothing() {
+    for case in REFUSALS {
+        let (program, says) = (case.program, case.says);
+        let trace = assert_same(program, || case.params(), Camera::Sim);
+        let last = trace.calls.last().expect("a Vision call");
+        let message = last.result.as_ref().expect_err("refused");
+        assert!(message.contains(says), "{program:?}: {message}");
+        let end = trace.end.as_ref().expect_err("stopped");
+        assert!(end.contains(message.as_str()), "{end}");
+        assert!(trace.pound.iter().all(|v| *v == 0.0), "{program:?}: {:?}", trace.pound);
+    }
+}
+
+#[test]
+fn a_fresh_profile_is_disabled_until_enabled() {
+    let path = std::env::temp_dir().join(format!("vision-host-fresh-{}.toml", std::process::id()));
+    let mut session = Session::open(&path, &registry()).expect("a missing profile is a fresh one");
+    let sim = sim();
+    let mut interp = vision_driver_sim::SimMachine::new(&sim).expect("machine").interpreter().clone();
+    let mut sink = |_: &vision_gcode::Event| {};
+    let mut ctx = interp.context(&mut sink);
+    let clock = clock();
+    let mut machine = vision_mcode::ContextMachine::new(&mut ctx, &clock);
+    let mut host = vision_host::testkit::MachineHost::new(&mut machine);
+    let e = session.mcode(&mut host, 280, &[]).expect_err("disabled");
+    assert!(matches!(e, HostError::Mcode(McodeError::Vision(_))), "{e:?}");
+    assert!(e.to_string().contains("not enabled"), "{e}");
+    let e = session.mcode(&mut host, 281, &[('X', 1.0)]).expect_err("bad word");
+    assert!(matches!(e, HostError::Mcode(McodeError::UnknownWord { .. })), "{e:?}");
+    assert!(host.messages.is_empty());
+    assert!(!path.exists(), "a refusal saves nothing");
+}
+
+/// After an aligned program that cancelled its alignment itself, a host that can tell lets the
+/// next program calibrate as `mach-vision run` does; one that cannot keeps the session's
+/// alignment, and M283 refuses until an M280.
+#[test]
+fn a_program_after_an_aligned_one_sees_the_cancel_only_when_the_host_can_tell() {
+    let first = example("04-rectangle-fit.nc");
+    // Example 1 from where example 4 left the head: back over the sheet's start dot first.
+    let second = "G90 G20 G54\nT98 M6\nG0 X-2.5 Y-4.0\nM283 C1\nM30\n".to_string();
+    for knows in [true, false] {
+        let (rig, module) = Rig::new(None, Camera::Sim);
+        let mut handler = SessionHandler::new(Session::new(module));
+        handler.knows_alignment = knows;
+        let mut machine = vision_driver_sim::SimMachine::new(&rig.sim).expect("machine");
+        for program in [&first, &second] {
+            machine.run_program(program, Some(&mut handler), &mut |_: &vision_gcode::Event| {}).ok();
+        }
+        let m283 = handler.calls.last().expect("M283");
+        assert_eq!(m283.mcode, 283);
+        if knows {
+            assert!(m283.result.is_ok(), "{m283:?}");
+            assert!(handler.session.alignment().is_none());
+        } else {
+            let message = m283.result.as_ref().expect_err("refused");
+            assert!(message.contains("M280") || message.contains("G69"), "{message}");
+        }
+    }
+}

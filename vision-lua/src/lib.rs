@@ -1,0 +1,110 @@
+//! `mach_vision`: the Vision M-codes M280–M284 as a Lua 5.3 native module for Mach4.
+//!
+//! Each `Macros/mNNN.mcs` of the profile defines `mNNN(hParam)` with one line,
+//! `return require("mach_vision").mcode(NNN, hParam)`. Everything else happens here: the line's words are read
+//! with `mc.mcCntlGetLocalVarFlag` / `mcCntlGetLocalVar`, the call runs through
+//! [`vision_host::Session`] on [`Mach4`] (the [`vision_host::Host`] over Mach4's `mc` API), and
+//! a refusal goes to `mc.mcCntlSetLastError` followed by `mc.mcCntlCycleStop`, which stops the
+//! program. The session lives in the Lua state between calls; its profile is
+//! `<Mach4 dir>/Profiles/<profile>/MachVision.toml` unless `mach_vision.open(path)` named one.
+//!
+//! Built with the `module` feature it is the shipped library (it links no Lua: the Lua 5.3 of
+//! the process that loads it provides every symbol); the default `vendored` feature compiles
+//! Lua 5.3 in for the tests.
+//!
+//! Lua API (every function returns `ok, message, gcode`: `true, nil, {lines}` on success,
+//! `false, "why", {}` after reporting the failure to Mach4):
+//!
+//! * `mach_vision.mcode(m, hParam)`: runs M-code `m` (280–284) with the words of `hParam`.
+//! * `mach_vision.open(path)`: (re)opens the session from profile file `path`.
+//! * `mach_vision.version`: the crate version.
+//!
+//! ```
+//! # #[cfg(feature = "vendored")] {
+//! use mlua::{Function, Lua};
+//!
+//! // Outside Mach4 there is no `mc` table: the call is refused, not a crash.
+//! let lua = Lua::new();
+//! let module = mach_vision::mach_vision(&lua)?;
+//! let mcode: Function = module.get("mcode")?;
+//! let (ok, message, _gcode): (bool, Option<String>, Vec<String>) = mcode.call((281, 7))?;
+//! assert!(!ok && message.is_some_and(|m| m.contains("no `mc` table")));
+//! # }
+//! # Ok::<(), mlua::Error>(())
+//! ```
+
+mod mach4;
+
+use std::path::PathBuf;
+
+use mlua::{Lua, Table, Value};
+use vision_host::{registry, HostError, Session};
+
+pub use mach4::Mach4;
+
+/// The session of one Lua state, taken out for the length of a call.
+struct Slot(Option<Session>);
+
+/// What every Lua entry point returns: `ok, message, gcode`.
+type Answer = (bool, Option<String>, Vec<String>);
+
+/// Installs `session` as the Lua state's Vision session (replacing any), so the next M-code uses
+/// it: how tests put a simulated camera behind the module, and how `open` works.
+pub fn install(lua: &Lua, session: Session) {
+    lua.set_app_data(Slot(Some(session)));
+}
+
+/// The module table `require("mach_vision")` returns.
+///
+/// # Errors
+/// Lua's allocation errors only.
+#[cfg_attr(feature = "module", mlua::lua_module(name = "mach_vision"))]
+pub fn mach_vision(lua: &Lua) -> mlua::Result<Table> {
+    let exports = lua.create_table()?;
+    exports.set("mcode", lua.create_function(|lua, (m, h_param): (u32, Value)| Ok(mcode(lua, m, &h_param)))?)?;
+    exports.set("open", lua.create_function(|lua, path: String| Ok(open(lua, PathBuf::from(path))))?)?;
+    exports.set("version", env!("CARGO_PKG_VERSION"))?;
+    Ok(exports)
+}
+
+/// The answer of a call that failed after `host` reported it to the operator.
+fn refused(host: Option<&Mach4>, e: &HostError) -> Answer {
+    let message = e.to_string();
+    if let Some(host) = host {
+        host.fail(&message);
+    }
+    (false, Some(message), Vec::new())
+}
+
+fn open(lua: &Lua, path: PathBuf) -> Answer {
+    let host = Mach4::new(lua).ok();
+    match Session::open(&path, &registry()) {
+        Ok(session) => {
+            install(lua, session);
+            (true, None, Vec::new())
+        }
+        Err(e) => refused(host.as_ref(), &e),
+    }
+}
+
+fn mcode(lua: &Lua, m: u32, h_param: &Value) -> Answer {
+    let mut host = match Mach4::new(lua) {
+        Ok(host) => host,
+        Err(e) => return refused(None, &e),
+    };
+    let taken = lua.app_data_mut::<Slot>().and_then(|mut slot| slot.0.take());
+    let session = match taken {
+        Some(session) => Ok(session),
+        None => host.profile_path().and_then(|path| Session::open(&path, &registry())),
+    };
+    let mut session = match session {
+        Ok(session) => session,
+        Err(e) => return refused(Some(&host), &e),
+    };
+    let result = host.words(h_param).and_then(|words| session.mcode(&mut host, m, &words));
+    install(lua, session);
+    match result {
+        Ok(outcome) => (true, None, outcome.gcode().to_vec()),
+        Err(e) => refused(Some(&host), &e),
+    }
+}

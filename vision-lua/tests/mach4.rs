@@ -1,0 +1,283 @@
+//! The real `hosts/mach4/Macros/m28x.mcs`, unmodified, in Lua 5.3 against a fake `mc` whose
+//! motion is the project's interpreter driving the simulator: the same G-code and the same cut
+//! error as `mach-vision run`, and the manual's messages on the error paths.
+
+use std::cell::RefCell;
+use std::path::Path;
+
+use mlua::{Function, Lua, Table, Value};
+use vision_core::Params;
+use vision_gcode::{Context, HandlerError, MCodeHandler, UserMCode};
+use vision_host::testkit::{example, reference, Call, Camera, Rig, Trace, REFUSALS};
+use vision_host::Session;
+use vision_mcode::VISION_MCODES;
+
+const NO_ERROR: i64 = 0;
+const NOT_NOW: i64 = -18;
+/// The `hParam` handle the fake hands each macro.
+const H_PARAM: i64 = 7;
+
+fn hosts_mach4() -> &'static Path {
+    Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../hosts/mach4"))
+}
+
+/// A Lua 5.3 state as Mach4's macro state: the fake `mc`, the module on `require`, the five
+/// macros loaded from their files.
+fn mach4_lua() -> Lua {
+    let lua = Lua::new();
+    lua.load(include_str!("fake_mc.lua")).set_name("fake_mc.lua").exec().expect("fake mc");
+    let preload: Table = lua.globals().get::<Table>("package").and_then(|p| p.get("preload")).expect("preload");
+    let open = lua.create_function(|lua, ()| mach_vision::mach_vision(lua)).expect("loader");
+    preload.set("mach_vision", open).expect("preload");
+    for m in VISION_MCODES {
+        let path = hosts_mach4().join(format!("Macros/m{m}.mcs"));
+        let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        lua.load(text).set_name(format!("m{m}.mcs")).exec().unwrap_or_else(|e| panic!("m{m}.mcs: {e}"));
+    }
+    lua
+}
+
+fn fake(lua: &Lua) -> Table {
+    lua.globals().get("fake").expect("fake")
+}
+
+/// The interpreter's M280–M284 handler that runs the Mach4 macro `mNNN(hParam)`, with the
+/// motion calls of `mc` over the interpreter for the length of the call.
+struct MacroHandler {
+    lua: Lua,
+    calls: Vec<Call>,
+    /// G-code lines run through `mcCntlGcodeExecuteWait`, per call.
+    executed: Vec<Vec<String>>,
+}
+
+fn rc(result: Result<(), impl std::fmt::Display>) -> i64 {
+    result.map_or(NOT_NOW, |()| NO_ERROR)
+}
+
+impl MacroHandler {
+    fn run_macro(&self, code: u32, ctx: &mut Context<'_>, executed: &RefCell<Vec<String>>) -> mlua::Result<Call> {
+        let lua = &self.lua;
+        let mc: Table = lua.globals().get("mc")?;
+        let ctx = RefCell::new(ctx);
+        lua.scope(|scope| {
+            mc.set(
+                "mcCntlGcodeExecuteWait",
+                scope.create_function(|_, (_, code): (Value, String)| {
+                    executed.borrow_mut().push(code.clone());
+                    Ok(rc(ctx.borrow_mut().execute(&code)))
+                })?,
+            )?;
+            mc.set(
+                "mcCntlGetPoundVar",
+                scope.create_function(|_, (_, n): (Value, u32)| {
+                    Ok(ctx.borrow().pound(n).map_or((0.0, NOT_NOW), |v| (v, NO_ERROR)))
+                })?,
+            )?;
+            mc.set(
+                "mcCntlSetPoundVar",
+                scope.create_function(|_, (_, n, v): (Value, u32, f64)| Ok(rc(ctx.borrow_mut().set_pound(n, v))))?,
+            )?;
+            mc.set(
+                "mcToolGetCurrent",
+                scope.create_function(|_, _: Value| Ok((ctx.borrow().active_tool(), NO_ERROR)))?,
+            )?;
+            mc.set(
+                "mcToolGetData",
+                scope.create_function(|_, (_, field, tool): (Value, i64, u32)| {
+                    Ok(match ctx.borrow().tool_offset(tool) {
+                        Ok(o) if field == 11 => (o.x, NO_ERROR),
+                        Ok(o) if field == 12 => (o.y, NO_ERROR),
+                        _ => (0.0, NOT_NOW),
+                    })
+                })?,
+            )?;
+            mc.set(
+                "mcToolSetData",
+                scope.create_function(|_, (_, field, tool, v): (Value, i64, u32, f64)| {
+                    let mut ctx = ctx.borrow_mut();
+                    let Ok(o) = ctx.tool_offset(tool) else { return Ok(NOT_NOW) };
+                    let (x, y) = if field == 11 { (v, o.y) } else { (o.x, v) };
+                    Ok(rc(ctx.set_tool_offset(tool, x, y)))
+                })?,
+            )?;
+            mc.set(
+                "mcAxisGetPos",
+                scope.create_function(|_, (_, axis): (Value, i64)| {
+                    let p = ctx.borrow().program_position();
+                    Ok(match axis {
+                        0 => (p.x, NO_ERROR),
+                        1 => (p.y, NO_ERROR),
+                        _ => (0.0, NOT_NOW),
+                    })
+                })?,
+            )?;
+            mc.set(
+                "mcCntlGetUnitsCurrent",
+                scope.create_function(|_, _: Value| {
+                    Ok((if ctx.borrow().units() == vision_math::LengthUnit::Inch { 200 } else { 210 }, NO_ERROR))
+                })?,
+            )?;
+            let run: Function = lua.globals().get(format!("m{code}"))?;
+            let (ok, message, gcode): (bool, Option<String>, Vec<String>) = run.call(H_PARAM)?;
+            let result = if ok { Ok(gcode) } else { Err(message.unwrap_or_default()) };
+            Ok(Call { mcode: code, result })
+        })
+    }
+}
+
+impl MCodeHandler for MacroHandler {
+    fn call(&mut self, call: &UserMCode<'_>, ctx: &mut Context<'_>) -> Result<Vec<String>, HandlerError> {
+        let failed = |e: mlua::Error| HandlerError::Failed(format!("Lua: {e}"));
+        let fake = fake(&self.lua);
+        let mc: Table = self.lua.globals().get("mc").map_err(failed)?;
+        let locals = self.lua.create_table().map_err(failed)?;
+        for (letter, value) in call.words() {
+            let var: i64 = mc.get(format!("SV_{}", letter.to_ascii_uppercase())).map_err(failed)?;
+            locals.set(var, *value).map_err(failed)?;
+        }
+        fake.set("locals", locals).map_err(failed)?;
+        fake.set("stopped", false).map_err(failed)?;
+        let executed = RefCell::new(Vec::new());
+        let done = self.run_macro(call.code(), ctx, &executed).map_err(failed)?;
+        self.executed.push(executed.into_inner());
+        self.calls.push(done.clone());
+        let stopped: bool = fake.get("stopped").map_err(failed)?;
+        match (done.result, stopped) {
+            // The macro already ran its G-code through mcCntlGcodeExecuteWait.
+            (Ok(_), false) => Ok(Vec::new()),
+            (Err(message), true) => Err(HandlerError::Failed(message)),
+            (result, stopped) => Err(HandlerError::Failed(format!("inconsistent: {result:?}, stopped {stopped}"))),
+        }
+    }
+}
+
+/// `program` through the Mach4 macros on a fresh [`Rig`].
+fn through_lua(program: &str, params: Option<Params>, camera: Camera) -> (Trace, MacroHandler) {
+    let (rig, module) = Rig::new(params, camera);
+    let lua = mach4_lua();
+    mach_vision::install(&lua, Session::new(module));
+    let mut handler = MacroHandler { lua, calls: Vec::new(), executed: Vec::new() };
+    let (machine, end) = rig.run(program, &mut handler);
+    let trace = Trace::collect(&machine, handler.calls.clone(), end);
+    (trace, handler)
+}
+
+fn assert_same(program: &str, params: impl Fn() -> Option<Params>, camera: Camera) -> (Trace, MacroHandler) {
+    let want = reference(program, params(), camera);
+    let (got, handler) = through_lua(program, params(), camera);
+    got.assert_matches(&want);
+    (got, handler)
+}
+
+#[test]
+fn rectangle_and_similarity_fits_through_the_macros_match_the_cli() {
+    for (name, marks, camera) in [
+        ("04-rectangle-fit.nc", 4, Camera::Sim),
+        ("05-similarity-fit.nc", 3, Camera::Sim),
+        ("04-rectangle-fit.nc", 4, Camera::Keyence),
+        ("05-similarity-fit.nc", 3, Camera::Keyence),
+    ] {
+        let (trace, handler) = assert_same(&example(name), || None, camera);
+        assert_eq!(trace.end, Ok("ended"), "{name}");
+        let captures = trace.calls.iter().filter(|c| c.mcode == 281 && c.result.is_ok()).count();
+        assert_eq!(captures, marks, "{name}");
+        let i = trace.calls.iter().position(|c| c.mcode == 282).expect("M282");
+        let gcode = trace.calls[i].result.as_ref().expect("M282 succeeds");
+        // M282's four lines reached Mach4 through mcCntlGcodeExecuteWait, one call each.
+        assert_eq!(&handler.executed[i], gcode, "{name}");
+        assert!(gcode[1].starts_with("G52 X") && gcode[3].starts_with("G51 X"), "{gcode:?}");
+        let (_, worst) = trace.cut_errors.iter().find(|(f, _)| f == "demo target").expect("the demo part");
+        assert!(*worst < 2e-3, "{name}: cut error {worst} in");
+        let status: Vec<String> = fake(&handler.lua).get("errors").expect("errors");
+        assert_eq!(status.last().map(String::as_str), Some("M282: alignment applied"));
+    }
+}
+
+#[test]
+fn calibration_verify_and_job_switch_through_the_macros_match_the_cli() {
+    for (name, camera) in [
+        ("01-calibrate-sheet.nc", Camera::Sim),
+        ("02-verify-calibration.nc", Camera::Sim),
+        ("07-switch-jobs.nc", Camera::Sim),
+        ("07-switch-jobs.nc", Camera::Keyence),
+    ] {
+        let (trace, _) = assert_same(&example(name), || None, camera);
+        assert_eq!(trace.end, Ok("ended"), "{name}");
+        assert!(trace.calls.iter().all(|c| c.result.is_ok()), "{name}: {:?}", trace.calls);
+    }
+}
+
+/// NG capture, K not calibrated, wrong tool: `mcCntlSetLastError` with the manual's message,
+/// the cycle stopped, no G-code run by the macro, the pound block untouched.
+#[test]
+fn refusals_report_to_mach4_stop_the_program_and_change_nothing() {
+    for (case, camera) in REFUSALS.iter().flat_map(|c| [(c, Camera::Sim), (c, Camera::Keyence)]) {
+        let (program, says) = (case.program, case.says);
+        let (trace, handler) = assert_same(program, || case.params(), camera);
+        let last = trace.calls.last().expect("a Vision call");
+        let message = last.result.as_ref().expect_err("refused");
+        assert!(message.contains(says), "{program:?}: {message}");
+        let errors: Vec<String> = fake(&handler.lua).get("errors").expect("errors");
+        assert_eq!(errors.last(), Some(message), "{program:?}");
+        assert!(fake(&handler.lua).get::<bool>("stopped").expect("flag"), "{program:?}");
+        assert!(handler.executed.last().is_some_and(Vec::is_empty), "{program:?}: {:?}", handler.executed);
+        assert!(trace.pound.iter().all(|v| *v == 0.0), "{program:?}: {:?}", trace.pound);
+        assert!(trace.end.as_ref().is_err_and(|e| e.contains(message.as_str())), "{:?}", trace.end);
+    }
+}
+
+#[test]
+fn without_a_session_the_module_opens_the_profile_beside_mach4s() {
+    let dir = std::env::temp_dir().join(format!("mach-vision-lua-{}", std::process::id()));
+    let lua = mach4_lua();
+    fake(&lua).set("machDir", dir.display().to_string()).expect("dir");
+    let run: Function = lua.globals().get("m280").expect("m280");
+    let (ok, message, gcode): (bool, Option<String>, Vec<String>) = run.call(H_PARAM).expect("runs");
+    // No MachVision.toml yet: a fresh, disabled profile.
+    assert!(!ok && gcode.is_empty());
+    assert!(message.as_deref().is_some_and(|m| m.contains("not enabled")), "{message:?}");
+    assert!(!dir.join("Profiles/Mach4Mill/MachVision.toml").exists());
+    // The editor's test block calls the macro without hParam: a clear refusal, not a crash.
+    let (ok, message, _): (bool, Option<String>, Vec<String>) =
+        lua.globals().get::<Function>("m281").and_then(|f| f.call(())).expect("runs");
+    assert!(!ok, "{message:?}");
+    assert!(fake(&lua).get::<bool>("stopped").expect("flag"));
+}
+
+/// Mach4's own failures (a non-zero return code, an answer that is not a unit) reach the
+/// operator naming the call, and stop the cycle.
+#[test]
+fn mach4_return_codes_are_reported_by_name() {
+    let (_rig, module) = Rig::new(None, Camera::Sim);
+    let lua = mach4_lua();
+    mach_vision::install(&lua, Session::new(module));
+    lua.load(
+        r#"
+        function mc.mcCntlGetPoundVar(inst, n) return 0.0, mc.MERROR_NOERROR end
+        function mc.mcToolGetCurrent(inst) return 98, mc.MERROR_NOERROR end
+        function mc.mcCntlGetUnitsCurrent(inst) return fake.units, mc.MERROR_NOERROR end
+        function mc.mcAxisGetPos(inst, axis) return 0.0, mc.MERROR_NOERROR end
+        function mc.mcCntlGcodeExecuteWait(inst, code) return mc.MERROR_NOT_NOW end
+        fake.units = 200
+        "#,
+    )
+    .exec()
+    .expect("mc");
+    let run = |m: &str| -> (bool, Option<String>) {
+        let f: Function = lua.globals().get(m).expect("macro");
+        let (ok, message, _): (bool, Option<String>, Vec<String>) = f.call(H_PARAM).expect("runs");
+        (ok, message)
+    };
+    let (ok, message) = run("m280");
+    assert!(!ok);
+    let message = message.expect("a message");
+    assert!(message.contains("mc.mcCntlGcodeExecuteWait returned error code -18"), "{message}");
+    let errors: Vec<String> = fake(&lua).get("errors").expect("errors");
+    assert_eq!(errors.last(), Some(&message));
+    assert!(fake(&lua).get::<bool>("stopped").expect("flag"));
+
+    fake(&lua).set("units", 215).expect("units");
+    let (ok, message) = run("m281");
+    assert!(!ok);
+    assert!(message.is_some_and(|m| m.contains("neither 200 (G20) nor 210 (G21)")));
+}
