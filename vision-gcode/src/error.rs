@@ -525,6 +525,14 @@ pub enum RunProblem {
         /// The L value.
         l: f64,
     },
+    /// A word, computed position or offset beyond ±[`crate::MAX_COORDINATE`] machine units.
+    #[error("{what} is {value:e} machine units, beyond ±{max:e}: check the program's units and values", max = crate::MAX_COORDINATE)]
+    BeyondRange {
+        /// What it is (`the X word`, `the move's machine position`, `#5221`).
+        what: String,
+        /// The value, machine units.
+        value: f64,
+    },
     /// A computed machine position that is not finite (e.g. huge values through G51).
     #[error("the move's machine position is not a finite number: check the values and the active G51 scale")]
     NonFinitePosition,

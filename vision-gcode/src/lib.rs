@@ -99,6 +99,9 @@
 //! * **G92** with an axis word missing zeroes that axis's G92 offset (seed 002); G52, G51 and
 //!   G10 L2 leave unmentioned axes unchanged. G92 and G10 L20 make the current point read exactly
 //!   the given values.
+//! * **Ranges.** Axis words, moves' machine positions (arc centres included), offsets and the
+//!   offset parameters are refused beyond ±[`MAX_COORDINATE`] machine units, the bound the path
+//!   planner uses too; `G68 R` is at most ±360°, a `G51` factor's magnitude 0.001 to 1000.
 //! * **G68** needs `R` (degrees, counter-clockwise); an omitted `X`/`Y` centre is the current
 //!   point (in the scaled frame), so nothing jumps. **G51** takes `X`/`Y` factors only, refuses
 //!   zero, and allows negative factors (a mirror, which reverses arc directions).
@@ -169,7 +172,7 @@ pub use error::{GCode, GcodeError, RunProblem, SyntaxProblem};
 pub use event::{
     ArcMove, Coolant, Event, EventSink, LinearMove, OutputChange, OutputWrite, PathMode, Rate, SpindleCommand, UserCall,
 };
-pub use geom::{ArcDirection, Plane, Xyz};
+pub use geom::{ArcDirection, Plane, Xyz, MAX_COORDINATE};
 pub use handler::{Context, HandlerError, MCodeHandler, UserMCode};
 pub use interp::{needs_program, Interpreter, MotionMode, RunOutcome};
 pub use tools::{DigitalOutput, Tool, ToolOutputs, ToolTable};
