@@ -140,6 +140,12 @@ pub enum SyntaxProblem {
         /// The nesting limit.
         limit: u32,
     },
+    /// A line's expressions hold more operands than the parser takes.
+    #[error("the line's expressions hold more than {limit} operands: split the computation over several lines")]
+    TooLong {
+        /// The operand limit.
+        limit: usize,
+    },
     /// `#n` at the start of an item must be an assignment.
     #[error("expected `=` after `#...`: a parameter at the start of an item is an assignment, `#1 = 2`")]
     ExpectedEquals,

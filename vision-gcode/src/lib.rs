@@ -140,7 +140,8 @@
 //!   `G12`), `N` must come first, a letter may not repeat (G and M excepted). Unlike LinuxCNC,
 //!   parentheses nest inside comments, because the manual's own programs write
 //!   `( ... (lower-left -2.5,-4.0) )`. Any NaN or infinity in an expression is an error, never a
-//!   coordinate.
+//!   coordinate. Expressions nest at most 64 deep and one line's hold at most 10 000 operands
+//!   ([`SyntaxProblem::TooLong`]), so a runaway generated line costs little memory.
 //! * Seed 002's G19 snippet as printed starts 353.6 mm from its arc centre and ends 250 mm from
 //!   it; it is refused like LinuxCNC refuses it (the test runs it with the start the other
 //!   plane snippets use).
