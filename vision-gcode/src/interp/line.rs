@@ -380,9 +380,18 @@ impl LineRun<'_> {
 
     /// A length word in machine units.
     pub(super) fn length(&mut self, letter: u8, owner: &'static str) -> Result<Option<f64>, RunProblem> {
+        Ok(self.length_as_written(letter, owner)?.map(|(_, machine)| machine))
+    }
+
+    /// A length word as written (program units) and in machine units.
+    pub(super) fn length_as_written(
+        &mut self,
+        letter: u8,
+        owner: &'static str,
+    ) -> Result<Option<(f64, f64)>, RunProblem> {
         match self.w.take(letter, owner)? {
             None => Ok(None),
-            Some(v) => in_range(self.conv(v), || format!("{owner}'s {} word", char::from(letter))).map(Some),
+            Some(v) => Ok(Some((v, in_range(self.conv(v), || format!("{owner}'s {} word", char::from(letter)))?))),
         }
     }
 
