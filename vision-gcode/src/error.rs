@@ -448,6 +448,9 @@ pub enum RunProblem {
         /// The name (lower case).
         name: String,
     },
+    /// LinuxCNC: the text ended without M2/M30 or a closing `%`.
+    #[error("the program ended with no M2/M30 or closing %: LinuxCNC refuses that; end it with M2")]
+    NoProgramEnd,
     /// `endsub` or `return` with no call to return from.
     #[error("endsub/return outside a subroutine call")]
     FlowOutsideCall,

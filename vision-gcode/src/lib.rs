@@ -121,7 +121,9 @@
 //! * **Parameters** `#1`–`#9999` (0 by default). The offsets live in LinuxCNC's addresses in
 //!   machine units (G28 #5161, G92 #5211, G54… #5221 + 20·(n − 1)); #5220, #5400–#5409 and
 //!   #5420–#5428 report the state in current units and are read-only.
-//! * **Program end.** M2/M30 emit [`Event::ProgramEnd`], stop the run, and reset G54, G17, G90,
+//! * **Program end.** Under LinuxCNC a text that ends without M2/M30 or a closing `%` is an
+//!   error ([`RunProblem::NoProgramEnd`]), as in rs274; the other dialects complete it.
+//!   M2/M30 emit [`Event::ProgramEnd`], stop the run, and reset G54, G17, G90,
 //!   G91.1, the path mode, the motion mode, G51/G68/G52 and G92; outputs are the host's to
 //!   switch off. At start no motion mode is active: axis words before G0–G3 are an error.
 //! * **Feed.** A feed move before any `F` is an error unless

@@ -107,7 +107,8 @@ impl Interpreter {
     ///
     /// # Errors
     /// The first line that fails; it changed nothing (see the crate documentation for user
-    /// M-code lines) and no later line ran.
+    /// M-code lines) and no later line ran. Under LinuxCNC, [`RunProblem::NoProgramEnd`] at the
+    /// last line when the text ends without M2/M30 or a closing `%`.
     pub fn run(
         &mut self,
         text: &str,
@@ -134,6 +135,16 @@ impl Interpreter {
                 started = !raw.trim().is_empty();
             }
             lines = line;
+        }
+        self.completed(lines)
+    }
+
+    /// The text ran to its end without M2/M30 or a closing `%`: complete, except under
+    /// LinuxCNC, whose rs274 refuses such a file ("File ended with no percent sign or program
+    /// end"); Mach4 and seed 002 run it.
+    pub(crate) fn completed(&self, lines: u32) -> Result<RunOutcome, GcodeError> {
+        if self.config.dialect == Dialect::LinuxCnc {
+            return Err(GcodeError::run(lines, RunProblem::NoProgramEnd));
         }
         Ok(RunOutcome::Completed { lines })
     }
