@@ -12,6 +12,7 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 use serde_json::{json, Value};
 use vision_core::text::{printable_line, MAX_MESSAGE_CHARS};
+use vision_driver_sim::MachineDialect;
 use vision_gcode::{
     ArcDirection, Dialect, Event, GcodeError, Interpreter, InterpreterConfig, PathMode, Rate, RunOutcome, Xyz,
 };
@@ -57,10 +58,15 @@ pub(crate) enum DialectArg {
 
 impl DialectArg {
     pub(crate) fn dialect(self) -> Dialect {
+        self.machine().dialect()
+    }
+
+    /// The same choice as a world's `machine.dialect` (`run` puts it there).
+    pub(crate) fn machine(self) -> MachineDialect {
         match self {
-            DialectArg::Machinemotion => Dialect::MachineMotion,
-            DialectArg::Mach4 => Dialect::Mach4,
-            DialectArg::Linuxcnc => Dialect::LinuxCnc,
+            DialectArg::Machinemotion => MachineDialect::Machinemotion,
+            DialectArg::Mach4 => MachineDialect::Mach4,
+            DialectArg::Linuxcnc => MachineDialect::Linuxcnc,
         }
     }
 }

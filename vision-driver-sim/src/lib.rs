@@ -63,4 +63,4 @@ pub use machine::SimMachine;
 pub use optics::Optics;
 pub use sim::Sim;
 pub use truth::CalibrationError;
-pub use world::{CameraMount, Fixture, Job, MachineSetup, Tool, World, WorldUnit, DEFAULT_WORLD_TOML};
+pub use world::{CameraMount, Fixture, Job, MachineDialect, MachineSetup, Tool, World, WorldUnit, DEFAULT_WORLD_TOML};

@@ -40,6 +40,7 @@ impl SimMachine {
         let world = sim.world();
         let unit = world.length_unit();
         let mut config = InterpreterConfig::new(unit);
+        config.dialect = world.machine.dialect.dialect();
         for t in &world.machine.tools {
             config
                 .tools
@@ -178,6 +179,24 @@ mod tests {
     fn centred(sim: &Sim, r: &Reading) -> bool {
         let want = sim.optics().resolution() * 0.5;
         (r.x_px - want.x).abs() < 0.5 && (r.y_px - want.y).abs() < 0.5
+    }
+
+    #[test]
+    fn the_world_names_the_controls_dialect() {
+        let (_, m) = machine();
+        assert_eq!(m.interpreter().config().dialect, vision_gcode::Dialect::MachineMotion);
+        let toml = crate::DEFAULT_WORLD_TOML.replace("dialect = \"machinemotion\"", "dialect = \"mach4\"");
+        let sim = Sim::new(World::from_toml(&toml).expect("world")).expect("sim");
+        let mut mach4 = SimMachine::new(&sim).expect("machine");
+        assert_eq!(mach4.interpreter().config().dialect, vision_gcode::Dialect::Mach4);
+        // Mach4 applies tool offsets at G43, not at M6: T98 M6 leaves the spindle where it is.
+        let before = mach4.interpreter().machine_position();
+        execute(&mut mach4, "G90 G0 X0 Y0\nT98 M6\nG0 X0 Y0");
+        let after_m6 = mach4.interpreter().machine_position();
+        execute(&mut mach4, "G43 H98\nG0 X0 Y0");
+        assert!((after_m6 - mach4.interpreter().machine_position()).norm() > 1.0, "{before:?} {after_m6:?}");
+        let bad = crate::DEFAULT_WORLD_TOML.replace("dialect = \"machinemotion\"", "dialect = \"fanuc\"");
+        assert!(World::from_toml(&bad).is_err());
     }
 
     #[test]

@@ -37,6 +37,33 @@ impl WorldUnit {
     }
 }
 
+/// Whose G-code rules the simulated control follows where the controllers differ
+/// ([`vision_gcode::Dialect`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MachineDialect {
+    /// Seed 002's MachineMotion (`"machinemotion"`): M6 applies tool offsets, G92 zeroes the
+    /// axes it does not name, comments nest. The default: the examples are written for it.
+    #[default]
+    Machinemotion,
+    /// Mach4 (`"mach4"`): tool offsets from G43 only, G92 keeps unnamed axes.
+    Mach4,
+    /// LinuxCNC 2.9 (`"linuxcnc"`): as Mach4, without G68/G51.
+    Linuxcnc,
+}
+
+impl MachineDialect {
+    /// The interpreter's dialect.
+    #[must_use]
+    pub fn dialect(self) -> vision_gcode::Dialect {
+        match self {
+            MachineDialect::Machinemotion => vision_gcode::Dialect::MachineMotion,
+            MachineDialect::Mach4 => vision_gcode::Dialect::Mach4,
+            MachineDialect::Linuxcnc => vision_gcode::Dialect::LinuxCnc,
+        }
+    }
+}
+
 /// A simulated world: the camera, the machine, and what lies on the table.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -165,6 +192,9 @@ pub struct MachineSetup {
     /// 20 in/s² = 508 mm/s²). Used for cycle times.
     #[serde(default)]
     pub max_accel: Option<f64>,
+    /// The control's G-code dialect (default `"machinemotion"`).
+    #[serde(default)]
+    pub dialect: MachineDialect,
 }
 
 /// Default axis speed, inch per second.

@@ -140,6 +140,12 @@ pub enum SyntaxProblem {
         /// The nesting limit.
         limit: u32,
     },
+    /// A line's expressions hold more operands than the parser takes.
+    #[error("the line's expressions hold more than {limit} operands: split the computation over several lines")]
+    TooLong {
+        /// The operand limit.
+        limit: usize,
+    },
     /// `#n` at the start of an item must be an assignment.
     #[error("expected `=` after `#...`: a parameter at the start of an item is an assignment, `#1 = 2`")]
     ExpectedEquals,
@@ -442,6 +448,9 @@ pub enum RunProblem {
         /// The name (lower case).
         name: String,
     },
+    /// LinuxCNC: the text ended without M2/M30 or a closing `%`.
+    #[error("the program ended with no M2/M30 or closing %: LinuxCNC refuses that; end it with M2")]
+    NoProgramEnd,
     /// `endsub` or `return` with no call to return from.
     #[error("endsub/return outside a subroutine call")]
     FlowOutsideCall,
@@ -524,6 +533,14 @@ pub enum RunProblem {
     G10Form {
         /// The L value.
         l: f64,
+    },
+    /// A word, computed position or offset beyond ±[`crate::MAX_COORDINATE`] machine units.
+    #[error("{what} is {value:e} machine units, beyond ±{max:e}: check the program's units and values", max = crate::MAX_COORDINATE)]
+    BeyondRange {
+        /// What it is (`the X word`, `the move's machine position`, `#5221`).
+        what: String,
+        /// The value, machine units.
+        value: f64,
     },
     /// A computed machine position that is not finite (e.g. huge values through G51).
     #[error("the move's machine position is not a finite number: check the values and the active G51 scale")]

@@ -99,6 +99,9 @@
 //! * **G92** with an axis word missing zeroes that axis's G92 offset (seed 002); G52, G51 and
 //!   G10 L2 leave unmentioned axes unchanged. G92 and G10 L20 make the current point read exactly
 //!   the given values.
+//! * **Ranges.** Axis words, moves' machine positions (arc centres included), offsets and the
+//!   offset parameters are refused beyond ±[`MAX_COORDINATE`] machine units, the bound the path
+//!   planner uses too; `G68 R` is at most ±360°, a `G51` factor's magnitude 0.001 to 1000.
 //! * **G68** needs `R` (degrees, counter-clockwise); an omitted `X`/`Y` centre is the current
 //!   point (in the scaled frame), so nothing jumps. **G51** takes `X`/`Y` factors only, refuses
 //!   zero, and allows negative factors (a mirror, which reverses arc directions).
@@ -118,7 +121,9 @@
 //! * **Parameters** `#1`–`#9999` (0 by default). The offsets live in LinuxCNC's addresses in
 //!   machine units (G28 #5161, G92 #5211, G54… #5221 + 20·(n − 1)); #5220, #5400–#5409 and
 //!   #5420–#5428 report the state in current units and are read-only.
-//! * **Program end.** M2/M30 emit [`Event::ProgramEnd`], stop the run, and reset G54, G17, G90,
+//! * **Program end.** Under LinuxCNC a text that ends without M2/M30 or a closing `%` is an
+//!   error ([`RunProblem::NoProgramEnd`]), as in rs274; the other dialects complete it.
+//!   M2/M30 emit [`Event::ProgramEnd`], stop the run, and reset G54, G17, G90,
 //!   G91.1, the path mode, the motion mode, G51/G68/G52 and G92; outputs are the host's to
 //!   switch off. At start no motion mode is active: axis words before G0–G3 are an error.
 //! * **Feed.** A feed move before any `F` is an error unless
@@ -137,7 +142,8 @@
 //!   `G12`), `N` must come first, a letter may not repeat (G and M excepted). Unlike LinuxCNC,
 //!   parentheses nest inside comments, because the manual's own programs write
 //!   `( ... (lower-left -2.5,-4.0) )`. Any NaN or infinity in an expression is an error, never a
-//!   coordinate.
+//!   coordinate. Expressions nest at most 64 deep and one line's hold at most 10 000 operands
+//!   ([`SyntaxProblem::TooLong`]), so a runaway generated line costs little memory.
 //! * Seed 002's G19 snippet as printed starts 353.6 mm from its arc centre and ends 250 mm from
 //!   it; it is refused like LinuxCNC refuses it (the test runs it with the start the other
 //!   plane snippets use).
@@ -169,7 +175,7 @@ pub use error::{GCode, GcodeError, RunProblem, SyntaxProblem};
 pub use event::{
     ArcMove, Coolant, Event, EventSink, LinearMove, OutputChange, OutputWrite, PathMode, Rate, SpindleCommand, UserCall,
 };
-pub use geom::{ArcDirection, Plane, Xyz};
+pub use geom::{ArcDirection, Plane, Xyz, MAX_COORDINATE};
 pub use handler::{Context, HandlerError, MCodeHandler, UserMCode};
 pub use interp::{needs_program, Interpreter, MotionMode, RunOutcome};
 pub use tools::{DigitalOutput, Tool, ToolOutputs, ToolTable};

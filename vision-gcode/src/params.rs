@@ -8,6 +8,7 @@
 use std::collections::HashMap;
 
 use crate::error::RunProblem;
+use crate::geom::MAX_COORDINATE;
 use crate::words::whole_in;
 
 /// Highest parameter number.
@@ -30,6 +31,20 @@ pub const TOOL_NUMBER: u32 = 5400;
 pub const TOOL_OFFSET: u32 = 5401;
 /// `#5420`–`#5422`: the current X, Y, Z in the program frame, current units. Read-only.
 pub const POSITION: u32 = 5420;
+
+/// Number of coordinate systems: 1 (G54) … 6 (G59); G59.1–G59.3 are not supported.
+pub(crate) const SYSTEMS: u32 = 6;
+
+/// First parameter of coordinate system `n` (1 = G54 … 6 = G59; a number outside that range
+/// stands for the nearest system).
+pub(crate) fn work_offset_base(n: u32) -> u32 {
+    WORK_OFFSET_BASE + WORK_OFFSET_STRIDE * (n.clamp(1, SYSTEMS) - 1)
+}
+
+/// Whether `#n` holds the X, Y or Z origin of one of the coordinate systems.
+pub(crate) fn is_work_offset(n: u32) -> bool {
+    (WORK_OFFSET_BASE..work_offset_base(SYSTEMS) + 3).contains(&n) && (n - WORK_OFFSET_BASE) % WORK_OFFSET_STRIDE < 3
+}
 
 /// Parameter numbers differing from a whole number by less than this are taken as that number.
 const INDEX_TOLERANCE: f64 = 1e-4;
@@ -154,8 +169,17 @@ impl Params {
         if !value.is_finite() {
             return Err(RunProblem::NonFinite { what: "the value written to a parameter" });
         }
+        if Params::holds_machine_length(n) && value.abs() > MAX_COORDINATE {
+            return Err(RunProblem::BeyondRange { what: format!("the value written to #{n}"), value });
+        }
         self.set(n, value);
         Ok(())
+    }
+
+    /// Whether `#n` holds a position or an offset (machine units) that reaches the machine.
+    fn holds_machine_length(n: u32) -> bool {
+        let in_block = |base: u32| (base..base + 3).contains(&n);
+        in_block(G28_POSITION) || in_block(G30_POSITION) || in_block(G92_OFFSET) || is_work_offset(n)
     }
 
     /// Writes `#n` unconditionally, logging the old value (the interpreter's own writes).

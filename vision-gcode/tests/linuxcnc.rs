@@ -217,25 +217,31 @@ fn dialects_differ_where_the_controllers_do() {
         let tools = ToolTable::numbered(1, 20).with(1, Tool { offset: Xyz::new(0.0, 0.0, 0.5), outputs: None });
         Interpreter::new(InterpreterConfig { tools, dialect, ..InterpreterConfig::default() })
     };
+    // LinuxCNC refuses a file that ends without M2/M30 or a closing `%` (as rs274 does); the
+    // snippets below are delimited so that the program end's resets do not hide the state.
+    let delimited = |text: &str| format!("%\n{text}\n%");
+    assert_eq!(problem(&mut with(Dialect::LinuxCnc), "G0 X1\nG0 X2"), RunProblem::NoProgramEnd);
+    run(&mut with(Dialect::Mach4), "G0 X1\nG0 X2");
+    run(&mut with(Dialect::LinuxCnc), "G0 X1\nM2");
     // G92 on some axes: seed 002 zeroes the others, Mach4 and LinuxCNC keep them.
     for (dialect, y) in [(Dialect::MachineMotion, 0.0), (Dialect::Mach4, -1.0), (Dialect::LinuxCnc, -1.0)] {
         let mut interp = with(dialect);
-        run(&mut interp, "G0 X1 Y1\nG92 X0 Y0\nG92 X5");
+        run(&mut interp, &delimited("G0 X1 Y1\nG92 X0 Y0\nG92 X5"));
         assert_eq!(interp.g92_offset().y, -y, "{dialect:?}");
     }
     // Tool length: from M6 in seed 002, from G43 on Mach4 and LinuxCNC.
     for (dialect, z) in [(Dialect::MachineMotion, 0.5), (Dialect::Mach4, 0.0), (Dialect::LinuxCnc, 0.0)] {
         let mut interp = with(dialect);
-        run(&mut interp, "T1 M6\nG0 Z0");
+        run(&mut interp, &delimited("T1 M6\nG0 Z0"));
         assert_eq!(interp.machine_position().z, z, "{dialect:?}");
-        run(&mut interp, "G43\nG0 Z0");
+        run(&mut interp, &delimited("G43\nG0 Z0"));
         assert_eq!(interp.machine_position().z, 0.5, "{dialect:?}");
     }
     // Comments nest only in seed 002.
     run(&mut with(Dialect::MachineMotion), "G0 X1 (a (b) c) Y2");
     let err = with(Dialect::Mach4).run("G0 X1 (a (b) c) Y2", None, &mut Vec::new()).expect_err("flat comments");
     assert!(matches!(err, GcodeError::Syntax { .. }), "{err}");
-    run(&mut with(Dialect::LinuxCnc), "G0 X1 (a (b c) Y2");
+    run(&mut with(Dialect::LinuxCnc), &delimited("G0 X1 (a (b c) Y2"));
     // G68/G51 are Mach codes.
     run(&mut with(Dialect::Mach4), "G68 X0 Y0 R30\nG69");
     assert!(matches!(problem(&mut with(Dialect::LinuxCnc), "G68 X0 Y0 R30"), RunProblem::Unsupported { .. }));

@@ -14,7 +14,7 @@ use crate::curve::{ArcCurve, ArcProblem, Curve, LineCurve};
 use crate::input::{Event, Item, Segment, Shape};
 use crate::limits::{speed_and_accel, Limits, NORMAL_SHARE};
 use crate::PathError;
-use vision_gcode::Xyz;
+use vision_gcode::{Xyz, MAX_COORDINATE};
 
 /// Two pieces whose tangents differ by at most this angle (radians) join without stopping;
 /// the velocity jump it allows (`v·θ`) is far below anything a drive can see.
@@ -25,9 +25,6 @@ const REVERSAL_MARGIN: f64 = 1e-6;
 const MIN_PIECE: f64 = 1e-12;
 /// The longest accepted dwell, seconds.
 const MAX_DWELL: f64 = 1e6;
-/// The largest accepted coordinate, feed and tolerance magnitude (machine units, units/min):
-/// far beyond any machine, well within the range where lengths and squares stay finite.
-const MAX_COORDINATE: f64 = 1e9;
 
 /// A stretch of path with its own speed cap and tangential acceleration.
 #[derive(Debug, Clone, PartialEq)]

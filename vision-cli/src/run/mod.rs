@@ -16,6 +16,7 @@ use vision_gcode::{Event, RunOutcome};
 use vision_mcode::{system_clock, VisionHandler};
 use vision_path::{Limits, PlanConfig, Setpoints};
 
+use crate::trace::DialectArg;
 use crate::{read_text, world, Failure};
 use report::{calibration_truth, pound, steps, ProgramReport, Report, Step};
 
@@ -63,6 +64,10 @@ pub(crate) struct RunArgs {
     /// (created if missing).
     #[arg(long, value_name = "DIR")]
     report: Option<PathBuf>,
+    /// Whose G-code rules the machine follows where the controllers differ; default: the
+    /// world's `machine.dialect` (`machinemotion` unless the world says otherwise).
+    #[arg(long, value_enum)]
+    dialect: Option<DialectArg>,
 }
 
 /// Everything a run needs, set up.
@@ -81,7 +86,10 @@ fn set(params: &mut Params, name: &str, value: impl Into<vision_core::ParamValue
 
 impl Session {
     fn new(args: &RunArgs) -> Result<Session, Failure> {
-        let world = world::load(args.world.as_deref())?;
+        let mut world = world::load(args.world.as_deref())?;
+        if let Some(dialect) = args.dialect {
+            world.machine.dialect = dialect.machine();
+        }
         let sim = Sim::new(world).map_err(|e| Failure::Input(e.to_string()))?;
         let camera_tool = i64::from(sim.world().machine.camera_tool);
 

@@ -15,6 +15,10 @@ use super::modal::MotionMode;
 /// in a millimetre program, 0.0100 in an inch one).
 const PECK_CLEARANCE_INCH: f64 = 0.010;
 
+/// The most pecks one G73/G83 hole may take: a Q far below the hole depth is a typo, and would
+/// otherwise never end (a Q below the depth's rounding step does not deepen the hole at all).
+const MAX_PECKS: f64 = 100_000.0;
+
 /// The G-code of a cycle.
 pub(crate) fn cycle_name(code: GCode) -> &'static str {
     match code.0 {
@@ -28,18 +32,18 @@ pub(crate) fn cycle_name(code: GCode) -> &'static str {
 }
 
 /// What a series of cycle lines remembers (LinuxCNC's `cycle_r`, `cycle_cc`, `cycle_p`,
-/// `cycle_q`, `cycle_il`). Lengths in machine units, as written (incremental values stay
-/// increments).
+/// `cycle_q`, `cycle_il`). Lengths as (program units as written, machine units); incremental
+/// values stay increments.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub(crate) struct CycleState {
     /// The last `R` word.
-    pub(crate) r: f64,
+    pub(crate) r: (f64, f64),
     /// The last `Z` word.
-    pub(crate) z: f64,
+    pub(crate) z: (f64, f64),
     /// The last `P` (seconds).
     pub(crate) p: f64,
-    /// The last `Q` (machine units).
-    pub(crate) q: f64,
+    /// The last `Q`.
+    pub(crate) q: (f64, f64),
     /// The Z where the current series of cycles started (G98 returns there); `None` once any
     /// other motion ran.
     pub(crate) initial_level: Option<f64>,
@@ -58,8 +62,7 @@ impl LineRun<'_> {
         }
         let feed = self.feed(name)?;
         let repeated = previous == Some(MotionMode::Cycle(code));
-        let r_word = self.length(b'R', name)?;
-        let r_word = match (r_word, repeated) {
+        let r_word = match (self.length_as_written(b'R', name)?, repeated) {
             (Some(r), _) => r,
             (None, true) => self.st.cycle.r,
             (None, false) => {
@@ -67,7 +70,7 @@ impl LineRun<'_> {
             }
         };
         let repeats = self.count(b'L', name, "L counts repeats and must be at least 1")?;
-        let z_word = match (self.length(b'Z', name)?, repeated) {
+        let z_word = match (self.length_as_written(b'Z', name)?, repeated) {
             (Some(z), _) => z,
             (None, true) => self.st.cycle.z,
             (None, false) => {
@@ -91,43 +94,54 @@ impl LineRun<'_> {
             0.0
         };
         let peck = if matches!(code.0, 730 | 830) {
-            let q = match (self.length(b'Q', name)?, repeated) {
+            let q = match (self.length_as_written(b'Q', name)?, repeated) {
                 (Some(q), _) => q,
                 (None, true) => self.st.cycle.q,
                 (None, false) => {
                     return Err(RunProblem::MissingWord { code: name, letter: 'Q', hint: "the peck depth, e.g. Q0.1" })
                 }
             };
-            if q <= 0.0 {
+            if q.1 <= 0.0 {
                 return Err(RunProblem::OutOfRange {
                     code: name,
                     letter: 'Q',
-                    value: q * self.cfg.machine_unit.factor_to(self.st.units),
+                    value: q.1 * self.cfg.machine_unit.factor_to(self.st.units),
                     hint: "the peck depth must be positive",
                 });
             }
             q
         } else {
-            0.0
+            (0.0, 0.0)
         };
         let start = self.st.program;
         let old_level = *self.st.cycle.initial_level.get_or_insert(start.z);
-        let (mut x, mut y, step_x, step_y, r, bottom);
+        // R and the bottom in machine units, and in program units for counting the pecks.
+        let (mut x, mut y, step_x, step_y, r, bottom, r_written, bottom_written);
         if self.st.absolute {
             x = self.length(b'X', name)?.unwrap_or(start.x);
             y = self.length(b'Y', name)?.unwrap_or(start.y);
             (step_x, step_y) = (0.0, 0.0);
-            r = r_word;
-            bottom = z_word;
+            (r_written, r) = r_word;
+            (bottom_written, bottom) = z_word;
         } else {
             step_x = self.length(b'X', name)?.unwrap_or(0.0);
             step_y = self.length(b'Y', name)?.unwrap_or(0.0);
             (x, y) = (start.x, start.y);
-            r = r_word + old_level;
-            bottom = r + z_word;
+            r = r_word.1 + old_level;
+            bottom = r + z_word.1;
+            r_written = r_word.0 + self.cfg.machine_unit.convert(old_level, self.st.units);
+            bottom_written = r_written + z_word.0;
         }
         if r < bottom {
             return Err(RunProblem::CycleRBelowZ { code: name });
+        }
+        if peck.0 > 0.0 && (r_written - bottom_written) / peck.0 > MAX_PECKS {
+            return Err(RunProblem::OutOfRange {
+                code: name,
+                letter: 'Q',
+                value: peck.0,
+                hint: "the hole would take more than 100 000 pecks; program a larger peck depth",
+            });
         }
         let saved_path = self.st.path;
         self.st.path = PathMode::ExactStop;
@@ -154,14 +168,17 @@ impl LineRun<'_> {
             }
             match code.0 {
                 730 | 830 => {
-                    let mut depth = r - peck;
-                    while depth > bottom {
+                    // Counted in program units, as rs274 does: converted to machine units, a hole
+                    // depth that is an exact multiple of Q can round to one peck more or less.
+                    let mut depth_written = r_written - peck.0;
+                    while depth_written > bottom_written {
+                        let depth = self.st.units.convert(depth_written, self.cfg.machine_unit);
                         self.cycle_move(x, y, depth, Rate::Feed(feed))?;
                         if code.0 == 830 {
                             self.cycle_move(x, y, r, Rate::Rapid)?;
                         }
                         self.cycle_move(x, y, depth + clearance, Rate::Rapid)?;
-                        depth -= peck;
+                        depth_written -= peck.0;
                     }
                     self.cycle_move(x, y, bottom, Rate::Feed(feed))?;
                     self.cycle_move(x, y, clear, Rate::Rapid)?;

@@ -478,9 +478,7 @@ impl Interpreter {
             };
             pc = next;
         }
-        Ok(RunOutcome::Completed {
-            lines: u32::try_from(r.sources.first().map_or(0, |s| s.lines.len())).unwrap_or(u32::MAX),
-        })
+        self.completed(u32::try_from(r.sources.first().map_or(0, |s| s.lines.len())).unwrap_or(u32::MAX))
     }
 
     /// Returns from the innermost call (endsub, return, M99): restores its caller's #1–#30 and

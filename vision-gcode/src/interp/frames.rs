@@ -2,7 +2,7 @@
 
 use vision_math::Point2;
 
-use super::line::LineRun;
+use super::line::{in_range, LineRun};
 use super::modal::{work_offset_base, SYSTEMS};
 use crate::config::Dialect;
 use crate::error::RunProblem;
@@ -10,6 +10,13 @@ use crate::frame::Placement;
 use crate::geom::{Xyz, AXIS_LETTERS};
 use crate::params::G92_OFFSET;
 use crate::words::whole;
+
+/// The largest G68 rotation, degrees: one turn. More says nothing a smaller angle does not, and
+/// a huge angle (R1e300) has lost every digit that gave it a direction.
+const MAX_ROTATION_DEGREES: f64 = 360.0;
+/// The magnitudes a G51 factor may have: a factor of 1000 either way is far beyond any
+/// alignment correction or drawing scale.
+const SCALE_RANGE: std::ops::RangeInclusive<f64> = 1e-3..=1e3;
 
 impl LineRun<'_> {
     /// Which axis words are on the line (without claiming them); at least one is required.
@@ -79,7 +86,9 @@ impl LineRun<'_> {
         } else {
             let origin = self.offset_reading(v, G92_OFFSET);
             for axis in (0..3).filter(|&a| given[a]) {
-                self.params.set(base + axis as u32, origin.axis(axis));
+                let value =
+                    in_range(origin.axis(axis), || format!("the G10 L20 origin's {}", char::from(AXIS_LETTERS[axis])))?;
+                self.params.set(base + axis as u32, value);
             }
         }
         if system == self.st.system {
@@ -121,7 +130,8 @@ impl LineRun<'_> {
         let (v, given) = self.absolute_point("G92")?;
         let g92 = self.offset_reading(v, work_offset_base(self.st.system));
         for axis in (0..3).filter(|&a| given[a]) {
-            self.params.set(G92_OFFSET + axis as u32, g92.axis(axis));
+            let value = in_range(g92.axis(axis), || format!("the G92 offset's {}", char::from(AXIS_LETTERS[axis])))?;
+            self.params.set(G92_OFFSET + axis as u32, value);
         }
         self.st.rederive_program(self.params);
         self.keep_given(v, given);
@@ -153,6 +163,14 @@ impl LineRun<'_> {
 
     pub(super) fn g68(&mut self) -> Result<(), RunProblem> {
         let degrees = self.require(b'R', "G68", "the rotation in degrees, counter-clockwise, e.g. G68 X0 Y0 R30")?;
+        if degrees.abs() > MAX_ROTATION_DEGREES {
+            return Err(RunProblem::OutOfRange {
+                code: "G68",
+                letter: 'R',
+                value: degrees,
+                hint: "the rotation is at most one turn, -360 to 360 degrees",
+            });
+        }
         // An omitted centre coordinate is the current point's (in the scaled frame), so the
         // machine does not jump.
         let scale = self.st.frame.chain.scale;
@@ -174,8 +192,17 @@ impl LineRun<'_> {
             return Err(RunProblem::NoAxisWords { code: "G51" });
         }
         for (letter, factor) in [('X', sx), ('Y', sy)] {
-            if factor == Some(0.0) {
-                return Err(RunProblem::ZeroScale { letter });
+            match factor {
+                Some(0.0) => return Err(RunProblem::ZeroScale { letter }),
+                Some(f) if !SCALE_RANGE.contains(&f.abs()) => {
+                    return Err(RunProblem::OutOfRange {
+                        code: "G51",
+                        letter,
+                        value: f,
+                        hint: "a scale factor's magnitude is 0.001 to 1000 (negative mirrors)",
+                    })
+                }
+                _ => {}
             }
         }
         let scale = &mut self.st.frame.chain.scale;

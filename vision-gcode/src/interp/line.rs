@@ -8,7 +8,7 @@ use crate::config::{Dialect, InterpreterConfig};
 use crate::error::{GCode, RunProblem};
 use crate::event::{Coolant, Event, OutputChange, OutputWrite, PathMode, SpindleCommand};
 use crate::frame::Placement;
-use crate::geom::{Plane, Xyz};
+use crate::geom::{Plane, Xyz, MAX_COORDINATE};
 use crate::interp::modal::Modal;
 use crate::params::{Params, G28_POSITION, G30_POSITION};
 use crate::words::{whole, Words};
@@ -380,7 +380,19 @@ impl LineRun<'_> {
 
     /// A length word in machine units.
     pub(super) fn length(&mut self, letter: u8, owner: &'static str) -> Result<Option<f64>, RunProblem> {
-        Ok(self.w.take(letter, owner)?.map(|v| self.conv(v)))
+        Ok(self.length_as_written(letter, owner)?.map(|(_, machine)| machine))
+    }
+
+    /// A length word as written (program units) and in machine units.
+    pub(super) fn length_as_written(
+        &mut self,
+        letter: u8,
+        owner: &'static str,
+    ) -> Result<Option<(f64, f64)>, RunProblem> {
+        match self.w.take(letter, owner)? {
+            None => Ok(None),
+            Some(v) => Ok(Some((v, in_range(self.conv(v), || format!("{owner}'s {} word", char::from(letter)))?))),
+        }
     }
 
     /// A count word (turns, repeats): a whole number ≥ 1, 1 when absent.
@@ -578,5 +590,15 @@ impl LineRun<'_> {
                 Ok(Flow::End(c))
             }
         }
+    }
+}
+
+/// `value` (machine units) when its magnitude is at most [`MAX_COORDINATE`]; `what` names it in
+/// the error.
+pub(super) fn in_range(value: f64, what: impl FnOnce() -> String) -> Result<f64, RunProblem> {
+    if value.abs() <= MAX_COORDINATE {
+        Ok(value)
+    } else {
+        Err(RunProblem::BeyondRange { what: what(), value })
     }
 }

@@ -107,7 +107,8 @@ impl Interpreter {
     ///
     /// # Errors
     /// The first line that fails; it changed nothing (see the crate documentation for user
-    /// M-code lines) and no later line ran.
+    /// M-code lines) and no later line ran. Under LinuxCNC, [`RunProblem::NoProgramEnd`] at the
+    /// last line when the text ends without M2/M30 or a closing `%`.
     pub fn run(
         &mut self,
         text: &str,
@@ -134,6 +135,16 @@ impl Interpreter {
                 started = !raw.trim().is_empty();
             }
             lines = line;
+        }
+        self.completed(lines)
+    }
+
+    /// The text ran to its end without M2/M30 or a closing `%`: complete, except under
+    /// LinuxCNC, whose rs274 refuses such a file ("File ended with no percent sign or program
+    /// end"); Mach4 and seed 002 run it.
+    pub(crate) fn completed(&self, lines: u32) -> Result<RunOutcome, GcodeError> {
+        if self.config.dialect == Dialect::LinuxCnc {
+            return Err(GcodeError::run(lines, RunProblem::NoProgramEnd));
         }
         Ok(RunOutcome::Completed { lines })
     }
@@ -465,8 +476,8 @@ impl Interpreter {
     /// effect at once: the machine stays, the program position is re-derived.
     ///
     /// # Errors
-    /// [`RunProblem::ReadOnlyParameter`], [`RunProblem::BadParameter`], a non-finite value;
-    /// reported at `line`.
+    /// [`RunProblem::ReadOnlyParameter`], [`RunProblem::BadParameter`], a non-finite value, an
+    /// offset or position beyond [`crate::MAX_COORDINATE`]; reported at `line`.
     pub(crate) fn write_param(&mut self, n: u32, value: f64, line: u32) -> Result<(), GcodeError> {
         self.params.begin();
         self.params.write(n, value).map_err(|p| GcodeError::run(line, p))?;
@@ -491,15 +502,20 @@ impl Interpreter {
     /// the machine stays and the program position is re-derived.
     ///
     /// # Errors
-    /// [`RunProblem::UnknownTool`] for tool 0 or a tool not in the table; a non-finite value.
+    /// [`RunProblem::UnknownTool`] for tool 0 or a tool not in the table; a non-finite value;
+    /// [`RunProblem::BeyondRange`] for one beyond [`crate::MAX_COORDINATE`].
     pub(crate) fn write_tool_offset(&mut self, tool: u32, x: f64, y: f64, line: u32) -> Result<(), GcodeError> {
         if !(x.is_finite() && y.is_finite()) {
             return Err(GcodeError::run(line, RunProblem::NonFinite { what: "the tool offset" }));
         }
         let (from, to) = (self.modal.units, self.config.machine_unit);
+        let (x, y) = (from.convert(x, to), from.convert(y, to));
+        for v in [x, y] {
+            line::in_range(v, || format!("tool {tool}'s offset")).map_err(|p| GcodeError::run(line, p))?;
+        }
         let entry = self.config.tools.get_mut(tool).ok_or(GcodeError::run(line, RunProblem::UnknownTool { tool }))?;
-        entry.offset.x = from.convert(x, to);
-        entry.offset.y = from.convert(y, to);
+        entry.offset.x = x;
+        entry.offset.y = y;
         let offset = entry.offset;
         self.after_tool_write(tool, offset);
         Ok(())

@@ -8,7 +8,7 @@ use crate::error::GCode;
 use crate::event::PathMode;
 use crate::frame::{Frame, Placement};
 use crate::geom::{ArcDirection, Plane, Xyz};
-use crate::params::{Params, G92_OFFSET, WORK_OFFSET_BASE, WORK_OFFSET_STRIDE};
+use crate::params::{Params, G92_OFFSET};
 
 /// The active motion mode (modal group 1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -116,19 +116,7 @@ impl Modal {
     }
 }
 
-/// Number of coordinate systems: 1 (G54) … 6 (G59); G59.1–G59.3 are not supported.
-pub(crate) const SYSTEMS: u32 = 6;
-
-/// First parameter of coordinate system `n` (1 = G54 … 6 = G59; a number outside that range
-/// stands for the nearest system).
-pub(crate) fn work_offset_base(n: u32) -> u32 {
-    WORK_OFFSET_BASE + WORK_OFFSET_STRIDE * (n.clamp(1, SYSTEMS) - 1)
-}
-
-/// Whether `#n` holds the X, Y or Z origin of one of the coordinate systems.
-pub(crate) fn is_work_offset(n: u32) -> bool {
-    (WORK_OFFSET_BASE..work_offset_base(SYSTEMS) + 3).contains(&n) && (n - WORK_OFFSET_BASE) % WORK_OFFSET_STRIDE < 3
-}
+pub(crate) use crate::params::{is_work_offset, work_offset_base, SYSTEMS};
 
 #[cfg(test)]
 mod tests {

@@ -10,7 +10,7 @@ use crate::geom::{ArcDirection, Plane, Xyz, AXIS_LETTERS, CENTRE_LETTERS};
 use vision_math::LengthUnit;
 
 use super::cycles::cycle_name;
-use super::line::{LineRun, Pending};
+use super::line::{in_range, LineRun, Pending};
 use super::modal::MotionMode;
 
 /// An arc that becomes line segments when flushed (it may be long: it is expanded lazily).
@@ -110,12 +110,13 @@ impl LineRun<'_> {
         }
     }
 
+    /// `m`, a machine position a move goes to, when it is finite and within range.
     pub(super) fn checked(&self, m: Xyz) -> Result<Xyz, RunProblem> {
-        if m.is_finite() {
-            Ok(m)
-        } else {
-            Err(RunProblem::NonFinitePosition)
+        if !m.is_finite() {
+            return Err(RunProblem::NonFinitePosition);
         }
+        in_range(m.max_abs(), || "the move's machine position".into())?;
+        Ok(m)
     }
 
     /// The line's motion: `code` is its motion-group code (if any), `axes_taken` whether another

@@ -3,7 +3,7 @@
 //! Recursion is bounded: each bracket, `#`, sign or function call costs one level of
 //! [`MAX_DEPTH`], and a chain of operators on one level is a loop, not a recursion.
 
-use super::{is_blank, number, Cursor, PResult, Parser, MAX_DEPTH};
+use super::{is_blank, number, Cursor, PResult, Parser, MAX_DEPTH, MAX_OPERANDS};
 use crate::error::SyntaxProblem;
 use crate::expr::{BinOp, Func, Node};
 
@@ -80,6 +80,10 @@ impl Parser {
     pub(super) fn operand(&mut self, cur: &mut Cursor<'_>, depth: u32) -> PResult<()> {
         if depth > MAX_DEPTH {
             return Err((cur.pos, SyntaxProblem::TooDeep { limit: MAX_DEPTH }));
+        }
+        // Each operand adds at most two nodes (itself and the operator after it).
+        if self.nodes.len() >= 2 * MAX_OPERANDS {
+            return Err((cur.pos, SyntaxProblem::TooLong { limit: MAX_OPERANDS }));
         }
         cur.skip_blanks();
         let at = cur.pos;

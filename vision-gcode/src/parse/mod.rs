@@ -26,6 +26,10 @@ type PResult<T> = Result<T, (usize, SyntaxProblem)>;
 
 /// Brackets, `#`, signs and function calls nest at most this deep.
 pub const MAX_DEPTH: u32 = 64;
+/// The most operands the expressions of one line may hold together: a line of LinuxCNC holds
+/// at most 256 characters, so this is far beyond any program, and it bounds the memory a
+/// runaway generated line (`1+1+…` over megabytes) takes to a few hundred kilobytes.
+pub const MAX_OPERANDS: usize = 10_000;
 
 /// A byte cursor over one line.
 #[derive(Debug, Clone, Copy)]

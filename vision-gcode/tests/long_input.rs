@@ -1,0 +1,78 @@
+//! A runaway generated line (issue 17 item 16, `1+1+…` over megabytes) is refused with a clear
+//! message, and refusing it takes little memory beyond the text itself: a global allocator in
+//! this test binary tracks the peak of live bytes.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use vision_gcode::{Event, GcodeError, Interpreter, InterpreterConfig, SyntaxProblem};
+
+struct Peak;
+
+static LIVE: AtomicUsize = AtomicUsize::new(0);
+static PEAK: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: forwards every call to the system allocator unchanged; only tracks sizes.
+unsafe impl GlobalAlloc for Peak {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let live = LIVE.fetch_add(layout.size(), Ordering::Relaxed) + layout.size();
+        PEAK.fetch_max(live, Ordering::Relaxed);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Peak = Peak;
+
+/// The documented limit: operands in one line's expressions.
+const LIMIT: usize = 10_000;
+
+/// `#1 = [1+1+…]` with `operands` ones.
+fn sum_line(operands: usize) -> String {
+    let mut text = String::with_capacity(8 + 2 * operands);
+    text.push_str("#1 = [1");
+    for _ in 1..operands {
+        text.push_str("+1");
+    }
+    text.push(']');
+    text
+}
+
+fn run(text: &str) -> (Result<(), GcodeError>, f64) {
+    let mut interp = Interpreter::new(InterpreterConfig::default());
+    let mut events: Vec<Event> = Vec::new();
+    let result = interp.run(text, None, &mut events).map(drop);
+    (result, interp.param(1))
+}
+
+#[test]
+fn a_megabyte_expression_is_refused_in_little_memory() {
+    let text = sum_line(5_000_000); // 10 MB
+    let before = LIVE.load(Ordering::Relaxed);
+    PEAK.store(before, Ordering::Relaxed);
+    let (result, _) = run(&text);
+    let extra = PEAK.load(Ordering::Relaxed) - before;
+    match result {
+        Err(GcodeError::Syntax { line: 1, problem: SyntaxProblem::TooLong { limit }, .. }) => {
+            assert_eq!(limit, LIMIT);
+        }
+        other => panic!("expected TooLong, got {other:?}"),
+    }
+    assert!(extra < 2_000_000, "refusing a 10 MB line took {extra} bytes beyond the text");
+}
+
+#[test]
+fn expressions_up_to_the_limit_run() {
+    let (result, value) = run(&sum_line(LIMIT));
+    result.expect("within the limit");
+    assert_eq!(value, LIMIT as f64);
+    let (result, _) = run(&sum_line(LIMIT + 1));
+    assert!(matches!(result, Err(GcodeError::Syntax { problem: SyntaxProblem::TooLong { .. }, .. })), "{result:?}");
+}
