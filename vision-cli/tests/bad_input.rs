@@ -68,3 +68,35 @@ fn control_characters_in_a_program_are_shown_escaped() {
     assert_eq!(err.lines().count(), 1, "the vertical tab does not split the line: {err:?}");
     assert!(err.contains("line 3") && err.contains("\\u{b}"), "{err}");
 }
+
+#[test]
+fn command_line_camera_choices_are_not_written_into_the_profile() {
+    let file =
+        "[vision]\nVisionEnabled = true\nVisionDriver = \"Keyence\"\nVisionIP = \"10.1.2.3\"\nVisionPort = 8600\n\
+                VisionCameraToolNumber = 98\n";
+    for camera in [&["--camera", "sim"][..], &["--camera", "keyence"][..]] {
+        let profile = scratch(&format!("kept-{}.toml", camera[1]), file.as_bytes());
+        let out = bin()
+            .args(["run", "--profile", arg(&profile)])
+            .args(camera)
+            .arg(example("01-calibrate-sheet.nc"))
+            .output()
+            .expect("run");
+        assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+        let saved = std::fs::read_to_string(&profile).expect("saved");
+        assert!(saved.contains("VisionCal_K11") && !saved.contains("VisionCal_K11 = 0.0\n"), "M283 saved: {saved}");
+        for kept in ["VisionDriver = \"Keyence\"", "VisionIP = \"10.1.2.3\"", "VisionPort = 8600"] {
+            assert!(saved.contains(kept), "{camera:?}: {kept} missing from {saved}");
+        }
+    }
+}
+
+#[test]
+fn a_profile_that_cannot_be_saved_is_refused_before_any_motion() {
+    let profile = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("bad_input/no-such-folder/vision.toml");
+    let out =
+        bin().args(["run", "--profile", arg(&profile)]).arg(example("01-calibrate-sheet.nc")).output().expect("run");
+    let err = one_short_line(&out, "create the folder");
+    assert!(!err.contains("intact"), "{err}");
+    assert!(out.stdout.is_empty(), "nothing ran");
+}
