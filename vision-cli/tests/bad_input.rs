@@ -100,3 +100,13 @@ fn a_profile_that_cannot_be_saved_is_refused_before_any_motion() {
     assert!(!err.contains("intact"), "{err}");
     assert!(out.stdout.is_empty(), "nothing ran");
 }
+
+#[test]
+fn a_pound_block_past_9999_is_bad_input_at_load_not_a_failed_m280() {
+    let profile = scratch("pound.toml", b"[vision]\nVisionEnabled = true\nVisionPoundVarBase = 9980\n");
+    let out =
+        bin().args(["run", "--profile", arg(&profile)]).arg(example("04-rectangle-fit.nc")).output().expect("run");
+    let err = one_short_line(&out, "VisionPoundVarBase");
+    assert!(err.contains("#9980..#10019") && err.contains("from 100 to 9960"), "{err}");
+    assert!(out.stdout.is_empty(), "nothing ran");
+}
