@@ -110,3 +110,23 @@ fn a_pound_block_past_9999_is_bad_input_at_load_not_a_failed_m280() {
     assert!(err.contains("#9980..#10019") && err.contains("from 100 to 9960"), "{err}");
     assert!(out.stdout.is_empty(), "nothing ran");
 }
+
+/// Issue 17 item 16: a program of very many Vision M-codes keeps a bounded report.
+#[test]
+fn the_run_report_keeps_a_bounded_number_of_steps_and_counts_the_rest() {
+    let program = format!("G90 G20\nT98 M6\n{}M30\n", "M281\n".repeat(25_000));
+    let path = scratch("many-m281.nc", program.as_bytes());
+    let out = bin().args(["run", "--json", arg(&path)]).output().expect("run");
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    let p = &report["programs"][0];
+    assert_eq!(p["steps"].as_array().map(Vec::len), Some(10_000));
+    assert_eq!(p["steps_not_listed"], 15_000);
+    let out = bin().args(["run", arg(&path)]).output().expect("run");
+    let text = String::from_utf8(out.stdout).expect("utf-8");
+    assert!(
+        text.contains("15000 more Vision M-codes ran but are not listed (the report keeps the first 10000)"),
+        "{}",
+        &text[text.len().saturating_sub(500)..]
+    );
+}

@@ -150,6 +150,7 @@ impl Session {
         };
         let result = self.machine.run_program(text, Some(&mut self.handler), &mut collect);
         let cycle = self.cycle_time(items, start);
+        let steps_not_listed = self.handler.records_dropped();
         let records = self.handler.take_records();
         let steps = steps(&records, &self.sim, &self.machine);
         let calibrated =
@@ -168,6 +169,7 @@ impl Session {
             cycle_time_s: cycle.as_ref().ok().copied(),
             cycle_note: cycle.err(),
             steps,
+            steps_not_listed,
             calibration_truth,
             error,
         }
