@@ -13,7 +13,14 @@
 //! the same folder, flushed to disk (`fsync`), and renamed over the old file; the folder is then
 //! synced (best effort). A failure at any step removes the temporary file and leaves the
 //! previous profile intact. The file system steps go through the small [`ProfileFs`] trait so a
-//! test can inject a failure.
+//! test can inject a failure. A save first removes the temporary files that interrupted saves of
+//! dead processes left; [`ProfileStore::check_writable`] lets a caller find an unwritable folder
+//! before the motion whose result it will save.
+//!
+//! Bad input refused at load (naming the key): a path that is not a regular file, unknown keys
+//! or tables, values out of range, a K that is singular or of an absurd scale
+//! ([`crate::Calibration::check_k`]). Text for a number or yes/no (`"8500"`, `"yes"`) is read
+//! as its type, as the host's own profile stores it.
 
 use std::collections::BTreeMap;
 use std::fs::{self, File, OpenOptions};
