@@ -84,6 +84,13 @@ struct Report {
 /// Runs the subcommand and returns the text to print.
 pub(crate) fn run(args: &FitArgs) -> Result<String, Failure> {
     let text = read_input(args.file.as_ref())?;
+    // serde would read the struct from a bare array too; the schema is an object.
+    if !text.trim_start().starts_with('{') {
+        return Err(Failure::Input(
+            "input is not valid fit JSON: expected an object {\"commanded\": [[x, y], ...], \"observed\": [[x, y], ...]}"
+                .into(),
+        ));
+    }
     let input: Input =
         serde_json::from_str(&text).map_err(|e| Failure::Input(format!("input is not valid fit JSON: {e}")))?;
     let commanded: Vec<Point2<f64>> = input.commanded.iter().map(|p| Point2::new(p[0], p[1])).collect();

@@ -68,3 +68,65 @@ fn control_characters_in_a_program_are_shown_escaped() {
     assert_eq!(err.lines().count(), 1, "the vertical tab does not split the line: {err:?}");
     assert!(err.contains("line 3") && err.contains("\\u{b}"), "{err}");
 }
+
+#[test]
+fn command_line_camera_choices_are_not_written_into_the_profile() {
+    let file =
+        "[vision]\nVisionEnabled = true\nVisionDriver = \"Keyence\"\nVisionIP = \"10.1.2.3\"\nVisionPort = 8600\n\
+                VisionCameraToolNumber = 98\n";
+    for camera in [&["--camera", "sim"][..], &["--camera", "keyence"][..]] {
+        let profile = scratch(&format!("kept-{}.toml", camera[1]), file.as_bytes());
+        let out = bin()
+            .args(["run", "--profile", arg(&profile)])
+            .args(camera)
+            .arg(example("01-calibrate-sheet.nc"))
+            .output()
+            .expect("run");
+        assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+        let saved = std::fs::read_to_string(&profile).expect("saved");
+        assert!(saved.contains("VisionCal_K11") && !saved.contains("VisionCal_K11 = 0.0\n"), "M283 saved: {saved}");
+        for kept in ["VisionDriver = \"Keyence\"", "VisionIP = \"10.1.2.3\"", "VisionPort = 8600"] {
+            assert!(saved.contains(kept), "{camera:?}: {kept} missing from {saved}");
+        }
+    }
+}
+
+#[test]
+fn a_profile_that_cannot_be_saved_is_refused_before_any_motion() {
+    let profile = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("bad_input/no-such-folder/vision.toml");
+    let out =
+        bin().args(["run", "--profile", arg(&profile)]).arg(example("01-calibrate-sheet.nc")).output().expect("run");
+    let err = one_short_line(&out, "create the folder");
+    assert!(!err.contains("intact"), "{err}");
+    assert!(out.stdout.is_empty(), "nothing ran");
+}
+
+#[test]
+fn a_pound_block_past_9999_is_bad_input_at_load_not_a_failed_m280() {
+    let profile = scratch("pound.toml", b"[vision]\nVisionEnabled = true\nVisionPoundVarBase = 9980\n");
+    let out =
+        bin().args(["run", "--profile", arg(&profile)]).arg(example("04-rectangle-fit.nc")).output().expect("run");
+    let err = one_short_line(&out, "VisionPoundVarBase");
+    assert!(err.contains("#9980..#10019") && err.contains("from 100 to 9960"), "{err}");
+    assert!(out.stdout.is_empty(), "nothing ran");
+}
+
+/// Issue 17 item 16: a program of very many Vision M-codes keeps a bounded report.
+#[test]
+fn the_run_report_keeps_a_bounded_number_of_steps_and_counts_the_rest() {
+    let program = format!("G90 G20\nT98 M6\n{}M30\n", "M281\n".repeat(25_000));
+    let path = scratch("many-m281.nc", program.as_bytes());
+    let out = bin().args(["run", "--json", arg(&path)]).output().expect("run");
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    let p = &report["programs"][0];
+    assert_eq!(p["steps"].as_array().map(Vec::len), Some(10_000));
+    assert_eq!(p["steps_not_listed"], 15_000);
+    let out = bin().args(["run", arg(&path)]).output().expect("run");
+    let text = String::from_utf8(out.stdout).expect("utf-8");
+    assert!(
+        text.contains("15000 more Vision M-codes ran but are not listed (the report keeps the first 10000)"),
+        "{}",
+        &text[text.len().saturating_sub(500)..]
+    );
+}

@@ -81,3 +81,21 @@ fn bad_input_exits_2_with_one_line() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("cannot read /nonexistent/marks.json"));
 }
+
+/// Issue 17 item 13: degenerate or out-of-range geometry exits 2 with the reason, never a G51
+/// that `trace` would refuse; a bare array is not the schema.
+#[test]
+fn degenerate_geometry_and_wrong_shapes_exit_2_with_the_reason() {
+    for (input, reason) in [
+        (r#"{"commanded":[[0,0],[1,0],[0,1]],"observed":[[0,0],[1,0],[2,0]]}"#, "collinear or collapse"),
+        (r#"{"commanded":[[0,0],[1e-15,0],[0,1e-15]],"observed":[[0,0],[1,0],[0,1]]}"#, "commanded points coincide"),
+        (r#"{"commanded":[[0,0],[1e200,0],[0,1e200]],"observed":[[0,0],[1,0],[0,1]]}"#, "no machine travels that far"),
+        (r#"[[[0,0],[1,0],[0,1]],[[0,0],[1,0],[0,1]]]"#, "expected an object"),
+    ] {
+        let out = with_stdin(&["fit"], input);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{input}: {err}");
+        assert!(err.contains(reason), "{input}: {err}");
+        assert!(out.stdout.is_empty(), "{input}: no report, no G51");
+    }
+}

@@ -186,7 +186,7 @@ fn fails(name: &str, program: &str, profile: Option<&str>) -> (Option<i32>, Stri
 #[test]
 fn error_paths_exit_1_with_the_line_and_the_manuals_message() {
     let base = "[vision]\nVisionEnabled = true\nVisionCameraToolNumber = 98\nVisionCal_K11 = 0.00203\nVisionCal_K22 = 0.00203\nVisionCameraInvertY = true\n";
-    let cases: [(&str, &str, Option<String>, &str, &str); 7] = [
+    let cases: [(&str, &str, Option<String>, &str, &str); 6] = [
         (
             "disabled",
             "G90 G20\nT98 M6\nM280",
@@ -204,13 +204,6 @@ fn error_paths_exit_1_with_the_line_and_the_manuals_message() {
             "K matrix is zero",
         ),
         ("few", "G90 G20\nT98 M6\nM280\nG0 X0 Y0\nM281\nM282", None, "line 6", "needs at least 4 captured marks"),
-        (
-            "pound",
-            "G90 G20\nT98 M6\nM280",
-            Some(format!("{base}VisionPoundVarBase = 9980\n")),
-            "line 3",
-            "VisionPoundVarBase 9980 does not fit this machine",
-        ),
         (
             "gate",
             &std::fs::read_to_string(example("04-rectangle-fit.nc")).expect("ex4"),

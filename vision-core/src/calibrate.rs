@@ -36,7 +36,7 @@
 //! in G90), over the sheet's last dot on success and back at the start position on failure.
 
 use vision_math::chain::fixed;
-use vision_math::{fit_rectangle, solve_linear, LengthUnit, Matrix2, PixelChain, Point2, Remap, Vector2};
+use vision_math::{fit_rectangle, solve_linear, LengthUnit, Matrix2, PixelChain, Point2, Remap, Vector2, MM_PER_INCH};
 
 use crate::driver::{CameraDriver, Reading};
 use crate::error::VisionError;
@@ -370,11 +370,12 @@ pub(crate) fn quick(walker: &mut Walker<'_>, params: &Params, diameter: f64) -> 
         ));
     }
     let k = Matrix2::new(diameter / w, 0.0, 0.0, diameter / h);
+    let (p, q) = motion_pairs(&walker.shots, &pairs, remap);
+    check_quick_scale(diameter, k, &p, &q, walker.unit)?;
     let chain = chain_with(params, k, remap)?;
     let c = walker.shoot(0)?;
     let (cw, ch) = mark_size(&chain, &walker.shots[c].reading);
     let size_error = (cw - diameter).abs().max((ch - diameter).abs());
-    let (p, q) = motion_pairs(&walker.shots, &pairs, remap);
     let bump_error = p.iter().zip(&q).map(|(p, q)| (k * p - q).norm()).fold(0.0, f64::max);
     let report = QuickReport {
         unit: walker.unit,
@@ -388,6 +389,42 @@ pub(crate) fn quick(walker: &mut Walker<'_>, params: &Params, diameter: f64) -> 
         date: walker.machine.now().iso_local(),
     };
     Ok(Solution { k, remap, tool_offset: None, report: CalReport::Quick(report) })
+}
+
+/// How far (as a factor either way) the scale `Qd` implies may be from the scale the axis-detect
+/// bump measured. Mark-size noise is a few percent; a unit mix-up is 25.4×.
+pub const QUICK_SCALE_TOLERANCE: f64 = 1.5;
+
+/// Refuses a `Qd` whose K (`k`) disagrees with the bump moves `(K·pixels, −motion)` by more
+/// than [`QUICK_SCALE_TOLERANCE`], naming the likely unit mix-up (lengths in `unit`).
+fn check_quick_scale(
+    diameter: f64,
+    k: Matrix2<f64>,
+    pixels: &[Vector2<f64>],
+    motion: &[Vector2<f64>],
+    unit: LengthUnit,
+) -> Result<(), VisionError> {
+    let implied: f64 = pixels.iter().map(|p| (k * p).norm()).sum();
+    let moved: f64 = motion.iter().map(|m| m.norm()).sum();
+    let ratio = implied / moved;
+    if ratio.is_finite() && (1.0 / QUICK_SCALE_TOLERANCE..=QUICK_SCALE_TOLERANCE).contains(&ratio) {
+        return Ok(());
+    }
+    let near = |factor: f64| (ratio / factor - 1.0).abs() < 0.2;
+    let hint = match unit {
+        LengthUnit::Inch if near(MM_PER_INCH) => {
+            format!("; is it a millimetre value in an inch program (Q{} in inches)?", diameter / MM_PER_INCH)
+        }
+        LengthUnit::Millimetre if near(1.0 / MM_PER_INCH) => {
+            format!("; is it an inch value in a millimetre program (Q{} in millimetres)?", diameter * MM_PER_INCH)
+        }
+        _ => String::new(),
+    };
+    Err(fail(format!(
+        "the dot diameter Q{diameter} {} makes the marks move {ratio:.3e}× the distance the axis-detect \
+         bump moved{hint} — give the printed dot's diameter in the program's units",
+        unit.short_name()
+    )))
 }
 
 /// `M283 Cn`: walk, solve, verify (compensating for the offset not yet written); writes nothing.

@@ -39,10 +39,11 @@ pub enum VisionError {
         reason: String,
     },
 
-    /// The pound-variable block would overlap a reserved range or start below 100.
+    /// The pound-variable block would overlap a reserved range, start below 100 or end past
+    /// #9999.
     #[error(
         "VisionPoundVarBase is in reserved range (base {base}, block #{base}..#{end}) — move the \
-         base out of 5061..5081 or 5201..5500; pick a value ≥ 100"
+         base out of 5061..5081 or 5201..5500; pick a value from 100 to 9960"
     )]
     PoundBaseReserved {
         /// The configured base.

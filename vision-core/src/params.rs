@@ -683,6 +683,16 @@ param_struct! {
     }
 }
 
+/// The smallest pixel footprint a K may give, inches per pixel (2.5 nm: beyond any microscope
+/// objective a machine camera carries).
+pub const K_SCALE_MIN_IN: f64 = 1e-7;
+/// The largest pixel footprint a K may give, inches per pixel (a 1776-pixel image would see
+/// 178 in, more than any machine table).
+pub const K_SCALE_MAX_IN: f64 = 0.1;
+/// The largest ratio between K's two axis scales (square-ish pixels and no more than a steep
+/// viewing angle; a larger ratio is a nearly singular K).
+pub const K_MAX_ANISOTROPY: f64 = 10.0;
+
 /// The persisted profile (SPEC §5): the [`Config`] and the [`Calibration`], read and written by
 /// the manual's names. The module's run state and its [`Telemetry`] are not part of it.
 ///
@@ -825,6 +835,46 @@ impl Calibration {
         Ok(())
     }
 
+    /// Checks K as a whole, as a profile load does: all zero ("not calibrated") or a pixel
+    /// footprint `√|det K|` of [`K_SCALE_MIN_IN`]..[`K_SCALE_MAX_IN`] inches per pixel with its
+    /// two axes within [`K_MAX_ANISOTROPY`]× of each other.
+    ///
+    /// # Errors
+    /// [`VisionError::InvalidParam`] naming `VisionCal_K11..K22` and what is wrong.
+    pub fn check_k(&self) -> Result<(), VisionError> {
+        let k = self.cal_k();
+        if k.iter().all(|v| *v == 0.0) {
+            return Ok(());
+        }
+        let bad = |reason: String| VisionError::InvalidParam {
+            name: "VisionCal_K11..K22".into(),
+            value: format!("[[{:e}, {:e}], [{:e}, {:e}]]", k[(0, 0)], k[(0, 1)], k[(1, 0)], k[(1, 1)]),
+            reason,
+        };
+        let in_per_unit = self.cal_units.factor_to(LengthUnit::Inch);
+        // Singular values of K, in inches per pixel, by the closed form for 2×2 matrices.
+        // Normalised first so 1e300 entries do not overflow.
+        let k_in = k.map(|v| v * in_per_unit);
+        let m = k_in.amax();
+        let sv = (k_in / m).singular_values() * m;
+        let (big, small) = (sv.max(), sv.min());
+        if !(big.is_finite() && small > 0.0 && big / small <= K_MAX_ANISOTROPY) {
+            return Err(bad(format!(
+                "is singular or nearly so (the axes' scales differ by more than {K_MAX_ANISOTROPY}×) — \
+                 recalibrate with M283, or set all four to 0 for \"not calibrated\""
+            )));
+        }
+        let scale = big.sqrt() * small.sqrt();
+        if !(K_SCALE_MIN_IN..=K_SCALE_MAX_IN).contains(&scale) {
+            return Err(bad(format!(
+                "gives {scale:.3e} in per pixel, outside the physical {K_SCALE_MIN_IN:e}..{K_SCALE_MAX_IN} in per \
+                 pixel (VisionCal_Units is {}) — recalibrate with M283, or set all four to 0",
+                self.cal_units.short_name()
+            )));
+        }
+        Ok(())
+    }
+
     /// The axis remap from the three `VisionCamera*` flags.
     #[must_use]
     pub fn remap(&self) -> Remap {
@@ -847,8 +897,8 @@ impl Calibration {
     /// This calibration with a new K, remap, unit and date (the pixel centre offset is kept).
     ///
     /// # Errors
-    /// [`VisionError::InvalidParam`] for a non-finite K or a date longer than the profile
-    /// allows; `self` is unchanged either way.
+    /// [`VisionError::InvalidParam`] for a K [`Calibration::check_k`] refuses (a profile
+    /// load would) or a date longer than the profile allows; `self` is unchanged either way.
     pub fn solved(
         &self,
         k: Matrix2<f64>,
@@ -861,6 +911,7 @@ impl Calibration {
         next.set_remap(remap);
         next.cal_units = units;
         next.set_raw("VisionCal_Date", &ParamValue::from(date))?;
+        next.check_k()?;
         Ok(next)
     }
 }

@@ -18,6 +18,9 @@ pub const FIELDS: u32 = 8;
 pub const BLOCK_LEN: u32 = SLOTS * FIELDS;
 /// The lowest allowed base.
 pub const MIN_BASE: i64 = 100;
+/// The highest numbered variable every supported host has (`#1..#9999` in rs274 and Mach4): a
+/// block past it can never run, so it is refused with the profile, not at the first M280.
+pub const MAX_END: i64 = 9999;
 /// Ranges the block may not overlap (inclusive): probe results and fixture offsets.
 pub const RESERVED: [(i64, i64); 2] = [(5061, 5081), (5201, 5500)];
 
@@ -58,8 +61,8 @@ pub struct SlotValues {
 }
 
 impl PoundBlock {
-    /// Validates base `base`: ≥ 100 and the 40-variable block `#base..#base+39` outside
-    /// 5061..5081 and 5201..5500.
+    /// Validates base `base`: ≥ 100, the 40-variable block `#base..#base+39` outside
+    /// 5061..5081 and 5201..5500 and at or below [`MAX_END`].
     ///
     /// # Errors
     /// [`VisionError::PoundBaseReserved`].
@@ -67,7 +70,7 @@ impl PoundBlock {
         let end = base.saturating_add(i64::from(BLOCK_LEN) - 1);
         let overlaps = RESERVED.iter().any(|(lo, hi)| base <= *hi && end >= *lo);
         match u32::try_from(base) {
-            Ok(b) if base >= MIN_BASE && !overlaps && u32::try_from(end).is_ok() => Ok(PoundBlock { base: b }),
+            Ok(b) if base >= MIN_BASE && !overlaps && end <= MAX_END => Ok(PoundBlock { base: b }),
             _ => Err(VisionError::PoundBaseReserved { base, end }),
         }
     }

@@ -13,7 +13,14 @@
 //! the same folder, flushed to disk (`fsync`), and renamed over the old file; the folder is then
 //! synced (best effort). A failure at any step removes the temporary file and leaves the
 //! previous profile intact. The file system steps go through the small [`ProfileFs`] trait so a
-//! test can inject a failure.
+//! test can inject a failure. A save first removes the temporary files that interrupted saves of
+//! dead processes left; [`ProfileStore::check_writable`] lets a caller find an unwritable folder
+//! before the motion whose result it will save.
+//!
+//! Bad input refused at load (naming the key): a path that is not a regular file, unknown keys
+//! or tables, values out of range, a K that is singular or of an absurd scale
+//! ([`crate::Calibration::check_k`]). Text for a number or yes/no (`"8500"`, `"yes"`) is read
+//! as its type, as the host's own profile stores it.
 
 use std::collections::BTreeMap;
 use std::fs::{self, File, OpenOptions};
@@ -75,6 +82,8 @@ impl ProfileFs for StdFs {
 pub struct ProfileStore {
     path: PathBuf,
     fs: Box<dyn ProfileFs>,
+    /// Values saved instead of the module's (see [`ProfileStore::keep`]).
+    kept: Vec<(&'static str, ParamValue)>,
 }
 
 impl std::fmt::Debug for ProfileStore {
@@ -83,7 +92,12 @@ impl std::fmt::Debug for ProfileStore {
     }
 }
 
+/// Decision: a profile holds `[vision]` and nothing else, and `[vision]` only the manual's
+/// names; anything more is refused naming it. A save rewrites the whole file, so a key kept
+/// only in memory would be silently deleted; a host bridge keeps its own settings in its own
+/// file.
 #[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 struct ProfileFile {
     vision: BTreeMap<String, toml::Value>,
 }
@@ -100,7 +114,40 @@ impl ProfileStore {
     /// A store for `path` whose writes go through `fs`.
     #[must_use]
     pub fn with_fs(path: impl Into<PathBuf>, fs: Box<dyn ProfileFs>) -> ProfileStore {
-        ProfileStore { path: path.into(), fs }
+        ProfileStore { path: path.into(), fs, kept: Vec::new() }
+    }
+
+    /// Every later save writes `value` for parameter `name`, whatever the module holds: for a
+    /// choice made for one session only (a command line's camera address) that must not
+    /// replace the file's.
+    #[must_use]
+    pub fn keep(mut self, name: &'static str, value: ParamValue) -> ProfileStore {
+        self.kept.retain(|(n, _)| *n != name);
+        self.kept.push((name, value));
+        self
+    }
+
+    /// Checks, without changing anything, that a save can succeed as far as the folder goes:
+    /// the path is a regular file or absent, and its folder exists and takes a new file. Call
+    /// it before the motion whose result is to be saved.
+    ///
+    /// # Errors
+    /// [`VisionError::Profile`] saying what is wrong.
+    pub fn check_writable(&self) -> Result<(), VisionError> {
+        self.require_regular_file()?;
+        let dir = self.dir();
+        let probe = self.temp_path();
+        match OpenOptions::new().write(true).create_new(true).open(&probe) {
+            Ok(f) => {
+                drop(f);
+                let _ = fs::remove_file(&probe);
+                Ok(())
+            }
+            Err(e) => Err(self.err(format!(
+                "cannot be saved: cannot create a file in {}: {e} — create the folder or make it writable",
+                dir.display()
+            ))),
+        }
     }
 
     /// The profile file.
@@ -115,6 +162,7 @@ impl ProfileStore {
     /// [`VisionError::Profile`] when the file cannot be read or parsed, or names an unknown or
     /// read-only parameter or an invalid value.
     pub fn load(&self) -> Result<Params, VisionError> {
+        self.require_regular_file()?;
         let text = fs::read_to_string(&self.path).map_err(|e| self.err(format!("cannot read: {e}")))?;
         from_toml(&text).map_err(|e| self.err(e))
     }
@@ -136,29 +184,92 @@ impl ProfileStore {
     /// # Errors
     /// [`VisionError::Profile`]; the previous file is intact and no temporary file is left.
     pub fn save(&mut self, params: &Params) -> Result<(), VisionError> {
-        let text = to_toml(params).map_err(|e| self.err(e))?;
-        let dir = match self.path.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-            _ => PathBuf::from("."),
-        };
-        let name = self.path.file_name().map_or_else(|| "profile".into(), |n| n.to_string_lossy().into_owned());
-        let n = TEMP_COUNTER.fetch_add(1, Ordering::Relaxed);
-        let tmp = dir.join(format!(".{name}.tmp-{}-{n}", std::process::id()));
+        self.require_regular_file()?;
+        let mut saved = params.clone();
+        for (name, value) in &self.kept {
+            saved.set(name, value.clone()).map_err(|e| self.err(e.to_string()))?;
+        }
+        let text = to_toml(&saved).map_err(|e| self.err(e))?;
+        let dir = self.dir();
+        self.remove_stale_temps(&dir);
+        let tmp = self.temp_path();
+        let previous = if self.path.exists() { "the previous profile is intact" } else { "no profile was written" };
         if let Err(e) = self.fs.write_synced(&tmp, text.as_bytes()) {
             let _ = self.fs.remove(&tmp);
-            return Err(self.err(format!("cannot write {}: {e}; the previous profile is intact", tmp.display())));
+            return Err(self.err(format!("cannot write {}: {e}; {previous}", tmp.display())));
         }
         if let Err(e) = self.fs.rename(&tmp, &self.path) {
             let _ = self.fs.remove(&tmp);
-            return Err(self.err(format!("cannot replace the profile: {e}; the previous profile is intact")));
+            return Err(self.err(format!("cannot replace the profile: {e}; {previous}")));
         }
         let _ = self.fs.sync_dir(&dir);
         Ok(())
     }
 
+    fn dir(&self) -> PathBuf {
+        match self.path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+            _ => PathBuf::from("."),
+        }
+    }
+
+    fn temp_prefix(&self) -> String {
+        let name = self.path.file_name().map_or_else(|| "profile".into(), |n| n.to_string_lossy().into_owned());
+        format!(".{name}.tmp-")
+    }
+
+    /// A fresh temporary name beside the profile: `.<name>.tmp-<pid>-<n>`.
+    fn temp_path(&self) -> PathBuf {
+        let n = TEMP_COUNTER.fetch_add(1, Ordering::Relaxed);
+        self.dir().join(format!("{}{}-{n}", self.temp_prefix(), std::process::id()))
+    }
+
+    /// Removes the temporary files interrupted saves of dead processes left beside the profile
+    /// (best effort). A file whose process is alive, or whose liveness cannot be told (no
+    /// `/proc`), is left alone: it may be a save in progress.
+    fn remove_stale_temps(&mut self, dir: &Path) {
+        let prefix = self.temp_prefix();
+        let Ok(entries) = fs::read_dir(dir) else { return };
+        let stale: Vec<PathBuf> = entries
+            .flatten()
+            .filter(|e| {
+                let name = e.file_name();
+                let Some(rest) = name.to_str().and_then(|n| n.strip_prefix(&prefix)) else { return false };
+                let Some((pid, n)) = rest.split_once('-') else { return false };
+                match (pid.parse::<u32>(), n.parse::<u64>()) {
+                    (Ok(pid), Ok(_)) => process_is_dead(pid),
+                    _ => false,
+                }
+            })
+            .map(|e| e.path())
+            .collect();
+        for path in stale {
+            let _ = self.fs.remove(&path);
+        }
+    }
+
+    /// Refuses a path that is not a regular file (a FIFO would block the read for ever, a
+    /// device would be read or overwritten, a folder cannot be replaced). Symbolic links are
+    /// followed.
+    fn require_regular_file(&self) -> Result<(), VisionError> {
+        match fs::metadata(&self.path) {
+            Ok(m) if !m.is_file() => {
+                Err(self.err("is not a regular file (a folder, FIFO or device) — give the path of a TOML file".into()))
+            }
+            _ => Ok(()),
+        }
+    }
+
     fn err(&self, reason: String) -> VisionError {
         VisionError::Profile { path: self.path.display().to_string(), reason }
     }
+}
+
+/// True when process `pid` is known not to exist (Linux `/proc`); false when it exists or
+/// when this cannot be told.
+fn process_is_dead(pid: u32) -> bool {
+    let proc_root = Path::new("/proc");
+    pid != std::process::id() && proc_root.join("self").exists() && !proc_root.join(pid.to_string()).exists()
 }
 
 /// The profile text for `params` (configuration parameters only).
@@ -203,6 +314,7 @@ pub fn from_toml(text: &str) -> Result<Params, String> {
         };
         params.set(&name, v).map_err(|e| e.to_string())?;
     }
+    params.calibration.check_k().map_err(|e| e.to_string())?;
     Ok(params)
 }
 
@@ -303,6 +415,126 @@ mod tests {
             let count = fs::read_dir(&dir).expect("dir").count();
             assert_eq!(count, 1, "the temporary file was removed");
         }
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn unknown_keys_and_tables_are_refused_naming_them() {
+        let e = from_toml("[vision]\nVisionEnabled = true\n[mach4]\nPlugin = 1\n").expect_err("table");
+        assert!(e.contains("mach4"), "{e}");
+        let e = from_toml("VisionEnabled = true\n").expect_err("top-level key");
+        assert!(e.contains("VisionEnabled"), "{e}");
+    }
+
+    #[test]
+    fn k_is_checked_as_a_whole_at_load_naming_it() {
+        let k = |k11: f64, k12: f64, k21: f64, k22: f64| {
+            format!("[vision]\nVisionCal_K11 = {k11:e}\nVisionCal_K12 = {k12:e}\nVisionCal_K21 = {k21:e}\nVisionCal_K22 = {k22:e}\n")
+        };
+        assert!(from_toml(&k(0.0, 0.0, 0.0, 0.0)).is_ok(), "all zero = not calibrated");
+        assert!(from_toml(&k(0.00203, 1e-5, -1e-5, 0.00204)).is_ok());
+        for (bad, why) in [
+            (k(1e300, 0.0, 0.0, 1e300), "in per pixel"),
+            (k(1e-12, 0.0, 0.0, 1e-12), "in per pixel"),
+            (k(0.002, 0.002, 0.002, 0.002), "singular"),
+            (k(0.002, 0.0, 0.0, 0.0), "singular"),
+            (k(1e300, 1e300, -1e300, 1e300), "in per pixel"),
+        ] {
+            let e = from_toml(&bad).expect_err(&bad);
+            assert!(e.contains("VisionCal_K11..K22") && e.contains(why), "{bad}: {e}");
+        }
+        // 1 mm per pixel is fine in mm, absurd (25 in) as inches.
+        let mm = format!("{}VisionCal_Units = \"mm\"\n", k(1.0, 0.0, 0.0, 1.0));
+        assert!(from_toml(&mm).is_ok(), "1 mm per pixel");
+        assert!(from_toml(&k(1.0, 0.0, 0.0, 1.0)).is_err(), "1 in per pixel");
+    }
+
+    #[test]
+    fn a_pound_block_past_9999_is_refused_at_load() {
+        let e = from_toml("[vision]\nVisionPoundVarBase = 9990\n").expect_err("past #9999");
+        assert!(e.contains("VisionPoundVarBase") && e.contains("#9990..#10029"), "{e}");
+        assert!(from_toml("[vision]\nVisionPoundVarBase = 9960\n").is_ok(), "#9960..#9999");
+    }
+
+    /// Decision: text values are read like the host's own profile (Mach4 stores every value
+    /// as text), and the next save writes them typed.
+    #[test]
+    fn text_values_are_read_as_their_type() {
+        let p = from_toml("[vision]\nVisionPort = \"8501\"\nVisionEnabled = \"yes\"\n").expect("text");
+        assert_eq!(p.port(), 8501);
+        assert!(p.enabled());
+        assert!(to_toml(&p).expect("save").contains("VisionPort = 8501\n"));
+        assert!(from_toml("[vision]\nVisionPort = \"85x\"\n").expect_err("not a number").contains("VisionPort"));
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_path_that_is_not_a_regular_file_is_refused_without_blocking() {
+        let dir = tmp_dir("fifo");
+        let fifo = dir.join("vision.toml");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status().map(|s| s.success());
+        for path in
+            [dir.clone(), PathBuf::from("/dev/null")].into_iter().chain(made.ok().filter(|ok| *ok).map(|_| fifo))
+        {
+            let store = ProfileStore::new(&path);
+            let e = store.load_or_default().expect_err("not a file");
+            assert!(e.to_string().contains("not a regular file"), "{e}");
+            assert!(store.check_writable().is_err());
+            assert!(ProfileStore::new(&path).save(&Params::default()).is_err());
+        }
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_missing_folder_is_found_before_saving_and_nothing_claims_a_previous_profile() {
+        let dir = tmp_dir("missing");
+        let path = dir.join("no-such-folder").join("vision.toml");
+        let store = ProfileStore::new(&path);
+        let e = store.check_writable().expect_err("missing folder");
+        assert!(e.to_string().contains("create the folder"), "{e}");
+        let e = ProfileStore::new(&path).save(&calibrated()).expect_err("missing folder");
+        assert!(e.to_string().contains("no profile was written"), "{e}");
+        assert!(!e.to_string().contains("intact"), "{e}");
+        ProfileStore::new(dir.join("vision.toml")).check_writable().expect("writable");
+        assert_eq!(fs::read_dir(&dir).expect("dir").count(), 0, "the check leaves nothing");
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn kept_values_are_saved_instead_of_the_modules() {
+        let dir = tmp_dir("kept");
+        let path = dir.join("vision.toml");
+        let mut store = ProfileStore::new(&path).keep("VisionIP", ParamValue::from("10.0.0.9"));
+        let mut p = calibrated();
+        p.set("VisionDriver", "Sim").expect("set");
+        store.save(&p).expect("save");
+        let back = ProfileStore::new(&path).load().expect("load");
+        assert_eq!(back.ip(), "10.0.0.9");
+        assert_eq!(back.driver(), "Sim", "only kept names are replaced");
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn stale_temporary_files_of_dead_processes_are_removed_on_save() {
+        let dir = tmp_dir("stale");
+        let path = dir.join("vision.toml");
+        // A process that has exited: its pid is free (until reused, which the check rechecks).
+        let mut child = std::process::Command::new("true").spawn().expect("spawn");
+        let dead = child.id();
+        child.wait().expect("wait");
+        let live = std::process::id();
+        let stale = dir.join(format!(".vision.toml.tmp-{dead}-3"));
+        let in_progress = dir.join(format!(".vision.toml.tmp-{live}-999999"));
+        let other = dir.join(format!(".other.toml.tmp-{dead}-3"));
+        for f in [&stale, &in_progress, &other] {
+            fs::write(f, "half").expect("write");
+        }
+        ProfileStore::new(&path).save(&calibrated()).expect("save");
+        if Path::new("/proc/self").exists() {
+            assert!(!stale.exists(), "a dead process's temporary file is removed");
+        }
+        assert!(in_progress.exists(), "a live process's is kept");
+        assert!(other.exists(), "another profile's is kept");
         let _ = fs::remove_dir_all(&dir);
     }
 }

@@ -164,3 +164,37 @@ fn huge_and_degenerate_values_are_errors_not_numbers() {
         exercise(text);
     }
 }
+
+/// Long inputs (issue 17): megabyte lines and a million-line program are refused or run in
+/// bounded time, never panic. (Deeply nested or megabyte expressions are the expression
+/// bounds' own tests.)
+#[test]
+fn megabyte_lines_and_million_line_programs_run_or_are_refused() {
+    const MB: usize = 1 << 20;
+    let started = std::time::Instant::now();
+    for line in [
+        format!("({})", "x".repeat(MB)),
+        format!("G0 X{}", "1".repeat(MB)),
+        format!("G0 X0.{}", "0".repeat(MB)),
+        "G0 X1 ".repeat(MB / 6),
+        format!("G0 X1 ;{}", "\u{7}".repeat(MB)),
+        "\u{0}\u{ff}".repeat(MB / 2),
+    ] {
+        let mut interp = Interpreter::new(InterpreterConfig::default());
+        let _ = interp.run(&line, None, &mut |e: &Event| check_finite(e));
+        assert!(interp.machine_position().is_finite());
+    }
+    // A million lines in a release build, a tenth in a debug build (same code paths).
+    let lines = if cfg!(debug_assertions) { 100_000 } else { 1_000_000 };
+    let program = "G1 X1 Y2 F10\nG0 X0 Y0\n".repeat(lines / 2);
+    let mut interp = Interpreter::new(InterpreterConfig::default());
+    let mut moves = 0usize;
+    interp
+        .run(&program, None, &mut |e: &Event| {
+            check_finite(e);
+            moves += usize::from(matches!(e, Event::Linear(_)));
+        })
+        .expect("a long valid program runs");
+    assert_eq!(moves, lines, "every line's move");
+    assert!(started.elapsed().as_secs() < 60, "long inputs took {:?}", started.elapsed());
+}

@@ -30,6 +30,33 @@ pub enum MathError {
         /// Which input held the bad value.
         what: &'static str,
     },
+    /// A coordinate beyond [`crate::fit::MAX_COORDINATE`]: no machine travels that far, and the
+    /// fit's sums would overflow.
+    #[error("{what} has a coordinate of {value:e}, beyond ±{limit:e} (no machine travels that far); check the input's units")]
+    CoordinateTooLarge {
+        /// Which set: "a commanded point" or "an observed point".
+        what: &'static str,
+        /// The largest coordinate magnitude found.
+        value: f64,
+        /// The bound, machine units.
+        limit: f64,
+    },
+    /// The fitted scale is near zero or huge: the observed points are collinear or collapse
+    /// while the commanded ones span an area.
+    #[error(
+        "the fit scales the part by X {scale_x:e} / Y {scale_y:e}, outside {min:e}..{max:e}: the observed \
+         points are collinear or collapse; check that each observed point is its own mark"
+    )]
+    DegenerateScale {
+        /// The fit's X scale (dimensionless).
+        scale_x: f64,
+        /// The fit's Y scale (dimensionless).
+        scale_y: f64,
+        /// The smallest allowed scale magnitude.
+        min: f64,
+        /// The largest allowed scale magnitude.
+        max: f64,
+    },
     /// The commanded points (nearly) coincide: no rotation or scale can be measured.
     #[error("the commanded points coincide; place the marks apart")]
     CoincidentPoints,

@@ -28,7 +28,14 @@ pub struct VisionHandler {
     module: VisionModule,
     clock: Clock,
     records: Vec<Record>,
+    /// Calls past [`MAX_RECORDS`] since the last [`VisionHandler::take_records`], not kept.
+    records_dropped: u64,
 }
+
+/// The most [`Record`]s a handler keeps between two [`VisionHandler::take_records`]: a program
+/// of millions of Vision M-codes keeps its memory bounded; the rest are only counted
+/// ([`VisionHandler::records_dropped`]).
+pub const MAX_RECORDS: usize = 10_000;
 
 impl std::fmt::Debug for VisionHandler {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -40,7 +47,7 @@ impl VisionHandler {
     /// A handler around `module`, telling time by `clock`.
     #[must_use]
     pub fn new(module: VisionModule, clock: Clock) -> VisionHandler {
-        VisionHandler { module, clock, records: Vec::new() }
+        VisionHandler { module, clock, records: Vec::new(), records_dropped: 0 }
     }
 
     /// The Vision module (parameters, dot list, driver).
@@ -72,9 +79,18 @@ impl VisionHandler {
         &self.records
     }
 
-    /// Takes the records, leaving none.
+    /// Takes the records (the first [`MAX_RECORDS`] calls since the last take), leaving none
+    /// and resetting [`VisionHandler::records_dropped`].
     pub fn take_records(&mut self) -> Vec<Record> {
+        self.records_dropped = 0;
         std::mem::take(&mut self.records)
+    }
+
+    /// Calls since the last [`VisionHandler::take_records`] that were not kept (past
+    /// [`MAX_RECORDS`]).
+    #[must_use]
+    pub fn records_dropped(&self) -> u64 {
+        self.records_dropped
     }
 
     /// Runs one Vision M-code on the interpreter behind `ctx`.
@@ -92,7 +108,11 @@ impl VisionHandler {
             let mut machine = ContextMachine::new(ctx, &self.clock);
             call.run(&mut self.module, &mut machine).map_err(McodeError::from)
         });
-        self.records.push(Record { line, mcode, result: result.clone() });
+        if self.records.len() < MAX_RECORDS {
+            self.records.push(Record { line, mcode, result: result.clone() });
+        } else {
+            self.records_dropped += 1;
+        }
         result
     }
 }

@@ -29,6 +29,6 @@ mod outcome;
 
 pub use call::{VisionCall, VISION_MCODES};
 pub use error::McodeError;
-pub use handler::{Record, VisionHandler};
+pub use handler::{Record, VisionHandler, MAX_RECORDS};
 pub use machine::{fixed_clock, system_clock, Clock, ContextMachine};
 pub use outcome::Outcome;

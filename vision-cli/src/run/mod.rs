@@ -104,6 +104,9 @@ impl Session {
             None => sim.calibrated_params(&Params::default()).map_err(|e| Failure::Input(e.to_string()))?,
         };
 
+        // The camera choices below are for this session: the profile keeps the file's.
+        let file_connection = ["VisionDriver", "VisionIP", "VisionPort"]
+            .map(|name| params.get(name).map(|v| (name, v)).map_err(|e| Failure::Input(e.to_string())));
         let mut registry = DriverRegistry::new();
         sim.register(&mut registry);
         vision_driver_keyence::register(&mut registry);
@@ -133,7 +136,14 @@ impl Session {
 
         let mut module = VisionModule::from_registry(params, &registry).map_err(|e| Failure::Input(e.to_string()))?;
         if let Some(path) = &args.profile {
-            module = module.with_profile(ProfileStore::new(path));
+            let mut store = ProfileStore::new(path);
+            for kept in file_connection {
+                let (name, value) = kept?;
+                store = store.keep(name, value);
+            }
+            // Found before any motion, not when M283/M284 saves after it.
+            store.check_writable().map_err(|e| Failure::Input(e.to_string()))?;
+            module = module.with_profile(store);
         }
         let clock = system_clock();
         let machine = SimMachine::new(&sim).map_err(|e| Failure::Input(e.to_string()))?;
@@ -152,6 +162,7 @@ impl Session {
             items.push(vision_path::item(e, usize::try_from(e.line()).unwrap_or(usize::MAX)));
         };
         let result = self.machine.run_program(text, Some(&mut self.handler), &mut collect);
+        let steps_not_listed = self.handler.records_dropped();
         let records = self.handler.take_records();
         let steps = steps(&records, &self.sim, &self.machine);
         let alignment_time_s = self.alignment_time(&items, &steps, start);
@@ -173,6 +184,7 @@ impl Session {
             cycle_note: cycle.err(),
             alignment_time_s,
             steps,
+            steps_not_listed,
             calibration_truth,
             error,
         }

@@ -45,12 +45,20 @@ pub(crate) struct ProgramReport {
     pub cycle_note: Option<String>,
     /// The time from the program's last M280 to the M282 after it, seconds (null without).
     pub alignment_time_s: Option<f64>,
-    /// Every Vision M-code, in order.
+    /// Every Vision M-code, in order (the first [`vision_mcode::MAX_RECORDS`]).
     pub steps: Vec<Step>,
+    /// Vision M-codes past the first [`vision_mcode::MAX_RECORDS`]: ran, but not listed.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub steps_not_listed: u64,
     /// What the simulator knows about the calibration after the program, when it calibrated.
     pub calibration_truth: Option<CalibrationTruth>,
     /// Why the program stopped, if it failed.
     pub error: Option<String>,
+}
+
+#[allow(clippy::trivially_copy_pass_by_ref)] // serde's `skip_serializing_if` passes a reference
+fn is_zero(n: &u64) -> bool {
+    *n == 0
 }
 
 /// One Vision M-code: the line, and the core's own report for it (flattened into the step).

@@ -66,6 +66,14 @@ fn program(s: &mut String, p: &ProgramReport, world_unit: &str) {
     for step in &p.steps {
         self::step(s, step, world_unit);
     }
+    if p.steps_not_listed > 0 {
+        let _ = writeln!(
+            s,
+            "  ... {} more Vision M-codes ran but are not listed (the report keeps the first {})",
+            p.steps_not_listed,
+            vision_mcode::MAX_RECORDS
+        );
+    }
     if let Some(t) = p.alignment_time_s {
         let _ = writeln!(s, "  alignment time (M280 to M282) {t:.3} s");
     }

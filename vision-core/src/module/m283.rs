@@ -63,6 +63,10 @@ impl VisionModule {
             return Err(VisionError::AlignmentActive);
         }
         self.driver_mut()?;
+        // A profile that cannot be saved is found before the walk moves the machine.
+        if let Some(store) = &self.profile {
+            store.check_writable()?;
+        }
         let tool = self.params.camera_tool().unwrap_or_else(|| machine.active_tool());
         let start: Point2<f64> = machine.program_position();
 

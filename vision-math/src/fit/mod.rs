@@ -112,9 +112,7 @@ impl Model {
         ) -> Result<Transform, MathError> {
             let m = Moments::new(model, commanded, observed)?;
             let p = model.solve(&m)?;
-            if !p.is_finite() {
-                return Err(MathError::DegenerateObserved);
-            }
+            p.check()?;
             Ok(Transform {
                 model,
                 rotation: p.rotation,
@@ -186,6 +184,21 @@ impl Params {
         let (c, s) = (rotation.re, rotation.im);
         let linear = Matrix2::new(c * scale.x, c * shear - s * scale.y, s * scale.x, s * shear + c * scale.y);
         Params { rotation, scale, shear, linear }
+    }
+
+    /// Refuses parameters no alignment can use: non-finite, or a scale outside
+    /// `MIN_SCALE..1/MIN_SCALE`.
+    fn check(&self) -> Result<(), MathError> {
+        if !self.is_finite() {
+            return Err(MathError::DegenerateObserved);
+        }
+        let (sx, sy) = (self.scale.x, self.scale.y);
+        let max = 1.0 / MIN_SCALE;
+        if [sx, sy].iter().all(|s| (MIN_SCALE..=max).contains(&s.abs())) {
+            Ok(())
+        } else {
+            Err(MathError::DegenerateScale { scale_x: sx, scale_y: sy, min: MIN_SCALE, max })
+        }
     }
 
     fn is_finite(&self) -> bool {
@@ -300,6 +313,15 @@ pub(crate) struct Moments {
 
 /// Points whose RMS spread is below this fraction of their magnitude count as coincident.
 const COINCIDENT: f64 = 1e-10;
+/// Points whose RMS spread is below this, machine units, count as coincident whatever their
+/// magnitude (10⁻⁹ in or mm is far below any machine's resolution).
+pub const MIN_SPREAD: f64 = 1e-9;
+/// The largest coordinate magnitude a fit accepts, machine units (10⁹ in is 25 000 km; the
+/// fit's squared sums stay far from overflow).
+pub const MAX_COORDINATE: f64 = 1e9;
+/// A fitted scale magnitude outside `MIN_SCALE..1/MIN_SCALE` is refused: it means collapsed or
+/// collinear observed points, and G51 with 10 decimals would print it as 0.
+pub const MIN_SCALE: f64 = 1e-6;
 /// Second-moment eigenvalue ratio below which points count as collinear
 /// (a thickness below 3·10⁻⁵ of the length).
 const COLLINEAR: f64 = 1e-9;
@@ -323,7 +345,10 @@ impl Moments {
         let (mut sax, mut say, mut sqx, mut sqy) = (0.0, 0.0, 0.0, 0.0);
         let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
         let (mut pxx, mut pxy, mut pyx, mut pyy) = (0.0, 0.0, 0.0, 0.0);
+        let (mut n_mag, mut o_mag): (f64, f64) = (0.0, 0.0);
         for (n, o) in commanded.iter().zip(observed) {
+            n_mag = n_mag.max(n.x.abs()).max(n.y.abs());
+            o_mag = o_mag.max(o.x.abs()).max(o.y.abs());
             let (ax, ay) = (n.x - n0.x, n.y - n0.y);
             let (qx, qy) = (o.x - o0.x, o.y - o0.y);
             sax += ax;
@@ -359,9 +384,14 @@ impl Moments {
         if !(co.x.is_finite() && co.y.is_finite()) {
             return Err(MathError::NonFinite { what: "an observed point" });
         }
+        for (what, value) in [("a commanded point", n_mag), ("an observed point", o_mag)] {
+            if value > MAX_COORDINATE {
+                return Err(MathError::CoordinateTooLarge { what, value, limit: MAX_COORDINATE });
+            }
+        }
         let spread2 = (sxx + syy) * inv;
         let magnitude = cn.x.abs().max(cn.y.abs());
-        let floor = COINCIDENT * magnitude;
+        let floor = (COINCIDENT * magnitude).max(MIN_SPREAD);
         if spread2 == 0.0 || spread2 <= floor * floor {
             return Err(MathError::CoincidentPoints);
         }
@@ -390,9 +420,7 @@ impl Moments {
         commanded: &[Point2<f64>],
         observed: &[Point2<f64>],
     ) -> Result<Fit, MathError> {
-        if !p.is_finite() {
-            return Err(MathError::DegenerateObserved);
-        }
+        p.check()?;
         let Params { rotation, scale, shear, linear } = p;
         // L spelled out so the loop below stays in registers.
         let (l11, l12, l21, l22) = (linear[(0, 0)], linear[(0, 1)], linear[(1, 0)], linear[(1, 1)]);

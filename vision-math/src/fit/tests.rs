@@ -330,3 +330,33 @@ fn model_names_round_trip() {
     }
     assert_eq!(Model::from_name("projective"), None);
 }
+
+#[test]
+fn collinear_observed_points_tiny_spreads_and_huge_coordinates_are_refused_for_their_reason() {
+    let p = |v: &[(f64, f64)]| v.iter().map(|(x, y)| Point2::new(*x, *y)).collect::<Vec<_>>();
+    let square = p(&[(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)]);
+    // Observed on a line: X or Y scale 0 (was `G51 X0.0000000000`). A similarity fit keeps
+    // its scale and shows the mismatch as residuals instead.
+    let line = p(&[(0.0, 0.0), (1.0, 0.0), (2.0, 0.0)]);
+    for model in [Model::Rectangle, Model::Affine] {
+        let e = model.fit(&square, &line).expect_err("collinear observed");
+        assert!(matches!(e, MathError::DegenerateScale { .. }), "{model:?}: {e:?}");
+        assert!(model.transform(&square, &line).is_err(), "{model:?}");
+    }
+    // Observed 1e-15 apart: every scaling model collapses the part.
+    let dot = p(&[(0.0, 0.0), (1e-15, 0.0), (0.0, 1e-15)]);
+    for model in [Model::Similarity, Model::Rectangle, Model::Affine] {
+        assert!(model.fit(&square, &dot).is_err(), "{model:?}");
+    }
+    for model in Model::ALL {
+        // Commanded 1e-15 apart, near the origin: coincident, not a fit.
+        assert_eq!(model.fit(&dot, &square).expect_err("coincident"), MathError::CoincidentPoints, "{model:?}");
+        // Huge but finite: named as too large, not as "not a finite number".
+        let huge = p(&[(0.0, 0.0), (1e200, 0.0), (0.0, 1e200)]);
+        let e = model.fit(&huge, &square).expect_err("huge");
+        assert!(matches!(e, MathError::CoordinateTooLarge { what: "a commanded point", .. }), "{model:?}: {e:?}");
+        let e = model.fit(&square, &huge).expect_err("huge");
+        assert!(matches!(e, MathError::CoordinateTooLarge { what: "an observed point", .. }), "{model:?}: {e:?}");
+        assert!(e.to_string().contains("1e200"), "{e}");
+    }
+}

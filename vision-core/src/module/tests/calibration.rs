@@ -253,7 +253,7 @@ impl ProfileFs for BrokenDisk {
 fn a_failed_save_undoes_the_calibration() {
     let mut rig = standard_rig();
     let start = rig.machine.program_position();
-    with_store(&mut rig, ProfileStore::with_fs("/nonexistent/vision.toml", Box::new(BrokenDisk)));
+    with_store(&mut rig, ProfileStore::with_fs(std::env::temp_dir().join("vision.toml"), Box::new(BrokenDisk)));
     let e = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect_err("save fails");
     assert!(matches!(e, VisionError::Profile { .. }), "{e}");
     assert_untouched(&rig, start);
@@ -262,7 +262,7 @@ fn a_failed_save_undoes_the_calibration() {
 #[test]
 fn a_failed_save_whose_offset_restore_fails_says_what_to_set_by_hand() {
     let mut rig = standard_rig();
-    with_store(&mut rig, ProfileStore::with_fs("/nonexistent/vision.toml", Box::new(BrokenDisk)));
+    with_store(&mut rig, ProfileStore::with_fs(std::env::temp_dir().join("vision.toml"), Box::new(BrokenDisk)));
     // The offset write succeeds, the save fails, the restoring write fails.
     rig.world().fail_offset_after = Some(1);
     let e = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect_err("save fails");
@@ -386,4 +386,36 @@ fn the_fake_optics_follow_the_hand_worked_geometry() {
     let o = tilted(2, true);
     let d = Vector2::new(0.31, -0.17);
     assert!((o.table_per_pixel() * (o.pixel(d) - Point2::from(o.centre_px)) - d).norm() < 1e-12);
+}
+
+#[test]
+fn a_quick_diameter_in_the_wrong_unit_is_refused_naming_the_mix_up() {
+    for (diameter, hint) in
+        [(12.7, Some("a millimetre value in an inch program (Q0.5 in inches)")), (1e300, None), (0.05, None)]
+    {
+        let mut world = World { marks: vec![Point2::new(0.2, 0.1)], ..World::default() };
+        world.program = Point2::origin();
+        let mut rig = Rig::with_world(world);
+        let before = rig.module.params().clone();
+        let e = rig.module.m283(&mut rig.machine, Calibrate::Quick { diameter }).expect_err("wrong diameter");
+        let text = e.to_string();
+        assert!(text.contains("axis-detect bump"), "{text}");
+        if let Some(hint) = hint {
+            assert!(text.contains(hint), "{text}");
+        }
+        assert_eq!(rig.module.params(), &before, "nothing saved");
+        assert_eq!(rig.machine.program_position(), Point2::origin());
+    }
+}
+
+#[test]
+fn an_unwritable_profile_is_found_before_the_calibration_moves() {
+    let dir = std::env::temp_dir().join(format!("vision-core-m283-nowrite-{}", std::process::id()));
+    let mut world = World { marks: vec![Point2::new(0.2, 0.1)], ..World::default() };
+    world.program = Point2::origin();
+    let mut rig = Rig::with_world(world);
+    rig.module.profile = Some(crate::ProfileStore::new(dir.join("missing").join("v.toml")));
+    let e = rig.module.m283(&mut rig.machine, Calibrate::Quick { diameter: 0.5 }).expect_err("cannot save");
+    assert!(e.to_string().contains("create the folder"), "{e}");
+    assert_eq!(rig.world().triggers, 0, "refused before the first trigger");
 }
