@@ -1,6 +1,6 @@
-//! The CLI's numeric options and the fit JSON are parsers of user input: any number (or
-//! non-number) gives exit 0, 1 or 2 with at most one line on standard error, never a panic
-//! (exit 101) or a non-finite number in the output.
+//! The CLI's numeric options (plan's limits, the camera's timeout and port) and the fit JSON
+//! are parsers of user input: any number (or non-number) gives exit 0, 1 or 2 with at most one
+//! line on standard error, never a panic (exit 101) or a non-finite number in the output.
 
 use std::io::Write as _;
 use std::path::PathBuf;
@@ -60,6 +60,28 @@ proptest! {
         }
         let out = cmd.arg(format!("{option}={value}")).arg(program()).output().expect("plan");
         well_behaved(&out, &format!("{option}={value}"))?;
+    }
+
+    #[test]
+    fn camera_numeric_options_are_used_or_refused(
+        option in prop::sample::select(vec!["--timeout", "--port"]),
+        value in number(),
+    ) {
+        // Loopback port 9 has no listener: a valid option ends in a refused connection at
+        // once (exit 1), an invalid one is bad input (exit 2).
+        let mut cmd = bin();
+        cmd.args(["trigger", "--ip", "127.0.0.1"]);
+        if option != "--port" {
+            cmd.args(["--port", "9"]);
+        }
+        let out = cmd.arg(format!("{option}={value}")).output().expect("trigger");
+        well_behaved(&out, &format!("trigger {option}={value}"))?;
+        let out = bin()
+            .args(["run", "--camera", "keyence", "--ip", "127.0.0.1", &format!("--port={value}")])
+            .arg(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../examples/programs/04-rectangle-fit.nc"))
+            .output()
+            .expect("run");
+        well_behaved(&out, &format!("run --port={value}"))?;
     }
 
     #[test]
