@@ -12,7 +12,8 @@
 //! the process that loads it provides every symbol); the default `vendored` feature compiles
 //! Lua 5.3 in for the tests.
 //!
-//! Lua API (every function returns `ok, message, gcode`: `true, nil, {lines}` on success,
+//! Lua API (every function returns `ok, message, gcode`: `true, nil, {lines}` on success, the
+//! lines being a record of the G-code the M-code already ran on Mach4, never to be run again;
 //! `false, "why", {}` after reporting the failure to Mach4):
 //!
 //! * `mach_vision.mcode(m, hParam)`: runs M-code `m` (280–284) with the words of `hParam`.
