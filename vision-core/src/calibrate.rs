@@ -26,7 +26,7 @@
 //! the verify walk compensates: commanding `N + o₀ − a = N + b` puts the optical axis on `N`,
 //! and a capture there is seen at `C − b + K·R·c`, where the new offset will see it.
 //!
-//! Nothing here commits: [`sheet_walk`] and [`quick`] return a [`Solution`] (K, remap, tool
+//! Nothing here commits: `sheet_walk` and `quick` return a `Solution` (K, remap, tool
 //! offset, report) and M283 applies it in one place, or nothing (see
 //! [`crate::VisionModule::m283`]).
 //!
