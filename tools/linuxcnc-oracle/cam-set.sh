@@ -1,7 +1,9 @@
 #!/bin/sh
-# Fetches LinuxCNC's CAM-style test programs (tests/trajectory-planner/circular-arcs/nc_files)
-# into target/linuxcnc-oracle/circular-arcs/ with a sparse, shallow clone. They are LinuxCNC's,
-# not ours: they are read from there, never committed here.
+# Copies LinuxCNC's CAM-style test programs (tests/trajectory-planner/circular-arcs/nc_files)
+# into target/linuxcnc-oracle/circular-arcs/ from a local copy of LinuxCNC's repository: the
+# git directory given as $1 (or $LINUXCNC_GIT), e.g. the snapshot the search tool's `fetch`
+# brings. This machine reaches no code host, so nothing is cloned. The programs are LinuxCNC's:
+# read from there, never committed here.
 set -eu
 root=$(cd "$(dirname "$0")/../.." && pwd)
 dest="$root/target/linuxcnc-oracle/circular-arcs"
@@ -9,9 +11,11 @@ if [ -d "$dest/tests" ]; then
     echo "$dest"
     exit 0
 fi
+git_dir=${1:-${LINUXCNC_GIT:-}}
+if [ -z "$git_dir" ]; then
+    echo "cam-set.sh: give LinuxCNC's git directory (argument or LINUXCNC_GIT)" >&2
+    exit 2
+fi
 mkdir -p "$dest"
-git clone -q --depth 1 --filter=blob:none --sparse https://github.com/LinuxCNC/linuxcnc.git "$dest/clone"
-git -C "$dest/clone" sparse-checkout set tests/trajectory-planner/circular-arcs/nc_files
-mv "$dest/clone/tests" "$dest/tests"
-rm -rf "$dest/clone"
+git --git-dir="$git_dir" archive HEAD tests/trajectory-planner/circular-arcs/nc_files | tar -x -C "$dest"
 echo "$dest"
