@@ -35,3 +35,6 @@ pub mod testkit;
 pub use error::HostError;
 pub use host::Host;
 pub use session::{registry, Session};
+/// How a bridge makes a message safe to show (control characters escaped, huge quoted input
+/// cut): the same rule as the CLI's.
+pub use vision_core::text::{printable_line, MAX_MESSAGE_CHARS};

@@ -39,7 +39,7 @@ mod mach4;
 use std::path::PathBuf;
 
 use mlua::{Lua, Table, Value};
-use vision_host::{registry, HostError, Session};
+use vision_host::{printable_line, registry, HostError, Session, MAX_MESSAGE_CHARS};
 
 pub use mach4::Mach4;
 
@@ -70,7 +70,8 @@ pub fn mach_vision(lua: &Lua) -> mlua::Result<Table> {
 
 /// The answer of a call that failed after `host` reported it to the operator.
 fn refused(host: Option<&Mach4>, e: &HostError) -> Answer {
-    let message = e.to_string();
+    // Messages quote profile paths and camera replies: shown escaped and bounded.
+    let message = printable_line(&e.to_string(), MAX_MESSAGE_CHARS);
     if let Some(host) = host {
         host.fail(&message);
     }

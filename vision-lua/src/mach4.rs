@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use mlua::{FromLua, Function, IntoLuaMulti, Lua, MultiValue, Table, Value};
-use vision_host::{Host, HostError};
+use vision_host::{printable_line, Host, HostError, MAX_MESSAGE_CHARS};
 use vision_math::{LengthUnit, Point2, Vector2};
 
 /// `mcCntlGetUnitsCurrent` for G20 (the G-code number × 10).
@@ -198,6 +198,6 @@ impl Host for Mach4 {
 
     fn message(&mut self, text: &str) {
         // A status line only: a refused message is not worth failing the M-code for.
-        let _ = self.call("mcCntlSetLastError", (self.inst.clone(), text));
+        let _ = self.call("mcCntlSetLastError", (self.inst.clone(), printable_line(text, MAX_MESSAGE_CHARS)));
     }
 }

@@ -244,6 +244,25 @@ fn without_a_session_the_module_opens_the_profile_beside_mach4s() {
     assert!(fake(&lua).get::<bool>("stopped").expect("flag"));
 }
 
+/// What reaches Mach4's message line is one escaped line, whatever it quotes (here a profile
+/// path holding a terminal escape).
+#[test]
+fn messages_to_the_operator_are_escaped() {
+    let dir = std::env::temp_dir().join(format!("mach-vision-lua-esc-\u{1b}[31m-{}", std::process::id()));
+    // The profile is a folder: refused, naming its path.
+    std::fs::create_dir_all(dir.join("Profiles/Mach4Mill/MachVision.toml")).expect("folder");
+    let lua = mach4_lua();
+    fake(&lua).set("machDir", dir.display().to_string()).expect("dir");
+    let run: Function = lua.globals().get("m280").expect("m280");
+    let (ok, message, _): (bool, Option<String>, Vec<String>) = run.call(H_PARAM).expect("runs");
+    assert!(!ok);
+    let message = message.expect("a message");
+    assert!(message.contains("\\u{1b}[31m") && !message.contains('\u{1b}'), "{message:?}");
+    let errors: Vec<String> = fake(&lua).get("errors").expect("errors");
+    assert_eq!(errors.last(), Some(&message));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// Mach4's own failures (a non-zero return code, an answer that is not a unit) reach the
 /// operator naming the call, and stop the cycle.
 #[test]
