@@ -1,0 +1,173 @@
+//! `mach_vision`: the Vision M-codes M280–M284 as a Python extension module for LinuxCNC's
+//! Python remaps (`hosts/linuxcnc/remap.py`), over [`vision_host::Session`].
+//!
+//! The remap handlers are thin: each hands its block's words and a `Host` object (LinuxCNC's
+//! interpreter behind the method table of `hosts/linuxcnc/README.md`) to one [`PySession`];
+//! the session runs the M-code, runs the G-code it emits through `Host.execute`, and raises
+//! [`VisionError`] with the operator's message when the M-code is refused. [`PyHost`] is the
+//! [`vision_host::Host`] over that object; a Python exception in one of its methods becomes the
+//! M-code's refusal, never a panic.
+//!
+//! Built with `PYO3_BUILD_EXTENSION_MODULE=1` the library links no libpython (the Python of
+//! the process that imports it provides every symbol) and is the shipped module, copied to
+//! `mach_vision.abi3.so`; without it, as in `cargo test`, it links libpython. The `sim` feature
+//! adds `Session.simulated(...)`, a session on the simulated camera, for the tests only.
+//!
+//! ```python
+//! import mach_vision
+//!
+//! session = mach_vision.Session("/home/cnc/linuxcnc/configs/mill/mach-vision.toml")
+//! try:
+//!     gcode = session.call(282, {"p": 0.0}, host)  # the lines M282 already ran
+//! except mach_vision.VisionError as e:
+//!     print("M282:", e)  # the manual's message
+//! ```
+
+mod host;
+#[cfg(feature = "sim")]
+mod sim;
+mod words;
+
+use std::path::PathBuf;
+
+use pyo3::exceptions::PyException;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use vision_host::{printable_line, registry, Session, MAX_MESSAGE_CHARS};
+
+pub use host::PyHost;
+pub use words::{word, WordError};
+
+pyo3::create_exception!(
+    mach_vision,
+    VisionError,
+    PyException,
+    "A vision M-code failed; `str(e)` is the operator's message (the manual's words)."
+);
+
+/// `VisionError` carrying `e`'s message, escaped and bounded for the operator's screen.
+fn vision_error(e: &impl std::fmt::Display) -> PyErr {
+    VisionError::new_err(printable_line(&e.to_string(), MAX_MESSAGE_CHARS))
+}
+
+/// `mach_vision.Session`: the Vision module of one LinuxCNC interpreter, kept between M-code
+/// calls (parameters, the run's dot list, the camera connection, the profile).
+#[pyclass(unsendable, module = "mach_vision", name = "Session")]
+pub struct PySession {
+    session: Session,
+    /// The simulated rig behind the camera (`Session.simulated`; tests only).
+    #[cfg(feature = "sim")]
+    sim: Option<sim::Simulated>,
+}
+
+impl PySession {
+    fn wrap(session: Session) -> PySession {
+        PySession {
+            session,
+            #[cfg(feature = "sim")]
+            sim: None,
+        }
+    }
+
+    /// Readies the camera for a call on `host`: the simulated camera looks from where the
+    /// host's machine is (a real camera needs nothing).
+    #[allow(clippy::unused_self, clippy::unnecessary_wraps)] // both used with the `sim` feature
+    fn before_call(&self, host: &PyHost<'_>) -> PyResult<()> {
+        #[cfg(feature = "sim")]
+        if let Some(sim) = &self.sim {
+            sim.place_head(host).map_err(|e| vision_error(&e))?;
+        }
+        let _ = host;
+        Ok(())
+    }
+}
+
+#[pymethods]
+impl PySession {
+    /// `Session(profile)`: the session of profile file `profile` (TOML; a missing file starts a
+    /// fresh, disabled profile that M283/M284 save to), with the camera driver `VisionDriver`
+    /// names. Raises `VisionError` when `profile` is None (`MACH_VISION_PROFILE` unset) or the
+    /// profile or driver cannot be set up.
+    #[new]
+    #[pyo3(signature = (profile=None))]
+    fn new(profile: Option<PathBuf>) -> PyResult<PySession> {
+        let profile = profile.ok_or_else(|| {
+            VisionError::new_err(
+                "no Vision profile: set MACH_VISION_PROFILE in LinuxCNC's environment to the profile file (TOML)",
+            )
+        })?;
+        Session::open(&profile, &registry()).map(PySession::wrap).map_err(|e| vision_error(&e))
+    }
+
+    /// `call(mcode, words, host)`: runs vision M-code `mcode` (280–284) with its block's words
+    /// (`{"p": 3.0}`) on `host`; returns the G-code lines it already ran through
+    /// `host.execute` (a record, never to be run again). Raises `VisionError` with the
+    /// operator's message when the M-code is refused or the host fails.
+    fn call(&mut self, mcode: u32, words: &Bound<'_, PyDict>, host: Bound<'_, PyAny>) -> PyResult<Vec<String>> {
+        let words = words::from_dict(words).map_err(|e| vision_error(&format!("M{mcode}: {e}")))?;
+        let mut host = PyHost::new(host);
+        self.before_call(&host)?;
+        let outcome = self.session.mcode(&mut host, mcode, &words).map_err(|e| vision_error(&e))?;
+        Ok(outcome.gcode().to_vec())
+    }
+
+    /// `Session.simulated(camera="sim", rotation_deg=None, shift=None, scale=None)` — **tests
+    /// only** (feature `sim`): a session whose camera sees vision-driver-sim's built-in world,
+    /// calibrated perfectly, directly (`camera="sim"`) or through the Keyence driver and its
+    /// emulator on loopback (`camera="keyence"`). The part ("demo target") is placed with the
+    /// given rotation (degrees counter-clockwise about its centre), shift (X, Y, inches) and
+    /// scale (X, Y) instead of the world's; `params` sets numeric Vision parameters
+    /// (`{"VisionFitMaxScaleDev": 0.05}`). Before each call the simulated head is put where
+    /// `host.machine_position()` (machine X, Y, program units) says the machine is.
+    #[cfg(feature = "sim")]
+    #[staticmethod]
+    #[pyo3(signature = (camera="sim", rotation_deg=None, shift=None, scale=None, params=None))]
+    fn simulated(
+        camera: &str,
+        rotation_deg: Option<f64>,
+        shift: Option<(f64, f64)>,
+        scale: Option<(f64, f64)>,
+        params: Option<std::collections::BTreeMap<String, f64>>,
+    ) -> PyResult<PySession> {
+        let pose = sim::Pose { rotation_deg, shift, scale };
+        let params = params.unwrap_or_default();
+        let (simulated, session) = sim::Simulated::new(camera, pose, &params).map_err(|e| vision_error(&e))?;
+        Ok(PySession { session, sim: Some(simulated) })
+    }
+
+    /// `true_point(x, y)` — **tests only**: where nominal part point (x, y) (work coordinates,
+    /// inches) really is on the simulated table, machine X, Y (inches).
+    #[cfg(feature = "sim")]
+    fn true_point(&self, x: f64, y: f64) -> PyResult<(f64, f64)> {
+        self.simulated_rig()?.true_point(x, y).map_err(|e| vision_error(&e))
+    }
+
+    /// `setup()` — **tests only**: what the controller must hold for the simulated world, a
+    /// dict: `work_offset` (G54 X, Y, inches), `camera_tool` (its number), `camera_table_offset`
+    /// (the camera tool's X, Y as LinuxCNC's tool table holds it, inches), `unit` (`"in"`).
+    #[cfg(feature = "sim")]
+    fn setup<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        self.simulated_rig()?.setup(py)
+    }
+}
+
+#[cfg(feature = "sim")]
+impl PySession {
+    fn simulated_rig(&self) -> PyResult<&sim::Simulated> {
+        self.sim.as_ref().ok_or_else(|| VisionError::new_err("not a simulated session (Session.simulated)"))
+    }
+}
+
+/// The module `import mach_vision` loads: `Session`, `VisionError`, `__version__`.
+#[pymodule(name = "mach_vision")]
+mod mach_vision {
+    use pyo3::prelude::*;
+
+    #[pymodule_export]
+    use super::{PySession, VisionError};
+
+    #[pymodule_init]
+    fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {
+        m.add("__version__", env!("CARGO_PKG_VERSION"))
+    }
+}
