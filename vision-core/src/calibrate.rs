@@ -30,6 +30,10 @@
 //! offset, report) and M283 applies it in one place, or nothing (see
 //! [`crate::VisionModule::m283`]).
 //!
+//! On a controller whose G5x system is rotated by θ₀ against the machine axes (LinuxCNC's
+//! `G10 L2 R`) the walk measures in that rotated program frame; K and the offset it writes are
+//! turned by θ₀ back onto the machine axes, along which the camera and the tool table measure.
+//!
 //! Moves between stations are incremental (`G91 G0 X.. Y..` followed by `G90`), stations are
 //! planned so each dot lands near the image centre, and `VisionTriggerSettleSec` is dwelt after
 //! every move. Decision: M283 leaves the machine in G90 (the manual's calibration programs run
@@ -40,6 +44,7 @@ use vision_math::{fit_rectangle, solve_linear, LengthUnit, Matrix2, PixelChain, 
 
 use crate::driver::{CameraDriver, Reading};
 use crate::error::VisionError;
+use crate::linuxcnc::{program_to_machine, rotation};
 use crate::machine::Machine;
 use crate::module::capture::{chain_with, mark_size, require_mark};
 use crate::params::Params;
@@ -491,7 +496,10 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
         )));
     }
     let b = fit.transform.offset();
-    let offset_written = offset_before - b;
+    // K and the tool offset are kept along the machine axes; the walk measured in the program
+    // frame, which a G5x rotation θ₀ (LinuxCNC) turns against them.
+    let theta0 = crate::linuxcnc::base_rotation(&*walker.machine)?;
+    let offset_written = offset_before - program_to_machine(b, theta0);
 
     // 5. Verify: the optical axis on every dot's nominal position in G90 with the new K, seen
     //    as the new offset will see it (the module doc explains the `+ b`).
@@ -507,6 +515,7 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
     #[allow(clippy::cast_precision_loss)]
     let verify_rms = (verify.iter().map(|v| v.residual.norm_squared()).sum::<f64>() / verify.len() as f64).sqrt();
     let verify_max = verify.iter().map(|v| v.residual.norm()).fold(0.0, f64::max);
+    let k = if theta0 == 0.0 { k } else { rotation(theta0) * k };
     let report = SheetReport {
         sheet: n,
         unit,

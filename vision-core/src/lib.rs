@@ -70,6 +70,7 @@ pub mod calibrate;
 pub mod driver;
 mod error;
 pub mod image_grab;
+pub mod linuxcnc;
 pub mod machine;
 pub mod module;
 pub mod params;
@@ -83,7 +84,7 @@ pub mod text;
 pub use calibrate::{AxisReport, CalReport, Calibrate, DotVerify, QuickReport, SheetReport};
 pub use driver::{CameraDriver, Capabilities, DriverError, DriverErrorKind, Judgment, Reading};
 pub use error::VisionError;
-pub use machine::{Machine, MachineError, Timestamp};
+pub use machine::{Controller, Machine, MachineError, Timestamp};
 pub use module::{
     AlignReport, Capture, Dot, DroppedMark, JobReport, Pieces, PredictedError, Recentred, Reply, Run, RunMode,
     VisionModule,

@@ -15,6 +15,12 @@
 //! the session forget a chain the program cancelled itself; on one that cannot (Mach4), run M280
 //! before capturing or calibrating in a program that follows an aligned one.
 //!
+//! LinuxCNC ([`Controller::LinuxCnc`]) is different: it has no G68 and no G51, so M282 rotates
+//! the G5x system and shifts with G52 and cannot scale ([`vision_math::linuxcnc`]); it keeps
+//! that rotation and G52 across restarts, so the alignment's flag and the rotation before it
+//! (θ₀) live in persistent parameters ([`linuxcnc::PERSISTENT_PARAMS`]) and the session reads
+//! the active alignment from the host at every call.
+//!
 //! ```
 //! use vision_host::{registry, HostError, Session};
 //!
@@ -38,3 +44,5 @@ pub use session::{registry, Session};
 /// How a bridge makes a message safe to show (control characters escaped, huge quoted input
 /// cut): the same rule as the CLI's.
 pub use vision_core::text::{printable_line, MAX_MESSAGE_CHARS};
+/// The controller a [`Host`] is ([`Host::controller`]), and LinuxCNC's persistent parameters.
+pub use vision_core::{linuxcnc, Controller};

@@ -3,7 +3,7 @@
 use std::cell::RefCell;
 use std::path::Path;
 
-use vision_core::{DriverRegistry, Machine, MachineError, ProfileStore, Timestamp, VisionModule};
+use vision_core::{linuxcnc, Controller, DriverRegistry, Machine, MachineError, ProfileStore, Timestamp, VisionModule};
 use vision_math::{AlignmentChain, LengthUnit, Point2, Vector2};
 use vision_mcode::{McodeError, Outcome, VisionCall};
 
@@ -74,9 +74,7 @@ impl Session {
     /// the call is reported even when the module itself succeeded.
     pub fn mcode(&mut self, host: &mut dyn Host, m: u32, words: &[(char, f64)]) -> Result<Outcome, HostError> {
         let call = VisionCall::parse(m, words)?;
-        if host.alignment_active()? == Some(false) {
-            self.alignment = None;
-        }
+        self.refresh_alignment(host)?;
         let mut machine = HostMachine { host, alignment: self.alignment, failure: RefCell::new(None) };
         let result = call.run(&mut self.module, &mut machine);
         if let Some(failure) = machine.failure.into_inner() {
@@ -84,8 +82,31 @@ impl Session {
         }
         let outcome = result.map_err(McodeError::from)?;
         self.track(&outcome);
-        host.message(summary(&outcome));
+        host.message(&summary(&outcome));
         Ok(outcome)
+    }
+
+    /// Brings the tracked alignment up to date with what the host can tell: LinuxCNC's is read
+    /// whole from the host (the flag and θ₀ in persistent parameters, the G5x rotation and the
+    /// G92/G52 offset: it survives restarts and sessions); a Mach4 host that says none is active
+    /// makes the session forget its own.
+    fn refresh_alignment(&mut self, host: &dyn Host) -> Result<(), HostError> {
+        match host.controller() {
+            Controller::LinuxCnc => {
+                self.alignment = linuxcnc::active_chain(
+                    host.pound(linuxcnc::ALIGNMENT_ACTIVE_PARAM)?,
+                    host.pound(linuxcnc::BASE_ROTATION_PARAM)?,
+                    host.xy_rotation_deg()?,
+                    host.g92_offset()?,
+                );
+            }
+            Controller::Mach4 => {
+                if host.alignment_active()? == Some(false) {
+                    self.alignment = None;
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Tracks the alignment `outcome` leaves active. The module already ran its G-code on the
@@ -100,15 +121,28 @@ impl Session {
     }
 }
 
-/// The operator's status line after a successful call.
-fn summary(outcome: &Outcome) -> &'static str {
-    match outcome {
+/// The operator's status line after a successful call. On LinuxCNC, M282 says which scale it
+/// left out.
+fn summary(outcome: &Outcome) -> String {
+    let line = match outcome {
         Outcome::Begin(_) => "M280: Vision run started",
         Outcome::Capture(_) => "M281: mark captured",
-        Outcome::Apply(_) => "M282: alignment applied",
+        Outcome::Apply(reply) => match &reply.report.linuxcnc {
+            Some(a) if a.ignored_scale != Vector2::new(1.0, 1.0) => {
+                return format!(
+                    "M282: alignment applied without scale (LinuxCNC cannot scale): scale X {:.6} / Y {:.6} \
+                     ignored, {:.4} % from 1",
+                    a.ignored_scale.x,
+                    a.ignored_scale.y,
+                    a.ignored_scale_dev_pct()
+                );
+            }
+            _ => "M282: alignment applied",
+        },
         Outcome::Calibrate(_) => "M283: calibration done and saved",
         Outcome::SelectJob(_) => "M284: camera job selected",
-    }
+    };
+    line.to_string()
 }
 
 /// [`vision_core::Machine`] over a [`Host`]. The trait's reads cannot fail, so a controller
@@ -126,6 +160,17 @@ impl HostMachine<'_> {
             self.failure.borrow_mut().get_or_insert(e);
             fallback
         })
+    }
+}
+
+impl HostMachine<'_> {
+    /// The sign between the host's tool table and the module's offset: −1 on LinuxCNC (see
+    /// [`Host::controller`]), else 1.
+    fn table_sign(&self) -> f64 {
+        match self.host.controller() {
+            Controller::LinuxCnc => -1.0,
+            Controller::Mach4 => 1.0,
+        }
     }
 }
 
@@ -150,12 +195,22 @@ impl Machine for HostMachine<'_> {
         self.keep(self.host.active_tool(), 0)
     }
 
+    fn controller(&self) -> Controller {
+        self.host.controller()
+    }
+
+    fn xy_rotation_deg(&self) -> f64 {
+        self.keep(self.host.xy_rotation_deg(), 0.0)
+    }
+
     fn tool_offset(&self, tool: u32) -> Result<Vector2<f64>, MachineError> {
-        self.host.tool_offset(tool).map_err(machine_error)
+        let table = self.host.tool_offset(tool).map_err(machine_error)?;
+        Ok(self.table_sign() * table)
     }
 
     fn set_tool_offset(&mut self, tool: u32, offset: Vector2<f64>) -> Result<(), MachineError> {
-        self.host.set_tool_offset(tool, offset).map_err(machine_error)
+        let table = self.table_sign() * offset;
+        self.host.set_tool_offset(tool, table).map_err(machine_error)
     }
 
     fn units(&self) -> LengthUnit {
