@@ -193,6 +193,13 @@ pub enum VisionError {
          calibrating"
     )]
     AlignmentActive,
+
+    /// A step of the stepwise M283 walk came out of order.
+    #[error("M283 walk: {what}")]
+    WalkOrder {
+        /// What was out of order and what to do.
+        what: &'static str,
+    },
 }
 
 /// A driver failure as the operator reads it: the driver's words as they are, or, when the

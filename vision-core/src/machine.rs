@@ -117,7 +117,9 @@ pub enum Controller {
     /// LinuxCNC: no G68 and no G51. M282 rotates the active G5x system (`G10 L2 P0 R`, about its
     /// origin) and shifts with `G52` (kept in the G92 registers), and cannot scale
     /// ([`vision_math::linuxcnc`]); the alignment state lives in persistent parameters
-    /// ([`crate::linuxcnc`]).
+    /// ([`crate::linuxcnc`]). A capture waits for the machine first and may not move after
+    /// that, so M281 does not re-centre, and M283 runs stepwise
+    /// ([`crate::VisionModule::m283_begin`]).
     LinuxCnc,
 }
 

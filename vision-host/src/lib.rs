@@ -6,7 +6,10 @@
 //!   implements it over its controller's API and nothing else.
 //! * [`Session`]: owns the [`vision_core::VisionModule`] (parameters, dot list, camera driver,
 //!   profile), runs one M-code at a time on a [`Host`] through `vision-mcode`, and runs the
-//!   G-code the module emits on the host — the one place that G-code leaves the library.
+//!   G-code the module emits on the host — the one place that G-code leaves the library. For a
+//!   host whose M-code cannot both move and trigger (LinuxCNC), M283 also runs stepwise:
+//!   [`Session::walk_begin`], then [`Session::walk_next`] → the host moves →
+//!   [`Session::walk_capture`], then [`Session::walk_finish`].
 //! * [`registry`]: the camera drivers a real machine can use, picked by `VisionDriver`.
 //!
 //! The key decision: controllers do not report the G51/G68/G52 chain they have active, so the

@@ -3,7 +3,10 @@
 use std::cell::RefCell;
 use std::path::Path;
 
-use vision_core::{linuxcnc, Controller, DriverRegistry, Machine, MachineError, ProfileStore, Timestamp, VisionModule};
+use vision_core::{
+    linuxcnc, Controller, DriverRegistry, Machine, MachineError, ProfileStore, StepwiseWalk, Timestamp, VisionError,
+    VisionModule,
+};
 use vision_math::{AlignmentChain, LengthUnit, Point2, Vector2};
 use vision_mcode::{McodeError, Outcome, VisionCall};
 
@@ -24,11 +27,17 @@ pub struct Session {
     module: VisionModule,
     /// The G51/G68/G52 chain this session's M282 made active (`None` after M280).
     alignment: Option<AlignmentChain>,
+    /// The stepwise M283 walk in progress ([`Session::walk_begin`]).
+    walk: Option<StepwiseWalk>,
 }
 
 impl std::fmt::Debug for Session {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Session").field("module", &self.module).field("alignment", &self.alignment).finish()
+        f.debug_struct("Session")
+            .field("module", &self.module)
+            .field("alignment", &self.alignment)
+            .field("walk", &self.walk)
+            .finish()
     }
 }
 
@@ -36,7 +45,7 @@ impl Session {
     /// A session around `module` (its driver and profile already set), no alignment active.
     #[must_use]
     pub fn new(module: VisionModule) -> Session {
-        Session { module, alignment: None }
+        Session { module, alignment: None, walk: None }
     }
 
     /// The session of the profile file `profile` (TOML; a missing file starts a fresh,
@@ -74,16 +83,107 @@ impl Session {
     /// the call is reported even when the module itself succeeded.
     pub fn mcode(&mut self, host: &mut dyn Host, m: u32, words: &[(char, f64)]) -> Result<Outcome, HostError> {
         let call = VisionCall::parse(m, words)?;
-        self.refresh_alignment(host)?;
-        let mut machine = HostMachine { host, alignment: self.alignment, failure: RefCell::new(None) };
-        let result = call.run(&mut self.module, &mut machine);
-        if let Some(failure) = machine.failure.into_inner() {
-            return Err(failure);
-        }
-        let outcome = result.map_err(McodeError::from)?;
+        let outcome = self.on_machine(host, |module, machine| call.run(module, machine))?;
         self.track(&outcome);
         host.message(&summary(&outcome));
         Ok(outcome)
+    }
+
+    /// Starts M283 stepwise, for a host whose M-code cannot both move and trigger (LinuxCNC's
+    /// `m283.ngc`): M283's words (`Q` or `C`) and all of M283's checks, nothing moved. Then
+    /// loop [`Session::walk_next`] → move there → [`Session::walk_capture`] until `walk_next`
+    /// answers `None`, and finish with [`Session::walk_finish`]. A walk already in progress is
+    /// dropped.
+    ///
+    /// # Errors
+    /// A bad word or M283's refusal ([`HostError::Mcode`]), or the controller's
+    /// [`HostError::Host`]; no walk is in progress then.
+    pub fn walk_begin(&mut self, host: &mut dyn Host, words: &[(char, f64)]) -> Result<(), HostError> {
+        self.walk = None;
+        let VisionCall::Calibrate(mode) = VisionCall::parse(283, words)? else {
+            // `parse(283, …)` answers only Calibrate; kept typed all the same.
+            return Err(HostError::Mcode(McodeError::BadWord {
+                mcode: "M283",
+                word: String::new(),
+                reason: "give exactly one of Qd or Cn".to_string(),
+            }));
+        };
+        self.walk = Some(self.on_machine(host, |module, machine| module.m283_begin(machine, mode))?);
+        Ok(())
+    }
+
+    /// The next point of the walk to move to (program frame, current units), or `None` when
+    /// the walk has every capture it needs. It depends on the captures so far.
+    ///
+    /// # Errors
+    /// No walk in progress, the walk failed on its captures (M283's message; the walk is
+    /// dropped and nothing written), or the controller's [`HostError::Host`].
+    pub fn walk_next(&mut self, host: &mut dyn Host) -> Result<Option<Point2<f64>>, HostError> {
+        self.walk_step(host, |module, machine, walk| module.m283_next(machine, walk))
+    }
+
+    /// Triggers here, for the point [`Session::walk_next`] gave; call it once the machine has
+    /// arrived there.
+    ///
+    /// # Errors
+    /// No walk in progress or no capture pending; the camera's failure or an NG (M283's
+    /// message: the walk is dropped, nothing written), or the controller's [`HostError::Host`].
+    pub fn walk_capture(&mut self, host: &mut dyn Host) -> Result<(), HostError> {
+        self.walk_step(host, |module, machine, walk| module.m283_capture(machine, walk))
+    }
+
+    /// Solves the walk and commits it as M283 does (K, the camera tool's offset, the profile:
+    /// all or nothing), tells the operator, and ends the walk.
+    ///
+    /// # Errors
+    /// No walk in progress; the walk still needs captures (the walk is kept); otherwise as
+    /// M283 (the walk is dropped, nothing written).
+    pub fn walk_finish(&mut self, host: &mut dyn Host) -> Result<Outcome, HostError> {
+        let reply = self.walk_step(host, |module, machine, walk| module.m283_finish(machine, walk))?;
+        self.walk = None;
+        let outcome = Outcome::Calibrate(reply);
+        host.message(&summary(&outcome));
+        Ok(outcome)
+    }
+
+    /// Runs `step` on the walk in progress. A failure drops the walk, except a step out of order
+    /// (the walk is still good).
+    fn walk_step<T>(
+        &mut self,
+        host: &mut dyn Host,
+        step: impl FnOnce(&mut VisionModule, &mut dyn Machine, &mut StepwiseWalk) -> Result<T, VisionError>,
+    ) -> Result<T, HostError> {
+        let Some(mut walk) = self.walk.take() else {
+            return Err(HostError::Mcode(McodeError::from(VisionError::WalkOrder {
+                what: "no M283 walk is in progress; M283 starts one",
+            })));
+        };
+        let result = self.on_machine(host, |module, machine| step(module, machine, &mut walk));
+        let keep = match &result {
+            Ok(_) => true,
+            Err(HostError::Mcode(McodeError::Vision(VisionError::WalkOrder { .. }))) => true,
+            Err(_) => false,
+        };
+        if keep {
+            self.walk = Some(walk);
+        }
+        result
+    }
+
+    /// Runs `f` on the module and the host as a [`Machine`], the alignment brought up to date
+    /// first; a controller failure during it wins over the module's result.
+    fn on_machine<T>(
+        &mut self,
+        host: &mut dyn Host,
+        f: impl FnOnce(&mut VisionModule, &mut dyn Machine) -> Result<T, VisionError>,
+    ) -> Result<T, HostError> {
+        self.refresh_alignment(host)?;
+        let mut machine = HostMachine { host, alignment: self.alignment, failure: RefCell::new(None) };
+        let result = f(&mut self.module, &mut machine);
+        if let Some(failure) = machine.failure.into_inner() {
+            return Err(failure);
+        }
+        Ok(result.map_err(McodeError::from)?)
     }
 
     /// Brings the tracked alignment up to date with what the host can tell: LinuxCNC's is read
