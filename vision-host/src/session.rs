@@ -25,7 +25,8 @@ pub fn registry() -> DriverRegistry {
 /// the camera connection, the profile it saves to, and the alignment its last M282 left active.
 pub struct Session {
     module: VisionModule,
-    /// The G51/G68/G52 chain this session's M282 made active (`None` after M280).
+    /// The G51/G68/G52 chain this session's M282 made active (`None` after M280); on LinuxCNC
+    /// read from the host at every call.
     alignment: Option<AlignmentChain>,
     /// The stepwise M283 walk in progress ([`Session::walk_begin`]).
     walk: Option<StepwiseWalk>,
@@ -68,7 +69,8 @@ impl Session {
         &self.module
     }
 
-    /// The alignment this session's last M282 made active (`None` after M280 or before any).
+    /// The alignment this session's last M282 made active (`None` after M280 or before any); on
+    /// LinuxCNC the one the host reported at the last call (see [`Host::controller`]).
     #[must_use]
     pub fn alignment(&self) -> Option<&AlignmentChain> {
         self.alignment.as_ref()

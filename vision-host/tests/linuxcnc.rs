@@ -266,6 +266,10 @@ fn a_shifted_and_rotated_part_lands_after_m282_also_on_an_operators_rotation() {
         assert_eq!(host.params.get(&linuxcnc::BASE_ROTATION_PARAM), Some(&base));
         let worst = worst_landing(&mut host);
         assert!(worst < 0.0005, "θ₀ {base}°: a corner lands {worst} in off");
+        // A second M282 from the same captures replaces the alignment, never compounds it.
+        let (rotation, g92) = (host.rotation_deg, host.g92);
+        session.mcode(&mut host, 282, &[]).expect("aligned again");
+        assert!((host.rotation_deg - rotation).abs() < 1e-9 && (host.g92 - g92).norm() < 1e-9);
         let said = host.messages.last().cloned().unwrap_or_default();
         assert!(said.starts_with("M282: alignment applied without scale"), "{said}");
 
