@@ -471,3 +471,15 @@ fn steps_out_of_order_are_refused_and_keep_the_walk() {
     let e = session.walk_begin(&mut host, &[('C', 9.0)]).expect_err("no sheet 9");
     assert!(e.to_string().contains('9'), "{e}");
 }
+
+#[test]
+fn m283_is_refused_while_an_alignment_is_active_and_the_refusal_names_m280() {
+    let (mut session, mut host) = rig(10.0, 0.4, Vector2::new(0.06, -0.04), 1.0, 2.0);
+    align(&mut session, &mut host).expect("aligned");
+    // A fresh session (LinuxCNC restarted) still sees the alignment, from the host.
+    let (mut fresh, _) = rig(10.0, 0.4, Vector2::new(0.06, -0.04), 1.0, 2.0);
+    let e = fresh.walk_begin(&mut host, &[('Q', 0.5)]).expect_err("aligned");
+    assert!(e.to_string().contains("M280"), "{e}");
+    fresh.mcode(&mut host, 280, &[]).expect("cancelled");
+    fresh.walk_begin(&mut host, &[('Q', 0.5)]).expect("no alignment now");
+}
