@@ -229,8 +229,8 @@ impl VisionModule {
 
     /// Solves the stepwise walk and commits it through the same path as
     /// [`VisionModule::m283`] (K, the camera tool's offset, the profile; all or nothing). The
-    /// reply lists no G-code: the host ran the walk's moves (on a failure the machine is sent
-    /// back to the walk's start, best effort, and those lines are listed).
+    /// reply lists no G-code: the host ran the walk's moves. On a failure the machine is sent
+    /// back to the walk's start (best effort), as after a failed [`VisionModule::m283`].
     ///
     /// # Errors
     /// [`VisionError::WalkOrder`] when the walk still needs captures; otherwise as
@@ -245,7 +245,7 @@ impl VisionModule {
             Replayed::Needs(_) => Err(VisionError::WalkOrder {
                 what: "the walk is not done: capture at every point o<vision_walk_next> gives before finishing",
             }),
-            Replayed::Failed { error, last } => Err(self.walk_failed(last, error)),
+            Replayed::Failed { error, last } => self.commit_walk(machine, Err(error), Vec::new(), last, walk.start),
         }
     }
 
