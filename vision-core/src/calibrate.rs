@@ -30,6 +30,10 @@
 //! offset, report) and M283 applies it in one place, or nothing (see
 //! [`crate::VisionModule::m283`]).
 //!
+//! On a controller whose G5x system is rotated by θ₀ against the machine axes (LinuxCNC's
+//! `G10 L2 R`) the walk measures in that rotated program frame; K and the offset it writes are
+//! turned by θ₀ back onto the machine axes, along which the camera and the tool table measure.
+//!
 //! Moves between stations are incremental (`G91 G0 X.. Y..` followed by `G90`), stations are
 //! planned so each dot lands near the image centre, and `VisionTriggerSettleSec` is dwelt after
 //! every move. Decision: M283 leaves the machine in G90 (the manual's calibration programs run
@@ -40,6 +44,7 @@ use vision_math::{fit_rectangle, solve_linear, LengthUnit, Matrix2, PixelChain, 
 
 use crate::driver::{CameraDriver, Reading};
 use crate::error::VisionError;
+use crate::linuxcnc::{program_to_machine, rotation};
 use crate::machine::Machine;
 use crate::module::capture::{chain_with, mark_size, require_mark};
 use crate::params::Params;
@@ -236,24 +241,51 @@ pub(crate) fn relative_move(d: vision_math::Vector2<f64>) -> Vec<String> {
     vec![format!("G91 G0 X{x} Y{y}"), "G90".to_string()]
 }
 
+/// Where a walker's readings come from.
+enum Source<'a> {
+    /// The camera, triggered where the walker's moves (run on the machine) left it.
+    Live(&'a mut dyn CameraDriver),
+    /// Readings taken before, each with the program position it was taken at. Moves are not
+    /// run: the walker only tracks where they would have gone (`at`). A trigger past the last
+    /// reading stops the walk and records where that capture is `needed`.
+    Replay { taken: &'a [(Point2<f64>, Reading)], next: usize, at: Point2<f64>, needed: Option<Point2<f64>> },
+}
+
 /// Moves, dwells and triggers.
 pub(crate) struct Walker<'a> {
     machine: &'a mut dyn Machine,
-    driver: &'a mut dyn CameraDriver,
+    source: Source<'a>,
     settle_s: f64,
     unit: LengthUnit,
     shots: Vec<Shot>,
     triggers: usize,
-    /// Every line run on the machine, in order (M283's reply lists them).
+    /// Every line run on the machine (on a replay: that would have run), in order (M283's
+    /// reply lists them).
     ran: Vec<String>,
     /// The last trigger's reading (a failed one too), for the `Last*` telemetry.
     last: Option<Reading>,
 }
 
 impl<'a> Walker<'a> {
+    /// A walker that moves `machine` and triggers `driver`, dwelling `settle_s` seconds after
+    /// every move.
     pub(crate) fn new(machine: &'a mut dyn Machine, driver: &'a mut dyn CameraDriver, settle_s: f64) -> Self {
+        Walker::with_source(machine, Source::Live(driver), settle_s)
+    }
+
+    /// A walker that replays `taken` (readings with the program positions they were taken at)
+    /// from `start`: it runs nothing on `machine` and only reads it (units, tool offsets, clock).
+    pub(crate) fn replay(
+        machine: &'a mut dyn Machine,
+        taken: &'a [(Point2<f64>, Reading)],
+        start: Point2<f64>,
+    ) -> Self {
+        Walker::with_source(machine, Source::Replay { taken, next: 0, at: start, needed: None }, 0.0)
+    }
+
+    fn with_source(machine: &'a mut dyn Machine, source: Source<'a>, settle_s: f64) -> Self {
         let unit = machine.units();
-        Walker { machine, driver, settle_s, unit, shots: Vec::new(), triggers: 0, ran: Vec::new(), last: None }
+        Walker { machine, source, settle_s, unit, shots: Vec::new(), triggers: 0, ran: Vec::new(), last: None }
     }
 
     /// The lines run so far, in order, and the last trigger's reading.
@@ -261,44 +293,69 @@ impl<'a> Walker<'a> {
         (self.ran, self.last)
     }
 
-    /// Runs `lines` on the machine and records them.
-    fn run(&mut self, lines: Vec<String>) -> Result<(), VisionError> {
-        self.machine.run_gcode(&lines)?;
+    /// On a replay that ran out of readings: where the next capture must be taken (program
+    /// frame).
+    pub(crate) fn needed(&self) -> Option<Point2<f64>> {
+        match self.source {
+            Source::Replay { needed, .. } => needed,
+            Source::Live(_) => None,
+        }
+    }
+
+    /// Runs `lines` (a move to `target`, program frame) on the machine, records them, settles.
+    fn run(&mut self, lines: Vec<String>, target: Point2<f64>) -> Result<(), VisionError> {
+        if let Source::Replay { at, .. } = &mut self.source {
+            *at = target;
+        } else {
+            self.machine.run_gcode(&lines)?;
+            self.machine.dwell(self.settle_s);
+        }
         self.ran.extend(lines);
-        self.machine.dwell(self.settle_s);
         Ok(())
     }
 
     fn position(&self) -> Point2<f64> {
-        self.machine.program_position()
+        match self.source {
+            Source::Replay { at, .. } => at,
+            Source::Live(_) => self.machine.program_position(),
+        }
     }
 
     /// Incremental move to `target` (program frame), then back to G90, then settle.
     fn move_to(&mut self, target: Point2<f64>) -> Result<(), VisionError> {
-        self.run(relative_move(target - self.position()))
+        self.run(relative_move(target - self.position()), target)
     }
 
     /// Absolute G90 move to `target`, then settle.
     pub(crate) fn move_abs(&mut self, target: Point2<f64>) -> Result<(), VisionError> {
         let x = fixed(target.x, MOVE_DECIMALS);
         let y = fixed(target.y, MOVE_DECIMALS);
-        self.run(vec![format!("G90 G0 X{x} Y{y}")])
+        self.run(vec![format!("G90 G0 X{x} Y{y}")], target)
     }
 
     /// Triggers and records a shot of walk dot `dot`; returns its index.
     fn shoot(&mut self, dot: usize) -> Result<usize, VisionError> {
         self.triggers += 1;
-        let reading = self.driver.trigger()?;
+        let (reading, pos) = match &mut self.source {
+            Source::Live(driver) => (driver.trigger()?, self.machine.program_position()),
+            Source::Replay { taken, next, at, needed } => {
+                let Some(&(pos, reading)) = taken.get(*next) else {
+                    *needed = Some(*at);
+                    return Err(fail("a capture is needed to go on (the stepwise M283 walk)"));
+                };
+                *next += 1;
+                (reading, pos)
+            }
+        };
         self.last = Some(reading);
         require_mark(&reading).map_err(|_| {
             fail(format!(
                 "the camera lost the mark (NG / no mark) at X{} Y{} — keep the dot in view, check lighting and \
                  the camera job",
-                fixed(self.position().x, 4),
-                fixed(self.position().y, 4)
+                fixed(pos.x, 4),
+                fixed(pos.y, 4)
             ))
         })?;
-        let pos = self.position();
         self.shots.push(Shot { pos, native: Point2::new(reading.x_px, reading.y_px), reading, dot });
         Ok(self.shots.len() - 1)
     }
@@ -491,7 +548,10 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
         )));
     }
     let b = fit.transform.offset();
-    let offset_written = offset_before - b;
+    // K and the tool offset are kept along the machine axes; the walk measured in the program
+    // frame, which a G5x rotation θ₀ (LinuxCNC) turns against them.
+    let theta0 = crate::linuxcnc::base_rotation(&*walker.machine)?;
+    let offset_written = offset_before - program_to_machine(b, theta0);
 
     // 5. Verify: the optical axis on every dot's nominal position in G90 with the new K, seen
     //    as the new offset will see it (the module doc explains the `+ b`).
@@ -507,6 +567,7 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
     #[allow(clippy::cast_precision_loss)]
     let verify_rms = (verify.iter().map(|v| v.residual.norm_squared()).sum::<f64>() / verify.len() as f64).sqrt();
     let verify_max = verify.iter().map(|v| v.residual.norm()).fold(0.0, f64::max);
+    let k = if theta0 == 0.0 { k } else { rotation(theta0) * k };
     let report = SheetReport {
         sheet: n,
         unit,

@@ -189,10 +189,17 @@ pub enum VisionError {
 
     /// An operation that needs the alignment modals cancelled found them active.
     #[error(
-        "an alignment transform (G51/G68/G52) is active — cancel it with G69 G50 G52 X0 Y0 before \
-         calibrating"
+        "an alignment transform (G51/G68/G52; on LinuxCNC G10 L2 R and G52) is active — cancel it \
+         with G69 G50 G52 X0 Y0 (on LinuxCNC: M280) before calibrating"
     )]
     AlignmentActive,
+
+    /// A step of the stepwise M283 walk came out of order.
+    #[error("M283 walk: {what}")]
+    WalkOrder {
+        /// What was out of order and what to do.
+        what: &'static str,
+    },
 }
 
 /// A driver failure as the operator reads it: the driver's words as they are, or, when the

@@ -10,6 +10,7 @@
 //! * [`pound`]: the pound-variable block; [`image_grab`]: M281 D1.
 //! * [`calibrate`]: M283's axis detect, quick calibration and sheet walk; [`sheets`]: `CAL_SHEETS`.
 //! * [`registry`]: drivers by name for the CLI.
+//! * [`linuxcnc`]: where a LinuxCNC host keeps the alignment's state (persistent parameters).
 //! * [`text`]: messages and reports made safe to show a person (control characters, huge input).
 //!
 //! The crate depends on `vision-math` only (plus `thiserror`, `serde`, `toml`); it knows no
@@ -48,6 +49,11 @@
 //! * M284 with job 0 (stored or given) does not contact the camera; the tool check does not
 //!   apply to M284. M281 D1 needs a driver advertising `grab_image`.
 //! * The `VisionFitMax*` gates are in percent and inches (converted under G21).
+//! * On a LinuxCNC host ([`Controller::LinuxCnc`]) M280/M282 write `G52` and `G10 L2 P0 R`
+//!   (no G68/G51; a scale beyond `VisionFitMaxScaleDev` is refused, a smaller one left out and
+//!   reported), θ₀ and the alignment flag live in persistent parameters ([`linuxcnc`]), camera
+//!   vectors along the machine axes are turned by −θ₀ into the program frame, M281 does not
+//!   re-centre, and M283 can run stepwise ([`VisionModule::m283_begin`]).
 //!
 //! ```
 //! use vision_core::{Params, VisionError, VisionModule};
@@ -70,6 +76,7 @@ pub mod calibrate;
 pub mod driver;
 mod error;
 pub mod image_grab;
+pub mod linuxcnc;
 pub mod machine;
 pub mod module;
 pub mod params;
@@ -83,10 +90,10 @@ pub mod text;
 pub use calibrate::{AxisReport, CalReport, Calibrate, DotVerify, QuickReport, SheetReport};
 pub use driver::{CameraDriver, Capabilities, DriverError, DriverErrorKind, Judgment, Reading};
 pub use error::VisionError;
-pub use machine::{Machine, MachineError, Timestamp};
+pub use machine::{Controller, Machine, MachineError, Timestamp};
 pub use module::{
     AlignReport, Capture, Dot, DroppedMark, JobReport, Pieces, PredictedError, Recentred, Reply, Run, RunMode,
-    VisionModule,
+    StepwiseWalk, VisionModule,
 };
 pub use params::{Access, Calibration, Config, ParamKind, ParamSpec, ParamValue, Params, Section, Telemetry};
 pub use pound::{PoundBlock, PoundReport, SlotValues};

@@ -107,6 +107,22 @@ fn civil_from_days(z: i64) -> (i64, u32, u32) {
     (y, u32::try_from(m).unwrap_or(1), u32::try_from(d).unwrap_or(1))
 }
 
+/// The controller a host is, as far as the Vision M-codes' output differs (SPEC §9).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Controller {
+    /// Mach4 (and the simulator): M282 aligns with `G51` scale, `G68` rotation about a centre
+    /// and a `G52` shift; M280 cancels with `G69 G50 G52 X0 Y0`.
+    #[default]
+    Mach4,
+    /// LinuxCNC: no G68 and no G51. M282 rotates the active G5x system (`G10 L2 P0 R`, about its
+    /// origin) and shifts with `G52` (kept in the G92 registers), and cannot scale
+    /// ([`vision_math::linuxcnc`]); the alignment state lives in persistent parameters
+    /// ([`crate::linuxcnc`]). A capture waits for the machine first and may not move after
+    /// that, so M281 does not re-centre, and M283 runs stepwise
+    /// ([`crate::VisionModule::m283_begin`]).
+    LinuxCnc,
+}
+
 /// The host CNC, seen by the Vision module.
 ///
 /// All lengths are in the machine's **current** units ([`Machine::units`], G20 inch or G21
@@ -131,6 +147,19 @@ pub trait Machine {
     fn work_position(&self) -> Point2<f64> {
         let p = self.program_position();
         self.active_alignment().map_or(p, |chain| chain.apply(p))
+    }
+
+    /// The controller, for the dialect of M280/M282's alignment lines. Default: Mach4.
+    fn controller(&self) -> Controller {
+        Controller::Mach4
+    }
+
+    /// The active G5x work system's XY rotation (LinuxCNC's `G10 L2 R`), degrees
+    /// counter-clockwise; 0 on a controller without one (the default). The program frame is
+    /// turned by it against the machine axes, along which the camera's K and its tool offset
+    /// are measured.
+    fn xy_rotation_deg(&self) -> f64 {
+        0.0
     }
 
     /// Runs G-code lines in order and waits until they are done.

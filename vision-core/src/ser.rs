@@ -4,6 +4,7 @@
 
 use serde::ser::{SerializeMap, SerializeStruct};
 use serde::{Serialize, Serializer};
+use vision_math::linuxcnc::LinuxCncAlignment;
 use vision_math::{AlignmentChain, Fit, LengthUnit, Matrix2, Point2, Remap, Vector2};
 
 use crate::driver::Judgment;
@@ -55,6 +56,18 @@ pub(crate) fn chain<S: Serializer>(c: &AlignmentChain, s: S) -> Result<S::Ok, S:
     st.serialize_field("center", &[c.center.x, c.center.y])?;
     st.serialize_field("rotation_deg", &c.rotation_deg)?;
     st.serialize_field("scale", &[c.scale.x, c.scale.y])?;
+    st.end()
+}
+
+/// `{ rotation_deg, g52, base_rotation_deg, ignored_scale }`: M282's LinuxCNC lines.
+#[allow(clippy::ref_option)] // serde's `serialize_with` hands the field by reference
+pub(crate) fn linuxcnc<S: Serializer>(a: &Option<LinuxCncAlignment>, s: S) -> Result<S::Ok, S::Error> {
+    let Some(a) = a else { return s.serialize_none() };
+    let mut st = s.serialize_struct("LinuxCncAlignment", 4)?;
+    st.serialize_field("rotation_deg", &a.rotation_deg)?;
+    st.serialize_field("g52", &[a.g52.x, a.g52.y])?;
+    st.serialize_field("base_rotation_deg", &a.base_rotation_deg)?;
+    st.serialize_field("ignored_scale", &[a.ignored_scale.x, a.ignored_scale.y])?;
     st.end()
 }
 

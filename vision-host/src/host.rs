@@ -2,7 +2,7 @@
 
 use std::time::SystemTime;
 
-use vision_core::Timestamp;
+use vision_core::{Controller, Timestamp};
 use vision_math::{LengthUnit, Point2, Vector2};
 
 use crate::error::HostError;
@@ -38,13 +38,15 @@ pub trait Host {
     /// The controller refused the read.
     fn active_tool(&self) -> Result<u32, HostError>;
 
-    /// Tool `tool`'s X/Y tool-table offset, current units.
+    /// Tool `tool`'s X/Y tool-table offset, current units, as the controller's table holds it
+    /// (on LinuxCNC the session flips its sign: see [`Controller::LinuxCnc`] below).
     ///
     /// # Errors
     /// The tool is not in the table.
     fn tool_offset(&self, tool: u32) -> Result<Vector2<f64>, HostError>;
 
-    /// Writes tool `tool`'s X/Y tool-table offset, current units.
+    /// Writes tool `tool`'s X/Y tool-table offset, current units, as the controller's table
+    /// holds it.
     ///
     /// # Errors
     /// The tool is not in the table or the table is locked.
@@ -78,6 +80,35 @@ pub trait Host {
     /// The controller refused the read.
     fn alignment_active(&self) -> Result<Option<bool>, HostError> {
         Ok(None)
+    }
+
+    /// Which controller this is: the dialect of M280/M282's alignment lines and where the
+    /// alignment's state lives. Default: Mach4.
+    ///
+    /// [`Controller::LinuxCnc`] also means: [`Host::tool_offset`] is LinuxCNC's table value,
+    /// which LinuxCNC *adds* to a programmed point (`machine = g5x + R·(p + g92) + tool`), while
+    /// the Vision module's offset is where the tool's point lies from the spindle (commanding P
+    /// puts the spindle at P − offset); the session negates it both ways.
+    fn controller(&self) -> Controller {
+        Controller::Mach4
+    }
+
+    /// The active G5x work system's XY rotation (LinuxCNC's `G10 L2 R`), degrees
+    /// counter-clockwise. Default 0 (Mach4 has none).
+    ///
+    /// # Errors
+    /// The controller refused the read.
+    fn xy_rotation_deg(&self) -> Result<f64, HostError> {
+        Ok(0.0)
+    }
+
+    /// The G92/G52 X/Y offset (LinuxCNC keeps G52 in the G92 registers), current units. Default
+    /// zero. A LinuxCNC session reads the active alignment from it.
+    ///
+    /// # Errors
+    /// The controller refused the read.
+    fn g92_offset(&self) -> Result<Vector2<f64>, HostError> {
+        Ok(Vector2::zeros())
     }
 
     /// Shows `text` to the operator (a status line, not an alarm).

@@ -89,6 +89,17 @@ impl AlignmentChain {
         Point2::from(rotated + self.shift)
     }
 
+    /// The rigid part of this chain: no scale, the same rotation about the same centre, and the
+    /// shift that makes it agree with this chain at the centre
+    /// (`c ↦ R·(S·c − c) + c + t`). What a host that cannot scale (LinuxCNC) executes.
+    #[must_use]
+    pub fn rigid(&self) -> AlignmentChain {
+        let c = self.center.coords;
+        let scaled_c = Vector2::new(self.scale.x * c.x, self.scale.y * c.y);
+        let shift = self.shift + self.rotation_matrix() * (scaled_c - c);
+        AlignmentChain { scale: Vector2::new(1.0, 1.0), shift, ..*self }
+    }
+
     /// Work point → program point: the inverse of [`AlignmentChain::apply`]; `None` when a scale
     /// factor is zero.
     #[must_use]
@@ -144,6 +155,25 @@ pub fn fixed(v: f64, decimals: usize) -> String {
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+
+    #[test]
+    fn rigid_part_keeps_the_centre_and_drops_the_scale() {
+        let chain = AlignmentChain {
+            scale: Vector2::new(1.002, 0.999),
+            center: Point2::new(3.0, 2.0),
+            rotation_deg: 0.4,
+            shift: Vector2::new(0.05, -0.02),
+        };
+        let rigid = chain.rigid();
+        assert_eq!(rigid.scale, Vector2::new(1.0, 1.0));
+        assert_eq!(rigid.rotation_deg, chain.rotation_deg);
+        let (got, want) = (rigid.apply(chain.center), chain.apply(chain.center));
+        assert_relative_eq!(got.x, want.x, epsilon = 1e-12);
+        assert_relative_eq!(got.y, want.y, epsilon = 1e-12);
+        // Away from the centre the two differ by the dropped scale: 0.002 · 3 in X.
+        let p = Point2::new(6.0, 2.0);
+        assert!((rigid.apply(p) - chain.apply(p)).norm() > 0.005);
+    }
 
     #[test]
     fn order_is_scale_then_rotate_about_centre_then_shift() {

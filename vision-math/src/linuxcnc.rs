@@ -88,9 +88,7 @@ impl LinuxCncAlignment {
         }
         let r = chain.rotation_matrix();
         let c = chain.center.coords;
-        // The rigid part agrees with the chain at the centre: c ↦ R·(S·c − c) + c + t.
-        let scaled_c = Vector2::new(chain.scale.x * c.x, chain.scale.y * c.y);
-        let rigid_shift = chain.shift + r * (scaled_c - c);
+        let rigid_shift = chain.rigid().shift;
         // R·(p − c) + c + t_r = R·p + t'  →  G52 = Rᵀ·t' = Rᵀ·(c + t_r) − c.
         let g52 = r.transpose() * (c + rigid_shift) - c;
         Ok(LinuxCncAlignment {

@@ -6,6 +6,7 @@ use vision_math::{LengthUnit, Matrix2, PixelChain, Point2, Remap, Vector2};
 
 use crate::driver::{Judgment, Reading};
 use crate::error::VisionError;
+use crate::linuxcnc::{self, machine_to_program};
 use crate::machine::Machine;
 use crate::params::Params;
 use crate::ser;
@@ -111,8 +112,11 @@ pub(crate) fn require_mark(reading: &Reading) -> Result<(), VisionError> {
 }
 
 /// The observed point in the program frame: `C` through the active alignment to the work
-/// frame, plus `d`, and back through the inverse (SPEC §2, last paragraph).
+/// frame, plus `d`, and back through the inverse (SPEC §2, last paragraph). `d` is measured
+/// along the machine axes, so the G5x rotation under the alignment (θ₀, LinuxCNC) turns it into
+/// the program frame first.
 pub(crate) fn observe(machine: &dyn Machine, offset: Vector2<f64>) -> Result<(Point2<f64>, Point2<f64>), VisionError> {
+    let offset = machine_to_program(offset, linuxcnc::base_rotation(machine)?);
     let c = machine.program_position();
     let observed = match machine.active_alignment() {
         None => c + offset,

@@ -9,7 +9,7 @@ use super::{Dot, Reply, VisionModule};
 use crate::calibrate::relative_move;
 use crate::error::VisionError;
 use crate::image_grab;
-use crate::machine::Machine;
+use crate::machine::{Controller, Machine};
 use crate::pound::{PoundBlock, SlotValues, SLOTS};
 
 impl VisionModule {
@@ -20,6 +20,8 @@ impl VisionModule {
     /// just observed (an incremental `G91 G0`, then `G90`), settles `VisionTriggerSettleSec` and
     /// triggers again; the last reading is the capture, `commanded` stays where the program put
     /// the camera, and the reply lists the moves. `VisionRecenterPasses` = 0 reads in one shot.
+    /// On LinuxCNC M281 never re-centres: it triggers after waiting for the machine
+    /// (`yield INTERP_EXECUTE_FINISH`), after which a remap may not queue G-code.
     ///
     /// `O = C + K·R·(p − res/2 − PxCenterOffset)` with K converted from `Cal_Units` to the
     /// machine's unit; with an alignment active, `O` is reported in the program frame (SPEC §2).
@@ -68,7 +70,11 @@ impl VisionModule {
         let tolerance = self.params.recenter_tolerance_px();
         let mut gcode = Vec::new();
         let mut passes = 0;
-        while passes < self.params.recenter_passes() && chain.centred(native).norm() > tolerance {
+        let max_passes = match machine.controller() {
+            Controller::Mach4 => self.params.recenter_passes(),
+            Controller::LinuxCnc => 0,
+        };
+        while passes < max_passes && chain.centred(native).norm() > tolerance {
             let lines = relative_move(observed - machine.program_position());
             if let Err(e) = machine.run_gcode(&lines) {
                 let e = VisionError::from(e);

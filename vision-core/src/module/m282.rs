@@ -1,6 +1,7 @@
 //! M282: solve the run's fit and emit it as modal G51 / G68 / G52.
 
 use vision_math::fit::{find_outlier, residual_sigma};
+use vision_math::linuxcnc::LinuxCncAlignment;
 use vision_math::{
     fit_piece, fit_rectangle, fit_similarity, AlignmentChain, Fit, LengthUnit, Model, Piece, Point2, Vector2,
 };
@@ -8,7 +9,8 @@ use vision_math::{
 use super::m280::RunMode;
 use super::{Reply, VisionModule};
 use crate::error::VisionError;
-use crate::machine::Machine;
+use crate::linuxcnc;
+use crate::machine::{Controller, Machine};
 use crate::ser;
 
 /// Which pieces of the fit M282 emits (`P` word).
@@ -63,7 +65,8 @@ pub struct AlignReport {
     /// The full fit of the run's model over every capture (what the quality gates judged).
     #[serde(serialize_with = "ser::fit")]
     pub fit: Fit,
-    /// The chain emitted (equal to `fit.transform.chain()` for [`Pieces::All`]).
+    /// The chain emitted (equal to `fit.transform.chain()` for [`Pieces::All`]); on LinuxCNC
+    /// its rigid part ([`AlignmentChain::rigid`]), which is what runs there.
     #[serde(serialize_with = "ser::chain")]
     pub chain: AlignmentChain,
     /// Residual `chain(nᵢ) − oᵢ` of each capture under the emitted chain, in capture order.
@@ -77,6 +80,10 @@ pub struct AlignReport {
     pub predicted: PredictedError,
     /// The mark left out of the fit as an outlier, if any (its residual is still listed).
     pub dropped: Option<DroppedMark>,
+    /// On a LinuxCNC host: the lines' values (`G10 L2 P0 R`, `G52`), θ₀, and the scale that
+    /// was not applied; `None` on Mach4 (and left out of the JSON then).
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "ser::linuxcnc")]
+    pub linuxcnc: Option<LinuxCncAlignment>,
 }
 
 /// The cut error a fit predicts over the part (see [`vision_math::fit::Prediction`]): from the
@@ -125,6 +132,12 @@ impl VisionModule {
     /// X and Y by enough to miss one by more than `VisionFitMaxAxisScaleError` (the refusal
     /// advises rectangle mode). Lengths in inches, ×25.4 under G21.
     ///
+    /// On LinuxCNC (no G68, no G51: [`crate::linuxcnc`], [`vision_math::linuxcnc`]) the lines
+    /// are `G10 L2 P0 R{θ₀ + θ}` and `G52`, the scale gate refuses with "LinuxCNC cannot
+    /// scale: …", and within it the rigid part of the chain is applied (the report's `chain`,
+    /// residuals and `Run_*`) and the scale left out is in [`AlignReport::linuxcnc`]. θ₀ and the
+    /// alignment flag are written before the lines run.
+    ///
     /// Every accepted fit predicts its cut error over the marks' bounding box
     /// ([`AlignReport::predicted`], `VisionRun_PredictedSigma` / `…Bound`).
     ///
@@ -163,6 +176,12 @@ impl VisionModule {
             RunMode::Rectangle => fit_rectangle(&commanded, &observed)?,
             RunMode::Similarity => fit_similarity(&commanded, &observed)?,
         };
+        let controller = machine.controller();
+        if controller == Controller::LinuxCnc {
+            // LinuxCNC's own refusal comes first: it cannot scale at all.
+            let full = fit.transform.chain().ok_or(VisionError::Math(vision_math::MathError::DegenerateObserved))?;
+            linuxcnc::check_scale(&full, self.params.fit_max_scale_dev_pct())?;
+        }
         self.check_gates(&fit, &commanded, &observed, unit)?;
         let predicted = predict(&fit, &commanded, camera_noise)?;
         let chain = match pieces {
@@ -175,8 +194,17 @@ impl VisionModule {
                 fit_piece(Piece::Scale { uniform: mode == RunMode::Similarity }, &commanded, &observed)?.chain
             }
         };
-        let gcode = chain.gcode()?.to_vec();
-        machine.run_gcode(&gcode)?;
+        let (gcode, chain, linuxcnc) = match controller {
+            Controller::Mach4 => {
+                let gcode = chain.gcode()?.to_vec();
+                machine.run_gcode(&gcode)?;
+                (gcode, chain, None)
+            }
+            Controller::LinuxCnc => {
+                let alignment = linuxcnc::plan(machine, &chain)?;
+                (linuxcnc::apply(machine, &alignment)?, chain.rigid(), Some(alignment))
+            }
+        };
         let residuals: Vec<Vector2<f64>> =
             all_commanded.iter().zip(&all_observed).map(|(n, o)| chain.apply(*n) - o).collect();
         let used: Vec<f64> = residuals
@@ -203,7 +231,19 @@ impl VisionModule {
         p.run_predicted_bound = predicted.bound99;
         Ok(Reply {
             gcode,
-            report: AlignReport { unit, mode, pieces, fit, chain, residuals, rms, max_residual, predicted, dropped },
+            report: AlignReport {
+                unit,
+                mode,
+                pieces,
+                fit,
+                chain,
+                residuals,
+                rms,
+                max_residual,
+                predicted,
+                dropped,
+                linuxcnc,
+            },
         })
     }
 

@@ -6,6 +6,7 @@ use vision_math::{AlignmentChain, Point2, Vector2};
 use super::capture::pixel_chain;
 use super::{Reply, VisionModule};
 use crate::calibrate::{quick, sheet_walk, CalReport, Calibrate, Solution, Walker};
+use crate::driver::Reading;
 use crate::error::VisionError;
 use crate::machine::{Machine, MachineError};
 use crate::params::Params;
@@ -15,6 +16,51 @@ use crate::sheets::{cal_sheet, known_sheets};
 fn is_identity(chain: &AlignmentChain) -> bool {
     let eps = 1e-12;
     (chain.scale - Vector2::new(1.0, 1.0)).norm() < eps && chain.rotation_deg.abs() < eps && chain.shift.norm() < eps
+}
+
+/// M283's walk on `walker`: the quick calibration or the sheet walk (`tool`: whose offset
+/// the sheet walk solves). Writes nothing.
+fn walk_routine(walker: &mut Walker<'_>, params: &Params, mode: Calibrate, tool: u32) -> Result<Solution, VisionError> {
+    match mode {
+        Calibrate::Quick { diameter } => quick(walker, params, diameter),
+        Calibrate::Sheet { n } => sheet_walk(walker, params, n, tool),
+    }
+}
+
+/// A stepwise M283 walk in progress ([`VisionModule::m283_begin`]): the mode, where it started,
+/// and the readings captured so far with the program positions they were taken at.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepwiseWalk {
+    mode: Calibrate,
+    tool: u32,
+    start: Point2<f64>,
+    taken: Vec<(Point2<f64>, Reading)>,
+    /// The point [`VisionModule::m283_next`] last gave, until it is captured.
+    pending: Option<Point2<f64>>,
+}
+
+impl StepwiseWalk {
+    /// The calibration being walked.
+    #[must_use]
+    pub fn mode(&self) -> Calibrate {
+        self.mode
+    }
+
+    /// Captures taken so far.
+    #[must_use]
+    pub fn captures(&self) -> usize {
+        self.taken.len()
+    }
+}
+
+/// What a replay of a stepwise walk came to.
+enum Replayed {
+    /// It needs a capture at this point (program frame).
+    Needs(Point2<f64>),
+    /// It has every reading: the solution to commit, and the last reading.
+    Done { solution: Box<Solution>, last: Option<Reading> },
+    /// It failed on the readings so far.
+    Failed { error: VisionError, last: Option<Reading> },
 }
 
 impl VisionModule {
@@ -52,6 +98,23 @@ impl VisionModule {
     /// routine: K, the remap flags, `Cal_*` and the tool offset keep their values, the machine is
     /// sent back to its start position (best effort) and `LastStatus` holds the error.
     pub fn m283(&mut self, machine: &mut dyn Machine, mode: Calibrate) -> Result<Reply<CalReport>, VisionError> {
+        let tool = self.check_m283(machine, mode)?;
+        let start: Point2<f64> = machine.program_position();
+        let (outcome, ran) = {
+            let Some(driver) = self.driver.as_deref_mut() else {
+                return Err(VisionError::NoDriver { name: self.params.driver().to_string() });
+            };
+            let mut walker = Walker::new(machine, driver, self.params.trigger_settle_s());
+            let outcome = walk_routine(&mut walker, &self.params, mode, tool);
+            (outcome, walker.into_ran())
+        };
+        let (ran, last) = ran;
+        self.commit_walk(machine, outcome, ran, last, start)
+    }
+
+    /// M283's checks before the walk moves anything (see [`VisionModule::m283`]'s errors);
+    /// returns the tool whose offset a sheet walk writes.
+    fn check_m283(&mut self, machine: &dyn Machine, mode: Calibrate) -> Result<u32, VisionError> {
         self.check_enabled()?;
         self.check_tool(machine)?;
         if let Calibrate::Sheet { n } = mode {
@@ -67,25 +130,24 @@ impl VisionModule {
         if let Some(store) = &self.profile {
             store.check_writable()?;
         }
-        let tool = self.params.camera_tool().unwrap_or_else(|| machine.active_tool());
-        let start: Point2<f64> = machine.program_position();
+        Ok(self.params.camera_tool().unwrap_or_else(|| machine.active_tool()))
+    }
 
-        let (outcome, ran) = {
-            let Some(driver) = self.driver.as_deref_mut() else {
-                return Err(VisionError::NoDriver { name: self.params.driver().to_string() });
-            };
-            let mut walker = Walker::new(machine, driver, self.params.trigger_settle_s());
-            let outcome = match mode {
-                Calibrate::Quick { diameter } => quick(&mut walker, &self.params, diameter),
-                Calibrate::Sheet { n } => sheet_walk(&mut walker, &self.params, n, tool),
-            };
-            (outcome, walker.into_ran())
-        };
-        let (ran, last) = ran;
+    /// M283's one commit path, for the one-shot walk and the stepwise one: applies the walk's
+    /// `outcome` (lines `ran`, last reading `last`) or, on any failure, sends the machine back to
+    /// `start` (best effort) and records the failure.
+    fn commit_walk(
+        &mut self,
+        machine: &mut dyn Machine,
+        outcome: Result<Solution, VisionError>,
+        ran: Vec<String>,
+        last: Option<Reading>,
+        start: Point2<f64>,
+    ) -> Result<Reply<CalReport>, VisionError> {
         match outcome.and_then(|solution| self.apply_calibration(machine, solution)) {
             Ok(report) => {
                 // The DRO shows the last trigger as M281 would, with the K just written.
-                if let Some(reading) = last.filter(crate::driver::Reading::found) {
+                if let Some(reading) = last.filter(Reading::found) {
                     if let Ok(chain) = pixel_chain(&self.params, machine.units()) {
                         self.publish_reading(&chain, &reading);
                     }
@@ -101,6 +163,109 @@ impl VisionModule {
                 Err(e)
             }
         }
+    }
+
+    /// **M283, stepwise** (a controller whose M-code cannot both move and trigger, LinuxCNC):
+    /// M283's checks, with nothing moved; the walk then goes [`VisionModule::m283_next`] (where
+    /// to go) → the host moves there → [`VisionModule::m283_capture`], until `m283_next` answers
+    /// `None`, then [`VisionModule::m283_finish`] solves and commits.
+    ///
+    /// Decision: the walk is replayed. The routine of [`VisionModule::m283`] runs again at every
+    /// step over the readings captured so far, moving nothing, and stops where it needs the next
+    /// one; it is deterministic given its readings, so one routine serves both ways, and the
+    /// stepwise walk solves and commits exactly as the one-shot one for the same readings (a
+    /// sheet walk is ~30 captures, so the O(n²) replays cost nothing).
+    ///
+    /// # Errors
+    /// As [`VisionModule::m283`] before its walk: nothing changes.
+    pub fn m283_begin(&mut self, machine: &mut dyn Machine, mode: Calibrate) -> Result<StepwiseWalk, VisionError> {
+        let tool = self.check_m283(machine, mode)?;
+        Ok(StepwiseWalk { mode, tool, start: machine.program_position(), taken: Vec::new(), pending: None })
+    }
+
+    /// The next point the stepwise walk must capture at (program frame, current units), or
+    /// `None` when it has every reading it needs.
+    ///
+    /// # Errors
+    /// The walk failed on the readings so far (as [`VisionModule::m283`] would: e.g. the axis
+    /// detect saw no motion); `LastStatus` holds the error and nothing is written.
+    pub fn m283_next(
+        &mut self,
+        machine: &mut dyn Machine,
+        walk: &mut StepwiseWalk,
+    ) -> Result<Option<Point2<f64>>, VisionError> {
+        walk.pending = match self.replay(machine, walk) {
+            Replayed::Needs(at) => Some(at),
+            Replayed::Done { .. } => None,
+            Replayed::Failed { error, last } => return Err(self.walk_failed(last, error)),
+        };
+        Ok(walk.pending)
+    }
+
+    /// Triggers where the machine is now (after `VisionTriggerSettleSec`), for the point
+    /// [`VisionModule::m283_next`] gave, and records the reading.
+    ///
+    /// # Errors
+    /// [`VisionError::WalkOrder`] when no capture is pending; the driver's error; the walk's
+    /// failure on this reading (an NG: "the camera lost the mark …", as [`VisionModule::m283`]).
+    /// `LastStatus` holds the error and nothing is written.
+    pub fn m283_capture(&mut self, machine: &mut dyn Machine, walk: &mut StepwiseWalk) -> Result<(), VisionError> {
+        if walk.pending.take().is_none() {
+            return Err(VisionError::WalkOrder {
+                what: "no capture is pending: ask for the next point (o<vision_walk_next>) and move there first",
+            });
+        }
+        machine.dwell(self.params.trigger_settle_s());
+        let reading = match self.driver_mut().and_then(|d| Ok(d.trigger()?)) {
+            Ok(r) => r,
+            Err(e) => return Err(self.walk_failed(None, e)),
+        };
+        walk.taken.push((machine.program_position(), reading));
+        match self.replay(machine, walk) {
+            Replayed::Failed { error, last } => Err(self.walk_failed(last, error)),
+            _ => Ok(()),
+        }
+    }
+
+    /// Solves the stepwise walk and commits it through the same path as
+    /// [`VisionModule::m283`] (K, the camera tool's offset, the profile; all or nothing). The
+    /// reply lists no G-code: the host ran the walk's moves. On a failure the machine is sent
+    /// back to the walk's start (best effort), as after a failed [`VisionModule::m283`].
+    ///
+    /// # Errors
+    /// [`VisionError::WalkOrder`] when the walk still needs captures; otherwise as
+    /// [`VisionModule::m283`].
+    pub fn m283_finish(
+        &mut self,
+        machine: &mut dyn Machine,
+        walk: &StepwiseWalk,
+    ) -> Result<Reply<CalReport>, VisionError> {
+        match self.replay(machine, walk) {
+            Replayed::Done { solution, last } => self.commit_walk(machine, Ok(*solution), Vec::new(), last, walk.start),
+            Replayed::Needs(_) => Err(VisionError::WalkOrder {
+                what: "the walk is not done: capture at every point o<vision_walk_next> gives before finishing",
+            }),
+            Replayed::Failed { error, last } => self.commit_walk(machine, Err(error), Vec::new(), last, walk.start),
+        }
+    }
+
+    /// Replays `walk` over its readings, moving nothing.
+    fn replay(&self, machine: &mut dyn Machine, walk: &StepwiseWalk) -> Replayed {
+        let mut walker = Walker::replay(machine, &walk.taken, walk.start);
+        let outcome = walk_routine(&mut walker, &self.params, walk.mode, walk.tool);
+        let needed = walker.needed();
+        let (_, last) = walker.into_ran();
+        match (outcome, needed) {
+            (_, Some(at)) => Replayed::Needs(at),
+            (Ok(solution), None) => Replayed::Done { solution: Box::new(solution), last },
+            (Err(error), None) => Replayed::Failed { error, last },
+        }
+    }
+
+    /// Records a failed stepwise step as M283 records a failure; returns the error.
+    fn walk_failed(&mut self, last: Option<Reading>, error: VisionError) -> VisionError {
+        self.publish_failure(last.map(|r| i64::from(r.judgment.code())), &error);
+        error
     }
 
     /// Applies a calibration solution: all of it, or nothing (see [`VisionModule::m283`]).

@@ -39,6 +39,7 @@ use crate::registry::DriverRegistry;
 pub use capture::{Capture, Recentred};
 pub use m280::RunMode;
 pub use m282::{AlignReport, DroppedMark, Pieces, PredictedError};
+pub use m283::StepwiseWalk;
 pub use m284::{JobReport, MAX_JOB};
 
 /// What an entry point hands back: the G-code it ran, then a report.

@@ -1,0 +1,485 @@
+//! The LinuxCNC dialect of the session, on a LinuxCNC-like host: a fake that applies LinuxCNC's
+//! canon (`machine = g5x + R(rot)·(p + g92) + tool`) for `G10 L2 P0 R`, `G52` and `G0`, and
+//! moves the simulated head there, so the real module with the simulated camera runs as it
+//! would under LinuxCNC.
+
+use std::collections::BTreeMap;
+
+use vision_core::{DriverRegistry, Timestamp, VisionModule};
+use vision_driver_sim::{Fixture, Sim, SimMachine};
+use vision_host::{linuxcnc, testkit, Controller, Host, HostError, Session};
+use vision_math::{LengthUnit, Matrix2, Point2, Vector2};
+
+/// Rotation by `deg` degrees counter-clockwise.
+fn rot(deg: f64) -> Matrix2<f64> {
+    let (s, c) = deg.to_radians().sin_cos();
+    Matrix2::new(c, -s, s, c)
+}
+
+/// LinuxCNC as the session sees it through remap.py, inches, G54 active.
+struct FakeLinuxCnc {
+    /// Moves the simulated head (tool 1 loaded, no offsets: `G53` puts the spindle there).
+    machine: SimMachine,
+    /// The G54 origin, machine coordinates.
+    g5x: Vector2<f64>,
+    /// The G54 rotation, degrees counter-clockwise.
+    rotation_deg: f64,
+    /// The G92/G52 offset.
+    g92: Vector2<f64>,
+    /// The tool table as LinuxCNC holds it (added to the programmed point).
+    tools: BTreeMap<u32, Vector2<f64>>,
+    tool: u32,
+    /// The spindle, machine coordinates.
+    spindle: Vector2<f64>,
+    incremental: bool,
+    /// Numbered parameters (0 when never written, as in LinuxCNC).
+    params: BTreeMap<u32, f64>,
+    /// Every line run, in order.
+    lines: Vec<String>,
+    messages: Vec<String>,
+    /// The true vector from the spindle to the point the camera images at its calibrated centre.
+    camera_truth: Vector2<f64>,
+}
+
+impl FakeLinuxCnc {
+    /// The machine of `sim`, G54 at the world's work offset rotated by `rotation_deg`, the
+    /// camera tool loaded with its true offset in LinuxCNC's sign.
+    fn new(sim: &Sim, rotation_deg: f64, camera_offset: Vector2<f64>) -> FakeLinuxCnc {
+        let world = sim.world();
+        let machine = SimMachine::new(sim).expect("the built-in machine");
+        let camera = world.machine.camera_tool;
+        let g5x = Vector2::new(world.machine.work_offset[0], world.machine.work_offset[1]);
+        let spindle = Vector2::new(world.machine.start[0], world.machine.start[1]);
+        let mut host = FakeLinuxCnc {
+            machine,
+            g5x,
+            rotation_deg,
+            g92: Vector2::zeros(),
+            tools: BTreeMap::from([(camera, -camera_offset), (1, Vector2::zeros())]),
+            tool: camera,
+            spindle,
+            incremental: false,
+            params: BTreeMap::new(),
+            lines: Vec::new(),
+            messages: Vec::new(),
+            camera_truth: camera_offset,
+        };
+        host.go(spindle);
+        host
+    }
+
+    fn tool_vector(&self) -> Vector2<f64> {
+        self.tools.get(&self.tool).copied().unwrap_or_else(Vector2::zeros)
+    }
+
+    /// LinuxCNC's canon: where commanding `p` puts the spindle.
+    fn spindle_for(&self, p: Point2<f64>) -> Vector2<f64> {
+        self.g5x + rot(self.rotation_deg) * (p.coords + self.g92) + self.tool_vector()
+    }
+
+    /// The program point the spindle is at (frame changes re-derive it; they do not move).
+    fn program(&self) -> Point2<f64> {
+        Point2::from(rot(-self.rotation_deg) * (self.spindle - self.g5x - self.tool_vector()) - self.g92)
+    }
+
+    /// Moves the spindle to machine point `m`.
+    fn go(&mut self, m: Vector2<f64>) {
+        let mut ignore = |_: &vision_gcode::Event| {};
+        self.machine.context(&mut ignore).execute(&format!("G53 G0 X{} Y{}", m.x, m.y)).expect("a G53 move");
+        self.spindle = m;
+    }
+
+    /// Where the point the camera images at its calibrated centre is, machine coordinates.
+    fn optical_axis(&self) -> Point2<f64> {
+        Point2::from(self.spindle + self.camera_truth)
+    }
+}
+
+fn unsupported(line: &str) -> HostError {
+    HostError::host(format!("the fake LinuxCNC does not run {line:?}"))
+}
+
+impl Host for FakeLinuxCnc {
+    fn execute(&mut self, line: &str) -> Result<(), HostError> {
+        let mut g = Vec::new();
+        let mut words = BTreeMap::new();
+        for token in line.split_whitespace() {
+            let mut chars = token.chars();
+            let letter = chars.next().ok_or_else(|| unsupported(line))?.to_ascii_uppercase();
+            let value: f64 = chars.as_str().parse().map_err(|_| unsupported(line))?;
+            if letter == 'G' {
+                g.push(value);
+            } else {
+                words.insert(letter, value);
+            }
+        }
+        let word = |c: char| words.get(&c).copied();
+        if g.contains(&90.0) {
+            self.incremental = false;
+        }
+        if g.contains(&91.0) {
+            self.incremental = true;
+        }
+        let has = |c: f64| g.contains(&c);
+        if has(10.0) {
+            if word('L') != Some(2.0) || word('P') != Some(0.0) || word('X').is_some() || word('Y').is_some() {
+                return Err(unsupported(line));
+            }
+            if let Some(r) = word('R') {
+                self.rotation_deg = r;
+            }
+        } else if has(52.0) {
+            self.g92 = Vector2::new(word('X').unwrap_or(self.g92.x), word('Y').unwrap_or(self.g92.y));
+        } else if has(0.0) {
+            let now = self.program();
+            let target = if self.incremental {
+                Point2::new(now.x + word('X').unwrap_or(0.0), now.y + word('Y').unwrap_or(0.0))
+            } else {
+                Point2::new(word('X').unwrap_or(now.x), word('Y').unwrap_or(now.y))
+            };
+            let m = self.spindle_for(target);
+            self.go(m);
+        } else if !(has(4.0) || g.iter().all(|c| *c == 90.0 || *c == 91.0)) || g.is_empty() {
+            return Err(unsupported(line));
+        }
+        self.lines.push(line.to_string());
+        Ok(())
+    }
+    fn pound(&self, index: u32) -> Result<f64, HostError> {
+        Ok(self.params.get(&index).copied().unwrap_or(0.0))
+    }
+    fn set_pound(&mut self, index: u32, value: f64) -> Result<(), HostError> {
+        self.params.insert(index, value);
+        Ok(())
+    }
+    fn active_tool(&self) -> Result<u32, HostError> {
+        Ok(self.tool)
+    }
+    fn tool_offset(&self, tool: u32) -> Result<Vector2<f64>, HostError> {
+        self.tools.get(&tool).copied().ok_or_else(|| HostError::host(format!("no tool {tool}")))
+    }
+    fn set_tool_offset(&mut self, tool: u32, offset: Vector2<f64>) -> Result<(), HostError> {
+        self.tools.insert(tool, offset);
+        Ok(())
+    }
+    fn position(&self) -> Result<Point2<f64>, HostError> {
+        Ok(self.program())
+    }
+    fn units(&self) -> Result<LengthUnit, HostError> {
+        Ok(LengthUnit::Inch)
+    }
+    fn dwell(&mut self, _seconds: f64) -> Result<(), HostError> {
+        Ok(())
+    }
+    fn message(&mut self, text: &str) {
+        self.messages.push(text.to_string());
+    }
+    fn now(&self) -> Timestamp {
+        Timestamp::from_unix(1_800_000_000, 0)
+    }
+    fn controller(&self) -> Controller {
+        Controller::LinuxCnc
+    }
+    fn xy_rotation_deg(&self) -> Result<f64, HostError> {
+        Ok(self.rotation_deg)
+    }
+    fn g92_offset(&self) -> Result<Vector2<f64>, HostError> {
+        Ok(self.g92)
+    }
+}
+
+/// Example 4's marks: the corners of a 6 × 4 in part.
+const MARKS: [[f64; 2]; 4] = [[0.0, 0.0], [6.0, 0.0], [6.0, 4.0], [0.0, 4.0]];
+
+/// A rig: the simulated world with only a 6 × 4 part on it, placed in the G54 frame rotated by
+/// `base_deg`, then turned `part_deg` about its centre, shifted by `shift` and scaled by
+/// `scale` in that frame; a session with a perfect calibration and VisionFitMaxScaleDev
+/// `gate_pct`; the fake LinuxCNC with G54 rotated by `base_deg`.
+fn rig(base_deg: f64, part_deg: f64, shift: Vector2<f64>, scale: f64, gate_pct: f64) -> (Session, FakeLinuxCnc) {
+    let sim = testkit::sim();
+    let c = Vector2::new(3.0, 2.0);
+    // Work = R(θ₀)·(R(α)·S·(n − c) + c + s) = R(θ₀ + α)·S·(n − c) + c + (R(θ₀)·(c + s) − c).
+    let work_shift = rot(base_deg) * (c + shift) - c;
+    let part = Fixture {
+        name: "part".into(),
+        sheet: None,
+        marks: MARKS.to_vec(),
+        diameter: Some(0.25),
+        shift: [work_shift.x, work_shift.y],
+        rotation_deg: base_deg + part_deg,
+        scale: [scale, scale],
+        center: Some([c.x, c.y]),
+        present: true,
+    };
+    sim.set_fixtures(vec![part]).expect("a valid part");
+    let mut params = testkit::sim_params(&sim);
+    params.set("VisionFitMaxScaleDev", gate_pct).expect("a percentage");
+    let centre = Vector2::new(params.px_center_offset_x(), params.px_center_offset_y());
+    let camera = sim.true_camera_offset(centre, LengthUnit::Inch);
+    let mut registry = DriverRegistry::new();
+    sim.register(&mut registry);
+    let module = VisionModule::from_registry(params, &registry).expect("the simulated camera");
+    (Session::new(module), FakeLinuxCnc::new(&sim, base_deg, camera))
+}
+
+/// Example 4 for LinuxCNC: M280, a capture over each nominal corner, M282.
+fn align(session: &mut Session, host: &mut FakeLinuxCnc) -> Result<(), HostError> {
+    session.mcode(host, 280, &[])?;
+    for [x, y] in MARKS {
+        host.execute(&format!("G0 X{x} Y{y}"))?;
+        session.mcode(host, 281, &[])?;
+    }
+    session.mcode(host, 282, &[]).map(|_| ())
+}
+
+/// The largest distance between the camera's optical axis commanded onto each nominal corner
+/// and the corner's true position, inches.
+fn worst_landing(host: &mut FakeLinuxCnc) -> f64 {
+    let truth = host.machine.sim().marks();
+    MARKS
+        .iter()
+        .zip(&truth)
+        .map(|([x, y], mark)| {
+            host.execute(&format!("G0 X{x} Y{y}")).expect("a move");
+            (host.optical_axis() - mark.position).norm()
+        })
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn a_shifted_and_rotated_part_lands_after_m282_also_on_an_operators_rotation() {
+    for base in [0.0, 10.0] {
+        let (mut session, mut host) = rig(base, 0.4, Vector2::new(0.06, -0.04), 1.0, 2.0);
+        let before = worst_landing(&mut host);
+        assert!(before > 0.03, "the part must be off before M282 (θ₀ {base}°): {before}");
+        align(&mut session, &mut host).expect("aligned");
+        // G10 L2 P0 R{θ₀ + θ}, G52: no G68, no G51.
+        let emitted: Vec<&String> =
+            host.lines.iter().filter(|l| l.starts_with("G10") || l.starts_with("G52")).collect();
+        assert!(host.lines.iter().all(|l| !l.contains("G68") && !l.contains("G51")), "{:?}", host.lines);
+        // M281 captures after waiting for the machine, so it never re-centres with a move,
+        // although these marks are read ~30 px off the image centre.
+        assert!(host.lines.iter().all(|l| !l.starts_with("G91")), "{:?}", host.lines);
+        assert!(emitted.len() >= 4, "{emitted:?}");
+        assert!((host.rotation_deg - (base + 0.4)).abs() < 0.01, "rotation {}", host.rotation_deg);
+        assert_eq!(host.params.get(&linuxcnc::ALIGNMENT_ACTIVE_PARAM), Some(&1.0));
+        assert_eq!(host.params.get(&linuxcnc::BASE_ROTATION_PARAM), Some(&base));
+        let worst = worst_landing(&mut host);
+        assert!(worst < 0.0005, "θ₀ {base}°: a corner lands {worst} in off");
+        // A second M282 from the same captures replaces the alignment, never compounds it.
+        let (rotation, g92) = (host.rotation_deg, host.g92);
+        session.mcode(&mut host, 282, &[]).expect("aligned again");
+        assert!((host.rotation_deg - rotation).abs() < 1e-9 && (host.g92 - g92).norm() < 1e-9);
+        let said = host.messages.last().cloned().unwrap_or_default();
+        assert!(said.starts_with("M282: alignment applied without scale"), "{said}");
+
+        // M280 puts θ₀ and G52 back, also from a fresh session (LinuxCNC restarted).
+        let (mut fresh, _) = rig(base, 0.4, Vector2::new(0.06, -0.04), 1.0, 2.0);
+        fresh.mcode(&mut host, 280, &[]).expect("cancelled");
+        assert_eq!(host.rotation_deg, base);
+        assert_eq!(host.g92, Vector2::zeros());
+        assert_eq!(host.params.get(&linuxcnc::ALIGNMENT_ACTIVE_PARAM), Some(&0.0));
+    }
+}
+
+#[test]
+fn a_capture_under_an_active_alignment_reads_in_the_program_frame() {
+    // After M282 the program frame is the part's: a capture over a corner reads that corner
+    // (within the camera's noise, 0.1 px ≈ 0.0002 in per coordinate, and the fit's), on an
+    // operator's rotation as without one.
+    for base in [0.0, 10.0] {
+        let (mut session, mut host) = rig(base, 0.4, Vector2::new(0.06, -0.04), 1.0, 2.0);
+        align(&mut session, &mut host).expect("aligned");
+        for [x, y] in MARKS {
+            host.execute(&format!("G0 X{x} Y{y}")).expect("a move");
+            let observed = match session.mcode(&mut host, 281, &[]).expect("a capture") {
+                vision_mcode::Outcome::Capture(reply) => reply.report.observed,
+                other => panic!("M281 captures: {other:?}"),
+            };
+            let miss = (observed - Point2::new(x, y)).norm();
+            assert!(miss < 0.001, "θ₀ {base}°: corner ({x}, {y}) reads {miss} in off");
+        }
+    }
+}
+
+#[test]
+fn a_part_printed_large_is_refused_under_a_small_gate_and_applied_rigidly_under_a_wide_one() {
+    let (mut session, mut host) = rig(10.0, 0.4, Vector2::new(0.06, -0.04), 1.001, 0.05);
+    let e = align(&mut session, &mut host).expect_err("0.1 % is beyond a 0.05 % gate");
+    assert!(e.to_string().starts_with("LinuxCNC cannot scale"), "{e}");
+    // Nothing changed: M280's cancel is all that ran.
+    assert_eq!(host.rotation_deg, 10.0);
+    assert_eq!(host.g92, Vector2::zeros());
+    assert_eq!(host.params.get(&linuxcnc::ALIGNMENT_ACTIVE_PARAM), Some(&0.0));
+    assert_eq!(host.lines.iter().filter(|l| l.starts_with("G10")).count(), 1, "{:?}", host.lines);
+
+    let (mut session, mut host) = rig(10.0, 0.4, Vector2::new(0.06, -0.04), 1.001, 2.0);
+    align(&mut session, &mut host).expect("within a 2 % gate");
+    let said = host.messages.last().cloned().unwrap_or_default();
+    assert!(said.contains("LinuxCNC cannot scale") && said.contains("ignored"), "{said}");
+    // The rigid part: the corners miss by the ignored 0.1 % of their distance from the centre
+    // (3.6 in), not more; the centre lands.
+    let worst = worst_landing(&mut host);
+    assert!((0.002..0.0045).contains(&worst), "a corner lands {worst} in off");
+    host.execute("G0 X3 Y2").expect("a move");
+    let truth = {
+        let c = Vector2::new(3.0, 2.0);
+        let work_shift = rot(10.0) * (c + Vector2::new(0.06, -0.04)) - c;
+        Point2::from(c + work_shift + host.g5x)
+    };
+    assert!((host.optical_axis() - truth).norm() < 0.0005, "the centre lands {}", (host.optical_axis() - truth).norm());
+}
+
+/// A rig for M283: the built-in world (calibration sheet 1 on it) with the sheet turned by the
+/// operator's `base_deg` with the G54 rotation, an uncalibrated session, and the camera tool's
+/// table offset off the truth by `table_error`; the camera is over the sheet's first dot.
+fn calibration_rig(base_deg: f64, table_error: Vector2<f64>) -> (Session, FakeLinuxCnc) {
+    let sim = testkit::sim();
+    let mut fixtures = sim.world().fixtures;
+    for f in &mut fixtures {
+        f.rotation_deg += base_deg;
+    }
+    sim.set_fixtures(fixtures).expect("the same fixtures, turned");
+    let params = testkit::uncalibrated_params(&sim);
+    let truth = sim.true_camera_offset(Vector2::zeros(), LengthUnit::Inch);
+    let mut registry = DriverRegistry::new();
+    sim.register(&mut registry);
+    let module = VisionModule::from_registry(params, &registry).expect("the simulated camera");
+    let mut host = FakeLinuxCnc::new(&sim, base_deg, truth);
+    host.tools.insert(sim.world().machine.camera_tool, -(truth + table_error));
+    let dot = vision_core::cal_sheet(1).expect("sheet 1").dots(LengthUnit::Inch)[0];
+    host.execute(&format!("G0 X{} Y{}", dot.x, dot.y)).expect("over the first dot");
+    (Session::new(module), host)
+}
+
+/// The stepwise walk as m283.ngc drives it: next point, `G0` there, capture; then finish.
+fn walk_stepwise(
+    session: &mut Session,
+    host: &mut FakeLinuxCnc,
+    words: &[(char, f64)],
+) -> Result<vision_mcode::Outcome, HostError> {
+    session.walk_begin(host, words)?;
+    let mut captures = 0;
+    while let Some(p) = session.walk_next(host)? {
+        host.execute(&format!("G0 X{} Y{}", p.x, p.y))?;
+        session.walk_capture(host)?;
+        captures += 1;
+        assert!(captures < 100, "the walk does not end");
+    }
+    session.walk_finish(host)
+}
+
+fn calibration(outcome: &vision_mcode::Outcome) -> &vision_core::CalReport {
+    match outcome {
+        vision_mcode::Outcome::Calibrate(reply) => &reply.report,
+        other => panic!("M283 calibrates: {other:?}"),
+    }
+}
+
+/// The camera tool's offset as the module sees it (LinuxCNC's table value, negated).
+fn camera_offset(session: &Session, host: &FakeLinuxCnc) -> Vector2<f64> {
+    let tool = session.module().params().camera_tool().unwrap_or(0);
+    -host.tools[&tool]
+}
+
+#[test]
+fn the_stepwise_walk_solves_and_commits_as_the_one_shot_m283() {
+    let error = Vector2::new(0.04, -0.03);
+    for (words, base) in [(vec![('C', 1.0)], 0.0), (vec![('C', 1.0)], 10.0), (vec![('Q', 0.5)], 10.0)] {
+        let (mut one, mut one_host) = calibration_rig(base, error);
+        let want = one.mcode(&mut one_host, 283, &words).expect("the one-shot M283");
+        let (mut step, mut step_host) = calibration_rig(base, error);
+        let got = walk_stepwise(&mut step, &mut step_host, &words).expect("the stepwise M283");
+        let (want, got) = (calibration(&want), calibration(&got));
+        // The same readings, taken where the moves put the camera: the one-shot walk's relative
+        // moves round to 7 decimals, a stepwise walk moves to the exact point: K agrees to ~1e-12.
+        let (k1, k2) = match (want, got) {
+            (vision_core::CalReport::Sheet(a), vision_core::CalReport::Sheet(b)) => {
+                assert_eq!(a.triggers, b.triggers);
+                assert_eq!(a.verify.len(), b.verify.len());
+                assert!((a.offset_written - b.offset_written).norm() < 1e-9, "{a:?}\n{b:?}");
+                assert!((a.verify_rms - b.verify_rms).abs() < 1e-9, "{a:?}\n{b:?}");
+                assert!((a.sheet_rotation_deg - b.sheet_rotation_deg).abs() < 1e-9);
+                (a.k, b.k)
+            }
+            (vision_core::CalReport::Quick(a), vision_core::CalReport::Quick(b)) => {
+                assert_eq!(a.axis.remap, b.axis.remap);
+                assert!((a.size_error - b.size_error).abs() < 1e-9);
+                (a.k, b.k)
+            }
+            _ => panic!("different modes: {want:?}\n{got:?}"),
+        };
+        assert!((k1 - k2).norm() / k1.norm() < 1e-9, "K {k1} vs {k2}");
+        assert_eq!(want.date(), got.date());
+        // Both committed: K in the module, the offset in the table (the sheet walk only).
+        assert_eq!(one.module().params().cal_k(), k1);
+        assert_eq!(step.module().params().cal_k(), k2);
+        assert!((camera_offset(&one, &one_host) - camera_offset(&step, &step_host)).norm() < 1e-9);
+        let said = step_host.messages.last().cloned().unwrap_or_default();
+        assert_eq!(said, "M283: calibration done and saved");
+    }
+}
+
+#[test]
+fn a_sheet_walk_on_an_operators_rotation_writes_k_and_the_offset_along_the_machine_axes() {
+    for base in [0.0, 10.0] {
+        let (mut session, mut host) = calibration_rig(base, Vector2::new(0.04, -0.03));
+        walk_stepwise(&mut session, &mut host, &[('C', 1.0)]).expect("calibrated");
+        let sim = host.machine.sim().clone();
+        let offset = camera_offset(&session, &host);
+        let e = sim.calibration_error(session.module().params(), offset, LengthUnit::Inch);
+        assert!(e.remap_matches, "θ₀ {base}°: {e:?}");
+        assert!(e.k_relative < 0.002, "θ₀ {base}°: {e:?}");
+        assert!(e.offset < 0.0005, "θ₀ {base}°: {e:?}");
+    }
+}
+
+#[test]
+fn an_ng_capture_stops_the_walk_and_writes_nothing() {
+    let (mut session, mut host) = calibration_rig(0.0, Vector2::new(0.04, -0.03));
+    host.execute("G0 X30 Y30").expect("off the sheet");
+    let before = (session.module().params().cal_k(), host.tools.clone());
+    session.walk_begin(&mut host, &[('C', 1.0)]).expect("begun");
+    let p = session.walk_next(&mut host).expect("a point").expect("the first capture");
+    host.execute(&format!("G0 X{} Y{}", p.x, p.y)).expect("a move");
+    let e = session.walk_capture(&mut host).expect_err("no mark out there");
+    assert!(e.to_string().contains("lost the mark"), "{e}");
+    assert_eq!(session.module().param("VisionLastStatus"), Ok(vision_core::ParamValue::Text(e.to_string())));
+    assert_eq!((session.module().params().cal_k(), host.tools.clone()), before);
+    // The walk is over: the next step says so.
+    let e = session.walk_next(&mut host).expect_err("no walk");
+    assert!(e.to_string().contains("no M283 walk is in progress"), "{e}");
+}
+
+#[test]
+fn steps_out_of_order_are_refused_and_keep_the_walk() {
+    let (mut session, mut host) = calibration_rig(0.0, Vector2::zeros());
+    let e = session.walk_capture(&mut host).expect_err("no walk yet");
+    assert!(e.to_string().contains("no M283 walk is in progress"), "{e}");
+    session.walk_begin(&mut host, &[('Q', 0.5)]).expect("begun");
+    let e = session.walk_capture(&mut host).expect_err("no point asked for");
+    assert!(e.to_string().contains("no capture is pending"), "{e}");
+    let e = session.walk_finish(&mut host).expect_err("nothing captured");
+    assert!(e.to_string().contains("the walk is not done"), "{e}");
+    // Still the same walk: it runs to the end from here.
+    while let Some(p) = session.walk_next(&mut host).expect("a point") {
+        host.execute(&format!("G0 X{} Y{}", p.x, p.y)).expect("a move");
+        session.walk_capture(&mut host).expect("a capture");
+    }
+    session.walk_finish(&mut host).expect("calibrated");
+    // M283's own refusals come at the start, before anything moves.
+    let e = session.walk_begin(&mut host, &[('C', 9.0)]).expect_err("no sheet 9");
+    assert!(e.to_string().contains('9'), "{e}");
+}
+
+#[test]
+fn m283_is_refused_while_an_alignment_is_active_and_the_refusal_names_m280() {
+    let (mut session, mut host) = rig(10.0, 0.4, Vector2::new(0.06, -0.04), 1.0, 2.0);
+    align(&mut session, &mut host).expect("aligned");
+    // A fresh session (LinuxCNC restarted) still sees the alignment, from the host.
+    let (mut fresh, _) = rig(10.0, 0.4, Vector2::new(0.06, -0.04), 1.0, 2.0);
+    let e = fresh.walk_begin(&mut host, &[('Q', 0.5)]).expect_err("aligned");
+    assert!(e.to_string().contains("M280"), "{e}");
+    fresh.mcode(&mut host, 280, &[]).expect("cancelled");
+    fresh.walk_begin(&mut host, &[('Q', 0.5)]).expect("no alignment now");
+}
