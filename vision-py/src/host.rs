@@ -3,7 +3,7 @@
 
 use pyo3::call::PyCallArgs;
 use pyo3::prelude::*;
-use vision_host::{printable_line, Host, HostError, MAX_MESSAGE_CHARS};
+use vision_host::{printable_line, Controller, Host, HostError, MAX_MESSAGE_CHARS};
 use vision_math::{LengthUnit, Point2, Vector2};
 
 use crate::words::shown;
@@ -12,6 +12,9 @@ use crate::VisionError;
 /// The controller behind a Python `Host` object: each [`Host`] call is a method call on it
 /// (`program_position()`, `pound(n)`, `execute(line)`, …; the table in
 /// `hosts/linuxcnc/README.md`). Lengths are in the program's units, angles in degrees.
+///
+/// It is [`Controller::LinuxCnc`]: M282 rotates the G5x system and shifts with G52, and the
+/// alignment's state is read from the host at every call.
 ///
 /// A Python exception raised by a method, or a value of the wrong type, becomes
 /// [`HostError::Host`] with Python's message; nothing here panics on what Python returns.
@@ -106,6 +109,19 @@ impl Host for PyHost<'_> {
 
     fn dwell(&mut self, seconds: f64) -> Result<(), HostError> {
         self.call("dwell", (seconds,)).map(|_| ())
+    }
+
+    fn controller(&self) -> Controller {
+        Controller::LinuxCnc
+    }
+
+    fn xy_rotation_deg(&self) -> Result<f64, HostError> {
+        self.value("xy_rotation_deg", (), "a number")
+    }
+
+    fn g92_offset(&self) -> Result<Vector2<f64>, HostError> {
+        let (x, y) = self.pair("g92_offset", ())?;
+        Ok(Vector2::new(x, y))
     }
 
     fn message(&mut self, text: &str) {

@@ -33,7 +33,7 @@ use std::path::PathBuf;
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use vision_host::{printable_line, registry, Session, MAX_MESSAGE_CHARS};
+use vision_host::{printable_line, registry, HostError, Session, MAX_MESSAGE_CHARS};
 
 pub use host::PyHost;
 pub use words::{word, WordError};
@@ -69,17 +69,25 @@ impl PySession {
         }
     }
 
-    /// Readies the camera for a call on `host`: the simulated camera looks from where the
-    /// host's machine is (a real camera needs nothing).
-    #[allow(clippy::unused_self, clippy::unnecessary_wraps)] // both used with the `sim` feature
-    fn before_call(&self, host: &PyHost<'_>) -> PyResult<()> {
+    /// Runs `step` of the session on the Python host object `host`; a refusal becomes
+    /// `VisionError`. The simulated camera (tests) first looks from where the host's machine is.
+    fn on_host<'py, T>(
+        &mut self,
+        host: Bound<'py, PyAny>,
+        step: impl FnOnce(&mut Session, &mut PyHost<'py>) -> Result<T, HostError>,
+    ) -> PyResult<T> {
+        let mut host = PyHost::new(host);
         #[cfg(feature = "sim")]
         if let Some(sim) = &self.sim {
-            sim.place_head(host).map_err(|e| vision_error(&e))?;
+            sim.place_head(&host).map_err(|e| vision_error(&e))?;
         }
-        let _ = host;
-        Ok(())
+        step(&mut self.session, &mut host).map_err(|e| vision_error(&e))
     }
+}
+
+/// The block's words, or `VisionError`.
+fn block_words(words: &Bound<'_, PyDict>) -> PyResult<Vec<(char, f64)>> {
+    words::from_dict(words).map_err(|e| vision_error(&e))
 }
 
 #[pymethods]
@@ -104,10 +112,8 @@ impl PySession {
     /// `host.execute` (a record, never to be run again). Raises `VisionError` with the
     /// operator's message when the M-code is refused or the host fails.
     fn call(&mut self, mcode: u32, words: &Bound<'_, PyDict>, host: Bound<'_, PyAny>) -> PyResult<Vec<String>> {
-        let words = words::from_dict(words).map_err(|e| vision_error(&format!("M{mcode}: {e}")))?;
-        let mut host = PyHost::new(host);
-        self.before_call(&host)?;
-        let outcome = self.session.mcode(&mut host, mcode, &words).map_err(|e| vision_error(&e))?;
+        let words = block_words(words)?;
+        let outcome = self.on_host(host, |session, host| session.mcode(host, mcode, &words))?;
         Ok(outcome.gcode().to_vec())
     }
 
@@ -116,9 +122,9 @@ impl PySession {
     /// calibrated perfectly, directly (`camera="sim"`) or through the Keyence driver and its
     /// emulator on loopback (`camera="keyence"`). The part ("demo target") is placed with the
     /// given rotation (degrees counter-clockwise about its centre), shift (X, Y, inches) and
-    /// scale (X, Y) instead of the world's; `params` sets numeric Vision parameters
-    /// (`{"VisionFitMaxScaleDev": 0.05}`). Before each call the simulated head is put where
-    /// `host.machine_position()` (machine X, Y, program units) says the machine is.
+    /// scale (X, Y) instead of the world's; `params` sets numeric Vision parameters (`{"VisionFitMaxScaleDev": 0.05}`).
+    /// Before each call the simulated head is put where `host.machine_position()` (machine X,
+    /// Y, program units) says the machine is.
     #[cfg(feature = "sim")]
     #[staticmethod]
     #[pyo3(signature = (camera="sim", rotation_deg=None, shift=None, scale=None, params=None))]
@@ -158,7 +164,9 @@ impl PySession {
     }
 }
 
-/// The module `import mach_vision` loads: `Session`, `VisionError`, `__version__`.
+/// The module `import mach_vision` loads: `Session`, `VisionError`, `__version__`, and
+/// `PERSISTENT_PARAMS`, the numbered parameters LinuxCNC's var file must list for an alignment
+/// to survive a restart ([`vision_host::linuxcnc::PERSISTENT_PARAMS`]).
 #[pymodule(name = "mach_vision")]
 mod mach_vision {
     use pyo3::prelude::*;
@@ -168,6 +176,7 @@ mod mach_vision {
 
     #[pymodule_init]
     fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {
-        m.add("__version__", env!("CARGO_PKG_VERSION"))
+        m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+        m.add("PERSISTENT_PARAMS", vision_host::linuxcnc::PERSISTENT_PARAMS.to_vec())
     }
 }

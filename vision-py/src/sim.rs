@@ -39,7 +39,7 @@ const PART: &str = "demo target";
 
 impl Simulated {
     /// The rig for `camera` (`"sim"` or `"keyence"`) with the part at `pose`, and a session on
-    /// it (perfectly calibrated, no profile file) with the numeric parameters `params` set.
+    /// it (no profile file): perfectly calibrated, with the numeric parameters `params` set.
     ///
     /// # Errors
     /// An unknown camera name, a pose the world refuses or a parameter the module refuses, as a
