@@ -117,27 +117,61 @@ impl PySession {
         Ok(outcome.gcode().to_vec())
     }
 
+    /// `walk_begin(words, host)`: M283's prolog. Checks M283's words (`{"q": d}` or
+    /// `{"c": n}`) and everything M283 checks, and plans the walk; nothing moves. Raises
+    /// `VisionError` when M283 is refused.
+    fn walk_begin(&mut self, words: &Bound<'_, PyDict>, host: Bound<'_, PyAny>) -> PyResult<()> {
+        let words = block_words(words)?;
+        self.on_host(host, |session, host| session.walk_begin(host, &words))
+    }
+
+    /// `walk_next(host)`: the walk's next point, `(x, y)` in the program frame and units, for
+    /// `m283.ngc` to move to before `walk_capture`; `None` when the walk has every capture. It
+    /// depends on the captures so far. Raises `VisionError` (no walk, or the walk failed).
+    fn walk_next(&mut self, host: Bound<'_, PyAny>) -> PyResult<Option<(f64, f64)>> {
+        let next = self.on_host(host, |session, host| session.walk_next(host))?;
+        Ok(next.map(|p| (p.x, p.y)))
+    }
+
+    /// `walk_capture(host)`: triggers where the machine now is, for the point `walk_next` gave
+    /// (M289, after the sync). Raises `VisionError` on an NG or a camera failure (the walk is
+    /// dropped, nothing written).
+    fn walk_capture(&mut self, host: Bound<'_, PyAny>) -> PyResult<()> {
+        self.on_host(host, |session, host| session.walk_capture(host))
+    }
+
+    /// `walk_finish(host)`: M283's epilog. Solves the walk and writes K, the camera tool's
+    /// offset and the profile (all or nothing); returns the G-code lines it ran (a record).
+    /// Raises `VisionError` when the calibration is refused.
+    fn walk_finish(&mut self, host: Bound<'_, PyAny>) -> PyResult<Vec<String>> {
+        let outcome = self.on_host(host, |session, host| session.walk_finish(host))?;
+        Ok(outcome.gcode().to_vec())
+    }
+
     /// `Session.simulated(camera="sim", rotation_deg=None, shift=None, scale=None)` — **tests
     /// only** (feature `sim`): a session whose camera sees vision-driver-sim's built-in world,
     /// calibrated perfectly, directly (`camera="sim"`) or through the Keyence driver and its
     /// emulator on loopback (`camera="keyence"`). The part ("demo target") is placed with the
     /// given rotation (degrees counter-clockwise about its centre), shift (X, Y, inches) and
-    /// scale (X, Y) instead of the world's; `params` sets numeric Vision parameters (`{"VisionFitMaxScaleDev": 0.05}`).
+    /// scale (X, Y) instead of the world's; `calibrated=False` starts with K never calibrated
+    /// (for M283); `params` sets numeric Vision parameters (`{"VisionFitMaxScaleDev": 0.05}`).
     /// Before each call the simulated head is put where `host.machine_position()` (machine X,
     /// Y, program units) says the machine is.
     #[cfg(feature = "sim")]
     #[staticmethod]
-    #[pyo3(signature = (camera="sim", rotation_deg=None, shift=None, scale=None, params=None))]
+    #[pyo3(signature = (camera="sim", rotation_deg=None, shift=None, scale=None, calibrated=true, params=None))]
     fn simulated(
         camera: &str,
         rotation_deg: Option<f64>,
         shift: Option<(f64, f64)>,
         scale: Option<(f64, f64)>,
+        calibrated: bool,
         params: Option<std::collections::BTreeMap<String, f64>>,
     ) -> PyResult<PySession> {
         let pose = sim::Pose { rotation_deg, shift, scale };
         let params = params.unwrap_or_default();
-        let (simulated, session) = sim::Simulated::new(camera, pose, &params).map_err(|e| vision_error(&e))?;
+        let (simulated, session) =
+            sim::Simulated::new(camera, pose, calibrated, &params).map_err(|e| vision_error(&e))?;
         Ok(PySession { session, sim: Some(simulated) })
     }
 

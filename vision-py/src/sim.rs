@@ -12,7 +12,7 @@ use std::collections::BTreeMap;
 use nalgebra::Point3;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use vision_host::testkit::{Camera, Rig};
+use vision_host::testkit::{self, Camera, Rig};
 use vision_host::{Host, HostError, Session};
 use vision_math::{LengthUnit, Point2, Vector2};
 
@@ -39,7 +39,8 @@ const PART: &str = "demo target";
 
 impl Simulated {
     /// The rig for `camera` (`"sim"` or `"keyence"`) with the part at `pose`, and a session on
-    /// it (no profile file): perfectly calibrated, with the numeric parameters `params` set.
+    /// it (no profile file): perfectly calibrated, or with K never calibrated when not
+    /// `calibrated`, and with the numeric parameters `params` set.
     ///
     /// # Errors
     /// An unknown camera name, a pose the world refuses or a parameter the module refuses, as a
@@ -47,6 +48,7 @@ impl Simulated {
     pub(crate) fn new(
         camera: &str,
         pose: Pose,
+        calibrated: bool,
         params: &BTreeMap<String, f64>,
     ) -> Result<(Simulated, Session), String> {
         let camera = match camera {
@@ -54,7 +56,8 @@ impl Simulated {
             "keyence" => Camera::Keyence,
             other => return Err(format!("camera {other:?} is not simulated: use \"sim\" or \"keyence\"")),
         };
-        let (rig, mut module) = Rig::new(None, camera);
+        let base = (!calibrated).then(|| testkit::uncalibrated_params(&testkit::sim()));
+        let (rig, mut module) = Rig::new(base, camera);
         for (name, value) in params {
             module.set_param(name, *value).map_err(|e| e.to_string())?;
         }

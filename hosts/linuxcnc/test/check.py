@@ -261,6 +261,49 @@ def full_runs(check, rig, module):
     check.that(case, sum("preview" in m for m in messages(calls)) == vision, "each of the %d vision M-codes reports" % vision)
 
 
+def calibrations(check, rig, module):
+    """M283 through m283.ngc: from K never calibrated and a camera offset 0.05 in off in the
+    tool table, the sheet walk (C1) calibrates well enough for example 4 to land; the quick
+    calibration (Q) on one mark completes."""
+    part = {"rotation_deg": 0.7, "shift": [0.0, 0.0], "scale": [1.0, 1.0]}
+    # Over sheet 1's first dot (the built-in world's sheet lies at work zero), walk, re-apply the
+    # camera offset M283 wrote, then example 4 from its M280 on.
+    lines = example_4().splitlines()
+    start = next(k for k, line in enumerate(lines) if line.startswith("M280"))
+    head = ["G90 G20 G17", "G54", "T98 M6 G43", "G0 X-2.5 Y-4.0", "M283 C1", "T98 M6 G43"]
+    program = "\n".join(head + lines[start:]) + "\n"
+    # rs274 has no motion to settle from: no dwell after each move.
+    sim = {**part, "calibrated": False, "params": {"VisionTriggerSettleSec": 0}}
+    status, calls, other = rig.run(program, sim, camera_error=(0.04, -0.03))
+    case = "m283-sheet"
+    check.that(case, status == 0, "rs274 exit status %d %s" % (status, other[-3:]))
+    said = [m for m in messages(calls) if "M283:" in m]
+    check.that(case, any("calibration done and saved" in m for m in said), "M283 reports: %s" % said)
+    rotary = {numbers(a)[5] for n, a in calls if n == "STRAIGHT_TRAVERSE"}
+    check.that(case, rotary == {0.0}, "C1 is the sheet, not a C-axis move (C: %s)" % sorted(rotary))
+    # The walk's moves: the traverses after the first (over dot 1) up to M283's report.
+    report = next((i for i, (n, a) in enumerate(calls) if n == "MESSAGE" and "M283:" in a), 0)
+    walk = [p for i, p, _ in motions(calls) if calls[i][0] == "STRAIGHT_TRAVERSE" and i < report][1:]
+    check.that(case, len(set(walk)) >= 5, "the walk moved to %d points (%d distinct)" % (len(walk), len(set(walk))))
+    worst = lands(check, case, calls, simulated(module, sim), TOLERANCE_IN)
+    print("     landing error after calibrating: %.6f in" % worst)
+
+    # The walk over bare table: the first capture finds no mark, the program stops there.
+    case = "m283-ng"
+    program = "G90 G20 G17\nG54\nT98 M6 G43\nG0 X20.0 Y20.0\nM283 C1\nG0 X0 Y0\nM2\n"
+    status, calls, other = rig.run(program, sim)
+    text = " ".join(other)
+    check.that(case, status != 0 and "M283: " in text, "stopped with: %s" % text[:200])
+    check.that(case, (0.0, 0.0) not in traverses(calls), "the program ran nothing after the walk")
+
+    case = "m283-quick"
+    program = "G90 G20 G17\nG54\nT98 M6 G43\nG0 X6.0 Y0\nM283 Q0.5\nM2\n"
+    status, calls, other = rig.run(program, sim)
+    said = [m for m in messages(calls) if "M283:" in m]
+    check.that(case, status == 0 and any("calibration done" in m for m in said), "%d %s %s" % (status, said, other[-2:]))
+    check.that(case, len(traverses(calls)) >= 3, "the axis detect moved (%d moves)" % len(traverses(calls)))
+
+
 def probes(check, rig):
     """What rs274 itself does, with no vision code."""
     # The canon order this check applies is LinuxCNC's: its interpreter turns a G53 (machine)
@@ -388,6 +431,7 @@ def main():
     probes(check, rig)
     module_errors(check, mach_vision)
     full_runs(check, rig, mach_vision)
+    calibrations(check, rig, mach_vision)
     print("%d failure(s)" % check.failures)
     return 1 if check.failures else 0
 
