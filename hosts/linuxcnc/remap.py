@@ -132,8 +132,10 @@ def host_for(interp, synced=False):
 
 
 def fail(interp, mcode, error):
-    """Stops the program with "M<mcode>: <error>" (a remap's or an O-word procedure's return)."""
-    interp.set_errormsg("M%d: %s" % (mcode, error))
+    """Stops the program with "M<mcode>: <error>" (a remap's or an O-word procedure's return);
+    a message that already names the M-code ("M280 P5 is invalid: …") is shown as it is."""
+    text = str(error)
+    interp.set_errormsg(text if text.startswith("M%d " % mcode) else "M%d: %s" % (mcode, text))
     return INTERP_ERROR
 
 

@@ -249,6 +249,14 @@ def full_runs(check, rig, module):
     check.that(case, all(r == 0.0 for r in turned), "no rotation was set")
     check.that(case, len(traverses(calls)) == len(MARKS), "the program stopped at M282")
 
+    # A word M280 refuses: the program stops with the M-code's own message, named once.
+    case = "bad-word"
+    status, calls, other = rig.run(example_4({"M280 P4": "M280 P5"}), RIGID)
+    said = [line for line in other if "P5" in line]
+    once = any(line.startswith("M280 P5 is invalid") for line in said) and not any("M280: M280" in m for m in said)
+    check.that(case, status != 0 and once, "stopped with: %s" % said)
+    check.that(case, traverses(calls) == [], "nothing moved")
+
     # Preview (rs274 as it is: self.task == 0): no capture, nothing that moves the preview.
     case = "preview"
     program = example_4()
