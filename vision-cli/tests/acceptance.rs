@@ -531,3 +531,36 @@ fn the_mark_size_tells_a_height_change() {
         }
     }
 }
+
+/// The resolution check in calibration: the built-in world with a 4096 × 3072 camera of
+/// 0.001 in/px, the demo target's fiducials taken off so that only one sheet dot is in view at
+/// a time. With the
+/// profile's default 1776 × 1776 the walk still calibrates (exactly, at the sheet's height: the
+/// optical centre is not visible to it), but the operator's dot 1, read near the camera's own
+/// centre, lies outside the profile's image, and the report, `VisionLastStatus` and the
+/// calibration's warning say the resolution is wrong; with the profile set right, no warning.
+#[test]
+fn a_calibration_that_reads_outside_the_image_warns_about_the_resolution() {
+    for (profile_res, warns) in [(None, true), (Some([4096, 3072]), false)] {
+        let mut w = World::default_world();
+        w.camera.resolution = [4096, 3072];
+        w.camera.units_per_pixel = 0.001;
+        w.fixtures[0].marks.clear();
+        let mut rig = Rig::new(w, false);
+        if let Some([x, y]) = profile_res {
+            rig.handler.module_mut().set_param("VisionCameraResX", x).expect("set");
+            rig.handler.module_mut().set_param("VisionCameraResY", y).expect("set");
+        }
+        let s = sheet_report(&rig.run(EX1));
+        let status = rig.handler.module().telemetry().last_status().to_string();
+        let e = rig.calibration_error();
+        assert!(e.k_relative < 2e-3 && e.remap_matches, "{profile_res:?}: {e:?}");
+        if warns {
+            let w = s.warning.expect("a warning");
+            assert!(w.contains("outside the 1776 x 1776 image") && w.contains("VisionCameraResX"), "{w}");
+            assert_eq!(status, format!("OK (warning: {w})"));
+        } else {
+            assert_eq!((s.warning, status.as_str()), (None, "OK"), "{profile_res:?}");
+        }
+    }
+}

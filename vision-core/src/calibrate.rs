@@ -26,6 +26,20 @@
 //! the verify walk compensates: commanding `N + o₀ − a = N + b` puts the optical axis on `N`,
 //! and a capture there is seen at `C − b + K·R·c`, where the new offset will see it.
 //!
+//! # What the walk cannot see: the optical centre
+//!
+//! The walk does not solve the optical centre, and at one working distance it cannot: moving the
+//! reference pixel (`res/2 + PxCenterOffset`) by `δ` pixels moves the solved offset by `K·R·δ`
+//! and leaves every residual unchanged (finding it takes a second working distance or lens
+//! distortion, which the walk does not measure). So a wrong `VisionCameraResX`/`ResY` calibrates
+//! exactly at the sheet's height, while re-centring then centres marks on a pixel `δ` away from
+//! the optical axis and a part at another height is off by the height change times `K·δ`. The
+//! evidence the calibration has is where the camera reports its marks: the walk centres each dot
+//! on the profile's image centre, and the first readings are wherever the operator put dot 1.
+//! Rule: a calibration reading outside `ResX` × `ResY` (threshold 0 px: a right setting never
+//! gives one) makes the report's `warning` say the resolution setting is wrong (the check
+//! M281 makes on every capture); the calibration itself still stands.
+//!
 //! Nothing here commits: `sheet_walk` and `quick` return a `Solution` (K, remap, tool
 //! offset, report) and M283 applies it in one place, or nothing (see
 //! [`crate::VisionModule::m283`]).
@@ -41,7 +55,7 @@ use vision_math::{fit_rectangle, solve_linear, LengthUnit, Matrix2, PixelChain, 
 use crate::driver::{CameraDriver, Reading};
 use crate::error::VisionError;
 use crate::machine::Machine;
-use crate::module::capture::{chain_with, mark_size, require_mark};
+use crate::module::capture::{chain_with, mark_size, outside_image_note, require_mark};
 use crate::params::Params;
 use crate::ser;
 use crate::sheets::{cal_sheet, known_sheets};
@@ -115,6 +129,9 @@ pub struct QuickReport {
     pub bump_error: f64,
     /// The `Cal_Date` written.
     pub date: String,
+    /// A non-fatal problem: a reading outside the image (the resolution setting is wrong; see
+    /// the module doc). Also in `VisionLastStatus`.
+    pub warning: Option<String>,
 }
 
 /// One dot of the verify walk. Lengths in the report's unit, work frame.
@@ -182,6 +199,9 @@ pub struct SheetReport {
     pub triggers: usize,
     /// The `Cal_Date` written.
     pub date: String,
+    /// A non-fatal problem: a reading outside the image (the resolution setting is wrong; see
+    /// the module doc). Also in `VisionLastStatus`.
+    pub warning: Option<String>,
 }
 
 /// M283's report (JSON: the inner report with `"mode": "quick"` or `"sheet"`).
@@ -213,6 +233,27 @@ impl CalReport {
             CalReport::Sheet(r) => &r.date,
         }
     }
+
+    /// The calibration's non-fatal problem, if any.
+    #[must_use]
+    pub fn warning(&self) -> Option<&str> {
+        match self {
+            CalReport::Quick(r) => r.warning.as_deref(),
+            CalReport::Sheet(r) => r.warning.as_deref(),
+        }
+    }
+}
+
+/// The resolution check of the module doc over the calibration's readings: the first reading
+/// outside the image, and how many were.
+fn resolution_warning(params: &Params, shots: &[Shot]) -> Option<String> {
+    let outside: Vec<String> = shots.iter().filter_map(|s| outside_image_note(params, s.native)).collect();
+    let first = outside.first()?;
+    Some(if outside.len() == 1 {
+        first.clone()
+    } else {
+        format!("{} of {} calibration readings were outside the image; the first: {first}", outside.len(), shots.len())
+    })
 }
 
 fn fail(reason: impl Into<String>) -> VisionError {
@@ -387,6 +428,7 @@ pub(crate) fn quick(walker: &mut Walker<'_>, params: &Params, diameter: f64) -> 
         size_error,
         bump_error,
         date: walker.machine.now().iso_local(),
+        warning: resolution_warning(params, &walker.shots),
     };
     Ok(Solution { k, remap, tool_offset: None, report: CalReport::Quick(report) })
 }
@@ -526,6 +568,7 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
         verify_max,
         triggers: walker.triggers,
         date: walker.machine.now().iso_local(),
+        warning: resolution_warning(params, &walker.shots),
     };
     Ok(Solution { k, remap, tool_offset: Some((tool, offset_written)), report: CalReport::Sheet(report) })
 }

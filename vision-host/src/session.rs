@@ -84,7 +84,7 @@ impl Session {
         }
         let outcome = result.map_err(McodeError::from)?;
         self.track(&outcome);
-        host.message(summary(&outcome));
+        host.message(&summary(&outcome));
         Ok(outcome)
     }
 
@@ -100,15 +100,17 @@ impl Session {
     }
 }
 
-/// The operator's status line after a successful call.
-fn summary(outcome: &Outcome) -> &'static str {
-    match outcome {
-        Outcome::Begin(_) => "M280: Vision run started",
-        Outcome::Capture(_) => "M281: mark captured",
-        Outcome::Apply(_) => "M282: alignment applied",
-        Outcome::Calibrate(_) => "M283: calibration done and saved",
-        Outcome::SelectJob(_) => "M284: camera job selected",
-    }
+/// The operator's status line after a successful call, with the call's warning (a mark outside
+/// the image, a height change, …) when it has one.
+fn summary(outcome: &Outcome) -> String {
+    let (done, warning) = match outcome {
+        Outcome::Begin(_) => ("M280: Vision run started", None),
+        Outcome::Capture(r) => ("M281: mark captured", r.report.warning.as_deref()),
+        Outcome::Apply(_) => ("M282: alignment applied", None),
+        Outcome::Calibrate(r) => ("M283: calibration done and saved", r.report.warning()),
+        Outcome::SelectJob(_) => ("M284: camera job selected", None),
+    };
+    warning.map_or_else(|| done.to_string(), |w| format!("{done} (warning: {w})"))
 }
 
 /// [`vision_core::Machine`] over a [`Host`]. The trait's reads cannot fail, so a controller
@@ -177,5 +179,42 @@ impl Machine for HostMachine<'_> {
 
     fn now(&self) -> Timestamp {
         self.host.now()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use vision_core::{Capture, Judgment, Reply};
+
+    #[test]
+    fn the_status_line_carries_the_calls_warning() {
+        let capture = |warning: Option<&str>| {
+            Outcome::Capture(Reply {
+                gcode: Vec::new(),
+                report: Capture {
+                    unit: LengthUnit::Inch,
+                    commanded: Point2::origin(),
+                    observed: Point2::origin(),
+                    offset: Vector2::zeros(),
+                    centred_px: Vector2::zeros(),
+                    width: 0.25,
+                    height: 0.25,
+                    angle_deg: 0.0,
+                    score: 0.99,
+                    judgment: Judgment::Ok,
+                    dot_index: None,
+                    slot: None,
+                    image: None,
+                    warning: warning.map(str::to_string),
+                    recentred: None,
+                },
+            })
+        };
+        assert_eq!(summary(&capture(None)), "M281: mark captured");
+        assert_eq!(
+            summary(&capture(Some("the mark was reported at pixel (1900.0, 10.0)"))),
+            "M281: mark captured (warning: the mark was reported at pixel (1900.0, 10.0))"
+        );
     }
 }

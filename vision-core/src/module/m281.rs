@@ -4,7 +4,7 @@ use std::time::Duration;
 
 use vision_math::{LengthUnit, Point2};
 
-use super::capture::{mark_size, observe, pixel_chain, require_mark, Capture, Recentred};
+use super::capture::{mark_size, observe, outside_image_note, pixel_chain, require_mark, Capture, Recentred};
 use super::{Dot, Reply, VisionModule};
 use crate::calibrate::relative_move;
 use crate::error::VisionError;
@@ -141,7 +141,7 @@ impl VisionModule {
         }
         let notes = [
             self.driver.as_deref().and_then(|d| d.reading_warning(&reading)),
-            self.resolution_note(native),
+            outside_image_note(&self.params, native),
             self.height_note(width, height, unit),
         ];
         for note in notes.into_iter().flatten() {
@@ -206,21 +206,6 @@ impl VisionModule {
             return Err(e);
         }
         Ok(reading)
-    }
-
-    /// A reading outside the image `VisionCameraResX` × `VisionCameraResY` says the resolution
-    /// setting does not match the camera (every offset would then be measured from the wrong
-    /// centre).
-    fn resolution_note(&self, native: Point2<f64>) -> Option<String> {
-        let res = super::capture::resolution(&self.params);
-        let inside = (0.0..=res.x).contains(&native.x) && (0.0..=res.y).contains(&native.y);
-        (!inside).then(|| {
-            format!(
-                "the mark was reported at pixel ({:.1}, {:.1}), outside the {} x {} image of VisionCameraResX/ResY: \
-                 set them to the camera's resolution",
-                native.x, native.y, res.x, res.y
-            )
-        })
     }
 
     /// The height check: the mark's measured size against `VisionMarkDiameter`. The image scale

@@ -40,7 +40,7 @@ impl VisionModule {
     /// when the save then fails, the old offset is written back and the error is the save's. If
     /// that restore fails too, the error says so and gives the offset to set by hand. The G-code
     /// runs through [`Machine::run_gcode`] as the walk goes; the reply lists every line run.
-    /// `LastStatus` is `OK` on success, and the `Last*` values show the routine's last trigger
+    /// `LastStatus` is `OK` on success (`OK (warning: …)` with the report's warning), and the `Last*` values show the routine's last trigger
     /// read through the new K (a failed routine's last trigger, when it found no mark, clears
     /// them).
     ///
@@ -90,7 +90,8 @@ impl VisionModule {
                         self.publish_reading(&chain, &reading);
                     }
                 }
-                self.telemetry.last_status = "OK".to_string();
+                self.telemetry.last_status =
+                    report.warning().map_or_else(|| "OK".to_string(), |w| format!("OK (warning: {w})"));
                 Ok(Reply { gcode: ran, report })
             }
             Err(e) => {
