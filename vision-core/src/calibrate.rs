@@ -55,7 +55,8 @@ use vision_math::{fit_rectangle, solve_linear, LengthUnit, Matrix2, PixelChain, 
 use crate::driver::{CameraDriver, Reading};
 use crate::error::VisionError;
 use crate::machine::Machine;
-use crate::module::capture::{chain_with, mark_size, outside_image_note, require_mark};
+use crate::module::capture::{centred_px, chain_with, k_in, mark_size, outside_image_note, require_mark};
+use crate::module::dro::Dro;
 use crate::params::Params;
 use crate::ser;
 use crate::sheets::{cal_sheet, known_sheets};
@@ -277,11 +278,17 @@ pub(crate) fn relative_move(d: vision_math::Vector2<f64>) -> Vec<String> {
     vec![format!("G91 G0 X{x} Y{y}"), "G90".to_string()]
 }
 
-/// Moves, dwells and triggers.
+/// The line of an absolute rapid to `target` (program frame).
+pub(crate) fn absolute_move(target: Point2<f64>) -> String {
+    format!("G90 G0 X{} Y{}", fixed(target.x, MOVE_DECIMALS), fixed(target.y, MOVE_DECIMALS))
+}
+
+/// Moves, dwells and triggers; writes every trigger to the DRO as it happens.
 pub(crate) struct Walker<'a> {
     machine: &'a mut dyn Machine,
     driver: &'a mut dyn CameraDriver,
-    settle_s: f64,
+    params: &'a Params,
+    dro: &'a mut Dro,
     unit: LengthUnit,
     shots: Vec<Shot>,
     triggers: usize,
@@ -289,12 +296,32 @@ pub(crate) struct Walker<'a> {
     ran: Vec<String>,
     /// The last trigger's reading (a failed one too), for the `Last*` telemetry.
     last: Option<Reading>,
+    /// The best K (current units per pixel) and remap known so far, for the DRO: the module's
+    /// calibration at the start, then each one the routine solves.
+    known: Option<(Matrix2<f64>, Remap)>,
 }
 
 impl<'a> Walker<'a> {
-    pub(crate) fn new(machine: &'a mut dyn Machine, driver: &'a mut dyn CameraDriver, settle_s: f64) -> Self {
+    pub(crate) fn new(
+        machine: &'a mut dyn Machine,
+        driver: &'a mut dyn CameraDriver,
+        params: &'a Params,
+        dro: &'a mut Dro,
+    ) -> Self {
         let unit = machine.units();
-        Walker { machine, driver, settle_s, unit, shots: Vec::new(), triggers: 0, ran: Vec::new(), last: None }
+        let known = Some((k_in(params, unit), params.remap()));
+        Walker {
+            machine,
+            driver,
+            params,
+            dro,
+            unit,
+            shots: Vec::new(),
+            triggers: 0,
+            ran: Vec::new(),
+            last: None,
+            known,
+        }
     }
 
     /// The lines run so far, in order, and the last trigger's reading.
@@ -306,7 +333,7 @@ impl<'a> Walker<'a> {
     fn run(&mut self, lines: Vec<String>) -> Result<(), VisionError> {
         self.machine.run_gcode(&lines)?;
         self.ran.extend(lines);
-        self.machine.dwell(self.settle_s);
+        self.machine.dwell(self.params.trigger_settle_s());
         Ok(())
     }
 
@@ -320,25 +347,36 @@ impl<'a> Walker<'a> {
     }
 
     /// Absolute G90 move to `target`, then settle.
-    pub(crate) fn move_abs(&mut self, target: Point2<f64>) -> Result<(), VisionError> {
-        let x = fixed(target.x, MOVE_DECIMALS);
-        let y = fixed(target.y, MOVE_DECIMALS);
-        self.run(vec![format!("G90 G0 X{x} Y{y}")])
+    fn move_abs(&mut self, target: Point2<f64>) -> Result<(), VisionError> {
+        self.run(vec![absolute_move(target)])
     }
 
-    /// Triggers and records a shot of walk dot `dot`; returns its index.
+    /// Triggers and records a shot of walk dot `dot`; returns its index. The DRO shows the
+    /// reading at once (through the best K known so far), or the failure.
     fn shoot(&mut self, dot: usize) -> Result<usize, VisionError> {
         self.triggers += 1;
-        let reading = self.driver.trigger()?;
+        let reading = match self.driver.trigger() {
+            Ok(r) => r,
+            Err(e) => {
+                let e = VisionError::from(e);
+                self.dro.failure(Some(-1), &e);
+                return Err(e);
+            }
+        };
         self.last = Some(reading);
-        require_mark(&reading).map_err(|_| {
-            fail(format!(
+        if require_mark(&reading).is_err() {
+            let e = fail(format!(
                 "the camera lost the mark (NG / no mark) at X{} Y{} — keep the dot in view, check lighting and \
                  the camera job",
                 fixed(self.position().x, 4),
                 fixed(self.position().y, 4)
-            ))
-        })?;
+            ));
+            self.dro.failure(Some(i64::from(reading.judgment.code())), &e);
+            return Err(e);
+        }
+        let native = Point2::new(reading.x_px, reading.y_px);
+        let chain = self.known.and_then(|(k, remap)| chain_with(self.params, k, remap).ok());
+        self.dro.reading(chain.as_ref(), centred_px(self.params, native), &reading);
         let pos = self.position();
         self.shots.push(Shot { pos, native: Point2::new(reading.x_px, reading.y_px), reading, dot });
         Ok(self.shots.len() - 1)
@@ -413,6 +451,7 @@ pub(crate) fn quick(walker: &mut Walker<'_>, params: &Params, diameter: f64) -> 
     let k = Matrix2::new(diameter / w, 0.0, 0.0, diameter / h);
     let (p, q) = motion_pairs(&walker.shots, &pairs, remap);
     check_quick_scale(diameter, k, &p, &q, walker.unit)?;
+    walker.known = Some((k, remap));
     let chain = chain_with(params, k, remap)?;
     let c = walker.shoot(0)?;
     let (cw, ch) = mark_size(&chain, &walker.shots[c].reading);
@@ -481,6 +520,7 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
     let remap = axis.remap;
     let mut pairs: Vec<(usize, usize)> = bumps.to_vec();
     let (mut k, _) = solve_k(&walker.shots, &pairs, remap)?;
+    walker.known = Some((k, remap));
     let res = crate::module::capture::resolution(params);
     let pixel = k.determinant().abs().sqrt();
     let probe = (PROBE_FOV_FRACTION * res.x.min(res.y) * pixel).max(axis.bump);
@@ -504,12 +544,14 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
             pairs.push((base, s));
         }
         k = solve_k(&walker.shots, &pairs, remap)?.0;
+        walker.known = Some((k, remap));
         // Next station from where this dot really is.
         station = d_of(&walker.shots[base], k)?;
     }
 
     // 3. The final K over every pair.
     let (k, k_rms) = solve_k(&walker.shots, &pairs, remap)?;
+    walker.known = Some((k, remap));
     let chain: PixelChain = chain_with(params, k, remap)
         .map_err(|e| fail(format!("the solved K is unusable ({e}); check that the camera is rigidly mounted")))?;
     if k.determinant() <= 0.0 {

@@ -86,7 +86,7 @@ pub use error::VisionError;
 pub use machine::{Machine, MachineError, Timestamp};
 pub use module::{
     AlignReport, Capture, Dot, DroppedMark, JobReport, Pieces, PredictedError, Recentred, Reply, Run, RunMode,
-    VisionModule,
+    TelemetrySink, VisionModule,
 };
 pub use params::{Access, Calibration, Config, ParamKind, ParamSpec, ParamValue, Params, Section, Telemetry};
 pub use pound::{PoundBlock, PoundReport, SlotValues};

@@ -93,6 +93,12 @@ pub(crate) fn center_offset(params: &Params) -> Vector2<f64> {
     Vector2::new(params.px_center_offset_x(), params.px_center_offset_y())
 }
 
+/// Native pixel `native` less the image centre and `PxCenterOffset` (what [`PixelChain::centred`]
+/// gives, without needing a K), pixels.
+pub(crate) fn centred_px(params: &Params, native: Point2<f64>) -> Vector2<f64> {
+    native.coords - resolution(params) * 0.5 - center_offset(params)
+}
+
 /// The pixel chain for the configured K (converted to `unit`), remap and resolution.
 pub(crate) fn pixel_chain(params: &Params, unit: LengthUnit) -> Result<PixelChain, VisionError> {
     chain_with(params, k_in(params, unit), params.remap())

@@ -109,8 +109,8 @@ impl VisionModule {
             self.run.dots.push(Dot { commanded, observed, unit });
             self.publish_run();
         }
-        self.publish_reading(&chain, &reading);
         let centred = chain.centred(native);
+        self.dro.reading(Some(&chain), centred, &reading);
 
         let mut image = None;
         let mut warning = None;
@@ -148,7 +148,7 @@ impl VisionModule {
             warning = Some(warning.map_or_else(|| note.clone(), |w| format!("{note}; {w}")));
         }
         if let Some(w) = &warning {
-            self.telemetry.last_status = format!("OK (warning: {w})");
+            self.dro.ok(Some(w));
         }
         Ok(Reply {
             gcode,
@@ -172,28 +172,17 @@ impl VisionModule {
         })
     }
 
-    /// Writes a usable reading to the `Last*` telemetry through `chain`, `LastStatus` = `OK`.
-    pub(crate) fn publish_reading(&mut self, chain: &vision_math::PixelChain, reading: &crate::driver::Reading) {
-        let native = Point2::new(reading.x_px, reading.y_px);
-        let centred = chain.centred(native);
-        let offset = chain.delta(native);
-        let (width, height) = mark_size(chain, reading);
-        let p = &mut self.telemetry;
-        p.last_judgment = i64::from(reading.judgment.code());
-        p.last_offset_px_x = centred.x;
-        p.last_offset_px_y = centred.y;
-        p.last_offset_x = offset.x;
-        p.last_offset_y = offset.y;
-        p.last_width = width;
-        p.last_height = height;
-        p.last_angle = reading.angle_deg;
-        p.last_score = reading.score;
-        p.last_status = "OK".to_string();
-    }
-
-    /// Triggers; a failed trigger or no mark is recorded in `LastJudgment` / `LastStatus`.
+    /// Triggers; a failed trigger or no mark is recorded in `LastJudgment` / `LastStatus`, and
+    /// no driver in `LastStatus`.
     fn trigger_mark(&mut self) -> Result<crate::driver::Reading, VisionError> {
-        let reading = match self.driver_mut()?.trigger() {
+        let driver = match self.driver_mut() {
+            Ok(d) => d,
+            Err(e) => {
+                self.publish_failure(None, &e);
+                return Err(e);
+            }
+        };
+        let reading = match driver.trigger() {
             Ok(r) => r,
             Err(e) => {
                 let e = VisionError::from(e);

@@ -5,7 +5,7 @@ use vision_math::{AlignmentChain, Point2, Vector2};
 
 use super::capture::pixel_chain;
 use super::{Reply, VisionModule};
-use crate::calibrate::{quick, sheet_walk, CalReport, Calibrate, Solution, Walker};
+use crate::calibrate::{absolute_move, quick, sheet_walk, CalReport, Calibrate, Solution, Walker};
 use crate::error::VisionError;
 use crate::machine::{Machine, MachineError};
 use crate::params::Params;
@@ -40,18 +40,64 @@ impl VisionModule {
     /// when the save then fails, the old offset is written back and the error is the save's. If
     /// that restore fails too, the error says so and gives the offset to set by hand. The G-code
     /// runs through [`Machine::run_gcode`] as the walk goes; the reply lists every line run.
-    /// `LastStatus` is `OK` on success (`OK (warning: …)` with the report's warning), and the `Last*` values show the routine's last trigger
-    /// read through the new K (a failed routine's last trigger, when it found no mark, clears
-    /// them).
+    ///
+    /// Telemetry: every trigger writes the `Last*` values as it happens (through the best K
+    /// known at that moment: the old calibration's, then each one the walk solves; the offsets
+    /// in units are 0 while there is none), a failed one clears the offsets and size; at the end
+    /// the last trigger is shown through the new K and `LastStatus` is `OK` (`OK (warning: …)`
+    /// with the report's warning), or the error.
     ///
     /// # Errors
     /// [`VisionError::NotEnabled`], [`VisionError::WrongTool`], [`VisionError::UnknownSheet`],
     /// [`VisionError::AlignmentActive`] (calibration moves must not be scaled or rotated),
-    /// [`VisionError::NoDriver`] — nothing changes; then [`VisionError::Calibration`],
+    /// [`VisionError::NoDriver`], an unwritable profile — nothing changes but `LastStatus`; then [`VisionError::Calibration`],
     /// [`VisionError::Driver`], [`VisionError::Machine`] or [`VisionError::Profile`] during the
     /// routine: K, the remap flags, `Cal_*` and the tool offset keep their values, the machine is
     /// sent back to its start position (best effort) and `LastStatus` holds the error.
     pub fn m283(&mut self, machine: &mut dyn Machine, mode: Calibrate) -> Result<Reply<CalReport>, VisionError> {
+        if let Err(e) = self.check_calibration(machine, mode) {
+            // The DRO shows why nothing was triggered.
+            self.publish_failure(None, &e);
+            return Err(e);
+        }
+        let tool = self.params.camera_tool().unwrap_or_else(|| machine.active_tool());
+        let start: Point2<f64> = machine.program_position();
+
+        let (outcome, ran) = {
+            let Some(driver) = self.driver.as_deref_mut() else {
+                return Err(VisionError::NoDriver { name: self.params.driver().to_string() });
+            };
+            let mut walker = Walker::new(machine, driver, &self.params, &mut self.dro);
+            let outcome = match mode {
+                Calibrate::Quick { diameter } => quick(&mut walker, &self.params, diameter),
+                Calibrate::Sheet { n } => sheet_walk(&mut walker, &self.params, n, tool),
+            };
+            (outcome, walker.into_ran())
+        };
+        let (ran, last) = ran;
+        match outcome.and_then(|solution| self.apply_calibration(machine, solution)) {
+            Ok(report) => {
+                // The last trigger again, as M281 would show it with the K just written.
+                if let Some(reading) = last.filter(crate::driver::Reading::found) {
+                    if let Ok(chain) = pixel_chain(&self.params, machine.units()) {
+                        let centred = chain.centred(Point2::new(reading.x_px, reading.y_px));
+                        self.dro.reading(Some(&chain), centred, &reading);
+                    }
+                }
+                self.dro.ok(report.warning());
+                Ok(Reply { gcode: ran, report })
+            }
+            Err(e) => {
+                let _ = machine.run_gcode(&[absolute_move(start)]);
+                // A failed trigger was shown (and its stale values cleared) as it happened.
+                self.publish_failure(None, &e);
+                Err(e)
+            }
+        }
+    }
+
+    /// M283's checks before anything moves or triggers.
+    fn check_calibration(&mut self, machine: &dyn Machine, mode: Calibrate) -> Result<(), VisionError> {
         self.check_enabled()?;
         self.check_tool(machine)?;
         if let Calibrate::Sheet { n } = mode {
@@ -67,41 +113,7 @@ impl VisionModule {
         if let Some(store) = &self.profile {
             store.check_writable()?;
         }
-        let tool = self.params.camera_tool().unwrap_or_else(|| machine.active_tool());
-        let start: Point2<f64> = machine.program_position();
-
-        let (outcome, ran) = {
-            let Some(driver) = self.driver.as_deref_mut() else {
-                return Err(VisionError::NoDriver { name: self.params.driver().to_string() });
-            };
-            let mut walker = Walker::new(machine, driver, self.params.trigger_settle_s());
-            let outcome = match mode {
-                Calibrate::Quick { diameter } => quick(&mut walker, &self.params, diameter),
-                Calibrate::Sheet { n } => sheet_walk(&mut walker, &self.params, n, tool),
-            };
-            (outcome, walker.into_ran())
-        };
-        let (ran, last) = ran;
-        match outcome.and_then(|solution| self.apply_calibration(machine, solution)) {
-            Ok(report) => {
-                // The DRO shows the last trigger as M281 would, with the K just written.
-                if let Some(reading) = last.filter(crate::driver::Reading::found) {
-                    if let Ok(chain) = pixel_chain(&self.params, machine.units()) {
-                        self.publish_reading(&chain, &reading);
-                    }
-                }
-                self.telemetry.last_status =
-                    report.warning().map_or_else(|| "OK".to_string(), |w| format!("OK (warning: {w})"));
-                Ok(Reply { gcode: ran, report })
-            }
-            Err(e) => {
-                if let Some(driver) = self.driver.as_deref_mut() {
-                    let _ = Walker::new(machine, driver, 0.0).move_abs(start);
-                }
-                self.publish_failure(last.map(|r| i64::from(r.judgment.code())), &e);
-                Err(e)
-            }
-        }
+        Ok(())
     }
 
     /// Applies a calibration solution: all of it, or nothing (see [`VisionModule::m283`]).
