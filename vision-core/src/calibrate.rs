@@ -26,6 +26,20 @@
 //! the verify walk compensates: commanding `N + o₀ − a = N + b` puts the optical axis on `N`,
 //! and a capture there is seen at `C − b + K·R·c`, where the new offset will see it.
 //!
+//! # What the walk cannot see: the optical centre
+//!
+//! The walk does not solve the optical centre, and at one working distance it cannot: moving the
+//! reference pixel (`res/2 + PxCenterOffset`) by `δ` pixels moves the solved offset by `K·R·δ`
+//! and leaves every residual unchanged (finding it takes a second working distance or lens
+//! distortion, which the walk does not measure). So a wrong `VisionCameraResX`/`ResY` calibrates
+//! exactly at the sheet's height, while re-centring then centres marks on a pixel `δ` away from
+//! the optical axis and a part at another height is off by the height change times `K·δ`. The
+//! evidence the calibration has is where the camera reports its marks: the walk centres each dot
+//! on the profile's image centre, and the first readings are wherever the operator put dot 1.
+//! Rule: a calibration reading outside `ResX` × `ResY` (threshold 0 px: a right setting never
+//! gives one) makes the report's `warning` say the resolution setting is wrong (the check
+//! M281 makes on every capture); the calibration itself still stands.
+//!
 //! Nothing here commits: `sheet_walk` and `quick` return a `Solution` (K, remap, tool
 //! offset, report) and M283 applies it in one place, or nothing (see
 //! [`crate::VisionModule::m283`]).
@@ -46,7 +60,8 @@ use crate::driver::{CameraDriver, Reading};
 use crate::error::VisionError;
 use crate::linuxcnc::{program_to_machine, rotation};
 use crate::machine::Machine;
-use crate::module::capture::{chain_with, mark_size, require_mark};
+use crate::module::capture::{centred_px, chain_with, k_in, mark_size, outside_image_note, require_mark};
+use crate::module::dro::Dro;
 use crate::params::Params;
 use crate::ser;
 use crate::sheets::{cal_sheet, known_sheets};
@@ -120,6 +135,9 @@ pub struct QuickReport {
     pub bump_error: f64,
     /// The `Cal_Date` written.
     pub date: String,
+    /// A non-fatal problem: a reading outside the image (the resolution setting is wrong; see
+    /// the module doc). Also in `VisionLastStatus`.
+    pub warning: Option<String>,
 }
 
 /// One dot of the verify walk. Lengths in the report's unit, work frame.
@@ -187,6 +205,9 @@ pub struct SheetReport {
     pub triggers: usize,
     /// The `Cal_Date` written.
     pub date: String,
+    /// A non-fatal problem: a reading outside the image (the resolution setting is wrong; see
+    /// the module doc). Also in `VisionLastStatus`.
+    pub warning: Option<String>,
 }
 
 /// M283's report (JSON: the inner report with `"mode": "quick"` or `"sheet"`).
@@ -218,6 +239,27 @@ impl CalReport {
             CalReport::Sheet(r) => &r.date,
         }
     }
+
+    /// The calibration's non-fatal problem, if any.
+    #[must_use]
+    pub fn warning(&self) -> Option<&str> {
+        match self {
+            CalReport::Quick(r) => r.warning.as_deref(),
+            CalReport::Sheet(r) => r.warning.as_deref(),
+        }
+    }
+}
+
+/// The resolution check of the module doc over the calibration's readings: the first reading
+/// outside the image, and how many were.
+fn resolution_warning(params: &Params, shots: &[Shot]) -> Option<String> {
+    let outside: Vec<String> = shots.iter().filter_map(|s| outside_image_note(params, s.native)).collect();
+    let first = outside.first()?;
+    Some(if outside.len() == 1 {
+        first.clone()
+    } else {
+        format!("{} of {} calibration readings were outside the image; the first: {first}", outside.len(), shots.len())
+    })
 }
 
 fn fail(reason: impl Into<String>) -> VisionError {
@@ -241,6 +283,11 @@ pub(crate) fn relative_move(d: vision_math::Vector2<f64>) -> Vec<String> {
     vec![format!("G91 G0 X{x} Y{y}"), "G90".to_string()]
 }
 
+/// The line of an absolute rapid to `target` (program frame).
+pub(crate) fn absolute_move(target: Point2<f64>) -> String {
+    format!("G90 G0 X{} Y{}", fixed(target.x, MOVE_DECIMALS), fixed(target.y, MOVE_DECIMALS))
+}
+
 /// Where a walker's readings come from.
 enum Source<'a> {
     /// The camera, triggered where the walker's moves (run on the machine) left it.
@@ -251,11 +298,12 @@ enum Source<'a> {
     Replay { taken: &'a [(Point2<f64>, Reading)], next: usize, at: Point2<f64>, needed: Option<Point2<f64>> },
 }
 
-/// Moves, dwells and triggers.
+/// Moves, dwells and triggers; writes every trigger to the DRO as it happens.
 pub(crate) struct Walker<'a> {
     machine: &'a mut dyn Machine,
     source: Source<'a>,
-    settle_s: f64,
+    params: &'a Params,
+    dro: &'a mut Dro,
     unit: LengthUnit,
     shots: Vec<Shot>,
     triggers: usize,
@@ -264,28 +312,51 @@ pub(crate) struct Walker<'a> {
     ran: Vec<String>,
     /// The last trigger's reading (a failed one too), for the `Last*` telemetry.
     last: Option<Reading>,
+    /// The best K (current units per pixel) and remap known so far, for the DRO: the module's
+    /// calibration at the start, then each one the routine solves.
+    known: Option<(Matrix2<f64>, Remap)>,
 }
 
 impl<'a> Walker<'a> {
-    /// A walker that moves `machine` and triggers `driver`, dwelling `settle_s` seconds after
-    /// every move.
-    pub(crate) fn new(machine: &'a mut dyn Machine, driver: &'a mut dyn CameraDriver, settle_s: f64) -> Self {
-        Walker::with_source(machine, Source::Live(driver), settle_s)
+    /// A walker that moves `machine` and triggers `driver`, dwelling `VisionTriggerSettleSec`
+    /// after every move.
+    pub(crate) fn new(
+        machine: &'a mut dyn Machine,
+        driver: &'a mut dyn CameraDriver,
+        params: &'a Params,
+        dro: &'a mut Dro,
+    ) -> Self {
+        Walker::with_source(machine, Source::Live(driver), params, dro)
     }
 
     /// A walker that replays `taken` (readings with the program positions they were taken at)
     /// from `start`: it runs nothing on `machine` and only reads it (units, tool offsets, clock).
+    /// Only the newest reading reaches the DRO: the older ones were shown when they were new.
     pub(crate) fn replay(
         machine: &'a mut dyn Machine,
         taken: &'a [(Point2<f64>, Reading)],
         start: Point2<f64>,
+        params: &'a Params,
+        dro: &'a mut Dro,
     ) -> Self {
-        Walker::with_source(machine, Source::Replay { taken, next: 0, at: start, needed: None }, 0.0)
+        Walker::with_source(machine, Source::Replay { taken, next: 0, at: start, needed: None }, params, dro)
     }
 
-    fn with_source(machine: &'a mut dyn Machine, source: Source<'a>, settle_s: f64) -> Self {
+    fn with_source(machine: &'a mut dyn Machine, source: Source<'a>, params: &'a Params, dro: &'a mut Dro) -> Self {
         let unit = machine.units();
-        Walker { machine, source, settle_s, unit, shots: Vec::new(), triggers: 0, ran: Vec::new(), last: None }
+        let known = Some((k_in(params, unit), params.remap()));
+        Walker {
+            machine,
+            source,
+            params,
+            dro,
+            unit,
+            shots: Vec::new(),
+            triggers: 0,
+            ran: Vec::new(),
+            last: None,
+            known,
+        }
     }
 
     /// The lines run so far, in order, and the last trigger's reading.
@@ -308,7 +379,7 @@ impl<'a> Walker<'a> {
             *at = target;
         } else {
             self.machine.run_gcode(&lines)?;
-            self.machine.dwell(self.settle_s);
+            self.machine.dwell(self.params.trigger_settle_s());
         }
         self.ran.extend(lines);
         Ok(())
@@ -327,36 +398,51 @@ impl<'a> Walker<'a> {
     }
 
     /// Absolute G90 move to `target`, then settle.
-    pub(crate) fn move_abs(&mut self, target: Point2<f64>) -> Result<(), VisionError> {
-        let x = fixed(target.x, MOVE_DECIMALS);
-        let y = fixed(target.y, MOVE_DECIMALS);
-        self.run(vec![format!("G90 G0 X{x} Y{y}")], target)
+    fn move_abs(&mut self, target: Point2<f64>) -> Result<(), VisionError> {
+        self.run(vec![absolute_move(target)], target)
     }
 
-    /// Triggers and records a shot of walk dot `dot`; returns its index.
+    /// Triggers and records a shot of walk dot `dot`; returns its index. The DRO shows the
+    /// reading at once (through the best K known so far), or the failure.
     fn shoot(&mut self, dot: usize) -> Result<usize, VisionError> {
         self.triggers += 1;
-        let (reading, pos) = match &mut self.source {
-            Source::Live(driver) => (driver.trigger()?, self.machine.program_position()),
+        let (reading, pos, newest) = match &mut self.source {
+            Source::Live(driver) => match driver.trigger() {
+                Ok(r) => (r, self.machine.program_position(), true),
+                Err(e) => {
+                    let e = VisionError::from(e);
+                    self.dro.failure(Some(-1), &e);
+                    return Err(e);
+                }
+            },
             Source::Replay { taken, next, at, needed } => {
                 let Some(&(pos, reading)) = taken.get(*next) else {
                     *needed = Some(*at);
                     return Err(fail("a capture is needed to go on (the stepwise M283 walk)"));
                 };
                 *next += 1;
-                (reading, pos)
+                (reading, pos, *next == taken.len())
             }
         };
         self.last = Some(reading);
-        require_mark(&reading).map_err(|_| {
-            fail(format!(
+        if require_mark(&reading).is_err() {
+            let e = fail(format!(
                 "the camera lost the mark (NG / no mark) at X{} Y{} — keep the dot in view, check lighting and \
                  the camera job",
                 fixed(pos.x, 4),
                 fixed(pos.y, 4)
-            ))
-        })?;
-        self.shots.push(Shot { pos, native: Point2::new(reading.x_px, reading.y_px), reading, dot });
+            ));
+            if newest {
+                self.dro.failure(Some(i64::from(reading.judgment.code())), &e);
+            }
+            return Err(e);
+        }
+        let native = Point2::new(reading.x_px, reading.y_px);
+        if newest {
+            let chain = self.known.and_then(|(k, remap)| chain_with(self.params, k, remap).ok());
+            self.dro.reading(chain.as_ref(), centred_px(self.params, native), &reading);
+        }
+        self.shots.push(Shot { pos, native, reading, dot });
         Ok(self.shots.len() - 1)
     }
 
@@ -429,6 +515,7 @@ pub(crate) fn quick(walker: &mut Walker<'_>, params: &Params, diameter: f64) -> 
     let k = Matrix2::new(diameter / w, 0.0, 0.0, diameter / h);
     let (p, q) = motion_pairs(&walker.shots, &pairs, remap);
     check_quick_scale(diameter, k, &p, &q, walker.unit)?;
+    walker.known = Some((k, remap));
     let chain = chain_with(params, k, remap)?;
     let c = walker.shoot(0)?;
     let (cw, ch) = mark_size(&chain, &walker.shots[c].reading);
@@ -444,6 +531,7 @@ pub(crate) fn quick(walker: &mut Walker<'_>, params: &Params, diameter: f64) -> 
         size_error,
         bump_error,
         date: walker.machine.now().iso_local(),
+        warning: resolution_warning(params, &walker.shots),
     };
     Ok(Solution { k, remap, tool_offset: None, report: CalReport::Quick(report) })
 }
@@ -496,6 +584,7 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
     let remap = axis.remap;
     let mut pairs: Vec<(usize, usize)> = bumps.to_vec();
     let (mut k, _) = solve_k(&walker.shots, &pairs, remap)?;
+    walker.known = Some((k, remap));
     let res = crate::module::capture::resolution(params);
     let pixel = k.determinant().abs().sqrt();
     let probe = (PROBE_FOV_FRACTION * res.x.min(res.y) * pixel).max(axis.bump);
@@ -519,12 +608,14 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
             pairs.push((base, s));
         }
         k = solve_k(&walker.shots, &pairs, remap)?.0;
+        walker.known = Some((k, remap));
         // Next station from where this dot really is.
         station = d_of(&walker.shots[base], k)?;
     }
 
     // 3. The final K over every pair.
     let (k, k_rms) = solve_k(&walker.shots, &pairs, remap)?;
+    walker.known = Some((k, remap));
     let chain: PixelChain = chain_with(params, k, remap)
         .map_err(|e| fail(format!("the solved K is unusable ({e}); check that the camera is rigidly mounted")))?;
     if k.determinant() <= 0.0 {
@@ -587,6 +678,7 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
         verify_max,
         triggers: walker.triggers,
         date: walker.machine.now().iso_local(),
+        warning: resolution_warning(params, &walker.shots),
     };
     Ok(Solution { k, remap, tool_offset: Some((tool, offset_written)), report: CalReport::Sheet(report) })
 }

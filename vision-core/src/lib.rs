@@ -93,7 +93,7 @@ pub use error::VisionError;
 pub use machine::{Controller, Machine, MachineError, Timestamp};
 pub use module::{
     AlignReport, Capture, Dot, DroppedMark, JobReport, Pieces, PredictedError, Recentred, Reply, Run, RunMode,
-    StepwiseWalk, VisionModule,
+    StepwiseWalk, TelemetrySink, VisionModule,
 };
 pub use params::{Access, Calibration, Config, ParamKind, ParamSpec, ParamValue, Params, Section, Telemetry};
 pub use pound::{PoundBlock, PoundReport, SlotValues};

@@ -7,6 +7,7 @@ use vision_core::{
     linuxcnc, Controller, DriverRegistry, Machine, MachineError, ProfileStore, StepwiseWalk, Timestamp, VisionError,
     VisionModule,
 };
+use vision_math::linuxcnc::LinuxCncAlignment;
 use vision_math::{AlignmentChain, LengthUnit, Point2, Vector2};
 use vision_mcode::{McodeError, Outcome, VisionCall};
 
@@ -223,28 +224,35 @@ impl Session {
     }
 }
 
-/// The operator's status line after a successful call. On LinuxCNC, M282 says which scale it
-/// left out.
+/// The operator's status line after a successful call, with the call's warning (a mark outside
+/// the image, a height change, …) when it has one. On LinuxCNC, M282 says which scale it left
+/// out.
 fn summary(outcome: &Outcome) -> String {
-    let line = match outcome {
-        Outcome::Begin(_) => "M280: Vision run started",
-        Outcome::Capture(_) => "M281: mark captured",
-        Outcome::Apply(reply) => match &reply.report.linuxcnc {
-            Some(a) if a.ignored_scale != Vector2::new(1.0, 1.0) => {
-                return format!(
-                    "M282: alignment applied without scale (LinuxCNC cannot scale): scale X {:.6} / Y {:.6} \
-                     ignored, {:.4} % from 1",
-                    a.ignored_scale.x,
-                    a.ignored_scale.y,
-                    a.ignored_scale_dev_pct()
-                );
-            }
-            _ => "M282: alignment applied",
-        },
-        Outcome::Calibrate(_) => "M283: calibration done and saved",
-        Outcome::SelectJob(_) => "M284: camera job selected",
+    let (done, warning) = match outcome {
+        Outcome::Begin(_) => ("M280: Vision run started".to_string(), None),
+        Outcome::Capture(r) => ("M281: mark captured".to_string(), r.report.warning.as_deref()),
+        Outcome::Apply(reply) => (apply_summary(reply.report.linuxcnc.as_ref()), None),
+        Outcome::Calibrate(r) => ("M283: calibration done and saved".to_string(), r.report.warning()),
+        Outcome::SelectJob(_) => ("M284: camera job selected".to_string(), None),
     };
-    line.to_string()
+    match warning {
+        Some(w) => format!("{done} (warning: {w})"),
+        None => done,
+    }
+}
+
+/// M282's status line: the scale a LinuxCNC alignment could not apply, when there was any.
+fn apply_summary(linuxcnc: Option<&LinuxCncAlignment>) -> String {
+    match linuxcnc {
+        Some(a) if a.ignored_scale != Vector2::new(1.0, 1.0) => format!(
+            "M282: alignment applied without scale (LinuxCNC cannot scale): scale X {:.6} / Y {:.6} ignored, {:.4} % \
+             from 1",
+            a.ignored_scale.x,
+            a.ignored_scale.y,
+            a.ignored_scale_dev_pct()
+        ),
+        _ => "M282: alignment applied".to_string(),
+    }
 }
 
 /// [`vision_core::Machine`] over a [`Host`]. The trait's reads cannot fail, so a controller
@@ -334,5 +342,42 @@ impl Machine for HostMachine<'_> {
 
     fn now(&self) -> Timestamp {
         self.host.now()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use vision_core::{Capture, Judgment, Reply};
+
+    #[test]
+    fn the_status_line_carries_the_calls_warning() {
+        let capture = |warning: Option<&str>| {
+            Outcome::Capture(Reply {
+                gcode: Vec::new(),
+                report: Capture {
+                    unit: LengthUnit::Inch,
+                    commanded: Point2::origin(),
+                    observed: Point2::origin(),
+                    offset: Vector2::zeros(),
+                    centred_px: Vector2::zeros(),
+                    width: 0.25,
+                    height: 0.25,
+                    angle_deg: 0.0,
+                    score: 0.99,
+                    judgment: Judgment::Ok,
+                    dot_index: None,
+                    slot: None,
+                    image: None,
+                    warning: warning.map(str::to_string),
+                    recentred: None,
+                },
+            })
+        };
+        assert_eq!(summary(&capture(None)), "M281: mark captured");
+        assert_eq!(
+            summary(&capture(Some("the mark was reported at pixel (1900.0, 10.0)"))),
+            "M281: mark captured (warning: the mark was reported at pixel (1900.0, 10.0))"
+        );
     }
 }

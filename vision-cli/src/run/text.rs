@@ -120,9 +120,7 @@ fn step(s: &mut String, step: &Step, world_unit: &str) {
                     r.first_px.y
                 );
             }
-            if let Some(w) = &c.warning {
-                let _ = writeln!(s, "              warning: {w}");
-            }
+            warning(s, c.warning.as_deref());
         }
         Step::Fit { line, report: a, gcode, cut_error } => {
             let unit = a.unit.short_name();
@@ -222,6 +220,7 @@ fn step(s: &mut String, step: &Step, world_unit: &str) {
                 );
             }
             let _ = writeln!(s, "              verify rms {} {unit}, max {} {unit}", l(r.verify_rms), l(r.verify_max));
+            warning(s, r.warning.as_deref());
         }
         Step::QuickCalibration { line, report: q } => {
             let unit = q.unit.short_name();
@@ -240,6 +239,7 @@ fn step(s: &mut String, step: &Step, world_unit: &str) {
                 l(q.size_error),
                 l(q.bump_error)
             );
+            warning(s, q.warning.as_deref());
         }
         Step::Job { line, report } => {
             let what = if report.switched {
@@ -252,6 +252,13 @@ fn step(s: &mut String, step: &Step, world_unit: &str) {
         Step::Refused { line, mcode, message } => {
             let _ = writeln!(s, "  line {line:>4}  M{mcode}  refused: {message}");
         }
+    }
+}
+
+/// A step's warning line, when it has one.
+fn warning(s: &mut String, w: Option<&str>) {
+    if let Some(w) = w {
+        let _ = writeln!(s, "              warning: {w}");
     }
 }
 

@@ -73,9 +73,31 @@ pub(crate) fn resolution(params: &Params) -> Vector2<f64> {
     Vector2::new(params.camera_res_x() as f64, params.camera_res_y() as f64)
 }
 
+/// A reading at native pixel `native` outside the image `VisionCameraResX` × `VisionCameraResY`
+/// says the resolution setting does not match the camera: every offset is then measured from a
+/// pixel that is not the optical centre (exact at the calibration height, wrong by the height
+/// change times that distance elsewhere, and re-centring centres on it). `None` inside.
+pub(crate) fn outside_image_note(params: &Params, native: Point2<f64>) -> Option<String> {
+    let res = resolution(params);
+    let inside = (0.0..=res.x).contains(&native.x) && (0.0..=res.y).contains(&native.y);
+    (!inside).then(|| {
+        format!(
+            "the mark was reported at pixel ({:.1}, {:.1}), outside the {} x {} image of VisionCameraResX/ResY: \
+             set them to the camera's resolution",
+            native.x, native.y, res.x, res.y
+        )
+    })
+}
+
 /// The pixel centre offset, pixels.
 pub(crate) fn center_offset(params: &Params) -> Vector2<f64> {
     Vector2::new(params.px_center_offset_x(), params.px_center_offset_y())
+}
+
+/// Native pixel `native` less the image centre and `PxCenterOffset` (what [`PixelChain::centred`]
+/// gives, without needing a K), pixels.
+pub(crate) fn centred_px(params: &Params, native: Point2<f64>) -> Vector2<f64> {
+    native.coords - resolution(params) * 0.5 - center_offset(params)
 }
 
 /// The pixel chain for the configured K (converted to `unit`), remap and resolution.

@@ -4,7 +4,7 @@ use std::time::Duration;
 
 use vision_math::{LengthUnit, Point2};
 
-use super::capture::{mark_size, observe, pixel_chain, require_mark, Capture, Recentred};
+use super::capture::{mark_size, observe, outside_image_note, pixel_chain, require_mark, Capture, Recentred};
 use super::{Dot, Reply, VisionModule};
 use crate::calibrate::relative_move;
 use crate::error::VisionError;
@@ -115,8 +115,8 @@ impl VisionModule {
             self.run.dots.push(Dot { commanded, observed, unit });
             self.publish_run();
         }
-        self.publish_reading(&chain, &reading);
         let centred = chain.centred(native);
+        self.dro.reading(Some(&chain), centred, &reading);
 
         let mut image = None;
         let mut warning = None;
@@ -147,14 +147,14 @@ impl VisionModule {
         }
         let notes = [
             self.driver.as_deref().and_then(|d| d.reading_warning(&reading)),
-            self.resolution_note(native),
+            outside_image_note(&self.params, native),
             self.height_note(width, height, unit),
         ];
         for note in notes.into_iter().flatten() {
             warning = Some(warning.map_or_else(|| note.clone(), |w| format!("{note}; {w}")));
         }
         if let Some(w) = &warning {
-            self.telemetry.last_status = format!("OK (warning: {w})");
+            self.dro.ok(Some(w));
         }
         Ok(Reply {
             gcode,
@@ -178,28 +178,17 @@ impl VisionModule {
         })
     }
 
-    /// Writes a usable reading to the `Last*` telemetry through `chain`, `LastStatus` = `OK`.
-    pub(crate) fn publish_reading(&mut self, chain: &vision_math::PixelChain, reading: &crate::driver::Reading) {
-        let native = Point2::new(reading.x_px, reading.y_px);
-        let centred = chain.centred(native);
-        let offset = chain.delta(native);
-        let (width, height) = mark_size(chain, reading);
-        let p = &mut self.telemetry;
-        p.last_judgment = i64::from(reading.judgment.code());
-        p.last_offset_px_x = centred.x;
-        p.last_offset_px_y = centred.y;
-        p.last_offset_x = offset.x;
-        p.last_offset_y = offset.y;
-        p.last_width = width;
-        p.last_height = height;
-        p.last_angle = reading.angle_deg;
-        p.last_score = reading.score;
-        p.last_status = "OK".to_string();
-    }
-
-    /// Triggers; a failed trigger or no mark is recorded in `LastJudgment` / `LastStatus`.
+    /// Triggers; a failed trigger or no mark is recorded in `LastJudgment` / `LastStatus`, and
+    /// no driver in `LastStatus`.
     fn trigger_mark(&mut self) -> Result<crate::driver::Reading, VisionError> {
-        let reading = match self.driver_mut()?.trigger() {
+        let driver = match self.driver_mut() {
+            Ok(d) => d,
+            Err(e) => {
+                self.publish_failure(None, &e);
+                return Err(e);
+            }
+        };
+        let reading = match driver.trigger() {
             Ok(r) => r,
             Err(e) => {
                 let e = VisionError::from(e);
@@ -212,21 +201,6 @@ impl VisionModule {
             return Err(e);
         }
         Ok(reading)
-    }
-
-    /// A reading outside the image `VisionCameraResX` × `VisionCameraResY` says the resolution
-    /// setting does not match the camera (every offset would then be measured from the wrong
-    /// centre).
-    fn resolution_note(&self, native: Point2<f64>) -> Option<String> {
-        let res = super::capture::resolution(&self.params);
-        let inside = (0.0..=res.x).contains(&native.x) && (0.0..=res.y).contains(&native.y);
-        (!inside).then(|| {
-            format!(
-                "the mark was reported at pixel ({:.1}, {:.1}), outside the {} x {} image of VisionCameraResX/ResY: \
-                 set them to the camera's resolution",
-                native.x, native.y, res.x, res.y
-            )
-        })
     }
 
     /// The height check: the mark's measured size against `VisionMarkDiameter`. The image scale

@@ -219,16 +219,17 @@ impl VisionModule {
 
         self.run.active = false;
         self.publish_run();
-        let p = &mut self.telemetry;
-        p.run_tx = chain.shift.x;
-        p.run_ty = chain.shift.y;
-        p.run_theta = chain.rotation_deg.to_radians();
-        p.run_sx = chain.scale.x;
-        p.run_sy = chain.scale.y;
-        p.run_center_x = chain.center.x;
-        p.run_center_y = chain.center.y;
-        p.run_predicted_sigma = predicted.sigma;
-        p.run_predicted_bound = predicted.bound99;
+        self.dro.write(|p| {
+            p.run_tx = chain.shift.x;
+            p.run_ty = chain.shift.y;
+            p.run_theta = chain.rotation_deg.to_radians();
+            p.run_sx = chain.scale.x;
+            p.run_sy = chain.scale.y;
+            p.run_center_x = chain.center.x;
+            p.run_center_y = chain.center.y;
+            p.run_predicted_sigma = predicted.sigma;
+            p.run_predicted_bound = predicted.bound99;
+        });
         Ok(Reply {
             gcode,
             report: AlignReport {

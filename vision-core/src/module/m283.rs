@@ -5,7 +5,7 @@ use vision_math::{AlignmentChain, Point2, Vector2};
 
 use super::capture::pixel_chain;
 use super::{Reply, VisionModule};
-use crate::calibrate::{quick, sheet_walk, CalReport, Calibrate, Solution, Walker};
+use crate::calibrate::{absolute_move, quick, sheet_walk, CalReport, Calibrate, Solution, Walker};
 use crate::driver::Reading;
 use crate::error::VisionError;
 use crate::machine::{Machine, MachineError};
@@ -86,14 +86,17 @@ impl VisionModule {
     /// when the save then fails, the old offset is written back and the error is the save's. If
     /// that restore fails too, the error says so and gives the offset to set by hand. The G-code
     /// runs through [`Machine::run_gcode`] as the walk goes; the reply lists every line run.
-    /// `LastStatus` is `OK` on success, and the `Last*` values show the routine's last trigger
-    /// read through the new K (a failed routine's last trigger, when it found no mark, clears
-    /// them).
+    ///
+    /// Telemetry: every trigger writes the `Last*` values as it happens (through the best K
+    /// known at that moment: the old calibration's, then each one the walk solves; the offsets
+    /// in units are 0 while there is none), a failed one clears the offsets and size; at the end
+    /// the last trigger is shown through the new K and `LastStatus` is `OK` (`OK (warning: …)`
+    /// with the report's warning), or the error.
     ///
     /// # Errors
     /// [`VisionError::NotEnabled`], [`VisionError::WrongTool`], [`VisionError::UnknownSheet`],
     /// [`VisionError::AlignmentActive`] (calibration moves must not be scaled or rotated),
-    /// [`VisionError::NoDriver`] — nothing changes; then [`VisionError::Calibration`],
+    /// [`VisionError::NoDriver`], an unwritable profile — nothing changes but `LastStatus`; then [`VisionError::Calibration`],
     /// [`VisionError::Driver`], [`VisionError::Machine`] or [`VisionError::Profile`] during the
     /// routine: K, the remap flags, `Cal_*` and the tool offset keep their values, the machine is
     /// sent back to its start position (best effort) and `LastStatus` holds the error.
@@ -104,7 +107,7 @@ impl VisionModule {
             let Some(driver) = self.driver.as_deref_mut() else {
                 return Err(VisionError::NoDriver { name: self.params.driver().to_string() });
             };
-            let mut walker = Walker::new(machine, driver, self.params.trigger_settle_s());
+            let mut walker = Walker::new(machine, driver, &self.params, &mut self.dro);
             let outcome = walk_routine(&mut walker, &self.params, mode, tool);
             (outcome, walker.into_ran())
         };
@@ -112,9 +115,14 @@ impl VisionModule {
         self.commit_walk(machine, outcome, ran, last, start)
     }
 
-    /// M283's checks before the walk moves anything (see [`VisionModule::m283`]'s errors);
-    /// returns the tool whose offset a sheet walk writes.
+    /// M283's checks before the walk moves or triggers anything (see [`VisionModule::m283`]'s
+    /// errors); returns the tool whose offset a sheet walk writes. A refusal is shown in
+    /// `LastStatus` (the DRO says why nothing was triggered).
     fn check_m283(&mut self, machine: &dyn Machine, mode: Calibrate) -> Result<u32, VisionError> {
+        self.m283_checks(machine, mode).inspect_err(|e| self.publish_failure(None, e))
+    }
+
+    fn m283_checks(&mut self, machine: &dyn Machine, mode: Calibrate) -> Result<u32, VisionError> {
         self.check_enabled()?;
         self.check_tool(machine)?;
         if let Calibrate::Sheet { n } = mode {
@@ -146,20 +154,20 @@ impl VisionModule {
     ) -> Result<Reply<CalReport>, VisionError> {
         match outcome.and_then(|solution| self.apply_calibration(machine, solution)) {
             Ok(report) => {
-                // The DRO shows the last trigger as M281 would, with the K just written.
+                // The last trigger again, as M281 would show it with the K just written.
                 if let Some(reading) = last.filter(Reading::found) {
                     if let Ok(chain) = pixel_chain(&self.params, machine.units()) {
-                        self.publish_reading(&chain, &reading);
+                        let centred = chain.centred(Point2::new(reading.x_px, reading.y_px));
+                        self.dro.reading(Some(&chain), centred, &reading);
                     }
                 }
-                self.telemetry.last_status = "OK".to_string();
+                self.dro.ok(report.warning());
                 Ok(Reply { gcode: ran, report })
             }
             Err(e) => {
-                if let Some(driver) = self.driver.as_deref_mut() {
-                    let _ = Walker::new(machine, driver, 0.0).move_abs(start);
-                }
-                self.publish_failure(last.map(|r| i64::from(r.judgment.code())), &e);
+                let _ = machine.run_gcode(&[absolute_move(start)]);
+                // A failed trigger was shown (and its stale values cleared) as it happened.
+                self.publish_failure(None, &e);
                 Err(e)
             }
         }
@@ -197,7 +205,7 @@ impl VisionModule {
         walk.pending = match self.replay(machine, walk) {
             Replayed::Needs(at) => Some(at),
             Replayed::Done { .. } => None,
-            Replayed::Failed { error, last } => return Err(self.walk_failed(last, error)),
+            Replayed::Failed { error, .. } => return Err(self.walk_failed(error)),
         };
         Ok(walk.pending)
     }
@@ -218,11 +226,11 @@ impl VisionModule {
         machine.dwell(self.params.trigger_settle_s());
         let reading = match self.driver_mut().and_then(|d| Ok(d.trigger()?)) {
             Ok(r) => r,
-            Err(e) => return Err(self.walk_failed(None, e)),
+            Err(e) => return Err(self.walk_failed(e)),
         };
         walk.taken.push((machine.program_position(), reading));
         match self.replay(machine, walk) {
-            Replayed::Failed { error, last } => Err(self.walk_failed(last, error)),
+            Replayed::Failed { error, .. } => Err(self.walk_failed(error)),
             _ => Ok(()),
         }
     }
@@ -250,8 +258,8 @@ impl VisionModule {
     }
 
     /// Replays `walk` over its readings, moving nothing.
-    fn replay(&self, machine: &mut dyn Machine, walk: &StepwiseWalk) -> Replayed {
-        let mut walker = Walker::replay(machine, &walk.taken, walk.start);
+    fn replay(&mut self, machine: &mut dyn Machine, walk: &StepwiseWalk) -> Replayed {
+        let mut walker = Walker::replay(machine, &walk.taken, walk.start, &self.params, &mut self.dro);
         let outcome = walk_routine(&mut walker, &self.params, walk.mode, walk.tool);
         let needed = walker.needed();
         let (_, last) = walker.into_ran();
@@ -262,9 +270,10 @@ impl VisionModule {
         }
     }
 
-    /// Records a failed stepwise step as M283 records a failure; returns the error.
-    fn walk_failed(&mut self, last: Option<Reading>, error: VisionError) -> VisionError {
-        self.publish_failure(last.map(|r| i64::from(r.judgment.code())), &error);
+    /// Records a failed stepwise step as M283 records a failure (a failed trigger was shown as
+    /// it happened); returns the error.
+    fn walk_failed(&mut self, error: VisionError) -> VisionError {
+        self.publish_failure(None, &error);
         error
     }
 

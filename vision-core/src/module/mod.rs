@@ -15,6 +15,7 @@
 //! for M280–M283 the camera-tool check (`VisionCameraToolNumber` ≠ 0 and another tool active).
 
 pub(crate) mod capture;
+pub(crate) mod dro;
 mod m280;
 mod m281;
 mod m282;
@@ -35,8 +36,10 @@ use crate::machine::Machine;
 use crate::params::{ParamValue, Params, Telemetry};
 use crate::profile::ProfileStore;
 use crate::registry::DriverRegistry;
+use dro::Dro;
 
 pub use capture::{Capture, Recentred};
+pub use dro::TelemetrySink;
 pub use m280::RunMode;
 pub use m282::{AlignReport, DroppedMark, Pieces, PredictedError};
 pub use m283::StepwiseWalk;
@@ -89,7 +92,7 @@ pub struct Run {
 /// camera driver and the profile store it persists to.
 pub struct VisionModule {
     pub(crate) params: Params,
-    pub(crate) telemetry: Telemetry,
+    pub(crate) dro: Dro,
     pub(crate) driver: Option<Box<dyn CameraDriver>>,
     pub(crate) run: Run,
     pub(crate) profile: Option<ProfileStore>,
@@ -100,7 +103,7 @@ impl std::fmt::Debug for VisionModule {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("VisionModule")
             .field("params", &self.params)
-            .field("telemetry", &self.telemetry)
+            .field("dro", &self.dro)
             .field("driver", &self.driver.as_ref().map(|d| d.name().to_string()))
             .field("run", &self.run)
             .field("profile", &self.profile)
@@ -118,7 +121,7 @@ impl VisionModule {
     pub fn new(params: Params) -> VisionModule {
         VisionModule {
             params,
-            telemetry: Telemetry::default(),
+            dro: Dro::default(),
             driver: None,
             run: Run::default(),
             profile: None,
@@ -187,7 +190,13 @@ impl VisionModule {
     /// The telemetry written after the last operation (read-only view).
     #[must_use]
     pub fn telemetry(&self) -> &Telemetry {
-        &self.telemetry
+        self.dro.values()
+    }
+
+    /// Hands the telemetry to `sink` each time the module writes it, during a call as well as
+    /// at its end (see [`TelemetrySink`]); `None` removes the sink.
+    pub fn set_telemetry_sink(&mut self, sink: Option<TelemetrySink>) {
+        self.dro.set_sink(sink);
     }
 
     /// Reads any parameter by its manual name (case-insensitive): configuration, calibration or
@@ -196,7 +205,7 @@ impl VisionModule {
     /// # Errors
     /// [`VisionError::UnknownParam`].
     pub fn param(&self, name: &str) -> Result<ParamValue, VisionError> {
-        self.params.get(name).or_else(|e| self.telemetry.get(name).ok_or(e))
+        self.params.get(name).or_else(|e| self.dro.values().get(name).ok_or(e))
     }
 
     /// The alignment run: mode, open or not, dot list.
@@ -244,28 +253,17 @@ impl VisionModule {
 
     /// Writes the run's telemetry (`Run_Active`, `Run_Mode`, `Run_DotCount`) from [`Run`].
     pub(crate) fn publish_run(&mut self) {
-        let t = &mut self.telemetry;
-        t.run_active = i64::from(self.run.active);
-        t.run_mode = self.run.mode.code();
-        t.run_dot_count = i64::try_from(self.run.dots.len()).unwrap_or(i64::MAX);
+        let run = &self.run;
+        self.dro.write(|t| {
+            t.run_active = i64::from(run.active);
+            t.run_mode = run.mode.code();
+            t.run_dot_count = i64::try_from(run.dots.len()).unwrap_or(i64::MAX);
+        });
     }
 
-    /// Records a failed operation in `LastStatus`; for a failed trigger also `LastJudgment`, and
-    /// the offsets, size, angle and score are cleared so a DRO never shows the previous mark's.
+    /// Records a failed operation (see [`Dro::failure`]).
     pub(crate) fn publish_failure(&mut self, judgment: Option<i64>, e: &VisionError) {
-        if let Some(j) = judgment {
-            let t = &mut self.telemetry;
-            t.last_judgment = j;
-            t.last_offset_px_x = 0.0;
-            t.last_offset_px_y = 0.0;
-            t.last_offset_x = 0.0;
-            t.last_offset_y = 0.0;
-            t.last_width = 0.0;
-            t.last_height = 0.0;
-            t.last_angle = 0.0;
-            t.last_score = 0.0;
-        }
-        self.telemetry.last_status = e.to_string();
+        self.dro.failure(judgment, e);
     }
 
     /// Refuses when Vision is disabled.

@@ -419,3 +419,72 @@ fn an_unwritable_profile_is_found_before_the_calibration_moves() {
     assert!(e.to_string().contains("create the folder"), "{e}");
     assert_eq!(rig.world().triggers, 0, "refused before the first trigger");
 }
+
+/// What a telemetry sink saw: each write, with how many triggers the camera had made by then.
+type Seen = std::sync::Arc<std::sync::Mutex<Vec<(usize, crate::params::Telemetry)>>>;
+
+/// Records every telemetry write of `rig`'s module with the trigger count at that moment.
+fn watch(rig: &mut Rig) -> Seen {
+    let seen: Seen = Seen::default();
+    let (log, world) = (seen.clone(), rig.shared.clone());
+    rig.module.set_telemetry_sink(Some(Box::new(move |t| {
+        let triggers = world.lock().map_or(0, |w| w.triggers);
+        log.lock().expect("log").push((triggers, t.clone()));
+    })));
+    seen
+}
+
+/// The DRO during M283 (SPEC §5, "written after every trigger"): each trigger is on it before
+/// the next one — the axis-detect bumps of an uncalibrated camera in pixels only, every later
+/// shot through the K solved so far, so a probe shot shows the mark about one probe move
+/// (a fifth of the field, ≈ 0.72 in, plus up to 0.04 in from the sheet's 0.3° over the 8 in
+/// between dots) off — and the end shows the last verify dot, centred.
+#[test]
+fn every_calibration_trigger_reaches_the_dro_as_it_happens() {
+    let mut rig = standard_rig();
+    let seen = watch(&mut rig);
+    let r = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("calibrates");
+    let triggers = sheet_report(r.report).triggers;
+    let seen = seen.lock().expect("log").clone();
+    // The write each trigger made, taken before the camera triggered again.
+    let at: Vec<&crate::params::Telemetry> = (1..=triggers)
+        .map(|n| &seen.iter().find(|(t, _)| *t == n).unwrap_or_else(|| panic!("trigger {n} never reached the DRO")).1)
+        .collect();
+    for t in &at[..3] {
+        assert_eq!((t.last_judgment(), t.last_offset_x(), t.last_width()), (1, 0.0, 0.0), "no K yet: {t:?}");
+        assert!(t.last_offset_px_x().hypot(t.last_offset_px_y()) > 50.0, "dot 1 sits off centre: {t:?}");
+    }
+    let offset = |t: &crate::params::Telemetry| t.last_offset_x().hypot(t.last_offset_y());
+    let largest = at[3..].iter().map(|t| offset(t)).fold(0.0, f64::max);
+    assert!((0.71..0.78).contains(&largest), "a probe shot is one probe move off: {largest}");
+    assert!(at[3..].iter().all(|t| (t.last_width() - 0.5).abs() < 0.01), "the 0.5 in dots through K");
+    let end = rig.module.telemetry();
+    assert!(offset(end) < 1e-3 && end.last_status() == "OK", "{end:?}");
+}
+
+/// A trigger that loses the mark clears the previous mark's values on the DRO at once, and
+/// M283 refused before any trigger still writes `LastStatus`.
+#[test]
+fn a_lost_mark_and_a_refusal_reach_the_dro() {
+    let mut marks = sheet_marks(0.3, Vector2::new(1.0, 1.0));
+    marks.remove(2); // dot 3 is missing
+    let mut rig = sheet_rig(tilted(0, false), LengthUnit::Inch, Vector2::new(3.0, -1.5), marks);
+    let seen = watch(&mut rig);
+    let e = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect_err("lost dot 3");
+    let lost = rig.shared.lock().expect("world").triggers;
+    let seen = seen.lock().expect("log").clone();
+    let before = &seen.iter().rfind(|(n, _)| *n == lost - 1).expect("the shot before").1;
+    let at = &seen.iter().find(|(n, _)| *n == lost).expect("the lost shot").1;
+    assert!(before.last_width() > 0.4 && before.last_judgment() == 1, "{before:?}");
+    assert_eq!((at.last_judgment(), at.last_width(), at.last_offset_x(), at.last_offset_px_x()), (0, 0.0, 0.0, 0.0));
+    assert_eq!(at.last_status(), e.to_string());
+
+    let triggers = rig.shared.lock().expect("world").triggers;
+    let e = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 7 }).expect_err("no sheet 7");
+    assert!(matches!(e, VisionError::UnknownSheet { .. }), "{e}");
+    assert_eq!(rig.module.telemetry().last_status(), e.to_string());
+    rig.module.set_param("VisionEnabled", false).expect("set");
+    let e = rig.module.m283(&mut rig.machine, Calibrate::Quick { diameter: 0.5 }).expect_err("disabled");
+    assert_eq!(rig.module.telemetry().last_status(), e.to_string());
+    assert_eq!(rig.shared.lock().expect("world").triggers, triggers, "nothing triggered");
+}

@@ -70,6 +70,10 @@ fn no_driver_is_a_clear_error() {
     rig.module.set_driver(None);
     let e = rig.module.m281(&mut rig.machine, false).expect_err("no driver");
     assert!(matches!(e, VisionError::NoDriver { .. }), "{e}");
+    assert_eq!(rig.module.telemetry().last_status(), e.to_string(), "the DRO says why nothing was read");
+    let e = rig.module.m283(&mut rig.machine, crate::calibrate::Calibrate::Quick { diameter: 0.5 }).expect_err("none");
+    assert!(matches!(e, VisionError::NoDriver { .. }), "{e}");
+    assert_eq!(rig.module.telemetry().last_status(), e.to_string());
     assert!(matches!(rig.module.m284(Some(1)), Err(VisionError::NoDriver { .. })));
 }
 
