@@ -5,15 +5,20 @@ does), so this one only plans the next point; the capture is M289, a remap that 
 the machine.
 """
 
-from remap import host_for, is_task, session
+from mach_vision import VisionError
+from remap import fail, host_for, is_task, session
 
 
 def vision_walk_next(self, *args):
     """Asks the session for the next point of the walk: sets #<_vision_x>, #<_vision_y> (program
-    units) and returns 1, or returns 0 when the walk is over."""
+    units) and returns 1, or returns 0 when the walk is over. A failed walk stops the program
+    with the message (set_errormsg and INTERP_ERROR, as a remap does)."""
     if not is_task(self):
         return 0.0
-    target = session().walk_next(host_for(self))
+    try:
+        target = session().walk_next(host_for(self))
+    except VisionError as e:
+        return fail(self, 283, e)
     if target is None:
         return 0.0
     self.params["_vision_x"], self.params["_vision_y"] = target

@@ -140,6 +140,14 @@ impl Sim {
         self.lock().head = Head::Driven(watch);
     }
 
+    /// Parks the spindle at `spindle` (machine coordinates, world unit) until the next call or
+    /// the next [`crate::SimMachine`] on this world: for a host whose machine runs outside the
+    /// simulation (LinuxCNC's interpreter in the bridge's tests), which places the head where
+    /// its machine is before each trigger. Stops following any interpreter.
+    pub fn place_head(&self, spindle: Point3<f64>) {
+        self.lock().head = Head::Parked(spindle);
+    }
+
     /// The camera's optical axis, machine coordinates, world unit.
     #[must_use]
     pub fn camera_axis(&self) -> Point2<f64> {
@@ -215,5 +223,23 @@ mod tests {
         bad[0].scale = [-1.0, 1.0];
         assert!(sim.set_fixtures(bad).is_err());
         assert!(sim.marks().is_empty(), "a refused table leaves the old one");
+    }
+
+    #[test]
+    fn a_placed_head_is_where_the_camera_looks_from() {
+        use vision_core::CameraDriver;
+        let sim = Sim::new(World::default_world()).expect("sim");
+        let mut camera = sim.camera();
+        // Camera axis over dot 5, at machine (10, 8): the spindle is the camera offset away.
+        let spindle = Point3::new(10.0 + 3.25, 8.0 - 1.75, 0.0);
+        sim.place_head(spindle);
+        assert_eq!(sim.spindle(), spindle);
+        let centre = camera.trigger().expect("reading");
+        assert!(centre.found());
+        let half = sim.optics().resolution() * 0.5;
+        assert!((centre.x_px - half.x).hypot(centre.y_px - half.y) < 40.0, "{centre:?}");
+        // Far off the table: nothing in view.
+        sim.place_head(Point3::new(40.0, 40.0, 0.0));
+        assert!(!camera.trigger().expect("reading").found());
     }
 }

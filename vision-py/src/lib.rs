@@ -1,0 +1,216 @@
+//! `mach_vision`: the Vision M-codes M280–M284 as a Python extension module for LinuxCNC's
+//! Python remaps (`hosts/linuxcnc/remap.py`), over [`vision_host::Session`].
+//!
+//! The remap handlers are thin: each hands its block's words and a `Host` object (LinuxCNC's
+//! interpreter behind the method table of `hosts/linuxcnc/README.md`) to one [`PySession`];
+//! the session runs the M-code, runs the G-code it emits through `Host.execute`, and raises
+//! [`VisionError`] with the operator's message when the M-code is refused. [`PyHost`] is the
+//! [`vision_host::Host`] over that object; a Python exception in one of its methods becomes the
+//! M-code's refusal, never a panic.
+//!
+//! Built with `PYO3_BUILD_EXTENSION_MODULE=1` the library links no libpython (the Python of
+//! the process that imports it provides every symbol) and is the shipped module, copied to
+//! `mach_vision.abi3.so`; without it, as in `cargo test`, it links libpython. The `sim` feature
+//! adds `Session.simulated(...)`, a session on the simulated camera, for the tests only.
+//!
+//! ```python
+//! import mach_vision
+//!
+//! session = mach_vision.Session("/home/cnc/linuxcnc/configs/mill/mach-vision.toml")
+//! try:
+//!     gcode = session.call(282, {"p": 0.0}, host)  # the lines M282 already ran
+//! except mach_vision.VisionError as e:
+//!     print("M282:", e)  # the manual's message
+//! ```
+
+mod host;
+#[cfg(feature = "sim")]
+mod sim;
+mod words;
+
+use std::path::PathBuf;
+
+use pyo3::exceptions::PyException;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use vision_host::{printable_line, registry, HostError, Session, MAX_MESSAGE_CHARS};
+
+pub use host::PyHost;
+pub use words::{word, WordError};
+
+pyo3::create_exception!(
+    mach_vision,
+    VisionError,
+    PyException,
+    "A vision M-code failed; `str(e)` is the operator's message (the manual's words)."
+);
+
+/// `VisionError` carrying `e`'s message, escaped and bounded for the operator's screen.
+fn vision_error(e: &impl std::fmt::Display) -> PyErr {
+    VisionError::new_err(printable_line(&e.to_string(), MAX_MESSAGE_CHARS))
+}
+
+/// `mach_vision.Session`: the Vision module of one LinuxCNC interpreter, kept between M-code
+/// calls (parameters, the run's dot list, the camera connection, the profile).
+#[pyclass(unsendable, module = "mach_vision", name = "Session")]
+pub struct PySession {
+    session: Session,
+    /// The simulated rig behind the camera (`Session.simulated`; tests only).
+    #[cfg(feature = "sim")]
+    sim: Option<sim::Simulated>,
+}
+
+impl PySession {
+    fn wrap(session: Session) -> PySession {
+        PySession {
+            session,
+            #[cfg(feature = "sim")]
+            sim: None,
+        }
+    }
+
+    /// Runs `step` of the session on the Python host object `host`; a refusal becomes
+    /// `VisionError`. The simulated camera (tests) first looks from where the host's machine is.
+    fn on_host<'py, T>(
+        &mut self,
+        host: Bound<'py, PyAny>,
+        step: impl FnOnce(&mut Session, &mut PyHost<'py>) -> Result<T, HostError>,
+    ) -> PyResult<T> {
+        let mut host = PyHost::new(host);
+        #[cfg(feature = "sim")]
+        if let Some(sim) = &self.sim {
+            sim.place_head(&host).map_err(|e| vision_error(&e))?;
+        }
+        step(&mut self.session, &mut host).map_err(|e| vision_error(&e))
+    }
+}
+
+/// The block's words, or `VisionError`.
+fn block_words(words: &Bound<'_, PyDict>) -> PyResult<Vec<(char, f64)>> {
+    words::from_dict(words).map_err(|e| vision_error(&e))
+}
+
+#[pymethods]
+impl PySession {
+    /// `Session(profile)`: the session of profile file `profile` (TOML; a missing file starts a
+    /// fresh, disabled profile that M283/M284 save to), with the camera driver `VisionDriver`
+    /// names. Raises `VisionError` when `profile` is None (`MACH_VISION_PROFILE` unset) or the
+    /// profile or driver cannot be set up.
+    #[new]
+    #[pyo3(signature = (profile=None))]
+    fn new(profile: Option<PathBuf>) -> PyResult<PySession> {
+        let profile = profile.ok_or_else(|| {
+            VisionError::new_err(
+                "no Vision profile: set MACH_VISION_PROFILE in LinuxCNC's environment to the profile file (TOML)",
+            )
+        })?;
+        Session::open(&profile, &registry()).map(PySession::wrap).map_err(|e| vision_error(&e))
+    }
+
+    /// `call(mcode, words, host)`: runs vision M-code `mcode` (280–284) with its block's words
+    /// (`{"p": 3.0}`) on `host`; returns the G-code lines it already ran through
+    /// `host.execute` (a record, never to be run again). Raises `VisionError` with the
+    /// operator's message when the M-code is refused or the host fails.
+    fn call(&mut self, mcode: u32, words: &Bound<'_, PyDict>, host: Bound<'_, PyAny>) -> PyResult<Vec<String>> {
+        let words = block_words(words)?;
+        let outcome = self.on_host(host, |session, host| session.mcode(host, mcode, &words))?;
+        Ok(outcome.gcode().to_vec())
+    }
+
+    /// `walk_begin(words, host)`: M283's prolog. Checks M283's words (`{"q": d}` or
+    /// `{"c": n}`) and everything M283 checks, and plans the walk; nothing moves. Raises
+    /// `VisionError` when M283 is refused.
+    fn walk_begin(&mut self, words: &Bound<'_, PyDict>, host: Bound<'_, PyAny>) -> PyResult<()> {
+        let words = block_words(words)?;
+        self.on_host(host, |session, host| session.walk_begin(host, &words))
+    }
+
+    /// `walk_next(host)`: the walk's next point, `(x, y)` in the program frame and units, for
+    /// `m283.ngc` to move to before `walk_capture`; `None` when the walk has every capture. It
+    /// depends on the captures so far. Raises `VisionError` (no walk, or the walk failed).
+    fn walk_next(&mut self, host: Bound<'_, PyAny>) -> PyResult<Option<(f64, f64)>> {
+        let next = self.on_host(host, |session, host| session.walk_next(host))?;
+        Ok(next.map(|p| (p.x, p.y)))
+    }
+
+    /// `walk_capture(host)`: triggers where the machine now is, for the point `walk_next` gave
+    /// (M289, after the sync). Raises `VisionError` on an NG or a camera failure (the walk is
+    /// dropped, nothing written).
+    fn walk_capture(&mut self, host: Bound<'_, PyAny>) -> PyResult<()> {
+        self.on_host(host, |session, host| session.walk_capture(host))
+    }
+
+    /// `walk_finish(host)`: M283's epilog. Solves the walk and writes K, the camera tool's
+    /// offset and the profile (all or nothing); returns the G-code lines it ran (a record).
+    /// Raises `VisionError` when the calibration is refused.
+    fn walk_finish(&mut self, host: Bound<'_, PyAny>) -> PyResult<Vec<String>> {
+        let outcome = self.on_host(host, |session, host| session.walk_finish(host))?;
+        Ok(outcome.gcode().to_vec())
+    }
+
+    /// `Session.simulated(camera="sim", rotation_deg=None, shift=None, scale=None)` — **tests
+    /// only** (feature `sim`): a session whose camera sees vision-driver-sim's built-in world,
+    /// calibrated perfectly, directly (`camera="sim"`) or through the Keyence driver and its
+    /// emulator on loopback (`camera="keyence"`). The part ("demo target") is placed with the
+    /// given rotation (degrees counter-clockwise about its centre), shift (X, Y, inches) and
+    /// scale (X, Y) instead of the world's; `calibrated=False` starts with K never calibrated
+    /// (for M283); `params` sets numeric Vision parameters (`{"VisionFitMaxScaleDev": 0.05}`).
+    /// Before each call the simulated head is put where `host.machine_position()` (machine X,
+    /// Y, program units) says the machine is.
+    #[cfg(feature = "sim")]
+    #[staticmethod]
+    #[pyo3(signature = (camera="sim", rotation_deg=None, shift=None, scale=None, calibrated=true, params=None))]
+    fn simulated(
+        camera: &str,
+        rotation_deg: Option<f64>,
+        shift: Option<(f64, f64)>,
+        scale: Option<(f64, f64)>,
+        calibrated: bool,
+        params: Option<std::collections::BTreeMap<String, f64>>,
+    ) -> PyResult<PySession> {
+        let pose = sim::Pose { rotation_deg, shift, scale };
+        let params = params.unwrap_or_default();
+        let (simulated, session) =
+            sim::Simulated::new(camera, pose, calibrated, &params).map_err(|e| vision_error(&e))?;
+        Ok(PySession { session, sim: Some(simulated) })
+    }
+
+    /// `true_point(x, y)` — **tests only**: where nominal part point (x, y) (work coordinates,
+    /// inches) really is on the simulated table, machine X, Y (inches).
+    #[cfg(feature = "sim")]
+    fn true_point(&self, x: f64, y: f64) -> PyResult<(f64, f64)> {
+        self.simulated_rig()?.true_point(x, y).map_err(|e| vision_error(&e))
+    }
+
+    /// `setup()` — **tests only**: what the controller must hold for the simulated world, a
+    /// dict: `work_offset` (G54 X, Y, inches), `camera_tool` (its number), `camera_table_offset`
+    /// (the camera tool's X, Y as LinuxCNC's tool table holds it, inches), `unit` (`"in"`).
+    #[cfg(feature = "sim")]
+    fn setup<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        self.simulated_rig()?.setup(py)
+    }
+}
+
+#[cfg(feature = "sim")]
+impl PySession {
+    fn simulated_rig(&self) -> PyResult<&sim::Simulated> {
+        self.sim.as_ref().ok_or_else(|| VisionError::new_err("not a simulated session (Session.simulated)"))
+    }
+}
+
+/// The module `import mach_vision` loads: `Session`, `VisionError`, `__version__`, and
+/// `PERSISTENT_PARAMS`, the numbered parameters LinuxCNC's var file must list for an alignment
+/// to survive a restart ([`vision_host::linuxcnc::PERSISTENT_PARAMS`]).
+#[pymodule(name = "mach_vision")]
+mod mach_vision {
+    use pyo3::prelude::*;
+
+    #[pymodule_export]
+    use super::{PySession, VisionError};
+
+    #[pymodule_init]
+    fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {
+        m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+        m.add("PERSISTENT_PARAMS", vision_host::linuxcnc::PERSISTENT_PARAMS.to_vec())
+    }
+}

@@ -1,0 +1,115 @@
+//! **Tests only** (feature `sim`): a session whose camera sees vision-driver-sim's built-in
+//! world, as `mach-vision run` sets it up ([`vision_host::testkit::Rig`]), with the head put
+//! where the LinuxCNC interpreter's machine is before each call.
+//!
+//! The simulation has no machine of its own here: LinuxCNC's interpreter (rs274 in the tests)
+//! is the machine. The test's `Host.machine_position()` applies LinuxCNC's canon to the
+//! interpreter's state (`g5x + R(rotation)·(p + g92) + tool`) and the head is parked there
+//! ([`vision_driver_sim::Sim::place_head`]) before the camera can trigger.
+
+use std::collections::BTreeMap;
+
+use nalgebra::Point3;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use vision_host::testkit::{self, Camera, Rig};
+use vision_host::{Host, HostError, Session};
+use vision_math::{LengthUnit, Point2, Vector2};
+
+use crate::host::PyHost;
+
+/// The part's pose on the table, replacing the built-in world's where given.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Pose {
+    /// Rotation about the part's centre, degrees counter-clockwise.
+    pub(crate) rotation_deg: Option<f64>,
+    /// Shift, X and Y, world unit (inches).
+    pub(crate) shift: Option<(f64, f64)>,
+    /// Print scale, X and Y.
+    pub(crate) scale: Option<(f64, f64)>,
+}
+
+/// The simulated rig behind a session's camera.
+pub(crate) struct Simulated {
+    rig: Rig,
+}
+
+/// The built-in world's part, the one [`Pose`] places.
+const PART: &str = "demo target";
+
+impl Simulated {
+    /// The rig for `camera` (`"sim"` or `"keyence"`) with the part at `pose`, and a session on
+    /// it (no profile file): perfectly calibrated, or with K never calibrated when not
+    /// `calibrated`, and with the numeric parameters `params` set.
+    ///
+    /// # Errors
+    /// An unknown camera name, a pose the world refuses or a parameter the module refuses, as a
+    /// message.
+    pub(crate) fn new(
+        camera: &str,
+        pose: Pose,
+        calibrated: bool,
+        params: &BTreeMap<String, f64>,
+    ) -> Result<(Simulated, Session), String> {
+        let camera = match camera {
+            "sim" => Camera::Sim,
+            "keyence" => Camera::Keyence,
+            other => return Err(format!("camera {other:?} is not simulated: use \"sim\" or \"keyence\"")),
+        };
+        let base = (!calibrated).then(|| testkit::uncalibrated_params(&testkit::sim()));
+        let (rig, mut module) = Rig::new(base, camera);
+        for (name, value) in params {
+            module.set_param(name, *value).map_err(|e| e.to_string())?;
+        }
+        let mut fixtures = rig.sim.world().fixtures;
+        let part = fixtures.iter_mut().find(|f| f.name == PART).ok_or_else(|| format!("no {PART:?} in the world"))?;
+        if let Some(r) = pose.rotation_deg {
+            part.rotation_deg = r;
+        }
+        if let Some((x, y)) = pose.shift {
+            part.shift = [x, y];
+        }
+        if let Some((x, y)) = pose.scale {
+            part.scale = [x, y];
+        }
+        rig.sim.set_fixtures(fixtures).map_err(|e| e.to_string())?;
+        Ok((Simulated { rig }, Session::new(module)))
+    }
+
+    /// Parks the simulated head where `host.machine_position()` says the machine is (machine
+    /// X, Y in the program's units, converted to the world's).
+    pub(crate) fn place_head(&self, host: &PyHost<'_>) -> Result<(), HostError> {
+        let (x, y): (f64, f64) = host.value("machine_position", (), "an (x, y) pair of numbers")?;
+        let (from, to) = (host.units()?, self.rig.sim.unit());
+        let z = self.rig.sim.spindle().z;
+        self.rig.sim.place_head(Point3::new(from.convert(x, to), from.convert(y, to), z));
+        Ok(())
+    }
+
+    /// Where nominal part point (`x`, `y`) (work coordinates, world unit) really is, machine
+    /// coordinates, world unit.
+    pub(crate) fn true_point(&self, x: f64, y: f64) -> Result<(f64, f64), String> {
+        let world = self.rig.sim.world();
+        let part = world.fixtures.iter().find(|f| f.name == PART).ok_or_else(|| format!("no {PART:?} in the world"))?;
+        let p = world.work_to_machine(part.true_point(Point2::new(x, y), world.length_unit()));
+        Ok((p.x, p.y))
+    }
+
+    /// What the controller must hold for this world (see `Session.setup`).
+    pub(crate) fn setup<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let world = self.rig.sim.world();
+        let unit = world.length_unit();
+        // The module's offset is where the camera's reference point lies from the spindle;
+        // LinuxCNC adds its table offset to a programmed point, so its table holds the negation.
+        let offset = world
+            .machine
+            .camera_table_offset
+            .map_or_else(|| self.rig.sim.true_camera_offset(Vector2::zeros(), unit), Vector2::from);
+        let dict = PyDict::new(py);
+        dict.set_item("work_offset", (world.machine.work_offset[0], world.machine.work_offset[1]))?;
+        dict.set_item("camera_tool", world.machine.camera_tool)?;
+        dict.set_item("camera_table_offset", (-offset.x, -offset.y))?;
+        dict.set_item("unit", if unit == LengthUnit::Inch { "in" } else { "mm" })?;
+        Ok(dict)
+    }
+}
