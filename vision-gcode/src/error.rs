@@ -534,6 +534,9 @@ pub enum RunProblem {
         /// The L value.
         l: f64,
     },
+    /// `R` on `G10 L20` (LinuxCNC rotates a system with `G10 L2 … R` only).
+    #[error("R is not allowed on G10 L20: rotate the system with G10 L2 P… R…, then set its origin with G10 L20")]
+    G10RotationL20,
     /// A word, computed position or offset beyond ±[`crate::MAX_COORDINATE`] machine units.
     #[error("{what} is {value:e} machine units, beyond ±{max:e}: check the program's units and values", max = crate::MAX_COORDINATE)]
     BeyondRange {

@@ -43,6 +43,22 @@
 //! program → work is bit-identical to [`vision_math::AlignmentChain::apply`] with the chain in
 //! machine units. `G91` increments are increments of `p`.
 //!
+//! Under LinuxCNC (which has no G68/G51, and keeps G52 in the G92 offset) a coordinate system
+//! may be rotated about its origin by `G10 L2 P… R…` (degrees, counter-clockwise, stored per
+//! system at #5230 + 20·(n − 1)); then, as LinuxCNC's canon (`rotate_and_offset_pos`) does,
+//!
+//! ```text
+//! m.xy = (work.xy − tool.xy) + R(rotation)·(p.xy + g92.xy)     G92/G52 before the rotation
+//! m.z  = p.z + ((work.z + g92.z) + tool.length)
+//! ```
+//!
+//! One function maps every point (moves, arc ends and centres, cycles), so the simulator and the
+//! planner, which take the interpreter's machine-coordinate events, see the same map. G53
+//! ignores the rotation; a G17 arc stays an exact arc (its centre rotated), a G18/G19 arc in a
+//! rotated system leaves the machine planes and becomes feed segments within
+//! [`InterpreterConfig::chord_tolerance`]. Mach4 and seed 002 rotate with G68 only (`G10 … R`
+//! other than `R0` is refused there), so the two rotations never meet.
+//!
 //! # Decisions where the spec is open
 //!
 //! * **Units.** Machine coordinates, events, offset parameters and the tool table are in the
@@ -98,7 +114,12 @@
 //!   (seed 002) or comments ending at the first `)`, G68/G51 (refused under LinuxCNC).
 //! * **G92** with an axis word missing zeroes that axis's G92 offset (seed 002); G52, G51 and
 //!   G10 L2 leave unmentioned axes unchanged. G92 and G10 L20 make the current point read exactly
-//!   the given values.
+//!   the given values. Under LinuxCNC, G52 and G92 share the offset at #5211 (G52 sets it, G92
+//!   computes it), both from the current point as rs274 does, and a G10 that changes the active
+//!   system's rotation leaves the current point where rs274 puts it (rotated by the old angle,
+//!   moved by the change of origin, rotated back, the G52/G92 offset left out): with a G52/G92
+//!   offset in force that is not the point the machine position reads, and the next incremental
+//!   or partial move goes where LinuxCNC sends it.
 //! * **Ranges.** Axis words, moves' machine positions (arc centres included), offsets and the
 //!   offset parameters are refused beyond ±[`MAX_COORDINATE`] machine units, the bound the path
 //!   planner uses too; `G68 R` is at most ±360°, a `G51` factor's magnitude 0.001 to 1000.
@@ -119,7 +140,7 @@
 //!   current point without them), then those axes (all, without words) go to the G28.1/G30.1
 //!   position (#5161–#5163 / #5181–#5183, machine coordinates).
 //! * **Parameters** `#1`–`#9999` (0 by default). The offsets live in LinuxCNC's addresses in
-//!   machine units (G28 #5161, G92 #5211, G54… #5221 + 20·(n − 1)); #5220, #5400–#5409 and
+//!   machine units (G28 #5161, G92 #5211, G54… #5221 + 20·(n − 1), its LinuxCNC rotation #5230 + 20·(n − 1) in degrees); #5220, #5400–#5409 and
 //!   #5420–#5428 report the state in current units and are read-only.
 //! * **Program end.** Under LinuxCNC a text that ends without M2/M30 or a closing `%` is an
 //!   error ([`RunProblem::NoProgramEnd`]), as in rs274; the other dialects complete it.

@@ -25,6 +25,9 @@ pub const ACTIVE_SYSTEM: u32 = 5220;
 pub const WORK_OFFSET_BASE: u32 = 5221;
 /// Distance between two coordinate systems' blocks.
 pub const WORK_OFFSET_STRIDE: u32 = 20;
+/// `#5230 + 20·(n − 1)`: the XY rotation of coordinate system n about its origin (LinuxCNC's
+/// `G10 L2 R`), degrees counter-clockwise.
+pub const WORK_ROTATION: u32 = 5230;
 /// `#5400`: the active tool number. Read-only.
 pub const TOOL_NUMBER: u32 = 5400;
 /// `#5401`–`#5403`: the active tool's X, Y offset and Z length, current units. Read-only.
@@ -39,6 +42,11 @@ pub(crate) const SYSTEMS: u32 = 6;
 /// stands for the nearest system).
 pub(crate) fn work_offset_base(n: u32) -> u32 {
     WORK_OFFSET_BASE + WORK_OFFSET_STRIDE * (n.clamp(1, SYSTEMS) - 1)
+}
+
+/// The rotation parameter of coordinate system `n` (as [`work_offset_base`]).
+pub(crate) fn work_rotation(n: u32) -> u32 {
+    work_offset_base(n) + (WORK_ROTATION - WORK_OFFSET_BASE)
 }
 
 /// Whether `#n` holds the X, Y or Z origin of one of the coordinate systems.

@@ -183,3 +183,31 @@ proptest! {
         prop_assert!((moved - Xyz::new(linear.x, linear.y, d.z)).norm() <= 1e-9 * (1.0 + before.norm()));
     }
 }
+
+proptest! {
+    /// LinuxCNC's canon (emccanon.cc, `rotate_and_offset_pos`): `machine = g5x + R(p + g52)`,
+    /// written out here independently of the interpreter's placement; G53 ignores all of it.
+    #[test]
+    fn linuxcnc_rotation_applies_g52_before_rotating(
+        system in 1u32..=6,
+        work in xyz(50.0),
+        g52 in xyz(5.0),
+        degrees in -360.0..360.0f64,
+        p in xyz(20.0),
+    ) {
+        let config = InterpreterConfig { dialect: vision_gcode::Dialect::LinuxCnc, ..InterpreterConfig::new(LengthUnit::Millimetre) };
+        let mut interp = Interpreter::new(config);
+        let program = format!(
+            "G21\nG10 L2 P{system} X{} Y{} Z{} R{degrees}\nG{}\nG52 X{} Y{} Z{}\nG0 X{} Y{} Z{}\nM2",
+            work.x, work.y, work.z, 53 + system, g52.x, g52.y, g52.z, p.x, p.y, p.z
+        );
+        let mut events = Vec::new();
+        interp.run(&program, None, &mut events).map_err(|e| TestCaseError::fail(e.to_string()))?;
+        let (s, c) = degrees.to_radians().sin_cos();
+        let (qx, qy) = (p.x + g52.x, p.y + g52.y);
+        let want = Xyz::new(work.x + (c * qx - s * qy), work.y + (s * qx + c * qy), work.z + p.z + g52.z);
+        prop_assert!((interp.machine_position() - want).norm() < 1e-9, "{:?} != {:?}", interp.machine_position(), want);
+        interp.run("G53 G0 X1 Y2\nM2", None, &mut events).map_err(|e| TestCaseError::fail(e.to_string()))?;
+        prop_assert_eq!(interp.machine_position().xy(), Point2::new(1.0, 2.0));
+    }
+}

@@ -262,3 +262,80 @@ fn polar_words_and_rotary_axes_are_named_not_misread() {
     let mut seed = machine(LengthUnit::Inch);
     assert_eq!(problem(&mut seed, "M3 A1"), RunProblem::OutputForm { code: "M3" });
 }
+
+fn linuxcnc_mm() -> Interpreter {
+    Interpreter::new(InterpreterConfig { dialect: Dialect::LinuxCnc, ..InterpreterConfig::new(LengthUnit::Millimetre) })
+}
+
+#[test]
+fn g10_l2_rotation_rotates_the_system_about_its_origin_as_rs274_does() {
+    // Every end point and the arc centre are what rs274 printed, its offsets applied
+    // (compare.py on this program: agree). Line 6 changes the rotation with a G52 offset in
+    // force: rs274's current point leaves G52 out there, and the G91 move starts from it.
+    let program = "G21 G90 G17 F100
+G10 L2 P1 X-2 Y1 R60
+G0 X1 Y0 Z0
+G52 X1 Y0.5
+G0 X0 Y0
+G10 L2 P0 R90
+G91 G1 X1
+G90 G3 X0 Y1 I-1 J0
+G53 G0 X0 Y0
+G10 L2 P2 X3 R-30
+G55 G0 X1 Y0
+G54 G0 X0 Y0
+M2";
+    let mut interp = linuxcnc_mm();
+    let events = run(&mut interp, program);
+    #[rustfmt::skip]
+    let want = [
+        (R, [-1.5, 1.866_025, 0.0]), (R, [-1.933_013, 2.116_025, 0.0]), (F, [-2.5, 3.0, 0.0]),
+        (R, [0.0, 0.0, 0.0]), (R, [4.982_051, -0.566_987, 0.0]), (R, [-2.5, 2.0, 0.0]),
+    ];
+    let got = moves(&events);
+    assert_eq!(got.len(), want.len(), "{got:?}");
+    for (g, w) in got.iter().zip(&want) {
+        assert!(g.0 == w.0 && (0..3).all(|i| (g.1[i] - w.1[i]).abs() < 1e-6), "{g:?} != {w:?}");
+    }
+    let arc = events.iter().find_map(|e| if let Event::Arc(a) = e { Some(a) } else { None }).expect("an arc");
+    assert!((arc.end - Xyz::new(-3.5, 2.0, 0.0)).norm() < 1e-9, "{arc:?}");
+    assert!((arc.center.xy() - Xyz::new(-2.5, 2.0, 0.0).xy()).norm() < 1e-9, "{arc:?}");
+    assert_eq!(arc.direction, ArcDirection::CounterClockwise);
+    // The rotation is stored per system, at #5230 + 20·(n − 1).
+    assert_eq!(interp.param(5230), 90.0);
+    assert_eq!(interp.param(5250), -30.0);
+}
+
+#[test]
+fn a_rotated_side_plane_arc_becomes_segments_on_the_true_arc() {
+    let mut interp = linuxcnc_mm();
+    let events = run(&mut interp, "G10 L2 P0 X-2 Y1 R60\nG0 X0 Y0 Z0\nG1 X1.5 Z0.5 F100\nG18 G2 X0.5 Z1.5 K1\nM2");
+    let segments: Vec<_> = events
+        .iter()
+        .filter_map(|e| if let Event::Linear(m) = e { (m.line == 4).then_some(m.end) } else { None })
+        .collect();
+    assert!(segments.len() > 10, "{segments:?}");
+    assert!(!events.iter().any(|e| matches!(e, Event::Arc(_))));
+    // The centre is program (1.5, 0, 1.5); the arc's plane is program Y = 0, rotated by 60°.
+    let (s, c) = 60f64.to_radians().sin_cos();
+    let centre = Xyz::new(-2.0 + 1.5 * c, 1.0 + 1.5 * s, 1.5);
+    for p in &segments {
+        assert!(((*p - centre).norm() - 1.0).abs() < 0.0025 + 1e-9, "{p:?}");
+        let along_normal = (p.x - (-2.0)) * -s + (p.y - 1.0) * c;
+        assert!(along_normal.abs() < 1e-9, "{p:?} leaves the rotated XZ plane");
+    }
+}
+
+#[test]
+fn g10_rotation_is_refused_where_the_dialect_has_none_or_the_form_has_none() {
+    assert_eq!(problem(&mut linuxcnc_mm(), "G10 L20 P0 X1 R30"), RunProblem::G10RotationL20);
+    assert!(matches!(
+        problem(&mut linuxcnc_mm(), "G10 L2 P0 R400"),
+        RunProblem::OutOfRange { code: "G10", letter: 'R', .. }
+    ));
+    let mut mach4 = Interpreter::new(InterpreterConfig { dialect: Dialect::Mach4, ..InterpreterConfig::default() });
+    let message = problem(&mut mach4, "G10 L2 P1 R30").to_string();
+    assert!(message.contains("rotation") && message.contains("G68"), "{message}");
+    run(&mut mach4, "G10 L2 P1 X1 R0\nG0 X0");
+    assert_eq!(mach4.machine_position(), Xyz::new(1.0, 0.0, 0.0));
+}

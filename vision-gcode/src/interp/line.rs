@@ -38,6 +38,8 @@ pub(crate) enum Flow {
 
 /// An action queued until the line commits.
 #[derive(Debug, Clone)]
+// Not boxed: the queue is a reused Vec, and a box would allocate per polyline (tests/no_alloc.rs).
+#[allow(clippy::large_enum_variant)]
 pub(crate) enum Pending {
     Event(Event),
     Polyline(Polyline),
@@ -208,6 +210,7 @@ impl LineRun<'_> {
         }
         if let Some(code) = groups.get(Group::System) {
             self.st.system = u32::from(code / 10 - 53);
+            self.st.load_rotation(self.cfg, self.params);
             self.st.rederive_program(self.params);
         }
         if let Some(code) = groups.get(Group::Path) {

@@ -3,12 +3,12 @@
 use vision_math::LengthUnit;
 
 use super::cycles::CycleState;
-use crate::config::InterpreterConfig;
+use crate::config::{Dialect, InterpreterConfig};
 use crate::error::GCode;
 use crate::event::PathMode;
-use crate::frame::{Frame, Placement};
+use crate::frame::{Frame, Placement, SystemRotation};
 use crate::geom::{ArcDirection, Plane, Xyz};
-use crate::params::{Params, G92_OFFSET};
+use crate::params::{work_rotation, Params, G92_OFFSET};
 
 /// The active motion mode (modal group 1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -36,6 +36,9 @@ pub(crate) struct Modal {
     pub(crate) path: PathMode,
     /// 1 (G54) … 6 (G59).
     pub(crate) system: u32,
+    /// The active system's XY rotation in force (LinuxCNC's `G10 L2 R`), degrees
+    /// counter-clockwise; always 0 in the other dialects.
+    pub(crate) rotation: f64,
     /// Machine units per minute.
     pub(crate) feed: Option<f64>,
     /// The last `T`.
@@ -68,6 +71,7 @@ impl Modal {
             units: config.initial_units,
             path: config.initial_path_mode,
             system: 1,
+            rotation: 0.0,
             feed: config.default_feed,
             selected_tool: 0,
             tool: 0,
@@ -96,6 +100,7 @@ impl Modal {
         for axis in 0..3 {
             params.set(G92_OFFSET + axis, 0.0);
         }
+        self.load_rotation(config, params);
         self.rederive_program(params);
     }
 
@@ -103,16 +108,34 @@ impl Modal {
     pub(crate) fn placement(&self, params: &Params) -> Placement {
         let [wx, wy, wz] = params.triple(work_offset_base(self.system));
         let [gx, gy, gz] = params.triple(G92_OFFSET);
+        let (work, g92) = (Xyz::new(wx, wy, wz), Xyz::new(gx, gy, gz));
         Placement {
             frame: self.frame,
-            offset: Placement::offset(Xyz::new(wx, wy, wz), Xyz::new(gx, gy, gz), self.tool_offset),
+            offset: Placement::offset(work, g92, self.tool_offset),
+            rotation: SystemRotation::new(self.rotation, work, g92, self.tool_offset),
         }
+    }
+
+    /// Takes the active system's rotation from its parameter (LinuxCNC; the other dialects
+    /// have no coordinate-system rotation).
+    pub(crate) fn load_rotation(&mut self, config: &InterpreterConfig, params: &Params) {
+        self.rotation = system_rotation(config, params, self.system);
     }
 
     /// Re-derives the program position from the machine position (after a frame change; the
     /// machine does not move).
     pub(crate) fn rederive_program(&mut self, params: &Params) {
         self.program = self.placement(params).program_of(self.machine);
+    }
+}
+
+/// Coordinate system `system`'s XY rotation, degrees: its parameter under LinuxCNC, 0 in the
+/// dialects without coordinate-system rotation.
+pub(crate) fn system_rotation(config: &InterpreterConfig, params: &Params, system: u32) -> f64 {
+    if config.dialect == Dialect::LinuxCnc {
+        params.get(work_rotation(system))
+    } else {
+        0.0
     }
 }
 

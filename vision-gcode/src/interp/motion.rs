@@ -277,7 +277,7 @@ impl LineRun<'_> {
         let machine_start = self.st.machine;
         let exact = match plane {
             Plane::Xy => pl.frame.is_similarity(),
-            Plane::Zx | Plane::Yz => pl.frame.is_translation(),
+            Plane::Zx | Plane::Yz => pl.is_translation(),
         };
         if exact {
             let center = self.checked(pl.machine_of(arc.center_point()))?;
