@@ -155,9 +155,6 @@ pub enum SyntaxProblem {
     /// `N` with a fraction, a sign or an expression.
     #[error("the line number `N` must be a whole number, e.g. N10")]
     BadLineNumber,
-    /// LinuxCNC's polar coordinate words.
-    #[error("polar coordinates (`@` radius, `^` angle) are not supported: post-process with X and Y")]
-    PolarCoordinates,
     /// An `o` word after other words.
     #[error("an o-word (`o100 sub`, `o<name> call`, `o1 if [...]`) must start its line (after `/` and `N` only)")]
     OWordNotFirst,
@@ -325,6 +322,12 @@ pub enum RunProblem {
     /// A feed move with no feed rate.
     #[error("{code} with no feed rate: program F (length units per minute) first")]
     NoFeedRate {
+        /// The motion code.
+        code: &'static str,
+    },
+    /// A feed move under G95 (feed per revolution) with no spindle speed.
+    #[error("{code} under G95 (feed per revolution) with no spindle speed: program S (revolutions per minute), or G94 and a feed per minute")]
+    NoSpindleSpeed {
         /// The motion code.
         code: &'static str,
     },
@@ -533,6 +536,12 @@ pub enum RunProblem {
     G10Form {
         /// The L value.
         l: f64,
+    },
+    /// LinuxCNC's polar words `@` / `^` where they cannot be used.
+    #[error("polar coordinates (`@` distance, `^` angle): {problem}")]
+    Polar {
+        /// Why not here.
+        problem: &'static str,
     },
     /// `R` on `G10 L20` (LinuxCNC rotates a system with `G10 L2 … R` only).
     #[error("R is not allowed on G10 L20: rotate the system with G10 L2 P… R…, then set its origin with G10 L20")]

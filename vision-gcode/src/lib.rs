@@ -84,7 +84,11 @@
 //!   coordinates; the canned cycles G73, G81, G82, G83, G85, G89 (XY plane, G98/G99, R, Q, P, L,
 //!   G91 repeats) expand into straight moves and dwells in exact-stop mode; `%` on the first
 //!   non-blank line makes the next `%` line end the program; `/` at the start of a line is
-//!   block delete (skipped only with [`InterpreterConfig::block_delete`]). Features left out
+//!   block delete (skipped only with [`InterpreterConfig::block_delete`]). Polar words (`@`
+//!   distance, `^` angle in degrees, G17 only, LinuxCNC only) place moves and cycle holes as in
+//!   rs274, absolute from the program origin or, under G91, as changes of the current point's.
+//!   G95 feeds per spindle revolution: a feed move goes at F × S (a move with no S is refused);
+//!   a change of feed mode needs a new F (under LinuxCNC any G94/G95 does). Features left out
 //!   (cutter compensation, lathe modes and cycles, threading, NURBS, probing, inverse-time feed,
 //!   HAL M-codes, …) are refused with a message naming them ([`RunProblem::Unsupported`]).
 //! * **o-words** (LinuxCNC): `sub`/`endsub`/`call`/`return` (arguments in #1–#30, local to the

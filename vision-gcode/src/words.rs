@@ -5,26 +5,30 @@ use crate::expr::{eval, Node};
 use crate::params::Params;
 use crate::parse::{Block, Value};
 
-/// Slot of `$` in the letter arrays (after `A`–`Z`).
+/// Slot of `$` in the letter arrays (after `A`–`Z`), then LinuxCNC's polar `@` and `^`.
 pub(crate) const DOLLAR: usize = 26;
-const SLOTS: usize = 27;
+const AT: usize = 27;
+const CARET: usize = 28;
+const SLOTS: usize = 29;
 
-/// The slot of an upper-case letter or `$`.
+/// The slot of an upper-case letter, `$`, `@` or `^`.
 #[inline]
 pub(crate) fn slot(letter: u8) -> usize {
-    if letter == b'$' {
-        DOLLAR
-    } else {
-        usize::from(letter - b'A')
+    match letter {
+        b'$' => DOLLAR,
+        b'@' => AT,
+        b'^' => CARET,
+        _ => usize::from(letter - b'A'),
     }
 }
 
 /// The letter of a slot.
 pub(crate) fn letter_of(slot: usize) -> char {
-    if slot == DOLLAR {
-        '$'
-    } else {
-        char::from(b'A' + u8::try_from(slot).unwrap_or(0))
+    match slot {
+        DOLLAR => '$',
+        AT => '@',
+        CARET => '^',
+        _ => char::from(b'A' + u8::try_from(slot).unwrap_or(0)),
     }
 }
 
@@ -111,7 +115,7 @@ impl Words {
         (rest != 0).then(|| letter_of(rest.trailing_zeros() as usize))
     }
 
-    /// Every non-G/M word, letter and value, alphabetical (`$` last).
+    /// Every non-G/M word, letter and value, alphabetical (`$`, `@`, `^` last).
     pub(crate) fn all(&self) -> impl Iterator<Item = (char, f64)> + '_ {
         (0..SLOTS).filter(|s| self.present & (1 << s) != 0).map(|s| (letter_of(s), self.values[s]))
     }

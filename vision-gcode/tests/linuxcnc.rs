@@ -251,12 +251,19 @@ fn dialects_differ_where_the_controllers_do() {
 #[test]
 fn polar_words_and_rotary_axes_are_named_not_misread() {
     let mut interp = Interpreter::new(InterpreterConfig { dialect: Dialect::LinuxCnc, ..InterpreterConfig::default() });
-    for text in ["G1 @1 ^30 F10", "G0 ^45"] {
-        match interp.run(text, None, &mut Vec::new()) {
-            Err(GcodeError::Syntax { problem: vision_gcode::SyntaxProblem::PolarCoordinates, .. }) => {}
-            other => panic!("{text}: {other:?}"),
-        }
+    for (text, why) in [
+        ("G1 @1 X1 F10", "X or Y"),
+        ("G18 G0 @1 ^30", "G17"),
+        ("G0 @1", "angle"),
+        ("G91 G0 ^10", "origin"),
+        ("G53 G0 @1 ^10", "G53"),
+        ("G81 @1 X1 Z-1 R1 F10", "X or Y"),
+    ] {
+        let message = problem(&mut interp, text).to_string();
+        assert!(message.contains("polar") && message.contains(why), "{text}: {message}");
     }
+    let mut mach4 = Interpreter::new(InterpreterConfig { dialect: Dialect::Mach4, ..InterpreterConfig::default() });
+    assert!(problem(&mut mach4, "G0 @1 ^30").to_string().contains("LinuxCNC feature"));
     // Under LinuxCNC a lone A beside M3 is the rotary axis, not seed 002's output device.
     assert_eq!(problem(&mut interp, "G0 A90 M3"), RunProblem::AxisNotSupported { letter: 'A' });
     let mut seed = machine(LengthUnit::Inch);
@@ -338,4 +345,52 @@ fn g10_rotation_is_refused_where_the_dialect_has_none_or_the_form_has_none() {
     assert!(message.contains("rotation") && message.contains("G68"), "{message}");
     run(&mut mach4, "G10 L2 P1 X1 R0\nG0 X0");
     assert_eq!(mach4.machine_position(), Xyz::new(1.0, 0.0, 0.0));
+}
+
+#[test]
+fn polar_words_move_as_in_rs274() {
+    // rs274 printed these end points for the same program (X/Y, mm; compare.py: agree).
+    let program = "G21 G0 @10 ^90\nG0 ^0\nG0 @5\nG91 G0 ^90\nG0 @2.5\nG90 G2 @7.5 ^0 I0 J-7.5 F100\nM2";
+    let events = run(&mut linuxcnc_mm(), program);
+    let want = [(0.0, 10.0), (10.0, 0.0), (5.0, 0.0), (0.0, 5.0), (0.0, 7.5)];
+    let got = moves(&events);
+    assert_eq!(got.len(), want.len(), "{got:?}");
+    for (g, w) in got.iter().zip(want) {
+        assert!((g.1[0] - w.0).abs() < 1e-9 && (g.1[1] - w.1).abs() < 1e-9, "{g:?} != {w:?}");
+    }
+    let arc = events.iter().find_map(|e| if let Event::Arc(a) = e { Some(a) } else { None }).expect("an arc");
+    assert!((arc.end.xy() - Xyz::new(7.5, 0.0, 0.0).xy()).norm() < 1e-9, "{arc:?}");
+}
+
+#[test]
+fn g95_feeds_per_revolution_at_the_spindle_speed() {
+    let feeds = |events: &[Event]| -> Vec<f64> {
+        events
+            .iter()
+            .filter_map(|e| match e {
+                Event::Linear(m) => match m.rate {
+                    Rate::Feed(f) => Some(f),
+                    Rate::Rapid => None,
+                },
+                _ => None,
+            })
+            .collect()
+    };
+    // 0.01 in per revolution at 1000 rpm: 10 in/min; at 1500 rpm, 15; back under G94, F per minute.
+    let mut interp = machine(LengthUnit::Inch);
+    let events = run(&mut interp, "G20 M3 S1000\nG95 G1 X0.1 F0.01\nS1500 X0.2\nG94 G1 X0.3 F20\nM2");
+    assert_eq!(feeds(&events), vec![10.0, 15.0, 20.0]);
+    // In a millimetre program on an inch machine the feed per revolution converts like any length.
+    let events = run(&mut machine(LengthUnit::Inch), "G21 S100 G95 G1 X25.4 F2.54\nM2");
+    assert!((feeds(&events)[0] - 10.0).abs() < 1e-12, "{:?}", feeds(&events));
+    // No spindle speed: refused with the reason, not a move at some feed.
+    for text in ["G95 G1 X1 F0.01", "S0 G95 G1 X1 F0.01", "G95 G81 X1 Z-1 R1 F0.01"] {
+        let message = problem(&mut machine(LengthUnit::Inch), text).to_string();
+        assert!(message.contains("G95") && message.contains("spindle speed"), "{text}: {message}");
+    }
+    // A change of feed mode needs a new F (LinuxCNC: any G94/G95 sets F to 0).
+    assert!(matches!(problem(&mut machine(LengthUnit::Inch), "S1000 F10\nG95 G1 X1"), RunProblem::ZeroFeedRate { .. }));
+    run(&mut machine(LengthUnit::Inch), "F10\nG94 G1 X1\nM2");
+    assert!(matches!(problem(&mut linuxcnc_mm(), "F10\nG94 G1 X1"), RunProblem::ZeroFeedRate { .. }));
+    run(&mut linuxcnc_mm(), "G94 F10 G1 X1\nM2");
 }

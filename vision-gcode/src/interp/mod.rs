@@ -416,7 +416,8 @@ impl Interpreter {
         Xyz::new(x, y, z)
     }
 
-    /// The feed rate, machine units per minute (`None` before any `F` without a default).
+    /// The feed rate as programmed: machine units per minute, or per spindle revolution under
+    /// G95 (`None` before any `F` without a default). Feed moves carry the rate per minute.
     #[must_use]
     pub fn feed(&self) -> Option<f64> {
         self.modal.feed

@@ -39,8 +39,10 @@ pub(crate) struct Modal {
     /// The active system's XY rotation in force (LinuxCNC's `G10 L2 R`), degrees
     /// counter-clockwise; always 0 in the other dialects.
     pub(crate) rotation: f64,
-    /// Machine units per minute.
+    /// Machine units per minute (G94) or per revolution (G95).
     pub(crate) feed: Option<f64>,
+    /// G95: `feed` is per spindle revolution, and a feed move goes at `feed` × `speed`.
+    pub(crate) per_revolution: bool,
     /// The last `T`.
     pub(crate) selected_tool: u32,
     /// The tool loaded by M6.
@@ -73,6 +75,7 @@ impl Modal {
             system: 1,
             rotation: 0.0,
             feed: config.default_feed,
+            per_revolution: false,
             selected_tool: 0,
             tool: 0,
             tool_offset: Xyz::ZERO,
@@ -95,6 +98,7 @@ impl Modal {
         self.absolute = true;
         self.arc_absolute = false;
         self.path = config.initial_path_mode;
+        self.per_revolution = false;
         self.system = 1;
         self.frame = Frame::identity();
         for axis in 0..3 {
