@@ -149,7 +149,8 @@ impl<'a> Context<'a> {
         Ok(self.interp.param(n))
     }
 
-    /// Writes parameter `#n`; offset parameters take effect at once.
+    /// Writes parameter `#n`; offset parameters take effect at once (in every dialect: a
+    /// handler's write stands for the control's offset table).
     ///
     /// # Errors
     /// [`RunProblem::ReadOnlyParameter`], [`RunProblem::BadParameter`], a non-finite value.

@@ -144,8 +144,17 @@
 //!   current point without them), then those axes (all, without words) go to the G28.1/G30.1
 //!   position (#5161–#5163 / #5181–#5183, machine coordinates).
 //! * **Parameters** `#1`–`#9999` (0 by default). The offsets live in LinuxCNC's addresses in
-//!   machine units (G28 #5161, G92 #5211, G54… #5221 + 20·(n − 1), its LinuxCNC rotation #5230 + 20·(n − 1) in degrees); #5220, #5400–#5409 and
-//!   #5420–#5428 report the state in current units and are read-only.
+//!   machine units (G28 #5161, G92 #5211, G54… #5221 + 20·(n − 1), and under LinuxCNC the
+//!   system's rotation at #5230 + 20·(n − 1), degrees); #5220, #5400–#5409 and #5420–#5428
+//!   report the state in current units and are read-only.
+//! * **When a written origin takes effect** (`#5221 = …` in the program): in Mach4 and seed 002
+//!   from that line on; under LinuxCNC, as rs274 2.9 (pre-release and 2.9.0–2.9.10 alike:
+//!   `convert_coordinate_system` returns early for the active system), only when the system
+//!   becomes active from another one (`G55` then `G54`; `G54` under G54 does nothing) or a G10
+//!   sets it (which loads all its parameters, earlier writes included). A write by a host or a
+//!   handler ([`Interpreter::set_param`], [`Context::set_pound`]) stands for the control's
+//!   offset table and takes effect at once in every dialect; a written G92 offset (#5211…)
+//!   does too.
 //! * **Program end.** Under LinuxCNC a text that ends without M2/M30 or a closing `%` is an
 //!   error ([`RunProblem::NoProgramEnd`]), as in rs274; the other dialects complete it.
 //!   M2/M30 emit [`Event::ProgramEnd`], stop the run, and reset G54, G17, G90,

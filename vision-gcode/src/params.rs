@@ -1,8 +1,8 @@
 //! Numbered parameters `#1`–`#9999` and the addresses that mirror the modal state.
 //!
 //! The addresses follow LinuxCNC where the state exists here. The offset parameters are the
-//! offsets' storage (writing `#5221` moves the G54 origin, effective from the next line); they
-//! hold **machine units**. The read-only parameters report the state in **current units** and
+//! offsets' storage (when a written `#5221` moves the G54 origin depends on the dialect: see the
+//! crate documentation); they hold **machine units**. The read-only parameters report the state in **current units** and
 //! are refreshed after every line.
 
 use std::collections::HashMap;

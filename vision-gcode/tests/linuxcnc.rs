@@ -394,3 +394,24 @@ fn g95_feeds_per_revolution_at_the_spindle_speed() {
     assert!(matches!(problem(&mut linuxcnc_mm(), "F10\nG94 G1 X1"), RunProblem::ZeroFeedRate { .. }));
     run(&mut linuxcnc_mm(), "G94 F10 G1 X1\nM2");
 }
+
+#[test]
+fn a_written_origin_takes_effect_per_dialect() {
+    // rs274 (and LinuxCNC 2.9.0 to 2.9.10, whose convert_coordinate_system is the same) loads
+    // a system's parameters only when it becomes active or a G10 sets it; compare.py on this
+    // program (inch machine) agrees. Mach4 and seed 002 apply the write from that line on.
+    let program = "G20 G0 X1\n#5221=10\n#5222=2\nG1 X2 F100\nG54\nG1 X3\nG10 L2 P1 X5\nG1 X3.5\nG55\nG54\nG1 X4\nM2";
+    let xs = |dialect| {
+        let mut interp = Interpreter::new(InterpreterConfig { dialect, ..InterpreterConfig::default() });
+        moves(&run(&mut interp, program)).iter().map(|m| m.1[0]).collect::<Vec<_>>()
+    };
+    assert_eq!(xs(Dialect::LinuxCnc), vec![1.0, 2.0, 3.0, 8.5, 9.0]);
+    for dialect in [Dialect::Mach4, Dialect::MachineMotion] {
+        assert_eq!(xs(dialect), vec![1.0, 12.0, 13.0, 8.5, 9.0], "{dialect:?}");
+    }
+    // A host's write stands for the control's offset table: at once, in every dialect.
+    let mut interp = Interpreter::new(InterpreterConfig { dialect: Dialect::LinuxCnc, ..InterpreterConfig::default() });
+    interp.set_param(5221, 3.0).expect("writable");
+    run(&mut interp, "G0 X1\nM2");
+    assert_eq!(interp.machine_position().x, 4.0);
+}

@@ -88,6 +88,7 @@ impl LineRun<'_> {
                 }
             }
             if system == self.st.system && l == 20.0 {
+                self.st.load_system(self.cfg, self.params);
                 self.st.rederive_program(self.params);
                 self.keep_given(v, given);
                 return Ok(());
@@ -97,7 +98,7 @@ impl LineRun<'_> {
             self.params.set(work_rotation(system), r);
         }
         if system == self.st.system {
-            self.st.load_rotation(self.cfg, self.params);
+            self.st.load_system(self.cfg, self.params);
             if self.st.rotation == before.1 {
                 self.st.rederive_program(self.params);
             } else {
@@ -185,8 +186,7 @@ impl LineRun<'_> {
         self.st.rederive_program(self.params);
         let (v, given) = self.absolute_point("G92")?;
         let w = self.placement().work_of(v);
-        let [x, y, z] = self.params.triple(work_offset_base(self.st.system));
-        let g92 = Placement::offset_summand(self.st.machine - w, Xyz::new(x, y, z), self.st.tool_offset);
+        let g92 = Placement::offset_summand(self.st.machine - w, self.st.origin, self.st.tool_offset);
         for axis in (0..3).filter(|&a| given[a]) {
             let value = in_range(g92.axis(axis), || format!("the G92 offset's {}", char::from(AXIS_LETTERS[axis])))?;
             self.params.set(G92_OFFSET + axis as u32, value);

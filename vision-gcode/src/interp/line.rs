@@ -211,9 +211,14 @@ impl LineRun<'_> {
             self.tool_length(code)?;
         }
         if let Some(code) = groups.get(Group::System) {
-            self.st.system = u32::from(code / 10 - 53);
-            self.st.load_rotation(self.cfg, self.params);
-            self.st.rederive_program(self.params);
+            let system = u32::from(code / 10 - 53);
+            // rs274 reloads a system's parameters only when it becomes active, not when it is
+            // selected again (a written #5221 waits for that).
+            if system != self.st.system || self.cfg.dialect != Dialect::LinuxCnc {
+                self.st.system = system;
+                self.st.load_system(self.cfg, self.params);
+                self.st.rederive_program(self.params);
+            }
         }
         if let Some(code) = groups.get(Group::Path) {
             self.path_mode(code)?;

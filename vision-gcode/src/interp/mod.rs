@@ -226,7 +226,7 @@ impl Interpreter {
                 return Err(GcodeError::run(line, problem));
             }
             if offsets_written {
-                self.modal.rederive_program(&self.params);
+                self.modal.after_offset_write(&self.config, &self.params);
             }
             self.refresh_mirrors();
             return self.user_line(code, &words, &comments, at, handler, sink);
@@ -234,7 +234,7 @@ impl Interpreter {
         self.pending.clear();
         let mut st = self.modal;
         if offsets_written {
-            st.rederive_program(&self.params);
+            st.after_offset_write(&self.config, &self.params);
         }
         let mut run = LineRun {
             cfg: &self.config,
@@ -484,6 +484,9 @@ impl Interpreter {
         self.params.write(n, value).map_err(|p| GcodeError::run(line, p))?;
         self.params.begin();
         if affects_frame(n) {
+            // A host's or handler's write stands for the control's offset table: it takes
+            // effect at once in every dialect.
+            self.modal.load_system(&self.config, &self.params);
             self.modal.rederive_program(&self.params);
         }
         self.refresh_mirrors();

@@ -36,6 +36,9 @@ pub(crate) struct Modal {
     pub(crate) path: PathMode,
     /// 1 (G54) … 6 (G59).
     pub(crate) system: u32,
+    /// The active system's origin in force, machine units: loaded from its parameters when the
+    /// system is selected, set by G10, or (per dialect) written; see [`Modal::load_system`].
+    pub(crate) origin: Xyz,
     /// The active system's XY rotation in force (LinuxCNC's `G10 L2 R`), degrees
     /// counter-clockwise; always 0 in the other dialects.
     pub(crate) rotation: f64,
@@ -73,6 +76,7 @@ impl Modal {
             units: config.initial_units,
             path: config.initial_path_mode,
             system: 1,
+            origin: Xyz::ZERO,
             rotation: 0.0,
             feed: config.default_feed,
             per_revolution: false,
@@ -104,15 +108,14 @@ impl Modal {
         for axis in 0..3 {
             params.set(G92_OFFSET + axis, 0.0);
         }
-        self.load_rotation(config, params);
+        self.load_system(config, params);
         self.rederive_program(params);
     }
 
     /// The program → machine map now.
     pub(crate) fn placement(&self, params: &Params) -> Placement {
-        let [wx, wy, wz] = params.triple(work_offset_base(self.system));
         let [gx, gy, gz] = params.triple(G92_OFFSET);
-        let (work, g92) = (Xyz::new(wx, wy, wz), Xyz::new(gx, gy, gz));
+        let (work, g92) = (self.origin, Xyz::new(gx, gy, gz));
         Placement {
             frame: self.frame,
             offset: Placement::offset(work, g92, self.tool_offset),
@@ -120,10 +123,24 @@ impl Modal {
         }
     }
 
-    /// Takes the active system's rotation from its parameter (LinuxCNC; the other dialects
-    /// have no coordinate-system rotation).
-    pub(crate) fn load_rotation(&mut self, config: &InterpreterConfig, params: &Params) {
+    /// Takes the active system's origin and rotation from its parameters (the rotation under
+    /// LinuxCNC only; the other dialects have none).
+    pub(crate) fn load_system(&mut self, config: &InterpreterConfig, params: &Params) {
+        let [x, y, z] = params.triple(work_offset_base(self.system));
+        self.origin = Xyz::new(x, y, z);
         self.rotation = system_rotation(config, params, self.system);
+    }
+
+    /// After a program line wrote an offset parameter (G92 or a system's origin): the G92
+    /// offset always takes effect; a written origin of the active system does at once in Mach4
+    /// and seed 002, and under LinuxCNC only when the system is selected again from another
+    /// one, or a G10 sets it (rs274 2.9: `convert_coordinate_system` reloads the parameters only
+    /// on a change of system). The program point is re-derived: the machine stays.
+    pub(crate) fn after_offset_write(&mut self, config: &InterpreterConfig, params: &Params) {
+        if config.dialect != Dialect::LinuxCnc {
+            self.load_system(config, params);
+        }
+        self.rederive_program(params);
     }
 
     /// Re-derives the program position from the machine position (after a frame change; the
