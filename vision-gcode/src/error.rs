@@ -439,11 +439,15 @@ pub enum RunProblem {
         /// The M-code.
         code: &'static str,
     },
-    /// A parameter number out of range or not whole.
-    #[error("#{index} is not a parameter: use a whole number from 1 to 9999")]
+    /// A parameter number out of the dialect's range or not whole.
+    #[error("#{index} is not a parameter: use a whole number from 1 to {last} (the {dialect} range)")]
     BadParameter {
         /// The index as computed.
         index: f64,
+        /// The dialect's highest parameter number.
+        last: u32,
+        /// The dialect's name.
+        dialect: &'static str,
     },
     /// A named parameter read before any value was assigned to it.
     #[error("named parameter #<{name}> is not defined: assign it first, e.g. #<{name}> = 0")]

@@ -143,10 +143,11 @@
 //! * **G28/G30** follow LinuxCNC: a rapid to the intermediate point the axis words name (the
 //!   current point without them), then those axes (all, without words) go to the G28.1/G30.1
 //!   position (#5161–#5163 / #5181–#5183, machine coordinates).
-//! * **Parameters** `#1`–`#9999` (0 by default). The offsets live in LinuxCNC's addresses in
-//!   machine units (G28 #5161, G92 #5211, G54… #5221 + 20·(n − 1), and under LinuxCNC the
-//!   system's rotation at #5230 + 20·(n − 1), degrees); #5220, #5400–#5409 and #5420–#5428
-//!   report the state in current units and are read-only.
+//! * **Parameters** `#1`–`#9999`, under LinuxCNC `#1`–`#5601` as in rs274 (0 by default; a
+//!   number outside the dialect's range is refused, naming it). The offsets live in LinuxCNC's
+//!   addresses in machine units (G28 #5161, G92 #5211, G54… #5221 + 20·(n − 1), and under
+//!   LinuxCNC the system's rotation at #5230 + 20·(n − 1), degrees); #5220, #5400–#5409 and
+//!   #5420–#5428 report the state in current units and are read-only.
 //! * **When a written origin takes effect** (`#5221 = …` in the program): in Mach4 and seed 002
 //!   from that line on; under LinuxCNC, as rs274 2.9 (pre-release and 2.9.0–2.9.10 alike:
 //!   `convert_coordinate_system` returns early for the active system), only when the system

@@ -1,4 +1,5 @@
-//! Numbered parameters `#1`–`#9999` and the addresses that mirror the modal state.
+//! Numbered parameters (`#1`–`#9999`, LinuxCNC `#1`–`#5601`) and the addresses that mirror the
+//! modal state.
 //!
 //! The addresses follow LinuxCNC where the state exists here. The offset parameters are the
 //! offsets' storage (when a written `#5221` moves the G54 origin depends on the dialect: see the
@@ -11,7 +12,7 @@ use crate::error::RunProblem;
 use crate::geom::MAX_COORDINATE;
 use crate::words::whole_in;
 
-/// Highest parameter number.
+/// Highest parameter number of any dialect ([`crate::Dialect::last_parameter`] gives each one's).
 pub const MAX_PARAMETER: u32 = 9999;
 /// `#5161`–`#5163`: the G28 position (machine coordinates, machine units).
 pub const G28_POSITION: u32 = 5161;
@@ -64,6 +65,10 @@ const INDEX_TOLERANCE: f64 = 1e-4;
 #[derive(Debug, Clone)]
 pub(crate) struct Params {
     values: Box<[f64]>,
+    /// The highest parameter number (the dialect's).
+    last: u32,
+    /// The dialect's name, for the error message.
+    dialect: &'static str,
     undo: Vec<(u32, f64)>,
     globals: HashMap<Box<str>, f64>,
     /// Local names, one map per active call (the first for the main program).
@@ -74,16 +79,28 @@ pub(crate) struct Params {
 
 impl Default for Params {
     fn default() -> Self {
-        Params::new()
+        Params::for_dialect(crate::Dialect::default())
+    }
+}
+
+#[cfg(test)]
+impl Params {
+    /// All parameters zero, seed 002's range.
+    #[must_use]
+    pub(crate) fn new() -> Params {
+        Params::for_dialect(crate::Dialect::MachineMotion)
     }
 }
 
 impl Params {
-    /// All parameters zero.
+    /// All parameters zero, numbered 1 to `dialect`'s last.
     #[must_use]
-    pub(crate) fn new() -> Params {
+    pub(crate) fn for_dialect(dialect: crate::Dialect) -> Params {
+        let last = dialect.last_parameter();
         Params {
-            values: vec![0.0; MAX_PARAMETER as usize + 1].into_boxed_slice(),
+            values: vec![0.0; last as usize + 1].into_boxed_slice(),
+            last,
+            dialect: dialect.name(),
             undo: Vec::new(),
             globals: HashMap::new(),
             frames: vec![HashMap::new()],
@@ -94,17 +111,31 @@ impl Params {
     /// The parameter number `index` stands for.
     ///
     /// # Errors
-    /// [`RunProblem::BadParameter`] unless `index` is (within 1e-4) a whole number in 1–9999.
-    pub(crate) fn index(index: f64) -> Result<u32, RunProblem> {
-        whole_in(index, INDEX_TOLERANCE, MAX_PARAMETER).filter(|&n| n >= 1).ok_or(RunProblem::BadParameter { index })
+    /// [`RunProblem::BadParameter`] unless `index` is (within 1e-4) a whole number from 1 to
+    /// the dialect's last.
+    pub(crate) fn index(&self, index: f64) -> Result<u32, RunProblem> {
+        match whole_in(index, INDEX_TOLERANCE, self.last).filter(|&n| n >= 1) {
+            Some(n) => Ok(n),
+            None => Err(self.bad(index)),
+        }
+    }
+
+    /// The error for parameter number `index`, which is not one.
+    pub(crate) fn bad(&self, index: f64) -> RunProblem {
+        RunProblem::BadParameter { index, last: self.last, dialect: self.dialect }
+    }
+
+    /// Whether `#n` exists in the dialect.
+    pub(crate) fn exists(&self, n: u32) -> bool {
+        (1..=self.last).contains(&n)
     }
 
     /// Reads `#index` (the index as an expression computed it).
     ///
     /// # Errors
-    /// [`RunProblem::BadParameter`] for an index outside 1–9999.
+    /// [`RunProblem::BadParameter`] for an index outside the dialect's range.
     pub(crate) fn read(&self, index: f64) -> Result<f64, RunProblem> {
-        Ok(self.get(Params::index(index)?))
+        Ok(self.get(self.index(index)?))
     }
 
     /// Reads `#<name>` (lower case).
@@ -165,11 +196,12 @@ impl Params {
     /// Writes `#n` as a program or a handler does: refuses read-only parameters.
     ///
     /// # Errors
-    /// [`RunProblem::ReadOnlyParameter`], [`RunProblem::BadParameter`] for `n` outside 1–9999,
+    /// [`RunProblem::ReadOnlyParameter`], [`RunProblem::BadParameter`] for `n` outside the
+    /// dialect's range,
     /// [`RunProblem::NonFinite`] for a NaN or infinite value.
     pub(crate) fn write(&mut self, n: u32, value: f64) -> Result<(), RunProblem> {
-        if n == 0 || n > MAX_PARAMETER {
-            return Err(RunProblem::BadParameter { index: f64::from(n) });
+        if !self.exists(n) {
+            return Err(self.bad(f64::from(n)));
         }
         if let Some(what) = Params::read_only(n) {
             return Err(RunProblem::ReadOnlyParameter { index: n, what });
@@ -246,11 +278,18 @@ mod tests {
     #[test]
     fn indices_reads_writes_and_rollback() {
         let mut p = Params::new();
-        assert_eq!(Params::index(5.00001), Ok(5));
-        assert!(Params::index(0.0).is_err());
-        assert!(Params::index(10_000.0).is_err());
-        assert!(Params::index(1.5).is_err());
-        assert!(Params::index(f64::NAN).is_err());
+        assert_eq!(p.index(5.00001), Ok(5));
+        assert!(p.index(0.0).is_err());
+        assert_eq!(p.index(9999.0), Ok(9999));
+        assert!(p.index(10_000.0).is_err());
+        assert!(p.index(1.5).is_err());
+        assert!(p.index(f64::NAN).is_err());
+        let lcnc = Params::for_dialect(crate::Dialect::LinuxCnc);
+        assert_eq!(lcnc.index(5601.0), Ok(5601));
+        assert_eq!(
+            lcnc.index(5602.0),
+            Err(RunProblem::BadParameter { index: 5602.0, last: 5601, dialect: "linuxcnc" })
+        );
         p.begin();
         p.write(7, 2.5).expect("writable");
         p.write(G92_OFFSET, 1.0).expect("offsets are writable");

@@ -176,7 +176,7 @@ pub(crate) fn evaluate(
     for a in block.assignments() {
         let target = match block.nodes(a.target()) {
             [Node::Named(i)] => Target::Named(block.names().get(*i as usize).cloned().unwrap_or_default()),
-            nodes => Target::Number(Params::index(eval(nodes, block.names(), params, stack)?)?),
+            nodes => Target::Number(params.index(eval(nodes, block.names(), params, stack)?)?),
         };
         let v = value(a.value(), stack)?;
         if !v.is_finite() {

@@ -415,3 +415,23 @@ fn a_written_origin_takes_effect_per_dialect() {
     run(&mut interp, "G0 X1\nM2");
     assert_eq!(interp.machine_position().x, 4.0);
 }
+
+#[test]
+fn the_parameter_range_is_the_dialects() {
+    // rs274 refuses #5602 ("Parameter number out of range"); #5601 is its last.
+    let mut interp = linuxcnc_mm();
+    run(&mut interp, "#5601 = 2\nG0 X#5601\nM2");
+    assert_eq!(interp.machine_position().x, 2.0);
+    for text in ["#5602 = 1", "G0 X#5602", "#[5600 + 2] = 1"] {
+        let p = problem(&mut linuxcnc_mm(), text);
+        assert_eq!(p, RunProblem::BadParameter { index: 5602.0, last: 5601, dialect: "linuxcnc" }, "{text}");
+        assert!(p.to_string().contains("1 to 5601"), "{p}");
+    }
+    assert!(linuxcnc_mm().set_param(6000, 1.0).is_err());
+    for dialect in [Dialect::Mach4, Dialect::MachineMotion] {
+        let mut interp = Interpreter::new(InterpreterConfig { dialect, ..InterpreterConfig::default() });
+        run(&mut interp, "#9999 = 3\nG0 X#9999\nM2");
+        assert_eq!(interp.machine_position().x, 3.0);
+        assert!(matches!(problem(&mut interp, "#10000 = 1"), RunProblem::BadParameter { last: 9999, .. }));
+    }
+}

@@ -79,9 +79,10 @@ impl Interpreter {
         let modal = Modal::initial(&config);
         let parser =
             if config.dialect == Dialect::MachineMotion { Parser::new() } else { Parser::with_flat_comments() };
+        let params = Params::for_dialect(config.dialect);
         let mut interp = Interpreter {
             config,
-            params: Params::new(),
+            params,
             modal,
             parser,
             stack: Vec::new(),
@@ -465,10 +466,18 @@ impl Interpreter {
         })
     }
 
-    /// Parameter `#n` (0 for numbers outside 1–9999).
+    /// Parameter `#n` (0 for numbers outside the dialect's range, [`crate::Dialect::last_parameter`]).
     #[must_use]
     pub fn param(&self, n: u32) -> f64 {
         self.params.get(n)
+    }
+
+    /// Parameter `#n`, refused outside the dialect's range; reported at `line`.
+    pub(crate) fn read_param(&self, n: u32, line: u32) -> Result<f64, GcodeError> {
+        if !self.params.exists(n) {
+            return Err(GcodeError::run(line, self.params.bad(f64::from(n))));
+        }
+        Ok(self.params.get(n))
     }
 
     // ---- host operations -----------------------------------------------------------------
