@@ -492,6 +492,12 @@ pub enum RunProblem {
     /// An o-word in G-code a handler runs.
     #[error("o-words (subroutines and control flow) cannot appear in G-code run by a handler")]
     FlowInHandler,
+    /// A write to one of LinuxCNC's predefined named parameters.
+    #[error("#<{name}> is one of LinuxCNC's predefined parameters and read-only: use another name")]
+    ReadOnlyName {
+        /// The name (lower case).
+        name: String,
+    },
     /// A write to a read-only parameter.
     #[error("#{index} is read-only ({what}); write to another parameter")]
     ReadOnlyParameter {

@@ -102,7 +102,10 @@
 //!   line `O<n>` of the same text (leading zeros ignored), `M99` returns (in the main program it
 //!   is an error, not Fanuc's endless restart). They share #1–#30 with their caller.
 //! * **Named parameters** `#<name>` (case and blanks ignored): local to the call that wrote
-//!   them, global when the name starts with `_`; reading one never written is an error.
+//!   them, global when the name starts with `_`; reading one never written is an error. Under
+//!   LinuxCNC a few of its predefined read-only names are provided: `_task` (0, as in any
+//!   preview interpreter), `_vmajor`/`_vminor` (2.9, 0), `_x`/`_y`/`_z`, `_imperial`/`_metric`,
+//!   `_absolute`/`_incremental`, `_current_tool`/`_selected_tool`, `_feed`, `_rpm`.
 //! * **Frame changes never move the machine** (G54–G59, G10 on the active system, G92, G52,
 //!   G68/G69, G51/G50, M6, a tool-offset or offset-parameter write): the program position is
 //!   re-derived from the machine position, and the next move goes to the new frame.

@@ -36,6 +36,28 @@ pub const TOOL_OFFSET: u32 = 5401;
 /// `#5420`–`#5422`: the current X, Y, Z in the program frame, current units. Read-only.
 pub const POSITION: u32 = 5420;
 
+/// LinuxCNC's predefined read-only named parameters provided under its dialect (names as
+/// programs read them, lower case): `_task` is 0 as in any preview interpreter (rs274, Axis's
+/// preview), `_vmajor`/`_vminor` 2.9 and 0 (rs274 reads "2.9.0" with `%lf%lf`), `_x`/`_y`/`_z`
+/// the current point (#5420–#5422), then the units, distance mode, tools, feed and spindle
+/// speed.
+pub(crate) const PREDEFINED: [&str; 14] = [
+    "_task",
+    "_vmajor",
+    "_vminor",
+    "_x",
+    "_y",
+    "_z",
+    "_imperial",
+    "_metric",
+    "_absolute",
+    "_incremental",
+    "_current_tool",
+    "_selected_tool",
+    "_feed",
+    "_rpm",
+];
+
 /// Number of coordinate systems: 1 (G54) … 6 (G59); G59.1–G59.3 are not supported.
 pub(crate) const SYSTEMS: u32 = 6;
 
@@ -69,6 +91,8 @@ pub(crate) struct Params {
     last: u32,
     /// The dialect's name, for the error message.
     dialect: &'static str,
+    /// The values of [`PREDEFINED`] (LinuxCNC only), refreshed after every line.
+    predefined: Option<[f64; PREDEFINED.len()]>,
     undo: Vec<(u32, f64)>,
     globals: HashMap<Box<str>, f64>,
     /// Local names, one map per active call (the first for the main program).
@@ -101,6 +125,7 @@ impl Params {
             values: vec![0.0; last as usize + 1].into_boxed_slice(),
             last,
             dialect: dialect.name(),
+            predefined: (dialect == crate::Dialect::LinuxCnc).then_some([0.0; PREDEFINED.len()]),
             undo: Vec::new(),
             globals: HashMap::new(),
             frames: vec![HashMap::new()],
@@ -143,6 +168,9 @@ impl Params {
     /// # Errors
     /// [`RunProblem::UndefinedName`] when nothing was assigned to it (in this call, for a local).
     pub(crate) fn read_named(&self, name: &str) -> Result<f64, RunProblem> {
+        if let Some(v) = self.predefined(name) {
+            return Ok(v);
+        }
         let value =
             if name.starts_with('_') { self.globals.get(name) } else { self.frames.last().and_then(|f| f.get(name)) };
         value.copied().ok_or_else(|| RunProblem::UndefinedName { name: name.to_string() })
@@ -153,6 +181,9 @@ impl Params {
     /// # Errors
     /// [`RunProblem::NonFinite`] for a NaN or infinite value.
     pub(crate) fn write_named(&mut self, name: &str, value: f64) -> Result<(), RunProblem> {
+        if self.predefined(name).is_some() {
+            return Err(RunProblem::ReadOnlyName { name: name.to_string() });
+        }
         if !value.is_finite() {
             return Err(RunProblem::NonFinite { what: "the value written to a parameter" });
         }
@@ -161,6 +192,19 @@ impl Params {
         let old = map.insert(name.into(), value);
         self.named_undo.push((name.into(), old));
         Ok(())
+    }
+
+    /// The value of a predefined name (under LinuxCNC), `None` for any other name.
+    fn predefined(&self, name: &str) -> Option<f64> {
+        let values = self.predefined.as_ref().filter(|_| name.starts_with('_'))?;
+        PREDEFINED.iter().position(|p| *p == name).map(|i| values[i])
+    }
+
+    /// Sets the predefined names' values (ignored outside LinuxCNC).
+    pub(crate) fn set_predefined(&mut self, values: [f64; PREDEFINED.len()]) {
+        if let Some(slot) = self.predefined.as_mut() {
+            *slot = values;
+        }
     }
 
     /// A subroutine call starts: a fresh frame of local names.

@@ -435,3 +435,23 @@ fn the_parameter_range_is_the_dialects() {
         assert!(matches!(problem(&mut interp, "#10000 = 1"), RunProblem::BadParameter { last: 9999, .. }));
     }
 }
+
+#[test]
+fn linuxcnc_predefined_named_parameters_read_as_in_rs274() {
+    // rs274 printed these end points for the same program (compare.py: agree). A line reads
+    // before it executes: `_absolute` on the G90 line still reads G91's 0.
+    let program = "G21 G91\nG0 X[#<_task> + 1]\nG0 X[#<_vmajor>] Y[#<_vminor>] Z[#<_incremental>]
+G90 G0 X[#<_x> + 1] Y[#<_imperial>*10 + #<_metric>] Z[#<_absolute>]\nF250 S1200 T3
+G0 X[#<_feed>] Y[#<_rpm>] Z[#<_selected_tool>]\nM6\nG0 X[#<_current_tool>] Y[#<_y>] Z[#<_z>]\nM2";
+    let events = run(&mut linuxcnc_mm(), program);
+    let want = [[1.0, 0.0, 0.0], [3.9, 0.0, 1.0], [4.9, 1.0, 0.0], [250.0, 1200.0, 3.0], [3.0, 1200.0, 3.0]];
+    let got = moves(&events);
+    assert_eq!(got.len(), want.len(), "{got:?}");
+    for (g, w) in got.iter().zip(want) {
+        assert!((0..3).all(|i| (g.1[i] - w[i]).abs() < 1e-9), "{g:?} != {w:?}");
+    }
+    assert_eq!(problem(&mut linuxcnc_mm(), "#<_x> = 1"), RunProblem::ReadOnlyName { name: "_x".into() });
+    // Elsewhere they are ordinary (undefined) globals.
+    let mut mach4 = Interpreter::new(InterpreterConfig { dialect: Dialect::Mach4, ..InterpreterConfig::default() });
+    assert!(matches!(problem(&mut mach4, "G0 X#<_task>"), RunProblem::UndefinedName { .. }));
+}

@@ -318,6 +318,28 @@ impl Interpreter {
             self.params.set_mirror(TOOL_OFFSET + i, o);
             self.params.set_mirror(POSITION + i, p);
         }
+        if self.config.dialect == Dialect::LinuxCnc {
+            let flag = |b: bool| if b { 1.0 } else { 0.0 };
+            let inch = st.units == LengthUnit::Inch;
+            let feed = st.feed.map_or(0.0, |f| self.config.machine_unit.convert(f, st.units));
+            // In PREDEFINED's order.
+            self.params.set_predefined([
+                0.0,
+                2.9,
+                0.0,
+                pos.x,
+                pos.y,
+                pos.z,
+                flag(inch),
+                flag(!inch),
+                flag(st.absolute),
+                flag(!st.absolute),
+                f64::from(st.tool),
+                f64::from(st.selected_tool),
+                feed,
+                st.speed.unwrap_or(0.0),
+            ]);
+        }
     }
 
     /// A triple in machine units, in the current program units.
