@@ -11,15 +11,24 @@ const AT: usize = 27;
 const CARET: usize = 28;
 const SLOTS: usize = 29;
 
-/// The slot of an upper-case letter, `$`, `@` or `^`.
+/// The slots by ASCII code: a table, not a `match`, as this runs for every word.
+const SLOT_OF: [u8; 128] = {
+    let mut table = [0u8; 128];
+    let mut c = b'A';
+    while c <= b'Z' {
+        table[c as usize] = c - b'A';
+        c += 1;
+    }
+    table[b'$' as usize] = DOLLAR as u8;
+    table[b'@' as usize] = AT as u8;
+    table[b'^' as usize] = CARET as u8;
+    table
+};
+
+/// The slot of an upper-case letter, `$`, `@` or `^` (the parser passes no other byte).
 #[inline]
 pub(crate) fn slot(letter: u8) -> usize {
-    match letter {
-        b'$' => DOLLAR,
-        b'@' => AT,
-        b'^' => CARET,
-        _ => usize::from(letter - b'A'),
-    }
+    usize::from(SLOT_OF[usize::from(letter & 0x7f)])
 }
 
 /// The letter of a slot.
