@@ -455,3 +455,16 @@ G0 X[#<_feed>] Y[#<_rpm>] Z[#<_selected_tool>]\nM6\nG0 X[#<_current_tool>] Y[#<_
     let mut mach4 = Interpreter::new(InterpreterConfig { dialect: Dialect::Mach4, ..InterpreterConfig::default() });
     assert!(matches!(problem(&mut mach4, "G0 X#<_task>"), RunProblem::UndefinedName { .. }));
 }
+
+#[test]
+fn a_hosts_rotation_write_takes_effect_at_once() {
+    let mut interp = linuxcnc_mm();
+    interp.set_param(5230, 90.0).expect("writable");
+    run(&mut interp, "G0 X1 Y0\nM2");
+    assert!((interp.machine_position() - Xyz::new(0.0, 1.0, 0.0)).norm() < 1e-12, "{:?}", interp.machine_position());
+    // A program's write waits, as rs274's does, for the system to be selected again
+    // (compare.py on this program: agree).
+    let xs: Vec<_> =
+        moves(&run(&mut linuxcnc_mm(), "#5230 = 90\nG0 X1 Y0\nG55\nG54\nG0 X2 Y0\nM2")).iter().map(|m| m.1).collect();
+    assert!((xs[0][0] - 1.0).abs() < 1e-12 && (xs[1][1] - 2.0).abs() < 1e-12, "{xs:?}");
+}

@@ -23,7 +23,7 @@ use crate::tools::{Tool, ToolTable};
 use crate::watch::{PositionWatch, Publisher};
 use crate::words::{evaluate, Target, Words};
 use line::{is_builtin_m, Flow, LineRun, Pending};
-use modal::{is_work_offset, work_offset_base, Modal};
+use modal::{is_work_offset, work_offset_base, Modal, SYSTEMS};
 
 /// Where a line sits: its number in the text being run, the line its events are tagged with, and
 /// whether it is G-code run by a handler.
@@ -617,9 +617,12 @@ fn is_user_mcode(range: &std::ops::RangeInclusive<u32>, code: u32) -> bool {
     !is_builtin_m(code) && range.contains(&code)
 }
 
-/// Whether writing `#n` moves the program frame (G92 and work offsets).
+/// Whether writing `#n` moves the program frame (G92, work offsets and, under LinuxCNC, their
+/// rotations).
 fn affects_frame(n: u32) -> bool {
-    (G92_OFFSET..G92_OFFSET + 3).contains(&n) || is_work_offset(n)
+    (G92_OFFSET..G92_OFFSET + 3).contains(&n)
+        || is_work_offset(n)
+        || (1..=SYSTEMS).any(|system| crate::params::work_rotation(system) == n)
 }
 
 /// Events from handler G-code carry the M-code's line; outside a program (tag 0) they carry
