@@ -235,8 +235,8 @@ def fmt(p):
 
 def random_program(rng):
     """A random program of the G-code both interpreters share: units, planes, G90/G91, G0-G3
-    (centre and R forms, full circles, P turns), work offsets, G10 L2 rotations, G10 L20, G52,
-    G92, G53, canned cycles and o-word loops."""
+    (centre and R forms, full circles, P turns), polar words, work offsets, G10 L2 rotations,
+    G10 L20, G52, G92, G53, canned cycles and o-word loops."""
     f = lambda v: "%.4f" % v
     units = rng.choice(["G20", "G21"])
     big = 1.0 if units == "G20" else 25.4
@@ -247,7 +247,15 @@ def random_program(rng):
     absolute = True
     for _ in range(rng.randint(5, 25)):
         kind = rng.random()
-        if kind < 0.30:
+        if kind < 0.05:
+            # LinuxCNC's polar words: distance and/or angle, absolute or as changes (G91).
+            words = rng.choice([["@%s" % f(rng.uniform(0.1, 3) * big), "^%s" % f(rng.uniform(-360, 360))],
+                                ["@%s" % f(rng.uniform(-1, 1) * big)], ["^%s" % f(rng.uniform(-90, 90))]])
+            # Away from the origin first: there a lone @ (G90) or any G91 polar word is undefined.
+            lines.append("G0 X%s Y%s" % (f(rng.uniform(0.2, 1) * big), f(rng.uniform(0.2, 1) * big)))
+            lines.append("%s %s" % (rng.choice(["G0", "G1"]), " ".join(words)))
+            pos = None
+        elif kind < 0.30:
             code = rng.choice(["G0", "G1"])
             axes = rng.sample("XYZ", rng.randint(1, 3))
             words = []
