@@ -18,8 +18,9 @@ pub const FIELDS: u32 = 8;
 pub const BLOCK_LEN: u32 = SLOTS * FIELDS;
 /// The lowest allowed base.
 pub const MIN_BASE: i64 = 100;
-/// The highest numbered variable every supported host has (`#1..#9999` in rs274 and Mach4): a
-/// block past it can never run, so it is refused with the profile, not at the first M280.
+/// The highest numbered variable a supported host has (`#1..#9999` in Mach4; LinuxCNC's rs274
+/// stops at #5601, where M280 refuses a block past it): a block past #9999 can never run, so it
+/// is refused with the profile, not at the first M280.
 pub const MAX_END: i64 = 9999;
 /// Ranges the block may not overlap (inclusive): probe results and fixture offsets.
 pub const RESERVED: [(i64, i64); 2] = [(5061, 5081), (5201, 5500)];

@@ -31,6 +31,17 @@ pub enum Dialect {
 }
 
 impl Dialect {
+    /// The highest numbered parameter: LinuxCNC 2.9's 5601 (`RS274NGC_MAX_PARAMETERS` is 5602,
+    /// indices below it); 9999 for Mach4 and seed 002, the range the pound-variable block of
+    /// the seed's profile assumes (no source here gives Mach4 a smaller one).
+    #[must_use]
+    pub fn last_parameter(self) -> u32 {
+        match self {
+            Dialect::LinuxCnc => 5601,
+            Dialect::MachineMotion | Dialect::Mach4 => crate::params::MAX_PARAMETER,
+        }
+    }
+
     /// Its name on the command line: `machinemotion`, `mach4`, `linuxcnc`.
     #[must_use]
     pub fn name(self) -> &'static str {

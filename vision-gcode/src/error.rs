@@ -155,9 +155,6 @@ pub enum SyntaxProblem {
     /// `N` with a fraction, a sign or an expression.
     #[error("the line number `N` must be a whole number, e.g. N10")]
     BadLineNumber,
-    /// LinuxCNC's polar coordinate words.
-    #[error("polar coordinates (`@` radius, `^` angle) are not supported: post-process with X and Y")]
-    PolarCoordinates,
     /// An `o` word after other words.
     #[error("an o-word (`o100 sub`, `o<name> call`, `o1 if [...]`) must start its line (after `/` and `N` only)")]
     OWordNotFirst,
@@ -328,6 +325,12 @@ pub enum RunProblem {
         /// The motion code.
         code: &'static str,
     },
+    /// A feed move under G95 (feed per revolution) with no spindle speed.
+    #[error("{code} under G95 (feed per revolution) with no spindle speed: program S (revolutions per minute), or G94 and a feed per minute")]
+    NoSpindleSpeed {
+        /// The motion code.
+        code: &'static str,
+    },
     /// G2/G3 with neither centre words nor R.
     #[error("{code} needs centre words ({centre}) or R")]
     ArcNoCentre {
@@ -436,11 +439,15 @@ pub enum RunProblem {
         /// The M-code.
         code: &'static str,
     },
-    /// A parameter number out of range or not whole.
-    #[error("#{index} is not a parameter: use a whole number from 1 to 9999")]
+    /// A parameter number out of the dialect's range or not whole.
+    #[error("#{index} is not a parameter: use a whole number from 1 to {last} (the {dialect} range)")]
     BadParameter {
         /// The index as computed.
         index: f64,
+        /// The dialect's highest parameter number.
+        last: u32,
+        /// The dialect's name.
+        dialect: &'static str,
     },
     /// A named parameter read before any value was assigned to it.
     #[error("named parameter #<{name}> is not defined: assign it first, e.g. #<{name}> = 0")]
@@ -485,6 +492,12 @@ pub enum RunProblem {
     /// An o-word in G-code a handler runs.
     #[error("o-words (subroutines and control flow) cannot appear in G-code run by a handler")]
     FlowInHandler,
+    /// A write to one of LinuxCNC's predefined named parameters.
+    #[error("#<{name}> is one of LinuxCNC's predefined parameters and read-only: use another name")]
+    ReadOnlyName {
+        /// The name (lower case).
+        name: String,
+    },
     /// A write to a read-only parameter.
     #[error("#{index} is read-only ({what}); write to another parameter")]
     ReadOnlyParameter {
@@ -534,6 +547,15 @@ pub enum RunProblem {
         /// The L value.
         l: f64,
     },
+    /// LinuxCNC's polar words `@` / `^` where they cannot be used.
+    #[error("polar coordinates (`@` distance, `^` angle): {problem}")]
+    Polar {
+        /// Why not here.
+        problem: &'static str,
+    },
+    /// `R` on `G10 L20` (LinuxCNC rotates a system with `G10 L2 … R` only).
+    #[error("R is not allowed on G10 L20: rotate the system with G10 L2 P… R…, then set its origin with G10 L20")]
+    G10RotationL20,
     /// A word, computed position or offset beyond ±[`crate::MAX_COORDINATE`] machine units.
     #[error("{what} is {value:e} machine units, beyond ±{max:e}: check the program's units and values", max = crate::MAX_COORDINATE)]
     BeyondRange {

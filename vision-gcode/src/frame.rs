@@ -72,13 +72,65 @@ impl Frame {
     }
 }
 
-/// The whole program → machine map at one moment: the frame and the summed offsets.
+/// The whole program → machine map at one moment: the frame, the summed offsets and LinuxCNC's
+/// coordinate-system rotation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Placement {
     pub(crate) frame: Frame,
     /// `x = (work.x + g92.x) − tool.x`, `y` likewise, `z = (work.z + g92.z) + tool length`,
-    /// machine units.
+    /// machine units. Under a [`SystemRotation`] only `z` is used.
     pub(crate) offset: Xyz,
+    /// The active G5x system's XY rotation (`G10 L2 R`), `None` when it has none.
+    pub(crate) rotation: Option<SystemRotation>,
+}
+
+/// LinuxCNC's rotation of a coordinate system about its origin (emccanon.cc,
+/// `rotate_and_offset_pos`): `m.xy = (work.xy − tool.xy) + R·(w.xy + g92.xy)`, the G92 (and
+/// G52) offset added before rotating, the tool offset after.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct SystemRotation {
+    /// `R(θ)`, counter-clockwise.
+    matrix: Matrix2<f64>,
+    /// The G92 offset's X/Y, machine units: added before rotating.
+    inner: Vector2<f64>,
+    /// The work origin's X/Y minus the tool's X/Y offset, machine units: added after.
+    outer: Vector2<f64>,
+}
+
+impl SystemRotation {
+    /// The rotation by `degrees` (counter-clockwise) of a system whose origin is `work`, with
+    /// the G92 offset `g92` and the tool offset `tool` (machine units); `None` for 0°, so that
+    /// an unrotated system keeps the plain offset sum bit for bit.
+    pub(crate) fn new(degrees: f64, work: Xyz, g92: Xyz, tool: Xyz) -> Option<SystemRotation> {
+        if degrees == 0.0 {
+            return None;
+        }
+        let (sin, cos) = degrees.to_radians().sin_cos();
+        Some(SystemRotation {
+            matrix: Matrix2::new(cos, -sin, sin, cos),
+            inner: Vector2::new(g92.x, g92.y),
+            outer: Vector2::new(work.x - tool.x, work.y - tool.y),
+        })
+    }
+
+    /// `p` rotated by `degrees` counter-clockwise about the origin (0° returns it unchanged).
+    pub(crate) fn turn(degrees: f64, p: Point2<f64>) -> Point2<f64> {
+        match SystemRotation::new(degrees, Xyz::ZERO, Xyz::ZERO, Xyz::ZERO) {
+            None => p,
+            Some(r) => r.apply(p),
+        }
+    }
+
+    /// Work X/Y → machine X/Y.
+    #[inline]
+    pub(crate) fn apply(&self, w: Point2<f64>) -> Point2<f64> {
+        Point2::from(self.matrix * (w.coords + self.inner) + self.outer)
+    }
+
+    /// Machine X/Y → work X/Y.
+    fn inverse(&self, m: Point2<f64>) -> Point2<f64> {
+        Point2::from(self.matrix.transpose() * (m.coords - self.outer) - self.inner)
+    }
 }
 
 impl Placement {
@@ -103,13 +155,28 @@ impl Placement {
     #[inline]
     pub(crate) fn machine_of(&self, p: Xyz) -> Xyz {
         let w = self.work_of(p);
-        Xyz { x: w.x + self.offset.x, y: w.y + self.offset.y, z: w.z + self.offset.z }
+        match &self.rotation {
+            None => Xyz { x: w.x + self.offset.x, y: w.y + self.offset.y, z: w.z + self.offset.z },
+            Some(r) => {
+                let m = r.apply(w.xy());
+                Xyz { x: m.x, y: m.y, z: w.z + self.offset.z }
+            }
+        }
     }
 
     /// Machine point → program point.
     pub(crate) fn program_of(&self, m: Xyz) -> Xyz {
-        let p = self.frame.inverse(Point2::new(m.x - self.offset.x, m.y - self.offset.y));
+        let w = match &self.rotation {
+            None => Point2::new(m.x - self.offset.x, m.y - self.offset.y),
+            Some(r) => r.inverse(m.xy()),
+        };
+        let p = self.frame.inverse(w);
         Xyz { x: p.x, y: p.y, z: (m.z - self.offset.z) - self.frame.local_z }
+    }
+
+    /// True when the whole X/Y map is a pure translation (no scale, no rotation of any kind).
+    pub(crate) fn is_translation(&self) -> bool {
+        self.rotation.is_none() && self.frame.is_translation()
     }
 }
 
@@ -129,7 +196,11 @@ mod tests {
             let back = frame.inverse(frame.apply(p));
             assert!((back - p).norm() < 1e-12);
         }
-        let placement = Placement { frame, offset: Placement::offset(Xyz::new(1.0, 2.0, 3.0), Xyz::ZERO, Xyz::ZERO) };
+        let placement = Placement {
+            frame,
+            offset: Placement::offset(Xyz::new(1.0, 2.0, 3.0), Xyz::ZERO, Xyz::ZERO),
+            rotation: None,
+        };
         let p = Xyz::new(1.0, 1.0, 1.0);
         let m = placement.machine_of(p);
         assert!((placement.program_of(m) - p).norm() < 1e-12);

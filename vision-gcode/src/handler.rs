@@ -141,15 +141,14 @@ impl<'a> Context<'a> {
     /// Parameter `#n`.
     ///
     /// # Errors
-    /// [`RunProblem::BadParameter`] for `n` outside 1–9999.
+    /// [`RunProblem::BadParameter`] for `n` outside the dialect's range
+    /// ([`crate::Dialect::last_parameter`]).
     pub fn pound(&self, n: u32) -> Result<f64, GcodeError> {
-        if n == 0 || n > crate::params::MAX_PARAMETER {
-            return Err(GcodeError::run(self.line, RunProblem::BadParameter { index: f64::from(n) }));
-        }
-        Ok(self.interp.param(n))
+        self.interp.read_param(n, self.line)
     }
 
-    /// Writes parameter `#n`; offset parameters take effect at once.
+    /// Writes parameter `#n`; offset parameters take effect at once (in every dialect: a
+    /// handler's write stands for the control's offset table).
     ///
     /// # Errors
     /// [`RunProblem::ReadOnlyParameter`], [`RunProblem::BadParameter`], a non-finite value.

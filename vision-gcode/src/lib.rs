@@ -43,6 +43,22 @@
 //! program → work is bit-identical to [`vision_math::AlignmentChain::apply`] with the chain in
 //! machine units. `G91` increments are increments of `p`.
 //!
+//! Under LinuxCNC (which has no G68/G51, and keeps G52 in the G92 offset) a coordinate system
+//! may be rotated about its origin by `G10 L2 P… R…` (degrees, counter-clockwise, stored per
+//! system at #5230 + 20·(n − 1)); then, as LinuxCNC's canon (`rotate_and_offset_pos`) does,
+//!
+//! ```text
+//! m.xy = (work.xy − tool.xy) + R(rotation)·(p.xy + g92.xy)     G92/G52 before the rotation
+//! m.z  = p.z + ((work.z + g92.z) + tool.length)
+//! ```
+//!
+//! One function maps every point (moves, arc ends and centres, cycles), so the simulator and the
+//! planner, which take the interpreter's machine-coordinate events, see the same map. G53
+//! ignores the rotation; a G17 arc stays an exact arc (its centre rotated), a G18/G19 arc in a
+//! rotated system leaves the machine planes and becomes feed segments within
+//! [`InterpreterConfig::chord_tolerance`]. Mach4 and seed 002 rotate with G68 only (`G10 … R`
+//! other than `R0` is refused there), so the two rotations never meet.
+//!
 //! # Decisions where the spec is open
 //!
 //! * **Units.** Machine coordinates, events, offset parameters and the tool table are in the
@@ -68,7 +84,11 @@
 //!   coordinates; the canned cycles G73, G81, G82, G83, G85, G89 (XY plane, G98/G99, R, Q, P, L,
 //!   G91 repeats) expand into straight moves and dwells in exact-stop mode; `%` on the first
 //!   non-blank line makes the next `%` line end the program; `/` at the start of a line is
-//!   block delete (skipped only with [`InterpreterConfig::block_delete`]). Features left out
+//!   block delete (skipped only with [`InterpreterConfig::block_delete`]). Polar words (`@`
+//!   distance, `^` angle in degrees, G17 only, LinuxCNC only) place moves and cycle holes as in
+//!   rs274, absolute from the program origin or, under G91, as changes of the current point's.
+//!   G95 feeds per spindle revolution: a feed move goes at F × S (a move with no S is refused);
+//!   a change of feed mode needs a new F (under LinuxCNC any G94/G95 does). Features left out
 //!   (cutter compensation, lathe modes and cycles, threading, NURBS, probing, inverse-time feed,
 //!   HAL M-codes, …) are refused with a message naming them ([`RunProblem::Unsupported`]).
 //! * **o-words** (LinuxCNC): `sub`/`endsub`/`call`/`return` (arguments in #1–#30, local to the
@@ -82,7 +102,10 @@
 //!   line `O<n>` of the same text (leading zeros ignored), `M99` returns (in the main program it
 //!   is an error, not Fanuc's endless restart). They share #1–#30 with their caller.
 //! * **Named parameters** `#<name>` (case and blanks ignored): local to the call that wrote
-//!   them, global when the name starts with `_`; reading one never written is an error.
+//!   them, global when the name starts with `_`; reading one never written is an error. Under
+//!   LinuxCNC a few of its predefined read-only names are provided: `_task` (0, as in any
+//!   preview interpreter), `_vmajor`/`_vminor` (2.9, 0), `_x`/`_y`/`_z`, `_imperial`/`_metric`,
+//!   `_absolute`/`_incremental`, `_current_tool`/`_selected_tool`, `_feed`, `_rpm`.
 //! * **Frame changes never move the machine** (G54–G59, G10 on the active system, G92, G52,
 //!   G68/G69, G51/G50, M6, a tool-offset or offset-parameter write): the program position is
 //!   re-derived from the machine position, and the next move goes to the new frame.
@@ -98,7 +121,12 @@
 //!   (seed 002) or comments ending at the first `)`, G68/G51 (refused under LinuxCNC).
 //! * **G92** with an axis word missing zeroes that axis's G92 offset (seed 002); G52, G51 and
 //!   G10 L2 leave unmentioned axes unchanged. G92 and G10 L20 make the current point read exactly
-//!   the given values.
+//!   the given values. Under LinuxCNC, G52 and G92 share the offset at #5211 (G52 sets it, G92
+//!   computes it), both from the current point as rs274 does, and a G10 that changes the active
+//!   system's rotation leaves the current point where rs274 puts it (rotated by the old angle,
+//!   moved by the change of origin, rotated back, the G52/G92 offset left out): with a G52/G92
+//!   offset in force that is not the point the machine position reads, and the next incremental
+//!   or partial move goes where LinuxCNC sends it.
 //! * **Ranges.** Axis words, moves' machine positions (arc centres included), offsets and the
 //!   offset parameters are refused beyond ±[`MAX_COORDINATE`] machine units, the bound the path
 //!   planner uses too; `G68 R` is at most ±360°, a `G51` factor's magnitude 0.001 to 1000.
@@ -118,9 +146,19 @@
 //! * **G28/G30** follow LinuxCNC: a rapid to the intermediate point the axis words name (the
 //!   current point without them), then those axes (all, without words) go to the G28.1/G30.1
 //!   position (#5161–#5163 / #5181–#5183, machine coordinates).
-//! * **Parameters** `#1`–`#9999` (0 by default). The offsets live in LinuxCNC's addresses in
-//!   machine units (G28 #5161, G92 #5211, G54… #5221 + 20·(n − 1)); #5220, #5400–#5409 and
+//! * **Parameters** `#1`–`#9999`, under LinuxCNC `#1`–`#5601` as in rs274 (0 by default; a
+//!   number outside the dialect's range is refused, naming it). The offsets live in LinuxCNC's
+//!   addresses in machine units (G28 #5161, G92 #5211, G54… #5221 + 20·(n − 1), and under
+//!   LinuxCNC the system's rotation at #5230 + 20·(n − 1), degrees); #5220, #5400–#5409 and
 //!   #5420–#5428 report the state in current units and are read-only.
+//! * **When a written origin takes effect** (`#5221 = …` in the program): in Mach4 and seed 002
+//!   from that line on; under LinuxCNC, as rs274 2.9 (pre-release and 2.9.0–2.9.10 alike:
+//!   `convert_coordinate_system` returns early for the active system), only when the system
+//!   becomes active from another one (`G55` then `G54`; `G54` under G54 does nothing) or a G10
+//!   sets it (which loads all its parameters, earlier writes included). A write by a host or a
+//!   handler ([`Interpreter::set_param`], [`Context::set_pound`]) stands for the control's
+//!   offset table and takes effect at once in every dialect; a written G92 offset (#5211…)
+//!   does too.
 //! * **Program end.** Under LinuxCNC a text that ends without M2/M30 or a closing `%` is an
 //!   error ([`RunProblem::NoProgramEnd`]), as in rs274; the other dialects complete it.
 //!   M2/M30 emit [`Event::ProgramEnd`], stop the run, and reset G54, G17, G90,

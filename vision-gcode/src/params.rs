@@ -1,8 +1,9 @@
-//! Numbered parameters `#1`–`#9999` and the addresses that mirror the modal state.
+//! Numbered parameters (`#1`–`#9999`, LinuxCNC `#1`–`#5601`) and the addresses that mirror the
+//! modal state.
 //!
 //! The addresses follow LinuxCNC where the state exists here. The offset parameters are the
-//! offsets' storage (writing `#5221` moves the G54 origin, effective from the next line); they
-//! hold **machine units**. The read-only parameters report the state in **current units** and
+//! offsets' storage (when a written `#5221` moves the G54 origin depends on the dialect: see the
+//! crate documentation); they hold **machine units**. The read-only parameters report the state in **current units** and
 //! are refreshed after every line.
 
 use std::collections::HashMap;
@@ -11,7 +12,7 @@ use crate::error::RunProblem;
 use crate::geom::MAX_COORDINATE;
 use crate::words::whole_in;
 
-/// Highest parameter number.
+/// Highest parameter number of any dialect ([`crate::Dialect::last_parameter`] gives each one's).
 pub const MAX_PARAMETER: u32 = 9999;
 /// `#5161`–`#5163`: the G28 position (machine coordinates, machine units).
 pub const G28_POSITION: u32 = 5161;
@@ -25,12 +26,37 @@ pub const ACTIVE_SYSTEM: u32 = 5220;
 pub const WORK_OFFSET_BASE: u32 = 5221;
 /// Distance between two coordinate systems' blocks.
 pub const WORK_OFFSET_STRIDE: u32 = 20;
+/// `#5230 + 20·(n − 1)`: the XY rotation of coordinate system n about its origin (LinuxCNC's
+/// `G10 L2 R`), degrees counter-clockwise.
+pub const WORK_ROTATION: u32 = 5230;
 /// `#5400`: the active tool number. Read-only.
 pub const TOOL_NUMBER: u32 = 5400;
 /// `#5401`–`#5403`: the active tool's X, Y offset and Z length, current units. Read-only.
 pub const TOOL_OFFSET: u32 = 5401;
 /// `#5420`–`#5422`: the current X, Y, Z in the program frame, current units. Read-only.
 pub const POSITION: u32 = 5420;
+
+/// LinuxCNC's predefined read-only named parameters provided under its dialect (names as
+/// programs read them, lower case): `_task` is 0 as in any preview interpreter (rs274, Axis's
+/// preview), `_vmajor`/`_vminor` 2.9 and 0 (rs274 reads "2.9.0" with `%lf%lf`), `_x`/`_y`/`_z`
+/// the current point (#5420–#5422), then the units, distance mode, tools, feed and spindle
+/// speed.
+pub(crate) const PREDEFINED: [&str; 14] = [
+    "_task",
+    "_vmajor",
+    "_vminor",
+    "_x",
+    "_y",
+    "_z",
+    "_imperial",
+    "_metric",
+    "_absolute",
+    "_incremental",
+    "_current_tool",
+    "_selected_tool",
+    "_feed",
+    "_rpm",
+];
 
 /// Number of coordinate systems: 1 (G54) … 6 (G59); G59.1–G59.3 are not supported.
 pub(crate) const SYSTEMS: u32 = 6;
@@ -39,6 +65,11 @@ pub(crate) const SYSTEMS: u32 = 6;
 /// stands for the nearest system).
 pub(crate) fn work_offset_base(n: u32) -> u32 {
     WORK_OFFSET_BASE + WORK_OFFSET_STRIDE * (n.clamp(1, SYSTEMS) - 1)
+}
+
+/// The rotation parameter of coordinate system `n` (as [`work_offset_base`]).
+pub(crate) fn work_rotation(n: u32) -> u32 {
+    work_offset_base(n) + (WORK_ROTATION - WORK_OFFSET_BASE)
 }
 
 /// Whether `#n` holds the X, Y or Z origin of one of the coordinate systems.
@@ -56,6 +87,12 @@ const INDEX_TOLERANCE: f64 = 1e-4;
 #[derive(Debug, Clone)]
 pub(crate) struct Params {
     values: Box<[f64]>,
+    /// The highest parameter number (the dialect's).
+    last: u32,
+    /// The dialect's name, for the error message.
+    dialect: &'static str,
+    /// The values of [`PREDEFINED`] (LinuxCNC only), refreshed after every line.
+    predefined: Option<[f64; PREDEFINED.len()]>,
     undo: Vec<(u32, f64)>,
     globals: HashMap<Box<str>, f64>,
     /// Local names, one map per active call (the first for the main program).
@@ -66,16 +103,29 @@ pub(crate) struct Params {
 
 impl Default for Params {
     fn default() -> Self {
-        Params::new()
+        Params::for_dialect(crate::Dialect::default())
+    }
+}
+
+#[cfg(test)]
+impl Params {
+    /// All parameters zero, seed 002's range.
+    #[must_use]
+    pub(crate) fn new() -> Params {
+        Params::for_dialect(crate::Dialect::MachineMotion)
     }
 }
 
 impl Params {
-    /// All parameters zero.
+    /// All parameters zero, numbered 1 to `dialect`'s last.
     #[must_use]
-    pub(crate) fn new() -> Params {
+    pub(crate) fn for_dialect(dialect: crate::Dialect) -> Params {
+        let last = dialect.last_parameter();
         Params {
-            values: vec![0.0; MAX_PARAMETER as usize + 1].into_boxed_slice(),
+            values: vec![0.0; last as usize + 1].into_boxed_slice(),
+            last,
+            dialect: dialect.name(),
+            predefined: (dialect == crate::Dialect::LinuxCnc).then_some([0.0; PREDEFINED.len()]),
             undo: Vec::new(),
             globals: HashMap::new(),
             frames: vec![HashMap::new()],
@@ -86,17 +136,31 @@ impl Params {
     /// The parameter number `index` stands for.
     ///
     /// # Errors
-    /// [`RunProblem::BadParameter`] unless `index` is (within 1e-4) a whole number in 1–9999.
-    pub(crate) fn index(index: f64) -> Result<u32, RunProblem> {
-        whole_in(index, INDEX_TOLERANCE, MAX_PARAMETER).filter(|&n| n >= 1).ok_or(RunProblem::BadParameter { index })
+    /// [`RunProblem::BadParameter`] unless `index` is (within 1e-4) a whole number from 1 to
+    /// the dialect's last.
+    pub(crate) fn index(&self, index: f64) -> Result<u32, RunProblem> {
+        match whole_in(index, INDEX_TOLERANCE, self.last).filter(|&n| n >= 1) {
+            Some(n) => Ok(n),
+            None => Err(self.bad(index)),
+        }
+    }
+
+    /// The error for parameter number `index`, which is not one.
+    pub(crate) fn bad(&self, index: f64) -> RunProblem {
+        RunProblem::BadParameter { index, last: self.last, dialect: self.dialect }
+    }
+
+    /// Whether `#n` exists in the dialect.
+    pub(crate) fn exists(&self, n: u32) -> bool {
+        (1..=self.last).contains(&n)
     }
 
     /// Reads `#index` (the index as an expression computed it).
     ///
     /// # Errors
-    /// [`RunProblem::BadParameter`] for an index outside 1–9999.
+    /// [`RunProblem::BadParameter`] for an index outside the dialect's range.
     pub(crate) fn read(&self, index: f64) -> Result<f64, RunProblem> {
-        Ok(self.get(Params::index(index)?))
+        Ok(self.get(self.index(index)?))
     }
 
     /// Reads `#<name>` (lower case).
@@ -104,6 +168,9 @@ impl Params {
     /// # Errors
     /// [`RunProblem::UndefinedName`] when nothing was assigned to it (in this call, for a local).
     pub(crate) fn read_named(&self, name: &str) -> Result<f64, RunProblem> {
+        if let Some(v) = self.predefined(name) {
+            return Ok(v);
+        }
         let value =
             if name.starts_with('_') { self.globals.get(name) } else { self.frames.last().and_then(|f| f.get(name)) };
         value.copied().ok_or_else(|| RunProblem::UndefinedName { name: name.to_string() })
@@ -114,6 +181,9 @@ impl Params {
     /// # Errors
     /// [`RunProblem::NonFinite`] for a NaN or infinite value.
     pub(crate) fn write_named(&mut self, name: &str, value: f64) -> Result<(), RunProblem> {
+        if self.predefined(name).is_some() {
+            return Err(RunProblem::ReadOnlyName { name: name.to_string() });
+        }
         if !value.is_finite() {
             return Err(RunProblem::NonFinite { what: "the value written to a parameter" });
         }
@@ -122,6 +192,19 @@ impl Params {
         let old = map.insert(name.into(), value);
         self.named_undo.push((name.into(), old));
         Ok(())
+    }
+
+    /// The value of a predefined name (under LinuxCNC), `None` for any other name.
+    fn predefined(&self, name: &str) -> Option<f64> {
+        let values = self.predefined.as_ref().filter(|_| name.starts_with('_'))?;
+        PREDEFINED.iter().position(|p| *p == name).map(|i| values[i])
+    }
+
+    /// Sets the predefined names' values (ignored outside LinuxCNC).
+    pub(crate) fn set_predefined(&mut self, values: [f64; PREDEFINED.len()]) {
+        if let Some(slot) = self.predefined.as_mut() {
+            *slot = values;
+        }
     }
 
     /// A subroutine call starts: a fresh frame of local names.
@@ -157,11 +240,12 @@ impl Params {
     /// Writes `#n` as a program or a handler does: refuses read-only parameters.
     ///
     /// # Errors
-    /// [`RunProblem::ReadOnlyParameter`], [`RunProblem::BadParameter`] for `n` outside 1–9999,
+    /// [`RunProblem::ReadOnlyParameter`], [`RunProblem::BadParameter`] for `n` outside the
+    /// dialect's range,
     /// [`RunProblem::NonFinite`] for a NaN or infinite value.
     pub(crate) fn write(&mut self, n: u32, value: f64) -> Result<(), RunProblem> {
-        if n == 0 || n > MAX_PARAMETER {
-            return Err(RunProblem::BadParameter { index: f64::from(n) });
+        if !self.exists(n) {
+            return Err(self.bad(f64::from(n)));
         }
         if let Some(what) = Params::read_only(n) {
             return Err(RunProblem::ReadOnlyParameter { index: n, what });
@@ -238,11 +322,18 @@ mod tests {
     #[test]
     fn indices_reads_writes_and_rollback() {
         let mut p = Params::new();
-        assert_eq!(Params::index(5.00001), Ok(5));
-        assert!(Params::index(0.0).is_err());
-        assert!(Params::index(10_000.0).is_err());
-        assert!(Params::index(1.5).is_err());
-        assert!(Params::index(f64::NAN).is_err());
+        assert_eq!(p.index(5.00001), Ok(5));
+        assert!(p.index(0.0).is_err());
+        assert_eq!(p.index(9999.0), Ok(9999));
+        assert!(p.index(10_000.0).is_err());
+        assert!(p.index(1.5).is_err());
+        assert!(p.index(f64::NAN).is_err());
+        let lcnc = Params::for_dialect(crate::Dialect::LinuxCnc);
+        assert_eq!(lcnc.index(5601.0), Ok(5601));
+        assert_eq!(
+            lcnc.index(5602.0),
+            Err(RunProblem::BadParameter { index: 5602.0, last: 5601, dialect: "linuxcnc" })
+        );
         p.begin();
         p.write(7, 2.5).expect("writable");
         p.write(G92_OFFSET, 1.0).expect("offsets are writable");

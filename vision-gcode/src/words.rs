@@ -5,26 +5,39 @@ use crate::expr::{eval, Node};
 use crate::params::Params;
 use crate::parse::{Block, Value};
 
-/// Slot of `$` in the letter arrays (after `A`–`Z`).
+/// Slot of `$` in the letter arrays (after `A`–`Z`), then LinuxCNC's polar `@` and `^`.
 pub(crate) const DOLLAR: usize = 26;
-const SLOTS: usize = 27;
+const AT: usize = 27;
+const CARET: usize = 28;
+const SLOTS: usize = 29;
 
-/// The slot of an upper-case letter or `$`.
+/// The slots by ASCII code: a table, not a `match`, as this runs for every word.
+const SLOT_OF: [u8; 128] = {
+    let mut table = [0u8; 128];
+    let mut c = b'A';
+    while c <= b'Z' {
+        table[c as usize] = c - b'A';
+        c += 1;
+    }
+    table[b'$' as usize] = DOLLAR as u8;
+    table[b'@' as usize] = AT as u8;
+    table[b'^' as usize] = CARET as u8;
+    table
+};
+
+/// The slot of an upper-case letter, `$`, `@` or `^` (the parser passes no other byte).
 #[inline]
 pub(crate) fn slot(letter: u8) -> usize {
-    if letter == b'$' {
-        DOLLAR
-    } else {
-        usize::from(letter - b'A')
-    }
+    usize::from(SLOT_OF[usize::from(letter & 0x7f)])
 }
 
 /// The letter of a slot.
 pub(crate) fn letter_of(slot: usize) -> char {
-    if slot == DOLLAR {
-        '$'
-    } else {
-        char::from(b'A' + u8::try_from(slot).unwrap_or(0))
+    match slot {
+        DOLLAR => '$',
+        AT => '@',
+        CARET => '^',
+        _ => char::from(b'A' + u8::try_from(slot).unwrap_or(0)),
     }
 }
 
@@ -111,7 +124,7 @@ impl Words {
         (rest != 0).then(|| letter_of(rest.trailing_zeros() as usize))
     }
 
-    /// Every non-G/M word, letter and value, alphabetical (`$` last).
+    /// Every non-G/M word, letter and value, alphabetical (`$`, `@`, `^` last).
     pub(crate) fn all(&self) -> impl Iterator<Item = (char, f64)> + '_ {
         (0..SLOTS).filter(|s| self.present & (1 << s) != 0).map(|s| (letter_of(s), self.values[s]))
     }
@@ -172,7 +185,7 @@ pub(crate) fn evaluate(
     for a in block.assignments() {
         let target = match block.nodes(a.target()) {
             [Node::Named(i)] => Target::Named(block.names().get(*i as usize).cloned().unwrap_or_default()),
-            nodes => Target::Number(Params::index(eval(nodes, block.names(), params, stack)?)?),
+            nodes => Target::Number(params.index(eval(nodes, block.names(), params, stack)?)?),
         };
         let v = value(a.value(), stack)?;
         if !v.is_finite() {

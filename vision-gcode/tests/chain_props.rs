@@ -183,3 +183,77 @@ proptest! {
         prop_assert!((moved - Xyz::new(linear.x, linear.y, d.z)).norm() <= 1e-9 * (1.0 + before.norm()));
     }
 }
+
+proptest! {
+    /// LinuxCNC's canon (emccanon.cc, `rotate_and_offset_pos`): `machine = g5x + R(p + g52)`,
+    /// written out here independently of the interpreter's placement; G53 ignores all of it.
+    #[test]
+    fn linuxcnc_rotation_applies_g52_before_rotating(
+        system in 1u32..=6,
+        work in xyz(50.0),
+        g52 in xyz(5.0),
+        degrees in -360.0..360.0f64,
+        p in xyz(20.0),
+    ) {
+        let config = InterpreterConfig { dialect: vision_gcode::Dialect::LinuxCnc, ..InterpreterConfig::new(LengthUnit::Millimetre) };
+        let mut interp = Interpreter::new(config);
+        let program = format!(
+            "G21\nG10 L2 P{system} X{} Y{} Z{} R{degrees}\nG{}\nG52 X{} Y{} Z{}\nG0 X{} Y{} Z{}\nM2",
+            work.x, work.y, work.z, 53 + system, g52.x, g52.y, g52.z, p.x, p.y, p.z
+        );
+        let mut events = Vec::new();
+        interp.run(&program, None, &mut events).map_err(|e| TestCaseError::fail(e.to_string()))?;
+        let (s, c) = degrees.to_radians().sin_cos();
+        let (qx, qy) = (p.x + g52.x, p.y + g52.y);
+        let want = Xyz::new(work.x + (c * qx - s * qy), work.y + (s * qx + c * qy), work.z + p.z + g52.z);
+        prop_assert!((interp.machine_position() - want).norm() < 1e-9, "{:?} != {:?}", interp.machine_position(), want);
+        interp.run("G53 G0 X1 Y2\nM2", None, &mut events).map_err(|e| TestCaseError::fail(e.to_string()))?;
+        prop_assert_eq!(interp.machine_position().xy(), Point2::new(1.0, 2.0));
+    }
+}
+
+proptest! {
+    /// M282 on LinuxCNC emits `G10 L2 P0 R…` and `G52 X… Y…` (vision-math's
+    /// `LinuxCncAlignment`): run by the interpreter under LinuxCNC's rules they put every program
+    /// point where the fit's chain does, on a system with its own origin and base rotation; a
+    /// second M282 replaces the first, and the cancel lines restore the base rotation.
+    #[test]
+    fn m282_linuxcnc_lines_execute_the_chain(
+        origin in xyz(50.0),
+        base in -30.0..30.0f64,
+        theta in -5.0..5.0f64,
+        (cx, cy) in (-10.0..10.0f64, -10.0..10.0f64),
+        (tx, ty) in (-1.0..1.0f64, -1.0..1.0f64),
+        p in xyz(20.0),
+    ) {
+        use vision_math::linuxcnc::LinuxCncAlignment;
+        let config = InterpreterConfig { dialect: vision_gcode::Dialect::LinuxCnc, ..InterpreterConfig::new(LengthUnit::Millimetre) };
+        let mut interp = Interpreter::new(config);
+        let chain = AlignmentChain {
+            scale: Vector2::new(1.0, 1.0),
+            center: Point2::new(cx, cy),
+            rotation_deg: theta,
+            shift: Vector2::new(tx, ty),
+        };
+        let first = LinuxCncAlignment::from_chain(&AlignmentChain { rotation_deg: -theta, ..chain }, base, 0.0)
+            .and_then(|a| a.gcode())
+            .map_err(|e| TestCaseError::fail(e.to_string()))?;
+        let alignment = LinuxCncAlignment::from_chain(&chain, base, 0.0).map_err(|e| TestCaseError::fail(e.to_string()))?;
+        let lines = alignment.gcode().map_err(|e| TestCaseError::fail(e.to_string()))?;
+        let cancel = alignment.cancel_gcode().map_err(|e| TestCaseError::fail(e.to_string()))?;
+        let setup = format!("G21\nG10 L2 P1 X{} Y{} Z{} R{base}\nG54", origin.x, origin.y, origin.z);
+        let program = format!("{setup}\n{}\n{}\n{}\n{}\nG0 X{} Y{} Z{}\n%", first[0], first[1], lines[0], lines[1], p.x, p.y, p.z);
+        let mut events = Vec::new();
+        interp.run(&format!("%\n{program}"), None, &mut events).map_err(|e| TestCaseError::fail(e.to_string()))?;
+        // Where the unaligned program would put chain.apply(p): the base-rotated system.
+        let a = chain.apply(p.xy());
+        let (s, c) = base.to_radians().sin_cos();
+        let want = Xyz::new(origin.x + c * a.x - s * a.y, origin.y + s * a.x + c * a.y, origin.z + p.z);
+        // The lines carry 7 decimals of position and 9 of angle.
+        prop_assert!((interp.machine_position() - want).norm() < 1e-5, "{:?} != {:?}", interp.machine_position(), want);
+        let text = format!("%\n{}\n{}\nG0 X{} Y{} Z{}\n%", cancel[0], cancel[1], p.x, p.y, p.z);
+        interp.run(&text, None, &mut events).map_err(|e| TestCaseError::fail(e.to_string()))?;
+        let want = Xyz::new(origin.x + c * p.x - s * p.y, origin.y + s * p.x + c * p.y, origin.z + p.z);
+        prop_assert!((interp.machine_position() - want).norm() < 1e-5, "{:?} != {:?}", interp.machine_position(), want);
+    }
+}

@@ -93,6 +93,7 @@ const PROGRAMS: &[&str] = &[
     include_str!("programs/linuxcnc_flow.ngc"),
     "%\nO0001\nG0 X0\nM98 P1000 L3\nM98 P2000\nM30\nO1000\nG91 G1 X1 F100\nG90\nM99\nO2000\nM98 P1000\nM99\n%",
     "o<s> sub\n#<l> = #1\no1 if [#<l> GT 1]\nG0 X#<l>\no1 else\nG1 Y1 F9\no1 endif\no<s> endsub\no2 repeat [3]\no<s> call [2]\no2 endrepeat\no3 do\n#<_k> = [#<_k> + 1]\no3 while [#<_k> LT 3]",
+    "G21 G0 @10 ^90\nG91 G0 ^45\nG0 @-2\nG90 G81 R1 Z-1 F10 @5 ^30\nG91 G81 R.1 Z-.5 ^60 L6\nG90 G80 G2 @5 ^-30 I0 J5\nG10 L2 P0 R30\nG52 X1\nG91 G1 X1\nM2",
     "%\nG17 G40 G49 G80 G90 G20\nT2 M6\nS12000 M3\nG43 H2 M8\nG53 G0 Z0\n/G0 X1\nG0 X0.5 Y0.5 Z0.2\nG98 G81 X1 Y1 Z-0.3 R0.1 F20\nX2\nG99 G83 X3 Q0.1 Z-0.5 R0.1 L2\nG91 G73 X0.5 Z-0.2 R-0.1 Q0.05 L3\nG90 G82 P0.2 Z-0.1 R0.1 X1\nG85 X2\nG89 X3 P0.1\nG80 G0 Z1\nG2 I0.5 F30\nG3 X1 Y1 R0.5 P2\nG64 P0.01 Q0.01\nG43.1 Z0.1\nG49 M9\nG30 G92.1\nM5\n%\nG1 X9",
 ];
 
@@ -116,7 +117,7 @@ proptest! {
     }
 
     #[test]
-    fn gcode_shaped_text_never_panics(text in "[GMXYZIJKRPFTLNQSHO#$%<>\\[\\]0-9.+*/ ()=;EQANDORSINMCOS\n-]{0,300}") {
+    fn gcode_shaped_text_never_panics(text in "[GMXYZIJKRPFTLNQSHO#$@^%<>\\[\\]0-9.+*/ ()=;EQANDORSINMCOS\n-]{0,300}") {
         exercise(&text);
     }
 
@@ -147,6 +148,37 @@ proptest! {
             }
         }
         exercise(&text.into_iter().collect::<String>());
+    }
+}
+
+proptest! {
+    /// LinuxCNC's polar words with any finite values, absolute or incremental, in moves and
+    /// canned cycles: a finite position or a typed error; an absolute `@r ^a` move lands at
+    /// distance |r| from the program origin.
+    #[test]
+    fn polar_words_run_or_are_refused_never_non_finite(
+        r in prop_oneof![-1e7..1e7f64, -1.0..1.0f64, Just(0.0)],
+        a in prop_oneof![-1e9..1e9f64, -360.0..360.0f64, Just(0.0)],
+        start in (-100.0..100.0f64, -100.0..100.0f64),
+        incremental in any::<bool>(),
+        cycle in any::<bool>(),
+    ) {
+        let mut interp = Interpreter::new(InterpreterConfig {
+            dialect: vision_gcode::Dialect::LinuxCnc,
+            ..InterpreterConfig::default()
+        });
+        let mode = if incremental { "G91" } else { "G90" };
+        let motion = if cycle { "G81 R1 Z-1" } else { "G1" };
+        let text = format!("%\nG0 X{} Y{}\n{mode} {motion} @{r} ^{a} F10\n%", start.0, start.1);
+        let result = interp.run(&text, None, &mut |e: &Event| check_finite(e));
+        prop_assert!(interp.machine_position().is_finite());
+        if result.is_ok() && !incremental && !cycle {
+            let p = interp.program_position();
+            prop_assert!((p.x.hypot(p.y) - r.abs()).abs() <= 1e-9 * r.abs().max(1.0), "{p:?} for @{r}");
+        }
+        if let Err(e) = result {
+            prop_assert!(matches!(e, vision_gcode::GcodeError::Run { .. }), "{e}");
+        }
     }
 }
 

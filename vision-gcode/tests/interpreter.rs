@@ -204,7 +204,7 @@ fn errors_name_the_line_and_the_problem() {
         ("G4 P-1", RunProblem::Negative { code: "G4", letter: 'P', value: -1.0 }),
         ("G4 G64 P2", RunProblem::WordConflict { letter: 'P', first: "G4", second: "G64" }),
         ("#5420 = 1", RunProblem::ReadOnlyParameter { index: 5420, what: "the current position" }),
-        ("#0 = 1", RunProblem::BadParameter { index: 0.0 }),
+        ("#0 = 1", RunProblem::BadParameter { index: 0.0, last: 9999, dialect: "machinemotion" }),
         ("G0 X[1/0]", RunProblem::DivisionByZero),
         ("G0 X[10**400]", RunProblem::NonFinite { what: "**" }),
         (

@@ -251,14 +251,220 @@ fn dialects_differ_where_the_controllers_do() {
 #[test]
 fn polar_words_and_rotary_axes_are_named_not_misread() {
     let mut interp = Interpreter::new(InterpreterConfig { dialect: Dialect::LinuxCnc, ..InterpreterConfig::default() });
-    for text in ["G1 @1 ^30 F10", "G0 ^45"] {
-        match interp.run(text, None, &mut Vec::new()) {
-            Err(GcodeError::Syntax { problem: vision_gcode::SyntaxProblem::PolarCoordinates, .. }) => {}
-            other => panic!("{text}: {other:?}"),
-        }
+    for (text, why) in [
+        ("G1 @1 X1 F10", "X or Y"),
+        ("G18 G0 @1 ^30", "G17"),
+        ("G0 @1", "angle"),
+        ("G91 G0 ^10", "origin"),
+        ("G53 G0 @1 ^10", "G53"),
+        ("G81 @1 X1 Z-1 R1 F10", "X or Y"),
+    ] {
+        let message = problem(&mut interp, text).to_string();
+        assert!(message.contains("polar") && message.contains(why), "{text}: {message}");
     }
+    let mut mach4 = Interpreter::new(InterpreterConfig { dialect: Dialect::Mach4, ..InterpreterConfig::default() });
+    assert!(problem(&mut mach4, "G0 @1 ^30").to_string().contains("LinuxCNC feature"));
     // Under LinuxCNC a lone A beside M3 is the rotary axis, not seed 002's output device.
     assert_eq!(problem(&mut interp, "G0 A90 M3"), RunProblem::AxisNotSupported { letter: 'A' });
     let mut seed = machine(LengthUnit::Inch);
     assert_eq!(problem(&mut seed, "M3 A1"), RunProblem::OutputForm { code: "M3" });
+}
+
+fn linuxcnc_mm() -> Interpreter {
+    Interpreter::new(InterpreterConfig { dialect: Dialect::LinuxCnc, ..InterpreterConfig::new(LengthUnit::Millimetre) })
+}
+
+#[test]
+fn g10_l2_rotation_rotates_the_system_about_its_origin_as_rs274_does() {
+    // Every end point and the arc centre are what rs274 printed, its offsets applied
+    // (compare.py on this program: agree). Line 6 changes the rotation with a G52 offset in
+    // force: rs274's current point leaves G52 out there, and the G91 move starts from it.
+    let program = "G21 G90 G17 F100
+G10 L2 P1 X-2 Y1 R60
+G0 X1 Y0 Z0
+G52 X1 Y0.5
+G0 X0 Y0
+G10 L2 P0 R90
+G91 G1 X1
+G90 G3 X0 Y1 I-1 J0
+G53 G0 X0 Y0
+G10 L2 P2 X3 R-30
+G55 G0 X1 Y0
+G54 G0 X0 Y0
+M2";
+    let mut interp = linuxcnc_mm();
+    let events = run(&mut interp, program);
+    #[rustfmt::skip]
+    let want = [
+        (R, [-1.5, 1.866_025, 0.0]), (R, [-1.933_013, 2.116_025, 0.0]), (F, [-2.5, 3.0, 0.0]),
+        (R, [0.0, 0.0, 0.0]), (R, [4.982_051, -0.566_987, 0.0]), (R, [-2.5, 2.0, 0.0]),
+    ];
+    let got = moves(&events);
+    assert_eq!(got.len(), want.len(), "{got:?}");
+    for (g, w) in got.iter().zip(&want) {
+        assert!(g.0 == w.0 && (0..3).all(|i| (g.1[i] - w.1[i]).abs() < 1e-6), "{g:?} != {w:?}");
+    }
+    let arc = events.iter().find_map(|e| if let Event::Arc(a) = e { Some(a) } else { None }).expect("an arc");
+    assert!((arc.end - Xyz::new(-3.5, 2.0, 0.0)).norm() < 1e-9, "{arc:?}");
+    assert!((arc.center.xy() - Xyz::new(-2.5, 2.0, 0.0).xy()).norm() < 1e-9, "{arc:?}");
+    assert_eq!(arc.direction, ArcDirection::CounterClockwise);
+    // The rotation is stored per system, at #5230 + 20·(n − 1).
+    assert_eq!(interp.param(5230), 90.0);
+    assert_eq!(interp.param(5250), -30.0);
+}
+
+#[test]
+fn a_rotated_side_plane_arc_becomes_segments_on_the_true_arc() {
+    let mut interp = linuxcnc_mm();
+    let events = run(&mut interp, "G10 L2 P0 X-2 Y1 R60\nG0 X0 Y0 Z0\nG1 X1.5 Z0.5 F100\nG18 G2 X0.5 Z1.5 K1\nM2");
+    let segments: Vec<_> = events
+        .iter()
+        .filter_map(|e| if let Event::Linear(m) = e { (m.line == 4).then_some(m.end) } else { None })
+        .collect();
+    assert!(segments.len() > 10, "{segments:?}");
+    assert!(!events.iter().any(|e| matches!(e, Event::Arc(_))));
+    // The centre is program (1.5, 0, 1.5); the arc's plane is program Y = 0, rotated by 60°.
+    let (s, c) = 60f64.to_radians().sin_cos();
+    let centre = Xyz::new(-2.0 + 1.5 * c, 1.0 + 1.5 * s, 1.5);
+    for p in &segments {
+        assert!(((*p - centre).norm() - 1.0).abs() < 0.0025 + 1e-9, "{p:?}");
+        let along_normal = (p.x - (-2.0)) * -s + (p.y - 1.0) * c;
+        assert!(along_normal.abs() < 1e-9, "{p:?} leaves the rotated XZ plane");
+    }
+}
+
+#[test]
+fn g10_rotation_is_refused_where_the_dialect_has_none_or_the_form_has_none() {
+    assert_eq!(problem(&mut linuxcnc_mm(), "G10 L20 P0 X1 R30"), RunProblem::G10RotationL20);
+    assert!(matches!(
+        problem(&mut linuxcnc_mm(), "G10 L2 P0 R400"),
+        RunProblem::OutOfRange { code: "G10", letter: 'R', .. }
+    ));
+    let mut mach4 = Interpreter::new(InterpreterConfig { dialect: Dialect::Mach4, ..InterpreterConfig::default() });
+    let message = problem(&mut mach4, "G10 L2 P1 R30").to_string();
+    assert!(message.contains("rotation") && message.contains("G68"), "{message}");
+    run(&mut mach4, "G10 L2 P1 X1 R0\nG0 X0");
+    assert_eq!(mach4.machine_position(), Xyz::new(1.0, 0.0, 0.0));
+}
+
+#[test]
+fn polar_words_move_as_in_rs274() {
+    // rs274 printed these end points for the same program (X/Y, mm; compare.py: agree).
+    let program = "G21 G0 @10 ^90\nG0 ^0\nG0 @5\nG91 G0 ^90\nG0 @2.5\nG90 G2 @7.5 ^0 I0 J-7.5 F100\nM2";
+    let events = run(&mut linuxcnc_mm(), program);
+    let want = [(0.0, 10.0), (10.0, 0.0), (5.0, 0.0), (0.0, 5.0), (0.0, 7.5)];
+    let got = moves(&events);
+    assert_eq!(got.len(), want.len(), "{got:?}");
+    for (g, w) in got.iter().zip(want) {
+        assert!((g.1[0] - w.0).abs() < 1e-9 && (g.1[1] - w.1).abs() < 1e-9, "{g:?} != {w:?}");
+    }
+    let arc = events.iter().find_map(|e| if let Event::Arc(a) = e { Some(a) } else { None }).expect("an arc");
+    assert!((arc.end.xy() - Xyz::new(7.5, 0.0, 0.0).xy()).norm() < 1e-9, "{arc:?}");
+}
+
+#[test]
+fn g95_feeds_per_revolution_at_the_spindle_speed() {
+    let feeds = |events: &[Event]| -> Vec<f64> {
+        events
+            .iter()
+            .filter_map(|e| match e {
+                Event::Linear(m) => match m.rate {
+                    Rate::Feed(f) => Some(f),
+                    Rate::Rapid => None,
+                },
+                _ => None,
+            })
+            .collect()
+    };
+    // 0.01 in per revolution at 1000 rpm: 10 in/min; at 1500 rpm, 15; back under G94, F per minute.
+    let mut interp = machine(LengthUnit::Inch);
+    let events = run(&mut interp, "G20 M3 S1000\nG95 G1 X0.1 F0.01\nS1500 X0.2\nG94 G1 X0.3 F20\nM2");
+    assert_eq!(feeds(&events), vec![10.0, 15.0, 20.0]);
+    // In a millimetre program on an inch machine the feed per revolution converts like any length.
+    let events = run(&mut machine(LengthUnit::Inch), "G21 S100 G95 G1 X25.4 F2.54\nM2");
+    assert!((feeds(&events)[0] - 10.0).abs() < 1e-12, "{:?}", feeds(&events));
+    // No spindle speed: refused with the reason, not a move at some feed.
+    for text in ["G95 G1 X1 F0.01", "S0 G95 G1 X1 F0.01", "G95 G81 X1 Z-1 R1 F0.01"] {
+        let message = problem(&mut machine(LengthUnit::Inch), text).to_string();
+        assert!(message.contains("G95") && message.contains("spindle speed"), "{text}: {message}");
+    }
+    // A change of feed mode needs a new F (LinuxCNC: any G94/G95 sets F to 0).
+    assert!(matches!(problem(&mut machine(LengthUnit::Inch), "S1000 F10\nG95 G1 X1"), RunProblem::ZeroFeedRate { .. }));
+    run(&mut machine(LengthUnit::Inch), "F10\nG94 G1 X1\nM2");
+    assert!(matches!(problem(&mut linuxcnc_mm(), "F10\nG94 G1 X1"), RunProblem::ZeroFeedRate { .. }));
+    run(&mut linuxcnc_mm(), "G94 F10 G1 X1\nM2");
+}
+
+#[test]
+fn a_written_origin_takes_effect_per_dialect() {
+    // rs274 (and LinuxCNC 2.9.0 to 2.9.10, whose convert_coordinate_system is the same) loads
+    // a system's parameters only when it becomes active or a G10 sets it; compare.py on this
+    // program (inch machine) agrees. Mach4 and seed 002 apply the write from that line on.
+    let program = "G20 G0 X1\n#5221=10\n#5222=2\nG1 X2 F100\nG54\nG1 X3\nG10 L2 P1 X5\nG1 X3.5\nG55\nG54\nG1 X4\nM2";
+    let xs = |dialect| {
+        let mut interp = Interpreter::new(InterpreterConfig { dialect, ..InterpreterConfig::default() });
+        moves(&run(&mut interp, program)).iter().map(|m| m.1[0]).collect::<Vec<_>>()
+    };
+    assert_eq!(xs(Dialect::LinuxCnc), vec![1.0, 2.0, 3.0, 8.5, 9.0]);
+    for dialect in [Dialect::Mach4, Dialect::MachineMotion] {
+        assert_eq!(xs(dialect), vec![1.0, 12.0, 13.0, 8.5, 9.0], "{dialect:?}");
+    }
+    // A host's write stands for the control's offset table: at once, in every dialect.
+    let mut interp = Interpreter::new(InterpreterConfig { dialect: Dialect::LinuxCnc, ..InterpreterConfig::default() });
+    interp.set_param(5221, 3.0).expect("writable");
+    run(&mut interp, "G0 X1\nM2");
+    assert_eq!(interp.machine_position().x, 4.0);
+}
+
+#[test]
+fn the_parameter_range_is_the_dialects() {
+    // rs274 refuses #5602 ("Parameter number out of range"); #5601 is its last.
+    let mut interp = linuxcnc_mm();
+    run(&mut interp, "#5601 = 2\nG0 X#5601\nM2");
+    assert_eq!(interp.machine_position().x, 2.0);
+    for text in ["#5602 = 1", "G0 X#5602", "#[5600 + 2] = 1"] {
+        let p = problem(&mut linuxcnc_mm(), text);
+        assert_eq!(p, RunProblem::BadParameter { index: 5602.0, last: 5601, dialect: "linuxcnc" }, "{text}");
+        assert!(p.to_string().contains("1 to 5601"), "{p}");
+    }
+    assert!(linuxcnc_mm().set_param(6000, 1.0).is_err());
+    for dialect in [Dialect::Mach4, Dialect::MachineMotion] {
+        let mut interp = Interpreter::new(InterpreterConfig { dialect, ..InterpreterConfig::default() });
+        run(&mut interp, "#9999 = 3\nG0 X#9999\nM2");
+        assert_eq!(interp.machine_position().x, 3.0);
+        assert!(matches!(problem(&mut interp, "#10000 = 1"), RunProblem::BadParameter { last: 9999, .. }));
+    }
+}
+
+#[test]
+fn linuxcnc_predefined_named_parameters_read_as_in_rs274() {
+    // rs274 printed these end points for the same program (compare.py: agree). A line reads
+    // before it executes: `_absolute` on the G90 line still reads G91's 0.
+    let program = "G21 G91\nG0 X[#<_task> + 1]\nG0 X[#<_vmajor>] Y[#<_vminor>] Z[#<_incremental>]
+G90 G0 X[#<_x> + 1] Y[#<_imperial>*10 + #<_metric>] Z[#<_absolute>]\nF250 S1200 T3
+G0 X[#<_feed>] Y[#<_rpm>] Z[#<_selected_tool>]\nM6\nG0 X[#<_current_tool>] Y[#<_y>] Z[#<_z>]\nM2";
+    let events = run(&mut linuxcnc_mm(), program);
+    let want = [[1.0, 0.0, 0.0], [3.9, 0.0, 1.0], [4.9, 1.0, 0.0], [250.0, 1200.0, 3.0], [3.0, 1200.0, 3.0]];
+    let got = moves(&events);
+    assert_eq!(got.len(), want.len(), "{got:?}");
+    for (g, w) in got.iter().zip(want) {
+        assert!((0..3).all(|i| (g.1[i] - w[i]).abs() < 1e-9), "{g:?} != {w:?}");
+    }
+    assert_eq!(problem(&mut linuxcnc_mm(), "#<_x> = 1"), RunProblem::ReadOnlyName { name: "_x".into() });
+    // Elsewhere they are ordinary (undefined) globals.
+    let mut mach4 = Interpreter::new(InterpreterConfig { dialect: Dialect::Mach4, ..InterpreterConfig::default() });
+    assert!(matches!(problem(&mut mach4, "G0 X#<_task>"), RunProblem::UndefinedName { .. }));
+}
+
+#[test]
+fn a_hosts_rotation_write_takes_effect_at_once() {
+    let mut interp = linuxcnc_mm();
+    interp.set_param(5230, 90.0).expect("writable");
+    run(&mut interp, "G0 X1 Y0\nM2");
+    assert!((interp.machine_position() - Xyz::new(0.0, 1.0, 0.0)).norm() < 1e-12, "{:?}", interp.machine_position());
+    // A program's write waits, as rs274's does, for the system to be selected again
+    // (compare.py on this program: agree).
+    let xs: Vec<_> =
+        moves(&run(&mut linuxcnc_mm(), "#5230 = 90\nG0 X1 Y0\nG55\nG54\nG0 X2 Y0\nM2")).iter().map(|m| m.1).collect();
+    assert!((xs[0][0] - 1.0).abs() < 1e-12 && (xs[1][1] - 2.0).abs() < 1e-12, "{xs:?}");
 }

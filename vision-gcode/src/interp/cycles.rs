@@ -10,6 +10,7 @@ use vision_math::LengthUnit;
 
 use super::line::LineRun;
 use super::modal::MotionMode;
+use super::motion::polar_step;
 
 /// LinuxCNC's rapid back-off of G73/G83 between pecks: 0.010 in (the 2.9 rs274 prints 0.2540 mm
 /// in a millimetre program, 0.0100 in an inch one).
@@ -117,15 +118,27 @@ impl LineRun<'_> {
         let old_level = *self.st.cycle.initial_level.get_or_insert(start.z);
         // R and the bottom in machine units, and in program units for counting the pecks.
         let (mut x, mut y, step_x, step_y, r, bottom, r_written, bottom_written);
+        // LinuxCNC's polar words: a hole position (G90), or a step per repeat (G91).
+        let polar = if self.w.has(b'@') || self.w.has(b'^') { Some(self.polar_words(name)?) } else { None };
+        let (mut step_distance, mut step_angle) = (None, None);
         if self.st.absolute {
             x = self.length(b'X', name)?.unwrap_or(start.x);
             y = self.length(b'Y', name)?.unwrap_or(start.y);
+            if let Some((distance, angle)) = polar {
+                let radius = distance.unwrap_or(start.x.hypot(start.y));
+                let theta = angle.unwrap_or(start.y.atan2(start.x));
+                (x, y) = (radius * theta.cos(), radius * theta.sin());
+            }
             (step_x, step_y) = (0.0, 0.0);
             (r_written, r) = r_word;
             (bottom_written, bottom) = z_word;
         } else {
             step_x = self.length(b'X', name)?.unwrap_or(0.0);
             step_y = self.length(b'Y', name)?.unwrap_or(0.0);
+            if let Some((distance, angle)) = polar {
+                // rs274 steps only by a non-zero increment.
+                (step_distance, step_angle) = (distance.filter(|d| *d != 0.0), angle.filter(|a| *a != 0.0));
+            }
             (x, y) = (start.x, start.y);
             r = r_word.1 + old_level;
             bottom = r + z_word.1;
@@ -157,6 +170,7 @@ impl LineRun<'_> {
         for repeat in 0..repeats {
             x += step_x;
             y += step_y;
+            (x, y) = polar_step(x, y, step_distance, step_angle)?;
             if repeat == 0 && current > r {
                 self.cycle_move(x, y, current, Rate::Rapid)?;
                 self.cycle_move(x, y, r, Rate::Rapid)?;

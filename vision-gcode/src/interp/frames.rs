@@ -3,11 +3,12 @@
 use vision_math::Point2;
 
 use super::line::{in_range, LineRun};
-use super::modal::{work_offset_base, SYSTEMS};
+use super::modal::{system_rotation, work_offset_base, SYSTEMS};
 use crate::config::Dialect;
 use crate::error::RunProblem;
-use crate::frame::Placement;
+use crate::frame::{Placement, SystemRotation};
 use crate::geom::{Xyz, AXIS_LETTERS};
+use crate::params::work_rotation;
 use crate::params::G92_OFFSET;
 use crate::words::whole;
 
@@ -67,46 +68,99 @@ impl LineRun<'_> {
             system = self.st.system;
         }
         let base = work_offset_base(system);
-        // LinuxCNC's coordinate-system rotation: only "no rotation" is possible here.
-        match self.w.take(b'R', "G10")? {
-            Some(r) if r != 0.0 => {
-                return Err(RunProblem::Unsupported {
-                    code: "G10 L2 R".into(),
-                    feature: "coordinate-system rotation (use G68 instead)",
-                })
+        let rotation = self.g10_rotation(l)?;
+        let before = (self.placement(), self.st.rotation);
+        let any_axis = AXIS_LETTERS.iter().any(|&l| self.w.has(l));
+        // `G10 L2 P0 R30` (LinuxCNC) or `G10 L2 P1 R0` (the others) may come without origin words.
+        if any_axis || rotation.is_none() {
+            let (v, given) = self.absolute_point("G10")?;
+            if l == 2.0 {
+                for axis in (0..3).filter(|&a| given[a]) {
+                    self.params.set(base + axis as u32, v.axis(axis));
+                }
+            } else {
+                let origin = self.origin_reading(v, system_rotation(self.cfg, self.params, system));
+                for axis in (0..3).filter(|&a| given[a]) {
+                    let value = in_range(origin.axis(axis), || {
+                        format!("the G10 L20 origin's {}", char::from(AXIS_LETTERS[axis]))
+                    })?;
+                    self.params.set(base + axis as u32, value);
+                }
             }
-            Some(_) if !AXIS_LETTERS.iter().any(|&l| self.w.has(l)) => return Ok(()),
-            _ => {}
+            if system == self.st.system && l == 20.0 {
+                self.st.load_system(self.cfg, self.params);
+                self.st.rederive_program(self.params);
+                self.keep_given(v, given);
+                return Ok(());
+            }
         }
-        let (v, given) = self.absolute_point("G10")?;
-        if l == 2.0 {
-            for axis in (0..3).filter(|&a| given[a]) {
-                self.params.set(base + axis as u32, v.axis(axis));
-            }
-        } else {
-            let origin = self.offset_reading(v, G92_OFFSET);
-            for axis in (0..3).filter(|&a| given[a]) {
-                let value =
-                    in_range(origin.axis(axis), || format!("the G10 L20 origin's {}", char::from(AXIS_LETTERS[axis])))?;
-                self.params.set(base + axis as u32, value);
-            }
+        if let (Some(r), Dialect::LinuxCnc) = (rotation, self.cfg.dialect) {
+            self.params.set(work_rotation(system), r);
         }
         if system == self.st.system {
-            self.st.rederive_program(self.params);
-            if l == 20.0 {
-                self.keep_given(v, given);
+            self.st.load_system(self.cfg, self.params);
+            if self.st.rotation == before.1 {
+                self.st.rederive_program(self.params);
+            } else {
+                self.st.program = self.rotated_current(before.0, before.1);
             }
         }
         Ok(())
     }
 
-    /// The offset (G10 L20: the work offset; G92: the G92 offset) that makes the current
-    /// machine point read program point `v`, the other of the two kept at parameters
-    /// `other`–`other + 2`.
-    fn offset_reading(&self, v: Xyz, other: u32) -> Xyz {
+    /// `G10 … R`: LinuxCNC's rotation of the system (degrees, counter-clockwise; L2 only).
+    /// Mach4 and seed 002 rotate with G68: there only `R0` is accepted, and it does nothing.
+    fn g10_rotation(&mut self, l: f64) -> Result<Option<f64>, RunProblem> {
+        let Some(r) = self.w.take(b'R', "G10")? else { return Ok(None) };
+        if self.cfg.dialect != Dialect::LinuxCnc {
+            if r != 0.0 {
+                return Err(RunProblem::Unsupported {
+                    code: "G10 L2 R".into(),
+                    feature: "coordinate-system rotation (a LinuxCNC code; Mach4 rotates with G68)",
+                });
+            }
+            return Ok(Some(r));
+        }
+        if l == 20.0 {
+            return Err(RunProblem::G10RotationL20);
+        }
+        rotation_in_range("G10", r).map(Some)
+    }
+
+    /// The current point after a G10 changed the active system's rotation, as rs274 computes it
+    /// (interp_convert.cc, `convert_setup`): the old point rotated by the old angle, moved by
+    /// the change of origin and rotated back by the new angle, the G92 offset left out. That
+    /// differs from the point the machine position reads when a G92/G52 offset is in force;
+    /// the next moves go where LinuxCNC sends them.
+    fn rotated_current(&self, before: Placement, old_degrees: f64) -> Xyz {
+        // G10 changes the origin only: the difference of the summed offsets is the origin's.
+        let (old, new) = (before.offset, self.placement().offset);
+        let p = self.st.program;
+        let turned = SystemRotation::turn(old_degrees, p.xy());
+        let moved = Point2::new(turned.x + old.x - new.x, turned.y + old.y - new.y);
+        let back = SystemRotation::turn(-self.st.rotation, moved);
+        Xyz::new(back.x, back.y, p.z + old.z - new.z)
+    }
+
+    /// The origin (G10 L20) that makes the current machine point read program point `v` in a
+    /// system rotated by `degrees`, with the active G92 offset and tool.
+    fn origin_reading(&self, v: Xyz, degrees: f64) -> Xyz {
         let w = self.placement().work_of(v);
-        let [x, y, z] = self.params.triple(other);
-        Placement::offset_summand(self.st.machine - w, Xyz::new(x, y, z), self.st.tool_offset)
+        let g92 = self.g92_triple();
+        let unrotated = Placement::offset_summand(self.st.machine - w, g92, self.st.tool_offset);
+        match SystemRotation::new(degrees, Xyz::ZERO, g92, self.st.tool_offset) {
+            None => unrotated,
+            Some(r) => {
+                let turned = r.apply(w.xy());
+                Xyz::new(self.st.machine.x - turned.x, self.st.machine.y - turned.y, unrotated.z)
+            }
+        }
+    }
+
+    /// The G92 (and, under LinuxCNC, G52) offset, machine units.
+    fn g92_triple(&self) -> Xyz {
+        let [x, y, z] = self.params.triple(G92_OFFSET);
+        Xyz::new(x, y, z)
     }
 
     /// After an offset was computed to make the current point read `v` on the given axes, take
@@ -126,15 +180,42 @@ impl LineRun<'_> {
                 self.params.set(G92_OFFSET + axis as u32, 0.0);
             }
         }
+        if self.cfg.dialect == Dialect::LinuxCnc {
+            return self.shared_offset("G92");
+        }
         self.st.rederive_program(self.params);
         let (v, given) = self.absolute_point("G92")?;
-        let g92 = self.offset_reading(v, work_offset_base(self.st.system));
+        let w = self.placement().work_of(v);
+        let g92 = Placement::offset_summand(self.st.machine - w, self.st.origin, self.st.tool_offset);
         for axis in (0..3).filter(|&a| given[a]) {
             let value = in_range(g92.axis(axis), || format!("the G92 offset's {}", char::from(AXIS_LETTERS[axis])))?;
             self.params.set(G92_OFFSET + axis as u32, value);
         }
         self.st.rederive_program(self.params);
         self.keep_given(v, given);
+        Ok(())
+    }
+
+    /// LinuxCNC's G92 and G52, which share one offset (#5211-#5213) added to the program point
+    /// before the system's rotation (interp_convert.cc, `convert_axis_offsets`). Both work on
+    /// the current point, never on the machine position: G92 makes it read the given values
+    /// (offset = point + offset − value), G52 sets the offset to the given values (point +=
+    /// old offset − value).
+    fn shared_offset(&mut self, code: &'static str) -> Result<(), RunProblem> {
+        let g52 = code == "G52";
+        let (v, given) = self.absolute_point(code)?;
+        let old = self.g92_triple();
+        for axis in (0..3).filter(|&a| given[a]) {
+            let name = || format!("the {code} offset's {}", char::from(AXIS_LETTERS[axis]));
+            let p = self.st.program.axis(axis);
+            let (offset, point) = if g52 {
+                (v.axis(axis), p + old.axis(axis) - v.axis(axis))
+            } else {
+                (p + old.axis(axis) - v.axis(axis), v.axis(axis))
+            };
+            self.params.set(G92_OFFSET + axis as u32, in_range(offset, name)?);
+            self.st.program.set_axis(axis, point);
+        }
         Ok(())
     }
 
@@ -147,6 +228,9 @@ impl LineRun<'_> {
     }
 
     pub(super) fn g52(&mut self) -> Result<(), RunProblem> {
+        if self.cfg.dialect == Dialect::LinuxCnc {
+            return self.shared_offset("G52");
+        }
         let (v, given) = self.absolute_point("G52")?;
         if given[0] {
             self.st.frame.chain.shift.x = v.x;
@@ -163,14 +247,7 @@ impl LineRun<'_> {
 
     pub(super) fn g68(&mut self) -> Result<(), RunProblem> {
         let degrees = self.require(b'R', "G68", "the rotation in degrees, counter-clockwise, e.g. G68 X0 Y0 R30")?;
-        if degrees.abs() > MAX_ROTATION_DEGREES {
-            return Err(RunProblem::OutOfRange {
-                code: "G68",
-                letter: 'R',
-                value: degrees,
-                hint: "the rotation is at most one turn, -360 to 360 degrees",
-            });
-        }
+        let degrees = rotation_in_range("G68", degrees)?;
         // An omitted centre coordinate is the current point's (in the scaled frame), so the
         // machine does not jump.
         let scale = self.st.frame.chain.scale;
@@ -211,4 +288,17 @@ impl LineRun<'_> {
         self.st.rederive_program(self.params);
         Ok(())
     }
+}
+
+/// A rotation word (`R`, degrees) of `code` when it is at most one turn either way.
+fn rotation_in_range(code: &'static str, degrees: f64) -> Result<f64, RunProblem> {
+    if degrees.abs() > MAX_ROTATION_DEGREES {
+        return Err(RunProblem::OutOfRange {
+            code,
+            letter: 'R',
+            value: degrees,
+            hint: "the rotation is at most one turn, -360 to 360 degrees",
+        });
+    }
+    Ok(degrees)
 }

@@ -38,6 +38,8 @@ pub(crate) enum Flow {
 
 /// An action queued until the line commits.
 #[derive(Debug, Clone)]
+// Not boxed: the queue is a reused Vec, and a box would allocate per polyline (tests/no_alloc.rs).
+#[allow(clippy::large_enum_variant)]
 pub(crate) enum Pending {
     Event(Event),
     Polyline(Polyline),
@@ -79,7 +81,7 @@ fn group_of(code: u16) -> Option<Group> {
         680 | 690 => Group::Rotation,
         900 | 910 => Group::Distance,
         901 | 911 => Group::ArcDistance,
-        940 => Group::FeedMode,
+        940 | 950 => Group::FeedMode,
         970 => Group::SpindleMode,
         980 | 990 => Group::Retract,
         _ => return None,
@@ -105,7 +107,6 @@ fn unsupported_g(code: u16) -> Option<&'static str> {
         860 | 870 | 880 => "boring cycles with spindle stop (G86-G88)",
         923 => "restoring G92 offsets (G92.3)",
         930 => "inverse-time feed (G93)",
-        950 => "feed per revolution (G95)",
         960 => "constant surface speed (G96)",
         _ => return None,
     })
@@ -179,6 +180,9 @@ impl LineRun<'_> {
         if let Some(code) = groups.get(Group::Units) {
             self.st.units = if code == 200 { LengthUnit::Inch } else { LengthUnit::Millimetre };
         }
+        if let Some(code) = groups.get(Group::FeedMode) {
+            self.feed_mode(code == 950);
+        }
         self.feed_rate()?;
         self.spindle_speed()?;
         self.select_tool()?;
@@ -207,8 +211,14 @@ impl LineRun<'_> {
             self.tool_length(code)?;
         }
         if let Some(code) = groups.get(Group::System) {
-            self.st.system = u32::from(code / 10 - 53);
-            self.st.rederive_program(self.params);
+            let system = u32::from(code / 10 - 53);
+            // rs274 reloads a system's parameters only when it becomes active, not when it is
+            // selected again (a written #5221 waits for that).
+            if system != self.st.system || self.cfg.dialect != Dialect::LinuxCnc {
+                self.st.system = system;
+                self.st.load_system(self.cfg, self.params);
+                self.st.rederive_program(self.params);
+            }
         }
         if let Some(code) = groups.get(Group::Path) {
             self.path_mode(code)?;
@@ -222,7 +232,6 @@ impl LineRun<'_> {
         if let Some(code) = groups.get(Group::Retract) {
             self.st.retract_to_r = code == 990;
         }
-        // G94 (group FeedMode) is the only feed mode: nothing to do.
         if groups.get(Group::Rotation) == Some(690) {
             self.st.frame.set_rotation(Point2::origin(), 0.0);
             self.st.rederive_program(self.params);
@@ -427,6 +436,16 @@ impl LineRun<'_> {
             self.st.feed = Some(self.conv(f));
         }
         Ok(())
+    }
+
+    /// G94 (per minute) / G95 (per revolution). LinuxCNC sets the feed rate to 0 on either (a
+    /// feed move needs a new F); the others do so when the mode changes, since F then means
+    /// another thing.
+    fn feed_mode(&mut self, per_revolution: bool) {
+        if self.cfg.dialect == Dialect::LinuxCnc || self.st.per_revolution != per_revolution {
+            self.st.feed = Some(0.0);
+        }
+        self.st.per_revolution = per_revolution;
     }
 
     fn spindle_speed(&mut self) -> Result<(), RunProblem> {

@@ -23,7 +23,7 @@ use crate::tools::{Tool, ToolTable};
 use crate::watch::{PositionWatch, Publisher};
 use crate::words::{evaluate, Target, Words};
 use line::{is_builtin_m, Flow, LineRun, Pending};
-use modal::{is_work_offset, work_offset_base, Modal};
+use modal::{is_work_offset, work_offset_base, Modal, SYSTEMS};
 
 /// Where a line sits: its number in the text being run, the line its events are tagged with, and
 /// whether it is G-code run by a handler.
@@ -79,9 +79,10 @@ impl Interpreter {
         let modal = Modal::initial(&config);
         let parser =
             if config.dialect == Dialect::MachineMotion { Parser::new() } else { Parser::with_flat_comments() };
+        let params = Params::for_dialect(config.dialect);
         let mut interp = Interpreter {
             config,
-            params: Params::new(),
+            params,
             modal,
             parser,
             stack: Vec::new(),
@@ -226,7 +227,7 @@ impl Interpreter {
                 return Err(GcodeError::run(line, problem));
             }
             if offsets_written {
-                self.modal.rederive_program(&self.params);
+                self.modal.after_offset_write(&self.config, &self.params);
             }
             self.refresh_mirrors();
             return self.user_line(code, &words, &comments, at, handler, sink);
@@ -234,7 +235,7 @@ impl Interpreter {
         self.pending.clear();
         let mut st = self.modal;
         if offsets_written {
-            st.rederive_program(&self.params);
+            st.after_offset_write(&self.config, &self.params);
         }
         let mut run = LineRun {
             cfg: &self.config,
@@ -316,6 +317,28 @@ impl Interpreter {
             let i = u32::try_from(i).unwrap_or(0);
             self.params.set_mirror(TOOL_OFFSET + i, o);
             self.params.set_mirror(POSITION + i, p);
+        }
+        if self.config.dialect == Dialect::LinuxCnc {
+            let flag = |b: bool| if b { 1.0 } else { 0.0 };
+            let inch = st.units == LengthUnit::Inch;
+            let feed = st.feed.map_or(0.0, |f| self.config.machine_unit.convert(f, st.units));
+            // In PREDEFINED's order.
+            self.params.set_predefined([
+                0.0,
+                2.9,
+                0.0,
+                pos.x,
+                pos.y,
+                pos.z,
+                flag(inch),
+                flag(!inch),
+                flag(st.absolute),
+                flag(!st.absolute),
+                f64::from(st.tool),
+                f64::from(st.selected_tool),
+                feed,
+                st.speed.unwrap_or(0.0),
+            ]);
         }
     }
 
@@ -416,7 +439,8 @@ impl Interpreter {
         Xyz::new(x, y, z)
     }
 
-    /// The feed rate, machine units per minute (`None` before any `F` without a default).
+    /// The feed rate as programmed: machine units per minute, or per spindle revolution under
+    /// G95 (`None` before any `F` without a default). Feed moves carry the rate per minute.
     #[must_use]
     pub fn feed(&self) -> Option<f64> {
         self.modal.feed
@@ -464,10 +488,18 @@ impl Interpreter {
         })
     }
 
-    /// Parameter `#n` (0 for numbers outside 1–9999).
+    /// Parameter `#n` (0 for numbers outside the dialect's range, [`crate::Dialect::last_parameter`]).
     #[must_use]
     pub fn param(&self, n: u32) -> f64 {
         self.params.get(n)
+    }
+
+    /// Parameter `#n`, refused outside the dialect's range; reported at `line`.
+    pub(crate) fn read_param(&self, n: u32, line: u32) -> Result<f64, GcodeError> {
+        if !self.params.exists(n) {
+            return Err(GcodeError::run(line, self.params.bad(f64::from(n))));
+        }
+        Ok(self.params.get(n))
     }
 
     // ---- host operations -----------------------------------------------------------------
@@ -483,6 +515,9 @@ impl Interpreter {
         self.params.write(n, value).map_err(|p| GcodeError::run(line, p))?;
         self.params.begin();
         if affects_frame(n) {
+            // A host's or handler's write stands for the control's offset table: it takes
+            // effect at once in every dialect.
+            self.modal.load_system(&self.config, &self.params);
             self.modal.rederive_program(&self.params);
         }
         self.refresh_mirrors();
@@ -582,9 +617,12 @@ fn is_user_mcode(range: &std::ops::RangeInclusive<u32>, code: u32) -> bool {
     !is_builtin_m(code) && range.contains(&code)
 }
 
-/// Whether writing `#n` moves the program frame (G92 and work offsets).
+/// Whether writing `#n` moves the program frame (G92, work offsets and, under LinuxCNC, their
+/// rotations).
 fn affects_frame(n: u32) -> bool {
-    (G92_OFFSET..G92_OFFSET + 3).contains(&n) || is_work_offset(n)
+    (G92_OFFSET..G92_OFFSET + 3).contains(&n)
+        || is_work_offset(n)
+        || (1..=SYSTEMS).any(|system| crate::params::work_rotation(system) == n)
 }
 
 /// Events from handler G-code carry the M-code's line; outside a program (tag 0) they carry

@@ -3,12 +3,12 @@
 use vision_math::LengthUnit;
 
 use super::cycles::CycleState;
-use crate::config::InterpreterConfig;
+use crate::config::{Dialect, InterpreterConfig};
 use crate::error::GCode;
 use crate::event::PathMode;
-use crate::frame::{Frame, Placement};
+use crate::frame::{Frame, Placement, SystemRotation};
 use crate::geom::{ArcDirection, Plane, Xyz};
-use crate::params::{Params, G92_OFFSET};
+use crate::params::{work_rotation, Params, G92_OFFSET};
 
 /// The active motion mode (modal group 1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -36,8 +36,16 @@ pub(crate) struct Modal {
     pub(crate) path: PathMode,
     /// 1 (G54) … 6 (G59).
     pub(crate) system: u32,
-    /// Machine units per minute.
+    /// The active system's origin in force, machine units: loaded from its parameters when the
+    /// system is selected, set by G10, or (per dialect) written; see [`Modal::load_system`].
+    pub(crate) origin: Xyz,
+    /// The active system's XY rotation in force (LinuxCNC's `G10 L2 R`), degrees
+    /// counter-clockwise; always 0 in the other dialects.
+    pub(crate) rotation: f64,
+    /// Machine units per minute (G94) or per revolution (G95).
     pub(crate) feed: Option<f64>,
+    /// G95: `feed` is per spindle revolution, and a feed move goes at `feed` × `speed`.
+    pub(crate) per_revolution: bool,
     /// The last `T`.
     pub(crate) selected_tool: u32,
     /// The tool loaded by M6.
@@ -68,7 +76,10 @@ impl Modal {
             units: config.initial_units,
             path: config.initial_path_mode,
             system: 1,
+            origin: Xyz::ZERO,
+            rotation: 0.0,
             feed: config.default_feed,
+            per_revolution: false,
             selected_tool: 0,
             tool: 0,
             tool_offset: Xyz::ZERO,
@@ -91,28 +102,61 @@ impl Modal {
         self.absolute = true;
         self.arc_absolute = false;
         self.path = config.initial_path_mode;
+        self.per_revolution = false;
         self.system = 1;
         self.frame = Frame::identity();
         for axis in 0..3 {
             params.set(G92_OFFSET + axis, 0.0);
         }
+        self.load_system(config, params);
         self.rederive_program(params);
     }
 
     /// The program → machine map now.
     pub(crate) fn placement(&self, params: &Params) -> Placement {
-        let [wx, wy, wz] = params.triple(work_offset_base(self.system));
         let [gx, gy, gz] = params.triple(G92_OFFSET);
+        let (work, g92) = (self.origin, Xyz::new(gx, gy, gz));
         Placement {
             frame: self.frame,
-            offset: Placement::offset(Xyz::new(wx, wy, wz), Xyz::new(gx, gy, gz), self.tool_offset),
+            offset: Placement::offset(work, g92, self.tool_offset),
+            rotation: SystemRotation::new(self.rotation, work, g92, self.tool_offset),
         }
+    }
+
+    /// Takes the active system's origin and rotation from its parameters (the rotation under
+    /// LinuxCNC only; the other dialects have none).
+    pub(crate) fn load_system(&mut self, config: &InterpreterConfig, params: &Params) {
+        let [x, y, z] = params.triple(work_offset_base(self.system));
+        self.origin = Xyz::new(x, y, z);
+        self.rotation = system_rotation(config, params, self.system);
+    }
+
+    /// After a program line wrote an offset parameter (G92 or a system's origin): the G92
+    /// offset always takes effect; a written origin of the active system does at once in Mach4
+    /// and seed 002, and under LinuxCNC only when the system is selected again from another
+    /// one, or a G10 sets it (rs274 2.9: `convert_coordinate_system` reloads the parameters only
+    /// on a change of system). The program point is re-derived: the machine stays.
+    pub(crate) fn after_offset_write(&mut self, config: &InterpreterConfig, params: &Params) {
+        if config.dialect != Dialect::LinuxCnc {
+            self.load_system(config, params);
+        }
+        self.rederive_program(params);
     }
 
     /// Re-derives the program position from the machine position (after a frame change; the
     /// machine does not move).
     pub(crate) fn rederive_program(&mut self, params: &Params) {
         self.program = self.placement(params).program_of(self.machine);
+    }
+}
+
+/// Coordinate system `system`'s XY rotation, degrees: its parameter under LinuxCNC, 0 in the
+/// dialects without coordinate-system rotation.
+pub(crate) fn system_rotation(config: &InterpreterConfig, params: &Params, system: u32) -> f64 {
+    if config.dialect == Dialect::LinuxCnc {
+        params.get(work_rotation(system))
+    } else {
+        0.0
     }
 }
 

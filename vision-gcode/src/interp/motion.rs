@@ -3,6 +3,7 @@
 use crate::arc::{
     Arc, Tolerance, CENTRE_TOLERANCE_INCH, CENTRE_TOLERANCE_MM, RADIUS_TOLERANCE_INCH, RADIUS_TOLERANCE_MM,
 };
+use crate::config::Dialect;
 use crate::error::{GCode, RunProblem};
 use crate::event::{ArcMove, Event, EventSink, LinearMove, PathMode, Rate};
 use crate::frame::Placement;
@@ -73,7 +74,48 @@ impl LineRun<'_> {
                 t.set_axis(axis, if self.st.absolute { v } else { t.axis(axis) + v });
             }
         }
+        if self.w.has(b'@') || self.w.has(b'^') {
+            let (x, y) = self.polar(owner)?;
+            t.x = x;
+            t.y = y;
+        }
         Ok(t)
+    }
+
+    /// LinuxCNC's polar words (interp_find.cc, `find_ends`): `@` the distance from the program
+    /// origin (G90) or a change of it (G91), `^` the angle in degrees counter-clockwise from +X,
+    /// or a change of it; a word left out keeps the current point's. The new X/Y, machine units.
+    fn polar(&mut self, owner: &'static str) -> Result<(f64, f64), RunProblem> {
+        let (distance, angle) = self.polar_words(owner)?;
+        let (x, y) = (self.st.program.x, self.st.program.y);
+        if !self.st.absolute {
+            return polar_step(x, y, distance, angle);
+        }
+        let (radius, theta) = match (distance, angle) {
+            (Some(r), Some(a)) => (r, a),
+            (Some(_), None) if x == 0.0 && y == 0.0 => {
+                return Err(RunProblem::Polar { problem: "at the origin the angle ^ is needed" })
+            }
+            (Some(r), None) => (r, y.atan2(x)),
+            (None, a) => (x.hypot(y), a.unwrap_or(0.0)),
+        };
+        Ok((radius * theta.cos(), radius * theta.sin()))
+    }
+
+    /// The polar words where LinuxCNC allows them: the distance (machine units) and the angle
+    /// (radians).
+    pub(super) fn polar_words(&mut self, owner: &'static str) -> Result<(Option<f64>, Option<f64>), RunProblem> {
+        let refuse = |problem| Err(RunProblem::Polar { problem });
+        if self.cfg.dialect != Dialect::LinuxCnc {
+            return refuse("a LinuxCNC feature; program X and Y in this dialect");
+        }
+        if self.st.plane != Plane::Xy {
+            return refuse("they work in the G17 plane only");
+        }
+        if self.w.has(b'X') || self.w.has(b'Y') {
+            return refuse("X or Y on the same line: give either X/Y or @/^");
+        }
+        Ok((self.length(b'@', owner)?, self.w.take(b'^', owner)?.map(f64::to_radians)))
     }
 
     /// G28 / G30: via the point the axis words name (if any) to the position stored at
@@ -133,7 +175,11 @@ impl LineRun<'_> {
                 cycle => Some(MotionMode::Cycle(GCode(cycle))),
             };
         }
-        let has_axes = self.w.has(b'X') || self.w.has(b'Y') || self.w.has(b'Z');
+        let polar = self.w.has(b'@') || self.w.has(b'^');
+        let has_axes = self.w.has(b'X') || self.w.has(b'Y') || self.w.has(b'Z') || polar;
+        if polar && g53 {
+            return Err(RunProblem::Polar { problem: "not with G53: program X and Y there" });
+        }
         if g53 {
             return self.g53();
         }
@@ -183,12 +229,20 @@ impl LineRun<'_> {
         }
     }
 
-    /// The feed rate for a feed move: set and positive.
+    /// The feed rate for a feed move, machine units per minute: set and positive; under G95
+    /// the programmed feed per revolution times the spindle speed `S`.
     pub(super) fn feed(&self, code: &'static str) -> Result<f64, RunProblem> {
-        match self.st.feed {
-            None => Err(RunProblem::NoFeedRate { code }),
-            Some(f) if f <= 0.0 => Err(RunProblem::ZeroFeedRate { code }),
-            Some(f) => Ok(f),
+        let f = match self.st.feed {
+            None => return Err(RunProblem::NoFeedRate { code }),
+            Some(f) if f <= 0.0 => return Err(RunProblem::ZeroFeedRate { code }),
+            Some(f) => f,
+        };
+        if !self.st.per_revolution {
+            return Ok(f);
+        }
+        match self.st.speed {
+            Some(s) if s > 0.0 => in_range(f * s, || format!("{code}'s feed per minute (F × S under G95)")),
+            _ => Err(RunProblem::NoSpindleSpeed { code }),
         }
     }
 
@@ -277,7 +331,7 @@ impl LineRun<'_> {
         let machine_start = self.st.machine;
         let exact = match plane {
             Plane::Xy => pl.frame.is_similarity(),
-            Plane::Zx | Plane::Yz => pl.frame.is_translation(),
+            Plane::Zx | Plane::Yz => pl.is_translation(),
         };
         if exact {
             let center = self.checked(pl.machine_of(arc.center_point()))?;
@@ -313,4 +367,26 @@ impl LineRun<'_> {
         self.st.machine = end;
         Ok(())
     }
+}
+
+/// An incremental polar step from (x, y): first the distance from the origin grows by
+/// `distance`, then the angle by `angle` (radians), as rs274 does; undefined at the origin.
+pub(super) fn polar_step(
+    mut x: f64,
+    mut y: f64,
+    distance: Option<f64>,
+    angle: Option<f64>,
+) -> Result<(f64, f64), RunProblem> {
+    if (distance.is_some() || angle.is_some()) && x == 0.0 && y == 0.0 {
+        return Err(RunProblem::Polar { problem: "an incremental (G91) polar move is undefined at the origin" });
+    }
+    if let Some(r) = distance {
+        let (radius, theta) = (x.hypot(y) + r, y.atan2(x));
+        (x, y) = (radius * theta.cos(), radius * theta.sin());
+    }
+    if let Some(a) = angle {
+        let (radius, theta) = (x.hypot(y), y.atan2(x) + a);
+        (x, y) = (radius * theta.cos(), radius * theta.sin());
+    }
+    Ok((x, y))
 }

@@ -81,7 +81,7 @@ pub struct Word {
 }
 
 impl Word {
-    /// The letter, upper case (or `$`).
+    /// The letter, upper case (or `$`, or the polar `@` / `^`).
     #[must_use]
     pub fn letter(&self) -> char {
         char::from(self.letter)
@@ -342,10 +342,10 @@ impl Parser {
                     let value = self.value(cur, b'=', cur.pos)?;
                     self.assignments.push(Assignment { target, value, at: offset(at) });
                 }
-                b'@' | b'^' => return Err((at, SyntaxProblem::PolarCoordinates)),
                 _ => {
                     let letter = b.to_ascii_uppercase();
-                    if !(letter.is_ascii_uppercase() || letter == b'$') {
+                    // `@` and `^` are LinuxCNC's polar distance and angle.
+                    if !(letter.is_ascii_uppercase() || matches!(letter, b'$' | b'@' | b'^')) {
                         return Err((at, unexpected(cur, at)));
                     }
                     if letter == b'O' {

@@ -140,7 +140,9 @@ fn syntax_errors_say_where_and_what() {
     assert_eq!(syntax("#1 G0"), (4, SyntaxProblem::ExpectedEquals));
     assert_eq!(syntax("G0 N10"), (4, SyntaxProblem::LineNumberNotFirst));
     assert_eq!(syntax("N1.5"), (2, SyntaxProblem::BadLineNumber));
-    assert_eq!(syntax("G0 @"), (4, SyntaxProblem::PolarCoordinates));
+    assert_eq!(syntax("G0 @"), (4, SyntaxProblem::MissingValue { letter: '@' }));
+    assert_eq!(syntax("G0 @1 @2"), (7, SyntaxProblem::DuplicateWord { letter: '@' }));
+    assert_eq!(words("G1 @[1+1] ^-30", &Params::new()), vec![('G', 1.0), ('@', 2.0), ('^', -30.0)]);
     assert_eq!(syntax("G0 &"), (4, SyntaxProblem::Unexpected { found: '&' }));
     assert_eq!(syntax("Gé"), (1, SyntaxProblem::MissingValue { letter: 'G' }));
     assert_eq!(syntax("é"), (1, SyntaxProblem::Unexpected { found: 'é' }));
