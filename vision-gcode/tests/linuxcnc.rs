@@ -229,7 +229,8 @@ fn dialects_differ_where_the_controllers_do() {
         run(&mut interp, &delimited("G0 X1 Y1\nG92 X0 Y0\nG92 X5"));
         assert_eq!(interp.g92_offset().y, -y, "{dialect:?}");
     }
-    // Tool length: from M6 in seed 002, from G43 on Mach4 and LinuxCNC.
+    // Tool length: from M6 in seed 002, from G43 on Mach4 and LinuxCNC (Mach4's X/Y offset is
+    // the loaded tool's, from M6: `mach4_applies_the_tool_xy_at_m6_and_the_length_at_g43`).
     for (dialect, z) in [(Dialect::MachineMotion, 0.5), (Dialect::Mach4, 0.0), (Dialect::LinuxCnc, 0.0)] {
         let mut interp = with(dialect);
         run(&mut interp, &delimited("T1 M6\nG0 Z0"));
@@ -467,4 +468,23 @@ fn a_hosts_rotation_write_takes_effect_at_once() {
     let xs: Vec<_> =
         moves(&run(&mut linuxcnc_mm(), "#5230 = 90\nG0 X1 Y0\nG55\nG54\nG0 X2 Y0\nM2")).iter().map(|m| m.1).collect();
     assert!((xs[0][0] - 1.0).abs() < 1e-12 && (xs[1][1] - 2.0).abs() < 1e-12, "{xs:?}");
+}
+
+#[test]
+fn mach4_applies_the_tool_xy_at_m6_and_the_length_at_g43() {
+    let tools = ToolTable::numbered(1, 20).with(7, Tool { offset: Xyz::new(1.5, -2.0, 0.5), outputs: None });
+    let mut interp = Interpreter::new(InterpreterConfig {
+        tools,
+        dialect: Dialect::Mach4,
+        ..InterpreterConfig::new(LengthUnit::Inch)
+    });
+    let at = |interp: &Interpreter| interp.machine_position();
+    run(&mut interp, "T7 M6\nG0 X0 Y0 Z0");
+    assert_eq!(at(&interp), Xyz::new(-1.5, 2.0, 0.0), "X/Y from M6, no length yet");
+    run(&mut interp, "G43 H7\nG0 X0 Y0 Z0");
+    assert_eq!(at(&interp), Xyz::new(-1.5, 2.0, 0.5), "G43 adds the length only");
+    run(&mut interp, "G49\nG0 X0 Y0 Z0");
+    assert_eq!(at(&interp), Xyz::new(-1.5, 2.0, 0.0), "G49 cancels the length only");
+    run(&mut interp, "T1 M6\nG0 X0 Y0 Z0");
+    assert_eq!(at(&interp), Xyz::new(0.0, 0.0, 0.0), "tool 1 has no X/Y offset");
 }

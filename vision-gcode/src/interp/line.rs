@@ -468,9 +468,10 @@ impl LineRun<'_> {
     }
 
     /// G43 `H` (a tool's offsets from the table; the loaded tool without `H`), G43.1 `Z` (a
-    /// length given here, current units), G49 (none).
+    /// length given here, current units), G49 (none). Under Mach4 they set the length only: the
+    /// X/Y offset is the loaded tool's, from M6.
     fn tool_length(&mut self, code: u16) -> Result<(), RunProblem> {
-        self.st.tool_offset = match code {
+        let offset = match code {
             430 => {
                 let tool = match self.w.take(b'H', "G43")? {
                     Some(h) => whole(b'H', h)?,
@@ -492,6 +493,10 @@ impl LineRun<'_> {
             }
             _ => Xyz::ZERO,
         };
+        self.st.tool_offset = match self.cfg.dialect {
+            Dialect::Mach4 => Xyz::new(self.st.tool_offset.x, self.st.tool_offset.y, offset.z),
+            Dialect::MachineMotion | Dialect::LinuxCnc => offset,
+        };
         self.st.rederive_program(self.params);
         Ok(())
     }
@@ -511,11 +516,16 @@ impl LineRun<'_> {
         let tool = self.st.selected_tool;
         let entry = self.cfg.tools.get(tool).ok_or(RunProblem::UnknownTool { tool })?;
         self.st.tool = tool;
-        // Seed 002 has no G43: the tool's offsets apply from M6. Mach4 and LinuxCNC wait for G43.
-        if self.cfg.dialect == Dialect::MachineMotion {
-            self.st.tool_offset = entry.offset;
-            self.st.rederive_program(self.params);
+        // Seed 002 has no G43: the tool's offsets apply from M6. Mach4: its X/Y offset applies
+        // from M6 (the manual's programs select the camera with `T98 M6` alone and expect its
+        // optical axis on the commanded point, SPEC §5), the length waits for G43. LinuxCNC
+        // applies all of it with G43 only.
+        match self.cfg.dialect {
+            Dialect::MachineMotion => self.st.tool_offset = entry.offset,
+            Dialect::Mach4 => self.st.tool_offset = Xyz::new(entry.offset.x, entry.offset.y, self.st.tool_offset.z),
+            Dialect::LinuxCnc => {}
         }
+        self.st.rederive_program(self.params);
         self.emit(Event::ToolChange { line: self.line, tool, offset: entry.offset });
         Ok(())
     }

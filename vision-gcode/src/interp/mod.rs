@@ -574,7 +574,11 @@ impl Interpreter {
 
     fn after_tool_write(&mut self, tool: u32, offset: Xyz) {
         if tool == self.modal.tool {
-            self.modal.tool_offset = offset;
+            // Under Mach4 the table's length reaches the machine through G43 only.
+            self.modal.tool_offset = match self.config.dialect {
+                Dialect::Mach4 => Xyz::new(offset.x, offset.y, self.modal.tool_offset.z),
+                Dialect::MachineMotion | Dialect::LinuxCnc => offset,
+            };
             self.modal.rederive_program(&self.params);
             self.refresh_mirrors();
         }
