@@ -4,7 +4,7 @@
 ( Setup, as the manual says:                                                     )
 ( 1. Tape sheet flat, X+ right / Y+ up                                           )
 ( 2. Spindle tool active, jog over sheet CENTER, zero X and Y                    )
-( 3. Camera tool active, jog over START dot (lower-left -2.5,-4.0)               )
+( 3. Camera tool active, jog over START dot [lower-left -2.5,-4.0]               )
 ( The built-in simulated world starts in exactly that state.                     )
 G90 G20 G17 ( absolute, inches, XY plane )
 G54

@@ -1,9 +1,9 @@
 ( Example 2 - Verify Calibration: 5-dot walk in absolute G90.                    )
 ( Shows: an M280/M281/M282 run over the sheet's corners, then a capture at the   )
-( centre in the aligned frame; #500/#501 hold the centre residual (should be ~0). )
+( centre in the aligned frame; #500/#501 hold the centre residual [should be ~0]. )
 ( Sheet center = 0,0 in current work coords )
-( Corners at (+/- 2.5, +/- 4.0) inch )
-( Walk order: 1 -> 2 -> 3 -> 4 (4-point fit) -> 5 (center verify) )
+( Corners at [+/- 2.5, +/- 4.0] inch )
+( Walk order: 1 -> 2 -> 3 -> 4 [4-point fit] -> 5 [center verify] )
 G90 G20 G17 ( absolute, inches, XY plane )
 G54 ( use whatever WCS is zeroed at sheet center )
 T98 M6 ( camera tool )
@@ -19,7 +19,7 @@ M281
 M282 ( solve + apply modal G51 / G68 / G52 )
 G0 X0 Y0 ( dot 5 - center, post-fit verify )
 M281 ( capture; pound vars #500..#507 show residual )
-( Inspect #500 (X), #501 (Y) - both should be ~0 if fit is good. )
+( Inspect #500 [X], #501 [Y] - both should be ~0 if fit is good. )
 ( To clear the transform when done: )
 G69 G50 G52 X0 Y0
 M30

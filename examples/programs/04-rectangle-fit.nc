@@ -4,7 +4,7 @@
 ( polylines when the two scales differ.                                           )
 ( Locate a 6 x 4 in part by its 4 corner fiducials, then run the cut )
 ( Operator drops the part on the fixture roughly square; fiducials )
-( are at the nominal corners (0,0), (6,0), (6,4), (0,4). )
+( are at the nominal corners [0,0], [6,0], [6,4], [0,4]. )
 G90 G20 G17
 G54
 T98 M6 ( camera tool )

@@ -1,7 +1,7 @@
 ( Example 5 - 3-Point Similarity Fit.                                            )
 ( Shows: M280 P3 - shift, rotation and one uniform scale from three fiducials;   )
 ( M282 emits G51 with equal X and Y factors, so arcs stay exact arcs.             )
-( Locate a part by 3 fiducials (similarity fit - shift, rotate, uniform scale) )
+( Locate a part by 3 fiducials [similarity fit - shift, rotate, uniform scale] )
 G90 G20 G17
 G54
 T98 M6

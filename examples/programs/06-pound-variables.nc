@@ -1,9 +1,9 @@
 ( Example 6 - Reading the Result with Pound Variables.                           )
 ( Shows: the pound-variable block - M281 writes the observed X/Y, width, height, )
-( angle and score of the capture to #500.. (slot 0) and #508.. (slot 1), and     )
+( angle and score of the capture to #500.. [slot 0] and #508.. [slot 1], and     )
 ( G-code math uses them, here to set the G55 fixture offset.                     )
 ( Single-mark inspection: trigger and use the result in G-code math )
-( Requires VisionPoundVarBase = 500 (default). )
+( Requires VisionPoundVarBase = 500 [default]. )
 G90 G20
 T98 M6
 M280 ( begin run so M281 has somewhere to store the dot )

@@ -1,7 +1,7 @@
 ( Example 7 - Switching Camera Jobs Mid-Program.                                 )
 ( Shows: M284 selecting camera jobs; a 4-mark alignment with the coarse job,     )
 ( then a fine capture with the precise job at the part centre, in the aligned    )
-( frame (the observed point is reported in program coordinates).                 )
+( frame [the observed point is reported in program coordinates].                 )
 ( Use a coarse fiducial finder for the rough alignment, then switch )
 ( to a precise circle-fit job for the final inspection step.         )
 G90 G20

@@ -1,5 +1,5 @@
 //! `mach-vision run --dialect` and the world's `machine.dialect` choose the control's G-code
-//! rules (issue 14): a nested comment is seed 002's, an error for Mach4 and LinuxCNC.
+//! rules (issue 14): a nested comment is seed 002's, an error for Mach4 (the default) and LinuxCNC.
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -11,7 +11,7 @@ fn run(args: &[&str], dir: &str) -> String {
     let program = d.join("nested.nc");
     std::fs::write(&program, "G90 G0 X0 Y0 (outer (inner) outer)\nM30\n").expect("write");
     let world_text =
-        vision_driver_sim::DEFAULT_WORLD_TOML.replace("dialect = \"machinemotion\"", "dialect = \"mach4\"");
+        vision_driver_sim::DEFAULT_WORLD_TOML.replace("dialect = \"mach4\"", "dialect = \"machinemotion\"");
     let world: PathBuf = d.join("world.toml");
     std::fs::write(&world, world_text).expect("write");
     let args: Vec<String> =
@@ -26,11 +26,11 @@ fn the_dialect_comes_from_the_option_or_the_world() {
     let ended = "ended by M30 at line 2";
     let failed = "failed at line 1";
     let default = run(&[], "default");
-    assert!(default.contains(ended), "{default}");
-    let mach4 = run(&["--dialect", "mach4"], "option");
-    assert!(mach4.contains(failed), "{mach4}");
+    assert!(default.contains(failed), "{default}");
+    let seed = run(&["--dialect", "machinemotion"], "option");
+    assert!(seed.contains(ended), "{seed}");
     let world = run(&["--world", "WORLD"], "world");
-    assert!(world.contains(failed), "{world}");
-    let back = run(&["--world", "WORLD", "--dialect", "machinemotion"], "override");
-    assert!(back.contains(ended), "{back}");
+    assert!(world.contains(ended), "{world}");
+    let back = run(&["--world", "WORLD", "--dialect", "mach4"], "override");
+    assert!(back.contains(failed), "{back}");
 }

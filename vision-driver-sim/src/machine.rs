@@ -184,18 +184,24 @@ mod tests {
     #[test]
     fn the_world_names_the_controls_dialect() {
         let (_, m) = machine();
-        assert_eq!(m.interpreter().config().dialect, vision_gcode::Dialect::MachineMotion);
-        let toml = crate::DEFAULT_WORLD_TOML.replace("dialect = \"machinemotion\"", "dialect = \"mach4\"");
+        assert_eq!(m.interpreter().config().dialect, vision_gcode::Dialect::Mach4);
+        // Mach4 applies the camera's X/Y offset at M6, as the manual's programs expect.
+        let mut mach4 = m;
+        execute(&mut mach4, "G90 G0 X0 Y0");
+        let spindle_tool = mach4.interpreter().machine_position();
+        execute(&mut mach4, "T98 M6\nG0 X0 Y0");
+        let camera = mach4.interpreter().machine_position();
+        assert!((camera - spindle_tool).norm() > 1.0, "{spindle_tool:?} {camera:?}");
+        // LinuxCNC applies a tool's offsets at G43 only: T98 M6 leaves the spindle where it is.
+        let toml = crate::DEFAULT_WORLD_TOML.replace("dialect = \"mach4\"", "dialect = \"linuxcnc\"");
         let sim = Sim::new(World::from_toml(&toml).expect("world")).expect("sim");
-        let mut mach4 = SimMachine::new(&sim).expect("machine");
-        assert_eq!(mach4.interpreter().config().dialect, vision_gcode::Dialect::Mach4);
-        // Mach4 applies tool offsets at G43, not at M6: T98 M6 leaves the spindle where it is.
-        let before = mach4.interpreter().machine_position();
-        execute(&mut mach4, "G90 G0 X0 Y0\nT98 M6\nG0 X0 Y0");
-        let after_m6 = mach4.interpreter().machine_position();
-        execute(&mut mach4, "G43 H98\nG0 X0 Y0");
-        assert!((after_m6 - mach4.interpreter().machine_position()).norm() > 1.0, "{before:?} {after_m6:?}");
-        let bad = crate::DEFAULT_WORLD_TOML.replace("dialect = \"machinemotion\"", "dialect = \"fanuc\"");
+        let mut linuxcnc = SimMachine::new(&sim).expect("machine");
+        assert_eq!(linuxcnc.interpreter().config().dialect, vision_gcode::Dialect::LinuxCnc);
+        execute(&mut linuxcnc, "G90 G0 X0 Y0\nT98 M6\nG0 X0 Y0");
+        let after_m6 = linuxcnc.interpreter().machine_position();
+        execute(&mut linuxcnc, "G43 H98\nG0 X0 Y0");
+        assert!((after_m6 - linuxcnc.interpreter().machine_position()).norm() > 1.0, "{after_m6:?}");
+        let bad = crate::DEFAULT_WORLD_TOML.replace("dialect = \"mach4\"", "dialect = \"fanuc\"");
         assert!(World::from_toml(&bad).is_err());
     }
 

@@ -43,10 +43,11 @@ impl WorldUnit {
 #[serde(rename_all = "lowercase")]
 pub enum MachineDialect {
     /// Seed 002's MachineMotion (`"machinemotion"`): M6 applies tool offsets, G92 zeroes the
-    /// axes it does not name, comments nest. The default: the examples are written for it.
-    #[default]
+    /// axes it does not name, comments nest.
     Machinemotion,
-    /// Mach4 (`"mach4"`): tool offsets from G43 only, G92 keeps unnamed axes.
+    /// Mach4 (`"mach4"`), the manual's controller and the default: M6 applies the tool's X/Y
+    /// offset and G43 its length, G92 keeps unnamed axes, a comment ends at its first `)`.
+    #[default]
     Mach4,
     /// LinuxCNC 2.9 (`"linuxcnc"`): as Mach4, without G68/G51.
     Linuxcnc,
@@ -192,7 +193,7 @@ pub struct MachineSetup {
     /// 20 in/s² = 508 mm/s²). Used for cycle times.
     #[serde(default)]
     pub max_accel: Option<f64>,
-    /// The control's G-code dialect (default `"machinemotion"`).
+    /// The control's G-code dialect (default `"mach4"`).
     #[serde(default)]
     pub dialect: MachineDialect,
 }

@@ -65,7 +65,7 @@ pub(crate) struct RunArgs {
     #[arg(long, value_name = "DIR")]
     report: Option<PathBuf>,
     /// Whose G-code rules the machine follows where the controllers differ; default: the
-    /// world's `machine.dialect` (`machinemotion` unless the world says otherwise).
+    /// world's `machine.dialect` (`mach4` unless the world says otherwise).
     #[arg(long, value_enum)]
     dialect: Option<DialectArg>,
 }
