@@ -188,6 +188,8 @@ mod tests {
         let e = p(281, &[('X', 1.0)]).expect_err("X");
         assert_eq!(e, McodeError::UnknownWord { m: 281, letter: 'X', allowed: "D".into() });
         assert_eq!(e.to_string(), "M281 does not take an X word (it takes: D) — put M281 on a line of its own");
+        let q = p(281, &[('Q', 1.0)]).expect_err("Q");
+        assert_eq!(q.to_string(), "M281 does not take a Q word (it takes: D) — put M281 on a line of its own");
         assert_eq!(p(280, &[('P', 3.0), ('P', 4.0)]), Err(McodeError::RepeatedWord { m: 280, letter: 'P' }));
         assert_eq!(p(282, &[('P', f64::NAN)]), Err(McodeError::NotFinite { m: 282, letter: 'P' }));
         assert_eq!(p(279, &[]), Err(McodeError::NotVision { m: 279 }));

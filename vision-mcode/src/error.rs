@@ -2,6 +2,15 @@
 
 use vision_core::VisionError;
 
+/// "an" before a letter whose spoken name starts with a vowel sound (an X, an F), else "a".
+fn article(letter: char) -> &'static str {
+    if "AEFHILMNORSX".contains(letter.to_ascii_uppercase()) {
+        "an"
+    } else {
+        "a"
+    }
+}
+
 /// Why a Vision M-code was refused. Nothing ran and nothing changed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
@@ -13,7 +22,7 @@ pub enum McodeError {
         m: u32,
     },
     /// A word the M-code does not take.
-    #[error("M{m} does not take an {letter} word (it takes: {allowed}) — put M{m} on a line of its own")]
+    #[error("M{m} does not take {} {letter} word (it takes: {allowed}) — put M{m} on a line of its own", article(*letter))]
     UnknownWord {
         /// The M number.
         m: u32,

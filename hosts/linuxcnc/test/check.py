@@ -407,7 +407,7 @@ def module_errors(check, module):
         ({"pq": 4.0}, BareHost(), 'word "pq" is not a letter'),
         ({"p": True}, BareHost(), "word P is True, not a number"),
         ({"p": float("nan")}, BareHost(), "M280 P word is not a finite number"),
-        ({"q": 1.0}, BareHost(), "M280 does not take an Q word"),
+        ({"q": 1.0}, BareHost(), "M280 does not take a Q word"),
         ({"p": 5.0}, BareHost(), "M280 P5 is invalid"),
         ({}, BareHost(tool=lambda: "T98"), "Host.tool() returned 'T98', not a tool number"),
         ({}, BareHost(pound=lambda n: {}[n]), "Host.pound(): KeyError: "),
