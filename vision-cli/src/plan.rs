@@ -43,7 +43,7 @@ pub(crate) struct PlanArgs {
     #[arg(long, value_enum, default_value_t = UnitArg::In)]
     machine_units: UnitArg,
     /// Whose G-code rules apply where the controllers differ (as in `trace`).
-    #[arg(long, value_enum, default_value_t = DialectArg::Machinemotion)]
+    #[arg(long, value_parser = DialectArg::parse, default_value_t = DialectArg::MACHINEMOTION)]
     dialect: DialectArg,
     /// The G-code program; standard input when `-`.
     program: PathBuf,

@@ -12,7 +12,8 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 use serde_json::{json, Value};
 use vision_core::text::{printable_line, MAX_MESSAGE_CHARS};
-use vision_driver_sim::MachineDialect;
+use vision_core::Controller;
+use vision_driver_sim::interpreter_dialect;
 use vision_gcode::{
     ArcDirection, Dialect, Event, GcodeError, Interpreter, InterpreterConfig, PathMode, Rate, RunOutcome, Xyz,
 };
@@ -34,7 +35,7 @@ pub(crate) struct TraceArgs {
     #[arg(long)]
     block_delete: bool,
     /// Whose rules apply where the controllers differ.
-    #[arg(long, value_enum, default_value_t = DialectArg::Machinemotion)]
+    #[arg(long, value_parser = DialectArg::parse, default_value_t = DialectArg::MACHINEMOTION)]
     dialect: DialectArg,
     /// Folders searched for `name.ngc` when `o<name> call` names a subroutine the program does
     /// not define (LinuxCNC's SUBROUTINE_PATH); colon-separated, or repeat the option.
@@ -44,30 +45,32 @@ pub(crate) struct TraceArgs {
     program: PathBuf,
 }
 
-/// Whose G-code rules apply where the controllers differ (shared with `plan`).
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub(crate) enum DialectArg {
-    /// Seed 002's MachineMotion: G92 zeroes unnamed axes, M6 applies tool offsets, nested
-    /// comments.
-    Machinemotion,
-    /// Mach4: G92 keeps unnamed axes, G43 applies tool length offsets, flat comments.
-    Mach4,
-    /// LinuxCNC 2.9: as Mach4, without G68/G51.
-    Linuxcnc,
-}
+/// `--dialect NAME`: the controller whose G-code rules apply where the controllers differ
+/// (shared with `plan` and `run`): `machinemotion` (seed 002: G92 zeroes unnamed axes, M6
+/// applies tool offsets, nested comments), `mach4` (G92 keeps unnamed axes, G43 applies tool
+/// length offsets, flat comments) or `linuxcnc` (2.9: as Mach4 without G68/G51; its tool table
+/// is added). Any name in `vision_core::CONTROLLERS`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct DialectArg(pub(crate) &'static dyn Controller);
 
 impl DialectArg {
-    pub(crate) fn dialect(self) -> Dialect {
-        self.machine().dialect()
+    /// Seed 002's MachineMotion, the default of `trace` and `plan` (the path interface's tools).
+    pub(crate) const MACHINEMOTION: DialectArg = DialectArg(&vision_core::controller::MachineMotion);
+
+    /// Parses a controller's name (case-insensitive).
+    pub(crate) fn parse(name: &str) -> Result<DialectArg, String> {
+        vision_core::controller::by_name(name).map(DialectArg).map_err(|e| e.to_string())
     }
 
-    /// The same choice as a world's `machine.dialect` (`run` puts it there).
-    pub(crate) fn machine(self) -> MachineDialect {
-        match self {
-            DialectArg::Machinemotion => MachineDialect::Machinemotion,
-            DialectArg::Mach4 => MachineDialect::Mach4,
-            DialectArg::Linuxcnc => MachineDialect::Linuxcnc,
-        }
+    /// The interpreter's dialect.
+    pub(crate) fn dialect(self) -> Dialect {
+        interpreter_dialect(self.0)
+    }
+}
+
+impl std::fmt::Display for DialectArg {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.0.name())
     }
 }
 

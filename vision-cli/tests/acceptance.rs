@@ -7,8 +7,9 @@
 use vision_core::{CalReport, Params, Timestamp, VisionModule};
 use vision_driver_sim::{Fixture, Sim, SimMachine, World};
 use vision_gcode::Event;
+use vision_host::{ProgramHandler, Record, Session};
 use vision_math::{LengthUnit, Point2, Vector2};
-use vision_mcode::{fixed_clock, Outcome, Record, VisionHandler};
+use vision_mcode::{fixed_clock, Outcome};
 
 const EX1: &str = include_str!("../../examples/programs/01-calibrate-sheet.nc");
 const EX2: &str = include_str!("../../examples/programs/02-verify-calibration.nc");
@@ -18,11 +19,12 @@ const EX5: &str = include_str!("../../examples/programs/05-similarity-fit.nc");
 const EX6: &str = include_str!("../../examples/programs/06-pound-variables.nc");
 const EX7: &str = include_str!("../../examples/programs/07-switch-jobs.nc");
 
-/// A world, its machine, and the Vision module as the M-code handler.
+/// A world, its machine, and the Vision session as the M-code handler (the path of
+/// `mach-vision run` and of every bridge).
 struct Rig {
     sim: Sim,
     machine: SimMachine,
-    handler: VisionHandler,
+    handler: ProgramHandler,
 }
 
 impl Rig {
@@ -38,7 +40,8 @@ impl Rig {
             params = sim.calibrated_params(&params).expect("calibrated");
         }
         let module = VisionModule::new(params).with_driver(Box::new(sim.camera()));
-        Rig { sim, machine, handler: VisionHandler::new(module, clock) }
+        let controller = sim.world().machine.controller();
+        Rig { sim, machine, handler: ProgramHandler::new(Session::new(module), controller, clock) }
     }
 
     /// Runs `program`; returns the Vision records it produced.
@@ -62,7 +65,7 @@ impl Rig {
         let unit = interp.units();
         let camera = self.sim.world().machine.camera_tool;
         let offset = interp.tool_offset(camera).expect("camera tool").xy().coords;
-        self.sim.calibration_error(self.handler.module().params(), offset, unit)
+        self.sim.calibration_error(self.handler.session().module().params(), offset, unit)
     }
 
     /// The worst cut error over `grid` (world unit) with the alignment the last M282 emitted.
@@ -391,7 +394,7 @@ fn a_displaced_mark_among_six_is_dropped_and_the_cut_recovers() {
                 }
                 w.fixtures.iter_mut().for_each(|f| f.present = f.name == "rectangle part");
             });
-            rig.handler.module_mut().set_param("VisionOutlierFactor", factor).expect("set");
+            rig.handler.session_mut().module_mut().set_param("VisionOutlierFactor", factor).expect("set");
             let records = rig.run_to_refusal(program);
             match last_fit(&records) {
                 Ok(fit) => {
@@ -457,12 +460,12 @@ fn rig_at_height(case: u64, height: f64, present: &str) -> Rig {
     let mut w = random_world(case, 0.1, 1.0);
     w.machine.camera_table_offset = None;
     w.camera.reference_working_distance = Some(w.camera.working_distance);
-    let params = Rig::new(w.clone(), true).handler.module().params().clone();
+    let params = Rig::new(w.clone(), true).handler.session().module().params().clone();
     w.camera.working_distance *= height;
     w.fixtures.iter_mut().for_each(|f| f.present = f.name == present);
     let mut rig = Rig::new(w, false);
     for (name, value) in params.config_values() {
-        rig.handler.module_mut().set_param(name, value).expect("calibration");
+        rig.handler.session_mut().module_mut().set_param(name, value).expect("calibration");
     }
     rig
 }
@@ -473,7 +476,7 @@ fn cut_at_height(case: u64, height: f64, passes: i64) -> f64 {
     let mut worst: f64 = 0.0;
     for (fixture, program, size) in [("rectangle part", EX4, (6.0, 4.0)), ("similarity part", EX5, (8.0, 6.0))] {
         let mut rig = rig_at_height(case, height, fixture);
-        rig.handler.module_mut().set_param("VisionRecenterPasses", passes).expect("set");
+        rig.handler.session_mut().module_mut().set_param("VisionRecenterPasses", passes).expect("set");
         let records = rig.run(program);
         worst = worst.max(rig.max_cut_error(&records, fixture, &grid(size.0, size.1)));
     }
@@ -510,7 +513,7 @@ fn recentring_keeps_the_cut_when_the_part_is_higher_or_lower_than_calibrated() {
 fn the_mark_size_tells_a_height_change() {
     for (height, expected) in [(1.0, None), (1.04, Some("farther")), (0.96, Some("closer"))] {
         let mut rig = rig_at_height(700, height, "rectangle part");
-        rig.handler.module_mut().set_param("VisionMarkDiameter", 0.25).expect("set");
+        rig.handler.session_mut().module_mut().set_param("VisionMarkDiameter", 0.25).expect("set");
         let records = rig.run(EX4);
         let warnings: Vec<Option<String>> = records
             .iter()
@@ -548,11 +551,11 @@ fn a_calibration_that_reads_outside_the_image_warns_about_the_resolution() {
         w.fixtures[0].marks.clear();
         let mut rig = Rig::new(w, false);
         if let Some([x, y]) = profile_res {
-            rig.handler.module_mut().set_param("VisionCameraResX", x).expect("set");
-            rig.handler.module_mut().set_param("VisionCameraResY", y).expect("set");
+            rig.handler.session_mut().module_mut().set_param("VisionCameraResX", x).expect("set");
+            rig.handler.session_mut().module_mut().set_param("VisionCameraResY", y).expect("set");
         }
         let s = sheet_report(&rig.run(EX1));
-        let status = rig.handler.module().telemetry().last_status().to_string();
+        let status = rig.handler.session().module().telemetry().last_status().to_string();
         let e = rig.calibration_error();
         assert!(e.k_relative < 2e-3 && e.remap_matches, "{profile_res:?}: {e:?}");
         if warns {
@@ -580,7 +583,7 @@ fn floor_ratio(cases: std::ops::Range<u64>, passes: i64, walk: bool) -> (f64, u3
         if walk {
             rig.run(EX1);
         }
-        rig.handler.module_mut().set_param("VisionRecenterPasses", passes).expect("set");
+        rig.handler.session_mut().module_mut().set_param("VisionRecenterPasses", passes).expect("set");
         for (fixture, program, size) in [("rectangle part", EX4, (6.0, 4.0)), ("similarity part", EX5, (8.0, 6.0))] {
             for name in ["sheet", "rectangle part", "similarity part"] {
                 rig.sim.set_present(name, name == fixture).expect("fixture");

@@ -56,9 +56,9 @@
 use vision_math::chain::fixed;
 use vision_math::{fit_rectangle, solve_linear, LengthUnit, Matrix2, PixelChain, Point2, Remap, Vector2, MM_PER_INCH};
 
+use crate::controller::{program_to_machine, rotation};
 use crate::driver::{CameraDriver, Reading};
 use crate::error::VisionError;
-use crate::linuxcnc::{program_to_machine, rotation};
 use crate::machine::Machine;
 use crate::module::capture::{centred_px, chain_with, k_in, mark_size, outside_image_note, require_mark};
 use crate::module::dro::Dro;
@@ -318,15 +318,16 @@ pub(crate) struct Walker<'a> {
 }
 
 impl<'a> Walker<'a> {
-    /// A walker that moves `machine` and triggers `driver`, dwelling `VisionTriggerSettleSec`
-    /// after every move.
+    /// A walker that moves `machine` (whose units are `unit`) and triggers `driver`, dwelling
+    /// `VisionTriggerSettleSec` after every move.
     pub(crate) fn new(
         machine: &'a mut dyn Machine,
         driver: &'a mut dyn CameraDriver,
         params: &'a Params,
         dro: &'a mut Dro,
+        unit: LengthUnit,
     ) -> Self {
-        Walker::with_source(machine, Source::Live(driver), params, dro)
+        Walker::with_source(machine, Source::Live(driver), params, dro, unit)
     }
 
     /// A walker that replays `taken` (readings with the program positions they were taken at)
@@ -338,12 +339,18 @@ impl<'a> Walker<'a> {
         start: Point2<f64>,
         params: &'a Params,
         dro: &'a mut Dro,
+        unit: LengthUnit,
     ) -> Self {
-        Walker::with_source(machine, Source::Replay { taken, next: 0, at: start, needed: None }, params, dro)
+        Walker::with_source(machine, Source::Replay { taken, next: 0, at: start, needed: None }, params, dro, unit)
     }
 
-    fn with_source(machine: &'a mut dyn Machine, source: Source<'a>, params: &'a Params, dro: &'a mut Dro) -> Self {
-        let unit = machine.units();
+    fn with_source(
+        machine: &'a mut dyn Machine,
+        source: Source<'a>,
+        params: &'a Params,
+        dro: &'a mut Dro,
+        unit: LengthUnit,
+    ) -> Self {
         let known = Some((k_in(params, unit), params.remap()));
         Walker {
             machine,
@@ -379,22 +386,22 @@ impl<'a> Walker<'a> {
             *at = target;
         } else {
             self.machine.run_gcode(&lines)?;
-            self.machine.dwell(self.params.trigger_settle_s());
+            self.machine.dwell(self.params.trigger_settle_s())?;
         }
         self.ran.extend(lines);
         Ok(())
     }
 
-    fn position(&self) -> Point2<f64> {
+    fn position(&self) -> Result<Point2<f64>, VisionError> {
         match self.source {
-            Source::Replay { at, .. } => at,
-            Source::Live(_) => self.machine.program_position(),
+            Source::Replay { at, .. } => Ok(at),
+            Source::Live(_) => Ok(self.machine.program_position()?),
         }
     }
 
     /// Incremental move to `target` (program frame), then back to G90, then settle.
     fn move_to(&mut self, target: Point2<f64>) -> Result<(), VisionError> {
-        self.run(relative_move(target - self.position()), target)
+        self.run(relative_move(target - self.position()?), target)
     }
 
     /// Absolute G90 move to `target`, then settle.
@@ -408,7 +415,7 @@ impl<'a> Walker<'a> {
         self.triggers += 1;
         let (reading, pos, newest) = match &mut self.source {
             Source::Live(driver) => match driver.trigger() {
-                Ok(r) => (r, self.machine.program_position(), true),
+                Ok(r) => (r, self.machine.program_position()?, true),
                 Err(e) => {
                     let e = VisionError::from(e);
                     self.dro.failure(Some(-1), &e);
@@ -449,7 +456,7 @@ impl<'a> Walker<'a> {
     /// The axis-detect bump from the current position; returns the remap and the two pairs.
     fn axis_detect(&mut self) -> Result<(AxisReport, [(usize, usize); 2]), VisionError> {
         let bump = LengthUnit::Inch.convert(BUMP_IN, self.unit);
-        let start = self.position();
+        let start = self.position()?;
         let s0 = self.shoot(0)?;
         self.move_to(start + Vector2::new(bump, 0.0))?;
         let s1 = self.shoot(0)?;
@@ -577,7 +584,7 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
     let sheet = cal_sheet(n).ok_or_else(|| VisionError::UnknownSheet { sheet: n, known: known_sheets() })?;
     let unit = walker.unit;
     let nominal = sheet.dots(unit);
-    let offset_before = walker.machine.tool_offset(tool)?;
+    let offset_before = crate::controller::tool_offset(&*walker.machine, tool)?;
 
     // 1. Axis detect: the remap and a first K from the two bumps.
     let (axis, bumps) = walker.axis_detect()?;
@@ -641,7 +648,7 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
     let b = fit.transform.offset();
     // K and the tool offset are kept along the machine axes; the walk measured in the program
     // frame, which a G5x rotation θ₀ (LinuxCNC) turns against them.
-    let theta0 = crate::linuxcnc::base_rotation(&*walker.machine)?;
+    let theta0 = walker.machine.controller().base_rotation(&*walker.machine)?;
     let offset_written = offset_before - program_to_machine(b, theta0);
 
     // 5. Verify: the optical axis on every dot's nominal position in G90 with the new K, seen

@@ -171,6 +171,15 @@ pub enum VisionError {
     #[error("{0}")]
     Machine(MachineError),
 
+    /// A controller name that is not one of [`crate::controller::CONTROLLERS`].
+    #[error("unknown controller '{name}' — known controllers: {known}")]
+    UnknownController {
+        /// The name asked for.
+        name: String,
+        /// The known names.
+        known: String,
+    },
+
     /// `M283 Cn` with a sheet number not in `CAL_SHEETS`.
     #[error("unknown calibration sheet {sheet} — known sheets: {known}")]
     UnknownSheet {

@@ -73,10 +73,10 @@
 //! ```
 
 pub mod calibrate;
+pub mod controller;
 pub mod driver;
 mod error;
 pub mod image_grab;
-pub mod linuxcnc;
 pub mod machine;
 pub mod module;
 pub mod params;
@@ -88,9 +88,10 @@ pub mod sheets;
 pub mod text;
 
 pub use calibrate::{AxisReport, CalReport, Calibrate, DotVerify, QuickReport, SheetReport};
+pub use controller::{Controller, CONTROLLERS};
 pub use driver::{CameraDriver, Capabilities, DriverError, DriverErrorKind, Judgment, Reading};
 pub use error::VisionError;
-pub use machine::{Controller, Machine, MachineError, Timestamp};
+pub use machine::{Machine, MachineError, MachineErrorKind, Timestamp};
 pub use module::{
     AlignReport, Capture, Dot, DroppedMark, JobReport, Pieces, PredictedError, Recentred, Reply, Run, RunMode,
     StepwiseWalk, TelemetrySink, VisionModule,

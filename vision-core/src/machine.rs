@@ -1,35 +1,98 @@
 //! The CNC side: what the Vision module needs from its host (SPEC §6).
 //!
-//! The host is a real control or the simulated machine that wraps a G-code interpreter. The
-//! module never parses G-code itself: it asks the host for positions and state and hands it
-//! G-code text to run.
+//! The host is a real control or the simulated machine that wraps a G-code interpreter: one
+//! trait for both. The module never parses G-code itself: it asks the host for positions and
+//! state and hands it G-code text to run.
 
 use std::fmt;
+use std::sync::Arc;
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
-use vision_math::{AlignmentChain, LengthUnit, Point2, Vector2};
+use vision_math::{LengthUnit, Point2, Vector2};
 
-/// A failure reported by the host machine, in the host's own words.
-#[derive(Debug, Clone, PartialEq, Eq)]
+use crate::controller::Controller;
+
+/// The common kind of a machine failure, so a host or the module can react without reading
+/// text (an e-stop is not a missing tool).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum MachineErrorKind {
+    /// The controller refused a G-code line (unsupported word, bad syntax, limit).
+    RefusedGcode,
+    /// Motion stopped: cycle stop, feed hold, e-stop or an alarm during the line.
+    Stopped,
+    /// The tool is not in the tool table.
+    UnknownTool,
+    /// A parameter or pound variable that does not exist, or a value out of its range.
+    OutOfRange,
+    /// The controller could not be reached or answered something unusable (a scripting call
+    /// that failed, a value of the wrong type).
+    Communication,
+    /// Anything else.
+    Other,
+}
+
+/// A failure reported by the host machine: the common [`MachineErrorKind`] and the host's own
+/// cause, kept whole (like [`crate::DriverError`]).
+///
+/// `Display` is `machine: ` and the host's own words. The cause is shared ([`Arc`]) so errors
+/// stay `Clone`; two errors are equal when their kinds and texts are.
+#[derive(Debug, Clone)]
 pub struct MachineError {
-    /// What the host says went wrong (e.g. `line 1: unsupported word G28.3`).
-    pub message: String,
+    kind: MachineErrorKind,
+    source: Arc<dyn std::error::Error + Send + Sync>,
 }
 
 impl MachineError {
-    /// Builds an error with `message`.
-    pub fn new(message: impl Into<String>) -> Self {
-        MachineError { message: message.into() }
+    /// An error of `kind` caused by `source`: the host's typed error, or a message.
+    pub fn new(kind: MachineErrorKind, source: impl Into<Box<dyn std::error::Error + Send + Sync>>) -> Self {
+        MachineError { kind, source: Arc::from(source.into()) }
+    }
+
+    /// The same error as a `kind` (a bridge that knows better what a failed call meant).
+    #[must_use]
+    pub fn with_kind(self, kind: MachineErrorKind) -> Self {
+        MachineError { kind, ..self }
+    }
+
+    /// The common kind.
+    #[must_use]
+    pub fn kind(&self) -> MachineErrorKind {
+        self.kind
+    }
+
+    /// The host's own error.
+    #[must_use]
+    pub fn get_ref(&self) -> &(dyn std::error::Error + Send + Sync + 'static) {
+        &*self.source
+    }
+
+    /// The host's own error as `E`, when it is one.
+    #[must_use]
+    pub fn downcast_ref<E: std::error::Error + 'static>(&self) -> Option<&E> {
+        self.source.downcast_ref::<E>()
     }
 }
 
 impl fmt::Display for MachineError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "machine: {}", self.message)
+        write!(f, "machine: {}", self.source)
     }
 }
 
-impl std::error::Error for MachineError {}
+impl PartialEq for MachineError {
+    fn eq(&self, other: &Self) -> bool {
+        self.kind == other.kind && self.to_string() == other.to_string()
+    }
+}
+
+impl Eq for MachineError {}
+
+impl std::error::Error for MachineError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        self.source.source()
+    }
+}
 
 /// A point in time from the host's clock, with the local UTC offset so that calibration dates
 /// can be written in local time without a time-zone database.
@@ -107,90 +170,75 @@ fn civil_from_days(z: i64) -> (i64, u32, u32) {
     (y, u32::try_from(m).unwrap_or(1), u32::try_from(d).unwrap_or(1))
 }
 
-/// The controller a host is, as far as the Vision M-codes' output differs (SPEC §9).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub enum Controller {
-    /// Mach4 (and the simulator): M282 aligns with `G51` scale, `G68` rotation about a centre
-    /// and a `G52` shift; M280 cancels with `G69 G50 G52 X0 Y0`.
-    #[default]
-    Mach4,
-    /// LinuxCNC: no G68 and no G51. M282 rotates the active G5x system (`G10 L2 P0 R`, about its
-    /// origin) and shifts with `G52` (kept in the G92 registers), and cannot scale
-    /// ([`vision_math::linuxcnc`]); the alignment state lives in persistent parameters
-    /// ([`crate::linuxcnc`]). A capture waits for the machine first and may not move after
-    /// that, so M281 does not re-centre, and M283 runs stepwise
-    /// ([`crate::VisionModule::m283_begin`]).
-    LinuxCnc,
-}
-
-/// The host CNC, seen by the Vision module.
+/// The host CNC, seen by the Vision module: a real controller through its bridge (Mach4's Lua
+/// module, LinuxCNC's Python module) or the simulated machine. A bridge implements this and
+/// nothing else; the session keeps the Vision module between M-code calls.
 ///
 /// All lengths are in the machine's **current** units ([`Machine::units`], G20 inch or G21
-/// millimetre). "Commanded position" is the XY the program last commanded for the active tool:
-/// with a tool whose table offset is `(ox, oy)`, commanding `P` puts the tool (for the camera
-/// tool: its optical axis) at `P` and the spindle at `P − (ox, oy)`.
+/// millimetre). "Program position" is the XY the program last commanded for the active tool.
+/// Every read can fail: a controller's scripting call can, and the failure reaches the operator
+/// with its [`MachineErrorKind`] instead of a made-up value.
 ///
-/// The host executes synchronously: when [`Machine::run_gcode`] returns, the motion is done and
+/// The host executes synchronously: when [`Machine::execute`] returns, the motion is done and
 /// [`Machine::program_position`] reports the new position.
 pub trait Machine {
+    /// Which controller this is: every rule that differs between controllers (how an alignment
+    /// is applied, the tool table's sign, re-centring, …) comes from it.
+    fn controller(&self) -> &'static dyn Controller;
+
+    /// Runs one G-code line and returns when its motion is finished (Mach4:
+    /// `mcCntlGcodeExecuteWait`; LinuxCNC: `self.execute`).
+    ///
+    /// # Errors
+    /// The controller refused the line or stopped during it.
+    fn execute(&mut self, line: &str) -> Result<(), MachineError>;
+
+    /// Runs `lines` in order, each with [`Machine::execute`]; lines after a failing one are not
+    /// run.
+    ///
+    /// # Errors
+    /// The first line's failure.
+    fn run_gcode(&mut self, lines: &[String]) -> Result<(), MachineError> {
+        lines.iter().try_for_each(|line| self.execute(line))
+    }
+
     /// Commanded XY in the **program** frame (the coordinates the G-code wrote, before any
-    /// active G51/G68/G52 alignment), current units.
-    fn program_position(&self) -> Point2<f64>;
-
-    /// The active alignment modals (G51 scale, G68 rotation, G52 shift), or `None` when all
-    /// three are cancelled. Lengths in current units.
-    fn active_alignment(&self) -> Option<AlignmentChain>;
-
-    /// Commanded XY in the active **work** frame (after G51/G68/G52, before work and tool
-    /// offsets), current units. The default maps [`Machine::program_position`] through
-    /// [`Machine::active_alignment`].
-    fn work_position(&self) -> Point2<f64> {
-        let p = self.program_position();
-        self.active_alignment().map_or(p, |chain| chain.apply(p))
-    }
-
-    /// The controller, for the dialect of M280/M282's alignment lines. Default: Mach4.
-    fn controller(&self) -> Controller {
-        Controller::Mach4
-    }
-
-    /// The active G5x work system's XY rotation (LinuxCNC's `G10 L2 R`), degrees
-    /// counter-clockwise; 0 on a controller without one (the default). The program frame is
-    /// turned by it against the machine axes, along which the camera's K and its tool offset
-    /// are measured.
-    fn xy_rotation_deg(&self) -> f64 {
-        0.0
-    }
-
-    /// Runs G-code lines in order and waits until they are done.
+    /// G51/G68/G52 alignment), current units.
     ///
     /// # Errors
-    /// The host's own error (unsupported word, limit, alarm); lines after the failing one are
-    /// not run.
-    fn run_gcode(&mut self, lines: &[String]) -> Result<(), MachineError>;
+    /// The controller refused the read.
+    fn program_position(&self) -> Result<Point2<f64>, MachineError>;
 
-    /// The active tool number (the tool last loaded by `Tn M6`; 0 = none).
-    fn active_tool(&self) -> u32;
-
-    /// Tool `tool`'s X/Y tool-table offset, current units.
+    /// The tool in the spindle (the tool last loaded by `Tn M6`; 0 = none).
     ///
     /// # Errors
-    /// The tool does not exist in the table.
+    /// The controller refused the read.
+    fn active_tool(&self) -> Result<u32, MachineError>;
+
+    /// Tool `tool`'s X/Y tool-table offset as the controller's table holds it, current units
+    /// (its sign is the controller's: [`Controller::tool_table_sign`]).
+    ///
+    /// # Errors
+    /// The tool is not in the table ([`MachineErrorKind::UnknownTool`]).
     fn tool_offset(&self, tool: u32) -> Result<Vector2<f64>, MachineError>;
 
-    /// Writes tool `tool`'s X/Y tool-table offset, current units. Takes effect at the next move.
+    /// Writes tool `tool`'s X/Y tool-table offset as the controller's table holds it, current
+    /// units. Takes effect at the next move.
     ///
     /// # Errors
-    /// The tool does not exist or the table is locked.
+    /// The tool is not in the table or the table is locked.
     fn set_tool_offset(&mut self, tool: u32, offset: Vector2<f64>) -> Result<(), MachineError>;
 
     /// The active length unit (G20 inch / G21 millimetre).
-    fn units(&self) -> LengthUnit;
+    ///
+    /// # Errors
+    /// The controller refused the read or reported neither unit.
+    fn units(&self) -> Result<LengthUnit, MachineError>;
 
     /// Reads pound variable `#index`.
     ///
     /// # Errors
-    /// The variable does not exist.
+    /// The variable does not exist ([`MachineErrorKind::OutOfRange`]) or the read failed.
     fn pound(&self, index: u32) -> Result<f64, MachineError>;
 
     /// Writes pound variable `#index`.
@@ -199,11 +247,52 @@ pub trait Machine {
     /// The variable does not exist or is read-only.
     fn set_pound(&mut self, index: u32, value: f64) -> Result<(), MachineError>;
 
-    /// Waits `seconds` (like `G4`), letting motion settle. A simulated machine may return at once.
-    fn dwell(&mut self, seconds: f64);
+    /// Waits `seconds` (finite, ≥ 0) for the machine to settle before a trigger (like `G4`). A
+    /// simulated machine may return at once.
+    ///
+    /// # Errors
+    /// The controller refused the wait (e.g. stopped).
+    fn dwell(&mut self, seconds: f64) -> Result<(), MachineError>;
 
-    /// The host's clock (injected so tests are deterministic).
-    fn now(&self) -> Timestamp;
+    /// Whether a G51/G68/G52 alignment is active, when the controller can tell (`None`, the
+    /// default: it cannot, and the module trusts the alignment its own M282 left, until the
+    /// next M280). A controller that answers lets the module forget an alignment the program
+    /// cancelled itself (`G69 G50 G52 X0 Y0` before M30).
+    ///
+    /// # Errors
+    /// The controller refused the read.
+    fn alignment_active(&self) -> Result<Option<bool>, MachineError> {
+        Ok(None)
+    }
+
+    /// The active G5x work system's XY rotation (LinuxCNC's `G10 L2 R`), degrees
+    /// counter-clockwise; 0 on a controller without one (the default).
+    ///
+    /// # Errors
+    /// The controller refused the read.
+    fn xy_rotation_deg(&self) -> Result<f64, MachineError> {
+        Ok(0.0)
+    }
+
+    /// The G92/G52 X/Y offset, current units (LinuxCNC keeps G52 in the G92 registers); zero by
+    /// default.
+    ///
+    /// # Errors
+    /// The controller refused the read.
+    fn g92_offset(&self) -> Result<Vector2<f64>, MachineError> {
+        Ok(Vector2::zeros())
+    }
+
+    /// Shows `text` to the operator (a status line, not an alarm). Default: nowhere.
+    fn message(&mut self, text: &str) {
+        let _ = text;
+    }
+
+    /// The host's clock, for `VisionCal_Date` and image names; the system clock in UTC unless
+    /// the controller knows better.
+    fn now(&self) -> Timestamp {
+        Timestamp { time: SystemTime::now(), utc_offset_s: 0 }
+    }
 }
 
 #[cfg(test)]

@@ -86,7 +86,11 @@ impl PoundBlock {
         let last = block.base + BLOCK_LEN - 1;
         for at in [block.base, last] {
             if let Err(e) = machine.pound(at) {
-                return Err(VisionError::PoundBlockMissing { base, end: i64::from(last), reason: e.message });
+                return Err(VisionError::PoundBlockMissing {
+                    base,
+                    end: i64::from(last),
+                    reason: e.get_ref().to_string(),
+                });
             }
         }
         Ok(block)

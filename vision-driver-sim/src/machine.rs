@@ -1,13 +1,26 @@
 //! [`SimMachine`]: the interpreter as a simulated CNC, moving the simulated head.
 
+use vision_core::Controller;
 use vision_gcode::params::WORK_OFFSET_BASE;
 use vision_gcode::{
-    Context, Event, EventSink, GcodeError, Interpreter, InterpreterConfig, MCodeHandler, RunOutcome, Tool, Xyz,
+    Context, Dialect, Event, EventSink, GcodeError, Interpreter, InterpreterConfig, MCodeHandler, RunOutcome, Tool, Xyz,
 };
 use vision_math::{Point2, Vector2};
 
 use crate::error::SimError;
 use crate::sim::Sim;
+
+/// The interpreter dialect of `controller`'s G-code ([`vision_core::Controller::dialect`]): the
+/// one place a controller becomes a `vision_gcode::Dialect`.
+///
+/// # Panics
+/// When a controller names a dialect the interpreter does not have (a test covers every
+/// controller).
+#[must_use]
+pub fn interpreter_dialect(controller: &dyn Controller) -> Dialect {
+    Dialect::from_name(controller.dialect())
+        .unwrap_or_else(|| panic!("controller {} names an unknown dialect {}", controller.name(), controller.dialect()))
+}
 
 /// A simulated CNC: the G-code interpreter set up from the world (machine unit = the world's
 /// unit, G54 = `machine.work_offset`, the tool table with the world's tools and the camera tool,
@@ -40,19 +53,21 @@ impl SimMachine {
         let world = sim.world();
         let unit = world.length_unit();
         let mut config = InterpreterConfig::new(unit);
-        config.dialect = world.machine.dialect.dialect();
+        let controller = world.machine.controller();
+        config.dialect = interpreter_dialect(controller);
+        // The world gives where each tool's point lies from the spindle; the table holds that
+        // with the controller's sign.
+        let sign = controller.tool_table_sign();
         for t in &world.machine.tools {
-            config
-                .tools
-                .insert(t.number, Tool { offset: Xyz::new(t.offset[0], t.offset[1], t.offset[2]), outputs: None });
+            let offset = Xyz::new(sign * t.offset[0], sign * t.offset[1], t.offset[2]);
+            config.tools.insert(t.number, Tool { offset, outputs: None });
         }
         let camera = world
             .machine
             .camera_table_offset
             .map_or_else(|| sim.true_camera_offset(Vector2::zeros(), unit), Vector2::from);
-        config
-            .tools
-            .insert(world.machine.camera_tool, Tool { offset: Xyz::new(camera.x, camera.y, 0.0), outputs: None });
+        let camera = Xyz::new(sign * camera.x, sign * camera.y, 0.0);
+        config.tools.insert(world.machine.camera_tool, Tool { offset: camera, outputs: None });
         let mut interp = Interpreter::new(config);
         for (i, v) in world.machine.work_offset.iter().enumerate() {
             // G54's X, Y, Z at LinuxCNC's addresses.
@@ -201,6 +216,8 @@ mod tests {
         let after_m6 = linuxcnc.interpreter().machine_position();
         execute(&mut linuxcnc, "G43 H98\nG0 X0 Y0");
         assert!((after_m6 - linuxcnc.interpreter().machine_position()).norm() > 1.0, "{after_m6:?}");
+        // Its table holds the negated offset, which LinuxCNC adds: the camera lands as on Mach4.
+        assert!((linuxcnc.interpreter().machine_position() - camera).norm() < 1e-9);
         let bad = crate::DEFAULT_WORLD_TOML.replace("dialect = \"mach4\"", "dialect = \"fanuc\"");
         assert!(World::from_toml(&bad).is_err());
     }

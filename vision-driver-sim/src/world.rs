@@ -9,7 +9,7 @@
 //! a complete, commented example of the format.
 
 use serde::{Deserialize, Serialize};
-use vision_core::cal_sheet;
+use vision_core::{cal_sheet, Controller};
 use vision_math::{LengthUnit, Point2, Vector2};
 
 use crate::error::SimError;
@@ -37,31 +37,42 @@ impl WorldUnit {
     }
 }
 
-/// Whose G-code rules the simulated control follows where the controllers differ
-/// ([`vision_gcode::Dialect`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum MachineDialect {
-    /// Seed 002's MachineMotion (`"machinemotion"`): M6 applies tool offsets, G92 zeroes the
-    /// axes it does not name, comments nest.
-    Machinemotion,
-    /// Mach4 (`"mach4"`), the manual's controller and the default: M6 applies the tool's X/Y
-    /// offset and G43 its length, G92 keeps unnamed axes, a comment ends at its first `)`.
-    #[default]
-    Mach4,
-    /// LinuxCNC 2.9 (`"linuxcnc"`): as Mach4, without G68/G51.
-    Linuxcnc,
+/// The controller the simulated machine is (its G-code dialect and its alignment rules), by its
+/// name in a world file: `"mach4"` (the default), `"linuxcnc"`, `"machinemotion"`
+/// ([`vision_core::controller::CONTROLLERS`]).
+#[derive(Debug, Clone, Copy)]
+pub struct ControllerName(pub &'static dyn Controller);
+
+impl ControllerName {
+    /// The controller.
+    #[must_use]
+    pub fn get(self) -> &'static dyn Controller {
+        self.0
+    }
 }
 
-impl MachineDialect {
-    /// The interpreter's dialect.
-    #[must_use]
-    pub fn dialect(self) -> vision_gcode::Dialect {
-        match self {
-            MachineDialect::Machinemotion => vision_gcode::Dialect::MachineMotion,
-            MachineDialect::Mach4 => vision_gcode::Dialect::Mach4,
-            MachineDialect::Linuxcnc => vision_gcode::Dialect::LinuxCnc,
-        }
+impl Default for ControllerName {
+    fn default() -> Self {
+        ControllerName(&vision_core::controller::Mach4)
+    }
+}
+
+impl PartialEq for ControllerName {
+    fn eq(&self, other: &Self) -> bool {
+        self.0.name() == other.0.name()
+    }
+}
+
+impl Serialize for ControllerName {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.0.name())
+    }
+}
+
+impl<'de> Deserialize<'de> for ControllerName {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let name = String::deserialize(d)?;
+        vision_core::controller::by_name(&name).map(ControllerName).map_err(serde::de::Error::custom)
     }
 }
 
@@ -193,9 +204,10 @@ pub struct MachineSetup {
     /// 20 in/s² = 508 mm/s²). Used for cycle times.
     #[serde(default)]
     pub max_accel: Option<f64>,
-    /// The control's G-code dialect (default `"mach4"`).
-    #[serde(default)]
-    pub dialect: MachineDialect,
+    /// The controller the machine is, key `dialect` (default `"mach4"`): the interpreter follows
+    /// its G-code dialect and the Vision M-codes its rules.
+    #[serde(default, rename = "dialect", alias = "controller")]
+    pub controller: ControllerName,
 }
 
 /// Default axis speed, inch per second.
@@ -204,6 +216,12 @@ const DEFAULT_MAX_SPEED_IN: f64 = 8.0;
 const DEFAULT_MAX_ACCEL_IN: f64 = 20.0;
 
 impl MachineSetup {
+    /// The controller the machine is.
+    #[must_use]
+    pub fn controller(&self) -> &'static dyn Controller {
+        self.controller.get()
+    }
+
     /// `(max_speed, max_accel)` in `unit` per second and per second², defaults filled in.
     #[must_use]
     pub fn motion_limits(&self, unit: WorldUnit) -> (f64, f64) {

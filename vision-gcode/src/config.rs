@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use vision_math::LengthUnit;
 
 use crate::event::PathMode;
+use crate::geom::Xyz;
 use crate::tools::ToolTable;
 
 /// Default chord tolerance for arcs turned into polylines: 0.0001 in.
@@ -39,6 +40,27 @@ impl Dialect {
         match self {
             Dialect::LinuxCnc => 5601,
             Dialect::MachineMotion | Dialect::Mach4 => crate::params::MAX_PARAMETER,
+        }
+    }
+
+    /// Every dialect.
+    pub const ALL: [Dialect; 3] = [Dialect::MachineMotion, Dialect::Mach4, Dialect::LinuxCnc];
+
+    /// The dialect called `name` ([`Dialect::name`]), if any.
+    #[must_use]
+    pub fn from_name(name: &str) -> Option<Dialect> {
+        Dialect::ALL.into_iter().find(|d| d.name() == name)
+    }
+
+    /// The tool offset the placement subtracts from a work point (X, Y) and adds (Z), from the
+    /// tool table's entry `table`: the entry itself, except that LinuxCNC *adds* a tool's X/Y
+    /// table offset to a programmed point, as it does its length (`machine = … + tool`). Its
+    /// own inverse.
+    #[must_use]
+    pub fn applied_tool_offset(self, table: Xyz) -> Xyz {
+        match self {
+            Dialect::LinuxCnc => Xyz::new(-table.x, -table.y, table.z),
+            Dialect::MachineMotion | Dialect::Mach4 => table,
         }
     }
 

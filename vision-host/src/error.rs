@@ -1,20 +1,20 @@
 //! The one error type of the host session.
 
+use vision_core::{MachineError, MachineErrorKind};
 use vision_mcode::McodeError;
 
 /// Why a Vision M-code or the session failed. Its message is what the operator sees.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum HostError {
-    /// The M-code was refused (bad word, or the Vision module's refusal: the manual's message).
+    /// The M-code was refused (bad word, or the Vision module's refusal: the manual's message;
+    /// a machine failure during the call is [`vision_core::VisionError::Machine`] inside it).
     #[error("{0}")]
     Mcode(#[from] McodeError),
-    /// The controller refused a call (in its own words, e.g. a non-zero Mach4 return code).
-    #[error("controller: {message}")]
-    Host {
-        /// What the controller said went wrong.
-        message: String,
-    },
+    /// The controller failed a call the bridge made outside the Vision module (reading the
+    /// M-code's words, the profile's path, …).
+    #[error("{0}")]
+    Machine(#[from] MachineError),
     /// The session could not start: the profile or the camera driver.
     #[error("Vision session: {message}")]
     Setup {
@@ -24,8 +24,21 @@ pub enum HostError {
 }
 
 impl HostError {
-    /// A controller failure with `message`.
+    /// A controller failure with `message`, of kind [`MachineErrorKind::Communication`] (a
+    /// scripting call that failed or answered a value of the wrong type).
     pub fn host(message: impl Into<String>) -> HostError {
-        HostError::Host { message: message.into() }
+        HostError::Machine(MachineError::new(MachineErrorKind::Communication, message.into()))
+    }
+
+    /// The machine failure behind this error, wherever it sits, for a bridge that reacts to its
+    /// [`MachineError::kind`] (an e-stop is not a missing tool).
+    #[must_use]
+    pub fn machine_error(&self) -> Option<&MachineError> {
+        match self {
+            HostError::Machine(e) | HostError::Mcode(McodeError::Vision(vision_core::VisionError::Machine(e))) => {
+                Some(e)
+            }
+            _ => None,
+        }
     }
 }

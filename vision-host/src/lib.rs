@@ -1,28 +1,20 @@
-//! The Vision session a CNC controller bridge keeps alive between M-code calls, shared by every
-//! host (Mach4's Lua module `vision-lua`, LinuxCNC's Python module).
+//! The Vision session every front end runs the M-codes through: the CLI on the simulated
+//! machine, Mach4's Lua module (`vision-lua`) and LinuxCNC's Python module (`vision-py`) on
+//! their controllers.
 //!
-//! * [`Host`]: the few callbacks a controller offers (run a G-code line and wait, pound
-//!   variables, tool X/Y offsets, position, units, dwell, a message to the operator). A bridge
-//!   implements it over its controller's API and nothing else.
 //! * [`Session`]: owns the [`vision_core::VisionModule`] (parameters, dot list, camera driver,
-//!   profile), runs one M-code at a time on a [`Host`] through `vision-mcode`, and runs the
-//!   G-code the module emits on the host — the one place that G-code leaves the library. For a
-//!   host whose M-code cannot both move and trigger (LinuxCNC), M283 also runs stepwise:
-//!   [`Session::walk_begin`], then [`Session::walk_next`] → the host moves →
+//!   profile) and runs one M-code at a time on a [`vision_core::Machine`] through
+//!   `vision-mcode`; the module runs the G-code it emits on that machine as it goes. For a
+//!   controller whose M-code cannot both move and trigger (LinuxCNC), M283 also runs stepwise:
+//!   [`Session::walk_begin`], then [`Session::walk_next`] → the machine moves →
 //!   [`Session::walk_capture`], then [`Session::walk_finish`].
+//! * [`ProgramHandler`]: the interpreter's M280–M284 handler that runs a whole program on the
+//!   simulated machine through a [`Session`] (what `mach-vision run` does).
 //! * [`registry`]: the camera drivers a real machine can use, picked by `VisionDriver`.
 //!
-//! The key decision: controllers do not report the G51/G68/G52 chain they have active, so the
-//! session remembers the chain its own M282 emitted (M280 cancels it) and tells the module. A
-//! host that can at least tell whether an alignment is active ([`Host::alignment_active`]) lets
-//! the session forget a chain the program cancelled itself; on one that cannot (Mach4), run M280
-//! before capturing or calibrating in a program that follows an aligned one.
-//!
-//! LinuxCNC ([`Controller::LinuxCnc`]) is different: it has no G68 and no G51, so M282 rotates
-//! the G5x system and shifts with G52 and cannot scale ([`vision_math::linuxcnc`]); it keeps
-//! that rotation and G52 across restarts, so the alignment's flag and the rotation before it
-//! (θ₀) live in persistent parameters ([`linuxcnc::PERSISTENT_PARAMS`]) and the session reads
-//! the active alignment from the host at every call.
+//! A bridge implements [`vision_core::Machine`] over its controller's API and nothing else;
+//! every rule that differs between controllers is the machine's
+//! [`vision_core::Controller`].
 //!
 //! ```
 //! use vision_host::{registry, HostError, Session};
@@ -36,16 +28,17 @@
 //! ```
 
 mod error;
-mod host;
+mod handler;
 mod session;
 #[cfg(feature = "testkit")]
 pub mod testkit;
 
 pub use error::HostError;
-pub use host::Host;
+pub use handler::{ProgramHandler, Record, MAX_RECORDS};
 pub use session::{registry, Session};
+/// The machine trait a bridge implements, its errors, and the controllers.
+pub use vision_core::controller::{self, linuxcnc};
 /// How a bridge makes a message safe to show (control characters escaped, huge quoted input
 /// cut): the same rule as the CLI's.
 pub use vision_core::text::{printable_line, MAX_MESSAGE_CHARS};
-/// The controller a [`Host`] is ([`Host::controller`]), and LinuxCNC's persistent parameters.
-pub use vision_core::{linuxcnc, Controller};
+pub use vision_core::{Controller, Machine, MachineError, MachineErrorKind, Timestamp};

@@ -1,18 +1,13 @@
 //! [`Session`]: one Vision module kept alive between a controller's M-code calls.
 
-use std::cell::RefCell;
 use std::path::Path;
 
-use vision_core::{
-    linuxcnc, Controller, DriverRegistry, Machine, MachineError, ProfileStore, StepwiseWalk, Timestamp, VisionError,
-    VisionModule,
-};
+use vision_core::{DriverRegistry, Machine, ProfileStore, StepwiseWalk, VisionError, VisionModule};
 use vision_math::linuxcnc::LinuxCncAlignment;
-use vision_math::{AlignmentChain, LengthUnit, Point2, Vector2};
+use vision_math::{AlignmentChain, Point2, Vector2};
 use vision_mcode::{McodeError, Outcome, VisionCall};
 
 use crate::error::HostError;
-use crate::host::Host;
 
 /// The camera drivers a real machine can pick by `VisionDriver` (the simulator is not one).
 #[must_use]
@@ -24,22 +19,17 @@ pub fn registry() -> DriverRegistry {
 
 /// The Vision module of one controller, between M-code calls: parameters, the run's dot list,
 /// the camera connection, the profile it saves to, and the alignment its last M282 left active.
+/// Every front end runs the M-codes through it: the CLI on the simulated machine, the Mach4
+/// and LinuxCNC bridges on theirs.
 pub struct Session {
     module: VisionModule,
-    /// The G51/G68/G52 chain this session's M282 made active (`None` after M280); on LinuxCNC
-    /// read from the host at every call.
-    alignment: Option<AlignmentChain>,
     /// The stepwise M283 walk in progress ([`Session::walk_begin`]).
     walk: Option<StepwiseWalk>,
 }
 
 impl std::fmt::Debug for Session {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Session")
-            .field("module", &self.module)
-            .field("alignment", &self.alignment)
-            .field("walk", &self.walk)
-            .finish()
+        f.debug_struct("Session").field("module", &self.module).field("walk", &self.walk).finish()
     }
 }
 
@@ -47,7 +37,7 @@ impl Session {
     /// A session around `module` (its driver and profile already set), no alignment active.
     #[must_use]
     pub fn new(module: VisionModule) -> Session {
-        Session { module, alignment: None, walk: None }
+        Session { module, walk: None }
     }
 
     /// The session of the profile file `profile` (TOML; a missing file starts a fresh,
@@ -70,25 +60,30 @@ impl Session {
         &self.module
     }
 
-    /// The alignment this session's last M282 made active (`None` after M280 or before any); on
-    /// LinuxCNC the one the host reported at the last call (see [`Host::controller`]).
-    #[must_use]
-    pub fn alignment(&self) -> Option<&AlignmentChain> {
-        self.alignment.as_ref()
+    /// The Vision module, mutably (e.g. to change a parameter between programs).
+    pub fn module_mut(&mut self) -> &mut VisionModule {
+        &mut self.module
     }
 
-    /// Runs Vision M-code `m` (280–284) with the words of its line on `host` (the module runs
-    /// the G-code it emits on the host as it goes) and tells the operator what happened.
+    /// The alignment active as of the last call ([`VisionModule::alignment`]): the one this
+    /// session's last M282 applied, or what the controller reported.
+    #[must_use]
+    pub fn alignment(&self) -> Option<&AlignmentChain> {
+        self.module.alignment()
+    }
+
+    /// Runs Vision M-code `m` (280–284) with the words of its line on `machine` (the module
+    /// runs the G-code it emits on the machine as it goes) and tells the operator what happened
+    /// ([`Machine::message`]).
     ///
     /// # Errors
-    /// [`HostError::Mcode`] (a bad word or the module's refusal, in the manual's words) or the
-    /// controller's [`HostError::Host`]. A refusal changes nothing; a controller failure during
-    /// the call is reported even when the module itself succeeded.
-    pub fn mcode(&mut self, host: &mut dyn Host, m: u32, words: &[(char, f64)]) -> Result<Outcome, HostError> {
+    /// [`HostError::Mcode`]: a bad word, the module's refusal in the manual's words, or the
+    /// machine's failure during the call ([`VisionError::Machine`], with its kind). A refusal
+    /// changes nothing.
+    pub fn mcode(&mut self, machine: &mut dyn Machine, m: u32, words: &[(char, f64)]) -> Result<Outcome, HostError> {
         let call = VisionCall::parse(m, words)?;
-        let outcome = self.on_machine(host, |module, machine| call.run(module, machine))?;
-        self.track(&outcome);
-        host.message(&summary(&outcome));
+        let outcome = call.run(&mut self.module, machine).map_err(McodeError::from)?;
+        machine.message(&summary(&outcome));
         Ok(outcome)
     }
 
@@ -100,8 +95,8 @@ impl Session {
     ///
     /// # Errors
     /// A bad word or M283's refusal ([`HostError::Mcode`]), or the controller's
-    /// [`HostError::Host`]; no walk is in progress then.
-    pub fn walk_begin(&mut self, host: &mut dyn Host, words: &[(char, f64)]) -> Result<(), HostError> {
+    /// the machine's failure; no walk is in progress then.
+    pub fn walk_begin(&mut self, machine: &mut dyn Machine, words: &[(char, f64)]) -> Result<(), HostError> {
         self.walk = None;
         let VisionCall::Calibrate(mode) = VisionCall::parse(283, words)? else {
             // `parse(283, …)` answers only Calibrate; kept typed all the same.
@@ -111,7 +106,7 @@ impl Session {
                 reason: "give exactly one of Qd or Cn".to_string(),
             }));
         };
-        self.walk = Some(self.on_machine(host, |module, machine| module.m283_begin(machine, mode))?);
+        self.walk = Some(self.module.m283_begin(machine, mode).map_err(McodeError::from)?);
         Ok(())
     }
 
@@ -120,9 +115,9 @@ impl Session {
     ///
     /// # Errors
     /// No walk in progress, the walk failed on its captures (M283's message; the walk is
-    /// dropped and nothing written), or the controller's [`HostError::Host`].
-    pub fn walk_next(&mut self, host: &mut dyn Host) -> Result<Option<Point2<f64>>, HostError> {
-        self.walk_step(host, |module, machine, walk| module.m283_next(machine, walk))
+    /// dropped and nothing written), or the machine's failure.
+    pub fn walk_next(&mut self, machine: &mut dyn Machine) -> Result<Option<Point2<f64>>, HostError> {
+        self.walk_step(machine, |module, machine, walk| module.m283_next(machine, walk))
     }
 
     /// Triggers here, for the point [`Session::walk_next`] gave; call it once the machine has
@@ -130,9 +125,9 @@ impl Session {
     ///
     /// # Errors
     /// No walk in progress or no capture pending; the camera's failure or an NG (M283's
-    /// message: the walk is dropped, nothing written), or the controller's [`HostError::Host`].
-    pub fn walk_capture(&mut self, host: &mut dyn Host) -> Result<(), HostError> {
-        self.walk_step(host, |module, machine, walk| module.m283_capture(machine, walk))
+    /// message: the walk is dropped, nothing written), or the machine's failure.
+    pub fn walk_capture(&mut self, machine: &mut dyn Machine) -> Result<(), HostError> {
+        self.walk_step(machine, |module, machine, walk| module.m283_capture(machine, walk))
     }
 
     /// Solves the walk and commits it as M283 does (K, the camera tool's offset, the profile:
@@ -141,11 +136,11 @@ impl Session {
     /// # Errors
     /// No walk in progress; the walk still needs captures (the walk is kept); otherwise as
     /// M283 (the walk is dropped, nothing written).
-    pub fn walk_finish(&mut self, host: &mut dyn Host) -> Result<Outcome, HostError> {
-        let reply = self.walk_step(host, |module, machine, walk| module.m283_finish(machine, walk))?;
+    pub fn walk_finish(&mut self, machine: &mut dyn Machine) -> Result<Outcome, HostError> {
+        let reply = self.walk_step(machine, |module, machine, walk| module.m283_finish(machine, walk))?;
         self.walk = None;
         let outcome = Outcome::Calibrate(reply);
-        host.message(&summary(&outcome));
+        machine.message(&summary(&outcome));
         Ok(outcome)
     }
 
@@ -153,7 +148,7 @@ impl Session {
     /// (the walk is still good).
     fn walk_step<T>(
         &mut self,
-        host: &mut dyn Host,
+        machine: &mut dyn Machine,
         step: impl FnOnce(&mut VisionModule, &mut dyn Machine, &mut StepwiseWalk) -> Result<T, VisionError>,
     ) -> Result<T, HostError> {
         let Some(mut walk) = self.walk.take() else {
@@ -161,7 +156,7 @@ impl Session {
                 what: "no M283 walk is in progress; M283 starts one",
             })));
         };
-        let result = self.on_machine(host, |module, machine| step(module, machine, &mut walk));
+        let result = step(&mut self.module, machine, &mut walk).map_err(|e| HostError::Mcode(e.into()));
         let keep = match &result {
             Ok(_) => true,
             Err(HostError::Mcode(McodeError::Vision(VisionError::WalkOrder { .. }))) => true,
@@ -171,56 +166,6 @@ impl Session {
             self.walk = Some(walk);
         }
         result
-    }
-
-    /// Runs `f` on the module and the host as a [`Machine`], the alignment brought up to date
-    /// first; a controller failure during it wins over the module's result.
-    fn on_machine<T>(
-        &mut self,
-        host: &mut dyn Host,
-        f: impl FnOnce(&mut VisionModule, &mut dyn Machine) -> Result<T, VisionError>,
-    ) -> Result<T, HostError> {
-        self.refresh_alignment(host)?;
-        let mut machine = HostMachine { host, alignment: self.alignment, failure: RefCell::new(None) };
-        let result = f(&mut self.module, &mut machine);
-        if let Some(failure) = machine.failure.into_inner() {
-            return Err(failure);
-        }
-        Ok(result.map_err(McodeError::from)?)
-    }
-
-    /// Brings the tracked alignment up to date with what the host can tell: LinuxCNC's is read
-    /// whole from the host (the flag and θ₀ in persistent parameters, the G5x rotation and the
-    /// G92/G52 offset: it survives restarts and sessions); a Mach4 host that says none is active
-    /// makes the session forget its own.
-    fn refresh_alignment(&mut self, host: &dyn Host) -> Result<(), HostError> {
-        match host.controller() {
-            Controller::LinuxCnc => {
-                self.alignment = linuxcnc::active_chain(
-                    host.pound(linuxcnc::ALIGNMENT_ACTIVE_PARAM)?,
-                    host.pound(linuxcnc::BASE_ROTATION_PARAM)?,
-                    host.xy_rotation_deg()?,
-                    host.g92_offset()?,
-                );
-            }
-            Controller::Mach4 => {
-                if host.alignment_active()? == Some(false) {
-                    self.alignment = None;
-                }
-            }
-        }
-        Ok(())
-    }
-
-    /// Tracks the alignment `outcome` leaves active. The module already ran its G-code on the
-    /// host, through [`HostMachine::run_gcode`]: the one path by which it reaches a controller
-    /// (where a host dialect of M282's output will translate it).
-    fn track(&mut self, outcome: &Outcome) {
-        match outcome {
-            Outcome::Begin(_) => self.alignment = None,
-            Outcome::Apply(reply) => self.alignment = Some(reply.report.chain),
-            _ => {}
-        }
     }
 }
 
@@ -255,100 +200,11 @@ fn apply_summary(linuxcnc: Option<&LinuxCncAlignment>) -> String {
     }
 }
 
-/// [`vision_core::Machine`] over a [`Host`]. The trait's reads cannot fail, so a controller
-/// failure on one is kept and reported after the call, in place of the module's result.
-struct HostMachine<'h> {
-    host: &'h mut dyn Host,
-    alignment: Option<AlignmentChain>,
-    failure: RefCell<Option<HostError>>,
-}
-
-impl HostMachine<'_> {
-    /// `value`, or `fallback` with the first failure kept.
-    fn keep<T>(&self, value: Result<T, HostError>, fallback: T) -> T {
-        value.unwrap_or_else(|e| {
-            self.failure.borrow_mut().get_or_insert(e);
-            fallback
-        })
-    }
-}
-
-impl HostMachine<'_> {
-    /// The sign between the host's tool table and the module's offset: −1 on LinuxCNC (see
-    /// [`Host::controller`]), else 1.
-    fn table_sign(&self) -> f64 {
-        match self.host.controller() {
-            Controller::LinuxCnc => -1.0,
-            Controller::Mach4 => 1.0,
-        }
-    }
-}
-
-fn machine_error(e: HostError) -> MachineError {
-    MachineError::new(e.to_string())
-}
-
-impl Machine for HostMachine<'_> {
-    fn program_position(&self) -> Point2<f64> {
-        self.keep(self.host.position(), Point2::origin())
-    }
-
-    fn active_alignment(&self) -> Option<AlignmentChain> {
-        self.alignment
-    }
-
-    fn run_gcode(&mut self, lines: &[String]) -> Result<(), MachineError> {
-        lines.iter().try_for_each(|line| self.host.execute(line)).map_err(machine_error)
-    }
-
-    fn active_tool(&self) -> u32 {
-        self.keep(self.host.active_tool(), 0)
-    }
-
-    fn controller(&self) -> Controller {
-        self.host.controller()
-    }
-
-    fn xy_rotation_deg(&self) -> f64 {
-        self.keep(self.host.xy_rotation_deg(), 0.0)
-    }
-
-    fn tool_offset(&self, tool: u32) -> Result<Vector2<f64>, MachineError> {
-        let table = self.host.tool_offset(tool).map_err(machine_error)?;
-        Ok(self.table_sign() * table)
-    }
-
-    fn set_tool_offset(&mut self, tool: u32, offset: Vector2<f64>) -> Result<(), MachineError> {
-        let table = self.table_sign() * offset;
-        self.host.set_tool_offset(tool, table).map_err(machine_error)
-    }
-
-    fn units(&self) -> LengthUnit {
-        self.keep(self.host.units(), LengthUnit::Inch)
-    }
-
-    fn pound(&self, index: u32) -> Result<f64, MachineError> {
-        self.host.pound(index).map_err(machine_error)
-    }
-
-    fn set_pound(&mut self, index: u32, value: f64) -> Result<(), MachineError> {
-        self.host.set_pound(index, value).map_err(machine_error)
-    }
-
-    fn dwell(&mut self, seconds: f64) {
-        let done = self.host.dwell(seconds);
-        self.keep(done, ());
-    }
-
-    fn now(&self) -> Timestamp {
-        self.host.now()
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use vision_core::{Capture, Judgment, Reply};
+    use vision_math::LengthUnit;
 
     #[test]
     fn the_status_line_carries_the_calls_warning() {

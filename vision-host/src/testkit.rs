@@ -1,15 +1,15 @@
-//! Helpers for the tests of host bridges (feature `testkit`): the simulated machine as a
-//! [`Host`], the CLI's run path as the reference, and a [`Trace`] of a program to compare the
-//! two by.
+//! Helpers for the tests of host bridges (feature `testkit`): the simulated machine and camera
+//! as `mach-vision run` sets them up ([`Rig`]), the run path of the CLI as the reference
+//! ([`reference`]), and a [`Trace`] of a program to compare a bridge's run by.
 
-use vision_core::{DriverRegistry, Machine, Params, Timestamp, VisionModule};
+use vision_core::{DriverRegistry, Params, Timestamp, VisionModule};
 use vision_driver_keyence::emulator::{DriverSource, Emulator, EmulatorHandle, NumberStyle, OutputFormat};
 use vision_driver_sim::{Sim, SimMachine, World};
-use vision_gcode::{Context, HandlerError, MCodeHandler, RunOutcome, UserMCode};
-use vision_math::{LengthUnit, Point2, Vector2};
-use vision_mcode::{fixed_clock, Clock, ContextMachine, VisionHandler};
+use vision_gcode::{MCodeHandler, RunOutcome};
+use vision_math::Vector2;
+use vision_mcode::{fixed_clock, Clock};
 
-use crate::{Host, HostError, Session};
+use crate::{ProgramHandler, Session};
 
 /// The clock of every test run, so both paths write the same `VisionCal_Date`.
 #[must_use]
@@ -21,67 +21,6 @@ pub fn clock() -> Clock {
 pub const POUND_BASE: u32 = 500;
 /// Variables in the Vision block (5 slots × 8 fields).
 pub const POUND_COUNT: u32 = 40;
-
-/// A [`Host`] over any [`Machine`] (the simulator, or the interpreter inside a handler).
-pub struct MachineHost<'m> {
-    machine: &'m mut dyn Machine,
-    /// Every message shown to the operator, in order.
-    pub messages: Vec<String>,
-    /// Answer [`Host::alignment_active`] from the machine (`false`: answer "cannot tell", as
-    /// Mach4 does).
-    pub knows_alignment: bool,
-}
-
-impl<'m> MachineHost<'m> {
-    /// The host over `machine`.
-    pub fn new(machine: &'m mut dyn Machine) -> MachineHost<'m> {
-        MachineHost { machine, messages: Vec::new(), knows_alignment: false }
-    }
-}
-
-fn host(e: vision_core::MachineError) -> HostError {
-    HostError::host(e.message)
-}
-
-impl Host for MachineHost<'_> {
-    fn execute(&mut self, line: &str) -> Result<(), HostError> {
-        self.machine.run_gcode(&[line.to_string()]).map_err(host)
-    }
-    fn pound(&self, index: u32) -> Result<f64, HostError> {
-        self.machine.pound(index).map_err(host)
-    }
-    fn set_pound(&mut self, index: u32, value: f64) -> Result<(), HostError> {
-        self.machine.set_pound(index, value).map_err(host)
-    }
-    fn active_tool(&self) -> Result<u32, HostError> {
-        Ok(self.machine.active_tool())
-    }
-    fn tool_offset(&self, tool: u32) -> Result<Vector2<f64>, HostError> {
-        self.machine.tool_offset(tool).map_err(host)
-    }
-    fn set_tool_offset(&mut self, tool: u32, offset: Vector2<f64>) -> Result<(), HostError> {
-        self.machine.set_tool_offset(tool, offset).map_err(host)
-    }
-    fn position(&self) -> Result<Point2<f64>, HostError> {
-        Ok(self.machine.program_position())
-    }
-    fn units(&self) -> Result<LengthUnit, HostError> {
-        Ok(self.machine.units())
-    }
-    fn dwell(&mut self, seconds: f64) -> Result<(), HostError> {
-        self.machine.dwell(seconds);
-        Ok(())
-    }
-    fn alignment_active(&self) -> Result<Option<bool>, HostError> {
-        Ok(self.knows_alignment.then(|| self.machine.active_alignment().is_some()))
-    }
-    fn message(&mut self, text: &str) {
-        self.messages.push(text.to_string());
-    }
-    fn now(&self) -> Timestamp {
-        self.machine.now()
-    }
-}
 
 /// A simulation of the built-in world.
 ///
@@ -296,12 +235,13 @@ impl Trace {
     }
 }
 
-/// `program` as `mach-vision run` runs it (the [`VisionHandler`] inside the interpreter) on a
-/// fresh [`Rig`].
+/// `program` as `mach-vision run` runs it (a [`ProgramHandler`] through a [`Session`] on the
+/// simulated machine) on a fresh [`Rig`].
 #[must_use]
 pub fn reference(program: &str, params: Option<Params>, camera: Camera) -> Trace {
     let (rig, module) = Rig::new(params, camera);
-    let mut handler = VisionHandler::new(module, clock());
+    let controller = rig.sim.world().machine.controller();
+    let mut handler = ProgramHandler::new(Session::new(module), controller, clock());
     let (machine, end) = rig.run(program, &mut handler);
     let calls = handler
         .take_records()
@@ -309,48 +249,6 @@ pub fn reference(program: &str, params: Option<Params>, camera: Camera) -> Trace
         .map(|r| Call { mcode: r.mcode, result: r.result.map(|o| o.gcode().to_vec()).map_err(|e| e.to_string()) })
         .collect();
     Trace::collect(&machine, calls, end)
-}
-
-/// The interpreter's M280–M284 handler that runs each call through a [`Session`] on the
-/// interpreter as its [`Host`] — the bridges' path without a bridge.
-pub struct SessionHandler {
-    /// The session.
-    pub session: Session,
-    clock: Clock,
-    /// Every Vision call so far.
-    pub calls: Vec<Call>,
-    /// Whether the host answers [`Host::alignment_active`] (see [`MachineHost`]).
-    pub knows_alignment: bool,
-}
-
-impl SessionHandler {
-    /// A handler around `session`.
-    #[must_use]
-    pub fn new(session: Session) -> SessionHandler {
-        SessionHandler { session, clock: clock(), calls: Vec::new(), knows_alignment: false }
-    }
-}
-
-impl MCodeHandler for SessionHandler {
-    fn call(&mut self, call: &UserMCode<'_>, ctx: &mut Context<'_>) -> Result<Vec<String>, HandlerError> {
-        let mut machine = ContextMachine::new(ctx, &self.clock);
-        let mut host = MachineHost::new(&mut machine);
-        host.knows_alignment = self.knows_alignment;
-        let result = self.session.mcode(&mut host, call.code(), call.words());
-        let result = result.map(|o| o.gcode().to_vec()).map_err(|e| e.to_string());
-        self.calls.push(Call { mcode: call.code(), result: result.clone() });
-        // The module already ran its G-code on the host.
-        result.map(|_| Vec::new()).map_err(HandlerError::Failed)
-    }
-}
-
-/// `program` run through a [`Session`] (no bridge) on a fresh [`Rig`].
-#[must_use]
-pub fn through_session(program: &str, params: Option<Params>, camera: Camera) -> Trace {
-    let (rig, module) = Rig::new(params, camera);
-    let mut handler = SessionHandler::new(Session::new(module));
-    let (machine, end) = rig.run(program, &mut handler);
-    Trace::collect(&machine, handler.calls, end)
 }
 
 /// The text of example program `name` (e.g. `04-rectangle-fit.nc`).

@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 
 use vision_core::{DriverRegistry, Timestamp, VisionModule};
 use vision_driver_sim::{Fixture, Sim, SimMachine};
-use vision_host::{linuxcnc, testkit, Controller, Host, HostError, Session};
+use vision_host::{linuxcnc, testkit, Controller, HostError, Machine, MachineError, MachineErrorKind, Session};
 use vision_math::{LengthUnit, Matrix2, Point2, Vector2};
 
 /// Rotation by `deg` degrees counter-clockwise.
@@ -95,12 +95,12 @@ impl FakeLinuxCnc {
     }
 }
 
-fn unsupported(line: &str) -> HostError {
-    HostError::host(format!("the fake LinuxCNC does not run {line:?}"))
+fn unsupported(line: &str) -> MachineError {
+    MachineError::new(MachineErrorKind::RefusedGcode, format!("the fake LinuxCNC does not run {line:?}"))
 }
 
-impl Host for FakeLinuxCnc {
-    fn execute(&mut self, line: &str) -> Result<(), HostError> {
+impl Machine for FakeLinuxCnc {
+    fn execute(&mut self, line: &str) -> Result<(), MachineError> {
         let mut g = Vec::new();
         let mut words = BTreeMap::new();
         for token in line.split_whitespace() {
@@ -145,30 +145,33 @@ impl Host for FakeLinuxCnc {
         self.lines.push(line.to_string());
         Ok(())
     }
-    fn pound(&self, index: u32) -> Result<f64, HostError> {
+    fn pound(&self, index: u32) -> Result<f64, MachineError> {
         Ok(self.params.get(&index).copied().unwrap_or(0.0))
     }
-    fn set_pound(&mut self, index: u32, value: f64) -> Result<(), HostError> {
+    fn set_pound(&mut self, index: u32, value: f64) -> Result<(), MachineError> {
         self.params.insert(index, value);
         Ok(())
     }
-    fn active_tool(&self) -> Result<u32, HostError> {
+    fn active_tool(&self) -> Result<u32, MachineError> {
         Ok(self.tool)
     }
-    fn tool_offset(&self, tool: u32) -> Result<Vector2<f64>, HostError> {
-        self.tools.get(&tool).copied().ok_or_else(|| HostError::host(format!("no tool {tool}")))
+    fn tool_offset(&self, tool: u32) -> Result<Vector2<f64>, MachineError> {
+        self.tools
+            .get(&tool)
+            .copied()
+            .ok_or_else(|| MachineError::new(MachineErrorKind::UnknownTool, format!("no tool {tool}")))
     }
-    fn set_tool_offset(&mut self, tool: u32, offset: Vector2<f64>) -> Result<(), HostError> {
+    fn set_tool_offset(&mut self, tool: u32, offset: Vector2<f64>) -> Result<(), MachineError> {
         self.tools.insert(tool, offset);
         Ok(())
     }
-    fn position(&self) -> Result<Point2<f64>, HostError> {
+    fn program_position(&self) -> Result<Point2<f64>, MachineError> {
         Ok(self.program())
     }
-    fn units(&self) -> Result<LengthUnit, HostError> {
+    fn units(&self) -> Result<LengthUnit, MachineError> {
         Ok(LengthUnit::Inch)
     }
-    fn dwell(&mut self, _seconds: f64) -> Result<(), HostError> {
+    fn dwell(&mut self, _seconds: f64) -> Result<(), MachineError> {
         Ok(())
     }
     fn message(&mut self, text: &str) {
@@ -177,13 +180,13 @@ impl Host for FakeLinuxCnc {
     fn now(&self) -> Timestamp {
         Timestamp::from_unix(1_800_000_000, 0)
     }
-    fn controller(&self) -> Controller {
-        Controller::LinuxCnc
+    fn controller(&self) -> &'static dyn Controller {
+        &vision_host::controller::LinuxCnc
     }
-    fn xy_rotation_deg(&self) -> Result<f64, HostError> {
+    fn xy_rotation_deg(&self) -> Result<f64, MachineError> {
         Ok(self.rotation_deg)
     }
-    fn g92_offset(&self) -> Result<Vector2<f64>, HostError> {
+    fn g92_offset(&self) -> Result<Vector2<f64>, MachineError> {
         Ok(self.g92)
     }
 }

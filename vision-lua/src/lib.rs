@@ -3,7 +3,7 @@
 //! Each `Macros/mNNN.mcs` of the profile defines `mNNN(hParam)` with one line,
 //! `return require("mach_vision").mcode(NNN, hParam)`. Everything else happens here: the line's words are read
 //! with `mc.mcCntlGetLocalVarFlag` / `mcCntlGetLocalVar`, the call runs through
-//! [`vision_host::Session`] on [`Mach4`] (the [`vision_host::Host`] over Mach4's `mc` API), and
+//! [`vision_host::Session`] on [`Mach4`] (the [`vision_host::Machine`] over Mach4's `mc` API), and
 //! a refusal goes to `mc.mcCntlSetLastError` followed by `mc.mcCntlCycleStop`, which stops the
 //! program. The session lives in the Lua state between calls; its profile is
 //! `<Mach4 dir>/Profiles/<profile>/MachVision.toml` unless `mach_vision.open(path)` named one.
@@ -92,18 +92,18 @@ fn open(lua: &Lua, path: PathBuf) -> Answer {
 fn mcode(lua: &Lua, m: u32, h_param: &Value) -> Answer {
     let mut host = match Mach4::new(lua) {
         Ok(host) => host,
-        Err(e) => return refused(None, &e),
+        Err(e) => return refused(None, &e.into()),
     };
     let taken = lua.app_data_mut::<Slot>().and_then(|mut slot| slot.0.take());
     let session = match taken {
         Some(session) => Ok(session),
-        None => host.profile_path().and_then(|path| Session::open(&path, &registry())),
+        None => host.profile_path().map_err(HostError::from).and_then(|path| Session::open(&path, &registry())),
     };
     let mut session = match session {
         Ok(session) => session,
         Err(e) => return refused(Some(&host), &e),
     };
-    let result = host.words(h_param).and_then(|words| session.mcode(&mut host, m, &words));
+    let result = host.words(h_param).map_err(HostError::from).and_then(|words| session.mcode(&mut host, m, &words));
     install(lua, session);
     match result {
         Ok(outcome) => (true, None, outcome.gcode().to_vec()),

@@ -1,9 +1,9 @@
-//! [`Mach4`]: [`Host`] over Mach4's `mc` scripting API.
+//! [`Mach4`]: [`Machine`] over Mach4's `mc` scripting API.
 
 use std::path::PathBuf;
 
 use mlua::{FromLua, Function, IntoLuaMulti, Lua, MultiValue, Table, Value};
-use vision_host::{printable_line, Host, HostError, MAX_MESSAGE_CHARS};
+use vision_host::{printable_line, Controller, Machine, MachineError, MachineErrorKind, MAX_MESSAGE_CHARS};
 use vision_math::{LengthUnit, Point2, Vector2};
 
 /// `mcCntlGetUnitsCurrent` for G20 (the G-code number × 10).
@@ -18,7 +18,7 @@ const PROFILE_FILE: &str = "MachVision.toml";
 /// The controller of the Lua state's global `mc` table, instance `mc.mcGetInstance()`.
 ///
 /// Mach4's calls return their value(s) followed by a return code; any code other than
-/// `mc.MERROR_NOERROR` is a [`HostError::Host`] naming the call.
+/// `mc.MERROR_NOERROR` is a [`MachineError`] naming the call.
 pub struct Mach4 {
     lua: Lua,
     mc: Table,
@@ -26,63 +26,68 @@ pub struct Mach4 {
     no_error: i64,
 }
 
-fn lua_error(call: &str, e: &mlua::Error) -> HostError {
-    HostError::host(format!("mc.{call} failed: {e}"))
+/// A failed scripting call or an unusable answer.
+fn comm(message: impl Into<String>) -> MachineError {
+    MachineError::new(MachineErrorKind::Communication, message.into())
+}
+
+fn lua_error(call: &str, e: &mlua::Error) -> MachineError {
+    comm(format!("mc.{call} failed: {e}"))
 }
 
 impl Mach4 {
     /// The controller behind the global `mc`.
     ///
     /// # Errors
-    /// [`HostError::Host`] when there is no `mc` table (not inside Mach4) or no instance.
-    pub fn new(lua: &Lua) -> Result<Mach4, HostError> {
+    /// A [`MachineError`] when there is no `mc` table (not inside Mach4) or no instance.
+    pub fn new(lua: &Lua) -> Result<Mach4, MachineError> {
         let mc: Table = lua
             .globals()
             .get("mc")
-            .map_err(|_| HostError::host("there is no `mc` table: mach_vision runs inside Mach4's macros"))?;
+            .map_err(|_| comm("there is no `mc` table: mach_vision runs inside Mach4's macros"))?;
         let no_error = mc.get::<Option<i64>>("MERROR_NOERROR").map_err(|e| lua_error("MERROR_NOERROR", &e))?;
         let mut host = Mach4 { lua: lua.clone(), mc, inst: Value::Nil, no_error: no_error.unwrap_or(0) };
         host.inst = host.value("mcGetInstance", ())?;
         Ok(host)
     }
 
-    fn function(&self, call: &str) -> Result<Function, HostError> {
-        self.mc.get::<Function>(call).map_err(|_| HostError::host(format!("this Mach4 has no mc.{call}")))
+    fn function(&self, call: &str) -> Result<Function, MachineError> {
+        self.mc.get::<Function>(call).map_err(|_| comm(format!("this Mach4 has no mc.{call}")))
     }
 
     /// A constant of the `mc` table (`mc.X_AXIS`, `mc.MTOOL_MILL_X`, …).
-    fn constant(&self, name: &str) -> Result<Value, HostError> {
+    fn constant(&self, name: &str) -> Result<Value, MachineError> {
         match self.mc.get::<Value>(name) {
-            Ok(Value::Nil) | Err(_) => Err(HostError::host(format!("this Mach4 has no mc.{name}"))),
+            Ok(Value::Nil) | Err(_) => Err(comm(format!("this Mach4 has no mc.{name}"))),
             Ok(v) => Ok(v),
         }
     }
 
     /// Checks a return code.
-    fn check(&self, call: &str, rc: &Value) -> Result<(), HostError> {
+    fn check(&self, call: &str, rc: &Value) -> Result<(), MachineError> {
         match rc {
             Value::Nil => Ok(()),
             Value::Integer(n) if *n == self.no_error => Ok(()),
             Value::Number(n) if *n == self.no_error as f64 => Ok(()),
-            other => Err(HostError::host(format!("mc.{call} returned error code {}", describe(other)))),
+            other => Err(comm(format!("mc.{call} returned error code {}", describe(other)))),
         }
     }
 
-    fn call(&self, call: &str, args: impl IntoLuaMulti) -> Result<MultiValue, HostError> {
+    fn call(&self, call: &str, args: impl IntoLuaMulti) -> Result<MultiValue, MachineError> {
         self.function(call)?.call::<MultiValue>(args).map_err(|e| lua_error(call, &e))
     }
 
     /// A call that returns `value, rc`.
-    fn value<T: FromLua>(&self, call: &str, args: impl IntoLuaMulti) -> Result<T, HostError> {
+    fn value<T: FromLua>(&self, call: &str, args: impl IntoLuaMulti) -> Result<T, MachineError> {
         let mut out = self.call(call, args)?.into_iter();
         let value = out.next().unwrap_or(Value::Nil);
         self.check(call, &out.next().unwrap_or(Value::Nil))?;
         let shown = describe(&value);
-        self.lua.unpack::<T>(value).map_err(|_| HostError::host(format!("mc.{call} returned {shown}")))
+        self.lua.unpack::<T>(value).map_err(|_| comm(format!("mc.{call} returned {shown}")))
     }
 
     /// A call that returns `rc` only.
-    fn status(&self, call: &str, args: impl IntoLuaMulti) -> Result<(), HostError> {
+    fn status(&self, call: &str, args: impl IntoLuaMulti) -> Result<(), MachineError> {
         let out = self.call(call, args)?;
         self.check(call, out.front().unwrap_or(&Value::Nil))
     }
@@ -99,7 +104,7 @@ impl Mach4 {
     ///
     /// # Errors
     /// A refused read.
-    pub fn words(&self, h_param: &Value) -> Result<Vec<(char, f64)>, HostError> {
+    pub fn words(&self, h_param: &Value) -> Result<Vec<(char, f64)>, MachineError> {
         let mut words = Vec::new();
         for letter in ('A'..='Z').filter(|l| !NOT_WORDS.contains(l)) {
             let Ok(var) = self.constant(&format!("SV_{letter}")) else { continue };
@@ -116,21 +121,21 @@ impl Mach4 {
     ///
     /// # Errors
     /// A refused read.
-    pub fn profile_path(&self) -> Result<PathBuf, HostError> {
+    pub fn profile_path(&self) -> Result<PathBuf, MachineError> {
         let dir: String = self.value("mcCntlGetMachDir", self.inst.clone())?;
         let profile: String = self.value("mcProfileGetName", self.inst.clone())?;
         Ok(PathBuf::from(dir).join("Profiles").join(profile).join(PROFILE_FILE))
     }
 
-    fn axis(&self, name: &str) -> Result<f64, HostError> {
+    fn axis(&self, name: &str) -> Result<f64, MachineError> {
         self.value("mcAxisGetPos", (self.inst.clone(), self.constant(name)?))
     }
 
-    fn tool_field(&self, field: &str, tool: u32) -> Result<f64, HostError> {
+    fn tool_field(&self, field: &str, tool: u32) -> Result<f64, MachineError> {
         self.value("mcToolGetData", (self.inst.clone(), self.constant(field)?, tool))
     }
 
-    fn set_tool_field(&self, field: &str, tool: u32, value: f64) -> Result<(), HostError> {
+    fn set_tool_field(&self, field: &str, tool: u32, value: f64) -> Result<(), MachineError> {
         self.status("mcToolSetData", (self.inst.clone(), self.constant(field)?, tool, value))
     }
 }
@@ -145,53 +150,64 @@ fn describe(v: &Value) -> String {
     }
 }
 
-impl Host for Mach4 {
-    fn execute(&mut self, line: &str) -> Result<(), HostError> {
-        self.status("mcCntlGcodeExecuteWait", (self.inst.clone(), line))
+impl Machine for Mach4 {
+    fn controller(&self) -> &'static dyn Controller {
+        &vision_host::controller::Mach4
     }
 
-    fn pound(&self, index: u32) -> Result<f64, HostError> {
-        self.value("mcCntlGetPoundVar", (self.inst.clone(), index))
+    fn execute(&mut self, line: &str) -> Result<(), MachineError> {
+        let done = self.status("mcCntlGcodeExecuteWait", (self.inst.clone(), line));
+        done.map_err(|e| e.with_kind(MachineErrorKind::RefusedGcode))
     }
 
-    fn set_pound(&mut self, index: u32, value: f64) -> Result<(), HostError> {
-        self.status("mcCntlSetPoundVar", (self.inst.clone(), index, value))
+    fn pound(&self, index: u32) -> Result<f64, MachineError> {
+        let value = self.value("mcCntlGetPoundVar", (self.inst.clone(), index));
+        value.map_err(|e| e.with_kind(MachineErrorKind::OutOfRange))
     }
 
-    fn active_tool(&self) -> Result<u32, HostError> {
+    fn set_pound(&mut self, index: u32, value: f64) -> Result<(), MachineError> {
+        let done = self.status("mcCntlSetPoundVar", (self.inst.clone(), index, value));
+        done.map_err(|e| e.with_kind(MachineErrorKind::OutOfRange))
+    }
+
+    fn active_tool(&self) -> Result<u32, MachineError> {
         let tool: f64 = self.value("mcToolGetCurrent", self.inst.clone())?;
         if tool.fract() == 0.0 && (0.0..=f64::from(u32::MAX)).contains(&tool) {
             #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)] // checked above
             Ok(tool as u32)
         } else {
-            Err(HostError::host(format!("mc.mcToolGetCurrent returned {tool}, not a tool number")))
+            Err(comm(format!("mc.mcToolGetCurrent returned {tool}, not a tool number")))
         }
     }
 
-    fn tool_offset(&self, tool: u32) -> Result<Vector2<f64>, HostError> {
-        Ok(Vector2::new(self.tool_field("MTOOL_MILL_X", tool)?, self.tool_field("MTOOL_MILL_Y", tool)?))
+    fn tool_offset(&self, tool: u32) -> Result<Vector2<f64>, MachineError> {
+        let unknown = |e: MachineError| e.with_kind(MachineErrorKind::UnknownTool);
+        Ok(Vector2::new(
+            self.tool_field("MTOOL_MILL_X", tool).map_err(unknown)?,
+            self.tool_field("MTOOL_MILL_Y", tool).map_err(unknown)?,
+        ))
     }
 
-    fn set_tool_offset(&mut self, tool: u32, offset: Vector2<f64>) -> Result<(), HostError> {
+    fn set_tool_offset(&mut self, tool: u32, offset: Vector2<f64>) -> Result<(), MachineError> {
         self.set_tool_field("MTOOL_MILL_X", tool, offset.x)?;
         self.set_tool_field("MTOOL_MILL_Y", tool, offset.y)
     }
 
-    fn position(&self) -> Result<Point2<f64>, HostError> {
+    fn program_position(&self) -> Result<Point2<f64>, MachineError> {
         Ok(Point2::new(self.axis("X_AXIS")?, self.axis("Y_AXIS")?))
     }
 
-    fn units(&self) -> Result<LengthUnit, HostError> {
+    fn units(&self) -> Result<LengthUnit, MachineError> {
         match self.value::<i64>("mcCntlGetUnitsCurrent", self.inst.clone())? {
             UNITS_INCH => Ok(LengthUnit::Inch),
             UNITS_MM => Ok(LengthUnit::Millimetre),
-            other => Err(HostError::host(format!(
+            other => Err(comm(format!(
                 "mc.mcCntlGetUnitsCurrent returned {other}, neither {UNITS_INCH} (G20) nor {UNITS_MM} (G21)"
             ))),
         }
     }
 
-    fn dwell(&mut self, seconds: f64) -> Result<(), HostError> {
+    fn dwell(&mut self, seconds: f64) -> Result<(), MachineError> {
         // Mach4 reads G4 P in seconds unless "Dwell in ms" is ticked (see the install guide).
         self.execute(&format!("G4 P{seconds:.3}"))
     }

@@ -111,6 +111,21 @@ impl AlignmentChain {
         Some(Point2::new(v.x / self.scale.x, v.y / self.scale.y))
     }
 
+    /// The chain a controller runs after reading [`AlignmentChain::gcode`]'s lines: every field
+    /// rounded to the decimals it is written with (moves no point by more than 1e-6 units).
+    /// `None` if a field is NaN or infinite.
+    #[must_use]
+    pub fn as_emitted(&self) -> Option<AlignmentChain> {
+        let round = |v: f64, decimals: usize| fixed(v, decimals).parse::<f64>().ok().filter(|r| r.is_finite());
+        let p = |v: f64| round(v, POSITION_DECIMALS);
+        Some(AlignmentChain {
+            scale: Vector2::new(round(self.scale.x, SCALE_DECIMALS)?, round(self.scale.y, SCALE_DECIMALS)?),
+            center: Point2::new(p(self.center.x)?, p(self.center.y)?),
+            rotation_deg: round(self.rotation_deg, ANGLE_DECIMALS)?,
+            shift: Vector2::new(p(self.shift.x)?, p(self.shift.y)?),
+        })
+    }
+
     /// The four lines M282 emits, with fixed decimals ([`POSITION_DECIMALS`],
     /// [`ANGLE_DECIMALS`], [`SCALE_DECIMALS`]); never `NaN`, `inf` or `-0`:
     ///
@@ -155,6 +170,25 @@ pub fn fixed(v: f64, decimals: usize) -> String {
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+
+    #[test]
+    fn the_emitted_chain_is_the_one_its_lines_write() {
+        let chain = AlignmentChain {
+            scale: Vector2::new(1.000_775_023_012_3, 1.001_148_365_6),
+            center: Point2::new(3.0, 2.000_000_04),
+            rotation_deg: 0.300_602_523_47,
+            shift: Vector2::new(-0.010_478_12, 0.015_755_24),
+        };
+        let emitted = chain.as_emitted().expect("finite");
+        let lines = chain.gcode().expect("finite");
+        assert_eq!(emitted.gcode().expect("finite"), lines);
+        assert_eq!(emitted.shift.x, -0.010_478_1);
+        assert_eq!(emitted.rotation_deg, 0.300_602_523);
+        for p in [Point2::new(0.0, 0.0), Point2::new(6.0, 4.0)] {
+            assert!((emitted.apply(p) - chain.apply(p)).norm() < 1e-6);
+        }
+        assert_eq!(AlignmentChain { rotation_deg: f64::NAN, ..chain }.as_emitted(), None);
+    }
 
     #[test]
     fn rigid_part_keeps_the_centre_and_drops_the_scale() {

@@ -6,10 +6,10 @@
 //!   [`Outcome`]: the module's report, and the G-code it ran on the machine
 //!   ([`Outcome::gcode`]; M282's lines formatted by `vision_math::AlignmentChain::gcode`: fixed
 //!   decimals that move no point by more than 1e-6 units; never NaN, inf or `-0`).
-//! * [`VisionHandler`]: the interpreter's user M-code handler for M280–M284 (the module runs
-//!   its G-code in place through [`ContextMachine`]; keeps a [`Record`] of every call).
-//! * [`ContextMachine`]: the one [`vision_core::Machine`] over the interpreter — inside a handler,
-//!   or around a standalone interpreter — so the module's moves run synchronously on it.
+//! * [`ContextMachine`]: the simulated machine, the one [`vision_core::Machine`] over the
+//!   interpreter (inside an M-code handler, or around a standalone interpreter), so the
+//!   module's moves run synchronously on it. `vision-host`'s session runs the M-codes on it as
+//!   on any controller.
 //!
 //! ```
 //! use vision_core::RunMode;
@@ -23,12 +23,10 @@
 
 mod call;
 mod error;
-mod handler;
 mod machine;
 mod outcome;
 
 pub use call::{VisionCall, VISION_MCODES};
 pub use error::McodeError;
-pub use handler::{Record, VisionHandler, MAX_RECORDS};
 pub use machine::{fixed_clock, system_clock, Clock, ContextMachine};
 pub use outcome::Outcome;

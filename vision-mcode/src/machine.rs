@@ -3,9 +3,10 @@
 use std::sync::Arc;
 use std::time::SystemTime;
 
-use vision_core::{Machine, MachineError, Timestamp};
-use vision_gcode::Context;
-use vision_math::{AlignmentChain, LengthUnit, Point2, Vector2};
+use vision_core::{Controller, Machine, MachineError, MachineErrorKind, Timestamp};
+use vision_gcode::params::{WORK_OFFSET_STRIDE, WORK_ROTATION};
+use vision_gcode::{Context, GcodeError};
+use vision_math::{LengthUnit, Point2, Vector2};
 
 /// The host's clock, shared by whoever needs it.
 pub type Clock = Arc<dyn Fn() -> Timestamp + Send + Sync>;
@@ -23,70 +24,95 @@ pub fn fixed_clock(t: Timestamp) -> Clock {
     Arc::new(move || t)
 }
 
-/// [`vision_core::Machine`] over an interpreter [`Context`]: inside an M-code handler, or around
-/// a standalone interpreter (`Interpreter::context`).
+/// [`vision_core::Machine`] over an interpreter [`Context`] — the simulated machine: inside an
+/// M-code handler, or around a standalone interpreter (`Interpreter::context`).
 ///
 /// Every length is in the interpreter's current units (G20/G21), as the trait asks. G-code runs
 /// synchronously through [`Context::execute`], so calibration moves, then triggers, then reads
-/// the new position.
+/// the new position. The interpreter knows its alignment exactly, so it answers
+/// [`Machine::alignment_active`]; the G5x rotation and the G92 offset are its own.
 pub struct ContextMachine<'c, 'a> {
     ctx: &'c mut Context<'a>,
     clock: &'c Clock,
+    controller: &'static dyn Controller,
 }
 
 impl<'c, 'a> ContextMachine<'c, 'a> {
-    /// The machine behind `ctx`, telling time by `clock`.
-    pub fn new(ctx: &'c mut Context<'a>, clock: &'c Clock) -> ContextMachine<'c, 'a> {
-        ContextMachine { ctx, clock }
+    /// The machine behind `ctx`, a `controller` (whose dialect the interpreter follows), telling
+    /// time by `clock`.
+    pub fn new(
+        ctx: &'c mut Context<'a>,
+        clock: &'c Clock,
+        controller: &'static dyn Controller,
+    ) -> ContextMachine<'c, 'a> {
+        ContextMachine { ctx, clock, controller }
+    }
+
+    /// The current units per machine unit.
+    fn per_machine_unit(&self) -> f64 {
+        self.ctx.interpreter().machine_unit().factor_to(self.ctx.units())
     }
 }
 
-fn host<E: std::fmt::Display>(e: E) -> MachineError {
-    MachineError::new(e.to_string())
+/// The interpreter's error as a [`MachineError`] of `kind`, the error kept as the cause.
+fn host(kind: MachineErrorKind) -> impl Fn(GcodeError) -> MachineError {
+    move |e| MachineError::new(kind, e)
 }
 
 impl Machine for ContextMachine<'_, '_> {
-    fn program_position(&self) -> Point2<f64> {
-        self.ctx.program_position().xy()
+    fn controller(&self) -> &'static dyn Controller {
+        self.controller
     }
 
-    fn active_alignment(&self) -> Option<AlignmentChain> {
-        self.ctx.active_alignment()
+    fn execute(&mut self, line: &str) -> Result<(), MachineError> {
+        self.ctx.execute(line).map_err(host(MachineErrorKind::RefusedGcode))
     }
 
-    fn run_gcode(&mut self, lines: &[String]) -> Result<(), MachineError> {
-        self.ctx.execute(&lines.join("\n")).map_err(host)
+    fn program_position(&self) -> Result<Point2<f64>, MachineError> {
+        Ok(self.ctx.program_position().xy())
     }
 
-    fn active_tool(&self) -> u32 {
-        self.ctx.active_tool()
+    fn alignment_active(&self) -> Result<Option<bool>, MachineError> {
+        Ok(Some(self.ctx.active_alignment().is_some()))
+    }
+
+    fn xy_rotation_deg(&self) -> Result<f64, MachineError> {
+        let system = self.ctx.interpreter().coordinate_system().max(1);
+        self.ctx.pound(WORK_ROTATION + WORK_OFFSET_STRIDE * (system - 1)).map_err(host(MachineErrorKind::OutOfRange))
+    }
+
+    fn g92_offset(&self) -> Result<Vector2<f64>, MachineError> {
+        let g92 = self.ctx.interpreter().g92_offset();
+        Ok(Vector2::new(g92.x, g92.y) * self.per_machine_unit())
+    }
+
+    fn active_tool(&self) -> Result<u32, MachineError> {
+        Ok(self.ctx.active_tool())
     }
 
     fn tool_offset(&self, tool: u32) -> Result<Vector2<f64>, MachineError> {
-        let o = self.ctx.tool_offset(tool).map_err(host)?;
+        let o = self.ctx.tool_offset(tool).map_err(host(MachineErrorKind::UnknownTool))?;
         Ok(Vector2::new(o.x, o.y))
     }
 
     fn set_tool_offset(&mut self, tool: u32, offset: Vector2<f64>) -> Result<(), MachineError> {
-        self.ctx.set_tool_offset(tool, offset.x, offset.y).map_err(host)
+        self.ctx.set_tool_offset(tool, offset.x, offset.y).map_err(host(MachineErrorKind::UnknownTool))
     }
 
-    fn units(&self) -> LengthUnit {
-        self.ctx.units()
+    fn units(&self) -> Result<LengthUnit, MachineError> {
+        Ok(self.ctx.units())
     }
 
     fn pound(&self, index: u32) -> Result<f64, MachineError> {
-        self.ctx.pound(index).map_err(host)
+        self.ctx.pound(index).map_err(host(MachineErrorKind::OutOfRange))
     }
 
     fn set_pound(&mut self, index: u32, value: f64) -> Result<(), MachineError> {
-        self.ctx.set_pound(index, value).map_err(host)
+        self.ctx.set_pound(index, value).map_err(host(MachineErrorKind::OutOfRange))
     }
 
-    fn dwell(&mut self, seconds: f64) {
-        // The core dwells `VisionTriggerSettleSec`, validated finite and ≥ 0; anything else is
-        // not a wait, so it is skipped rather than turned into an error the trait cannot carry.
-        let _ = self.ctx.dwell(seconds);
+    fn dwell(&mut self, seconds: f64) -> Result<(), MachineError> {
+        self.ctx.dwell(seconds).map_err(host(MachineErrorKind::OutOfRange))
     }
 
     fn now(&self) -> Timestamp {

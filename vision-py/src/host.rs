@@ -1,23 +1,23 @@
-//! [`PyHost`]: [`Host`] over the Python object LinuxCNC's remap hands the session
+//! [`PyHost`]: [`Machine`] over the Python object LinuxCNC's remap hands the session
 //! (`hosts/linuxcnc/remap.py`'s `Host`).
 
 use pyo3::call::PyCallArgs;
 use pyo3::prelude::*;
-use vision_host::{printable_line, Controller, Host, HostError, MAX_MESSAGE_CHARS};
+use vision_host::{printable_line, Controller, Machine, MachineError, MachineErrorKind, MAX_MESSAGE_CHARS};
 use vision_math::{LengthUnit, Point2, Vector2};
 
 use crate::words::shown;
 use crate::VisionError;
 
-/// The controller behind a Python `Host` object: each [`Host`] call is a method call on it
+/// The controller behind a Python `Host` object: each [`Machine`] call is a method call on it
 /// (`program_position()`, `pound(n)`, `execute(line)`, …; the table in
 /// `hosts/linuxcnc/README.md`). Lengths are in the program's units, angles in degrees.
 ///
-/// It is [`Controller::LinuxCnc`]: M282 rotates the G5x system and shifts with G52, and the
-/// alignment's state is read from the host at every call.
+/// It is [`vision_host::controller::LinuxCnc`]: M282 rotates the G5x system and shifts with
+/// G52, and the alignment's state is read from the machine at every call.
 ///
 /// A Python exception raised by a method, or a value of the wrong type, becomes
-/// [`HostError::Host`] with Python's message; nothing here panics on what Python returns.
+/// a [`MachineError`] with Python's message; nothing here panics on what Python returns.
 pub struct PyHost<'py> {
     object: Bound<'py, PyAny>,
 }
@@ -38,8 +38,8 @@ impl<'py> PyHost<'py> {
     /// `object.method(*args)`.
     ///
     /// # Errors
-    /// [`HostError::Host`] with the exception's message when the method is missing or raises.
-    pub fn call(&self, method: &str, args: impl PyCallArgs<'py>) -> Result<Bound<'py, PyAny>, HostError> {
+    /// A [`MachineError`] with the exception's message when the method is missing or raises.
+    pub fn call(&self, method: &str, args: impl PyCallArgs<'py>) -> Result<Bound<'py, PyAny>, MachineError> {
         self.object.call_method1(method, args).map_err(|e| python_error(self.object.py(), method, &e))
     }
 
@@ -47,79 +47,82 @@ impl<'py> PyHost<'py> {
     ///
     /// # Errors
     /// As [`PyHost::call`], and when the result is not a `T` (`what` names it in the message).
-    pub fn value<T>(&self, method: &str, args: impl PyCallArgs<'py>, what: &str) -> Result<T, HostError>
+    pub fn value<T>(&self, method: &str, args: impl PyCallArgs<'py>, what: &str) -> Result<T, MachineError>
     where
         T: FromPyObjectOwned<'py>,
     {
         let value = self.call(method, args)?;
-        value
-            .extract::<T>()
-            .map_err(|_| HostError::host(format!("Host.{method}() returned {}, not {what}", shown(&value))))
+        value.extract::<T>().map_err(|_| comm(format!("Host.{method}() returned {}, not {what}", shown(&value))))
     }
 
     /// `object.method(*args)` as an X, Y pair (`(x, y)`).
-    fn pair(&self, method: &str, args: impl PyCallArgs<'py>) -> Result<(f64, f64), HostError> {
+    fn pair(&self, method: &str, args: impl PyCallArgs<'py>) -> Result<(f64, f64), MachineError> {
         self.value(method, args, "an (x, y) pair of numbers")
     }
 }
 
 /// The operator's view of Python exception `e`, raised by `Host.method`: a `VisionError`'s
 /// message as it is (the remap wrote it for the operator), any other exception with its type.
-fn python_error(py: Python<'_>, method: &str, e: &PyErr) -> HostError {
-    let text =
-        if e.is_instance_of::<VisionError>(py) { e.value(py).to_string() } else { format!("Host.{method}(): {e}") };
-    HostError::host(printable_line(&text, MAX_MESSAGE_CHARS))
+/// A failed call or an unusable answer.
+fn comm(message: impl Into<String>) -> MachineError {
+    MachineError::new(MachineErrorKind::Communication, message.into())
 }
 
-impl Host for PyHost<'_> {
-    fn execute(&mut self, line: &str) -> Result<(), HostError> {
-        self.call("execute", (line,)).map(|_| ())
+fn python_error(py: Python<'_>, method: &str, e: &PyErr) -> MachineError {
+    let text =
+        if e.is_instance_of::<VisionError>(py) { e.value(py).to_string() } else { format!("Host.{method}(): {e}") };
+    comm(printable_line(&text, MAX_MESSAGE_CHARS))
+}
+
+impl Machine for PyHost<'_> {
+    fn controller(&self) -> &'static dyn Controller {
+        &vision_host::controller::LinuxCnc
     }
 
-    fn pound(&self, index: u32) -> Result<f64, HostError> {
+    fn execute(&mut self, line: &str) -> Result<(), MachineError> {
+        self.call("execute", (line,)).map(|_| ()).map_err(|e| e.with_kind(MachineErrorKind::RefusedGcode))
+    }
+
+    fn pound(&self, index: u32) -> Result<f64, MachineError> {
         self.value("pound", (index,), "a number")
     }
 
-    fn set_pound(&mut self, index: u32, value: f64) -> Result<(), HostError> {
+    fn set_pound(&mut self, index: u32, value: f64) -> Result<(), MachineError> {
         self.call("set_pound", (index, value)).map(|_| ())
     }
 
-    fn active_tool(&self) -> Result<u32, HostError> {
+    fn active_tool(&self) -> Result<u32, MachineError> {
         self.value("tool", (), "a tool number")
     }
 
-    fn tool_offset(&self, tool: u32) -> Result<Vector2<f64>, HostError> {
+    fn tool_offset(&self, tool: u32) -> Result<Vector2<f64>, MachineError> {
         let (x, y) = self.pair("tool_offset", (tool,))?;
         Ok(Vector2::new(x, y))
     }
 
-    fn set_tool_offset(&mut self, tool: u32, offset: Vector2<f64>) -> Result<(), HostError> {
+    fn set_tool_offset(&mut self, tool: u32, offset: Vector2<f64>) -> Result<(), MachineError> {
         self.call("set_tool_offset", (tool, offset.x, offset.y)).map(|_| ())
     }
 
-    fn position(&self) -> Result<Point2<f64>, HostError> {
+    fn program_position(&self) -> Result<Point2<f64>, MachineError> {
         let (x, y) = self.pair("program_position", ())?;
         Ok(Point2::new(x, y))
     }
 
-    fn units(&self) -> Result<LengthUnit, HostError> {
+    fn units(&self) -> Result<LengthUnit, MachineError> {
         let metric: bool = self.value("metric", (), "True or False")?;
         Ok(if metric { LengthUnit::Millimetre } else { LengthUnit::Inch })
     }
 
-    fn dwell(&mut self, seconds: f64) -> Result<(), HostError> {
+    fn dwell(&mut self, seconds: f64) -> Result<(), MachineError> {
         self.call("dwell", (seconds,)).map(|_| ())
     }
 
-    fn controller(&self) -> Controller {
-        Controller::LinuxCnc
-    }
-
-    fn xy_rotation_deg(&self) -> Result<f64, HostError> {
+    fn xy_rotation_deg(&self) -> Result<f64, MachineError> {
         self.value("xy_rotation_deg", (), "a number")
     }
 
-    fn g92_offset(&self) -> Result<Vector2<f64>, HostError> {
+    fn g92_offset(&self) -> Result<Vector2<f64>, MachineError> {
         let (x, y) = self.pair("g92_offset", ())?;
         Ok(Vector2::new(x, y))
     }

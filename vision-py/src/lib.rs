@@ -5,7 +5,7 @@
 //! interpreter behind the method table of `hosts/linuxcnc/README.md`) to one [`PySession`];
 //! the session runs the M-code, runs the G-code it emits through `Host.execute`, and raises
 //! [`VisionError`] with the operator's message when the M-code is refused. [`PyHost`] is the
-//! [`vision_host::Host`] over that object; a Python exception in one of its methods becomes the
+//! [`vision_host::Machine`] over that object; a Python exception in one of its methods becomes the
 //! M-code's refusal, never a panic.
 //!
 //! Built with `PYO3_BUILD_EXTENSION_MODULE=1` the library links no libpython (the Python of

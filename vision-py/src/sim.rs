@@ -13,7 +13,7 @@ use nalgebra::Point3;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use vision_host::testkit::{self, Camera, Rig};
-use vision_host::{Host, HostError, Session};
+use vision_host::{HostError, Machine, Session};
 use vision_math::{LengthUnit, Point2, Vector2};
 
 use crate::host::PyHost;

@@ -11,9 +11,10 @@ use std::path::{Path, PathBuf};
 use clap::{Args, ValueEnum};
 use vision_core::{DriverRegistry, Params, ProfileStore, VisionModule};
 use vision_driver_keyence::emulator::EmulatorHandle;
-use vision_driver_sim::{Sim, SimMachine};
+use vision_driver_sim::{ControllerName, Sim, SimMachine};
 use vision_gcode::{Event, RunOutcome};
-use vision_mcode::{system_clock, VisionHandler};
+use vision_host::{ProgramHandler, Session};
+use vision_mcode::system_clock;
 use vision_path::{Limits, PlanConfig, Setpoints};
 
 use crate::trace::DialectArg;
@@ -64,17 +65,19 @@ pub(crate) struct RunArgs {
     /// (created if missing).
     #[arg(long, value_name = "DIR")]
     report: Option<PathBuf>,
-    /// Whose G-code rules the machine follows where the controllers differ; default: the
-    /// world's `machine.dialect` (`mach4` unless the world says otherwise).
-    #[arg(long, value_enum)]
+    /// The controller the simulated machine is (`mach4`, `linuxcnc`, `machinemotion`): its
+    /// G-code dialect and its rules for the Vision M-codes; default: the world's
+    /// `machine.dialect` (`mach4` unless the world says otherwise).
+    #[arg(long, value_parser = DialectArg::parse)]
     dialect: Option<DialectArg>,
 }
 
-/// Everything a run needs, set up.
-struct Session {
+/// Everything a run needs, set up: the simulated machine and camera, and the Vision session
+/// that runs M280–M284 on it (the path every bridge runs).
+struct Runner {
     sim: Sim,
     machine: SimMachine,
-    handler: VisionHandler,
+    handler: ProgramHandler,
     camera: String,
     /// Keeps the loopback emulator alive for the session.
     _emulator: Option<EmulatorHandle>,
@@ -84,11 +87,11 @@ fn set(params: &mut Params, name: &str, value: impl Into<vision_core::ParamValue
     params.set(name, value).map_err(|e| Failure::Input(e.to_string()))
 }
 
-impl Session {
-    fn new(args: &RunArgs) -> Result<Session, Failure> {
+impl Runner {
+    fn new(args: &RunArgs) -> Result<Runner, Failure> {
         let mut world = world::load(args.world.as_deref())?;
         if let Some(dialect) = args.dialect {
-            world.machine.dialect = dialect.machine();
+            world.machine.controller = ControllerName(dialect.0);
         }
         let sim = Sim::new(world).map_err(|e| Failure::Input(e.to_string()))?;
         let camera_tool = i64::from(sim.world().machine.camera_tool);
@@ -145,9 +148,14 @@ impl Session {
             store.check_writable().map_err(|e| Failure::Input(e.to_string()))?;
             module = module.with_profile(store);
         }
-        let clock = system_clock();
         let machine = SimMachine::new(&sim).map_err(|e| Failure::Input(e.to_string()))?;
-        Ok(Session { sim, machine, handler: VisionHandler::new(module, clock), camera, _emulator: emulator })
+        let handler = ProgramHandler::new(Session::new(module), sim.world().machine.controller(), system_clock());
+        Ok(Runner { sim, machine, handler, camera, _emulator: emulator })
+    }
+
+    /// The Vision module.
+    fn module(&self) -> &vision_core::VisionModule {
+        self.handler.session().module()
     }
 
     /// Runs one program (its text already read) and reports it.
@@ -170,7 +178,7 @@ impl Session {
         let calibrated =
             steps.iter().any(|s| matches!(s, Step::SheetCalibration { .. } | Step::QuickCalibration { .. }));
         let calibration_truth =
-            if calibrated { calibration_truth(&self.sim, &self.machine, self.handler.module().params()) } else { None };
+            if calibrated { calibration_truth(&self.sim, &self.machine, self.module().params()) } else { None };
         let (outcome, error) = match result {
             Ok(RunOutcome::Completed { .. }) => ("completed".to_string(), None),
             Ok(RunOutcome::Ended { line, code }) => (format!("ended by M{code} at line {line}"), None),
@@ -228,7 +236,7 @@ pub(crate) fn run(args: &RunArgs) -> Result<String, Failure> {
     // Every program is read before anything runs: an unreadable file is bad input, not a
     // session cut off halfway with its report lost.
     let texts = args.programs.iter().map(|p| read_text(p, "program")).collect::<Result<Vec<_>, _>>()?;
-    let mut session = Session::new(args)?;
+    let mut session = Runner::new(args)?;
     let mut programs = Vec::with_capacity(args.programs.len());
     let mut failure = None;
     for (path, text) in args.programs.iter().zip(&texts) {
@@ -241,7 +249,7 @@ pub(crate) fn run(args: &RunArgs) -> Result<String, Failure> {
             break;
         }
     }
-    let params = session.handler.module().params();
+    let params = session.module().params();
     let report = Report {
         world: args.world.as_ref().map_or_else(|| "built-in".to_string(), |p| p.display().to_string()),
         world_unit: session.sim.unit().short_name(),
@@ -249,7 +257,7 @@ pub(crate) fn run(args: &RunArgs) -> Result<String, Failure> {
         profile: args.profile.as_ref().map(|p| p.display().to_string()),
         programs,
         pound: pound(&session.machine, params)?,
-        telemetry: session.handler.module().telemetry().clone(),
+        telemetry: session.module().telemetry().clone(),
     };
     if let Some(dir) = &args.report {
         pictures::write(&report, dir)?;

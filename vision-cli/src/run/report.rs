@@ -10,7 +10,8 @@ use vision_driver_sim::{Sim, SimMachine};
 use vision_math::{LengthUnit, Point2, Vector2};
 
 use crate::Failure;
-use vision_mcode::{Outcome, Record};
+use vision_host::Record;
+use vision_mcode::Outcome;
 
 /// The whole run.
 #[derive(Debug, Serialize)]

@@ -71,7 +71,7 @@ fn program(s: &mut String, p: &ProgramReport, world_unit: &str) {
             s,
             "  ... {} more Vision M-codes ran but are not listed (the report keeps the first {})",
             p.steps_not_listed,
-            vision_mcode::MAX_RECORDS
+            vision_host::MAX_RECORDS
         );
     }
     if let Some(t) = p.alignment_time_s {

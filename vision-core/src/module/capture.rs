@@ -2,11 +2,11 @@
 
 use std::path::PathBuf;
 
-use vision_math::{LengthUnit, Matrix2, PixelChain, Point2, Remap, Vector2};
+use vision_math::{AlignmentChain, LengthUnit, Matrix2, PixelChain, Point2, Remap, Vector2};
 
+use crate::controller::machine_to_program;
 use crate::driver::{Judgment, Reading};
 use crate::error::VisionError;
-use crate::linuxcnc::{self, machine_to_program};
 use crate::machine::Machine;
 use crate::params::Params;
 use crate::ser;
@@ -133,14 +133,18 @@ pub(crate) fn require_mark(reading: &Reading) -> Result<(), VisionError> {
     }
 }
 
-/// The observed point in the program frame: `C` through the active alignment to the work
-/// frame, plus `d`, and back through the inverse (SPEC §2, last paragraph). `d` is measured
-/// along the machine axes, so the G5x rotation under the alignment (θ₀, LinuxCNC) turns it into
-/// the program frame first.
-pub(crate) fn observe(machine: &dyn Machine, offset: Vector2<f64>) -> Result<(Point2<f64>, Point2<f64>), VisionError> {
-    let offset = machine_to_program(offset, linuxcnc::base_rotation(machine)?);
-    let c = machine.program_position();
-    let observed = match machine.active_alignment() {
+/// The commanded point `C` and the observed point in the program frame: `C` through the active
+/// `alignment` to the work frame, plus `d`, and back through the inverse (SPEC §2, last
+/// paragraph). `d` is measured along the machine axes, so the G5x rotation under the alignment
+/// (θ₀, LinuxCNC) turns it into the program frame first.
+pub(crate) fn observe(
+    machine: &dyn Machine,
+    alignment: Option<AlignmentChain>,
+    offset: Vector2<f64>,
+) -> Result<(Point2<f64>, Point2<f64>), VisionError> {
+    let offset = machine_to_program(offset, machine.controller().base_rotation(machine)?);
+    let c = machine.program_position()?;
+    let observed = match alignment {
         None => c + offset,
         Some(chain) => chain.inverse(chain.apply(c) + offset).ok_or_else(|| VisionError::BadCalibration {
             reason: "the active G51 scale has a zero factor, so the program frame cannot be recovered".into(),

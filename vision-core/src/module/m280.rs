@@ -1,11 +1,8 @@
 //! M280: begin an alignment run.
 
-use vision_math::chain::CANCEL_LINE;
-
 use super::{Reply, Run, VisionModule};
 use crate::error::VisionError;
-use crate::linuxcnc;
-use crate::machine::{Controller, Machine};
+use crate::machine::Machine;
 use crate::pound::PoundBlock;
 
 /// The fit an alignment run solves at M282.
@@ -51,9 +48,9 @@ impl RunMode {
 impl VisionModule {
     /// **M280**: begins an alignment run in `mode`.
     ///
-    /// Validates the pound-variable base, runs `G69 G50 G52 X0 Y0` on the machine (cancelling
-    /// any earlier alignment; on LinuxCNC `G52 X0 Y0` and `G10 L2 P0 R{θ₀}`, then the
-    /// alignment flag is cleared: see [`crate::linuxcnc`]), then opens a fresh [`Run`] (empty dot list) and writes
+    /// Validates the pound-variable base, cancels any earlier alignment as the machine's
+    /// controller does ([`crate::Controller::cancel_alignment`]: `G69 G50 G52 X0 Y0` on Mach4;
+    /// `G52 X0 Y0` and `G10 L2 P0 R{θ₀}` on LinuxCNC), then opens a fresh [`Run`] (empty dot list) and writes
     /// `Run_Active` = 1, `Run_Mode`, `Run_DotCount` = 0. Needs no camera and no calibration.
     ///
     /// # Errors
@@ -64,14 +61,8 @@ impl VisionModule {
         self.check_enabled()?;
         self.check_tool(machine)?;
         PoundBlock::on_machine(self.params.pound_var_base(), machine)?;
-        let gcode = match machine.controller() {
-            Controller::Mach4 => {
-                let gcode = vec![CANCEL_LINE.to_string()];
-                machine.run_gcode(&gcode)?;
-                gcode
-            }
-            Controller::LinuxCnc => linuxcnc::cancel(machine)?,
-        };
+        let gcode = machine.controller().cancel_alignment(machine)?;
+        self.alignment = None;
         self.run = Run { mode, active: true, dots: Vec::new() };
         self.publish_run();
         Ok(Reply { gcode, report: mode })

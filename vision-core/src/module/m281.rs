@@ -9,7 +9,7 @@ use super::{Dot, Reply, VisionModule};
 use crate::calibrate::relative_move;
 use crate::error::VisionError;
 use crate::image_grab;
-use crate::machine::{Controller, Machine};
+use crate::machine::Machine;
 use crate::pound::{PoundBlock, SlotValues, SLOTS};
 
 impl VisionModule {
@@ -48,9 +48,10 @@ impl VisionModule {
     pub fn m281(&mut self, machine: &mut dyn Machine, keep_image: bool) -> Result<Reply<Capture>, VisionError> {
         let ready = self.check_enabled().and_then(|()| self.check_tool(machine)).and_then(|()| {
             let block = PoundBlock::on_machine(self.params.pound_var_base(), machine)?;
-            Ok((block, pixel_chain(&self.params, machine.units())?))
+            let unit = machine.units()?;
+            Ok((block, pixel_chain(&self.params, unit)?, unit, self.refresh_alignment(machine)?))
         });
-        let (block, chain) = match ready {
+        let (block, chain, unit, alignment) = match ready {
             Ok(r) => r,
             Err(e) => {
                 // The DRO shows why nothing was read.
@@ -58,37 +59,38 @@ impl VisionModule {
                 return Err(e);
             }
         };
-        let unit = machine.units();
         let mut trigger_time = machine.now();
         let mut reading = self.trigger_mark()?;
         let mut native = Point2::new(reading.x_px, reading.y_px);
         let mut offset = chain.delta(native);
-        let (commanded, mut observed) = observe(machine, offset)?;
+        let (commanded, mut observed) = self.observe(machine, alignment, offset)?;
         // Re-centring: a mark read far off the image centre carries K's error times that
         // distance (a part closer or farther than the calibration height); read over it again.
         let first_px = chain.centred(native);
         let tolerance = self.params.recenter_tolerance_px();
         let mut gcode = Vec::new();
         let mut passes = 0;
-        let max_passes = match machine.controller() {
-            Controller::Mach4 => self.params.recenter_passes(),
-            Controller::LinuxCnc => 0,
-        };
+        let max_passes = if machine.controller().may_recentre() { self.params.recenter_passes() } else { 0 };
         while passes < max_passes && chain.centred(native).norm() > tolerance {
-            let lines = relative_move(observed - machine.program_position());
-            if let Err(e) = machine.run_gcode(&lines) {
-                let e = VisionError::from(e);
-                self.publish_failure(None, &e);
-                return Err(e);
+            let moved = (|| -> Result<Vec<String>, VisionError> {
+                let lines = relative_move(observed - commanded_now(machine)?);
+                machine.run_gcode(&lines)?;
+                machine.dwell(self.params.trigger_settle_s())?;
+                Ok(lines)
+            })();
+            match moved {
+                Ok(lines) => gcode.extend(lines),
+                Err(e) => {
+                    self.publish_failure(None, &e);
+                    return Err(e);
+                }
             }
-            gcode.extend(lines);
-            machine.dwell(self.params.trigger_settle_s());
             // M281 D1 keeps the image of the reading reported.
             trigger_time = machine.now();
             reading = self.trigger_mark()?;
             native = Point2::new(reading.x_px, reading.y_px);
             offset = chain.delta(native);
-            observed = observe(machine, offset)?.1;
+            observed = self.observe(machine, alignment, offset)?.1;
             passes += 1;
         }
         let (width, height) = mark_size(&chain, &reading);
@@ -225,6 +227,22 @@ impl VisionModule {
                 if distance_pct < 0.0 { "closer to the camera" } else { "farther from the camera" }
             )
         })
+    }
+}
+
+fn commanded_now(machine: &dyn Machine) -> Result<Point2<f64>, VisionError> {
+    Ok(machine.program_position()?)
+}
+
+impl VisionModule {
+    /// [`observe`], a failure shown in `LastStatus` (the trigger already happened).
+    fn observe(
+        &mut self,
+        machine: &dyn Machine,
+        alignment: Option<vision_math::AlignmentChain>,
+        offset: vision_math::Vector2<f64>,
+    ) -> Result<(Point2<f64>, Point2<f64>), VisionError> {
+        observe(machine, alignment, offset).inspect_err(|e| self.publish_failure(None, e))
     }
 }
 

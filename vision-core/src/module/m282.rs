@@ -8,9 +8,9 @@ use vision_math::{
 
 use super::m280::RunMode;
 use super::{Reply, VisionModule};
+use crate::controller::Applied;
 use crate::error::VisionError;
-use crate::linuxcnc;
-use crate::machine::{Controller, Machine};
+use crate::machine::Machine;
 use crate::ser;
 
 /// Which pieces of the fit M282 emits (`P` word).
@@ -159,7 +159,7 @@ impl VisionModule {
         if self.run.dots.len() < needed {
             return Err(VisionError::TooFewDots { mode: mode.name(), needed, got: self.run.dots.len() });
         }
-        let unit = machine.units();
+        let unit = machine.units()?;
         let (all_commanded, all_observed): (Vec<Point2<f64>>, Vec<Point2<f64>>) =
             self.run.dots.iter().map(|d| d.in_unit(unit)).unzip();
         let model = match mode {
@@ -177,11 +177,9 @@ impl VisionModule {
             RunMode::Similarity => fit_similarity(&commanded, &observed)?,
         };
         let controller = machine.controller();
-        if controller == Controller::LinuxCnc {
-            // LinuxCNC's own refusal comes first: it cannot scale at all.
-            let full = fit.transform.chain().ok_or(VisionError::Math(vision_math::MathError::DegenerateObserved))?;
-            linuxcnc::check_scale(&full, self.params.fit_max_scale_dev_pct())?;
-        }
+        // The controller's own refusal comes first (LinuxCNC cannot scale at all).
+        let full = fit.transform.chain().ok_or(VisionError::Math(vision_math::MathError::DegenerateObserved))?;
+        controller.check_fit(&full, self.params.fit_max_scale_dev_pct())?;
         self.check_gates(&fit, &commanded, &observed, unit)?;
         let predicted = predict(&fit, &commanded, camera_noise)?;
         let chain = match pieces {
@@ -194,17 +192,8 @@ impl VisionModule {
                 fit_piece(Piece::Scale { uniform: mode == RunMode::Similarity }, &commanded, &observed)?.chain
             }
         };
-        let (gcode, chain, linuxcnc) = match controller {
-            Controller::Mach4 => {
-                let gcode = chain.gcode()?.to_vec();
-                machine.run_gcode(&gcode)?;
-                (gcode, chain, None)
-            }
-            Controller::LinuxCnc => {
-                let alignment = linuxcnc::plan(machine, &chain)?;
-                (linuxcnc::apply(machine, &alignment)?, chain.rigid(), Some(alignment))
-            }
-        };
+        let Applied { gcode, chain, active, linuxcnc } = controller.apply_alignment(machine, &chain)?;
+        self.alignment = Some(active);
         let residuals: Vec<Vector2<f64>> =
             all_commanded.iter().zip(&all_observed).map(|(n, o)| chain.apply(*n) - o).collect();
         let used: Vec<f64> = residuals

@@ -1,11 +1,12 @@
 //! M283: calibrate K (and, for `Cn`, the camera tool offset).
 
 use vision_math::chain::fixed;
-use vision_math::{AlignmentChain, Point2, Vector2};
+use vision_math::{AlignmentChain, LengthUnit, Point2, Vector2};
 
 use super::capture::pixel_chain;
 use super::{Reply, VisionModule};
 use crate::calibrate::{absolute_move, quick, sheet_walk, CalReport, Calibrate, Solution, Walker};
+use crate::controller;
 use crate::driver::Reading;
 use crate::error::VisionError;
 use crate::machine::{Machine, MachineError};
@@ -102,12 +103,12 @@ impl VisionModule {
     /// sent back to its start position (best effort) and `LastStatus` holds the error.
     pub fn m283(&mut self, machine: &mut dyn Machine, mode: Calibrate) -> Result<Reply<CalReport>, VisionError> {
         let tool = self.check_m283(machine, mode)?;
-        let start: Point2<f64> = machine.program_position();
+        let (start, unit) = self.before_walk(machine)?;
         let (outcome, ran) = {
             let Some(driver) = self.driver.as_deref_mut() else {
                 return Err(VisionError::NoDriver { name: self.params.driver().to_string() });
             };
-            let mut walker = Walker::new(machine, driver, &self.params, &mut self.dro);
+            let mut walker = Walker::new(machine, driver, &self.params, &mut self.dro, unit);
             let outcome = walk_routine(&mut walker, &self.params, mode, tool);
             (outcome, walker.into_ran())
         };
@@ -130,7 +131,7 @@ impl VisionModule {
                 return Err(VisionError::UnknownSheet { sheet: n, known: known_sheets() });
             }
         }
-        if machine.active_alignment().is_some_and(|a| !is_identity(&a)) {
+        if self.refresh_alignment(machine)?.is_some_and(|a| !is_identity(&a)) {
             return Err(VisionError::AlignmentActive);
         }
         self.driver_mut()?;
@@ -138,7 +139,17 @@ impl VisionModule {
         if let Some(store) = &self.profile {
             store.check_writable()?;
         }
-        Ok(self.params.camera_tool().unwrap_or_else(|| machine.active_tool()))
+        match self.params.camera_tool() {
+            Some(tool) => Ok(tool),
+            None => Ok(machine.active_tool()?),
+        }
+    }
+
+    /// Where the walk starts (program frame) and the machine's units, or the read's failure
+    /// (shown in `LastStatus`; nothing moved).
+    fn before_walk(&mut self, machine: &dyn Machine) -> Result<(Point2<f64>, LengthUnit), VisionError> {
+        let read = || -> Result<_, VisionError> { Ok((machine.program_position()?, machine.units()?)) };
+        read().inspect_err(|e| self.publish_failure(None, e))
     }
 
     /// M283's one commit path, for the one-shot walk and the stepwise one: applies the walk's
@@ -156,7 +167,9 @@ impl VisionModule {
             Ok(report) => {
                 // The last trigger again, as M281 would show it with the K just written.
                 if let Some(reading) = last.filter(Reading::found) {
-                    if let Ok(chain) = pixel_chain(&self.params, machine.units()) {
+                    if let Ok(chain) =
+                        machine.units().map_err(VisionError::from).and_then(|u| pixel_chain(&self.params, u))
+                    {
                         let centred = chain.centred(Point2::new(reading.x_px, reading.y_px));
                         self.dro.reading(Some(&chain), centred, &reading);
                     }
@@ -188,7 +201,8 @@ impl VisionModule {
     /// As [`VisionModule::m283`] before its walk: nothing changes.
     pub fn m283_begin(&mut self, machine: &mut dyn Machine, mode: Calibrate) -> Result<StepwiseWalk, VisionError> {
         let tool = self.check_m283(machine, mode)?;
-        Ok(StepwiseWalk { mode, tool, start: machine.program_position(), taken: Vec::new(), pending: None })
+        let (start, _) = self.before_walk(machine)?;
+        Ok(StepwiseWalk { mode, tool, start, taken: Vec::new(), pending: None })
     }
 
     /// The next point the stepwise walk must capture at (program frame, current units), or
@@ -223,12 +237,16 @@ impl VisionModule {
                 what: "no capture is pending: ask for the next point (o<vision_walk_next>) and move there first",
             });
         }
-        machine.dwell(self.params.trigger_settle_s());
-        let reading = match self.driver_mut().and_then(|d| Ok(d.trigger()?)) {
+        let settled = machine.dwell(self.params.trigger_settle_s()).map_err(VisionError::from);
+        let reading = match settled.and_then(|()| Ok(self.driver_mut()?.trigger()?)) {
             Ok(r) => r,
             Err(e) => return Err(self.walk_failed(e)),
         };
-        walk.taken.push((machine.program_position(), reading));
+        let at = match machine.program_position() {
+            Ok(at) => at,
+            Err(e) => return Err(self.walk_failed(e.into())),
+        };
+        walk.taken.push((at, reading));
         match self.replay(machine, walk) {
             Replayed::Failed { error, .. } => Err(self.walk_failed(error)),
             _ => Ok(()),
@@ -259,7 +277,11 @@ impl VisionModule {
 
     /// Replays `walk` over its readings, moving nothing.
     fn replay(&mut self, machine: &mut dyn Machine, walk: &StepwiseWalk) -> Replayed {
-        let mut walker = Walker::replay(machine, &walk.taken, walk.start, &self.params, &mut self.dro);
+        let unit = match machine.units() {
+            Ok(unit) => unit,
+            Err(e) => return Replayed::Failed { error: e.into(), last: None },
+        };
+        let mut walker = Walker::replay(machine, &walk.taken, walk.start, &self.params, &mut self.dro, unit);
         let outcome = walk_routine(&mut walker, &self.params, walk.mode, walk.tool);
         let needed = walker.needed();
         let (_, last) = walker.into_ran();
@@ -280,25 +302,28 @@ impl VisionModule {
     /// Applies a calibration solution: all of it, or nothing (see [`VisionModule::m283`]).
     fn apply_calibration(&mut self, machine: &mut dyn Machine, solution: Solution) -> Result<CalReport, VisionError> {
         let calibration =
-            self.params.calibration.solved(solution.k, solution.remap, machine.units(), solution.report.date())?;
+            self.params.calibration.solved(solution.k, solution.remap, machine.units()?, solution.report.date())?;
         let next = Params { calibration, ..self.params.clone() };
         let restore = match solution.tool_offset {
             Some((tool, offset)) => {
-                let before = machine.tool_offset(tool)?;
-                machine.set_tool_offset(tool, offset)?;
+                let before = controller::tool_offset(machine, tool)?;
+                controller::set_tool_offset(machine, tool, offset)?;
                 Some((tool, before))
             }
             None => None,
         };
         if let Err(save) = self.commit_params(next) {
             let Some((tool, before)) = restore else { return Err(save) };
-            if let Err(e) = machine.set_tool_offset(tool, before) {
-                return Err(VisionError::Machine(MachineError::new(format!(
-                    "{save}; restoring tool {tool}'s offset then failed too ({e}) — set its X/Y offset back to \
+            if let Err(e) = controller::set_tool_offset(machine, tool, before) {
+                return Err(VisionError::Machine(MachineError::new(
+                    e.kind(),
+                    format!(
+                        "{save}; restoring tool {tool}'s offset then failed too ({e}) — set its X/Y offset back to \
                      X{} Y{} by hand",
-                    fixed(before.x, 6),
-                    fixed(before.y, 6)
-                ))));
+                        fixed(before.x, 6),
+                        fixed(before.y, 6)
+                    ),
+                )));
             }
             return Err(save);
         }

@@ -28,7 +28,7 @@ mod tests;
 
 use std::path::{Path, PathBuf};
 
-use vision_math::{LengthUnit, Point2};
+use vision_math::{AlignmentChain, LengthUnit, Point2};
 
 use crate::driver::CameraDriver;
 use crate::error::VisionError;
@@ -97,6 +97,9 @@ pub struct VisionModule {
     pub(crate) run: Run,
     pub(crate) profile: Option<ProfileStore>,
     pub(crate) images_dir: PathBuf,
+    /// The alignment this module's last M282 applied (`None` after M280 or before any), as
+    /// the controller reports it at the last call ([`crate::Controller::active_alignment`]).
+    pub(crate) alignment: Option<AlignmentChain>,
 }
 
 impl std::fmt::Debug for VisionModule {
@@ -108,6 +111,7 @@ impl std::fmt::Debug for VisionModule {
             .field("run", &self.run)
             .field("profile", &self.profile)
             .field("images_dir", &self.images_dir)
+            .field("alignment", &self.alignment)
             .finish()
     }
 }
@@ -126,6 +130,7 @@ impl VisionModule {
             run: Run::default(),
             profile: None,
             images_dir: PathBuf::from(DEFAULT_IMAGES_DIR),
+            alignment: None,
         }
     }
 
@@ -208,6 +213,21 @@ impl VisionModule {
         self.params.get(name).or_else(|e| self.dro.values().get(name).ok_or(e))
     }
 
+    /// The alignment active on the machine as of the last call: the one this module's last
+    /// M282 applied (`None` after M280 or before any), or what the controller reported
+    /// ([`crate::Controller::active_alignment`]). Program frame → work frame, current units.
+    #[must_use]
+    pub fn alignment(&self) -> Option<&AlignmentChain> {
+        self.alignment.as_ref()
+    }
+
+    /// Brings [`VisionModule::alignment`] up to date with what `machine`'s controller reports,
+    /// and returns it.
+    pub(crate) fn refresh_alignment(&mut self, machine: &dyn Machine) -> Result<Option<AlignmentChain>, VisionError> {
+        self.alignment = machine.controller().active_alignment(machine, self.alignment)?;
+        Ok(self.alignment)
+    }
+
     /// The alignment run: mode, open or not, dot list.
     #[must_use]
     pub fn run(&self) -> &Run {
@@ -277,10 +297,9 @@ impl VisionModule {
 
     /// Refuses when the camera tool is set and another tool is active.
     pub(crate) fn check_tool(&self, machine: &dyn Machine) -> Result<(), VisionError> {
-        match self.params.camera_tool() {
-            Some(camera) if machine.active_tool() != camera => {
-                Err(VisionError::WrongTool { camera, active: machine.active_tool() })
-            }
+        let Some(camera) = self.params.camera_tool() else { return Ok(()) };
+        match machine.active_tool()? {
+            active if active != camera => Err(VisionError::WrongTool { camera, active }),
             _ => Ok(()),
         }
     }

@@ -493,6 +493,7 @@ impl LineRun<'_> {
             }
             _ => Xyz::ZERO,
         };
+        let offset = self.cfg.dialect.applied_tool_offset(offset);
         self.st.tool_offset = match self.cfg.dialect {
             Dialect::Mach4 => Xyz::new(self.st.tool_offset.x, self.st.tool_offset.y, offset.z),
             Dialect::MachineMotion | Dialect::LinuxCnc => offset,

@@ -311,7 +311,7 @@ impl Interpreter {
         self.publisher.publish(st.machine);
         self.params.set_mirror(ACTIVE_SYSTEM, f64::from(st.system));
         self.params.set_mirror(TOOL_NUMBER, f64::from(st.tool));
-        let off = self.current(st.tool_offset);
+        let off = self.current(self.config.dialect.applied_tool_offset(st.tool_offset));
         let pos = self.current(st.program);
         for (i, (o, p)) in [(off.x, pos.x), (off.y, pos.y), (off.z, pos.z)].into_iter().enumerate() {
             let i = u32::try_from(i).unwrap_or(0);
@@ -575,6 +575,7 @@ impl Interpreter {
     fn after_tool_write(&mut self, tool: u32, offset: Xyz) {
         if tool == self.modal.tool {
             // Under Mach4 the table's length reaches the machine through G43 only.
+            let offset = self.config.dialect.applied_tool_offset(offset);
             self.modal.tool_offset = match self.config.dialect {
                 Dialect::Mach4 => Xyz::new(offset.x, offset.y, self.modal.tool_offset.z),
                 Dialect::MachineMotion | Dialect::LinuxCnc => offset,

@@ -175,7 +175,7 @@ fn quick_calibration_for_plain_and_swapped_mountings() {
         assert!(q.size_error < 1e-12 && q.bump_error < 1e-12);
         assert!((q.confirm_size - Vector2::new(0.5, 0.5)).amax() < 1e-12);
         // Moved back to where it started.
-        assert_eq!(rig.machine.program_position(), Point2::origin());
+        assert_eq!(rig.machine.program_position().expect("a position"), Point2::origin());
         assert_eq!(rig.machine.tool_offset(98).expect("tool"), Vector2::zeros());
     }
     // A camera job without width/height cannot do Q.
@@ -195,7 +195,7 @@ fn assert_untouched(rig: &Rig, start: Point2<f64>) {
     assert_eq!(p.remap(), Remap::IDENTITY);
     assert_eq!(p.cal_date(), "");
     assert_eq!(rig.machine.tool_offset(98).expect("tool"), Vector2::new(3.0, -1.5));
-    assert!((rig.machine.program_position() - start).norm() < 1e-6);
+    assert!((rig.machine.program_position().expect("a position") - start).norm() < 1e-6);
 }
 
 #[test]
@@ -203,7 +203,7 @@ fn a_failed_walk_restores_k_flags_offset_and_position() {
     let mut marks = sheet_marks(0.3, Vector2::new(1.0, 1.0));
     marks.remove(2); // dot 3 is missing
     let mut rig = sheet_rig(tilted(0, false), LengthUnit::Inch, Vector2::new(3.0, -1.5), marks);
-    let start = rig.machine.program_position();
+    let start = rig.machine.program_position().expect("a position");
     let e = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect_err("lost dot 3");
     assert!(matches!(e, VisionError::Calibration { .. }), "{e}");
     assert!(e.to_string().contains("lost the mark"), "{e}");
@@ -218,14 +218,14 @@ fn a_failed_walk_restores_k_flags_offset_and_position() {
 #[test]
 fn a_failed_verify_writes_nothing() {
     let mut rig = standard_rig();
-    let start = rig.machine.program_position();
+    let start = rig.machine.program_position().expect("a position");
     // 3 bumps + 5 × (5 + 5) walk moves = the verify's first move fails.
     rig.world().fail_gcode_after = Some(3 + 25);
     let e = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect_err("e-stop");
     assert!(matches!(e, VisionError::Machine(_)), "{e}");
     rig.world().fail_gcode_after = None;
     // The restore move could not run while the machine refused G-code; run it now.
-    let p = rig.machine.program_position();
+    let p = rig.machine.program_position().expect("a position");
     assert!((p - start).norm() > 1e-3);
     let p = rig.module.params();
     assert_eq!(p.cal_k(), Matrix2::zeros());
@@ -252,7 +252,7 @@ impl ProfileFs for BrokenDisk {
 #[test]
 fn a_failed_save_undoes_the_calibration() {
     let mut rig = standard_rig();
-    let start = rig.machine.program_position();
+    let start = rig.machine.program_position().expect("a position");
     with_store(&mut rig, ProfileStore::with_fs(std::env::temp_dir().join("vision.toml"), Box::new(BrokenDisk)));
     let e = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect_err("save fails");
     assert!(matches!(e, VisionError::Profile { .. }), "{e}");
@@ -286,7 +286,7 @@ fn a_refused_offset_write_commits_nothing() {
     std::fs::create_dir_all(&dir).expect("tmp");
     let path = dir.join("vision.toml");
     with_store(&mut rig, ProfileStore::new(&path));
-    let start = rig.machine.program_position();
+    let start = rig.machine.program_position().expect("a position");
     rig.world().fail_offset_after = Some(0);
     let e = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect_err("tool table locked");
     assert!(e.to_string().contains("tool table is locked"), "{e}");
@@ -304,12 +304,16 @@ fn refusals_before_any_motion() {
         rig.module.m283(m, Calibrate::Sheet { n: 7 }).map(|_| ()),
         Err(VisionError::UnknownSheet { sheet: 7, known: "1".into() })
     );
-    rig.world().alignment = Some(AlignmentChain { rotation_deg: 0.5, ..AlignmentChain::IDENTITY });
+    // An alignment the module's M282 left (a Mach4 machine reports only that one is active).
+    let turned = AlignmentChain { rotation_deg: 0.5, ..AlignmentChain::IDENTITY };
+    rig.world().alignment = Some(turned);
+    rig.module.alignment = Some(turned);
     assert_eq!(
         rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).map(|_| ()),
         Err(VisionError::AlignmentActive)
     );
     rig.world().alignment = Some(AlignmentChain::IDENTITY);
+    rig.module.alignment = Some(AlignmentChain::IDENTITY);
     rig.world().tool = 1;
     assert_eq!(
         rig.module.m283(&mut rig.machine, Calibrate::Quick { diameter: 0.5 }).map(|_| ()),
@@ -329,7 +333,7 @@ fn a_mark_that_does_not_move_fails_the_axis_detect() {
         Vector2::new(3.0, -1.5),
         sheet_marks(0.0, Vector2::new(1.0, 1.0)),
     );
-    let start = rig.machine.program_position();
+    let start = rig.machine.program_position().expect("a position");
     for _ in 0..3 {
         rig.world().script.push_back(Ok(Reading::position(900.0, 900.0)));
     }
@@ -404,7 +408,7 @@ fn a_quick_diameter_in_the_wrong_unit_is_refused_naming_the_mix_up() {
             assert!(text.contains(hint), "{text}");
         }
         assert_eq!(rig.module.params(), &before, "nothing saved");
-        assert_eq!(rig.machine.program_position(), Point2::origin());
+        assert_eq!(rig.machine.program_position().expect("a position"), Point2::origin());
     }
 }
 

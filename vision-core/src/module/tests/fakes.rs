@@ -9,8 +9,9 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use vision_math::chain::CANCEL_LINE;
 use vision_math::{AlignmentChain, LengthUnit, Matrix2, Point2, Remap, Vector2};
 
+use crate::controller::{Controller, Mach4};
 use crate::driver::{CameraDriver, Capabilities, DriverError, DriverErrorKind, Judgment, Reading};
-use crate::machine::{Machine, MachineError, Timestamp};
+use crate::machine::{Machine, MachineError, MachineErrorKind, Timestamp};
 use crate::module::VisionModule;
 use crate::params::Params;
 
@@ -225,23 +226,24 @@ impl FakeMachine {
 }
 
 impl Machine for FakeMachine {
-    fn program_position(&self) -> Point2<f64> {
-        let w = self.world();
-        Point2::new(w.inch_to_cur(w.program.x), w.inch_to_cur(w.program.y))
+    fn controller(&self) -> &'static dyn Controller {
+        &Mach4
     }
-    fn active_alignment(&self) -> Option<AlignmentChain> {
+    fn program_position(&self) -> Result<Point2<f64>, MachineError> {
         let w = self.world();
-        w.alignment.map(|a| AlignmentChain {
-            center: Point2::new(w.inch_to_cur(a.center.x), w.inch_to_cur(a.center.y)),
-            shift: Vector2::new(w.inch_to_cur(a.shift.x), w.inch_to_cur(a.shift.y)),
-            ..a
-        })
+        Ok(Point2::new(w.inch_to_cur(w.program.x), w.inch_to_cur(w.program.y)))
+    }
+    fn alignment_active(&self) -> Result<Option<bool>, MachineError> {
+        Ok(Some(self.world().alignment.is_some()))
+    }
+    fn execute(&mut self, line: &str) -> Result<(), MachineError> {
+        self.run_gcode(&[line.to_string()])
     }
     fn run_gcode(&mut self, lines: &[String]) -> Result<(), MachineError> {
         let mut w = self.world();
         if let Some(n) = w.fail_gcode_after {
             if n == 0 {
-                return Err(MachineError::new("emergency stop"));
+                return Err(MachineError::new(MachineErrorKind::Stopped, "emergency stop"));
             }
             w.fail_gcode_after = Some(n - 1);
         }
@@ -258,7 +260,7 @@ impl Machine for FakeMachine {
             let (mut x, mut y) = (None, None);
             for word in line.split_whitespace() {
                 let (letter, num) = word.split_at(1);
-                let bad = || MachineError::new(format!("bad word {word}"));
+                let bad = || MachineError::new(MachineErrorKind::RefusedGcode, format!("bad word {word}"));
                 match (letter, num) {
                     ("G", "0" | "00" | "1" | "01") => {}
                     ("G", "90") => w.absolute = true,
@@ -267,7 +269,12 @@ impl Machine for FakeMachine {
                     ("G", "21") => w.units = LengthUnit::Millimetre,
                     ("X", v) => x = Some(w.to_inch(v.parse().map_err(|_| bad())?)),
                     ("Y", v) => y = Some(w.to_inch(v.parse().map_err(|_| bad())?)),
-                    _ => return Err(MachineError::new(format!("unsupported word {word} in {line:?}"))),
+                    _ => {
+                        return Err(MachineError::new(
+                            MachineErrorKind::RefusedGcode,
+                            format!("unsupported word {word} in {line:?}"),
+                        ))
+                    }
                 }
             }
             if x.is_some() || y.is_some() {
@@ -282,19 +289,23 @@ impl Machine for FakeMachine {
         }
         Ok(())
     }
-    fn active_tool(&self) -> u32 {
-        self.world().tool
+    fn active_tool(&self) -> Result<u32, MachineError> {
+        Ok(self.world().tool)
     }
     fn tool_offset(&self, tool: u32) -> Result<Vector2<f64>, MachineError> {
         let w = self.world();
-        let o = w.offsets.get(&tool).copied().ok_or_else(|| MachineError::new(format!("no tool {tool}")))?;
+        let o = w
+            .offsets
+            .get(&tool)
+            .copied()
+            .ok_or_else(|| MachineError::new(MachineErrorKind::UnknownTool, format!("no tool {tool}")))?;
         Ok(o * w.inch_to_cur(1.0))
     }
     fn set_tool_offset(&mut self, tool: u32, offset: Vector2<f64>) -> Result<(), MachineError> {
         let mut w = self.world();
         if let Some(n) = w.fail_offset_after {
             if n == 0 {
-                return Err(MachineError::new("the tool table is locked"));
+                return Err(MachineError::new(MachineErrorKind::Other, "the tool table is locked"));
             }
             w.fail_offset_after = Some(n - 1);
         }
@@ -304,29 +315,33 @@ impl Machine for FakeMachine {
                 *o = offset * f;
                 Ok(())
             }
-            None => Err(MachineError::new(format!("no tool {tool}"))),
+            None => Err(MachineError::new(MachineErrorKind::UnknownTool, format!("no tool {tool}"))),
         }
     }
-    fn units(&self) -> LengthUnit {
-        self.world().units
+    fn units(&self) -> Result<LengthUnit, MachineError> {
+        Ok(self.world().units)
     }
     fn pound(&self, index: u32) -> Result<f64, MachineError> {
         let w = self.world();
         if index > w.last_pound {
-            return Err(MachineError::new(format!("#{index} does not exist (the last is #{})", w.last_pound)));
+            return Err(MachineError::new(
+                MachineErrorKind::OutOfRange,
+                format!("#{index} does not exist (the last is #{})", w.last_pound),
+            ));
         }
         Ok(w.pounds.get(&index).copied().unwrap_or(0.0))
     }
     fn set_pound(&mut self, index: u32, value: f64) -> Result<(), MachineError> {
         let mut w = self.world();
         if w.fail_pound == Some(index) {
-            return Err(MachineError::new(format!("#{index} is read-only")));
+            return Err(MachineError::new(MachineErrorKind::OutOfRange, format!("#{index} is read-only")));
         }
         w.pounds.insert(index, value);
         Ok(())
     }
-    fn dwell(&mut self, seconds: f64) {
+    fn dwell(&mut self, seconds: f64) -> Result<(), MachineError> {
         self.world().dwell_s += seconds;
+        Ok(())
     }
     fn now(&self) -> Timestamp {
         Timestamp::from_unix(self.world().now_s, 3600)
@@ -343,8 +358,9 @@ fn alignment_modal(w: &World, line: &str) -> Result<Option<AlignmentChain>, Mach
     }
     let mut value = |letter: char| -> Result<f64, MachineError> {
         let word = words.next().filter(|w| w.starts_with(letter));
-        word.and_then(|w| w[1..].parse().ok())
-            .ok_or_else(|| MachineError::new(format!("{code} needs {letter} in {line:?}")))
+        word.and_then(|w| w[1..].parse().ok()).ok_or_else(|| {
+            MachineError::new(MachineErrorKind::RefusedGcode, format!("{code} needs {letter} in {line:?}"))
+        })
     };
     let mut chain = w.alignment.unwrap_or(AlignmentChain::IDENTITY);
     match code {

@@ -1,12 +1,14 @@
-//! M280–M284 through the real interpreter, with a scripted camera.
+//! M280–M284 of whole programs through the session on the real interpreter, with a scripted
+//! camera.
 
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
 
 use vision_core::{CameraDriver, Capabilities, DriverError, Judgment, Params, Reading, Timestamp, VisionModule};
 use vision_gcode::{Event, Interpreter, InterpreterConfig};
+use vision_host::{controller, ProgramHandler, Session};
 use vision_math::{Matrix2, PixelChain, Remap, Vector2};
-use vision_mcode::{fixed_clock, Outcome, VisionHandler};
+use vision_mcode::{fixed_clock, Outcome};
 
 /// A camera that reports the queued offsets (machine units from the camera to the mark) as
 /// native pixels through the configured K, and records job switches.
@@ -44,7 +46,7 @@ impl CameraDriver for Scripted {
 
 const K: f64 = 0.002;
 
-fn handler(offsets: &[Vector2<f64>], enabled: bool) -> (VisionHandler, Arc<Mutex<Vec<u32>>>) {
+fn handler(offsets: &[Vector2<f64>], enabled: bool) -> (ProgramHandler, Arc<Mutex<Vec<u32>>>) {
     let mut params = Params::default();
     params.set("VisionEnabled", enabled).expect("set");
     params.set("VisionCameraToolNumber", 98).expect("set");
@@ -62,7 +64,8 @@ fn handler(offsets: &[Vector2<f64>], enabled: bool) -> (VisionHandler, Arc<Mutex
     let camera =
         Scripted { offsets: Arc::new(Mutex::new(offsets.iter().copied().collect())), chain, jobs: jobs.clone() };
     let module = VisionModule::new(params).with_driver(Box::new(camera));
-    (VisionHandler::new(module, fixed_clock(Timestamp::from_unix(1_800_000_000, 0))), jobs)
+    let clock = fixed_clock(Timestamp::from_unix(1_800_000_000, 0));
+    (ProgramHandler::new(Session::new(module), &controller::Mach4, clock), jobs)
 }
 
 const PROGRAM: &str = "G90 G20 G17
@@ -100,7 +103,7 @@ fn a_rectangle_run_emits_the_modals_and_the_interpreter_applies_them() {
     assert!((chain.shift - shift).norm() < 1e-9, "{chain:?}");
     let m = interp.machine_position();
     assert!((m.xy() - (vision_math::Point2::new(3.0, 2.0) + shift)).norm() < 1e-9, "{m:?}");
-    assert_eq!(h.module().telemetry().run_active(), 0);
+    assert_eq!(h.session().module().telemetry().run_active(), 0);
 }
 
 #[test]

@@ -1,0 +1,146 @@
+//! LinuxCNC 2.9 (SPEC §9): no G68 and no G51, so M282 rotates the active G5x system
+//! (`G10 L2 P0 R`, about its origin) and shifts with `G52` (kept in the G92 registers), and
+//! cannot scale ([`vision_math::linuxcnc`]).
+//!
+//! LinuxCNC keeps the G5x rotation and the G92/G52 offset in its var file, across M2 and
+//! restarts, so an alignment outlives the program and the session that made it. M280 must then
+//! put back the rotation the operator had before M282 (θ₀), which the controller no longer
+//! shows. The module keeps θ₀ and an "alignment active" flag in two numbered parameters.
+//! LinuxCNC keeps a numbered parameter (#31–#5000) across restarts only when the var file
+//! already lists it, so the install guide and the tests' var file list
+//! [`PERSISTENT_PARAMS`].
+
+use vision_math::linuxcnc::{cancel_gcode, LinuxCncAlignment};
+use vision_math::{AlignmentChain, Point2, Vector2};
+
+use super::{Applied, Controller};
+use crate::error::VisionError;
+use crate::machine::{Machine, MachineError};
+
+/// LinuxCNC 2.9. Its tool table holds the offset LinuxCNC *adds* to a programmed point
+/// (`machine = g5x + R·(p + g92) + tool`), the negative of the module's. A capture waits for the
+/// machine first (`yield INTERP_EXECUTE_FINISH`) and a remap may not queue G-code after that,
+/// so M281 does not re-centre, and M283 runs stepwise ([`crate::VisionModule::m283_begin`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct LinuxCnc;
+
+impl Controller for LinuxCnc {
+    fn name(&self) -> &'static str {
+        "linuxcnc"
+    }
+
+    fn dialect(&self) -> &'static str {
+        "linuxcnc"
+    }
+
+    fn tool_table_sign(&self) -> f64 {
+        -1.0
+    }
+
+    fn may_recentre(&self) -> bool {
+        false
+    }
+
+    /// Runs `G52 X0 Y0` and `G10 L2 P0 R{θ₀}`, then clears the flag. When a line is refused the
+    /// flag stays set, so the next M280 restores θ₀ again.
+    fn cancel_alignment(&self, machine: &mut dyn Machine) -> Result<Vec<String>, VisionError> {
+        let lines = cancel_gcode(self.base_rotation(machine)?)?.to_vec();
+        machine.run_gcode(&lines)?;
+        machine.set_pound(ALIGNMENT_ACTIVE_PARAM, 0.0)?;
+        Ok(lines)
+    }
+
+    /// LinuxCNC's own refusal comes before the quality gates: a scale beyond the gate
+    /// (`VisionFitMaxScaleDev`) cannot be applied ("LinuxCNC cannot scale: …").
+    fn check_fit(&self, full: &AlignmentChain, max_scale_dev_pct: f64) -> Result<(), VisionError> {
+        LinuxCncAlignment::from_chain(full, 0.0, max_scale_dev_pct)?;
+        Ok(())
+    }
+
+    /// Stores θ₀ and sets the flag first (so that an M280 after a refused line still restores
+    /// θ₀), then runs `G10 L2 P0 R…` and `G52 X… Y…`; the scale is left out and reported.
+    fn apply_alignment(&self, machine: &mut dyn Machine, chain: &AlignmentChain) -> Result<Applied, VisionError> {
+        let alignment = LinuxCncAlignment::from_chain(chain, self.base_rotation(machine)?, 0.0)?;
+        let gcode = alignment.gcode()?.to_vec();
+        machine.set_pound(BASE_ROTATION_PARAM, alignment.base_rotation_deg)?;
+        machine.set_pound(ALIGNMENT_ACTIVE_PARAM, 1.0)?;
+        machine.run_gcode(&gcode)?;
+        let rigid = chain.rigid();
+        Ok(Applied { gcode, chain: rigid, active: rigid, linuxcnc: Some(alignment) })
+    }
+
+    /// Read whole from the machine (the flag and θ₀ in persistent parameters, the G5x rotation
+    /// and the G92/G52 offset): it survives restarts and sessions, so `remembered` is not used.
+    fn active_alignment(
+        &self,
+        machine: &dyn Machine,
+        _remembered: Option<AlignmentChain>,
+    ) -> Result<Option<AlignmentChain>, MachineError> {
+        Ok(active_chain(
+            machine.pound(ALIGNMENT_ACTIVE_PARAM)?,
+            machine.pound(BASE_ROTATION_PARAM)?,
+            machine.xy_rotation_deg()?,
+            machine.g92_offset()?,
+        ))
+    }
+
+    /// The stored θ₀ while an alignment is active (also after a restart), else the G5x
+    /// rotation now.
+    fn base_rotation(&self, machine: &dyn Machine) -> Result<f64, MachineError> {
+        if flag_set(machine.pound(ALIGNMENT_ACTIVE_PARAM)?) {
+            machine.pound(BASE_ROTATION_PARAM)
+        } else {
+            machine.xy_rotation_deg()
+        }
+    }
+}
+
+/// `#3990`: 1 while an M282 alignment is active, 0 after M280 (a persistent parameter).
+pub const ALIGNMENT_ACTIVE_PARAM: u32 = 3990;
+/// `#3991`: θ₀, the active G5x system's rotation before the alignment, degrees
+/// counter-clockwise (a persistent parameter); meaningful while [`ALIGNMENT_ACTIVE_PARAM`] is 1.
+pub const BASE_ROTATION_PARAM: u32 = 3991;
+/// Every parameter the var file must list for the alignment to survive a restart.
+pub const PERSISTENT_PARAMS: [u32; 2] = [ALIGNMENT_ACTIVE_PARAM, BASE_ROTATION_PARAM];
+
+/// True when the flag's value `flag` (from [`ALIGNMENT_ACTIVE_PARAM`]) says an alignment is
+/// active (1; anything from 0.5 on, so a var file's `1.000000` counts).
+#[must_use]
+pub fn flag_set(flag: f64) -> bool {
+    flag >= 0.5
+}
+
+/// The alignment a LinuxCNC host has active, from what it reports: the flag's value `flag`,
+/// the stored θ₀ `base_rotation_deg`, the G5x rotation now `rotation_deg` (degrees
+/// counter-clockwise) and the G92/G52 offset `g92` (program units). `None` when the flag is not
+/// set. The chain maps the program frame into the frame turned by θ₀, as M282's chain does:
+/// `R(θ)·(p + g92)` with `θ = rotation − θ₀`, i.e. a rotation about the origin and a shift of
+/// `R(θ)·g92`.
+#[must_use]
+pub fn active_chain(flag: f64, base_rotation_deg: f64, rotation_deg: f64, g92: Vector2<f64>) -> Option<AlignmentChain> {
+    if !flag_set(flag) {
+        return None;
+    }
+    let mut chain = AlignmentChain {
+        scale: Vector2::new(1.0, 1.0),
+        center: Point2::origin(),
+        rotation_deg: rotation_deg - base_rotation_deg,
+        shift: Vector2::zeros(),
+    };
+    chain.shift = chain.rotation_matrix() * g92;
+    Some(chain)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn active_chain_reads_the_flag_and_rotates_the_g92_shift() {
+        assert!(active_chain(0.0, 10.0, 12.0, Vector2::new(1.0, 0.0)).is_none());
+        let chain = active_chain(1.0, 10.0, 100.0, Vector2::new(1.0, 0.0)).expect("flag set");
+        // θ = 90°: (1, 0) + g92 = (2, 0) → (0, 2).
+        let p = chain.apply(Point2::new(1.0, 0.0));
+        assert!((p - Point2::new(0.0, 2.0)).norm() < 1e-12, "{p}");
+    }
+}
