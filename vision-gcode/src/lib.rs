@@ -195,6 +195,7 @@ mod frame;
 pub mod geom;
 pub mod handler;
 mod interp;
+mod letters;
 pub mod params;
 /// The line parser is crate-private; the `bench-internals` feature exposes it (unstable, not
 /// part of the API) for the parse-only benchmark.
@@ -205,6 +206,7 @@ pub mod parse;
 mod parse;
 pub mod tools;
 mod watch;
+mod whole;
 mod words;
 
 pub use arc::{CENTRE_TOLERANCE_INCH, CENTRE_TOLERANCE_MM, RADIUS_TOLERANCE_INCH, RADIUS_TOLERANCE_MM};

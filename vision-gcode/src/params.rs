@@ -10,7 +10,7 @@ use std::collections::HashMap;
 
 use crate::error::RunProblem;
 use crate::geom::MAX_COORDINATE;
-use crate::words::whole_in;
+use crate::whole::whole_in;
 
 /// Highest parameter number of any dialect ([`crate::Dialect::last_parameter`] gives each one's).
 pub const MAX_PARAMETER: u32 = 9999;
