@@ -3,7 +3,7 @@
 //!
 //! The addresses follow LinuxCNC where the state exists here. The offset parameters are the
 //! offsets' storage (when a written `#5221` moves the G54 origin depends on the dialect: see the
-//! crate documentation); they hold **machine units**. The read-only parameters report the state in **current units** and
+//! repository's `docs/gcode-interpreter.md`); they hold **machine units**. The read-only parameters report the state in **current units** and
 //! are refreshed after every line.
 
 use std::collections::HashMap;

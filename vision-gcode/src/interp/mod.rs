@@ -128,9 +128,10 @@ impl Interpreter {
     /// not executed.
     ///
     /// # Errors
-    /// The first line that fails; it changed nothing (see the crate documentation for user
-    /// M-code lines) and no later line ran. Under LinuxCNC, [`RunProblem::NoProgramEnd`] at the
-    /// last line when the text ends without M2/M30 or a closing `%`.
+    /// The first line that fails; it changed nothing (for user M-code lines see "A line is
+    /// atomic" in the repository's `docs/gcode-interpreter.md`) and no later line ran. Under
+    /// LinuxCNC, [`RunProblem::NoProgramEnd`] at the last line when the text ends without M2/M30
+    /// or a closing `%`.
     pub fn run(
         &mut self,
         text: &str,
