@@ -3,7 +3,7 @@
 use crate::error::{GCode, RunProblem};
 use crate::expr::{eval, Node};
 use crate::letters::{letter_of, slot, SLOTS};
-use crate::params::Params;
+use crate::params::ParameterTable;
 use crate::parse::{Block, Value};
 use crate::whole::whole_in;
 
@@ -112,7 +112,7 @@ pub(crate) enum Target {
 /// Expression errors, bad parameter numbers, non-finite values, malformed G/M numbers.
 pub(crate) fn evaluate(
     block: &Block<'_, '_>,
-    params: &Params,
+    params: &ParameterTable,
     stack: &mut Vec<f64>,
     words: &mut Words,
     assigns: &mut Vec<(Target, f64)>,
@@ -199,7 +199,7 @@ mod tests {
 
     #[test]
     fn reads_happen_before_writes_and_codes_are_tenths() {
-        let mut params = Params::new();
+        let mut params = ParameterTable::new();
         params.write(1, 3.0).expect("write");
         let mut parser = Parser::new();
         let block = parser.parse_line("#1=7 #2=#1 G90.1 M3 X#1 $2", 1).expect("parses");

@@ -309,7 +309,7 @@ impl Source {
 
 /// An active call.
 #[derive(Debug)]
-struct Frame {
+struct CallFrame {
     return_to: (usize, usize),
     /// #1–#30 of the caller (o-word calls; M98 calls share them).
     saved: Option<[f64; CALL_PARAMS]>,
@@ -322,7 +322,7 @@ struct Frame {
 struct Runner {
     sources: Vec<Source>,
     subs: HashMap<Box<str>, (usize, usize)>,
-    calls: Vec<Frame>,
+    calls: Vec<CallFrame>,
     /// Active `repeat`s: (source, line of the `repeat`, turns left).
     repeats: Vec<(usize, usize, u64)>,
     iterations: u64,
@@ -399,7 +399,7 @@ impl Interpreter {
                         self.params.set(n, args.get(i).copied().unwrap_or(0.0));
                     }
                     self.params.push_frame();
-                    r.calls.push(Frame {
+                    r.calls.push(CallFrame {
                         return_to: (src, pc + 1),
                         saved: Some(saved),
                         repeats: r.repeats.len(),
@@ -523,7 +523,7 @@ impl Interpreter {
         if r.calls.len() >= MAX_CALL_DEPTH {
             return Err(GcodeError::run(line, RunProblem::CallsTooDeep { limit: MAX_CALL_DEPTH }));
         }
-        r.calls.push(Frame {
+        r.calls.push(CallFrame {
             return_to: next,
             saved: None,
             repeats: r.repeats.len(),

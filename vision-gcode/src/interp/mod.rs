@@ -17,7 +17,7 @@ use crate::error::{GcodeError, RunProblem};
 use crate::event::{Event, EventSink, PathMode, UserCall};
 use crate::geom::{Plane, Xyz};
 use crate::handler::{Context, HandlerError, MCodeHandler, UserMCode};
-use crate::params::{Params, ACTIVE_SYSTEM, G92_OFFSET, POSITION, TOOL_NUMBER, TOOL_OFFSET};
+use crate::params::{ParameterTable, ACTIVE_SYSTEM, G92_OFFSET, POSITION, TOOL_NUMBER, TOOL_OFFSET};
 use crate::parse::Parser;
 use crate::tools::{Tool, ToolTable};
 use crate::watch::{PositionWatch, Publisher};
@@ -83,7 +83,7 @@ pub enum Piece {
 pub struct Interpreter {
     /// The set-up; `config.tools` is the live tool table.
     config: InterpreterConfig,
-    params: Params,
+    params: ParameterTable,
     modal: Modal,
     parser: Parser,
     stack: Vec<f64>,
@@ -100,7 +100,7 @@ impl Interpreter {
         let modal = Modal::initial(&config);
         let parser =
             if config.dialect == Dialect::MachineMotion { Parser::new() } else { Parser::with_flat_comments() };
-        let params = Params::for_dialect(config.dialect);
+        let params = ParameterTable::for_dialect(config.dialect);
         let mut interp = Interpreter {
             config,
             params,
