@@ -190,4 +190,14 @@ fn the_closing_percent_ends_the_plan() {
         let text = String::from_utf8(out.stdout).unwrap();
         assert_eq!(report_value(&text, "end"), "X1.0000 Y0.0000 Z0.0000 (line 4)", "{dialect}");
     }
+    // From an o-word on, the rest of the text runs at once: the `%` that opened the program
+    // still closes it there.
+    let path =
+        program("percent-sub.ngc", "%\nG20 G90 F10\no100 sub\nG1 X#1\no100 endsub\no100 call [2]\nG1 Y1\n%\nG1 X9\n");
+    for dialect in ["linuxcnc", "mach4"] {
+        let out = plan(&["--accel", "10", "--dialect", dialect], &path);
+        assert!(out.status.success(), "{dialect}: {}", String::from_utf8_lossy(&out.stderr));
+        let text = String::from_utf8(out.stdout).unwrap();
+        assert_eq!(report_value(&text, "end"), "X2.0000 Y1.0000 Z0.0000 (line 8)", "{dialect}");
+    }
 }
