@@ -12,8 +12,9 @@ use crate::error::RunProblem;
 use crate::geom::MAX_COORDINATE;
 use crate::whole::whole_in;
 
-/// Highest parameter number of any dialect ([`crate::Dialect::last_parameter`] gives each one's).
-pub const MAX_PARAMETER: u32 = 9999;
+/// Highest parameter number of any dialect ([`crate::Dialect::last_parameter`] gives each one's):
+/// Mach4's and seed 002's.
+pub const MAX_PARAMETER: u32 = crate::Dialect::Mach4.last_parameter();
 /// `#5161`–`#5163`: the G28 position (machine coordinates, machine units).
 pub const G28_POSITION: u32 = 5161;
 /// `#5181`–`#5183`: the G30 position (machine coordinates, machine units).
