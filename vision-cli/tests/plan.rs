@@ -139,3 +139,65 @@ fn a_tiny_program_feed_is_refused_at_its_line() {
     let err = String::from_utf8(out.stderr).unwrap();
     assert!(err.contains("line 2") && err.contains("feed"), "{err}");
 }
+
+/// `plan --dialect linuxcnc` plans a LinuxCNC program (issue 22: it refused every one, since the
+/// planner ran each line as a program of its own, which LinuxCNC's end rule refused), and
+/// `trace` runs the same program to the same end.
+#[test]
+fn a_linuxcnc_program_plans_and_traces_under_the_linuxcnc_dialect() {
+    let path = program("linuxcnc.ngc", "G20 G90 F10\nG1 X1\nM2\n");
+    let out = plan(&["--accel", "10", "--dialect", "linuxcnc"], &path);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout).unwrap();
+    // 1 in at 10 in/min, reached in 0.0167 s at 10 in/s².
+    assert_eq!(report_value(&text, "cycle time"), "6.017 s");
+    assert_eq!(report_value(&text, "setpoints"), "6018");
+    assert_eq!(report_value(&text, "end"), "X1.0000 Y0.0000 Z0.0000 (line 3)");
+
+    let out = bin().args(["trace", "--dialect", "linuxcnc"]).arg(&path).output().expect("run");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("     2  feed   X1.0000 Y0.0000 Z0.0000  F10.0000"), "{text}");
+    assert!(text.contains("# ended by M2 at line 3; machine at X1.0000 Y0.0000 Z0.0000"), "{text}");
+}
+
+/// Under LinuxCNC a program that ends with no M2/M30 or closing `%` is refused by `plan` as by
+/// `trace` (rs274 refuses it); under Mach4 both run it.
+#[test]
+fn a_program_without_its_end_is_refused_under_linuxcnc_only() {
+    let path = program("no-end.ngc", "G20 G90 F10\nG1 X1\n");
+    let out = plan(&["--accel", "10", "--dialect", "linuxcnc"], &path);
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(err.contains("no-end.ngc: line 2: the program ended with no M2/M30"), "{err}");
+    for tool in [&["plan", "--accel", "10"][..], &["trace"][..]] {
+        let out = bin().args(tool).args(["--dialect", "linuxcnc"]).arg(&path).output().expect("run");
+        assert_eq!(out.status.code(), Some(1), "{tool:?}");
+        let err = String::from_utf8(out.stderr).unwrap();
+        assert!(err.contains(": the program ended with no M2/M30 or closing %"), "{tool:?}: {err}");
+        let out = bin().args(tool).args(["--dialect", "mach4"]).arg(&path).output().expect("run");
+        assert!(out.status.success(), "{tool:?}: {}", String::from_utf8_lossy(&out.stderr));
+    }
+}
+
+/// A closing `%` ends the program in `plan` as in `trace`: what follows it is not run (the
+/// planner ran it, line by line, before issue 22).
+#[test]
+fn the_closing_percent_ends_the_plan() {
+    let path = program("percent.ngc", "%\nG20 G90 F10\nG1 X1\n%\nG1 X5\n");
+    for dialect in ["linuxcnc", "mach4", "machinemotion"] {
+        let out = plan(&["--accel", "10", "--dialect", dialect], &path);
+        assert!(out.status.success(), "{dialect}: {}", String::from_utf8_lossy(&out.stderr));
+        let text = String::from_utf8(out.stdout).unwrap();
+        assert_eq!(report_value(&text, "end"), "X1.0000 Y0.0000 Z0.0000 (line 4)", "{dialect}");
+    }
+    // From an o-word on, the rest of the text runs at once: the `%` that opened the program
+    // still closes it there.
+    let path =
+        program("percent-sub.ngc", "%\nG20 G90 F10\no100 sub\nG1 X#1\no100 endsub\no100 call [2]\nG1 Y1\n%\nG1 X9\n");
+    for dialect in ["linuxcnc", "mach4"] {
+        let out = plan(&["--accel", "10", "--dialect", dialect], &path);
+        assert!(out.status.success(), "{dialect}: {}", String::from_utf8_lossy(&out.stderr));
+        let text = String::from_utf8(out.stdout).unwrap();
+        assert_eq!(report_value(&text, "end"), "X2.0000 Y1.0000 Z0.0000 (line 8)", "{dialect}");
+    }
+}

@@ -36,10 +36,10 @@ impl Dialect {
     /// indices below it); 9999 for Mach4 and seed 002, the range the pound-variable block of
     /// the seed's profile assumes (no source here gives Mach4 a smaller one).
     #[must_use]
-    pub fn last_parameter(self) -> u32 {
+    pub const fn last_parameter(self) -> u32 {
         match self {
             Dialect::LinuxCnc => 5601,
-            Dialect::MachineMotion | Dialect::Mach4 => crate::params::MAX_PARAMETER,
+            Dialect::MachineMotion | Dialect::Mach4 => 9999,
         }
     }
 

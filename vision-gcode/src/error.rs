@@ -176,7 +176,7 @@ pub enum SyntaxProblem {
 }
 
 /// Why a line that parses cannot run. The line changed nothing (for a user M-code line: see
-/// the crate documentation).
+/// "A line is atomic" in the repository's `docs/gcode-interpreter.md`).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum RunProblem {

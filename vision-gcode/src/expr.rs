@@ -10,7 +10,7 @@
 //! intermediate NaN or infinity is an error rather than a value.
 
 use crate::error::RunProblem;
-use crate::params::Params;
+use crate::params::ParameterTable;
 
 /// Two numbers compare equal (`EQ`, `NE`, `LE`, `GE`) when they differ by less than this.
 pub(crate) const EQUAL_TOLERANCE: f64 = 1e-6;
@@ -242,7 +242,7 @@ pub(crate) enum Node {
 pub(crate) fn eval(
     nodes: &[Node],
     names: &[Box<str>],
-    params: &Params,
+    params: &ParameterTable,
     stack: &mut Vec<f64>,
 ) -> Result<f64, RunProblem> {
     stack.clear();
@@ -325,7 +325,7 @@ mod tests {
 
     #[test]
     fn postfix_evaluation_and_non_finite_intermediates() {
-        let params = Params::new();
+        let params = ParameterTable::new();
         let mut stack = Vec::new();
         // [2 + 3 * 4]
         let nodes = [Node::Num(2.0), Node::Num(3.0), Node::Num(4.0), Node::Bin(BinOp::Mul), Node::Bin(BinOp::Add)];

@@ -3,17 +3,18 @@
 //!
 //! The addresses follow LinuxCNC where the state exists here. The offset parameters are the
 //! offsets' storage (when a written `#5221` moves the G54 origin depends on the dialect: see the
-//! crate documentation); they hold **machine units**. The read-only parameters report the state in **current units** and
+//! repository's `docs/gcode-interpreter.md`); they hold **machine units**. The read-only parameters report the state in **current units** and
 //! are refreshed after every line.
 
 use std::collections::HashMap;
 
 use crate::error::RunProblem;
 use crate::geom::MAX_COORDINATE;
-use crate::words::whole_in;
+use crate::whole::whole_in;
 
-/// Highest parameter number of any dialect ([`crate::Dialect::last_parameter`] gives each one's).
-pub const MAX_PARAMETER: u32 = 9999;
+/// Highest parameter number of any dialect ([`crate::Dialect::last_parameter`] gives each one's):
+/// Mach4's and seed 002's.
+pub const MAX_PARAMETER: u32 = crate::Dialect::Mach4.last_parameter();
 /// `#5161`–`#5163`: the G28 position (machine coordinates, machine units).
 pub const G28_POSITION: u32 = 5161;
 /// `#5181`–`#5183`: the G30 position (machine coordinates, machine units).
@@ -85,7 +86,7 @@ const INDEX_TOLERANCE: f64 = 1e-4;
 /// Named parameters (`#<name>`): a name starting with `_` is global; any other is local to the
 /// subroutine call that wrote it (the main program has its own frame).
 #[derive(Debug, Clone)]
-pub(crate) struct Params {
+pub(crate) struct ParameterTable {
     values: Box<[f64]>,
     /// The highest parameter number (the dialect's).
     last: u32,
@@ -97,31 +98,31 @@ pub(crate) struct Params {
     globals: HashMap<Box<str>, f64>,
     /// Local names, one map per active call (the first for the main program).
     frames: Vec<HashMap<Box<str>, f64>>,
-    /// (name, previous value) of named writes since [`Params::begin`].
+    /// (name, previous value) of named writes since [`ParameterTable::begin`].
     named_undo: Vec<(Box<str>, Option<f64>)>,
 }
 
-impl Default for Params {
+impl Default for ParameterTable {
     fn default() -> Self {
-        Params::for_dialect(crate::Dialect::default())
+        ParameterTable::for_dialect(crate::Dialect::default())
     }
 }
 
 #[cfg(test)]
-impl Params {
+impl ParameterTable {
     /// All parameters zero, seed 002's range.
     #[must_use]
-    pub(crate) fn new() -> Params {
-        Params::for_dialect(crate::Dialect::MachineMotion)
+    pub(crate) fn new() -> ParameterTable {
+        ParameterTable::for_dialect(crate::Dialect::MachineMotion)
     }
 }
 
-impl Params {
+impl ParameterTable {
     /// All parameters zero, numbered 1 to `dialect`'s last.
     #[must_use]
-    pub(crate) fn for_dialect(dialect: crate::Dialect) -> Params {
+    pub(crate) fn for_dialect(dialect: crate::Dialect) -> ParameterTable {
         let last = dialect.last_parameter();
-        Params {
+        ParameterTable {
             values: vec![0.0; last as usize + 1].into_boxed_slice(),
             last,
             dialect: dialect.name(),
@@ -247,13 +248,13 @@ impl Params {
         if !self.exists(n) {
             return Err(self.bad(f64::from(n)));
         }
-        if let Some(what) = Params::read_only(n) {
+        if let Some(what) = ParameterTable::read_only(n) {
             return Err(RunProblem::ReadOnlyParameter { index: n, what });
         }
         if !value.is_finite() {
             return Err(RunProblem::NonFinite { what: "the value written to a parameter" });
         }
-        if Params::holds_machine_length(n) && value.abs() > MAX_COORDINATE {
+        if ParameterTable::holds_machine_length(n) && value.abs() > MAX_COORDINATE {
             return Err(RunProblem::BeyondRange { what: format!("the value written to #{n}"), value });
         }
         self.set(n, value);
@@ -293,7 +294,7 @@ impl Params {
         self.named_undo.clear();
     }
 
-    /// Undoes every write since [`Params::begin`], newest first.
+    /// Undoes every write since [`ParameterTable::begin`], newest first.
     pub(crate) fn rollback(&mut self) {
         while let Some((n, old)) = self.undo.pop() {
             if let Some(slot) = self.values.get_mut(n as usize) {
@@ -321,14 +322,14 @@ mod tests {
 
     #[test]
     fn indices_reads_writes_and_rollback() {
-        let mut p = Params::new();
+        let mut p = ParameterTable::new();
         assert_eq!(p.index(5.00001), Ok(5));
         assert!(p.index(0.0).is_err());
         assert_eq!(p.index(9999.0), Ok(9999));
         assert!(p.index(10_000.0).is_err());
         assert!(p.index(1.5).is_err());
         assert!(p.index(f64::NAN).is_err());
-        let lcnc = Params::for_dialect(crate::Dialect::LinuxCnc);
+        let lcnc = ParameterTable::for_dialect(crate::Dialect::LinuxCnc);
         assert_eq!(lcnc.index(5601.0), Ok(5601));
         assert_eq!(
             lcnc.index(5602.0),

@@ -2,44 +2,10 @@
 
 use crate::error::{GCode, RunProblem};
 use crate::expr::{eval, Node};
-use crate::params::Params;
+use crate::letters::{letter_of, slot, SLOTS};
+use crate::params::ParameterTable;
 use crate::parse::{Block, Value};
-
-/// Slot of `$` in the letter arrays (after `A`–`Z`), then LinuxCNC's polar `@` and `^`.
-pub(crate) const DOLLAR: usize = 26;
-const AT: usize = 27;
-const CARET: usize = 28;
-const SLOTS: usize = 29;
-
-/// The slots by ASCII code: a table, not a `match`, as this runs for every word.
-const SLOT_OF: [u8; 128] = {
-    let mut table = [0u8; 128];
-    let mut c = b'A';
-    while c <= b'Z' {
-        table[c as usize] = c - b'A';
-        c += 1;
-    }
-    table[b'$' as usize] = DOLLAR as u8;
-    table[b'@' as usize] = AT as u8;
-    table[b'^' as usize] = CARET as u8;
-    table
-};
-
-/// The slot of an upper-case letter, `$`, `@` or `^` (the parser passes no other byte).
-#[inline]
-pub(crate) fn slot(letter: u8) -> usize {
-    usize::from(SLOT_OF[usize::from(letter & 0x7f)])
-}
-
-/// The letter of a slot.
-pub(crate) fn letter_of(slot: usize) -> char {
-    match slot {
-        DOLLAR => '$',
-        AT => '@',
-        CARET => '^',
-        _ => char::from(b'A' + u8::try_from(slot).unwrap_or(0)),
-    }
-}
+use crate::whole::whole_in;
 
 /// A short list with a fixed capacity (no allocation per line).
 #[derive(Debug, Clone, Copy)]
@@ -146,7 +112,7 @@ pub(crate) enum Target {
 /// Expression errors, bad parameter numbers, non-finite values, malformed G/M numbers.
 pub(crate) fn evaluate(
     block: &Block<'_, '_>,
-    params: &Params,
+    params: &ParameterTable,
     stack: &mut Vec<f64>,
     words: &mut Words,
     assigns: &mut Vec<(Target, f64)>,
@@ -200,19 +166,6 @@ fn too_many(code: &str) -> RunProblem {
     RunProblem::ModalConflict { first: code.to_string(), second: "the many other codes on this line".to_string() }
 }
 
-/// `value` as a whole number in `0..=max`, when it lies within `tolerance` of one (never for
-/// NaN).
-pub(crate) fn whole_in(value: f64, tolerance: f64, max: u32) -> Option<u32> {
-    let r = value.round();
-    if (value - r).abs() < tolerance && (0.0..=f64::from(max)).contains(&r) {
-        // Whole and in 0..=max: exact.
-        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
-        Some(r as u32)
-    } else {
-        None
-    }
-}
-
 /// A G value in tenths (`90.1` → 901).
 fn g_code(v: f64) -> Result<u16, RunProblem> {
     // A `match`, not `ok_or`: no error value is built (and dropped) for every G word.
@@ -246,7 +199,7 @@ mod tests {
 
     #[test]
     fn reads_happen_before_writes_and_codes_are_tenths() {
-        let mut params = Params::new();
+        let mut params = ParameterTable::new();
         params.write(1, 3.0).expect("write");
         let mut parser = Parser::new();
         let block = parser.parse_line("#1=7 #2=#1 G90.1 M3 X#1 $2", 1).expect("parses");
@@ -267,9 +220,5 @@ mod tests {
         assert_eq!(whole(b'T', 98.00001), Ok(98));
         assert!(whole(b'T', 1.5).is_err());
         assert_eq!(g_code(90.1), Ok(901));
-        assert_eq!(whole_in(f64::NAN, 0.5, 10), None);
-        assert_eq!(whole_in(10.4, 0.5, 10), Some(10));
-        assert_eq!(whole_in(10.6, 0.5, 10), None);
-        assert_eq!(whole_in(-0.4, 0.5, 10), Some(0));
     }
 }

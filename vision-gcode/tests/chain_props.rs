@@ -3,7 +3,7 @@
 //!
 //! Numbers go into the program with Rust's shortest round-trip formatting, so the interpreter
 //! reads the very same `f64`s; the expected position is computed in the documented order
-//! (crate docs, "The frame chain"), so equality is exact.
+//! (`docs/gcode-interpreter.md`, "The frame chain"), so equality is exact.
 
 #![allow(clippy::float_cmp)]
 

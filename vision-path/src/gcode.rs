@@ -22,7 +22,8 @@
 use std::collections::VecDeque;
 
 use vision_gcode::{
-    needs_program, Event as GEvent, GcodeError, Interpreter, InterpreterConfig, Plane, Rate, RunOutcome, Xyz,
+    needs_program, Event as GEvent, GcodeError, Interpreter, InterpreterConfig, Piece, Plane, ProgramStream, Rate,
+    RunOutcome, Xyz,
 };
 
 use crate::follower::check_axes;
@@ -38,6 +39,8 @@ use crate::{MotionSink, Pace, PathError, PathFollower};
 /// the interpreter with the handler yourself and turn its events into items with [`item`].
 pub struct GcodeItems<T = String> {
     interp: Interpreter,
+    /// Where the program stands between lines (begun, opened by `%`).
+    program: ProgramStream,
     text: T,
     /// Byte offset of the next line in `text`.
     next: Option<usize>,
@@ -50,7 +53,15 @@ pub struct GcodeItems<T = String> {
 impl<T: AsRef<str>> GcodeItems<T> {
     /// Run `text` on `interp` (in its current state and machine position), lazily.
     pub fn new(interp: Interpreter, text: T) -> GcodeItems<T> {
-        GcodeItems { interp, text, next: Some(0), line: 0, queue: VecDeque::new(), done: false }
+        GcodeItems {
+            interp,
+            program: ProgramStream::default(),
+            text,
+            next: Some(0),
+            line: 0,
+            queue: VecDeque::new(),
+            done: false,
+        }
     }
 
     /// Where the machine is before the program runs (the planner's start), machine units.
@@ -60,10 +71,15 @@ impl<T: AsRef<str>> GcodeItems<T> {
 
     /// Run the next line, queueing its items.
     fn step(&mut self) {
-        // The end of the text (a final newline does not start another line).
+        // The end of the text (a final newline does not start another line): the program
+        // ended without M2/M30 or a closing `%`, which LinuxCNC refuses.
         let Some(start) = self.next.filter(|&start| start < self.text.as_ref().len()) else {
-            self.queue.push_back(Ok(Item::End { line: self.line as usize }));
             self.done = true;
+            let end = match self.interp.end_of_text(self.line) {
+                Ok(_) => Ok(Item::End { line: self.line as usize }),
+                Err(e) => Err(program_error(&e, self.line)),
+            };
+            self.queue.push_back(end);
             return;
         };
         let rest = &self.text.as_ref()[start..];
@@ -75,30 +91,30 @@ impl<T: AsRef<str>> GcodeItems<T> {
         self.line = self.line.saturating_add(1);
         let line = self.line;
         let queue = &mut self.queue;
-        if needs_program(raw) {
-            // Control flow needs the rest of the text at once (its subroutines may come later):
-            // from here the items are queued whole, not streamed.
-            let base = line - 1;
-            let outcome = self.interp.run(rest, None, &mut |e: &GEvent| {
-                queue.push_back(Ok(item(e, base.saturating_add(e.line()) as usize)));
-            });
-            self.done = true;
-            match outcome {
-                Ok(RunOutcome::Completed { lines }) => {
-                    self.line = base.saturating_add(lines);
-                    self.queue.push_back(Ok(Item::End { line: self.line as usize }));
-                }
-                Ok(RunOutcome::Ended { .. }) => {}
-                Err(e) => self.queue.push_back(Err(program_error(&e, base.saturating_add(e.line())))),
-            }
-            return;
-        }
-        let outcome = self.interp.run(raw, None, &mut |e: &GEvent| queue.push_back(Ok(item(e, line as usize))));
+        // Control flow needs the rest of the text at once (its subroutines may come later):
+        // from here the items are queued whole, not streamed.
+        let whole = needs_program(raw);
+        let (piece, base) = if whole { (rest, line - 1) } else { (raw, line) };
+        let at = |n: u32| if whole { base.saturating_add(n) } else { line };
+        let outcome = self.interp.run_streamed(&mut self.program, piece, None, &mut |e: &GEvent| {
+            queue.push_back(Ok(item(e, at(e.line()) as usize)));
+        });
         match outcome {
-            Ok(RunOutcome::Completed { .. }) => {}
-            Ok(RunOutcome::Ended { .. }) => self.done = true,
+            Ok(Piece::RanOut { lines }) if whole => {
+                // The rest ran: the text has ended.
+                self.next = None;
+                self.line = at(lines);
+            }
+            Ok(Piece::RanOut { .. }) => {}
+            // M2/M30 queued its own end.
+            Ok(Piece::Over(RunOutcome::Ended { .. })) => self.done = true,
+            // The closing `%`.
+            Ok(Piece::Over(RunOutcome::Completed { lines })) => {
+                self.queue.push_back(Ok(Item::End { line: at(lines) as usize }));
+                self.done = true;
+            }
             Err(e) => {
-                self.queue.push_back(Err(program_error(&e, line)));
+                self.queue.push_back(Err(program_error(&e, at(e.line()))));
                 self.done = true;
             }
         }

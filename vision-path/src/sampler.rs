@@ -1,7 +1,7 @@
 //! Sampling the planned path at a fixed period: the setpoint iterator.
 //!
 //! The setpoints are samples, at `t = k·T`, of one continuous trajectory whose speed and
-//! acceleration obey the limits; that is why the sampled bounds hold (see the crate docs).
+//! acceleration obey the limits; that is why the sampled bounds hold (see the repository's `docs/path-planner.md`).
 //! Every stop is held until the next sample instant, so each stop point (G61 corner, dwell,
 //! event, end) is itself a setpoint, exactly at the programmed position, with zero velocity.
 

@@ -12,7 +12,7 @@ use std::path::PathBuf;
 use std::rc::Rc;
 
 use super::line::Flow;
-use super::{At, Interpreter, RunOutcome};
+use super::{At, Interpreter, Piece, ProgramStream, RunOutcome};
 use crate::error::{GcodeError, RunProblem, SyntaxProblem};
 use crate::event::EventSink;
 use crate::expr::eval;
@@ -309,7 +309,7 @@ impl Source {
 
 /// An active call.
 #[derive(Debug)]
-struct Frame {
+struct CallFrame {
     return_to: (usize, usize),
     /// #1–#30 of the caller (o-word calls; M98 calls share them).
     saved: Option<[f64; CALL_PARAMS]>,
@@ -322,7 +322,7 @@ struct Frame {
 struct Runner {
     sources: Vec<Source>,
     subs: HashMap<Box<str>, (usize, usize)>,
-    calls: Vec<Frame>,
+    calls: Vec<CallFrame>,
     /// Active `repeat`s: (source, line of the `repeat`, turns left).
     repeats: Vec<(usize, usize, u64)>,
     iterations: u64,
@@ -335,10 +335,10 @@ impl Interpreter {
         text: &str,
         from: usize,
         pending: Option<Flow>,
-        mut delimited: bool,
+        program: &mut ProgramStream,
         mut handler: Option<&mut dyn MCodeHandler>,
         sink: &mut dyn EventSink,
-    ) -> Result<RunOutcome, GcodeError> {
+    ) -> Result<Piece, GcodeError> {
         let main = Source::index(text.to_string())?;
         let mut r =
             Runner { sources: Vec::new(), subs: HashMap::new(), calls: Vec::new(), repeats: Vec::new(), iterations: 0 };
@@ -348,7 +348,7 @@ impl Interpreter {
             let line = u32::try_from(from).unwrap_or(u32::MAX);
             (src, pc) = self.m98(&mut r, flow, (src, pc), line)?;
         }
-        let started = true;
+        program.started = true;
         while let Some(source) = r.sources.get(src) {
             if pc >= source.lines.len() {
                 if src != 0 || !r.calls.is_empty() {
@@ -361,13 +361,15 @@ impl Interpreter {
                 let raw = source.line(pc);
                 let at = At { line, tag: line, nested: false };
                 match self.exec_line(raw, at, handler.as_deref_mut(), sink)? {
-                    Flow::End(code) => return Ok(RunOutcome::Ended { line, code }),
+                    Flow::End(code) => return Ok(Piece::Over(RunOutcome::Ended { line, code })),
                     flow @ (Flow::Call { .. } | Flow::Return) => {
                         (src, pc) = self.m98(&mut r, flow, (src, pc + 1), line)?;
                         continue;
                     }
-                    Flow::Percent if delimited && src == 0 => return Ok(RunOutcome::Completed { lines: line }),
-                    Flow::Percent => delimited = !started,
+                    Flow::Percent if program.delimited && src == 0 => {
+                        return Ok(Piece::Over(RunOutcome::Completed { lines: line }))
+                    }
+                    Flow::Percent => program.delimited = false,
                     Flow::Continue | Flow::OWord => {}
                 }
                 pc += 1;
@@ -397,7 +399,7 @@ impl Interpreter {
                         self.params.set(n, args.get(i).copied().unwrap_or(0.0));
                     }
                     self.params.push_frame();
-                    r.calls.push(Frame {
+                    r.calls.push(CallFrame {
                         return_to: (src, pc + 1),
                         saved: Some(saved),
                         repeats: r.repeats.len(),
@@ -478,7 +480,7 @@ impl Interpreter {
             };
             pc = next;
         }
-        self.completed(u32::try_from(r.sources.first().map_or(0, |s| s.lines.len())).unwrap_or(u32::MAX))
+        Ok(Piece::RanOut { lines: u32::try_from(r.sources.first().map_or(0, |s| s.lines.len())).unwrap_or(u32::MAX) })
     }
 
     /// Returns from the innermost call (endsub, return, M99): restores its caller's #1–#30 and
@@ -521,7 +523,7 @@ impl Interpreter {
         if r.calls.len() >= MAX_CALL_DEPTH {
             return Err(GcodeError::run(line, RunProblem::CallsTooDeep { limit: MAX_CALL_DEPTH }));
         }
-        r.calls.push(Frame {
+        r.calls.push(CallFrame {
             return_to: next,
             saved: None,
             repeats: r.repeats.len(),

@@ -10,7 +10,7 @@ use crate::event::{Coolant, Event, OutputChange, OutputWrite, PathMode, SpindleC
 use crate::frame::Placement;
 use crate::geom::{Plane, Xyz, MAX_COORDINATE};
 use crate::interp::modal::Modal;
-use crate::params::{Params, G28_POSITION, G30_POSITION};
+use crate::params::{ParameterTable, G28_POSITION, G30_POSITION};
 use crate::words::{whole, Words};
 use vision_math::{LengthUnit, Point2};
 
@@ -159,7 +159,7 @@ fn axis_consumer(code: u16) -> bool {
 /// One line at work.
 pub(crate) struct LineRun<'a> {
     pub(crate) cfg: &'a InterpreterConfig,
-    pub(crate) params: &'a mut Params,
+    pub(crate) params: &'a mut ParameterTable,
     /// The working copy of the modal state.
     pub(crate) st: Modal,
     pub(crate) out: &'a mut Vec<Pending>,

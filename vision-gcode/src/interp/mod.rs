@@ -17,7 +17,7 @@ use crate::error::{GcodeError, RunProblem};
 use crate::event::{Event, EventSink, PathMode, UserCall};
 use crate::geom::{Plane, Xyz};
 use crate::handler::{Context, HandlerError, MCodeHandler, UserMCode};
-use crate::params::{Params, ACTIVE_SYSTEM, G92_OFFSET, POSITION, TOOL_NUMBER, TOOL_OFFSET};
+use crate::params::{ParameterTable, ACTIVE_SYSTEM, G92_OFFSET, POSITION, TOOL_NUMBER, TOOL_OFFSET};
 use crate::parse::Parser;
 use crate::tools::{Tool, ToolTable};
 use crate::watch::{PositionWatch, Publisher};
@@ -51,6 +51,27 @@ pub enum RunOutcome {
     },
 }
 
+/// Where a program fed to [`Interpreter::run_streamed`] in pieces stands between them: whether
+/// it has begun (a non-blank line ran) and whether a `%` on its first line opened it, so that the
+/// next `%` ends it. A fresh one is a program not yet begun.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ProgramStream {
+    started: bool,
+    delimited: bool,
+}
+
+/// How one piece of a program fed to [`Interpreter::run_streamed`] ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Piece {
+    /// An M2/M30 or the closing `%` ended the program.
+    Over(RunOutcome),
+    /// The piece ran out after `lines` lines; the program goes on.
+    RanOut {
+        /// Lines in the piece.
+        lines: u32,
+    },
+}
+
 /// A G-code interpreter for one machine.
 ///
 /// It owns the modal state, the parameters and the tool table, and runs G-code text
@@ -62,7 +83,7 @@ pub enum RunOutcome {
 pub struct Interpreter {
     /// The set-up; `config.tools` is the live tool table.
     config: InterpreterConfig,
-    params: Params,
+    params: ParameterTable,
     modal: Modal,
     parser: Parser,
     stack: Vec<f64>,
@@ -79,7 +100,7 @@ impl Interpreter {
         let modal = Modal::initial(&config);
         let parser =
             if config.dialect == Dialect::MachineMotion { Parser::new() } else { Parser::with_flat_comments() };
-        let params = Params::for_dialect(config.dialect);
+        let params = ParameterTable::for_dialect(config.dialect);
         let mut interp = Interpreter {
             config,
             params,
@@ -107,47 +128,74 @@ impl Interpreter {
     /// not executed.
     ///
     /// # Errors
-    /// The first line that fails; it changed nothing (see the crate documentation for user
-    /// M-code lines) and no later line ran. Under LinuxCNC, [`RunProblem::NoProgramEnd`] at the
-    /// last line when the text ends without M2/M30 or a closing `%`.
+    /// The first line that fails; it changed nothing (for user M-code lines see "A line is
+    /// atomic" in the repository's `docs/gcode-interpreter.md`) and no later line ran. Under
+    /// LinuxCNC, [`RunProblem::NoProgramEnd`] at the last line when the text ends without M2/M30
+    /// or a closing `%`.
     pub fn run(
         &mut self,
         text: &str,
-        mut handler: Option<&mut dyn MCodeHandler>,
+        handler: Option<&mut dyn MCodeHandler>,
         sink: &mut dyn EventSink,
     ) -> Result<RunOutcome, GcodeError> {
-        let mut lines = 0;
-        // `%` on the first non-blank line opens a delimited program; the next `%` ends it.
-        let (mut started, mut delimited) = (false, false);
-        for (i, raw) in text.split('\n').enumerate() {
-            let line = u32::try_from(i + 1).unwrap_or(u32::MAX);
-            let at = At { line, tag: line, nested: false };
-            match self.exec_line(raw, at, handler.as_deref_mut(), sink)? {
-                Flow::End(code) => return Ok(RunOutcome::Ended { line, code }),
-                Flow::Percent if delimited => return Ok(RunOutcome::Completed { lines: line }),
-                Flow::Percent => delimited = !started,
-                Flow::OWord => return self.run_flow(text, i, None, delimited, handler, sink),
-                call @ (Flow::Call { .. } | Flow::Return) => {
-                    return self.run_flow(text, i + 1, Some(call), delimited, handler, sink)
-                }
-                Flow::Continue => {}
-            }
-            if !started {
-                started = !raw.trim().is_empty();
-            }
-            lines = line;
+        let mut program = ProgramStream::default();
+        match self.run_streamed(&mut program, text, handler, sink)? {
+            Piece::Over(outcome) => Ok(outcome),
+            Piece::RanOut { lines } => self.end_of_text(lines),
         }
-        self.completed(lines)
     }
 
-    /// The text ran to its end without M2/M30 or a closing `%`: complete, except under
-    /// LinuxCNC, whose rs274 refuses such a file ("File ended with no percent sign or program
-    /// end"); Mach4 and seed 002 run it.
-    pub(crate) fn completed(&self, lines: u32) -> Result<RunOutcome, GcodeError> {
+    /// The text of a program ended after `lines` lines without M2/M30 or a closing `%`:
+    /// complete, except under LinuxCNC, whose rs274 refuses such a file ("File ended with no
+    /// percent sign or program end"); Mach4 and seed 002 run it.
+    ///
+    /// # Errors
+    /// Under LinuxCNC, [`RunProblem::NoProgramEnd`] at line `lines`.
+    pub fn end_of_text(&self, lines: u32) -> Result<RunOutcome, GcodeError> {
         if self.config.dialect == Dialect::LinuxCnc {
             return Err(GcodeError::run(lines, RunProblem::NoProgramEnd));
         }
         Ok(RunOutcome::Completed { lines })
+    }
+
+    /// Runs one piece of a program that is fed in pieces (a line at a time, say, so that the
+    /// caller need not hold the whole text), by [`Interpreter::run`]'s rules: `program` carries
+    /// between the pieces whether the program has begun and whether a `%` opened it. The
+    /// piece's lines are numbered from 1. When the text ends, call [`Interpreter::end_of_text`].
+    ///
+    /// A piece that starts control flow (an o-word, M98, M99: [`needs_program`]) runs its
+    /// subroutines from the same piece, so it must hold the rest of the program.
+    ///
+    /// # Errors
+    /// As [`Interpreter::run`], except that running out of text is not an error here.
+    pub fn run_streamed(
+        &mut self,
+        program: &mut ProgramStream,
+        text: &str,
+        mut handler: Option<&mut dyn MCodeHandler>,
+        sink: &mut dyn EventSink,
+    ) -> Result<Piece, GcodeError> {
+        let mut lines = 0;
+        for (i, raw) in text.split('\n').enumerate() {
+            let line = u32::try_from(i + 1).unwrap_or(u32::MAX);
+            let at = At { line, tag: line, nested: false };
+            match self.exec_line(raw, at, handler.as_deref_mut(), sink)? {
+                Flow::End(code) => return Ok(Piece::Over(RunOutcome::Ended { line, code })),
+                Flow::Percent if program.delimited => return Ok(Piece::Over(RunOutcome::Completed { lines: line })),
+                // `%` on the first non-blank line opens a delimited program; the next `%` ends it.
+                Flow::Percent => program.delimited = !program.started,
+                Flow::OWord => return self.run_flow(text, i, None, program, handler, sink),
+                call @ (Flow::Call { .. } | Flow::Return) => {
+                    return self.run_flow(text, i + 1, Some(call), program, handler, sink)
+                }
+                Flow::Continue => {}
+            }
+            if !program.started {
+                program.started = !raw.trim().is_empty();
+            }
+            lines = line;
+        }
+        Ok(Piece::RanOut { lines })
     }
 
     /// Host-side access to the same operations a handler has (positions, parameters, tools,

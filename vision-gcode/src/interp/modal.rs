@@ -8,7 +8,7 @@ use crate::error::GCode;
 use crate::event::PathMode;
 use crate::frame::{Frame, Placement, SystemRotation};
 use crate::geom::{ArcDirection, Plane, Xyz};
-use crate::params::{work_rotation, Params, G92_OFFSET};
+use crate::params::{work_rotation, ParameterTable, G92_OFFSET};
 
 /// The active motion mode (modal group 1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -96,7 +96,7 @@ impl Modal {
     /// motion mode, the initial path mode, G51/G68/G52 cancelled; zero the G92 offset (logged in
     /// `params`' undo log, so a failing line takes it back); re-derive the program position.
     /// Units, feed, tools and the machine position stay.
-    pub(crate) fn end_program(&mut self, config: &InterpreterConfig, params: &mut Params) {
+    pub(crate) fn end_program(&mut self, config: &InterpreterConfig, params: &mut ParameterTable) {
         self.motion = None;
         self.plane = Plane::Xy;
         self.absolute = true;
@@ -113,7 +113,7 @@ impl Modal {
     }
 
     /// The program → machine map now.
-    pub(crate) fn placement(&self, params: &Params) -> Placement {
+    pub(crate) fn placement(&self, params: &ParameterTable) -> Placement {
         let [gx, gy, gz] = params.triple(G92_OFFSET);
         let (work, g92) = (self.origin, Xyz::new(gx, gy, gz));
         Placement {
@@ -125,7 +125,7 @@ impl Modal {
 
     /// Takes the active system's origin and rotation from its parameters (the rotation under
     /// LinuxCNC only; the other dialects have none).
-    pub(crate) fn load_system(&mut self, config: &InterpreterConfig, params: &Params) {
+    pub(crate) fn load_system(&mut self, config: &InterpreterConfig, params: &ParameterTable) {
         let [x, y, z] = params.triple(work_offset_base(self.system));
         self.origin = Xyz::new(x, y, z);
         self.rotation = system_rotation(config, params, self.system);
@@ -136,7 +136,7 @@ impl Modal {
     /// and seed 002, and under LinuxCNC only when the system is selected again from another
     /// one, or a G10 sets it (rs274 2.9: `convert_coordinate_system` reloads the parameters only
     /// on a change of system). The program point is re-derived: the machine stays.
-    pub(crate) fn after_offset_write(&mut self, config: &InterpreterConfig, params: &Params) {
+    pub(crate) fn after_offset_write(&mut self, config: &InterpreterConfig, params: &ParameterTable) {
         if config.dialect != Dialect::LinuxCnc {
             self.load_system(config, params);
         }
@@ -145,14 +145,14 @@ impl Modal {
 
     /// Re-derives the program position from the machine position (after a frame change; the
     /// machine does not move).
-    pub(crate) fn rederive_program(&mut self, params: &Params) {
+    pub(crate) fn rederive_program(&mut self, params: &ParameterTable) {
         self.program = self.placement(params).program_of(self.machine);
     }
 }
 
 /// Coordinate system `system`'s XY rotation, degrees: its parameter under LinuxCNC, 0 in the
 /// dialects without coordinate-system rotation.
-pub(crate) fn system_rotation(config: &InterpreterConfig, params: &Params, system: u32) -> f64 {
+pub(crate) fn system_rotation(config: &InterpreterConfig, params: &ParameterTable, system: u32) -> f64 {
     if config.dialect == Dialect::LinuxCnc {
         params.get(work_rotation(system))
     } else {

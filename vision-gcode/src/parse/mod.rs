@@ -17,7 +17,7 @@ mod number;
 
 use crate::error::{GcodeError, SyntaxProblem};
 use crate::expr::Node;
-use crate::words::slot;
+use crate::letters::slot;
 
 pub(crate) use number::is_blank;
 

@@ -2,11 +2,11 @@
 
 use super::*;
 use crate::expr::eval;
-use crate::params::Params;
+use crate::params::ParameterTable;
 
 /// Parses `text` and evaluates every word and assignment value with all parameters zero
 /// except those given.
-fn words(text: &str, params: &Params) -> Vec<(char, f64)> {
+fn words(text: &str, params: &ParameterTable) -> Vec<(char, f64)> {
     let mut parser = Parser::new();
     let block = parser.parse_line(text, 1).expect("parses");
     let mut stack = Vec::new();
@@ -32,12 +32,12 @@ fn syntax(text: &str) -> (u32, SyntaxProblem) {
 }
 
 fn value(text: &str) -> f64 {
-    words(&format!("X{text}"), &Params::new())[0].1
+    words(&format!("X{text}"), &ParameterTable::new())[0].1
 }
 
 #[test]
 fn words_numbers_case_and_blanks() {
-    let p = Params::new();
+    let p = ParameterTable::new();
     assert_eq!(
         words("g1 x1.5 Y-2 z+.25 f100", &p),
         vec![('G', 1.0), ('X', 1.5), ('Y', -2.0), ('Z', 0.25), ('F', 100.0)]
@@ -91,7 +91,7 @@ fn expressions_follow_linuxcnc_precedence() {
 
 #[test]
 fn parameters_and_indirection() {
-    let mut p = Params::new();
+    let mut p = ParameterTable::new();
     p.write(1, 5.0).expect("write");
     p.write(5, 42.0).expect("write");
     p.write(2, 0.5).expect("write");
@@ -104,7 +104,7 @@ fn assignments_are_collected_in_order() {
     let block = parser.parse_line("#1=2 #[1+1] = [3*4] #3=-#1 G0 X#1", 1).expect("parses");
     assert_eq!(block.assignments().len(), 3);
     assert_eq!(block.words().len(), 2);
-    let p = Params::new();
+    let p = ParameterTable::new();
     let mut stack = Vec::new();
     let targets: Vec<f64> = block
         .assignments()
@@ -142,7 +142,7 @@ fn syntax_errors_say_where_and_what() {
     assert_eq!(syntax("N1.5"), (2, SyntaxProblem::BadLineNumber));
     assert_eq!(syntax("G0 @"), (4, SyntaxProblem::MissingValue { letter: '@' }));
     assert_eq!(syntax("G0 @1 @2"), (7, SyntaxProblem::DuplicateWord { letter: '@' }));
-    assert_eq!(words("G1 @[1+1] ^-30", &Params::new()), vec![('G', 1.0), ('@', 2.0), ('^', -30.0)]);
+    assert_eq!(words("G1 @[1+1] ^-30", &ParameterTable::new()), vec![('G', 1.0), ('@', 2.0), ('^', -30.0)]);
     assert_eq!(syntax("G0 &"), (4, SyntaxProblem::Unexpected { found: '&' }));
     assert_eq!(syntax("Gé"), (1, SyntaxProblem::MissingValue { letter: 'G' }));
     assert_eq!(syntax("é"), (1, SyntaxProblem::Unexpected { found: 'é' }));

@@ -2,7 +2,7 @@
 
 use nalgebra::{Complex, Matrix2, Point2, UnitComplex, Vector2};
 
-use super::{unit, Fit, Model, Moments, Params};
+use super::{unit, Fit, LinearPart, Model, Moments};
 use crate::MathError;
 
 /// Least-squares affine fit `o ≈ L·n + b` (6 parameters), closed form on centred moments:
@@ -19,7 +19,7 @@ pub fn fit_affine(commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Result
 }
 
 #[inline(always)]
-pub(super) fn solve(m: &Moments) -> Result<Params, MathError> {
+pub(super) fn solve(m: &Moments) -> Result<LinearPart, MathError> {
     m.require_area(Model::Affine)?;
     let det = m.sxx * m.syy - m.sxy * m.sxy;
     let cinv = Matrix2::new(m.syy, -m.sxy, -m.sxy, m.sxx) / det;
@@ -34,5 +34,5 @@ pub(super) fn solve(m: &Moments) -> Result<Params, MathError> {
     if sx.is_nan() || sx <= 0.0 {
         return Err(MathError::DegenerateObserved);
     }
-    Ok(Params { rotation, scale: Vector2::new(sx, sy), shear, linear: l })
+    Ok(LinearPart { rotation, scale: Vector2::new(sx, sy), shear, linear: l })
 }

@@ -131,7 +131,7 @@ impl Model {
     }
 
     #[inline(always)]
-    fn solve(self, m: &Moments) -> Result<Params, MathError> {
+    fn solve(self, m: &Moments) -> Result<LinearPart, MathError> {
         match self {
             Model::Rigid => rigid::solve(m),
             Model::Similarity => similarity::solve(m),
@@ -164,26 +164,27 @@ pub struct Transform {
     pub observed_centroid: Point2<f64>,
 }
 
-/// The model-specific part of a solution.
+/// The model-specific part of a solution: the linear part of the fitted map, as rotation, scales
+/// and shear and as the matrix `L`.
 ///
 /// `linear` is `L = R(θ)·[[sx, shear], [0, sy]]` as the residual pass needs it. A model may fill
 /// it straight from the moments (similarity does, with no square root), so the residual pass
 /// need not wait for the square root and divisions that split `L` into rotation and scales.
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct Params {
+pub(crate) struct LinearPart {
     rotation: UnitComplex<f64>,
     scale: Vector2<f64>,
     shear: f64,
     linear: Matrix2<f64>,
 }
 
-impl Params {
+impl LinearPart {
     /// Parameters whose `L` is built from the rotation and `U = [[sx, shear], [0, sy]]`.
     #[inline(always)]
-    fn from_parts(rotation: UnitComplex<f64>, scale: Vector2<f64>, shear: f64) -> Params {
+    fn from_parts(rotation: UnitComplex<f64>, scale: Vector2<f64>, shear: f64) -> LinearPart {
         let (c, s) = (rotation.re, rotation.im);
         let linear = Matrix2::new(c * scale.x, c * shear - s * scale.y, s * scale.x, s * shear + c * scale.y);
-        Params { rotation, scale, shear, linear }
+        LinearPart { rotation, scale, shear, linear }
     }
 
     /// Refuses parameters no alignment can use: non-finite, or a scale outside
@@ -416,12 +417,12 @@ impl Moments {
     pub(crate) fn finish(
         &self,
         model: Model,
-        p: Params,
+        p: LinearPart,
         commanded: &[Point2<f64>],
         observed: &[Point2<f64>],
     ) -> Result<Fit, MathError> {
         p.check()?;
-        let Params { rotation, scale, shear, linear } = p;
+        let LinearPart { rotation, scale, shear, linear } = p;
         // L spelled out so the loop below stays in registers.
         let (l11, l12, l21, l22) = (linear[(0, 0)], linear[(0, 1)], linear[(1, 0)], linear[(1, 1)]);
         let (cnx, cny, cox, coy) = (self.cn.x, self.cn.y, self.co.x, self.co.y);

@@ -2,7 +2,7 @@
 
 use nalgebra::{Point2, Vector2};
 
-use super::{unit, Fit, Model, Moments, Params};
+use super::{unit, Fit, LinearPart, Model, Moments};
 use crate::MathError;
 
 /// The true least-squares rectangle fit `o ≈ R(θ)·diag(sx, sy)·n + b` (5 parameters).
@@ -24,7 +24,7 @@ pub fn fit_rectangle(commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Res
 }
 
 #[inline(always)]
-pub(super) fn solve(m: &Moments) -> Result<Params, MathError> {
+pub(super) fn solve(m: &Moments) -> Result<LinearPart, MathError> {
     m.require_area(Model::Rectangle)?;
     let (ix, iy) = (1.0 / m.sxx, 1.0 / m.syy);
     let m11 = m.pxx * m.pxx * ix + m.pyy * m.pyy * iy;
@@ -48,5 +48,5 @@ pub(super) fn solve(m: &Moments) -> Result<Params, MathError> {
         sx = -sx;
         sy = -sy;
     }
-    Ok(Params::from_parts(rotation, Vector2::new(sx, sy), 0.0))
+    Ok(LinearPart::from_parts(rotation, Vector2::new(sx, sy), 0.0))
 }

@@ -2,7 +2,7 @@
 
 use nalgebra::{Point2, Vector2};
 
-use super::{unit, Fit, Model, Moments, Params};
+use super::{unit, Fit, LinearPart, Model, Moments};
 use crate::MathError;
 
 /// Least-squares rigid transform (rotation + shift) from `commanded` to `observed`.
@@ -17,7 +17,7 @@ pub fn fit_rigid(commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Result<
 }
 
 #[inline(always)]
-pub(super) fn solve(m: &Moments) -> Result<Params, MathError> {
+pub(super) fn solve(m: &Moments) -> Result<LinearPart, MathError> {
     let (rotation, _) = unit(m.pxx + m.pyy, m.pxy - m.pyx, m.sxx + m.syy).ok_or(MathError::DegenerateObserved)?;
-    Ok(Params::from_parts(rotation, Vector2::new(1.0, 1.0), 0.0))
+    Ok(LinearPart::from_parts(rotation, Vector2::new(1.0, 1.0), 0.0))
 }

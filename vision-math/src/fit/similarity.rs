@@ -2,7 +2,7 @@
 
 use nalgebra::{Matrix2, Point2, Vector2};
 
-use super::{unit, Fit, Model, Moments, Params};
+use super::{unit, Fit, LinearPart, Model, Moments};
 use crate::MathError;
 
 /// Least-squares similarity from `commanded` to `observed` (closed form, Umeyama without SVD).
@@ -18,7 +18,7 @@ pub fn fit_similarity(commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Re
 }
 
 #[inline(always)]
-pub(super) fn solve(m: &Moments) -> Result<Params, MathError> {
+pub(super) fn solve(m: &Moments) -> Result<LinearPart, MathError> {
     let d = m.sxx + m.syy;
     let (re, im) = (m.pxx + m.pyy, m.pxy - m.pyx);
     // L = s·R(θ) = [[re, −im], [im, re]] / d needs no square root; only splitting it into s and
@@ -27,5 +27,5 @@ pub(super) fn solve(m: &Moments) -> Result<Params, MathError> {
     let (a, b) = (re * inv_d, im * inv_d);
     let (rotation, h) = unit(re, im, d).ok_or(MathError::DegenerateObserved)?;
     let s = h * inv_d;
-    Ok(Params { rotation, scale: Vector2::new(s, s), shear: 0.0, linear: Matrix2::new(a, -b, b, a) })
+    Ok(LinearPart { rotation, scale: Vector2::new(s, s), shear: 0.0, linear: Matrix2::new(a, -b, b, a) })
 }
