@@ -198,18 +198,25 @@ impl Runner {
         }
     }
 
-    /// The time from the last M280 to the M282 after it (the motion, settles and re-centring
+    /// The time from the last M280 that an M282 follows to that M282 (the motion, settles and re-centring
     /// of the alignment), seconds: the plan up to the M282's line minus the plan before the
     /// M280's. `None` without such a pair or when the motion cannot be planned.
     fn alignment_time(&self, items: &[vision_path::Item], steps: &[Step], start: vision_path::Xyz) -> Option<f64> {
-        let begin = steps.iter().rev().find_map(|s| match s {
-            Step::Begin { line, .. } => Some(*line),
-            _ => None,
-        })?;
-        let fit = steps.iter().find_map(|s| match s {
-            Step::Fit { line, .. } if *line > begin => Some(*line),
-            _ => None,
-        })?;
+        // The last M280 that an M282 follows, and that M282.
+        let mut begin = None;
+        let mut pair = None;
+        for step in steps {
+            match step {
+                Step::Begin { line, .. } => begin = Some(*line),
+                Step::Fit { line, .. } => {
+                    if let Some(b) = begin.take() {
+                        pair = Some((b, *line));
+                    }
+                }
+                _ => {}
+            }
+        }
+        let (begin, fit) = pair?;
         let until = |last: u32| {
             let prefix: Vec<vision_path::Item> = items.iter().filter(|i| i.line() <= last as usize).cloned().collect();
             self.cycle_time(prefix, start).ok()

@@ -141,6 +141,15 @@ fn step(s: &mut String, step: &Step, world_unit: &str) {
                 xy(chain.shift.x, chain.shift.y),
                 xy(chain.center.x, chain.center.y)
             );
+            if let Some(lc) = a.linuxcnc.as_ref().filter(|lc| lc.ignored_scale != vision_math::Vector2::new(1.0, 1.0)) {
+                let _ = writeln!(
+                    s,
+                    "              LinuxCNC cannot scale: scale X {:.7} Y {:.7} left out ({:.4} % from 1)",
+                    lc.ignored_scale.x,
+                    lc.ignored_scale.y,
+                    lc.ignored_scale_dev_pct()
+                );
+            }
             for (i, r) in a.residuals.iter().enumerate() {
                 let _ =
                     writeln!(s, "              mark {} residual {} (|r| {})", i + 1, xy(r.x, r.y), l(r.x.hypot(r.y)));
