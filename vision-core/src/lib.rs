@@ -3,14 +3,16 @@
 //! [`CameraDriver`] for the camera and [`Machine`] for the CNC.
 //!
 //! * [`driver`]: the camera trait; drivers return native pixels, all math lives here.
-//! * [`machine`]: the host trait (positions, G-code, tools, units, pound variables, clock).
+//! * [`machine`]: the one machine trait every front end implements (positions, G-code, tools,
+//!   units, pound variables, clock), with typed [`MachineError`]s.
+//! * [`controller`]: every rule that differs between Mach4, LinuxCNC and seed 002's
+//!   MachineMotion, one file each ([`Controller`], [`CONTROLLERS`]).
 //! * [`params`]: the OEM parameters under the manual's names, in three parts ([`Config`],
 //!   [`Calibration`], [`Telemetry`]); [`profile`]: the TOML file of the first two ([`Params`]).
 //! * [`module`]: [`VisionModule`] with the typed entry points `m280` … `m284`.
 //! * [`pound`]: the pound-variable block; [`image_grab`]: M281 D1.
 //! * [`calibrate`]: M283's axis detect, quick calibration and sheet walk; [`sheets`]: `CAL_SHEETS`.
 //! * [`registry`]: drivers by name for the CLI.
-//! * [`linuxcnc`]: where a LinuxCNC host keeps the alignment's state (persistent parameters).
 //! * [`text`]: messages and reports made safe to show a person (control characters, huge input).
 //!
 //! The crate depends on `vision-math` only (plus `thiserror`, `serde`, `toml`); it knows no
@@ -18,42 +20,16 @@
 //!
 //! # How a host uses it
 //!
-//! The M-code adapter (`vision-mcode`) parses `M280 P3`, `M281 D1`, … into typed values
-//! ([`RunMode`], [`Pieces`], [`Calibrate`], a job number, a keep-image flag), calls
-//! [`VisionModule::m280`] … [`VisionModule::m284`] with the host's [`Machine`] and shows the
-//! report. The module runs its own G-code through [`Machine::run_gcode`] (M280's cancel line,
-//! M282's four modal lines, M283's moves); [`Reply::gcode`] lists what it ran. The run's state is typed ([`Run`]); the `Last*` / `Run_*` telemetry is written
-//! from it after each operation and never read back. The CLI picks the driver by `VisionDriver` through a [`DriverRegistry`] and
-//! loads/saves parameters with a [`ProfileStore`].
+//! `vision-host`'s session parses `M280 P3`, `M281 D1`, … (through `vision-mcode`) into typed
+//! values ([`RunMode`], [`Pieces`], [`Calibrate`], a job number, a keep-image flag) and calls
+//! [`VisionModule::m280`] … [`VisionModule::m284`] with the controller's [`Machine`]. The module
+//! runs its own G-code through [`Machine::run_gcode`] (M280's cancel, M282's alignment, M283's
+//! moves), as the machine's [`Controller`] writes it; [`Reply::gcode`] lists what it ran. The
+//! run's state is typed ([`Run`]); the `Last*` / `Run_*` telemetry is written from it after each
+//! operation and never read back. Drivers come from a [`DriverRegistry`] by `VisionDriver`;
+//! parameters load and save with a [`ProfileStore`].
 //!
-//! # Decisions where the spec is open
-//!
-//! * Failed triggers (driver error, NG / no mark) update `LastJudgment` and `LastStatus` only;
-//!   refusals before the trigger (disabled, wrong tool, reserved base, zero K) change nothing.
-//! * Mark width/height use the column of `K·R` for the camera's native axis (identical to the
-//!   manual's `width_px × ‖K column 1‖` unless `SwapXY`); `M283 Q` likewise divides by the size
-//!   along the remapped axes.
-//! * M282 `P1`/`P2`/`P3` emit the least-squares optimum of a shift-only / rotation-only (about
-//!   the commanded centroid) / scale-only (about the centroid) transform, always as the same four
-//!   lines with the other pieces at identity ([`Pieces`]). Quality gates judge the run's full fit;
-//!   the shift gate measures the centroid displacement.
-//! * M282 needs the run mode's 4 (rectangle) or 3 (similarity) captures; more are fitted by least
-//!   squares, slots keep the first four; the dot list stays until the next M280.
-//! * Pound fields 6–7 are never written. `Run_*` hold the **emitted** chain.
-//! * M284's job above 999 is refused as an invalid `VisionActiveJob` before the camera is
-//!   contacted; word syntax (`P1.5`) is the adapter's to refuse.
-//! * M283 refuses while an alignment is active and leaves the machine in G90. The walk commits
-//!   nothing; M283 then writes the offset to `VisionCameraToolNumber` (or the active tool when
-//!   that is 0), saves the profile, and takes the new calibration — all or nothing, the tool
-//!   table first (see [`VisionModule::m283`]). See [`calibrate`] for the solve.
-//! * M284 with job 0 (stored or given) does not contact the camera; the tool check does not
-//!   apply to M284. M281 D1 needs a driver advertising `grab_image`.
-//! * The `VisionFitMax*` gates are in percent and inches (converted under G21).
-//! * On a LinuxCNC host ([`Controller::LinuxCnc`]) M280/M282 write `G52` and `G10 L2 P0 R`
-//!   (no G68/G51; a scale beyond `VisionFitMaxScaleDev` is refused, a smaller one left out and
-//!   reported), θ₀ and the alignment flag live in persistent parameters ([`linuxcnc`]), camera
-//!   vectors along the machine axes are turned by −θ₀ into the program frame, M281 does not
-//!   re-centre, and M283 can run stepwise ([`VisionModule::m283_begin`]).
+//! The decisions where the spec is open are in `docs/vision-module.md`.
 //!
 //! ```
 //! use vision_core::{Params, VisionError, VisionModule};

@@ -179,6 +179,13 @@ mod tests {
     use vision_gcode::{HandlerError, UserMCode};
     use vision_math::{AlignmentChain, LengthUnit};
 
+    #[test]
+    fn every_controller_names_a_dialect_of_the_interpreter() {
+        for c in vision_core::CONTROLLERS {
+            assert_eq!(interpreter_dialect(c).name(), c.dialect(), "{}", c.name());
+        }
+    }
+
     fn machine() -> (Sim, SimMachine) {
         let sim = Sim::new(World::default_world()).expect("sim");
         let m = SimMachine::new(&sim).expect("machine");
