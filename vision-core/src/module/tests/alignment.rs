@@ -66,7 +66,10 @@ fn m280_and_m282_commit_only_after_the_machine_took_their_lines() {
     let run = rig.module.run().clone();
     rig.world().fail_gcode_after = Some(0);
     let e = rig.module.m282(&mut rig.machine, Pieces::All).expect_err("e-stop");
-    assert!(matches!(e, VisionError::Machine(_)), "{e}");
+    // A host tells an e-stop from a refused word without reading text.
+    let VisionError::Machine(machine) = &e else { panic!("{e}") };
+    assert_eq!(machine.kind(), crate::MachineErrorKind::Stopped);
+    assert_eq!(e.to_string(), "machine: emergency stop");
     assert_eq!(rig.module.run(), &run, "the run stays open");
     assert_eq!(rig.module.telemetry().run_active(), 1);
     assert_eq!(rig.module.telemetry().run_sx(), 1.0);

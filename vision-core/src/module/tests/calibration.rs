@@ -199,6 +199,21 @@ fn assert_untouched(rig: &Rig, start: Point2<f64>) {
 }
 
 #[test]
+fn a_camera_tool_missing_from_the_table_is_an_unknown_tool_and_moves_nothing() {
+    let mut rig = standard_rig();
+    let start = rig.machine.program_position().expect("a position");
+    rig.world().offsets.remove(&98);
+    let e = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect_err("no tool 98");
+    let VisionError::Machine(machine) = &e else { panic!("{e}") };
+    assert_eq!(machine.kind(), crate::MachineErrorKind::UnknownTool, "{e}");
+    assert_eq!(rig.module.params().cal_k(), Matrix2::zeros());
+    // Only M283's return to its start ran: the walk failed before its first move.
+    let log = rig.world().log.clone();
+    assert_eq!(log.len(), 1, "{log:?}");
+    assert!((rig.machine.program_position().expect("a position") - start).norm() < 1e-6);
+}
+
+#[test]
 fn a_failed_walk_restores_k_flags_offset_and_position() {
     let mut marks = sheet_marks(0.3, Vector2::new(1.0, 1.0));
     marks.remove(2); // dot 3 is missing
