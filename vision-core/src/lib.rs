@@ -7,9 +7,9 @@
 //! * [`params`]: the OEM parameters under the manual's names, in three parts ([`Config`],
 //!   [`Calibration`], [`Telemetry`]); [`profile`]: the TOML file of the first two ([`Params`]).
 //! * [`module`]: [`VisionModule`] with the typed entry points `m280` … `m284`.
-//! * [`pound`]: the pound-variable block; [`image_grab`]: M281 D1.
+//! * [`pound`]: the pound-variable block.
 //! * [`calibrate`]: M283's axis detect, quick calibration and sheet walk; [`sheets`]: `CAL_SHEETS`.
-//! * [`registry`]: drivers by name for the CLI.
+//! * [`registry`]: the camera drivers by name, with their settings tables.
 //! * [`linuxcnc`]: where a LinuxCNC host keeps the alignment's state (persistent parameters).
 //! * [`text`]: messages and reports made safe to show a person (control characters, huge input).
 //!
@@ -47,7 +47,7 @@
 //!   that is 0), saves the profile, and takes the new calibration — all or nothing, the tool
 //!   table first (see [`VisionModule::m283`]). See [`calibrate`] for the solve.
 //! * M284 with job 0 (stored or given) does not contact the camera; the tool check does not
-//!   apply to M284. M281 D1 needs a driver advertising `grab_image`.
+//!   apply to M284. M281 D1 asks the driver to keep the image ([`CameraDriver::grab_image`]).
 //! * The `VisionFitMax*` gates are in percent and inches (converted under G21).
 //! * On a LinuxCNC host ([`Controller::LinuxCnc`]) M280/M282 write `G52` and `G10 L2 P0 R`
 //!   (no G68/G51; a scale beyond `VisionFitMaxScaleDev` is refused, a smaller one left out and
@@ -75,7 +75,6 @@
 pub mod calibrate;
 pub mod driver;
 mod error;
-pub mod image_grab;
 pub mod linuxcnc;
 pub mod machine;
 pub mod module;
@@ -88,14 +87,17 @@ pub mod sheets;
 pub mod text;
 
 pub use calibrate::{AxisReport, CalReport, Calibrate, DotVerify, QuickReport, SheetReport};
-pub use driver::{CameraDriver, Capabilities, DriverError, DriverErrorKind, Judgment, Reading};
+pub use driver::{CameraDriver, Capabilities, DriverError, DriverErrorKind, ImageRequest, Judgment, Reading};
 pub use error::VisionError;
 pub use machine::{Controller, Machine, MachineError, Timestamp};
 pub use module::{
     AlignReport, Capture, Dot, DroppedMark, JobReport, Pieces, PredictedError, Recentred, Reply, Run, RunMode,
     StepwiseWalk, TelemetrySink, VisionModule,
 };
-pub use params::{Access, Calibration, Config, ParamKind, ParamSpec, ParamValue, Params, Section, Telemetry};
+pub use params::{
+    Access, Calibration, Config, DriverSettings, ParamKind, ParamSpec, ParamValue, Params, Section, Setting,
+    SettingsTable, Telemetry,
+};
 pub use pound::{PoundBlock, PoundReport, SlotValues};
 pub use profile::{ProfileFs, ProfileStore, StdFs};
 pub use registry::{DriverFactory, DriverRegistry};

@@ -1,9 +1,10 @@
 //! [`KeyenceDriver`]: one persistent connection, the reconnect rule, and the
 //! [`CameraDriver`] implementation.
 
+use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use vision_core::{CameraDriver, Capabilities, DriverError, DriverRegistry, Params, Reading};
+use vision_core::{CameraDriver, Capabilities, DriverError, DriverRegistry, ImageRequest, Params, Reading};
 
 use crate::config::KeyenceConfig;
 use crate::error::KeyenceError;
@@ -40,7 +41,7 @@ impl KeyenceDriver {
         Ok(KeyenceDriver { config, session: None, job_command: None })
     }
 
-    /// A driver from `VisionIP`, `VisionPort` and `VisionTimeout`. Does not connect.
+    /// A driver from its settings in `params` ([`KeyenceConfig::from_params`]). Does not connect.
     ///
     /// # Errors
     /// As [`KeyenceConfig::from_params`].
@@ -150,8 +151,8 @@ impl CameraDriver for KeyenceDriver {
         DRIVER_NAME
     }
 
-    /// Job switching (`PL`/`PW`), and image grabbing: the camera FTP-pushes its images, the
-    /// core picks them up from `VisionImageWatchDir` (SPEC §7).
+    /// Job switching (`PL`/`PW`), and image grabbing: the camera FTP-pushes its images into
+    /// `VisionImageWatchDir`, where [`CameraDriver::grab_image`] picks them up (SPEC §7).
     fn capabilities(&self) -> Capabilities {
         Capabilities { select_job: true, grab_image: true }
     }
@@ -173,6 +174,12 @@ impl CameraDriver for KeyenceDriver {
         several_marks(reading)
     }
 
+    /// The newest image the camera pushed into `VisionImageWatchDir` since the trigger,
+    /// waiting up to `VisionImageGrabTimeout` (see [`crate::images`]).
+    fn grab_image(&mut self, request: &ImageRequest<'_>) -> Result<PathBuf, DriverError> {
+        crate::images::grab(&self.config.images, request).map_err(DriverError::from)
+    }
+
     fn timeout(&self) -> Duration {
         self.config.timeout
     }
@@ -189,10 +196,10 @@ fn several_marks(reading: &Reading) -> Option<String> {
     ))
 }
 
-/// Registers the driver under [`DRIVER_NAME`]; the factory reads `VisionIP`, `VisionPort` and
-/// `VisionTimeout` and does not connect.
+/// Registers the driver under [`DRIVER_NAME`] with its settings ([`crate::settings::SETTINGS`]);
+/// the factory reads them ([`KeyenceConfig::from_params`]) and does not connect.
 pub fn register(registry: &mut DriverRegistry) {
-    registry.register(DRIVER_NAME, |params: &Params| {
+    registry.register_with_settings(DRIVER_NAME, &crate::settings::SETTINGS, |params: &Params| {
         let driver = KeyenceDriver::from_params(params).map_err(DriverError::from)?;
         Ok(Box::new(driver) as Box<dyn CameraDriver>)
     });

@@ -10,7 +10,8 @@
 //!   host whose M-code cannot both move and trigger (LinuxCNC), M283 also runs stepwise:
 //!   [`Session::walk_begin`], then [`Session::walk_next`] → the host moves →
 //!   [`Session::walk_capture`], then [`Session::walk_finish`].
-//! * [`registry`]: the camera drivers a real machine can use, picked by `VisionDriver`.
+//! * [`cameras`]: the one list of camera drivers, with their settings; [`registry`]: the ones a
+//!   real machine can use (no simulator), picked by `VisionDriver`.
 //!
 //! The key decision: controllers do not report the G51/G68/G52 chain they have active, so the
 //! session remembers the chain its own M282 emitted (M280 cancels it) and tells the module. A
@@ -35,12 +36,14 @@
 //! # Ok::<(), HostError>(())
 //! ```
 
+mod cameras;
 mod error;
 mod host;
 mod session;
 #[cfg(feature = "testkit")]
 pub mod testkit;
 
+pub use cameras::cameras;
 pub use error::HostError;
 pub use host::Host;
 pub use session::{registry, Session};

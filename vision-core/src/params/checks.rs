@@ -29,13 +29,6 @@ pub(super) fn seconds_60(v: &f64) -> Result<(), String> {
         Err("must be between 0 and 60 seconds".into())
     }
 }
-pub(super) fn timeout_s(v: &f64) -> Result<(), String> {
-    if v.is_finite() && *v > 0.0 && *v <= 300.0 {
-        Ok(())
-    } else {
-        Err("must be more than 0 and at most 300 seconds".into())
-    }
-}
 pub(super) fn pixel_offset(v: &f64) -> Result<(), String> {
     if v.is_finite() && v.abs() <= 100_000.0 {
         Ok(())
@@ -55,13 +48,6 @@ pub(super) fn passes(v: &i64) -> Result<(), String> {
         Ok(())
     } else {
         Err("must be 0..10 passes (0 reads in one shot)".into())
-    }
-}
-pub(super) fn port(v: &i64) -> Result<(), String> {
-    if (1..=65_535).contains(v) {
-        Ok(())
-    } else {
-        Err("must be a TCP port 1..65535".into())
     }
 }
 pub(super) fn job(v: &i64) -> Result<(), String> {
@@ -94,19 +80,6 @@ pub(super) fn driver_name(v: &String) -> Result<(), String> {
         Ok(())
     } else {
         Err("must be a driver name (letters, digits, _ or -), e.g. Keyence".into())
-    }
-}
-#[allow(clippy::ptr_arg)]
-pub(super) fn host(v: &String) -> Result<(), String> {
-    let ok = v.parse::<std::net::IpAddr>().is_ok()
-        || (!v.is_empty()
-            && v.len() <= 253
-            && v.chars().all(|c| c.is_ascii_alphanumeric() || c == '.' || c == '-')
-            && !v.starts_with('-'));
-    if ok {
-        Ok(())
-    } else {
-        Err("must be an IP address (e.g. 192.168.208.80) or a host name".into())
     }
 }
 #[allow(clippy::ptr_arg)]

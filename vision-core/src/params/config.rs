@@ -1,13 +1,11 @@
 //! [`Config`]: the operator's settings.
 
-use super::checks::{
-    any, driver_name, host, job, noise_px, non_negative, passes, port, pound_base, resolution, seconds_60, short_text,
-    timeout_s, tool,
-};
+use super::checks::{any, driver_name, job, noise_px, non_negative, passes, pound_base, resolution, seconds_60, tool};
 
 profile_part! {
-    /// The persisted configuration: connection, camera, pound-variable output and the fit
-    /// quality gates. Written by the operator (profile, CLI, DRO) and by M284
+    /// The persisted configuration: the driver's name, the camera, pound-variable output and the
+    /// fit quality gates (a driver's own settings, e.g. the camera's address, are its
+    /// [`DriverSettings`](super::DriverSettings)). Written by the operator (profile, CLI, DRO) and by M284
     /// (`VisionActiveJob`).
     Config in config {
         /// `VisionEnabled`: master enable. When No, every Vision M-code fails with "Vision is not
@@ -15,19 +13,9 @@ profile_part! {
         (Connection) enabled: bool => bool = false, "VisionEnabled", any;
         /// `VisionDriver`: the camera driver's registry name (default `Keyence`).
         (Connection) driver: String => &str = "Keyence".to_string(), "VisionDriver", driver_name;
-        /// `VisionIP`: camera IP address or host name.
-        (Connection) ip: String => &str = "192.168.208.80".to_string(), "VisionIP", host;
-        /// `VisionPort`: camera TCP port (Keyence VS default 8500).
-        (Connection) port: i64 => i64 = 8500, "VisionPort", port;
-        /// `VisionTimeout`: per-command socket I/O timeout, seconds.
-        (Connection) timeout_s: f64 => f64 = 3.0, "VisionTimeout", timeout_s;
         /// `VisionActiveJob`: camera job 0..999 applied by M284 without P; written by M284. 0 =
         /// leave the camera on its loaded job.
         (Connection) active_job: i64 => i64 = 0, "VisionActiveJob", job;
-        /// `VisionImageWatchDir`: folder the camera FTP-pushes images into; empty disables M281 D1.
-        (Connection) image_watch_dir: String => &str = String::new(), "VisionImageWatchDir", short_text;
-        /// `VisionImageGrabTimeout`: how long M281 D1 waits for a fresh image, seconds.
-        (Connection) image_grab_timeout_s: f64 => f64 = 2.0, "VisionImageGrabTimeout", seconds_60;
         /// `VisionCameraResX`: image width, pixels.
         (Connection) camera_res_x: i64 => i64 = 1776, "VisionCameraResX", resolution;
         /// `VisionCameraResY`: image height, pixels.

@@ -1,7 +1,10 @@
 //! The OEM parameters (SPEC §5, manual appendix A) under the manual's own names.
 //!
-//! The parameters fall into three parts with one owner each:
-//! * [`Config`]: connection, camera, output and quality gates — the operator's settings;
+//! The parameters fall into parts with one owner each:
+//! * [`Config`]: the driver's name, camera, output and quality gates — the operator's settings;
+//! * [`DriverSettings`]: a camera driver's own settings (the Keyence camera's `VisionIP`,
+//!   `VisionPort`, …), declared, checked and read by the driver ([`SettingsTable`]); the core
+//!   only carries them, by name, and the profile keeps them in the driver's own table;
 //! * [`Calibration`]: K, the axis flags, `Cal_Units`, `Cal_Date`, the pixel centre offset —
 //!   replaced as a whole by M283;
 //! * [`Telemetry`]: `Last*` and `Run_*` — written by the module after each operation, read-only
@@ -24,13 +27,15 @@
 //! The code, by concern: [`ParamValue`] and the other descriptions in `value.rs`; the Rust types a
 //! parameter can have in `typed.rs`; the range checks in `checks.rs`; the table machinery
 //! (`param_struct!`, `profile_part!`) in `table.rs`; one file per part (`config.rs`,
-//! `calibration.rs` with the K limits, `telemetry.rs`); [`Params`] here.
+//! `calibration.rs` with the K limits, `telemetry.rs`); the drivers' settings in `driver.rs`;
+//! [`Params`] here.
 
 #[macro_use]
 mod table;
 mod calibration;
 mod checks;
 mod config;
+mod driver;
 mod telemetry;
 pub(crate) mod typed;
 mod value;
@@ -39,26 +44,59 @@ use vision_math::{Matrix2, Remap};
 
 pub use calibration::{Calibration, K_MAX_ANISOTROPY, K_SCALE_MAX_IN, K_SCALE_MIN_IN};
 pub use config::Config;
+pub use driver::{DriverSettings, Setting, SettingsTable};
 pub use telemetry::Telemetry;
 pub use value::{Access, ParamKind, ParamSpec, ParamValue, Section};
 
 use crate::error::VisionError;
 
-/// The persisted profile (SPEC §5): the [`Config`] and the [`Calibration`], read and written by
-/// the manual's names. The module's run state and its [`Telemetry`] are not part of it.
+/// The persisted profile (SPEC §5): the [`Config`], the [`Calibration`] and the camera
+/// drivers' own settings ([`DriverSettings`]), read and written by the manual's names. The
+/// module's run state and its [`Telemetry`] are not part of it.
 ///
 /// Every configuration and calibration getter is also available on `Params` directly
-/// (`params.ip()`, `params.cal_k()`).
+/// (`params.pound_var_base()`, `params.cal_k()`). A driver's settings are known by name once
+/// their table is added ([`Params::with_driver_settings`]; `DriverRegistry::params` adds every
+/// registered driver's): `Params::default()` knows none.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Params {
-    /// Connection, camera, output and quality gates.
+    /// The driver's name, camera, output and quality gates.
     pub config: Config,
     /// K, the axis flags, `Cal_Units`, `Cal_Date` and the pixel centre offset.
     pub calibration: Calibration,
+    /// The drivers' settings tables, in the order they were added.
+    pub(crate) drivers: Vec<DriverSettings>,
 }
 
 impl Params {
-    /// Every parameter: configuration, calibration, then telemetry.
+    /// These parameters with `table`'s settings at their defaults added (kept as they are when
+    /// the table is already there).
+    #[must_use]
+    pub fn with_driver_settings(mut self, table: &'static SettingsTable) -> Params {
+        if self.driver_settings(table.table).is_none() {
+            self.drivers.push(DriverSettings::new(table));
+        }
+        self
+    }
+
+    /// The settings of the driver whose profile table is `table` (`keyence`), if added.
+    #[must_use]
+    pub fn driver_settings(&self, table: &str) -> Option<&DriverSettings> {
+        self.drivers.iter().find(|d| d.table() == table)
+    }
+
+    /// As [`Params::driver_settings`], to write.
+    pub fn driver_settings_mut(&mut self, table: &str) -> Option<&mut DriverSettings> {
+        self.drivers.iter_mut().find(|d| d.table() == table)
+    }
+
+    /// Every driver settings table, in the order they were added.
+    pub fn drivers_settings(&self) -> impl Iterator<Item = &DriverSettings> {
+        self.drivers.iter()
+    }
+
+    /// The core's parameters: configuration, calibration, then telemetry (a driver's settings
+    /// are listed by its [`DriverSettings::specs`]).
     pub fn specs() -> impl Iterator<Item = &'static ParamSpec> {
         Config::SPECS.iter().chain(Calibration::SPECS).chain(Telemetry::SPECS)
     }
@@ -78,10 +116,11 @@ impl Params {
         self.config
             .get(name)
             .or_else(|| self.calibration.get(name))
+            .or_else(|| self.drivers.iter().find_map(|d| d.get(name).cloned()))
             .ok_or_else(|| VisionError::UnknownParam { name: name.to_string() })
     }
 
-    /// Writes configuration or calibration parameter `name` (case-insensitive) after
+    /// Writes configuration, calibration or driver setting `name` (case-insensitive) after
     /// validating `value`.
     ///
     /// Text is accepted for every type (`"Yes"`, `"8500"`, `"0.00203"`, `"mm"`), so a CLI can
@@ -95,6 +134,11 @@ impl Params {
         let value = value.into();
         if self.config.set_raw(name, &value)? || self.calibration.set_raw(name, &value)? {
             return Ok(());
+        }
+        for driver in &mut self.drivers {
+            if driver.set(name, &value)? {
+                return Ok(());
+            }
         }
         match Telemetry::SPECS.iter().find(|s| s.name.eq_ignore_ascii_case(name)) {
             Some(spec) => Err(VisionError::ReadOnlyParam { name: spec.name.to_string() }),
@@ -133,9 +177,18 @@ impl Params {
         self.config.camera_tool()
     }
 
-    /// Every persisted parameter with its value: configuration, then calibration.
+    /// Every persisted parameter with its value: configuration, calibration, then each driver's
+    /// settings.
     #[must_use]
     pub fn config_values(&self) -> Vec<(&'static str, ParamValue)> {
+        let mut values = self.core_values();
+        values.extend(self.drivers.iter().flat_map(DriverSettings::values));
+        values
+    }
+
+    /// The core's persisted parameters with their values: configuration, then calibration.
+    #[must_use]
+    pub fn core_values(&self) -> Vec<(&'static str, ParamValue)> {
         Config::SPECS
             .iter()
             .filter_map(|s| self.config.get(s.name).map(|v| (s.name, v)))
@@ -146,7 +199,7 @@ impl Params {
 
 #[cfg(test)]
 #[allow(clippy::float_cmp)]
-mod tests {
+pub(crate) mod tests {
     use vision_math::{LengthUnit, Vector2};
 
     use super::*;
@@ -156,9 +209,7 @@ mod tests {
         let p = Params::default();
         assert!(!p.enabled());
         assert_eq!(p.driver(), "Keyence");
-        assert_eq!(p.ip(), "192.168.208.80");
-        assert_eq!(p.port(), 8500);
-        assert_eq!(p.get("VisionTimeout"), Ok(ParamValue::Float(3.0)));
+        assert!(matches!(p.get("VisionIP"), Err(VisionError::UnknownParam { .. })), "a driver's, not the core's");
         assert_eq!(p.camera_res_x(), 1776);
         assert_eq!(p.pound_var_base(), 500);
         assert_eq!(p.cal_units(), LengthUnit::Inch);
@@ -189,13 +240,13 @@ mod tests {
         let mut p = Params::default();
         p.set("VisionEnabled", "Yes").expect("yes");
         assert!(p.enabled());
-        p.set("VisionPort", "8600").expect("port text");
-        assert_eq!(p.port(), 8600);
+        p.set("VisionCameraResX", "1600").expect("resolution text");
+        assert_eq!(p.camera_res_x(), 1600);
         p.set("VisionCal_K11", 0.00203).expect("k");
         p.set("VisionCal_Units", "mm").expect("mm");
         assert_eq!(p.cal_units(), LengthUnit::Millimetre);
-        assert!(matches!(p.set("VisionPort", 70_000), Err(VisionError::InvalidParam { .. })));
-        assert_eq!(p.port(), 8600);
+        assert!(matches!(p.set("VisionCameraResX", 170_000), Err(VisionError::InvalidParam { .. })));
+        assert_eq!(p.camera_res_x(), 1600);
         assert!(matches!(p.set("VisionCal_K12", f64::NAN), Err(VisionError::InvalidParam { .. })));
         assert!(matches!(p.set("VisionEnabled", "maybe"), Err(VisionError::InvalidParam { .. })));
         assert!(matches!(p.set("VisionCal_Units", "ft"), Err(VisionError::InvalidParam { .. })));
@@ -209,10 +260,65 @@ mod tests {
         assert_eq!(p.set("VisionRun_Tx", 1.0), Err(VisionError::ReadOnlyParam { name: "VisionRun_Tx".into() }));
         assert!(matches!(p.set("VisionNope", 1), Err(VisionError::UnknownParam { .. })));
         assert!(matches!(p.set("VisionActiveJob", 1000), Err(VisionError::InvalidParam { .. })));
-        assert!(matches!(p.set("VisionIP", "bad host!"), Err(VisionError::InvalidParam { .. })));
-        assert!(matches!(p.set("VisionPort", 1.5), Err(VisionError::InvalidParam { .. })));
-        let e = p.set("VisionPort", "x").expect_err("not a number");
-        assert_eq!(e.to_string(), "VisionPort = \"x\" is invalid: must be an integer");
+        assert!(matches!(p.set("VisionCameraResX", 1.5), Err(VisionError::InvalidParam { .. })));
+        let e = p.set("VisionCameraResX", "x").expect_err("not a number");
+        assert_eq!(e.to_string(), "VisionCameraResX = \"x\" is invalid: must be an integer");
+    }
+
+    /// A driver's table, as a driver crate declares one.
+    pub(crate) static PROBE: SettingsTable = SettingsTable {
+        table: "probe",
+        settings: &[
+            Setting {
+                spec: ParamSpec {
+                    name: "VisionProbeLevel",
+                    kind: ParamKind::Integer,
+                    access: Access::Config,
+                    section: Section::Connection,
+                    doc: "`VisionProbeLevel`: a level 1..9.",
+                },
+                default: || ParamValue::Int(5),
+                check: |v| match v {
+                    ParamValue::Int(1..=9) => Ok(()),
+                    _ => Err("must be a level 1..9".into()),
+                },
+            },
+            Setting {
+                spec: ParamSpec {
+                    name: "VisionProbeMode",
+                    kind: ParamKind::Choice(&["fast", "slow"]),
+                    access: Access::Config,
+                    section: Section::Connection,
+                    doc: "`VisionProbeMode`: fast or slow.",
+                },
+                default: || ParamValue::Text("fast".into()),
+                check: |_| Ok(()),
+            },
+        ],
+    };
+
+    #[test]
+    fn a_drivers_settings_are_read_and_written_by_name_once_its_table_is_added() {
+        let mut p = Params::default();
+        assert!(matches!(p.set("VisionProbeLevel", 3), Err(VisionError::UnknownParam { .. })));
+        p = p.with_driver_settings(&PROBE);
+        assert_eq!(p.get("visionprobelevel"), Ok(ParamValue::Int(5)));
+        p.set("VisionProbeLevel", "7").expect("text is read as the setting's type");
+        p.set("VisionProbeMode", "SLOW").expect("a choice, case-insensitive");
+        assert_eq!(p.get("VisionProbeMode"), Ok(ParamValue::Text("slow".into())));
+        let e = p.set("VisionProbeLevel", 10).expect_err("the driver's check");
+        assert_eq!(e.to_string(), "VisionProbeLevel = 10 is invalid: must be a level 1..9");
+        let e = p.set("VisionProbeLevel", "x").expect_err("the type");
+        assert_eq!(e.to_string(), "VisionProbeLevel = \"x\" is invalid: must be an integer");
+        assert!(matches!(p.set("VisionProbeMode", "medium"), Err(VisionError::InvalidParam { .. })));
+        assert_eq!(p.get("VisionProbeLevel"), Ok(ParamValue::Int(7)), "a refused value changes nothing");
+        // Adding the table again keeps its values; the values are listed after the core's.
+        let p = p.with_driver_settings(&PROBE);
+        assert_eq!(p.driver_settings("probe").and_then(|d| d.get("VisionProbeLevel")), Some(&ParamValue::Int(7)));
+        let values = p.config_values();
+        assert_eq!(values.len(), p.core_values().len() + 2);
+        assert_eq!(values.last(), Some(&("VisionProbeMode", ParamValue::Text("slow".into()))));
+        assert_ne!(p, Params::default().with_driver_settings(&PROBE));
     }
 
     #[test]

@@ -120,6 +120,24 @@ impl ParamType for LengthUnit {
     }
 }
 
+/// `v` read as a value of `kind` (text is read as the kind, as [`ParamType::from_value`] does;
+/// a choice matches its words case-insensitively and gives the word as declared); `None` when
+/// `v` is not one.
+pub(crate) fn coerce(kind: ParamKind, v: &ParamValue) -> Option<ParamValue> {
+    match kind {
+        ParamKind::YesNo => bool::from_value(v).map(ParamValue::Bool),
+        ParamKind::Integer => i64::from_value(v).map(ParamValue::Int),
+        ParamKind::Float => f64::from_value(v).map(ParamValue::Float),
+        ParamKind::Text => String::from_value(v).map(ParamValue::Text),
+        ParamKind::Choice(words) => match v {
+            ParamValue::Text(s) => {
+                words.iter().find(|w| w.eq_ignore_ascii_case(s.trim())).map(|w| ParamValue::Text((*w).to_string()))
+            }
+            _ => None,
+        },
+    }
+}
+
 /// Why a value is not of `kind`, for [`crate::VisionError::InvalidParam`].
 pub(crate) fn kind_reason(kind: ParamKind) -> String {
     match kind {
