@@ -10,7 +10,7 @@
 //! * [`KeyenceConfig`]: address, timeout, bounds and the image folder, from those settings.
 //! * `images`: M281 D1, the image the camera FTP-pushed for a trigger
 //!   ([`vision_core::CameraDriver::grab_image`]).
-//! * [`Session`]: the pure part — framing, reply parsing and the command/reply state machine
+//! * [`Exchange`]: the pure part — framing, reply parsing and the command/reply state machine
 //!   over any `Read + Write` (a transport of your own, e.g. a serial link); the socket is a thin
 //!   edge around it. [`parse_data_line`] reads one Data Output line.
 //! * `emulator` (cargo feature `emulator`): a TCP server that answers like a VS camera, with
@@ -130,4 +130,4 @@ mod transport;
 pub use config::{ImageWatch, KeyenceConfig, DEFAULT_PORT, DEFAULT_TIMEOUT, MAX_TIMEOUT};
 pub use driver::{register, KeyenceDriver, DRIVER_NAME};
 pub use error::{er_meaning, KeyenceError};
-pub use protocol::{parse_data_line, JobCommand, Limits, Program, Session};
+pub use protocol::{parse_data_line, Exchange, JobCommand, Limits, Program};

@@ -12,7 +12,7 @@ use crate::error::VisionError;
 /// One setting of a camera driver, as the driver declares it.
 #[derive(Debug)]
 pub struct Setting {
-    /// Its name (the manual's, e.g. `VisionIP`), type, section and description with units.
+    /// Its name (the manual's, `Vision…`), type, section and description with units.
     /// `access` is [`Access::Config`](super::Access::Config): a driver setting is written by
     /// the operator and persisted.
     pub spec: ParamSpec,

@@ -2,8 +2,8 @@
 //!
 //! The parameters fall into parts with one owner each:
 //! * [`Config`]: the driver's name, camera, output and quality gates — the operator's settings;
-//! * [`DriverSettings`]: a camera driver's own settings (the Keyence camera's `VisionIP`,
-//!   `VisionPort`, …), declared, checked and read by the driver ([`SettingsTable`]); the core
+//! * [`DriverSettings`]: a camera driver's own settings (a camera's address, its timeouts, …),
+//!   declared, checked and read by the driver ([`SettingsTable`]); the core
 //!   only carries them, by name, and the profile keeps them in the driver's own table;
 //! * [`Calibration`]: K, the axis flags, `Cal_Units`, `Cal_Date`, the pixel centre offset —
 //!   replaced as a whole by M283;
@@ -209,7 +209,7 @@ pub(crate) mod tests {
         let p = Params::default();
         assert!(!p.enabled());
         assert_eq!(p.driver(), "Keyence");
-        assert!(matches!(p.get("VisionIP"), Err(VisionError::UnknownParam { .. })), "a driver's, not the core's");
+        assert!(matches!(p.get("VisionProbeLevel"), Err(VisionError::UnknownParam { .. })), "a driver's");
         assert_eq!(p.camera_res_x(), 1776);
         assert_eq!(p.pound_var_base(), 500);
         assert_eq!(p.cal_units(), LengthUnit::Inch);
