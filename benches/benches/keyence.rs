@@ -9,7 +9,7 @@ use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use vision_benches::keyence::{camera, raw_trigger, InMemoryCamera, FULL_LINE};
-use vision_driver_keyence::{parse_data_line, Limits, Session};
+use vision_driver_keyence::{parse_data_line, Exchange, Limits};
 use vision_driver_keyence::{KeyenceConfig, KeyenceDriver};
 
 fn round_trip(c: &mut Criterion) {
@@ -39,7 +39,7 @@ fn round_trip(c: &mut Criterion) {
 
 fn protocol(c: &mut Criterion) {
     let mut group = c.benchmark_group("keyence/protocol");
-    let mut session = Session::new(InMemoryCamera::default(), Limits::default(), Duration::from_secs(3));
+    let mut session = Exchange::new(InMemoryCamera::default(), Limits::default(), Duration::from_secs(3));
     group.bench_function("session_trigger_in_memory", |b| {
         b.iter(|| {
             black_box(session.trigger().expect("reading"));

@@ -8,8 +8,8 @@ use std::net::TcpStream;
 use std::time::{Duration, Instant};
 
 use vision_benches::keyence::{camera, raw_trigger, InMemoryCamera};
+use vision_driver_keyence::{Exchange, Limits};
 use vision_driver_keyence::{KeyenceConfig, KeyenceDriver};
-use vision_driver_keyence::{Limits, Session};
 
 fn main() {
     let mode = std::env::args().nth(1).unwrap_or_else(|| "driver".into());
@@ -32,7 +32,7 @@ fn main() {
             }
         }
         "session" => {
-            let mut s = Session::new(InMemoryCamera::default(), Limits::default(), Duration::from_secs(3));
+            let mut s = Exchange::new(InMemoryCamera::default(), Limits::default(), Duration::from_secs(3));
             for _ in 0..iters {
                 black_box(s.trigger().expect("reading"));
             }

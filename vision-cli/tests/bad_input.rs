@@ -88,6 +88,8 @@ fn command_line_camera_choices_are_not_written_into_the_profile() {
         for kept in ["VisionDriver = \"Keyence\"", "VisionIP = \"10.1.2.3\"", "VisionPort = 8600"] {
             assert!(saved.contains(kept), "{camera:?}: {kept} missing from {saved}");
         }
+        let keyence = saved.find("[keyence]").expect("the driver's settings in its own table");
+        assert!(saved.find("VisionIP") > Some(keyence), "{saved}");
     }
 }
 
@@ -129,4 +131,17 @@ fn the_run_report_keeps_a_bounded_number_of_steps_and_counts_the_rest() {
         "{}",
         &text[text.len().saturating_sub(500)..]
     );
+}
+
+#[test]
+fn camera_takes_any_registered_name_in_any_case_and_lists_them_for_an_unknown_one() {
+    let out = bin().args(["run", "--camera", "SIM"]).arg(example("04-rectangle-fit.nc")).output().expect("run");
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout).expect("utf-8");
+    assert!(text.starts_with("mach-vision run: world built-in, camera: simulated camera\n"), "{text}");
+    let out = bin().args(["run", "--camera", "basler\u{7}"]).arg(example("04-rectangle-fit.nc")).output().expect("run");
+    let err = one_short_line(&out, "--camera basler\\u{7}: no such camera");
+    assert!(err.contains("the cameras are sim, keyence (any case)"), "{err}");
+    let out = bin().args(["run", "--camera", "sim", "--ip", "10.0.0.1"]).arg(example("04-rectangle-fit.nc")).output();
+    one_short_line(&out.expect("run"), "--ip needs --camera keyence");
 }

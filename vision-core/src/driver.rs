@@ -5,8 +5,9 @@
 //! [`DriverErrorKind`] so the core can react without knowing the driver.
 
 use std::fmt;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::time::Duration;
+use std::time::{Duration, SystemTime};
 
 /// The camera's pass/fail verdict for a trigger.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -91,8 +92,20 @@ impl Reading {
 pub struct Capabilities {
     /// The driver can switch camera jobs/programs (M284).
     pub select_job: bool,
-    /// The camera writes images that can be grabbed from a watch folder (M281 D1).
+    /// The driver can keep the image of a trigger (M281 D1, [`CameraDriver::grab_image`]).
     pub grab_image: bool,
+}
+
+/// What M281 D1 asks of [`CameraDriver::grab_image`]: which trigger's image, and where to keep it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ImageRequest<'a> {
+    /// The folder to save the image into (the module's images folder; created if missing).
+    pub dir: &'a Path,
+    /// When the trigger was sent (the host's clock): an image older than this is not its image.
+    pub since: SystemTime,
+    /// The trigger's time as a file-name stamp (`YYYYMMDD_HHMMSS_mmm`): the saved file is named
+    /// `vision_<stamp>.<ext>` (`_2`, `_3`, … when taken); a file is never overwritten.
+    pub stamp: &'a str,
 }
 
 /// The common kind of a driver failure, so the core can react without knowing the driver.
@@ -215,6 +228,19 @@ pub trait CameraDriver: Send {
     fn reading_warning(&self, reading: &Reading) -> Option<String> {
         let _ = reading;
         None
+    }
+
+    /// M281 D1: keeps the image of the trigger `request` describes, saved into `request.dir`,
+    /// and returns the saved file's path. How the camera delivers images (a folder it pushes
+    /// them to, a download, …) is the driver's business and its settings'. The default, for a
+    /// driver without [`Capabilities::grab_image`], answers [`DriverErrorKind::Unsupported`].
+    ///
+    /// # Errors
+    /// Unsupported, no image in time, or the image could not be saved; M281 reports it as a
+    /// warning, never as a failed capture.
+    fn grab_image(&mut self, request: &ImageRequest<'_>) -> Result<PathBuf, DriverError> {
+        let _ = request;
+        Err(DriverError::new(DriverErrorKind::Unsupported, format!("camera driver {} cannot keep images", self.name())))
     }
 
     /// The I/O timeout the driver applies to one exchange (for diagnostics).

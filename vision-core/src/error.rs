@@ -75,7 +75,7 @@ pub enum VisionError {
 
     /// The driver failed. The text is the driver's own ([`DriverError`]'s `Display`): only the
     /// driver knows its camera, its protocol and what each refusal means, and it names the
-    /// `Vision*` parameters it reads (`VisionIP`, `VisionPort`, `VisionTimeout`). The core adds
+    /// settings it reads (its [`crate::SettingsTable`]). The core adds
     /// nothing of a camera's vocabulary; it only describes the [`DriverErrorKind`] when a driver
     /// sent no text at all.
     #[error("{}", driver_message(.0))]
@@ -219,7 +219,7 @@ fn driver_message(e: &DriverError) -> String {
         return text;
     }
     match e.kind() {
-        DriverErrorKind::Timeout => "the camera did not answer within VisionTimeout",
+        DriverErrorKind::Timeout => "the camera did not answer in time",
         DriverErrorKind::Refused => "the camera refused or closed the connection",
         DriverErrorKind::Malformed => "the camera's reply could not be understood",
         DriverErrorKind::Rejected => "the camera refused the command",
@@ -286,7 +286,7 @@ mod tests {
             assert!(silent.starts_with("the camera"), "{kind:?}: {silent}");
         }
         let timeout = VisionError::from(DriverError::new(DriverErrorKind::Timeout, " "));
-        assert_eq!(timeout.to_string(), "the camera did not answer within VisionTimeout");
+        assert_eq!(timeout.to_string(), "the camera did not answer in time");
         assert!(VisionError::PoundBaseReserved { base: 5050, end: 5089 }
             .to_string()
             .starts_with("VisionPoundVarBase is in reserved range"));

@@ -10,9 +10,9 @@
 //! * [`params`]: the OEM parameters under the manual's names, in three parts ([`Config`],
 //!   [`Calibration`], [`Telemetry`]); [`profile`]: the TOML file of the first two ([`Params`]).
 //! * [`module`]: [`VisionModule`] with the typed entry points `m280` … `m284`.
-//! * [`pound`]: the pound-variable block; [`image_grab`]: M281 D1.
+//! * [`pound`]: the pound-variable block.
 //! * [`calibrate`]: M283's axis detect, quick calibration and sheet walk; [`sheets`]: `CAL_SHEETS`.
-//! * [`registry`]: drivers by name for the CLI.
+//! * [`registry`]: the camera drivers by name, with their settings tables.
 //! * [`text`]: messages and reports made safe to show a person (control characters, huge input).
 //!
 //! The crate depends on `vision-math` only (plus `thiserror`, `serde`, `toml`); it knows no
@@ -52,7 +52,6 @@ pub mod calibrate;
 pub mod controller;
 pub mod driver;
 mod error;
-pub mod image_grab;
 pub mod machine;
 pub mod module;
 pub mod params;
@@ -65,14 +64,17 @@ pub mod text;
 
 pub use calibrate::{AxisReport, CalReport, Calibrate, DotVerify, QuickReport, SheetReport};
 pub use controller::{Controller, CONTROLLERS};
-pub use driver::{CameraDriver, Capabilities, DriverError, DriverErrorKind, Judgment, Reading};
+pub use driver::{CameraDriver, Capabilities, DriverError, DriverErrorKind, ImageRequest, Judgment, Reading};
 pub use error::VisionError;
 pub use machine::{Machine, MachineError, MachineErrorKind, Timestamp};
 pub use module::{
     AlignReport, Capture, Dot, DroppedMark, JobReport, Pieces, PredictedError, Recentred, Reply, Run, RunMode,
     StepwiseWalk, TelemetrySink, VisionModule,
 };
-pub use params::{Access, Calibration, Config, ParamKind, ParamSpec, ParamValue, Params, Section, Telemetry};
+pub use params::{
+    Access, Calibration, Config, DriverSettings, ParamKind, ParamSpec, ParamValue, Params, Section, Setting,
+    SettingsTable, Telemetry,
+};
 pub use pound::{PoundBlock, PoundReport, SlotValues};
 pub use profile::{ProfileFs, ProfileStore, StdFs};
 pub use registry::{DriverFactory, DriverRegistry};

@@ -7,7 +7,17 @@
 //! VisionEnabled = true
 //! VisionCal_K11 = 0.00203
 //! # …
+//!
+//! [keyence]   # a camera driver's own settings
+//! # …
 //! ```
+//!
+//! `[vision]` holds the core's parameters; each camera driver with settings has its own table
+//! (its [`SettingsTable`](crate::params::SettingsTable)), under the manual's names. A driver's
+//! settings are read from `[vision]` too, where the manual writes them (and where profiles
+//! written before drivers had tables hold them); a save writes them to the driver's table. A
+//! store knows the drivers' tables of the parameters it starts from
+//! ([`ProfileStore::with_defaults`]).
 //!
 //! Saving is atomic: the whole profile (so K11..K22 together) is written to a temporary file in
 //! the same folder, flushed to disk (`fsync`), and renamed over the old file; the folder is then
@@ -18,7 +28,7 @@
 //! before the motion whose result it will save.
 //!
 //! Bad input refused at load (naming the key): a path that is not a regular file, unknown keys
-//! or tables, values out of range, a K that is singular or of an absurd scale
+//! or tables (a driver's table the store does not know is unknown), values out of range, a K that is singular or of an absurd scale
 //! ([`crate::Calibration::check_k`]). Text for a number or yes/no (`"8500"`, `"yes"`) is read
 //! as its type, as the host's own profile stores it.
 
@@ -28,7 +38,7 @@ use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
 use crate::error::VisionError;
 use crate::params::{ParamValue, Params};
@@ -84,6 +94,8 @@ pub struct ProfileStore {
     fs: Box<dyn ProfileFs>,
     /// Values saved instead of the module's (see [`ProfileStore::keep`]).
     kept: Vec<(&'static str, ParamValue)>,
+    /// What a load starts from (see [`ProfileStore::with_defaults`]).
+    base: Params,
 }
 
 impl std::fmt::Debug for ProfileStore {
@@ -92,15 +104,19 @@ impl std::fmt::Debug for ProfileStore {
     }
 }
 
-/// Decision: a profile holds `[vision]` and nothing else, and `[vision]` only the manual's
-/// names; anything more is refused naming it. A save rewrites the whole file, so a key kept
-/// only in memory would be silently deleted; a host bridge keeps its own settings in its own
-/// file.
-#[derive(Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// Decision: a profile holds `[vision]` and the known drivers' tables and nothing else, and
+/// each table only the manual's names; anything more is refused naming it. A save rewrites the
+/// whole file, so a key kept only in memory would be silently deleted; a host bridge keeps its
+/// own settings in its own file.
+#[derive(Serialize)]
 struct ProfileFile {
     vision: BTreeMap<String, toml::Value>,
+    #[serde(flatten)]
+    drivers: BTreeMap<String, BTreeMap<String, toml::Value>>,
 }
+
+/// The name of the core's table.
+const VISION: &str = "vision";
 
 static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
 
@@ -114,7 +130,16 @@ impl ProfileStore {
     /// A store for `path` whose writes go through `fs`.
     #[must_use]
     pub fn with_fs(path: impl Into<PathBuf>, fs: Box<dyn ProfileFs>) -> ProfileStore {
-        ProfileStore { path: path.into(), fs, kept: Vec::new() }
+        ProfileStore { path: path.into(), fs, kept: Vec::new(), base: Params::default() }
+    }
+
+    /// Loads start from `base` instead of the defaults: the parameters a missing file gives,
+    /// and, with them, the drivers' settings tables a file may hold (`DriverRegistry::params`
+    /// gives every registered driver's).
+    #[must_use]
+    pub fn with_defaults(mut self, base: Params) -> ProfileStore {
+        self.base = base;
+        self
     }
 
     /// Every later save writes `value` for parameter `name`, whatever the module holds: for a
@@ -156,7 +181,8 @@ impl ProfileStore {
         &self.path
     }
 
-    /// Reads the profile: defaults, overridden by every parameter in the file (validated).
+    /// Reads the profile: the defaults ([`ProfileStore::with_defaults`]), overridden by every
+    /// parameter in the file (validated).
     ///
     /// # Errors
     /// [`VisionError::Profile`] when the file cannot be read or parsed, or names an unknown or
@@ -164,7 +190,7 @@ impl ProfileStore {
     pub fn load(&self) -> Result<Params, VisionError> {
         self.require_regular_file()?;
         let text = fs::read_to_string(&self.path).map_err(|e| self.err(format!("cannot read: {e}")))?;
-        from_toml(&text).map_err(|e| self.err(e))
+        from_toml_with(&text, self.base.clone()).map_err(|e| self.err(e))
     }
 
     /// As [`ProfileStore::load`], but a missing file gives the defaults.
@@ -175,7 +201,7 @@ impl ProfileStore {
         if self.path.exists() {
             self.load()
         } else {
-            Ok(Params::default())
+            Ok(self.base.clone())
         }
     }
 
@@ -272,56 +298,100 @@ fn process_is_dead(pid: u32) -> bool {
     pid != std::process::id() && proc_root.join("self").exists() && !proc_root.join(pid.to_string()).exists()
 }
 
-/// The profile text for `params` (configuration parameters only).
+/// A parameter value as TOML.
+fn toml_value(v: ParamValue) -> toml::Value {
+    match v {
+        ParamValue::Bool(b) => toml::Value::Boolean(b),
+        ParamValue::Int(i) => toml::Value::Integer(i),
+        ParamValue::Float(f) => toml::Value::Float(f),
+        ParamValue::Text(s) => toml::Value::String(s),
+    }
+}
+
+/// The profile text for `params` (configuration parameters only): `[vision]`, then each
+/// driver's table.
 ///
 /// # Errors
 /// A serialisation failure (not expected for validated parameters).
 pub fn to_toml(params: &Params) -> Result<String, String> {
-    let vision = params
-        .config_values()
-        .into_iter()
-        .map(|(name, v)| {
-            let value = match v {
-                ParamValue::Bool(b) => toml::Value::Boolean(b),
-                ParamValue::Int(i) => toml::Value::Integer(i),
-                ParamValue::Float(f) => toml::Value::Float(f),
-                ParamValue::Text(s) => toml::Value::String(s),
-            };
-            (name.to_string(), value)
-        })
-        .collect();
-    let body = toml::to_string(&ProfileFile { vision }).map_err(|e| format!("cannot serialise: {e}"))?;
+    let named = |values: Vec<(&'static str, ParamValue)>| {
+        values.into_iter().map(|(name, v)| (name.to_string(), toml_value(v))).collect::<BTreeMap<_, _>>()
+    };
+    let vision = named(params.core_values());
+    let drivers = params.drivers_settings().map(|d| (d.table().to_string(), named(d.values()))).collect();
+    let body = toml::to_string(&ProfileFile { vision, drivers }).map_err(|e| format!("cannot serialise: {e}"))?;
     Ok(format!(
         "# mach-vision: Vision OEM parameters (calibration and configuration).\n\
          # Written atomically by the Vision module; do not edit VisionCal_K11..K22 by hand.\n{body}"
     ))
 }
 
-/// Parameters from profile text: defaults overridden by every entry of `[vision]`.
+/// Parameters from profile text, starting from the defaults (which know no driver's table).
 ///
 /// # Errors
-/// A parse error, an unknown or telemetry name, or an invalid value (the message says which).
+/// As [`from_toml_with`].
 pub fn from_toml(text: &str) -> Result<Params, String> {
-    let file: ProfileFile = toml::from_str(text).map_err(|e| format!("cannot parse: {e}"))?;
-    let mut params = Params::default();
-    for (name, value) in file.vision {
-        let v = match value {
-            toml::Value::Boolean(b) => ParamValue::Bool(b),
-            toml::Value::Integer(i) => ParamValue::Int(i),
-            toml::Value::Float(f) => ParamValue::Float(f),
-            toml::Value::String(s) => ParamValue::Text(s),
-            other => return Err(format!("{name}: unsupported value {other}")),
-        };
-        params.set(&name, v).map_err(|e| e.to_string())?;
+    from_toml_with(text, Params::default())
+}
+
+/// Parameters from profile text: `base` overridden by every entry of `[vision]` and of the
+/// drivers' tables `base` has.
+///
+/// # Errors
+/// A parse error, a missing `[vision]`, an unknown table or key, an unknown or telemetry name,
+/// or an invalid value (the message says which).
+pub fn from_toml_with(text: &str, base: Params) -> Result<Params, String> {
+    let mut file: toml::Table = toml::from_str(text).map_err(|e| format!("cannot parse: {e}"))?;
+    let known: Vec<&str> = base.drivers_settings().map(|d| d.table()).collect();
+    if let Some(key) = file.keys().find(|k| *k != VISION && !known.contains(&k.as_str())) {
+        let tables: String = std::iter::once(VISION).chain(known.iter().copied()).map(|t| format!("[{t}]")).collect();
+        return Err(format!(
+            "cannot parse: unknown table or key `{key}`: a profile holds {tables} — move it into [vision] or remove it"
+        ));
+    }
+    let mut params = base;
+    let tables = |v: toml::Value, name: &str| match v {
+        toml::Value::Table(t) => Ok(t),
+        other => Err(format!("cannot parse: `{name}` must be a table [{name}], not {other}")),
+    };
+    let vision = tables(file.remove(VISION).ok_or("cannot parse: missing table [vision]")?, VISION)?;
+    for (name, value) in vision {
+        params.set(&name, param_value(&name, value)?).map_err(|e| e.to_string())?;
+    }
+    for (table, entries) in file {
+        let entries = tables(entries, &table)?;
+        let Some(settings) = params.driver_settings_mut(&table) else { continue };
+        for (name, value) in entries {
+            let value = param_value(&name, value)?;
+            if !settings.set(&name, &value).map_err(|e| e.to_string())? {
+                let names: Vec<&str> = settings.specs().map(|s| s.name).collect();
+                return Err(format!(
+                    "[{table}] {name}: unknown setting — [{table}] holds {}; the core's parameters go in [vision]",
+                    names.join(", ")
+                ));
+            }
+        }
     }
     params.calibration.check_k().map_err(|e| e.to_string())?;
     Ok(params)
+}
+
+/// A TOML value as a parameter value.
+fn param_value(name: &str, value: toml::Value) -> Result<ParamValue, String> {
+    Ok(match value {
+        toml::Value::Boolean(b) => ParamValue::Bool(b),
+        toml::Value::Integer(i) => ParamValue::Int(i),
+        toml::Value::Float(f) => ParamValue::Float(f),
+        toml::Value::String(s) => ParamValue::Text(s),
+        other => return Err(format!("{name}: unsupported value {other}")),
+    })
 }
 
 #[cfg(test)]
 #[allow(clippy::float_cmp)]
 mod tests {
     use super::*;
+    use crate::params::tests::PROBE;
     use vision_math::{LengthUnit, Matrix2};
 
     fn tmp_dir(name: &str) -> PathBuf {
@@ -337,7 +407,7 @@ mod tests {
         p.set_cal_k(Matrix2::new(0.00203, 1e-5, -1e-5, 0.00204)).expect("k");
         p.set("VisionCal_Units", "mm").expect("set");
         p.set("VisionCal_Date", "2025-01-02T03:04:05+00:00").expect("set");
-        p.set("VisionIP", "10.0.0.7").expect("set");
+        p.set("VisionCameraResX", 1600).expect("set");
         p
     }
 
@@ -351,7 +421,7 @@ mod tests {
         let back = store.load().expect("load");
         assert_eq!(back.cal_k(), p.cal_k());
         assert_eq!(back.cal_units(), LengthUnit::Millimetre);
-        assert_eq!(back.ip(), "10.0.0.7");
+        assert_eq!(back.camera_res_x(), 1600);
         assert_eq!(back, p);
         // No temporary file is left behind.
         let names: Vec<_> = fs::read_dir(&dir).expect("dir").flatten().map(|e| e.file_name()).collect();
@@ -360,12 +430,40 @@ mod tests {
     }
 
     #[test]
+    fn a_drivers_settings_load_from_its_table_or_vision_and_save_to_its_table() {
+        let base = Params::default().with_driver_settings(&PROBE);
+        // The manual's flat form (and profiles written before drivers had tables).
+        let flat =
+            from_toml_with("[vision]\nVisionEnabled = true\nVisionProbeLevel = 7\n", base.clone()).expect("flat");
+        assert_eq!(flat.get("VisionProbeLevel"), Ok(ParamValue::Int(7)));
+        let text = to_toml(&flat).expect("save");
+        assert!(text.contains("[probe]\nVisionProbeLevel = 7\nVisionProbeMode = \"fast\"\n"), "{text}");
+        assert!(text.find("[vision]") < text.find("[probe]"), "{text}");
+        assert!(!text[..text.find("[probe]").unwrap_or(0)].contains("VisionProbe"), "{text}");
+        assert_eq!(from_toml_with(&text, base.clone()), Ok(flat.clone()), "nothing is lost");
+        // A table's own keys only, checked by the driver; a table the store does not know is refused.
+        let e = from_toml_with("[vision]\n[probe]\nVisionEnabled = true\n", base.clone()).expect_err("core key");
+        assert!(e.contains("[probe] VisionEnabled: unknown setting") && e.contains("VisionProbeLevel"), "{e}");
+        let e = from_toml_with("[vision]\n[probe]\nVisionProbeLevel = 0\n", base.clone()).expect_err("range");
+        assert!(e.contains("VisionProbeLevel = 0 is invalid"), "{e}");
+        let e = from_toml(&text).expect_err("no such driver");
+        assert!(e.contains("unknown table or key `probe`"), "{e}");
+        // A missing file gives the store's defaults.
+        let dir = tmp_dir("drivers");
+        let store = ProfileStore::new(dir.join("vision.toml")).with_defaults(base.clone());
+        assert_eq!(store.load_or_default(), Ok(base));
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
     fn bad_profiles_are_refused_with_the_reason() {
-        assert!(from_toml("[vision]\nVisionPort = 0\n").expect_err("range").contains("VisionPort"));
+        assert!(from_toml("[vision]\nVisionCameraResX = 0\n").expect_err("range").contains("VisionCameraResX"));
         assert!(from_toml("[vision]\nVisionLastStatus = \"x\"\n").expect_err("ro").contains("read-only"));
         assert!(from_toml("[vision]\nVisionBogus = 1\n").expect_err("unknown").contains("unknown parameter"));
         assert!(from_toml("not toml [").expect_err("parse").starts_with("cannot parse"));
-        assert!(from_toml("[vision]\nVisionIP = [1]\n").expect_err("array").contains("unsupported"));
+        assert!(from_toml("[vision]\nVisionDriver = [1]\n").expect_err("array").contains("unsupported"));
+        assert!(from_toml("vision = 1\n").expect_err("not a table").contains("[vision]"));
+        assert!(from_toml("").expect_err("no [vision]").contains("missing table [vision]"));
         assert_eq!(from_toml("[vision]\n"), Ok(Params::default()));
     }
 
@@ -460,11 +558,12 @@ mod tests {
     /// as text), and the next save writes them typed.
     #[test]
     fn text_values_are_read_as_their_type() {
-        let p = from_toml("[vision]\nVisionPort = \"8501\"\nVisionEnabled = \"yes\"\n").expect("text");
-        assert_eq!(p.port(), 8501);
+        let p = from_toml("[vision]\nVisionCameraResX = \"1601\"\nVisionEnabled = \"yes\"\n").expect("text");
+        assert_eq!(p.camera_res_x(), 1601);
         assert!(p.enabled());
-        assert!(to_toml(&p).expect("save").contains("VisionPort = 8501\n"));
-        assert!(from_toml("[vision]\nVisionPort = \"85x\"\n").expect_err("not a number").contains("VisionPort"));
+        assert!(to_toml(&p).expect("save").contains("VisionCameraResX = 1601\n"));
+        let e = from_toml("[vision]\nVisionCameraResX = \"85x\"\n").expect_err("not a number");
+        assert!(e.contains("VisionCameraResX"), "{e}");
     }
 
     #[cfg(unix)]
@@ -504,12 +603,12 @@ mod tests {
     fn kept_values_are_saved_instead_of_the_modules() {
         let dir = tmp_dir("kept");
         let path = dir.join("vision.toml");
-        let mut store = ProfileStore::new(&path).keep("VisionIP", ParamValue::from("10.0.0.9"));
+        let mut store = ProfileStore::new(&path).keep("VisionCameraResX", ParamValue::from(1600));
         let mut p = calibrated();
         p.set("VisionDriver", "Sim").expect("set");
         store.save(&p).expect("save");
         let back = ProfileStore::new(&path).load().expect("load");
-        assert_eq!(back.ip(), "10.0.0.9");
+        assert_eq!(back.camera_res_x(), 1600);
         assert_eq!(back.driver(), "Sim", "only kept names are replaced");
         let _ = fs::remove_dir_all(&dir);
     }

@@ -1,20 +1,30 @@
-//! Camera drivers by name (`VisionDriver`), so the CLI can pick one at run time.
+//! Camera drivers by name (`VisionDriver`), with their settings, so a host can pick one at run
+//! time.
 //!
-//! The core knows no driver: each driver crate (or the CLI) registers a factory closure under
-//! its name, and [`DriverRegistry::create`] builds the one `VisionDriver` names, passing it the
-//! parameters (IP, port, timeout, …).
+//! The core knows no driver: each driver crate registers a factory closure under its name, and
+//! its settings table when it has settings ([`DriverRegistry::register_with_settings`]).
+//! [`DriverRegistry::params`] gives the parameters that know every registered driver's settings
+//! (what a profile load starts from), and [`DriverRegistry::create`] builds the driver
+//! `VisionDriver` names from the parameters.
 
 use crate::driver::{CameraDriver, DriverError};
 use crate::error::VisionError;
-use crate::params::Params;
+use crate::params::{Params, SettingsTable};
 
 /// Builds a driver from the parameters.
 pub type DriverFactory = Box<dyn Fn(&Params) -> Result<Box<dyn CameraDriver>, DriverError> + Send + Sync>;
 
-/// Driver name → factory. Names match case-insensitively.
+/// One registered driver.
+struct Entry {
+    name: String,
+    settings: Option<&'static SettingsTable>,
+    factory: DriverFactory,
+}
+
+/// Driver name → settings and factory. Names match case-insensitively.
 #[derive(Default)]
 pub struct DriverRegistry {
-    entries: Vec<(String, DriverFactory)>,
+    entries: Vec<Entry>,
 }
 
 impl std::fmt::Debug for DriverRegistry {
@@ -30,25 +40,59 @@ impl DriverRegistry {
         DriverRegistry::default()
     }
 
-    /// Registers `factory` under `name`, replacing a driver of the same name.
+    /// Registers `factory` under `name` for a driver without settings, replacing a driver of
+    /// the same name.
     pub fn register<F>(&mut self, name: &str, factory: F)
     where
         F: Fn(&Params) -> Result<Box<dyn CameraDriver>, DriverError> + Send + Sync + 'static,
     {
-        self.entries.retain(|(n, _)| !n.eq_ignore_ascii_case(name));
-        self.entries.push((name.to_string(), Box::new(factory)));
+        self.insert(name, None, Box::new(factory));
+    }
+
+    /// Registers `factory` under `name` for a driver whose settings are `settings`, replacing
+    /// a driver of the same name. The factory always sees the settings' table in its
+    /// parameters (at its defaults when the parameters had none).
+    pub fn register_with_settings<F>(&mut self, name: &str, settings: &'static SettingsTable, factory: F)
+    where
+        F: Fn(&Params) -> Result<Box<dyn CameraDriver>, DriverError> + Send + Sync + 'static,
+    {
+        self.insert(name, Some(settings), Box::new(factory));
+    }
+
+    fn insert(&mut self, name: &str, settings: Option<&'static SettingsTable>, factory: DriverFactory) {
+        self.entries.retain(|e| !e.name.eq_ignore_ascii_case(name));
+        self.entries.push(Entry { name: name.to_string(), settings, factory });
     }
 
     /// The registered names, in registration order.
     #[must_use]
     pub fn names(&self) -> Vec<&str> {
-        self.entries.iter().map(|(n, _)| n.as_str()).collect()
+        self.entries.iter().map(|e| e.name.as_str()).collect()
     }
 
     /// True when `name` is registered.
     #[must_use]
     pub fn contains(&self, name: &str) -> bool {
-        self.entries.iter().any(|(n, _)| n.eq_ignore_ascii_case(name))
+        self.entry(name).is_some()
+    }
+
+    /// The registered name `name` matches (case-insensitive), as it was registered.
+    #[must_use]
+    pub fn name(&self, name: &str) -> Option<&str> {
+        self.entry(name).map(|e| e.name.as_str())
+    }
+
+    /// The settings table of driver `name`, when it has settings.
+    #[must_use]
+    pub fn settings(&self, name: &str) -> Option<&'static SettingsTable> {
+        self.entry(name).and_then(|e| e.settings)
+    }
+
+    /// The default parameters with every registered driver's settings at their defaults: what
+    /// a profile load starts from, so each driver's settings are known by name.
+    #[must_use]
+    pub fn params(&self) -> Params {
+        self.entries.iter().filter_map(|e| e.settings).fold(Params::default(), Params::with_driver_settings)
     }
 
     /// Builds driver `name` from `params`.
@@ -56,11 +100,18 @@ impl DriverRegistry {
     /// # Errors
     /// [`VisionError::UnknownDriver`], or the factory's error as [`VisionError::Driver`].
     pub fn create(&self, name: &str, params: &Params) -> Result<Box<dyn CameraDriver>, VisionError> {
-        let (_, factory) = self
-            .entries
-            .iter()
-            .find(|(n, _)| n.eq_ignore_ascii_case(name))
+        let entry = self
+            .entry(name)
             .ok_or_else(|| VisionError::UnknownDriver { name: name.to_string(), known: self.names().join(", ") })?;
-        Ok(factory(params)?)
+        match entry.settings {
+            Some(table) if params.driver_settings(table.table).is_none() => {
+                Ok((entry.factory)(&params.clone().with_driver_settings(table))?)
+            }
+            _ => Ok((entry.factory)(params)?),
+        }
+    }
+
+    fn entry(&self, name: &str) -> Option<&Entry> {
+        self.entries.iter().find(|e| e.name.eq_ignore_ascii_case(name))
     }
 }

@@ -71,11 +71,11 @@ mod tests {
 
     #[test]
     fn long_text_keeps_its_head_and_tail() {
-        let quoted = format!("VisionIP = \"{}\" is invalid: must be an IP address", "a".repeat(10_000_000));
+        let quoted = format!("VisionCal_Date = \"{}\" is invalid: must be text", "a".repeat(10_000_000));
         let line = printable_line(&quoted, MAX_MESSAGE_CHARS);
         assert!(line.chars().count() < MAX_MESSAGE_CHARS + 60, "{}", line.len());
-        assert!(line.starts_with("VisionIP = \"aaa"));
-        assert!(line.ends_with("is invalid: must be an IP address"));
+        assert!(line.starts_with("VisionCal_Date = \"aaa"));
+        assert!(line.ends_with("is invalid: must be text"));
         assert!(line.contains(&format!("[{} characters cut]", quoted.chars().count() - MAX_MESSAGE_CHARS)));
         let exact = "é".repeat(10);
         assert_eq!(printable_line(&exact, 10), exact, "exactly the limit is kept whole");

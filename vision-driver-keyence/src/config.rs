@@ -1,11 +1,14 @@
-//! What the driver needs to reach a camera, built from the `Vision*` parameters.
+//! What the driver needs to reach a camera and keep its images, built from its settings
+//! ([`crate::settings`]).
 
+use std::path::PathBuf;
 use std::time::Duration;
 
-use vision_core::Params;
+use vision_core::{ParamValue, Params};
 
 use crate::error::KeyenceError;
 use crate::protocol::Limits;
+use crate::settings::{self, MAX_IMAGE_GRAB_TIMEOUT_S};
 
 /// The Keyence Non-Procedural port (SPEC §7).
 pub const DEFAULT_PORT: u16 = 8500;
@@ -33,11 +36,31 @@ pub struct KeyenceConfig {
     /// Idle time before TCP keepalive probes start, so a camera that vanished while idle is
     /// noticed (default 10 s; `None` disables).
     pub keepalive: Option<Duration>,
+    /// Where the camera pushes its images, for M281 D1.
+    pub images: ImageWatch,
+}
+
+/// The folder a VS camera FTP-pushes its inspection images into, and how long M281 D1 waits
+/// there for the trigger's image.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ImageWatch {
+    /// The folder (`VisionImageWatchDir`); empty: no images are kept.
+    pub dir: PathBuf,
+    /// How long to wait for a fresh image (`VisionImageGrabTimeout`, default 2 s, at most 60 s).
+    pub timeout: Duration,
+}
+
+impl Default for ImageWatch {
+    /// No folder, 2 s.
+    fn default() -> Self {
+        ImageWatch { dir: PathBuf::new(), timeout: Duration::from_secs(2) }
+    }
 }
 
 impl KeyenceConfig {
     /// A configuration for the camera at `ip:port` with the defaults: 3 s timeout, default
-    /// [`Limits`], the camera's current memory device, keepalive after 10 s idle.
+    /// [`Limits`], the camera's current memory device, keepalive after 10 s idle, no image
+    /// folder.
     #[must_use]
     pub fn new(ip: impl Into<String>, port: u16) -> KeyenceConfig {
         KeyenceConfig {
@@ -47,6 +70,7 @@ impl KeyenceConfig {
             limits: Limits::default(),
             memory_device: None,
             keepalive: Some(Duration::from_secs(10)),
+            images: ImageWatch::default(),
         }
     }
 
@@ -57,17 +81,37 @@ impl KeyenceConfig {
         self
     }
 
-    /// `VisionIP`, `VisionPort` and `VisionTimeout` from the parameters, defaults for the rest.
+    /// The driver's settings in `params` (`[keyence]`: `VisionIP`, `VisionPort`,
+    /// `VisionTimeout`, `VisionImageWatchDir`, `VisionImageGrabTimeout`; their defaults when
+    /// `params` has no such table), defaults for the rest.
     ///
     /// # Errors
-    /// [`KeyenceError::Config`] when a value is out of the driver's range.
+    /// [`KeyenceError::Config`] naming the setting when a value is out of the driver's range.
     pub fn from_params(params: &Params) -> Result<KeyenceConfig, KeyenceError> {
-        let port = u16::try_from(params.port())
-            .map_err(|_| KeyenceError::Config { reason: format!("VisionPort {} is not a TCP port", params.port()) })?;
-        let seconds = params.timeout_s();
-        let timeout = Duration::try_from_secs_f64(seconds)
-            .map_err(|_| KeyenceError::Config { reason: format!("VisionTimeout {seconds} s is not a duration") })?;
-        let config = KeyenceConfig::new(params.ip(), port).with_timeout(timeout);
+        let table = settings::settings(params);
+        let value = |name: &str| table.get(name).cloned().ok_or_else(|| bad(format!("{name} is missing")));
+        let text = |name: &str| match value(name)? {
+            ParamValue::Text(s) => Ok(s),
+            other => Err(bad(format!("{name} {other} is not text"))),
+        };
+        let seconds = |name: &str| match value(name)? {
+            ParamValue::Float(s) => {
+                Duration::try_from_secs_f64(s).map_err(|_| bad(format!("{name} {s} s is not a duration")))
+            }
+            other => Err(bad(format!("{name} {other} is not a number of seconds"))),
+        };
+        let port = match value("VisionPort")? {
+            ParamValue::Int(p) => u16::try_from(p).map_err(|_| bad(format!("VisionPort {p} is not a TCP port")))?,
+            other => return Err(bad(format!("VisionPort {other} is not a TCP port"))),
+        };
+        let config = KeyenceConfig {
+            timeout: seconds("VisionTimeout")?,
+            images: ImageWatch {
+                dir: PathBuf::from(text("VisionImageWatchDir")?),
+                timeout: seconds("VisionImageGrabTimeout")?,
+            },
+            ..KeyenceConfig::new(text("VisionIP")?, port)
+        };
         config.validate()?;
         Ok(config)
     }
@@ -90,6 +134,9 @@ impl KeyenceConfig {
         if let Some(d) = self.memory_device.filter(|d| !(1..=2).contains(d)) {
             return bad(format!("memory device {d} must be 1 or 2"));
         }
+        if self.images.timeout.as_secs_f64() > MAX_IMAGE_GRAB_TIMEOUT_S {
+            return bad(format!("VisionImageGrabTimeout {:?} must be at most 60 s", self.images.timeout));
+        }
         if self.keepalive.is_some_and(|k| k < Duration::from_secs(1)) {
             return bad("keepalive must be at least 1 s".into());
         }
@@ -107,6 +154,10 @@ impl KeyenceConfig {
     }
 }
 
+fn bad(reason: String) -> KeyenceError {
+    KeyenceError::Config { reason }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -118,12 +169,16 @@ mod tests {
         assert_eq!(c.port, DEFAULT_PORT);
         assert_eq!(c.timeout, DEFAULT_TIMEOUT);
         assert_eq!(c.address(), "192.168.208.80:8500");
-        let mut p = Params::default();
+        assert_eq!(c.images, ImageWatch::default());
+        let mut p = Params::default().with_driver_settings(&settings::SETTINGS);
         p.set("VisionTimeout", 0.25).expect("timeout");
         p.set("VisionIP", "camera-1").expect("ip");
         p.set("VisionPort", 8600).expect("port");
+        p.set("VisionImageWatchDir", "/srv/ftp/vs").expect("folder");
+        p.set("VisionImageGrabTimeout", "0.5").expect("grab timeout");
         let c = KeyenceConfig::from_params(&p).expect("set");
         assert_eq!((c.ip.as_str(), c.port, c.timeout), ("camera-1", 8600, Duration::from_millis(250)));
+        assert_eq!(c.images, ImageWatch { dir: PathBuf::from("/srv/ftp/vs"), timeout: Duration::from_millis(500) });
     }
 
     #[test]
@@ -137,6 +192,10 @@ mod tests {
             ok.clone().with_timeout(Duration::from_secs(301)),
             KeyenceConfig { memory_device: Some(3), ..ok.clone() },
             KeyenceConfig { keepalive: Some(Duration::from_millis(10)), ..ok.clone() },
+            KeyenceConfig {
+                images: ImageWatch { timeout: Duration::from_secs(61), ..ImageWatch::default() },
+                ..ok.clone()
+            },
             KeyenceConfig { limits: Limits { max_line_len: 4, max_lines: 8 }, ..ok.clone() },
         ] {
             assert!(matches!(bad.validate(), Err(KeyenceError::Config { .. })), "{bad:?}");

@@ -1,13 +1,14 @@
 //! [`KeyenceDriver`]: one persistent connection, the reconnect rule, and the
 //! [`CameraDriver`] implementation.
 
+use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use vision_core::{CameraDriver, Capabilities, DriverError, DriverRegistry, Params, Reading};
+use vision_core::{CameraDriver, Capabilities, DriverError, DriverRegistry, ImageRequest, Params, Reading};
 
 use crate::config::KeyenceConfig;
 use crate::error::KeyenceError;
-use crate::protocol::{JobCommand, Program, Session, MAX_JOB};
+use crate::protocol::{Exchange, JobCommand, Program, MAX_JOB};
 use crate::transport::TcpLink;
 
 /// The driver's registry name (`VisionDriver = Keyence`).
@@ -26,7 +27,7 @@ pub const DRIVER_NAME: &str = "Keyence";
 #[derive(Debug)]
 pub struct KeyenceDriver {
     config: KeyenceConfig,
-    session: Option<Session<TcpLink>>,
+    exchange: Option<Exchange<TcpLink>>,
     job_command: Option<JobCommand>,
 }
 
@@ -37,10 +38,10 @@ impl KeyenceDriver {
     /// [`KeyenceError::Config`] when the configuration is unusable.
     pub fn new(config: KeyenceConfig) -> Result<KeyenceDriver, KeyenceError> {
         config.validate()?;
-        Ok(KeyenceDriver { config, session: None, job_command: None })
+        Ok(KeyenceDriver { config, exchange: None, job_command: None })
     }
 
-    /// A driver from `VisionIP`, `VisionPort` and `VisionTimeout`. Does not connect.
+    /// A driver from its settings in `params` ([`KeyenceConfig::from_params`]). Does not connect.
     ///
     /// # Errors
     /// As [`KeyenceConfig::from_params`].
@@ -57,12 +58,12 @@ impl KeyenceDriver {
     /// True while a connection is open (it may still turn out dead at the next call).
     #[must_use]
     pub fn is_connected(&self) -> bool {
-        self.session.is_some()
+        self.exchange.is_some()
     }
 
     /// Closes the connection; the next call reconnects.
     pub fn disconnect(&mut self) {
-        self.session = None;
+        self.exchange = None;
     }
 
     /// The job command this camera accepted (`PL` or `PW`), once a job switch has succeeded.
@@ -76,7 +77,7 @@ impl KeyenceDriver {
     /// # Errors
     /// Any [`KeyenceError`]; see the crate documentation for what each means.
     pub fn measure(&mut self) -> Result<Reading, KeyenceError> {
-        self.call(Session::trigger)
+        self.call(Exchange::trigger)
     }
 
     /// `FVR`: the camera's firmware version text.
@@ -84,7 +85,7 @@ impl KeyenceDriver {
     /// # Errors
     /// As [`KeyenceDriver::measure`].
     pub fn firmware_version(&mut self) -> Result<String, KeyenceError> {
-        self.call(Session::version)
+        self.call(Exchange::version)
     }
 
     /// `PR`: the job the camera runs.
@@ -92,7 +93,7 @@ impl KeyenceDriver {
     /// # Errors
     /// As [`KeyenceDriver::measure`].
     pub fn program(&mut self) -> Result<Program, KeyenceError> {
-        self.call(Session::program)
+        self.call(Exchange::program)
     }
 
     /// Switches the camera to job `job` (0–999): `PL` on a VS, `PW` when the camera answers
@@ -123,23 +124,23 @@ impl KeyenceDriver {
     /// camera refusal.
     fn call<T>(
         &mut self,
-        op: impl FnOnce(&mut Session<TcpLink>) -> Result<T, KeyenceError>,
+        op: impl FnOnce(&mut Exchange<TcpLink>) -> Result<T, KeyenceError>,
     ) -> Result<T, KeyenceError> {
         let deadline = Instant::now() + self.config.timeout;
-        if self.session.as_mut().is_some_and(|s| !s.get_mut().idle_check()) {
-            self.session = None;
+        if self.exchange.as_mut().is_some_and(|s| !s.get_mut().idle_check()) {
+            self.exchange = None;
         }
-        let session = match self.session.as_mut() {
+        let exchange = match self.exchange.as_mut() {
             Some(s) => s,
             None => {
                 let link = TcpLink::connect(&self.config, deadline)?;
-                self.session.insert(Session::new(link, self.config.limits, self.config.timeout))
+                self.exchange.insert(Exchange::new(link, self.config.limits, self.config.timeout))
             }
         };
-        session.get_mut().set_deadline(deadline);
-        let result = op(session);
+        exchange.get_mut().set_deadline(deadline);
+        let result = op(exchange);
         if matches!(&result, Err(e) if !matches!(e, KeyenceError::Rejected { .. })) {
-            self.session = None;
+            self.exchange = None;
         }
         result
     }
@@ -150,8 +151,8 @@ impl CameraDriver for KeyenceDriver {
         DRIVER_NAME
     }
 
-    /// Job switching (`PL`/`PW`), and image grabbing: the camera FTP-pushes its images, the
-    /// core picks them up from `VisionImageWatchDir` (SPEC §7).
+    /// Job switching (`PL`/`PW`), and image grabbing: the camera FTP-pushes its images into
+    /// `VisionImageWatchDir`, where [`CameraDriver::grab_image`] picks them up (SPEC §7).
     fn capabilities(&self) -> Capabilities {
         Capabilities { select_job: true, grab_image: true }
     }
@@ -173,6 +174,12 @@ impl CameraDriver for KeyenceDriver {
         several_marks(reading)
     }
 
+    /// The newest image the camera pushed into `VisionImageWatchDir` since the trigger,
+    /// waiting up to `VisionImageGrabTimeout` (see [`crate::images`]).
+    fn grab_image(&mut self, request: &ImageRequest<'_>) -> Result<PathBuf, DriverError> {
+        crate::images::grab(&self.config.images, request).map_err(DriverError::from)
+    }
+
     fn timeout(&self) -> Duration {
         self.config.timeout
     }
@@ -189,10 +196,10 @@ fn several_marks(reading: &Reading) -> Option<String> {
     ))
 }
 
-/// Registers the driver under [`DRIVER_NAME`]; the factory reads `VisionIP`, `VisionPort` and
-/// `VisionTimeout` and does not connect.
+/// Registers the driver under [`DRIVER_NAME`] with its settings ([`crate::settings::SETTINGS`]);
+/// the factory reads them ([`KeyenceConfig::from_params`]) and does not connect.
 pub fn register(registry: &mut DriverRegistry) {
-    registry.register(DRIVER_NAME, |params: &Params| {
+    registry.register_with_settings(DRIVER_NAME, &crate::settings::SETTINGS, |params: &Params| {
         let driver = KeyenceDriver::from_params(params).map_err(DriverError::from)?;
         Ok(Box::new(driver) as Box<dyn CameraDriver>)
     });

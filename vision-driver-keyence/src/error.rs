@@ -133,6 +133,24 @@ pub enum KeyenceError {
         /// The job asked for.
         job: u32,
     },
+
+    /// M281 D1, but `VisionImageWatchDir` is empty: the driver does not know where the camera
+    /// pushes its images.
+    NoImageFolder,
+
+    /// No image newer than the trigger came into the watch folder in time.
+    NoImage {
+        /// The watch folder.
+        dir: String,
+        /// The time waited (`VisionImageGrabTimeout`).
+        timeout: Duration,
+    },
+
+    /// The watch folder could not be read, or the image not copied.
+    Image {
+        /// What failed, with the operating system's words.
+        reason: String,
+    },
 }
 
 impl KeyenceError {
@@ -140,11 +158,16 @@ impl KeyenceError {
     #[must_use]
     pub fn kind(&self) -> DriverErrorKind {
         match self {
-            KeyenceError::Config { .. } | KeyenceError::InvalidJob { .. } => DriverErrorKind::InvalidArgument,
-            KeyenceError::Resolve { .. } | KeyenceError::Io { .. } => DriverErrorKind::Other,
-            KeyenceError::ConnectTimeout { .. } | KeyenceError::Unreachable { .. } | KeyenceError::Timeout { .. } => {
-                DriverErrorKind::Timeout
+            KeyenceError::Config { .. } | KeyenceError::InvalidJob { .. } | KeyenceError::NoImageFolder => {
+                DriverErrorKind::InvalidArgument
             }
+            KeyenceError::Resolve { .. } | KeyenceError::Io { .. } | KeyenceError::Image { .. } => {
+                DriverErrorKind::Other
+            }
+            KeyenceError::ConnectTimeout { .. }
+            | KeyenceError::Unreachable { .. }
+            | KeyenceError::Timeout { .. }
+            | KeyenceError::NoImage { .. } => DriverErrorKind::Timeout,
             KeyenceError::Refused { .. } | KeyenceError::Closed { .. } => DriverErrorKind::Refused,
             KeyenceError::Malformed { .. } | KeyenceError::LineTooLong { .. } | KeyenceError::TooManyLines { .. } => {
                 DriverErrorKind::Malformed
@@ -205,6 +228,11 @@ impl KeyenceError {
                 format!("the reply to {command} ran past {limit} lines without the expected answer")
             }
             KeyenceError::InvalidJob { job } => format!("camera job {job} is out of range (0–999)"),
+            KeyenceError::NoImageFolder => "VisionImageWatchDir is empty".into(),
+            KeyenceError::NoImage { dir, timeout } => {
+                format!("no image newer than the trigger appeared in {dir} within {:.1} s", timeout.as_secs_f64())
+            }
+            KeyenceError::Image { reason } => reason.clone(),
         }
     }
 
@@ -246,6 +274,13 @@ impl KeyenceError {
             | KeyenceError::TooManyLines { command, .. } => reply_advice(command).into(),
             KeyenceError::Rejected { command, code, .. } => rejection_advice(command, code),
             KeyenceError::InvalidJob { .. } => "use a camera job number 0–999".into(),
+            KeyenceError::NoImageFolder => {
+                "set VisionImageWatchDir to the folder the camera FTP-pushes its images into".into()
+            }
+            KeyenceError::NoImage { .. } => "check the camera's FTP push and VisionImageWatchDir".into(),
+            KeyenceError::Image { .. } => {
+                "check that VisionImageWatchDir is readable and the images folder writable".into()
+            }
         }
     }
 

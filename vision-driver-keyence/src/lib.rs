@@ -4,21 +4,26 @@
 //! * [`KeyenceDriver`]: the [`vision_core::CameraDriver`] (`TRG`, `FVR`, `PR`, job switch with
 //!   `PL`, falling back to `PW`), one persistent connection, typed errors; [`register`] adds
 //!   it to a [`vision_core::DriverRegistry`] as `Keyence`.
-//! * [`KeyenceConfig`]: address, timeout and bounds, from the `Vision*` parameters.
-//! * [`Session`]: the pure part — framing, reply parsing and the command/reply state machine
+//! * [`settings`]: the driver's own settings, `[keyence]` in the profile under the manual's
+//!   names (`VisionIP`, `VisionPort`, `VisionTimeout`, `VisionImageWatchDir`,
+//!   `VisionImageGrabTimeout`); [`register`] hands them to the registry.
+//! * [`KeyenceConfig`]: address, timeout, bounds and the image folder, from those settings.
+//! * `images`: M281 D1, the image the camera FTP-pushed for a trigger
+//!   ([`vision_core::CameraDriver::grab_image`]).
+//! * [`Exchange`]: the pure part — framing, reply parsing and the command/reply state machine
 //!   over any `Read + Write` (a transport of your own, e.g. a serial link); the socket is a thin
 //!   edge around it. [`parse_data_line`] reads one Data Output line.
 //! * `emulator` (cargo feature `emulator`): a TCP server that answers like a VS camera, with
 //!   pluggable results and fault injection.
 //!
 //! ```
-//! use vision_core::{DriverRegistry, Params};
+//! use vision_core::DriverRegistry;
 //! use vision_driver_keyence::emulator::Emulator;
 //!
 //! let camera = Emulator::builder().bind("127.0.0.1:0")?; // a mark at the image centre
 //! let mut registry = DriverRegistry::new();
 //! vision_driver_keyence::register(&mut registry);
-//! let mut params = Params::default();
+//! let mut params = registry.params(); // knows the driver's settings by name
 //! params.set("VisionIP", "127.0.0.1")?;
 //! params.set("VisionPort", i64::from(camera.addr().port()))?;
 //! let mut driver = registry.create("Keyence", &params)?;
@@ -92,8 +97,8 @@
 //! * Job switch: `PL,d,nnn` (job as three digits), `PW,d,nnn` after `ER,PL,01`; the command that
 //!   worked is remembered. `d` is the device `PR` reports unless [`KeyenceConfig::memory_device`]
 //!   is set. Job numbers above 999 are refused before connecting.
-//! * Capabilities: `select_job` and `grab_image` (the camera FTP-pushes images; the core grabs
-//!   them from `VisionImageWatchDir`), as SPEC §7 lists.
+//! * Capabilities: `select_job` and `grab_image` (the camera FTP-pushes images; the driver
+//!   picks the trigger's up from `VisionImageWatchDir`), as SPEC §7 lists.
 //! * `test_connection` returns the text after `FVR,`.
 //!
 //! # Protocol facts: confirmed and assumed
@@ -117,10 +122,12 @@ mod driver;
 #[cfg(feature = "emulator")]
 pub mod emulator;
 mod error;
+mod images;
 mod protocol;
+pub mod settings;
 mod transport;
 
-pub use config::{KeyenceConfig, DEFAULT_PORT, DEFAULT_TIMEOUT, MAX_TIMEOUT};
+pub use config::{ImageWatch, KeyenceConfig, DEFAULT_PORT, DEFAULT_TIMEOUT, MAX_TIMEOUT};
 pub use driver::{register, KeyenceDriver, DRIVER_NAME};
 pub use error::{er_meaning, KeyenceError};
-pub use protocol::{parse_data_line, JobCommand, Limits, Program, Session};
+pub use protocol::{parse_data_line, Exchange, JobCommand, Limits, Program};

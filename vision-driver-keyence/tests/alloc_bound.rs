@@ -9,7 +9,7 @@ use std::time::Duration;
 
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
-use vision_driver_keyence::{Limits, Session};
+use vision_driver_keyence::{Exchange, Limits};
 
 struct Counting;
 
@@ -81,7 +81,7 @@ impl Write for Peer<'_> {
 fn peak_during(peer: Peer<'_>) -> (usize, usize, bool) {
     let base = LIVE.load(Ordering::SeqCst);
     PEAK.store(base, Ordering::SeqCst);
-    let mut s = Session::new(peer, Limits::default(), Duration::from_secs(3));
+    let mut s = Exchange::new(peer, Limits::default(), Duration::from_secs(3));
     let ok = s.trigger().is_ok();
     let served = s.get_ref().served;
     drop(s);

@@ -8,7 +8,7 @@ mod common;
 use std::time::{Duration, Instant};
 
 use common::{assert_within, counting, driver, start, T};
-use vision_core::{CameraDriver, DriverErrorKind, DriverRegistry, Judgment, Params, Reading, VisionError};
+use vision_core::{CameraDriver, DriverErrorKind, DriverRegistry, Judgment, Reading, VisionError};
 use vision_driver_keyence::emulator::{
     Delimiter, Emulator, Fault, JudgmentStyle, ListSource, Mode, NumberStyle, OutputFormat, Series, Shot,
 };
@@ -423,7 +423,7 @@ fn the_registry_builds_it_from_the_parameters() {
     let mut registry = DriverRegistry::new();
     register(&mut registry);
     assert!(registry.contains("keyence"));
-    let mut params = Params::default();
+    let mut params = registry.params();
     params.set("VisionIP", "127.0.0.1").expect("ip");
     params.set("VisionPort", i64::from(em.addr().port())).expect("port");
     params.set("VisionTimeout", T.as_secs_f64()).expect("timeout");

@@ -10,7 +10,8 @@
 //!   [`Session::walk_capture`], then [`Session::walk_finish`].
 //! * [`ProgramHandler`]: the interpreter's M280–M284 handler that runs a whole program on the
 //!   simulated machine through a [`Session`] (what `mach-vision run` does).
-//! * [`registry`]: the camera drivers a real machine can use, picked by `VisionDriver`.
+//! * [`cameras`]: the one list of camera drivers, with their settings; [`registry`]: the ones a
+//!   real machine can use (no simulator), picked by `VisionDriver`.
 //!
 //! A bridge implements [`vision_core::Machine`] over its controller's API and nothing else;
 //! every rule that differs between controllers is the machine's
@@ -27,12 +28,14 @@
 //! # Ok::<(), HostError>(())
 //! ```
 
+mod cameras;
 mod error;
 mod handler;
 mod session;
 #[cfg(feature = "testkit")]
 pub mod testkit;
 
+pub use cameras::cameras;
 pub use error::HostError;
 pub use handler::{ProgramHandler, Record, MAX_RECORDS};
 pub use session::{registry, Session};

@@ -12,9 +12,7 @@ use crate::error::HostError;
 /// The camera drivers a real machine can pick by `VisionDriver` (the simulator is not one).
 #[must_use]
 pub fn registry() -> DriverRegistry {
-    let mut registry = DriverRegistry::new();
-    vision_driver_keyence::register(&mut registry);
-    registry
+    crate::cameras(None)
 }
 
 /// The Vision module of one controller, between M-code calls: parameters, the run's dot list,
@@ -48,7 +46,7 @@ impl Session {
     /// [`HostError::Setup`] when the profile cannot be read or the driver cannot be created.
     pub fn open(profile: &Path, registry: &DriverRegistry) -> Result<Session, HostError> {
         let setup = |e: vision_core::VisionError| HostError::Setup { message: format!("{}: {e}", profile.display()) };
-        let store = ProfileStore::new(profile);
+        let store = ProfileStore::new(profile).with_defaults(registry.params());
         let params = store.load_or_default().map_err(setup)?;
         let module = VisionModule::from_registry(params, registry).map_err(setup)?.with_profile(store);
         Ok(Session::new(module))

@@ -2,7 +2,7 @@
 //! as `mach-vision run` sets them up ([`Rig`]), the run path of the CLI as the reference
 //! ([`reference`]), and a [`Trace`] of a program to compare a bridge's run by.
 
-use vision_core::{DriverRegistry, Params, Timestamp, VisionModule};
+use vision_core::{Params, Timestamp, VisionModule};
 use vision_driver_keyence::emulator::{DriverSource, Emulator, EmulatorHandle, NumberStyle, OutputFormat};
 use vision_driver_sim::{Sim, SimMachine, World};
 use vision_gcode::{MCodeHandler, RunOutcome};
@@ -38,7 +38,7 @@ pub fn sim() -> Sim {
 /// Never for the built-in world.
 #[must_use]
 pub fn sim_params(sim: &Sim) -> Params {
-    let mut params = sim.calibrated_params(&Params::default()).expect("the built-in world calibrates");
+    let mut params = sim.calibrated_params(&crate::cameras(Some(sim)).params()).expect("the built-in world calibrates");
     params.set("VisionDriver", "Sim").expect("a string parameter");
     params
 }
@@ -50,7 +50,7 @@ pub fn sim_params(sim: &Sim) -> Params {
 /// Never: the values are valid.
 #[must_use]
 pub fn uncalibrated_params(sim: &Sim) -> Params {
-    let mut p = Params::default();
+    let mut p = crate::cameras(Some(sim)).params();
     p.set("VisionEnabled", true).expect("a yes/no parameter");
     p.set("VisionDriver", "Sim").expect("a string parameter");
     p.set("VisionCameraToolNumber", i64::from(sim.world().machine.camera_tool)).expect("a tool number");
@@ -110,6 +110,7 @@ impl Rig {
     #[must_use]
     pub fn new(params: Option<Params>, camera: Camera) -> (Rig, VisionModule) {
         let sim = sim();
+        let registry = crate::cameras(Some(&sim));
         let mut params = params.unwrap_or_else(|| sim_params(&sim));
         let emulator = match camera {
             Camera::Sim => None,
@@ -120,15 +121,13 @@ impl Rig {
                     .numbers(NumberStyle::FixedWidth)
                     .bind("127.0.0.1:0")
                     .expect("a loopback port");
+                params = params.with_driver_settings(&vision_driver_keyence::settings::SETTINGS);
                 params.set("VisionDriver", "Keyence").expect("a string parameter");
                 params.set("VisionIP", "127.0.0.1").expect("an address");
                 params.set("VisionPort", i64::from(emulator.addr().port())).expect("a port");
                 Some(emulator)
             }
         };
-        let mut registry = DriverRegistry::new();
-        sim.register(&mut registry);
-        vision_driver_keyence::register(&mut registry);
         let module = VisionModule::from_registry(params, &registry).expect("the camera's driver");
         (Rig { sim, emulator }, module)
     }

@@ -8,7 +8,7 @@ mod text;
 
 use std::path::{Path, PathBuf};
 
-use clap::{Args, ValueEnum};
+use clap::Args;
 use vision_core::{DriverRegistry, Params, ProfileStore, VisionModule};
 use vision_driver_keyence::emulator::EmulatorHandle;
 use vision_driver_sim::{ControllerName, Sim, SimMachine};
@@ -24,15 +24,9 @@ use report::{calibration_truth, pound, steps, ProgramReport, Report, Step};
 /// Setpoint period of the cycle-time planning, seconds.
 const CYCLE_PERIOD_S: f64 = 0.001;
 
-/// Which camera answers the triggers.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub(crate) enum CameraKind {
-    /// The simulated camera of the world, called directly.
-    Sim,
-    /// A Keyence VS camera over TCP: at `--ip`/`--port`, or (without `--ip`) an emulated VS
-    /// camera on loopback backed by the world's simulated camera.
-    Keyence,
-}
+/// The Keyence driver's registry name: the one camera `--ip`/`--port` address, and the one the
+/// CLI can emulate on loopback.
+const KEYENCE: &str = vision_driver_keyence::DRIVER_NAME;
 
 /// Arguments of `mach-vision run`.
 #[derive(Debug, Args)]
@@ -49,9 +43,11 @@ pub(crate) struct RunArgs {
     /// calibration of the world would leave, not saved.
     #[arg(long, value_name = "P.toml")]
     profile: Option<PathBuf>,
-    /// The camera.
-    #[arg(long, value_enum, default_value_t = CameraKind::Sim)]
-    camera: CameraKind,
+    /// The camera: any registered driver's name, in any case (`sim`: the world's simulated
+    /// camera, called directly; `keyence`: a Keyence VS camera over TCP, at `--ip`/`--port`, or
+    /// without `--ip` an emulated VS camera on loopback backed by the world's simulated camera).
+    #[arg(long, default_value = "sim", value_name = "NAME")]
+    camera: String,
     /// Keyence camera address (with `--camera keyence`).
     #[arg(long)]
     ip: Option<String>,
@@ -95,36 +91,38 @@ impl Runner {
         }
         let sim = Sim::new(world).map_err(|e| Failure::Input(e.to_string()))?;
         let camera_tool = i64::from(sim.world().machine.camera_tool);
+        let registry = vision_host::cameras(Some(&sim));
+        let driver = camera_name(&registry, &args.camera)?;
 
         let mut params = match &args.profile {
-            Some(path) if path.exists() => ProfileStore::new(path).load().map_err(|e| Failure::Input(e.to_string()))?,
+            Some(path) if path.exists() => ProfileStore::new(path)
+                .with_defaults(registry.params())
+                .load()
+                .map_err(|e| Failure::Input(e.to_string()))?,
             Some(_) => {
-                let mut p = Params::default();
+                let mut p = registry.params();
                 set(&mut p, "VisionEnabled", true)?;
                 set(&mut p, "VisionCameraToolNumber", camera_tool)?;
                 p
             }
-            None => sim.calibrated_params(&Params::default()).map_err(|e| Failure::Input(e.to_string()))?,
+            None => sim.calibrated_params(&registry.params()).map_err(|e| Failure::Input(e.to_string()))?,
         };
 
         // The camera choices below are for this session: the profile keeps the file's.
         let file_connection = ["VisionDriver", "VisionIP", "VisionPort"]
             .map(|name| params.get(name).map(|v| (name, v)).map_err(|e| Failure::Input(e.to_string())));
-        let mut registry = DriverRegistry::new();
-        sim.register(&mut registry);
-        vision_driver_keyence::register(&mut registry);
-        let (camera, emulator) = match (args.camera, &args.ip) {
-            (CameraKind::Sim, _) => {
+        let (camera, emulator) = match (driver.as_str(), &args.ip) {
+            ("Sim", _) => {
                 set(&mut params, "VisionDriver", "Sim")?;
                 ("simulated camera".to_string(), None)
             }
-            (CameraKind::Keyence, Some(ip)) => {
+            (KEYENCE, Some(ip)) => {
                 set(&mut params, "VisionDriver", "Keyence")?;
                 set(&mut params, "VisionIP", ip.as_str())?;
                 set(&mut params, "VisionPort", i64::from(args.port))?;
                 (format!("Keyence VS at {ip}:{}", args.port), None)
             }
-            (CameraKind::Keyence, None) => {
+            (KEYENCE, None) => {
                 let emulator = world::serve_camera(&sim, "127.0.0.1:0")
                     .map_err(|e| Failure::Input(format!("cannot start the loopback camera emulator: {e}")))?;
                 set(&mut params, "VisionDriver", "Keyence")?;
@@ -135,11 +133,15 @@ impl Runner {
                     Some(emulator),
                 )
             }
+            (other, _) => {
+                set(&mut params, "VisionDriver", other)?;
+                (format!("{other} camera"), None)
+            }
         };
 
         let mut module = VisionModule::from_registry(params, &registry).map_err(|e| Failure::Input(e.to_string()))?;
         if let Some(path) = &args.profile {
-            let mut store = ProfileStore::new(path);
+            let mut store = ProfileStore::new(path).with_defaults(registry.params());
             for kept in file_connection {
                 let (name, value) = kept?;
                 store = store.keep(name, value);
@@ -235,9 +237,23 @@ impl Runner {
     }
 }
 
+/// The registered name `--camera` gives (any case).
+///
+/// # Errors
+/// [`Failure::Input`] naming the cameras there are, for a name none is registered under.
+fn camera_name(registry: &DriverRegistry, camera: &str) -> Result<String, Failure> {
+    registry.name(camera).map(str::to_string).ok_or_else(|| {
+        Failure::Input(format!(
+            "--camera {}: no such camera — the cameras are {} (any case)",
+            vision_core::text::printable_line(camera, 64),
+            registry.names().join(", ").to_ascii_lowercase()
+        ))
+    })
+}
+
 /// Runs `mach-vision run`.
 pub(crate) fn run(args: &RunArgs) -> Result<String, Failure> {
-    if args.ip.is_some() && args.camera != CameraKind::Keyence {
+    if args.ip.is_some() && !args.camera.eq_ignore_ascii_case(KEYENCE) {
         return Err(Failure::Input("--ip needs --camera keyence".into()));
     }
     // Every program is read before anything runs: an unreadable file is bad input, not a

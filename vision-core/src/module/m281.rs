@@ -1,14 +1,12 @@
 //! M281: capture one mark.
 
-use std::time::Duration;
-
 use vision_math::{LengthUnit, Point2};
 
 use super::capture::{mark_size, observe, outside_image_note, pixel_chain, require_mark, Capture, Recentred};
 use super::{Dot, Reply, VisionModule};
 use crate::calibrate::relative_move;
+use crate::driver::ImageRequest;
 use crate::error::VisionError;
-use crate::image_grab;
 use crate::machine::Machine;
 use crate::pound::{PoundBlock, SlotValues, SLOTS};
 
@@ -30,10 +28,10 @@ impl VisionModule {
     /// grows; outside a run only slot 0 and the telemetry are written. Every success writes the
     /// `Last*` telemetry with `LastStatus` = `OK`.
     ///
-    /// `keep_image` (D1): when `VisionImageWatchDir` is set and the driver advertises
-    /// `grab_image`, the image the camera pushed for this trigger is copied into the images
-    /// folder ([`crate::image_grab`]); a missing image is a warning in `LastStatus`
-    /// (`OK (warning: …)`) and [`Capture::warning`], not a failed capture.
+    /// `keep_image` (D1): when the driver advertises `grab_image`, it keeps the image of the
+    /// reading reported in the images folder ([`crate::CameraDriver::grab_image`]); no image
+    /// is a warning in `LastStatus` (`OK (warning: …)`) and [`Capture::warning`], not a failed
+    /// capture.
     ///
     /// # Errors
     /// [`VisionError::NotEnabled`], [`VisionError::WrongTool`],
@@ -122,29 +120,16 @@ impl VisionModule {
 
         let mut image = None;
         let mut warning = None;
-        if keep_image {
-            let watch = self.params.image_watch_dir().to_string();
-            let pushes = self.driver.as_deref().is_some_and(|d| d.capabilities().grab_image);
-            if watch.is_empty() {
-                warning = Some("image not saved: VisionImageWatchDir is empty".to_string());
-            } else if !pushes {
-                warning = Some(format!(
-                    "image not saved: camera driver {} does not push images",
-                    self.driver.as_deref().map_or("?", |d| d.name())
-                ));
-            } else {
-                let timeout =
-                    Duration::try_from_secs_f64(self.params.image_grab_timeout_s()).unwrap_or(Duration::from_secs(2));
-                match image_grab::grab(
-                    watch.as_ref(),
-                    &self.images_dir,
-                    trigger_time.time,
-                    timeout,
-                    &trigger_time.file_stamp(),
-                ) {
+        if let Some(driver) = self.driver.as_deref_mut().filter(|_| keep_image) {
+            if driver.capabilities().grab_image {
+                let stamp = trigger_time.file_stamp();
+                let request = ImageRequest { dir: &self.images_dir, since: trigger_time.time, stamp: &stamp };
+                match driver.grab_image(&request) {
                     Ok(path) => image = Some(path),
-                    Err(reason) => warning = Some(format!("image not saved: {reason}")),
+                    Err(e) => warning = Some(format!("image not saved: {e}")),
                 }
+            } else {
+                warning = Some(format!("image not saved: camera driver {} cannot keep images", driver.name()));
             }
         }
         let notes = [

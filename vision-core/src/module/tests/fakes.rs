@@ -10,7 +10,7 @@ use vision_math::chain::CANCEL_LINE;
 use vision_math::{AlignmentChain, LengthUnit, Matrix2, Point2, Remap, Vector2};
 
 use crate::controller::{Controller, Mach4};
-use crate::driver::{CameraDriver, Capabilities, DriverError, DriverErrorKind, Judgment, Reading};
+use crate::driver::{CameraDriver, Capabilities, DriverError, DriverErrorKind, ImageRequest, Judgment, Reading};
 use crate::machine::{Machine, MachineError, MachineErrorKind, Timestamp};
 use crate::module::VisionModule;
 use crate::params::Params;
@@ -110,6 +110,10 @@ pub(crate) struct World {
     pub script: VecDeque<Result<Reading, DriverError>>,
     pub select_job: bool,
     pub jobs: Vec<u32>,
+    /// The image the camera keeps for a trigger (M281 D1); `None`: it has none.
+    pub image: Option<Vec<u8>>,
+    /// Every image request: the trigger's time, seconds since the epoch, and its stamp.
+    pub grabs: Vec<(u64, String)>,
     pub triggers: usize,
     /// Uniform pixel noise amplitude (±px) added to every reading.
     pub noise_px: f64,
@@ -142,6 +146,8 @@ impl Default for World {
             script: VecDeque::new(),
             select_job: true,
             jobs: Vec::new(),
+            image: None,
+            grabs: Vec::new(),
             triggers: 0,
             noise_px: 0.0,
             rng: 0x9E37_79B9_7F4A_7C15,
@@ -402,6 +408,19 @@ impl CameraDriver for FakeCamera {
     }
     fn test_connection(&mut self) -> Result<String, DriverError> {
         Ok("FVR,fake".into())
+    }
+    fn grab_image(&mut self, request: &ImageRequest<'_>) -> Result<std::path::PathBuf, DriverError> {
+        let mut w = lock(&self.0);
+        let since = request.since.duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs());
+        w.grabs.push((since, request.stamp.to_string()));
+        let Some(bytes) = w.image.clone() else {
+            return Err(DriverError::new(DriverErrorKind::Timeout, "the fake camera kept no image — give it one"));
+        };
+        let path = request.dir.join(format!("vision_{}.bmp", request.stamp));
+        std::fs::create_dir_all(request.dir)
+            .and_then(|()| std::fs::write(&path, bytes))
+            .map_err(|e| DriverError::new(DriverErrorKind::Other, e))?;
+        Ok(path)
     }
     fn reading_warning(&self, reading: &Reading) -> Option<String> {
         reading.count.filter(|n| *n > 1).map(|n| format!("the fake camera saw {n} marks and reported the nearest"))

@@ -1,14 +1,14 @@
 //! What survives: images kept by M281 D1, the profile written by M283 and M284, the registry.
 
-use std::fs::{self, File};
+use std::fs;
 use std::path::PathBuf;
-use std::time::{Duration, UNIX_EPOCH};
+use std::time::UNIX_EPOCH;
 
 use vision_math::{Matrix2, Point2};
 
 use super::fakes::{FakeCamera, Rig, World};
 use crate::calibrate::Calibrate;
-use crate::driver::{DriverError, DriverErrorKind};
+use crate::driver::{CameraDriver as _, DriverError, DriverErrorKind};
 use crate::error::VisionError;
 use crate::module::VisionModule;
 use crate::params::Params;
@@ -23,44 +23,67 @@ fn tmp(name: &str) -> PathBuf {
 }
 
 #[test]
-fn m281_d1_keeps_the_fresh_image_and_warns_when_none_comes() {
+fn m281_d1_asks_the_driver_for_the_image_and_warns_when_it_has_none() {
     let root = tmp("d1");
-    let watch = root.join("watch");
-    fs::create_dir_all(&watch).expect("watch");
     let mut rig = Rig::with_world(World { marks: vec![Point2::new(0.0, 0.0)], ..World::default() });
     rig.module.set_images_dir(root.join("Images"));
-    rig.module.set_param("VisionImageWatchDir", watch.to_string_lossy().as_ref()).expect("dir");
-    rig.module.set_param("VisionImageGrabTimeout", 0.05).expect("timeout");
 
-    // Nothing pushed: a warning, the capture still counts.
+    // The driver has no image: its words are the warning, the capture still counts.
     let c = rig.module.m281(&mut rig.machine, true).expect("capture").report;
     assert_eq!(c.image, None);
     let w = c.warning.expect("warning");
-    assert!(w.starts_with("image not saved: no image newer than the trigger"), "{w}");
+    assert_eq!(w, "image not saved: the fake camera kept no image — give it one");
     assert!(rig.module.telemetry().last_status().starts_with("OK (warning: image not saved"));
 
-    // The camera pushed an image after the trigger (the fake clock reads 1_700_000_000 s).
-    let img = watch.join("IMG_0001.bmp");
-    fs::write(&img, b"BM...").expect("write");
-    File::options()
-        .write(true)
-        .open(&img)
-        .and_then(|f| f.set_modified(UNIX_EPOCH + Duration::from_secs(1_700_000_001)))
-        .expect("mtime");
+    // The driver keeps the trigger's image where the module says (the fake clock reads
+    // 1_700_000_000 s).
+    rig.shared.lock().expect("world").image = Some(b"BM...".to_vec());
     let c = rig.module.m281(&mut rig.machine, true).expect("capture").report;
     let kept = c.image.expect("kept");
     assert_eq!(kept, root.join("Images").join("vision_20231114_231320_000.bmp"));
     assert_eq!(fs::read(&kept).expect("read"), b"BM...");
     assert_eq!(c.warning, None);
     assert_eq!(rig.module.telemetry().last_status(), "OK");
-    // D0 never touches the folder.
+    assert_eq!(rig.shared.lock().expect("world").grabs.last(), Some(&(1_700_000_000, "20231114_231320_000".into())));
+    // D0 never asks.
     rig.module.m281(&mut rig.machine, false).expect("capture");
-    assert_eq!(fs::read_dir(root.join("Images")).expect("dir").count(), 1);
-    // Empty watch folder: a warning, no wait.
-    rig.module.set_param("VisionImageWatchDir", "").expect("dir");
-    let c = rig.module.m281(&mut rig.machine, true).expect("capture").report;
-    assert!(c.warning.expect("warning").contains("VisionImageWatchDir is empty"));
+    assert_eq!(rig.shared.lock().expect("world").grabs.len(), 2);
     let _ = fs::remove_dir_all(&root);
+}
+
+/// A driver without `grab_image`.
+struct NoImages;
+
+impl crate::driver::CameraDriver for NoImages {
+    fn name(&self) -> &str {
+        "Plain"
+    }
+    fn capabilities(&self) -> crate::driver::Capabilities {
+        crate::driver::Capabilities::default()
+    }
+    fn trigger(&mut self) -> Result<crate::driver::Reading, DriverError> {
+        Ok(crate::driver::Reading::position(888.0, 888.0))
+    }
+    fn select_job(&mut self, _job: u32) -> Result<(), DriverError> {
+        Err(DriverError::new(DriverErrorKind::Unsupported, "no jobs"))
+    }
+    fn test_connection(&mut self) -> Result<String, DriverError> {
+        Ok(String::new())
+    }
+}
+
+#[test]
+fn m281_d1_on_a_driver_that_cannot_keep_images_is_a_warning() {
+    let mut rig = Rig::with_world(World { marks: vec![Point2::new(0.0, 0.0)], ..World::default() });
+    rig.module.set_driver(Some(Box::new(NoImages)));
+    let c = rig.module.m281(&mut rig.machine, true).expect("capture").report;
+    assert_eq!(c.warning.as_deref(), Some("image not saved: camera driver Plain cannot keep images"));
+    let e = NoImages.grab_image(&crate::driver::ImageRequest {
+        dir: std::path::Path::new("."),
+        since: UNIX_EPOCH,
+        stamp: "s",
+    });
+    assert_eq!(e.map_err(|e| e.kind()), Err(DriverErrorKind::Unsupported));
 }
 
 #[test]
@@ -90,8 +113,9 @@ fn the_registry_builds_the_driver_vision_driver_names() {
     let shared = rig.shared.clone();
     let mut registry = DriverRegistry::new();
     registry.register("Fake", move |_params: &Params| Ok(Box::new(FakeCamera(shared.clone())) as _));
-    registry.register("Broken", |p: &Params| {
-        Err(DriverError::new(DriverErrorKind::InvalidArgument, format!("cannot use {}:{}", p.ip(), p.port())))
+    registry.register_with_settings("Broken", &crate::params::tests::PROBE, |p: &Params| {
+        let level = p.get("VisionProbeLevel").map_err(|e| DriverError::new(DriverErrorKind::Other, e))?;
+        Err(DriverError::new(DriverErrorKind::InvalidArgument, format!("cannot use level {level}")))
     });
     assert_eq!(registry.names(), vec!["Fake", "Broken"]);
     assert!(registry.contains("fake"));
@@ -108,5 +132,14 @@ fn the_registry_builds_the_driver_vision_driver_names() {
     assert_eq!(module.driver().map(|d| d.name()), Some("Fake"));
     params.set("VisionDriver", "Broken").expect("set");
     let e = VisionModule::from_registry(params, &registry).expect_err("factory error");
-    assert_eq!(e.to_string(), "cannot use 192.168.208.80:8500");
+    assert_eq!(e.to_string(), "cannot use level 5", "the factory sees its settings, at their defaults");
+    assert_eq!(registry.name("broken"), Some("Broken"));
+    assert!(registry.settings("Fake").is_none());
+    assert_eq!(registry.settings("BROKEN").map(|t| t.table), Some("probe"));
+    let mut params = registry.params();
+    params.set("VisionProbeLevel", 2).expect("a registered driver's setting");
+    params.set("VisionEnabled", true).expect("set");
+    params.set("VisionDriver", "Broken").expect("set");
+    let e = VisionModule::from_registry(params, &registry).expect_err("factory error");
+    assert_eq!(e.to_string(), "cannot use level 2");
 }

@@ -1,6 +1,6 @@
 //! The command/reply state machine over any `Read + Write`.
 //!
-//! A [`Session`] sends one command, then reads lines until the command's answer:
+//! An [`Exchange`] sends one command, then reads lines until the command's answer:
 //!
 //! * empty lines are skipped;
 //! * `ER,<cmd>,<nn>` for the command sent is the answer (a [`KeyenceError::Rejected`]);
@@ -11,7 +11,7 @@
 //!
 //! Time is the stream's business: a read or write that fails with `TimedOut` or `WouldBlock`
 //! becomes [`KeyenceError::Timeout`] (the socket transport turns its per-exchange deadline into
-//! exactly that). After any error other than [`KeyenceError::Rejected`] the session's stream is
+//! exactly that). After any error other than [`KeyenceError::Rejected`] the exchange's stream is
 //! in an unknown state and must be dropped.
 
 use std::io::{self, Read, Write};
@@ -73,7 +73,7 @@ enum Want {
 /// ```
 /// use std::io::{self, Read, Write};
 /// use std::time::Duration;
-/// use vision_driver_keyence::{Limits, Session};
+/// use vision_driver_keyence::{Limits, Exchange};
 ///
 /// /// A camera that answers every command with the echo and one data line.
 /// struct Canned(io::Cursor<&'static [u8]>);
@@ -86,13 +86,13 @@ enum Want {
 /// }
 ///
 /// let camera = Canned(io::Cursor::new(b"TRG\r1,812.5,903.25\r"));
-/// let mut session = Session::new(camera, Limits::default(), Duration::from_secs(3));
-/// let reading = session.trigger()?;
+/// let mut exchange = Exchange::new(camera, Limits::default(), Duration::from_secs(3));
+/// let reading = exchange.trigger()?;
 /// assert_eq!((reading.x_px, reading.y_px), (812.5, 903.25));
 /// # Ok::<(), vision_driver_keyence::KeyenceError>(())
 /// ```
 #[derive(Debug)]
-pub struct Session<S> {
+pub struct Exchange<S> {
     stream: S,
     reader: LineReader,
     limits: Limits,
@@ -100,13 +100,13 @@ pub struct Session<S> {
     written: usize,
 }
 
-impl<S: Read + Write> Session<S> {
-    /// A session over `stream`. `timeout` is only quoted in messages: the stream enforces it.
+impl<S: Read + Write> Exchange<S> {
+    /// An exchange over `stream`. `timeout` is only quoted in messages: the stream enforces it.
     /// Out-of-range `limits` are clamped to [`Limits::validate`]'s bounds.
     #[must_use]
-    pub fn new(stream: S, limits: Limits, timeout: Duration) -> Session<S> {
+    pub fn new(stream: S, limits: Limits, timeout: Duration) -> Exchange<S> {
         let limits = limits.clamped();
-        Session { stream, reader: LineReader::new(limits.max_line_len), limits, timeout, written: 0 }
+        Exchange { stream, reader: LineReader::new(limits.max_line_len), limits, timeout, written: 0 }
     }
 
     /// The stream.
@@ -124,14 +124,14 @@ impl<S: Read + Write> Session<S> {
         self.stream
     }
 
-    /// Command bytes the stream accepted since the last [`Session::reset_bytes_written`]. Zero
+    /// Command bytes the stream accepted since the last [`Exchange::reset_bytes_written`]. Zero
     /// after a failure means no byte of any command can have reached the camera.
     #[must_use]
     pub fn bytes_written(&self) -> usize {
         self.written
     }
 
-    /// Restarts the [`Session::bytes_written`] count (e.g. before an exchange whose failure a
+    /// Restarts the [`Exchange::bytes_written`] count (e.g. before an exchange whose failure a
     /// caller wants to judge: zero bytes then means the camera cannot have seen it).
     pub fn reset_bytes_written(&mut self) {
         self.written = 0;
@@ -149,7 +149,7 @@ impl<S: Read + Write> Session<S> {
     /// `FVR`: the camera's firmware version (a connection test).
     ///
     /// # Errors
-    /// As [`Session::trigger`].
+    /// As [`Exchange::trigger`].
     pub fn version(&mut self) -> Result<String, KeyenceError> {
         self.exchange("FVR", Want::Answer, parse_version)
     }
@@ -157,7 +157,7 @@ impl<S: Read + Write> Session<S> {
     /// `PR`: the program (job) the camera runs.
     ///
     /// # Errors
-    /// As [`Session::trigger`].
+    /// As [`Exchange::trigger`].
     pub fn program(&mut self) -> Result<Program, KeyenceError> {
         self.exchange("PR", Want::Answer, parse_program).map(|(device, job)| Program { device, job })
     }
@@ -166,7 +166,7 @@ impl<S: Read + Write> Session<S> {
     ///
     /// # Errors
     /// [`KeyenceError::InvalidJob`] or [`KeyenceError::Config`] (device not 1 or 2) before
-    /// anything is sent, else as [`Session::trigger`].
+    /// anything is sent, else as [`Exchange::trigger`].
     pub fn load_program(&mut self, command: JobCommand, device: u8, job: u32) -> Result<(), KeyenceError> {
         if job > MAX_JOB {
             return Err(KeyenceError::InvalidJob { job });
@@ -190,7 +190,7 @@ impl<S: Read + Write> Session<S> {
     /// command that worked, to pass as `known` next time.
     ///
     /// # Errors
-    /// As [`Session::load_program`]; when both commands are unknown, the `PW` refusal with the
+    /// As [`Exchange::load_program`]; when both commands are unknown, the `PW` refusal with the
     /// `PL` one in [`KeyenceError::Rejected::previous`].
     pub fn select_job(&mut self, known: Option<JobCommand>, device: u8, job: u32) -> Result<JobCommand, KeyenceError> {
         if let Some(c) = known {
@@ -374,8 +374,8 @@ mod tests {
 
     const T: Duration = Duration::from_millis(300);
 
-    fn session(steps: Vec<Step>) -> Session<Script> {
-        Session::new(Script::new(steps), Limits::default(), T)
+    fn exchange(steps: Vec<Step>) -> Exchange<Script> {
+        Exchange::new(Script::new(steps), Limits::default(), T)
     }
 
     fn trg(reply: &[u8]) -> Vec<Step> {
@@ -403,7 +403,7 @@ mod tests {
             (b"TRG\r\n1,150,75\r\n", Judgment::Ok, None, 150.0, 75.0),
             (b"TRG\n1,150,75\n", Judgment::Ok, None, 150.0, 75.0),
         ] {
-            let mut s = session(trg(reply));
+            let mut s = exchange(trg(reply));
             let r = s.trigger().expect("reading");
             assert_eq!((r.judgment, r.count, r.x_px, r.y_px), (judgment, count, x, y));
             assert_eq!(s.bytes_written(), 4);
@@ -415,7 +415,7 @@ mod tests {
     fn echo_and_data_split_any_way() {
         let mut steps = vec![Step::write(b"TRG\r")];
         steps.extend(bytewise(b"TRG\r1,2.5,3.5\r"));
-        let mut s = session(steps);
+        let mut s = exchange(steps);
         assert_eq!(s.trigger().expect("bytewise").x_px, 2.5);
         s.into_inner().done();
     }
@@ -423,7 +423,7 @@ mod tests {
     #[test]
     fn lines_before_the_echo_answer_nothing() {
         // A stale data output and an error for another command arrive before our echo.
-        let mut s = session(trg(b"1,9,9\rER,PL,03\r\rTRG\r1,2,3\r"));
+        let mut s = exchange(trg(b"1,9,9\rER,PL,03\r\rTRG\r1,2,3\r"));
         let r = s.trigger().expect("reading");
         assert_eq!((r.x_px, r.y_px), (2.0, 3.0));
         s.into_inner().done();
@@ -433,7 +433,7 @@ mod tests {
     fn rejection_is_typed_and_keeps_the_raw_reply() {
         for code in ["01", "02", "03", "04", "05", "06", "07"] {
             let reply = format!("ER,TRG,{code}\r");
-            let mut s = session(trg(reply.as_bytes()));
+            let mut s = exchange(trg(reply.as_bytes()));
             let e = s.trigger().expect_err("rejected");
             assert_eq!(
                 e,
@@ -446,13 +446,13 @@ mod tests {
             );
             s.into_inner().done();
         }
-        let mut s = session(trg(b"TRG\rER,TRG,07\r"));
+        let mut s = exchange(trg(b"TRG\rER,TRG,07\r"));
         assert_eq!(s.trigger().expect_err("after echo").code(), Some("07"));
     }
 
     #[test]
     fn timeout_says_what_was_missing() {
-        let mut s = session(vec![Step::write(b"TRG\r"), Step::ReadErr(io::ErrorKind::WouldBlock)]);
+        let mut s = exchange(vec![Step::write(b"TRG\r"), Step::ReadErr(io::ErrorKind::WouldBlock)]);
         match s.trigger() {
             Err(KeyenceError::Timeout { waiting_for, timeout, echoed, .. }) => {
                 assert_eq!(waiting_for, "the TRG echo");
@@ -462,7 +462,7 @@ mod tests {
             other => panic!("{other:?}"),
         }
         let mut s =
-            session(vec![Step::write(b"TRG\r"), Step::read(b"7,7\rTRG\r"), Step::ReadErr(io::ErrorKind::TimedOut)]);
+            exchange(vec![Step::write(b"TRG\r"), Step::read(b"7,7\rTRG\r"), Step::ReadErr(io::ErrorKind::TimedOut)]);
         match s.trigger() {
             Err(KeyenceError::Timeout { waiting_for, ignored, echoed, .. }) => {
                 assert_eq!(waiting_for, "the data line (the TRG echo arrived)");
@@ -475,47 +475,47 @@ mod tests {
 
     #[test]
     fn closed_reset_and_other_io() {
-        let mut s = session(trg(b"TRG\r"));
+        let mut s = exchange(trg(b"TRG\r"));
         assert!(matches!(s.trigger(), Err(KeyenceError::Closed { .. })));
-        let mut s = session(vec![Step::write(b"TRG\r"), Step::ReadErr(io::ErrorKind::ConnectionReset)]);
+        let mut s = exchange(vec![Step::write(b"TRG\r"), Step::ReadErr(io::ErrorKind::ConnectionReset)]);
         assert!(matches!(s.trigger(), Err(KeyenceError::Closed { .. })));
-        let mut s = session(vec![Step::write(b"TRG\r"), Step::ReadErr(io::ErrorKind::PermissionDenied)]);
+        let mut s = exchange(vec![Step::write(b"TRG\r"), Step::ReadErr(io::ErrorKind::PermissionDenied)]);
         assert!(matches!(s.trigger(), Err(KeyenceError::Io { kind: io::ErrorKind::PermissionDenied, .. })));
     }
 
     #[test]
     fn write_failures_count_bytes() {
-        let mut s = session(vec![Step::WriteErr(io::ErrorKind::BrokenPipe)]);
+        let mut s = exchange(vec![Step::WriteErr(io::ErrorKind::BrokenPipe)]);
         assert!(matches!(s.trigger(), Err(KeyenceError::Closed { .. })));
         assert_eq!(s.bytes_written(), 0);
         s.into_inner().done();
-        let mut s = session(vec![Step::write(b"TR"), Step::WriteErr(io::ErrorKind::TimedOut)]);
+        let mut s = exchange(vec![Step::write(b"TR"), Step::WriteErr(io::ErrorKind::TimedOut)]);
         assert!(matches!(s.trigger(), Err(KeyenceError::Timeout { .. })));
         assert_eq!(s.bytes_written(), 2);
     }
 
     #[test]
     fn garbage_data_line_is_malformed() {
-        let mut s = session(trg(b"TRG\r#garbage#\r"));
+        let mut s = exchange(trg(b"TRG\r#garbage#\r"));
         match s.trigger() {
             Err(KeyenceError::Malformed { command, line, .. }) => {
                 assert_eq!((command.as_str(), line.as_str()), ("TRG", "#garbage#"));
             }
             other => panic!("{other:?}"),
         }
-        let mut s = session(trg(b"TRG\r\xff\xfe\r"));
+        let mut s = exchange(trg(b"TRG\r\xff\xfe\r"));
         assert!(matches!(s.trigger(), Err(KeyenceError::Malformed { line, .. }) if line == "\\xff\\xfe"));
-        let mut s = session(trg(b"TRG\rER,TRG\r"));
+        let mut s = exchange(trg(b"TRG\rER,TRG\r"));
         assert!(matches!(s.trigger(), Err(KeyenceError::Malformed { .. })));
     }
 
     #[test]
     fn hostile_peers_hit_the_bounds() {
-        let mut s = session(trg(&[b'7'; 2000]));
+        let mut s = exchange(trg(&[b'7'; 2000]));
         assert_eq!(s.trigger(), Err(KeyenceError::LineTooLong { command: "TRG".into(), limit: 512 }));
-        let mut s = session(trg(b"x\rx\rx\rx\rx\rx\rx\rx\rTRG\r1,2\r"));
+        let mut s = exchange(trg(b"x\rx\rx\rx\rx\rx\rx\rx\rTRG\r1,2\r"));
         assert_eq!(s.trigger(), Err(KeyenceError::TooManyLines { command: "TRG".into(), limit: 8 }));
-        let mut s = session(trg(b"\r\r\r\r\r\r\r\r\r\r\r\r"));
+        let mut s = exchange(trg(b"\r\r\r\r\r\r\r\r\r\r\r\r"));
         assert!(matches!(s.trigger(), Err(KeyenceError::TooManyLines { .. })));
     }
 
@@ -529,7 +529,7 @@ mod tests {
             Step::write(b"TRG\r"),
             Step::read(b"\n\nTRG\r1,3,3\r"),
         ]);
-        let mut s = session(steps);
+        let mut s = exchange(steps);
         for want in [1.0, 2.0, 3.0] {
             assert_eq!(s.trigger().expect("reading").x_px, want);
         }
@@ -540,7 +540,7 @@ mod tests {
     fn leftover_bytes_are_stale() {
         let mut steps = trg(b"TRG\r1,1,1\r9,9");
         steps.extend(trg(b"TRG\r1,2,2\r"));
-        let mut s = session(steps);
+        let mut s = exchange(steps);
         assert_eq!(s.trigger().expect("first").x_px, 1.0);
         assert_eq!(s.trigger().expect("second").x_px, 2.0);
         s.into_inner().done();
@@ -548,7 +548,7 @@ mod tests {
 
     #[test]
     fn version_and_program() {
-        let mut s = session(vec![
+        let mut s = exchange(vec![
             Step::write(b"FVR\r"),
             Step::read(b"FVR,1.20.0001\r"),
             Step::write(b"PR\r"),
@@ -557,32 +557,32 @@ mod tests {
         assert_eq!(s.version().expect("version"), "1.20.0001");
         assert_eq!(s.program().expect("program"), Program { device: 2, job: 17 });
         s.into_inner().done();
-        let mut s = session(vec![Step::write(b"FVR\r"), Step::read(b"FVR\r")]);
+        let mut s = exchange(vec![Step::write(b"FVR\r"), Step::read(b"FVR\r")]);
         assert!(matches!(s.version(), Err(KeyenceError::Malformed { .. })));
     }
 
     #[test]
     fn an_unreadable_job_reply_speaks_of_job_switching() {
-        let mut s = session(vec![Step::write(b"PR\r"), Step::read(b"PR,9\r")]);
+        let mut s = exchange(vec![Step::write(b"PR\r"), Step::read(b"PR,9\r")]);
         let e = s.program().expect_err("not PR,<device>,<job>");
         assert!(matches!(e, KeyenceError::Malformed { .. }), "{e:?}");
         let text = e.to_string();
         assert!(text.contains("job switching (M284)") && !text.contains("Data Output"), "{text}");
-        let mut s = session(vec![Step::write(b"PL,1,005\r"), Step::read(b"PL,1\r")]);
+        let mut s = exchange(vec![Step::write(b"PL,1,005\r"), Step::read(b"PL,1\r")]);
         let text = s.load_program(JobCommand::Pl, 1, 5).expect_err("not a bare PL").to_string();
         assert!(text.contains("job switching (M284)") && !text.contains("Data Output"), "{text}");
         // A bare NG after the echo is a reading, not a broken reply.
-        let mut s = session(trg(b"TRG\r0\r"));
+        let mut s = exchange(trg(b"TRG\r0\r"));
         assert_eq!(s.trigger().expect("NG").judgment, Judgment::Ng);
     }
 
     #[test]
     fn job_switch_falls_back_from_pl_to_pw() {
-        let mut s = session(vec![Step::write(b"PL,1,005\r"), Step::read(b"PL\r")]);
+        let mut s = exchange(vec![Step::write(b"PL,1,005\r"), Step::read(b"PL\r")]);
         assert_eq!(s.select_job(None, 1, 5), Ok(JobCommand::Pl));
         s.into_inner().done();
 
-        let mut s = session(vec![
+        let mut s = exchange(vec![
             Step::write(b"PL,2,042\r"),
             Step::read(b"ER,PL,01\r"),
             Step::write(b"PW,2,042\r"),
@@ -594,7 +594,7 @@ mod tests {
         assert_eq!(s.select_job(Some(JobCommand::Pw), 2, 43), Ok(JobCommand::Pw));
         s.into_inner().done();
 
-        let mut s = session(vec![
+        let mut s = exchange(vec![
             Step::write(b"PL,1,005\r"),
             Step::read(b"ER,PL,01\r"),
             Step::write(b"PW,1,005\r"),
@@ -613,14 +613,14 @@ mod tests {
         s.into_inner().done();
 
         // Any other refusal of PL is final: no PW is sent.
-        let mut s = session(vec![Step::write(b"PL,1,999\r"), Step::read(b"ER,PL,03\r")]);
+        let mut s = exchange(vec![Step::write(b"PL,1,999\r"), Step::read(b"ER,PL,03\r")]);
         assert_eq!(s.select_job(None, 1, 999).expect_err("range").code(), Some("03"));
         s.into_inner().done();
     }
 
     #[test]
     fn arguments_are_checked_before_sending() {
-        let mut s = session(Vec::new());
+        let mut s = exchange(Vec::new());
         assert_eq!(s.select_job(None, 1, 1000), Err(KeyenceError::InvalidJob { job: 1000 }));
         assert!(matches!(s.load_program(JobCommand::Pl, 3, 1), Err(KeyenceError::Config { .. })));
         assert_eq!(s.bytes_written(), 0);
@@ -671,7 +671,7 @@ mod tests {
         #![proptest_config(ProptestConfig::with_cases(400))]
 
         /// Stray lines, then the camera's answer, each line with any delimiter, delivered in
-        /// arbitrary pieces: the session returns exactly what the answer says — the data line's
+        /// arbitrary pieces: the exchange returns exactly what the answer says — the data line's
         /// reading (or its refusal), the rejection, the closed connection — or `TooManyLines`
         /// when the answer lies past the 8-line bound; arbitrary bytes never panic and anything
         /// accepted from them is finite. (Memory is bounded by construction: tests/alloc_bound.rs.)
@@ -708,7 +708,7 @@ mod tests {
             }
             let mut steps = vec![Step::write(b"TRG\r")];
             steps.extend(bytes.chunks(piece).map(Step::read));
-            let got = session(steps).trigger();
+            let got = exchange(steps).trigger();
             // Lines read when the answer is complete: the strays, then the echo and the data
             // line, the rejection, or the echo and the end of the stream.
             let needed = strays.len() + if matches!(answer, Answer::Reject(_)) { 1 } else { 2 };

@@ -1,9 +1,11 @@
-//! M281 D1: keep the image the camera pushed for a trigger (SPEC §5 "Images").
+//! M281 D1 on a Keyence camera: keep the image the camera pushed for a trigger (SPEC §5
+//! "Images", §7).
 //!
-//! The camera FTP-pushes every inspection image into `VisionImageWatchDir`. After a trigger,
-//! [`grab`] waits up to `VisionImageGrabTimeout` for a regular file in that folder whose
-//! modification time is not older than the trigger, and copies it into the images folder under a
-//! timestamped name (`vision_YYYYMMDD_HHMMSS_mmm.ext`, then `_2`, `_3`, … if taken).
+//! A VS camera FTP-pushes every inspection image into a folder of the PC, `VisionImageWatchDir`
+//! ([`ImageWatch`]). After a trigger, [`grab`] waits up to `VisionImageGrabTimeout` for a regular
+//! file in that folder whose modification time is not older than the trigger, and copies it into
+//! the images folder the core names under a timestamped name (`vision_YYYYMMDD_HHMMSS_mmm.ext`,
+//! then `_2`, `_3`, … if taken).
 //!
 //! Safety rules: only regular files directly inside the watch folder are considered (symbolic
 //! links and sub-folders are skipped, so a name can never lead outside the folder); the
@@ -15,39 +17,38 @@ use std::io;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant, SystemTime};
 
+use vision_core::ImageRequest;
+
+use crate::config::ImageWatch;
+use crate::error::KeyenceError;
+
 /// How often the watch folder is polled.
 const POLL: Duration = Duration::from_millis(20);
 /// Give up on name collisions after this many suffixes.
 const MAX_SUFFIX: u32 = 1000;
 
-/// Waits up to `timeout` for an image in `watch_dir` modified at or after `since`, copies the
-/// newest such image into `images_dir` under `vision_{stamp}.ext`, and returns the new path.
+/// Waits up to `watch.timeout` for an image in `watch.dir` modified at or after
+/// `request.since`, copies the newest such image into `request.dir` under
+/// `vision_{request.stamp}.ext`, and returns the new path.
 ///
 /// # Errors
-/// A human-readable reason (no image in time, unreadable folder, copy failure); M281 reports it
-/// as a warning, never as a failed capture.
-pub fn grab(
-    watch_dir: &Path,
-    images_dir: &Path,
-    since: SystemTime,
-    timeout: Duration,
-    stamp: &str,
-) -> Result<PathBuf, String> {
+/// [`KeyenceError::NoImageFolder`] when `watch.dir` is empty, [`KeyenceError::NoImage`] when no
+/// image came in time, [`KeyenceError::Image`] for an unreadable folder or a failed copy. M281
+/// reports each as a warning, never as a failed capture.
+pub(crate) fn grab(watch: &ImageWatch, request: &ImageRequest<'_>) -> Result<PathBuf, KeyenceError> {
+    if watch.dir.as_os_str().is_empty() {
+        return Err(KeyenceError::NoImageFolder);
+    }
     let start = Instant::now();
     loop {
-        if let Some(src) = newest_since(watch_dir, since)? {
-            return copy_new(&src, images_dir, stamp);
+        if let Some(src) = newest_since(&watch.dir, request.since).map_err(|reason| KeyenceError::Image { reason })? {
+            return copy_new(&src, request.dir, request.stamp).map_err(|reason| KeyenceError::Image { reason });
         }
         let elapsed = start.elapsed();
-        if elapsed >= timeout {
-            return Err(format!(
-                "no image newer than the trigger appeared in {} within {:.1} s — check the camera's FTP push \
-                 and VisionImageWatchDir",
-                watch_dir.display(),
-                timeout.as_secs_f64()
-            ));
+        if elapsed >= watch.timeout {
+            return Err(KeyenceError::NoImage { dir: watch.dir.display().to_string(), timeout: watch.timeout });
         }
-        std::thread::sleep(POLL.min(timeout - elapsed));
+        std::thread::sleep(POLL.min(watch.timeout - elapsed));
     }
 }
 
@@ -116,10 +117,21 @@ mod tests {
     use std::time::UNIX_EPOCH;
 
     fn tmp(name: &str) -> PathBuf {
-        let d = std::env::temp_dir().join(format!("vision-core-grab-{name}-{}", std::process::id()));
+        let d = std::env::temp_dir().join(format!("vision-keyence-grab-{name}-{}", std::process::id()));
         let _ = fs::remove_dir_all(&d);
         fs::create_dir_all(&d).expect("tmp");
         d
+    }
+
+    /// `grab` from `watch` (waiting `timeout`) into `images`, for a trigger at `since`.
+    fn grab_into(
+        watch: &Path,
+        images: &Path,
+        since: SystemTime,
+        timeout: Duration,
+        stamp: &str,
+    ) -> Result<PathBuf, KeyenceError> {
+        grab(&ImageWatch { dir: watch.to_path_buf(), timeout }, &ImageRequest { dir: images, since, stamp })
     }
 
     fn write_at(path: &Path, bytes: &[u8], t: SystemTime) {
@@ -136,10 +148,10 @@ mod tests {
         let trigger = UNIX_EPOCH + Duration::from_secs(1_700_000_000);
         write_at(&watch.join("old.bmp"), b"old", trigger - Duration::from_secs(5));
         write_at(&watch.join("new.BMP"), b"new", trigger + Duration::from_secs(1));
-        let a = grab(&watch, &images, trigger, Duration::from_millis(0), "20231114_221320_000").expect("grab");
+        let a = grab_into(&watch, &images, trigger, Duration::from_millis(0), "20231114_221320_000").expect("grab");
         assert_eq!(a, images.join("vision_20231114_221320_000.bmp"));
         assert_eq!(fs::read(&a).expect("read"), b"new");
-        let b = grab(&watch, &images, trigger, Duration::from_millis(0), "20231114_221320_000").expect("grab");
+        let b = grab_into(&watch, &images, trigger, Duration::from_millis(0), "20231114_221320_000").expect("grab");
         assert_eq!(b, images.join("vision_20231114_221320_000_2.bmp"));
         assert_eq!(fs::read(&a).expect("read"), b"new");
         let _ = fs::remove_dir_all(&root);
@@ -159,12 +171,18 @@ mod tests {
             std::os::unix::fs::symlink(&outside, watch.join("link.png")).expect("symlink");
         }
         let t0 = Instant::now();
-        let e = grab(&watch, &root.join("images"), trigger, Duration::from_millis(60), "s").expect_err("none");
-        assert!(e.starts_with("no image newer than the trigger"), "{e}");
+        let e = grab_into(&watch, &root.join("images"), trigger, Duration::from_millis(60), "s").expect_err("none");
+        assert!(matches!(e, KeyenceError::NoImage { .. }), "{e:?}");
+        assert!(e.to_string().starts_with("no image newer than the trigger"), "{e}");
+        assert!(e.to_string().contains("VisionImageWatchDir"), "{e}");
         assert!(t0.elapsed() >= Duration::from_millis(60));
         assert!(!root.join("images").exists() || fs::read_dir(root.join("images")).expect("dir").next().is_none());
-        let e = grab(&root.join("missing"), &root.join("images"), trigger, Duration::ZERO, "s").expect_err("no dir");
-        assert!(e.starts_with("cannot read image folder"), "{e}");
+        let e =
+            grab_into(&root.join("missing"), &root.join("images"), trigger, Duration::ZERO, "s").expect_err("no dir");
+        assert!(e.to_string().starts_with("cannot read image folder"), "{e}");
+        let e = grab_into(Path::new(""), &root.join("images"), trigger, Duration::ZERO, "s").expect_err("empty");
+        assert_eq!(e, KeyenceError::NoImageFolder);
+        assert!(e.to_string().starts_with("VisionImageWatchDir is empty"), "{e}");
         let _ = fs::remove_dir_all(&root);
     }
 

@@ -1,0 +1,161 @@
+//! [`Calibration`]: K, the camera axis flags, `Cal_Units`, `Cal_Date`, the pixel centre offset,
+//! and the limits a K must keep.
+
+use vision_math::{LengthUnit, Matrix2, Remap, Vector2};
+
+use super::checks::{any, finite, pixel_offset, short_text};
+use super::ParamValue;
+use crate::error::VisionError;
+
+profile_part! {
+    /// The calibration: K, the camera axis flags, `Cal_Units`, `Cal_Date` and the pixel centre
+    /// offset. M283 replaces it as a whole (see [`crate::calibrate`]).
+    ///
+    /// Decision: `VisionPxCenterOffsetX/Y` belong here, as the manual lists them: they describe
+    /// the camera's optics like K does, and are persisted with it. M283 does not solve them
+    /// (the sheet walk absorbs a centre bias into the camera tool offset), so a calibration
+    /// keeps the offset it had.
+    Calibration in calibration {
+        /// `VisionCameraSwapXY`: swap the centred pixel x and y (set by M283's axis detect).
+        (Calibration) camera_swap_xy: bool => bool = false, "VisionCameraSwapXY", any;
+        /// `VisionCameraInvertX`: negate pixel x after the swap (set by M283).
+        (Calibration) camera_invert_x: bool => bool = false, "VisionCameraInvertX", any;
+        /// `VisionCameraInvertY`: negate pixel y after the swap (set by M283).
+        (Calibration) camera_invert_y: bool => bool = false, "VisionCameraInvertY", any;
+        /// `VisionCal_K11`: K row 1 column 1, `Cal_Units` per pixel.
+        (Calibration) cal_k11: f64 => f64 = 0.0, "VisionCal_K11", finite;
+        /// `VisionCal_K12`: K row 1 column 2, `Cal_Units` per pixel.
+        (Calibration) cal_k12: f64 => f64 = 0.0, "VisionCal_K12", finite;
+        /// `VisionCal_K21`: K row 2 column 1, `Cal_Units` per pixel.
+        (Calibration) cal_k21: f64 => f64 = 0.0, "VisionCal_K21", finite;
+        /// `VisionCal_K22`: K row 2 column 2, `Cal_Units` per pixel.
+        (Calibration) cal_k22: f64 => f64 = 0.0, "VisionCal_K22", finite;
+        /// `VisionCal_Date`: ISO local time of the last successful calibration (empty = never).
+        (Calibration) cal_date: String => &str = String::new(), "VisionCal_Date", short_text;
+        /// `VisionCal_Units`: the unit K is calibrated in (`in` or `mm`).
+        (Calibration) cal_units: LengthUnit => LengthUnit = LengthUnit::Inch, "VisionCal_Units", any;
+        /// `VisionPxCenterOffsetX`: optical-centre bias subtracted after the image-centre shift,
+        /// pixels.
+        (Calibration) px_center_offset_x: f64 => f64 = 0.0, "VisionPxCenterOffsetX", pixel_offset;
+        /// `VisionPxCenterOffsetY`: same, Y, pixels.
+        (Calibration) px_center_offset_y: f64 => f64 = 0.0, "VisionPxCenterOffsetY", pixel_offset;
+    }
+}
+
+/// The smallest pixel footprint a K may give, inches per pixel (2.5 nm: beyond any microscope
+/// objective a machine camera carries).
+pub const K_SCALE_MIN_IN: f64 = 1e-7;
+/// The largest pixel footprint a K may give, inches per pixel (a 1776-pixel image would see
+/// 178 in, more than any machine table).
+pub const K_SCALE_MAX_IN: f64 = 0.1;
+/// The largest ratio between K's two axis scales (square-ish pixels and no more than a steep
+/// viewing angle; a larger ratio is a nearly singular K).
+pub const K_MAX_ANISOTROPY: f64 = 10.0;
+
+impl Calibration {
+    /// K as a matrix `[[K11, K12], [K21, K22]]`, `Cal_Units` per pixel.
+    #[must_use]
+    pub fn cal_k(&self) -> Matrix2<f64> {
+        Matrix2::new(self.cal_k11, self.cal_k12, self.cal_k21, self.cal_k22)
+    }
+
+    /// Writes all four K entries at once (`Cal_Units` per pixel); nothing changes unless all
+    /// four are finite.
+    ///
+    /// # Errors
+    /// [`VisionError::InvalidParam`] for a non-finite entry.
+    pub fn set_cal_k(&mut self, k: Matrix2<f64>) -> Result<(), VisionError> {
+        if let Some(bad) = k.iter().find(|v| !v.is_finite()) {
+            return Err(VisionError::InvalidParam {
+                name: "VisionCal_K11..K22".into(),
+                value: bad.to_string(),
+                reason: "must be finite numbers".into(),
+            });
+        }
+        self.cal_k11 = k[(0, 0)];
+        self.cal_k12 = k[(0, 1)];
+        self.cal_k21 = k[(1, 0)];
+        self.cal_k22 = k[(1, 1)];
+        Ok(())
+    }
+
+    /// Checks K as a whole, as a profile load does: all zero ("not calibrated") or a pixel
+    /// footprint `√|det K|` of [`K_SCALE_MIN_IN`]..[`K_SCALE_MAX_IN`] inches per pixel with its
+    /// two axes within [`K_MAX_ANISOTROPY`]× of each other.
+    ///
+    /// # Errors
+    /// [`VisionError::InvalidParam`] naming `VisionCal_K11..K22` and what is wrong.
+    pub fn check_k(&self) -> Result<(), VisionError> {
+        let k = self.cal_k();
+        if k.iter().all(|v| *v == 0.0) {
+            return Ok(());
+        }
+        let bad = |reason: String| VisionError::InvalidParam {
+            name: "VisionCal_K11..K22".into(),
+            value: format!("[[{:e}, {:e}], [{:e}, {:e}]]", k[(0, 0)], k[(0, 1)], k[(1, 0)], k[(1, 1)]),
+            reason,
+        };
+        let in_per_unit = self.cal_units.factor_to(LengthUnit::Inch);
+        // Singular values of K, in inches per pixel, by the closed form for 2×2 matrices.
+        // Normalised first so 1e300 entries do not overflow.
+        let k_in = k.map(|v| v * in_per_unit);
+        let m = k_in.amax();
+        let sv = (k_in / m).singular_values() * m;
+        let (big, small) = (sv.max(), sv.min());
+        if !(big.is_finite() && small > 0.0 && big / small <= K_MAX_ANISOTROPY) {
+            return Err(bad(format!(
+                "is singular or nearly so (the axes' scales differ by more than {K_MAX_ANISOTROPY}×) — \
+                 recalibrate with M283, or set all four to 0 for \"not calibrated\""
+            )));
+        }
+        let scale = big.sqrt() * small.sqrt();
+        if !(K_SCALE_MIN_IN..=K_SCALE_MAX_IN).contains(&scale) {
+            return Err(bad(format!(
+                "gives {scale:.3e} in per pixel, outside the physical {K_SCALE_MIN_IN:e}..{K_SCALE_MAX_IN} in per \
+                 pixel (VisionCal_Units is {}) — recalibrate with M283, or set all four to 0",
+                self.cal_units.short_name()
+            )));
+        }
+        Ok(())
+    }
+
+    /// The axis remap from the three `VisionCamera*` flags.
+    #[must_use]
+    pub fn remap(&self) -> Remap {
+        Remap { swap_xy: self.camera_swap_xy, invert_x: self.camera_invert_x, invert_y: self.camera_invert_y }
+    }
+
+    /// Writes the three remap flags at once.
+    pub fn set_remap(&mut self, r: Remap) {
+        self.camera_swap_xy = r.swap_xy;
+        self.camera_invert_x = r.invert_x;
+        self.camera_invert_y = r.invert_y;
+    }
+
+    /// The pixel centre offset, pixels.
+    #[must_use]
+    pub fn center_offset(&self) -> Vector2<f64> {
+        Vector2::new(self.px_center_offset_x, self.px_center_offset_y)
+    }
+
+    /// This calibration with a new K, remap, unit and date (the pixel centre offset is kept).
+    ///
+    /// # Errors
+    /// [`VisionError::InvalidParam`] for a K [`Calibration::check_k`] refuses (a profile
+    /// load would) or a date longer than the profile allows; `self` is unchanged either way.
+    pub fn solved(
+        &self,
+        k: Matrix2<f64>,
+        remap: Remap,
+        units: LengthUnit,
+        date: &str,
+    ) -> Result<Calibration, VisionError> {
+        let mut next = self.clone();
+        next.set_cal_k(k)?;
+        next.set_remap(remap);
+        next.cal_units = units;
+        next.set_raw("VisionCal_Date", &ParamValue::from(date))?;
+        next.check_k()?;
+        Ok(next)
+    }
+}
