@@ -175,7 +175,7 @@ impl CameraDriver for KeyenceDriver {
     }
 
     /// The newest image the camera pushed into `VisionImageWatchDir` since the trigger,
-    /// waiting up to `VisionImageGrabTimeout` (see [`crate::images`]).
+    /// waiting up to `VisionImageGrabTimeout` (the `images` module).
     fn grab_image(&mut self, request: &ImageRequest<'_>) -> Result<PathBuf, DriverError> {
         crate::images::grab(&self.config.images, request).map_err(DriverError::from)
     }

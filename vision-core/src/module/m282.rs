@@ -132,7 +132,7 @@ impl VisionModule {
     /// X and Y by enough to miss one by more than `VisionFitMaxAxisScaleError` (the refusal
     /// advises rectangle mode). Lengths in inches, ×25.4 under G21.
     ///
-    /// On LinuxCNC (no G68, no G51: [`crate::linuxcnc`], [`vision_math::linuxcnc`]) the lines
+    /// On LinuxCNC (no G68, no G51: [`crate::controller::linuxcnc`], [`vision_math::linuxcnc`]) the lines
     /// are `G10 L2 P0 R{θ₀ + θ}` and `G52`, the scale gate refuses with "LinuxCNC cannot
     /// scale: …", and within it the rigid part of the chain is applied (the report's `chain`,
     /// residuals and `Run_*`) and the scale left out is in [`AlignReport::linuxcnc`]. θ₀ and the
