@@ -168,8 +168,67 @@ pub(crate) fn rotation(deg: f64) -> Matrix2<f64> {
     AlignmentChain { rotation_deg: deg, ..AlignmentChain::IDENTITY }.rotation_matrix()
 }
 
-/// The alignment of a controller with G68/G51/G52 modals (Mach4, seed 002): cancelled with
-/// `G69 G50 G52 X0 Y0`, applied as the chain's four lines, state kept by the module.
+/// Implements [`Controller`] for `$controller`, a controller whose alignment is the G68/G51/G52
+/// modals (Mach4, seed 002): cancelled with `G69 G50 G52 X0 Y0`, applied as the chain's four
+/// lines and remembered by the module; a tool table that holds the module's offset; moves that
+/// finish before the next line, so M281 may re-centre; no G5x rotation under the alignment.
+macro_rules! modal_controller {
+    ($controller:ty, name = $name:literal, dialect = $dialect:literal) => {
+        impl $crate::controller::Controller for $controller {
+            fn name(&self) -> &'static str {
+                $name
+            }
+
+            fn dialect(&self) -> &'static str {
+                $dialect
+            }
+
+            fn tool_table_sign(&self) -> f64 {
+                1.0
+            }
+
+            fn may_recentre(&self) -> bool {
+                true
+            }
+
+            fn cancel_alignment(&self, machine: &mut dyn $crate::Machine) -> Result<Vec<String>, $crate::VisionError> {
+                $crate::controller::modal::cancel(machine)
+            }
+
+            fn check_fit(
+                &self,
+                _full: &vision_math::AlignmentChain,
+                _max_scale_dev_pct: f64,
+            ) -> Result<(), $crate::VisionError> {
+                Ok(())
+            }
+
+            fn apply_alignment(
+                &self,
+                machine: &mut dyn $crate::Machine,
+                chain: &vision_math::AlignmentChain,
+            ) -> Result<$crate::controller::Applied, $crate::VisionError> {
+                $crate::controller::modal::apply(machine, chain)
+            }
+
+            fn active_alignment(
+                &self,
+                machine: &dyn $crate::Machine,
+                remembered: Option<vision_math::AlignmentChain>,
+            ) -> Result<Option<vision_math::AlignmentChain>, $crate::MachineError> {
+                $crate::controller::modal::active(machine, remembered)
+            }
+
+            fn base_rotation(&self, _machine: &dyn $crate::Machine) -> Result<f64, $crate::MachineError> {
+                Ok(0.0)
+            }
+        }
+    };
+}
+use modal_controller;
+
+/// The alignment of a controller with G68/G51/G52 modals: cancelled with `G69 G50 G52 X0 Y0`,
+/// applied as the chain's four lines, state kept by the module.
 mod modal {
     use super::{Applied, CANCEL_LINE};
     use crate::error::VisionError;
