@@ -202,6 +202,23 @@ pub trait Machine {
         lines.iter().try_for_each(|line| self.execute(line))
     }
 
+    /// Saves the program's modal state — motion mode, distance mode, feed and feed mode, plane,
+    /// units, offsets — before the module's own moves (M281's re-centring, M283's walk), so
+    /// that [`Machine::restore_modal_state`] puts back exactly what the program had: a feed move
+    /// after M281 stays a feed move (Mach4: `mcCntlMachineStatePush`; LinuxCNC: `M70`).
+    ///
+    /// # Errors
+    /// The controller refused; the module then does not move.
+    fn save_modal_state(&mut self) -> Result<(), MachineError>;
+
+    /// Restores the modal state [`Machine::save_modal_state`] saved last (Mach4:
+    /// `mcCntlMachineStatePop`; LinuxCNC: `M72`). The module calls it after its own moves, on
+    /// success and on failure alike.
+    ///
+    /// # Errors
+    /// The controller refused.
+    fn restore_modal_state(&mut self) -> Result<(), MachineError>;
+
     /// Commanded XY in the **program** frame (the coordinates the G-code wrote, before any
     /// G51/G68/G52 alignment), current units.
     ///

@@ -180,6 +180,12 @@ pub enum SyntaxProblem {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum RunProblem {
+    /// A host's save or restore of the modal state that cannot be done.
+    #[error("modal state: {what}")]
+    ModalStack {
+        /// Why.
+        what: &'static str,
+    },
     /// A G-code this interpreter does not implement.
     #[error("{code} is not supported: this machine knows G0 G1 G2 G3 G4 G10 G17 G18 G19 G20 G21 G28 G28.1 G30 G30.1 G40 G43 G43.1 G49 G50 G51 G52 G53 G54-G59 G61 G61.1 G64 G68 G69 G73 G80-G83 G85 G89 G90 G90.1 G91 G91.1 G92 G92.1 G92.2 G94 G97 G98 G99")]
     UnknownGCode {

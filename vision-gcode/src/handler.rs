@@ -138,6 +138,23 @@ impl<'a> Context<'a> {
         Ok(())
     }
 
+    /// Saves the modal state (see [`Interpreter::push_modal_state`]): what a host does before
+    /// moves of its own.
+    ///
+    /// # Errors
+    /// As [`Interpreter::push_modal_state`].
+    pub fn push_modal_state(&mut self) -> Result<(), GcodeError> {
+        self.interp.push_modal_state()
+    }
+
+    /// Restores the modal state saved last (see [`Interpreter::pop_modal_state`]).
+    ///
+    /// # Errors
+    /// As [`Interpreter::pop_modal_state`].
+    pub fn pop_modal_state(&mut self) -> Result<(), GcodeError> {
+        self.interp.pop_modal_state()
+    }
+
     /// Parameter `#n`.
     ///
     /// # Errors

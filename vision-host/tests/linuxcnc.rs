@@ -32,6 +32,8 @@ struct FakeLinuxCnc {
     /// The spindle, machine coordinates.
     spindle: Vector2<f64>,
     incremental: bool,
+    /// Distance modes saved by M70, newest last.
+    saved: Vec<bool>,
     /// Numbered parameters (0 when never written, as in LinuxCNC).
     params: BTreeMap<u32, f64>,
     /// Every line run, in order.
@@ -59,6 +61,7 @@ impl FakeLinuxCnc {
             tool: camera,
             spindle,
             incremental: false,
+            saved: Vec::new(),
             params: BTreeMap::new(),
             lines: Vec::new(),
             messages: Vec::new(),
@@ -143,6 +146,14 @@ impl Machine for FakeLinuxCnc {
             return Err(unsupported(line));
         }
         self.lines.push(line.to_string());
+        Ok(())
+    }
+    fn save_modal_state(&mut self) -> Result<(), MachineError> {
+        self.saved.push(self.incremental);
+        Ok(())
+    }
+    fn restore_modal_state(&mut self) -> Result<(), MachineError> {
+        self.incremental = self.saved.pop().ok_or_else(|| unsupported("M72 without M70"))?;
         Ok(())
     }
     fn pound(&self, index: u32) -> Result<f64, MachineError> {

@@ -160,6 +160,14 @@ impl Machine for Mach4 {
         done.map_err(|e| e.with_kind(MachineErrorKind::RefusedGcode))
     }
 
+    fn save_modal_state(&mut self) -> Result<(), MachineError> {
+        self.status("mcCntlMachineStatePush", self.inst.clone())
+    }
+
+    fn restore_modal_state(&mut self) -> Result<(), MachineError> {
+        self.status("mcCntlMachineStatePop", self.inst.clone())
+    }
+
     fn pound(&self, index: u32) -> Result<f64, MachineError> {
         let value = self.value("mcCntlGetPoundVar", (self.inst.clone(), index));
         value.map_err(|e| e.with_kind(MachineErrorKind::OutOfRange))

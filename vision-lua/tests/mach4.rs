@@ -112,6 +112,14 @@ impl MacroHandler {
                 })?,
             )?;
             mc.set(
+                "mcCntlMachineStatePush",
+                scope.create_function(|_, _: Value| Ok(rc(ctx.borrow_mut().push_modal_state())))?,
+            )?;
+            mc.set(
+                "mcCntlMachineStatePop",
+                scope.create_function(|_, _: Value| Ok(rc(ctx.borrow_mut().pop_modal_state())))?,
+            )?;
+            mc.set(
                 "mcCntlGetUnitsCurrent",
                 scope.create_function(|_, _: Value| {
                     Ok((if ctx.borrow().units() == vision_math::LengthUnit::Inch { 200 } else { 210 }, NO_ERROR))

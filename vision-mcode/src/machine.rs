@@ -68,6 +68,14 @@ impl Machine for ContextMachine<'_, '_> {
         self.ctx.execute(line).map_err(host(MachineErrorKind::RefusedGcode))
     }
 
+    fn save_modal_state(&mut self) -> Result<(), MachineError> {
+        self.ctx.push_modal_state().map_err(host(MachineErrorKind::Other))
+    }
+
+    fn restore_modal_state(&mut self) -> Result<(), MachineError> {
+        self.ctx.pop_modal_state().map_err(host(MachineErrorKind::Other))
+    }
+
     fn program_position(&self) -> Result<Point2<f64>, MachineError> {
         Ok(self.ctx.program_position().xy())
     }

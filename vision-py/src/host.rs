@@ -83,6 +83,16 @@ impl Machine for PyHost<'_> {
         self.call("execute", (line,)).map(|_| ()).map_err(|e| e.with_kind(MachineErrorKind::RefusedGcode))
     }
 
+    /// `M70`: LinuxCNC saves the modal state.
+    fn save_modal_state(&mut self) -> Result<(), MachineError> {
+        self.execute("M70")
+    }
+
+    /// `M72`: LinuxCNC restores the modal state `M70` saved.
+    fn restore_modal_state(&mut self) -> Result<(), MachineError> {
+        self.execute("M72")
+    }
+
     fn pound(&self, index: u32) -> Result<f64, MachineError> {
         self.value("pound", (index,), "a number")
     }

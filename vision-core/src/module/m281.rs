@@ -4,10 +4,10 @@ use vision_math::{LengthUnit, Point2};
 
 use super::capture::{mark_size, observe, outside_image_note, pixel_chain, require_mark, Capture, Recentred};
 use super::{Dot, Reply, VisionModule};
-use crate::calibrate::relative_move;
-use crate::driver::ImageRequest;
+use crate::calibrate::{absolute_move, relative_move};
+use crate::driver::{ImageRequest, Reading};
 use crate::error::VisionError;
-use crate::machine::Machine;
+use crate::machine::{Machine, Timestamp};
 use crate::pound::{PoundBlock, SlotValues, SLOTS};
 
 impl VisionModule {
@@ -18,8 +18,13 @@ impl VisionModule {
     /// just observed (an incremental `G91 G0`, then `G90`), settles `VisionTriggerSettleSec` and
     /// triggers again; the last reading is the capture, `commanded` stays where the program put
     /// the camera, and the reply lists the moves. `VisionRecenterPasses` = 0 reads in one shot.
-    /// On LinuxCNC M281 never re-centres: it triggers after waiting for the machine
-    /// (`yield INTERP_EXECUTE_FINISH`), after which a remap may not queue G-code.
+    /// After the last reading the camera moves back to where the program put it, and the
+    /// program's modal state, saved before the first move, is restored
+    /// ([`Machine::save_modal_state`]), on success and failure alike: the program goes on from
+    /// its own point in the modes it had (a feed move stays a feed move). Only a reading inside the image is
+    /// moved to, so a move never exceeds the field of view. A controller may forbid moving
+    /// ([`crate::Controller::may_recentre`]: LinuxCNC triggers after waiting for the machine,
+    /// after which a remap may not queue G-code); M281 then reads in one shot.
     ///
     /// `O = C + K·R·(p − res/2 − PxCenterOffset)` with K converted from `Cal_Units` to the
     /// machine's unit; with an alignment active, `O` is reported in the program frame (SPEC §2).
@@ -60,8 +65,7 @@ impl VisionModule {
         let mut trigger_time = machine.now();
         let mut reading = self.trigger_mark()?;
         let mut native = Point2::new(reading.x_px, reading.y_px);
-        let mut offset = chain.delta(native);
-        let (commanded, mut observed) = self.observe(machine, alignment, offset)?;
+        let (commanded, mut observed) = self.observe(machine, alignment, chain.delta(native))?;
         // Re-centring: a mark read far off the image centre carries K's error times that
         // distance (a part closer or farther than the calibration height); read over it again.
         let first_px = chain.centred(native);
@@ -69,28 +73,53 @@ impl VisionModule {
         let mut gcode = Vec::new();
         let mut passes = 0;
         let max_passes = if machine.controller().may_recentre() { self.params.recenter_passes() } else { 0 };
-        while passes < max_passes && chain.centred(native).norm() > tolerance {
-            let moved = (|| -> Result<Vec<String>, VisionError> {
-                let lines = relative_move(observed - commanded_now(machine)?);
-                machine.run_gcode(&lines)?;
-                machine.dwell(self.params.trigger_settle_s())?;
-                Ok(lines)
-            })();
-            match moved {
-                Ok(lines) => gcode.extend(lines),
+        // The program's modal state is saved before the first move and put back after the
+        // last, whatever happens in between: a feed move after M281 stays a feed move.
+        let mut saved = false;
+        let mut failure = None;
+        // A reading outside the image is no distance to move by (a wrong resolution or K):
+        // every re-centring move stays within the field of view.
+        while passes < max_passes
+            && chain.centred(native).norm() > tolerance
+            && outside_image_note(&self.params, native).is_none()
+        {
+            if !saved {
+                if let Err(e) = machine.save_modal_state() {
+                    failure = Some(VisionError::from(e));
+                    break;
+                }
+                saved = true;
+            }
+            match self.recentre_pass(machine, &chain, observed, alignment) {
+                Ok(pass) => {
+                    gcode.extend(pass.lines);
+                    (trigger_time, reading, native, observed) = (pass.time, pass.reading, pass.native, pass.observed);
+                }
                 Err(e) => {
-                    self.publish_failure(None, &e);
-                    return Err(e);
+                    failure = Some(e);
+                    break;
                 }
             }
-            // M281 D1 keeps the image of the reading reported.
-            trigger_time = machine.now();
-            reading = self.trigger_mark()?;
-            native = Point2::new(reading.x_px, reading.y_px);
-            offset = chain.delta(native);
-            observed = self.observe(machine, alignment, offset)?.1;
             passes += 1;
         }
+        if passes > 0 && failure.is_none() {
+            // Back where the program put the camera: the program goes on from its own point.
+            let lines = vec![absolute_move(commanded)];
+            match machine.run_gcode(&lines).map(|()| lines) {
+                Ok(lines) => gcode.extend(lines),
+                Err(e) => failure = Some(e.into()),
+            }
+        }
+        if saved {
+            if let Err(e) = machine.restore_modal_state() {
+                failure.get_or_insert(VisionError::from(e));
+            }
+        }
+        if let Some(e) = failure {
+            self.publish_failure(None, &e);
+            return Err(e);
+        }
+        let offset = chain.delta(native);
         let (width, height) = mark_size(&chain, &reading);
         let values = SlotValues {
             x: observed.x,
@@ -215,11 +244,35 @@ impl VisionModule {
     }
 }
 
-fn commanded_now(machine: &dyn Machine) -> Result<Point2<f64>, VisionError> {
-    Ok(machine.program_position()?)
+/// One re-centring pass: the move over the point last observed, and the reading there.
+struct Pass {
+    lines: Vec<String>,
+    time: Timestamp,
+    reading: Reading,
+    native: Point2<f64>,
+    observed: Point2<f64>,
 }
 
 impl VisionModule {
+    /// Moves the camera over `observed` (program frame), settles, triggers and observes again.
+    fn recentre_pass(
+        &mut self,
+        machine: &mut dyn Machine,
+        chain: &vision_math::PixelChain,
+        observed: Point2<f64>,
+        alignment: Option<vision_math::AlignmentChain>,
+    ) -> Result<Pass, VisionError> {
+        let lines = relative_move(observed - machine.program_position()?);
+        machine.run_gcode(&lines)?;
+        machine.dwell(self.params.trigger_settle_s())?;
+        // M281 D1 keeps the image of the reading reported.
+        let time = machine.now();
+        let reading = self.trigger_mark()?;
+        let native = Point2::new(reading.x_px, reading.y_px);
+        let observed = observe(machine, alignment, chain.delta(native))?.1;
+        Ok(Pass { lines, time, reading, native, observed })
+    }
+
     /// [`observe`], a failure shown in `LastStatus` (the trigger already happened).
     fn observe(
         &mut self,

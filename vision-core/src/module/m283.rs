@@ -104,8 +104,15 @@ impl VisionModule {
     pub fn m283(&mut self, machine: &mut dyn Machine, mode: Calibrate) -> Result<Reply<CalReport>, VisionError> {
         let tool = self.check_m283(machine, mode)?;
         let (start, unit) = self.before_walk(machine)?;
+        // The walk's moves must leave the program's modal state as it was (G90/G91, G0/G1, …).
+        if let Err(e) = machine.save_modal_state() {
+            let e = VisionError::from(e);
+            self.publish_failure(None, &e);
+            return Err(e);
+        }
         let (outcome, ran) = {
             let Some(driver) = self.driver.as_deref_mut() else {
+                let _ = machine.restore_modal_state();
                 return Err(VisionError::NoDriver { name: self.params.driver().to_string() });
             };
             let mut walker = Walker::new(machine, driver, &self.params, &mut self.dro, unit);
@@ -113,7 +120,7 @@ impl VisionModule {
             (outcome, walker.into_ran())
         };
         let (ran, last) = ran;
-        self.commit_walk(machine, outcome, ran, last, start)
+        self.commit_walk(machine, outcome, ran, last, start, true)
     }
 
     /// M283's checks before the walk moves or triggers anything (see [`VisionModule::m283`]'s
@@ -154,7 +161,9 @@ impl VisionModule {
 
     /// M283's one commit path, for the one-shot walk and the stepwise one: applies the walk's
     /// `outcome` (lines `ran`, last reading `last`) or, on any failure, sends the machine back to
-    /// `start` (best effort) and records the failure.
+    /// `start` (best effort) and records the failure. With `modal_saved` (the one-shot walk
+    /// saved the modal state before moving) the program's modal state is restored last, on
+    /// either path.
     fn commit_walk(
         &mut self,
         machine: &mut dyn Machine,
@@ -162,9 +171,23 @@ impl VisionModule {
         ran: Vec<String>,
         last: Option<Reading>,
         start: Point2<f64>,
+        modal_saved: bool,
     ) -> Result<Reply<CalReport>, VisionError> {
         match outcome.and_then(|solution| self.apply_calibration(machine, solution)) {
             Ok(report) => {
+                if modal_saved {
+                    if let Err(e) = machine.restore_modal_state() {
+                        let e = VisionError::Machine(MachineError::new(
+                            e.kind(),
+                            format!(
+                                "the calibration was saved, but the program's modal state could not be restored \
+                                 ({e}) — check G90/G91 and G0/G1 before the next move"
+                            ),
+                        ));
+                        self.publish_failure(None, &e);
+                        return Err(e);
+                    }
+                }
                 // The last trigger again, as M281 would show it with the K just written.
                 if let Some(reading) = last.filter(Reading::found) {
                     if let Ok(chain) =
@@ -179,6 +202,10 @@ impl VisionModule {
             }
             Err(e) => {
                 let _ = machine.run_gcode(&[absolute_move(start)]);
+                if modal_saved {
+                    // Best effort, as the move back: the error already says what failed.
+                    let _ = machine.restore_modal_state();
+                }
                 // A failed trigger was shown (and its stale values cleared) as it happened.
                 self.publish_failure(None, &e);
                 Err(e)
@@ -267,11 +294,15 @@ impl VisionModule {
         walk: &StepwiseWalk,
     ) -> Result<Reply<CalReport>, VisionError> {
         match self.replay(machine, walk) {
-            Replayed::Done { solution, last } => self.commit_walk(machine, Ok(*solution), Vec::new(), last, walk.start),
+            Replayed::Done { solution, last } => {
+                self.commit_walk(machine, Ok(*solution), Vec::new(), last, walk.start, false)
+            }
             Replayed::Needs(_) => Err(VisionError::WalkOrder {
                 what: "the walk is not done: capture at every point o<vision_walk_next> gives before finishing",
             }),
-            Replayed::Failed { error, last } => self.commit_walk(machine, Err(error), Vec::new(), last, walk.start),
+            Replayed::Failed { error, last } => {
+                self.commit_walk(machine, Err(error), Vec::new(), last, walk.start, false)
+            }
         }
     }
 

@@ -91,7 +91,12 @@ pub struct Interpreter {
     pending: Vec<Pending>,
     /// Where the machine position is published for [`PositionWatch`]es (not shared by clones).
     publisher: Publisher,
+    /// Modal states saved by [`Interpreter::push_modal_state`], newest last.
+    saved_modal: Vec<Modal>,
 }
+
+/// The most modal states [`Interpreter::push_modal_state`] keeps at once.
+pub const MAX_SAVED_MODAL_STATES: usize = 16;
 
 impl Interpreter {
     /// An interpreter at machine position zero, in its start-up modes.
@@ -110,6 +115,7 @@ impl Interpreter {
             assigns: Vec::new(),
             pending: Vec::new(),
             publisher: Publisher::default(),
+            saved_modal: Vec::new(),
         };
         interp.refresh_mirrors();
         interp
@@ -209,6 +215,7 @@ impl Interpreter {
     /// initial path mode, G51/G68/G52 cancelled, G92 zeroed. Units, feed, tools, parameters and
     /// the machine position stay.
     pub fn reset(&mut self) {
+        self.saved_modal.clear();
         self.modal.end_program(&self.config, &mut self.params);
         self.params.begin();
         self.refresh_mirrors();
@@ -610,6 +617,47 @@ impl Interpreter {
     /// As [`Context::set_tool_offset`].
     pub fn set_tool_offset(&mut self, tool: u32, x: f64, y: f64) -> Result<(), GcodeError> {
         self.write_tool_offset(tool, x, y, 0)
+    }
+
+    /// Saves the modal state — motion mode, plane, distance and arc distance modes, units, path
+    /// mode, feed and feed mode, the canned cycles' return mode — on a stack, as Mach4's
+    /// `mcCntlMachineStatePush` and LinuxCNC's `M70` do, so that a host's own moves can be
+    /// undone by [`Interpreter::pop_modal_state`].
+    ///
+    /// # Errors
+    /// [`RunProblem::ModalStack`] when [`MAX_SAVED_MODAL_STATES`] are saved already.
+    pub fn push_modal_state(&mut self) -> Result<(), GcodeError> {
+        if self.saved_modal.len() >= MAX_SAVED_MODAL_STATES {
+            return Err(GcodeError::run(0, RunProblem::ModalStack { what: "too many modal states are saved already" }));
+        }
+        self.saved_modal.push(self.modal);
+        Ok(())
+    }
+
+    /// Restores the modal state [`Interpreter::push_modal_state`] saved last and forgets it.
+    /// The position, the work system and its offsets, the tool and the alignment stay as they
+    /// are now (the moves in between happened).
+    ///
+    /// # Errors
+    /// [`RunProblem::ModalStack`] when none is saved.
+    pub fn pop_modal_state(&mut self) -> Result<(), GcodeError> {
+        let saved = self
+            .saved_modal
+            .pop()
+            .ok_or_else(|| GcodeError::run(0, RunProblem::ModalStack { what: "no modal state is saved" }))?;
+        let m = &mut self.modal;
+        m.motion = saved.motion;
+        m.plane = saved.plane;
+        m.absolute = saved.absolute;
+        m.arc_absolute = saved.arc_absolute;
+        m.units = saved.units;
+        m.path = saved.path;
+        m.feed = saved.feed;
+        m.per_revolution = saved.per_revolution;
+        m.retract_to_r = saved.retract_to_r;
+        m.cycle = saved.cycle;
+        self.refresh_mirrors();
+        Ok(())
     }
 
     /// Adds or replaces a tool-table entry (machine units). Tool 0 is ignored.

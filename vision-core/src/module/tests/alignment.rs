@@ -440,8 +440,22 @@ fn m281_recentres_over_a_mark_seen_off_centre() {
     assert_eq!(recentred.passes, 1);
     assert!((recentred.first_px.norm() - 0.1f64.hypot(0.1) / 0.00203).abs() < 1e-6, "{recentred:?}");
     assert!(c.centred_px.norm() < 1e-6, "{c:?}");
-    assert_eq!(r.gcode, vec!["G91 G0 X0.1000000 Y-0.1000000".to_string(), "G90".to_string()]);
-    assert!((rig.machine.program_position().expect("a position") - Point2::new(1.1, 0.9)).norm() < 1e-9);
+    // Over the mark, then back where the program put the camera, in the program's own modes.
+    let want = ["G91 G0 X0.1000000 Y-0.1000000", "G90", "G90 G0 X1.0000000 Y1.0000000"];
+    assert_eq!(r.gcode, want.map(str::to_string));
+    assert!((rig.machine.program_position().expect("a position") - Point2::new(1.0, 1.0)).norm() < 1e-9);
+    assert!(rig.world().saved_modal.is_empty(), "saved and restored");
+    // A program in G91 stays in G91.
+    rig.world().absolute = false;
+    let r = rig.module.m281(&mut rig.machine, false).expect("capture");
+    assert!(r.report.recentred.is_some());
+    assert!(!rig.world().absolute, "the program's G91 is back");
+    // A refused re-centring move: the capture fails, and the modes are put back all the same.
+    rig.world().fail_gcode_after = Some(0);
+    let e = rig.module.m281(&mut rig.machine, false).expect_err("e-stop");
+    assert!(matches!(e, VisionError::Machine(_)), "{e}");
+    assert!(!rig.world().absolute && rig.world().saved_modal.is_empty());
+    rig.world().fail_gcode_after = None;
     // Within the tolerance: no move.
     rig.module.set_param("VisionRecenterTolerance", 100.0).expect("set");
     rig.go(1.0, 1.0);

@@ -96,6 +96,8 @@ pub(crate) struct World {
     pub last_pound: u32,
     /// `run_gcode` fails after this many more calls.
     pub fail_gcode_after: Option<usize>,
+    /// Modal states saved by the module (distance mode, units), newest last.
+    pub saved_modal: Vec<(bool, LengthUnit)>,
     /// `set_tool_offset` fails after this many more calls.
     pub fail_offset_after: Option<usize>,
 
@@ -137,6 +139,7 @@ impl Default for World {
             fail_pound: None,
             last_pound: 9999,
             fail_gcode_after: None,
+            saved_modal: Vec::new(),
             fail_offset_after: None,
             marks: Vec::new(),
             mark_size: 0.5,
@@ -238,6 +241,19 @@ impl Machine for FakeMachine {
     fn program_position(&self) -> Result<Point2<f64>, MachineError> {
         let w = self.world();
         Ok(Point2::new(w.inch_to_cur(w.program.x), w.inch_to_cur(w.program.y)))
+    }
+    fn save_modal_state(&mut self) -> Result<(), MachineError> {
+        let mut w = self.world();
+        let state = (w.absolute, w.units);
+        w.saved_modal.push(state);
+        Ok(())
+    }
+    fn restore_modal_state(&mut self) -> Result<(), MachineError> {
+        let mut w = self.world();
+        let (absolute, units) =
+            w.saved_modal.pop().ok_or_else(|| MachineError::new(MachineErrorKind::Other, "nothing saved"))?;
+        (w.absolute, w.units) = (absolute, units);
+        Ok(())
     }
     fn alignment_active(&self) -> Result<Option<bool>, MachineError> {
         Ok(Some(self.world().alignment.is_some()))
