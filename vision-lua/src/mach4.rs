@@ -24,7 +24,14 @@ pub struct Mach4 {
     mc: Table,
     inst: Value,
     no_error: i64,
+    /// The motion and distance modes (`#4001`, `#4003`) at each `save_modal_state`, newest last.
+    saved: Vec<(f64, f64)>,
 }
+
+/// `mc.SV_MOD_GROUP_1`: the active motion mode as its G number (0, 1, 2, 3, 80, 81, …).
+const SV_MOD_GROUP_1: u32 = 4001;
+/// `mc.SV_MOD_GROUP_3`: the distance mode, 90 or 91.
+const SV_MOD_GROUP_3: u32 = 4003;
 
 /// A failed scripting call or an unusable answer.
 fn comm(message: impl Into<String>) -> MachineError {
@@ -46,7 +53,8 @@ impl Mach4 {
             .get("mc")
             .map_err(|_| comm("there is no `mc` table: mach_vision runs inside Mach4's macros"))?;
         let no_error = mc.get::<Option<i64>>("MERROR_NOERROR").map_err(|e| lua_error("MERROR_NOERROR", &e))?;
-        let mut host = Mach4 { lua: lua.clone(), mc, inst: Value::Nil, no_error: no_error.unwrap_or(0) };
+        let mut host =
+            Mach4 { lua: lua.clone(), mc, inst: Value::Nil, no_error: no_error.unwrap_or(0), saved: Vec::new() };
         host.inst = host.value("mcGetInstance", ())?;
         Ok(host)
     }
@@ -160,12 +168,37 @@ impl Machine for Mach4 {
         done.map_err(|e| e.with_kind(MachineErrorKind::RefusedGcode))
     }
 
+    /// `mcCntlMachineStatePush`, and the motion and distance modes read aside: Mach4's scripts
+    /// push and pop the machine state around moves of their own, but which modal groups the
+    /// pop restores is not documented, so those two are checked after it.
     fn save_modal_state(&mut self) -> Result<(), MachineError> {
-        self.status("mcCntlMachineStatePush", self.inst.clone())
+        let modes = (self.pound(SV_MOD_GROUP_1)?, self.pound(SV_MOD_GROUP_3)?);
+        self.status("mcCntlMachineStatePush", self.inst.clone())?;
+        self.saved.push(modes);
+        Ok(())
     }
 
+    /// `mcCntlMachineStatePop`, then the saved motion and distance modes put back where the pop
+    /// left another (`G0`/`G1`/`G80`, `G90`/`G91`).
     fn restore_modal_state(&mut self) -> Result<(), MachineError> {
-        self.status("mcCntlMachineStatePop", self.inst.clone())
+        let (motion, distance) =
+            self.saved.pop().ok_or_else(|| comm("no modal state was saved (mcCntlMachineStatePush)"))?;
+        self.status("mcCntlMachineStatePop", self.inst.clone())?;
+        for (var, want) in [(SV_MOD_GROUP_3, distance), (SV_MOD_GROUP_1, motion)] {
+            if self.pound(var)? == want {
+                continue;
+            }
+            #[allow(clippy::float_cmp)] // G numbers are small whole numbers, exact in f64
+            let settable = [0.0, 1.0, 80.0, 90.0, 91.0].contains(&want);
+            if !settable {
+                return Err(MachineError::new(
+                    MachineErrorKind::Other,
+                    format!("Mach4 did not restore G{want} after the Vision moves: set it again before the next move"),
+                ));
+            }
+            self.execute(&format!("G{want}"))?;
+        }
+        Ok(())
     }
 
     fn pound(&self, index: u32) -> Result<f64, MachineError> {

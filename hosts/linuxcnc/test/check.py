@@ -304,6 +304,18 @@ def calibrations(check, rig, module):
     check.that(case, status != 0 and "M283: " in text, "stopped with: %s" % text[:200])
     check.that(case, (0.0, 0.0) not in traverses(calls), "the program ran nothing after the walk")
 
+    # The walk leaves the program's modes as they were: after M283 in G91 G1, a bare X0.5 is an
+    # incremental feed move (m283.ngc: M73, and the motion mode set back).
+    case = "m283-modes"
+    program = "G90 G20 G17\nG54\nT98 M6 G43\nG0 X-2.5 Y-4.0\nG91 G1 F30\nM283 C1\nX0.5\nM2\n"
+    status, calls, other = rig.run(program, {**sim, "calibrated": True})
+    last = [(n, p) for i, p, _ in motions(calls) for n in [calls[i][0]] if n in ("STRAIGHT_FEED", "STRAIGHT_TRAVERSE")]
+    check.that(case, status == 0 and len(last) >= 2, "rs274 exit status %d %s" % (status, other[-3:]))
+    if len(last) >= 2:
+        (kind, end), (_, before) = last[-1], last[-2]
+        moved = (round(end[0] - before[0], 6), round(end[1] - before[1], 6))
+        check.that(case, kind == "STRAIGHT_FEED" and moved == (0.5, 0.0), "X0.5 after M283 is %s by %s" % (kind, moved))
+
     case = "m283-quick"
     program = "G90 G20 G17\nG54\nT98 M6 G43\nG0 X6.0 Y0\nM283 Q0.5\nM2\n"
     status, calls, other = rig.run(program, sim)
