@@ -484,4 +484,9 @@ fn the_mark_size_and_the_pixel_range_warn_about_height_and_resolution() {
     rig.world().marks = vec![Point2::new(1.3, 1.0)];
     let w = rig.module.m281(&mut rig.machine, false).expect("capture").report.warning.expect("resolution warning");
     assert!(w.contains("outside the 1000 x 1000 image") && w.contains("VisionCameraResX"), "{w}");
+    // Re-centring on: a reading outside the image is no distance to move by.
+    rig.module.set_param("VisionRecenterPasses", 2).expect("re-centre");
+    let r = rig.module.m281(&mut rig.machine, false).expect("capture");
+    assert_eq!((r.report.recentred, r.gcode.len()), (None, 0), "{:?}", r.gcode);
+    assert!(r.report.warning.is_some_and(|w| w.contains("outside the 1000 x 1000 image")));
 }
