@@ -1,5 +1,6 @@
 //! `mach-vision run --dialect` and the world's `machine.dialect` choose the control's G-code
-//! rules (issue 14): a nested comment is seed 002's, an error for Mach4 (the default) and LinuxCNC.
+//! rules (issue 14): a comment whose inner `(` is never closed ends at its first `)` for Mach4
+//! (the default), and is an unclosed comment for seed 002 (whose comments nest).
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -9,7 +10,7 @@ fn run(args: &[&str], dir: &str) -> String {
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).expect("scratch dir");
     let program = d.join("nested.nc");
-    std::fs::write(&program, "G90 G0 X0 Y0 (outer (inner) outer)\nM30\n").expect("write");
+    std::fs::write(&program, "G90 G0 Y0 (outer (inner) X0\nM30\n").expect("write");
     let world_text =
         vision_driver_sim::DEFAULT_WORLD_TOML.replace("dialect = \"mach4\"", "dialect = \"machinemotion\"");
     let world: PathBuf = d.join("world.toml");
@@ -26,11 +27,11 @@ fn the_dialect_comes_from_the_option_or_the_world() {
     let ended = "ended by M30 at line 2";
     let failed = "failed at line 1";
     let default = run(&[], "default");
-    assert!(default.contains(failed), "{default}");
+    assert!(default.contains(ended), "{default}");
     let seed = run(&["--dialect", "machinemotion"], "option");
-    assert!(seed.contains(ended), "{seed}");
+    assert!(seed.contains(failed), "{seed}");
     let world = run(&["--world", "WORLD"], "world");
-    assert!(world.contains(ended), "{world}");
+    assert!(world.contains(failed), "{world}");
     let back = run(&["--world", "WORLD", "--dialect", "mach4"], "override");
-    assert!(back.contains(failed), "{back}");
+    assert!(back.contains(ended), "{back}");
 }

@@ -113,6 +113,32 @@ pub enum SyntaxProblem {
     /// A `(` comment without its `)`.
     #[error("comment `(` is not closed: add `)` before the end of the line")]
     UnclosedComment,
+    /// A `(` inside a comment, which LinuxCNC (rs274) refuses ("Nested comment found").
+    #[error(
+        "a `(` at column {inner} inside the comment opened at column {open}: LinuxCNC does not \
+         allow nested comments; remove the inner parentheses or write [ ] instead"
+    )]
+    NestedComment {
+        /// Column of the comment's `(`.
+        open: u32,
+        /// Column of the `(` inside it.
+        inner: u32,
+    },
+    /// The rest of a line after a comment that ended at its first `)` although it holds a `(`
+    /// (Mach4, when no `)` on the line balances the comment) does not parse.
+    #[error(
+        "the comment opened at column {open} ended at the `)` at column {close} (its inner `(` is \
+         never closed, so it ends at its first `)`), and the text after it is read as G-code: \
+         {problem}; balance the parentheses inside the comment, or write [ ] instead"
+    )]
+    CommentEndedEarly {
+        /// Column of the comment's `(`.
+        open: u32,
+        /// Column of the `)` that ended it.
+        close: u32,
+        /// What went wrong after it.
+        problem: Box<SyntaxProblem>,
+    },
     /// A `[` without its `]`.
     #[error("`[` is not closed: add `]`")]
     UnclosedBracket,

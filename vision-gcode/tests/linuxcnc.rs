@@ -6,7 +6,7 @@
 
 use vision_gcode::{
     ArcDirection, Coolant, Dialect, Event, GcodeError, Interpreter, InterpreterConfig, Rate, RunOutcome, RunProblem,
-    SpindleCommand, Tool, ToolTable, Xyz,
+    SpindleCommand, SyntaxProblem, Tool, ToolTable, Xyz,
 };
 use vision_math::LengthUnit;
 
@@ -238,11 +238,32 @@ fn dialects_differ_where_the_controllers_do() {
         run(&mut interp, &delimited("G43\nG0 Z0"));
         assert_eq!(interp.machine_position().z, 0.5, "{dialect:?}");
     }
-    // Comments nest only in seed 002.
-    run(&mut with(Dialect::MachineMotion), "G0 X1 (a (b) c) Y2");
-    let err = with(Dialect::Mach4).run("G0 X1 (a (b) c) Y2", None, &mut Vec::new()).expect_err("flat comments");
-    assert!(matches!(err, GcodeError::Syntax { .. }), "{err}");
-    run(&mut with(Dialect::LinuxCnc), &delimited("G0 X1 (a (b c) Y2"));
+    // Comments: seed 002 nests; Mach4 nests where the line balances the comment, else ends it
+    // at its first `)`; LinuxCNC refuses a `(` inside a comment, as rs274 does
+    // (`close_and_downcase`: "Nested comment found").
+    for dialect in [Dialect::MachineMotion, Dialect::Mach4] {
+        let mut interp = with(dialect);
+        run(&mut interp, "G0 X1 (a (b) c) Y2");
+        assert_eq!(interp.machine_position().y, 2.0, "{dialect:?}");
+    }
+    let mut mach4 = with(Dialect::Mach4);
+    run(&mut mach4, "G0 X1 (a (b) Y3");
+    assert_eq!(mach4.machine_position().y, 3.0);
+    let err = mach4.run("G0 X1 (a (b) c", None, &mut Vec::new()).expect_err("c has no value");
+    assert!(
+        matches!(
+            err,
+            GcodeError::Syntax { column: 14, problem: SyntaxProblem::CommentEndedEarly { open: 7, close: 12, .. }, .. }
+        ),
+        "{err:?}"
+    );
+    assert!(err.to_string().contains("the comment opened at column 7 ended at the `)` at column 12"), "{err}");
+    let err = with(Dialect::LinuxCnc).run(&delimited("G0 X1 (a (b c) Y2"), None, &mut Vec::new()).expect_err("nested");
+    assert!(
+        matches!(err, GcodeError::Syntax { problem: SyntaxProblem::NestedComment { open: 7, inner: 10 }, .. }),
+        "{err:?}"
+    );
+    assert!(err.to_string().contains("nested comments"), "{err}");
     // G68/G51 are Mach codes.
     run(&mut with(Dialect::Mach4), "G68 X0 Y0 R30\nG69");
     assert!(matches!(problem(&mut with(Dialect::LinuxCnc), "G68 X0 Y0 R30"), RunProblem::Unsupported { .. }));

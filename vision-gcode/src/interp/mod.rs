@@ -103,8 +103,7 @@ impl Interpreter {
     #[must_use]
     pub fn new(config: InterpreterConfig) -> Interpreter {
         let modal = Modal::initial(&config);
-        let parser =
-            if config.dialect == Dialect::MachineMotion { Parser::new() } else { Parser::with_flat_comments() };
+        let parser = Parser::for_dialect(config.dialect);
         let params = ParameterTable::for_dialect(config.dialect);
         let mut interp = Interpreter {
             config,

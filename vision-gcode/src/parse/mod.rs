@@ -15,6 +15,7 @@
 mod expr;
 mod number;
 
+use crate::config::Dialect;
 use crate::error::{GcodeError, SyntaxProblem};
 use crate::expr::Node;
 use crate::letters::slot;
@@ -234,9 +235,8 @@ struct Marks {
 /// The reusable line parser.
 #[derive(Debug, Clone, Default)]
 pub struct Parser {
-    /// Whether parentheses nest inside comments (seed 002) or the first `)` closes (Mach4,
-    /// LinuxCNC).
-    flat_comments: bool,
+    /// Where a comment ends.
+    comments_rule: CommentRule,
     words: Vec<Word>,
     assignments: Vec<Assignment>,
     comments: Vec<Span>,
@@ -251,11 +251,11 @@ impl Parser {
         Parser::default()
     }
 
-    /// A parser whose comments end at their first `)` (Mach4, LinuxCNC), where [`Parser::new`]
-    /// nests parentheses inside comments (seed 002's manual writes `( … (x, y) )`).
+    /// A parser with `dialect`'s comment rule ([`CommentRule::of`]); [`Parser::new`] nests
+    /// parentheses inside comments (seed 002's).
     #[must_use]
-    pub fn with_flat_comments() -> Parser {
-        Parser { flat_comments: true, ..Parser::default() }
+    pub fn for_dialect(dialect: Dialect) -> Parser {
+        Parser { comments_rule: CommentRule::of(dialect), ..Parser::default() }
     }
 
     /// Parses one line of text (without its line break).
@@ -298,6 +298,30 @@ impl Parser {
     }
 
     fn items(&mut self, cur: &mut Cursor<'_>, marks: &mut Marks) -> PResult<Option<u32>> {
+        let mut early = None;
+        self.items_noting(cur, marks, &mut early).map_err(|(at, problem)| match early {
+            // The text after a comment that ended at its first `)` although it holds a `(`:
+            // say so, since the writer most likely meant it as the rest of the comment.
+            Some((open, close)) if at > close => {
+                let problem = SyntaxProblem::CommentEndedEarly {
+                    open: column_of(cur.bytes, open),
+                    close: column_of(cur.bytes, close),
+                    problem: Box::new(problem),
+                };
+                (at, problem)
+            }
+            _ => (at, problem),
+        })
+    }
+
+    /// [`Parser::items`], noting in `early` the last comment that ended at its first `)`
+    /// although it holds a `(` (its `(` and `)` positions).
+    fn items_noting(
+        &mut self,
+        cur: &mut Cursor<'_>,
+        marks: &mut Marks,
+        early: &mut Option<(usize, usize)>,
+    ) -> PResult<Option<u32>> {
         let mut number = None;
         let mut seen: u32 = 0;
         let mut first = true;
@@ -307,10 +331,12 @@ impl Parser {
             let at = cur.pos;
             match b {
                 b'(' => {
-                    let close =
-                        comment_end(cur.bytes, at, self.flat_comments).ok_or((at, SyntaxProblem::UnclosedComment))?;
-                    self.comments.push(span(at + 1, close));
-                    cur.pos = close + 1;
+                    let end = self.comments_rule.end(cur.bytes, at)?;
+                    if end.early {
+                        *early = Some((at, end.close));
+                    }
+                    self.comments.push(span(at + 1, end.close));
+                    cur.pos = end.close + 1;
                     continue;
                 }
                 b';' => {
@@ -396,8 +422,7 @@ impl Parser {
             match cur.peek() {
                 None => return Ok(()),
                 Some(b'(') => {
-                    let close =
-                        comment_end(cur.bytes, at, self.flat_comments).ok_or((at, SyntaxProblem::UnclosedComment))?;
+                    let close = self.comments_rule.end(cur.bytes, at)?.close;
                     self.comments.push(span(at + 1, close));
                     cur.pos = close + 1;
                 }
@@ -453,12 +478,79 @@ impl Parser {
     }
 }
 
-/// The `)` that closes the comment opened at `open`: the first one when `flat`, else the one
-/// that balances it (the manual's own programs write `( ... (lower-left -2.5,-4.0) )`).
-fn comment_end(bytes: &[u8], open: usize, flat: bool) -> Option<usize> {
-    if flat {
-        return bytes[open..].iter().position(|&b| b == b')').map(|i| open + i);
+/// Where a `(` comment ends: the rule of each dialect.
+///
+/// * [`CommentRule::Nested`] (seed 002, MachineMotion): at the `)` that balances its `(`; the
+///   manual's programs write `( Corners at (+/- 2.5, +/- 4.0) inch )`.
+/// * [`CommentRule::Mach4`]: at the `)` that balances its `(` when one on the line does, else at
+///   its first `)`. Every line the first-`)` rule of RS274/NGC reads is read the same, and so is
+///   every line the nesting rule reads: where both read a line they agree (a `(` inside a
+///   comment leaves the flat reading one `)` short of balanced), so this rule only adds lines and
+///   never changes one. Mach4's G-code manuals do not say; the seed manual, written for Mach4,
+///   nests (docs/gcode-interpreter.md, "Comments").
+/// * [`CommentRule::Rs274`] (LinuxCNC): at its first `)`, and a `(` inside a comment is an
+///   error, as `close_and_downcase` in LinuxCNC's `interp_internal.cc` refuses it ("Nested
+///   comment found").
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum CommentRule {
+    /// Parentheses nest inside comments.
+    #[default]
+    Nested,
+    /// Balanced when the line balances the comment, else the first `)`.
+    Mach4,
+    /// The first `)`; a `(` inside a comment is refused.
+    Rs274,
+}
+
+/// Where a comment ended, and whether it ended at its first `)` although it holds a `(` (so
+/// the text after that `)` may be the rest of the comment the writer meant).
+#[derive(Debug, Clone, Copy)]
+struct CommentEnd {
+    close: usize,
+    early: bool,
+}
+
+impl CommentRule {
+    /// The rule of `dialect`'s controller.
+    #[must_use]
+    pub const fn of(dialect: Dialect) -> CommentRule {
+        match dialect {
+            Dialect::MachineMotion => CommentRule::Nested,
+            Dialect::Mach4 => CommentRule::Mach4,
+            Dialect::LinuxCnc => CommentRule::Rs274,
+        }
     }
+
+    /// Where the comment opened at `open` (a `(`) ends.
+    fn end(self, bytes: &[u8], open: usize) -> PResult<CommentEnd> {
+        let rest = bytes.get(open + 1..).unwrap_or(&[]);
+        // The common case in one pass: the first parenthesis after `(` is its `)`.
+        let inner = match rest.iter().position(|&b| b == b'(' || b == b')').map(|i| open + 1 + i) {
+            None => return Err((open, SyntaxProblem::UnclosedComment)),
+            Some(close) if bytes[close] == b')' => return Ok(CommentEnd { close, early: false }),
+            Some(inner) => inner,
+        };
+        match self {
+            CommentRule::Rs274 => Err((
+                inner,
+                SyntaxProblem::NestedComment { open: column_of(bytes, open), inner: column_of(bytes, inner) },
+            )),
+            CommentRule::Nested => balanced(bytes, open)
+                .map(|close| CommentEnd { close, early: false })
+                .ok_or((open, SyntaxProblem::UnclosedComment)),
+            CommentRule::Mach4 => match balanced(bytes, open) {
+                Some(close) => Ok(CommentEnd { close, early: false }),
+                None => {
+                    let first = bytes[inner..].iter().position(|&b| b == b')').map(|i| inner + i);
+                    first.map(|close| CommentEnd { close, early: true }).ok_or((open, SyntaxProblem::UnclosedComment))
+                }
+            },
+        }
+    }
+}
+
+/// The `)` that balances the `(` at `open`, if the line has one.
+fn balanced(bytes: &[u8], open: usize) -> Option<usize> {
     let mut depth = 0usize;
     for (i, &b) in bytes.iter().enumerate().skip(open) {
         match b {
@@ -473,6 +565,14 @@ fn comment_end(bytes: &[u8], open: usize, flat: bool) -> Option<usize> {
         }
     }
     None
+}
+
+/// 1-based character column of byte `offset` in a line's bytes.
+fn column_of(bytes: &[u8], offset: usize) -> u32 {
+    match std::str::from_utf8(bytes) {
+        Ok(text) => column(text, offset),
+        Err(_) => u32::try_from(offset + 1).unwrap_or(u32::MAX),
+    }
 }
 
 fn span(start: usize, end: usize) -> Span {
