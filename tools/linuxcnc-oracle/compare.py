@@ -183,15 +183,39 @@ def off_axis(p, point, normal):
 CHORD_MM = 0.0025
 
 
-def polyline(t, ours, j):
+def sagitta(t, start):
+    """The sagitta of rs274's arc t (one turn) from start: how far one chord strays from it."""
+    if start is None or t["turns"] != 1:
+        return None
+    n, c = t["normal"], t["axis_point"]
+
+    def flat(p):
+        d = [a - b for a, b in zip(p, c)]
+        along = sum(a * b for a, b in zip(d, n))
+        return [a - along * b for a, b in zip(d, n)]
+    u, v = flat(start), flat(t["end"])
+    cross = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
+    ccw = math.atan2(sum(a * b for a, b in zip(cross, n)), sum(a * b for a, b in zip(u, v)))
+    sweep = -ccw if t["cw"] else ccw
+    if sweep <= 0:
+        sweep += 2 * math.pi
+    return t["radius"] * (1 - math.cos(sweep / 2))
+
+
+def polyline(t, ours, j, start=None):
     """When ours[j:] starts a run of feed segments of one line standing for rs274's arc t (a
-    G18/G19 arc in a rotated system): the index after the run, else None."""
+    G18/G19 arc in a rotated system): the index after the run, else None. A run of one
+    segment stands for an arc from `start` (rs274's previous end) short enough that one chord
+    is within the chord tolerance."""
     k = j
     while k < len(ours) and ours[k]["kind"] == "feed" and ours[k]["line"] == ours[j]["line"]:
         k += 1
-    if k - j < 2 or not close(t["end"], ours[k - 1]["end"], t["unit"]):
+    if k == j or not close(t["end"], ours[k - 1]["end"], t["unit"]):
         return None
     slack = CHORD_MM + TOLERANCE * t["unit"]
+    if k - j == 1:
+        bulge = sagitta(t, start)
+        return k if bulge is not None and bulge <= slack else None
     if all(abs(off_axis(o["end"], t["axis_point"], t["normal"]) - t["radius"]) <= slack for o in ours[j:k]):
         return k
     return None
@@ -210,7 +234,7 @@ def compare(theirs, ours):
         if t["end"] is None:
             return "%s: rs274 did %s" % (where, t["kind"])
         if t["kind"] == "arc" and o["kind"] == "feed":
-            after = polyline(t, ours, j - 1)
+            after = polyline(t, ours, j - 1, theirs[i - 1]["end"] if i > 0 else None)
             if after is not None:
                 j = after
                 continue
@@ -233,11 +257,94 @@ def fmt(p):
     return "(" + ", ".join("-" if x is None else "%.4f" % x for x in p) + ")"
 
 
-def random_program(rng):
+def fmt4(v):
+    return "%.4f" % v
+
+
+def axis_words(rng, big, span=1.0, letters="XYZ"):
+    """One to three of the letters with random values (program units)."""
+    return " ".join("%s%s" % (a, fmt4(rng.uniform(-span, span) * big))
+                    for a in sorted(rng.sample(letters, rng.randint(1, len(letters)))))
+
+
+def focus_feature(rng, lines, pos, absolute, big):
+    """Appends one of the features issue 25 found differences in; returns the tracked program
+    point (None when unknown) and whether G90 is in force:
+      - G10 L20 (any system, some axes), G52 and G92 in a rotated system, then a move;
+      - G53 between the lines of an active canned cycle (and a cycle repeated after it);
+      - full circles with P turns, their end written, left out, or read back from #5420-#5422
+        (one rounding step off the start when the machine's units are not the program's)."""
+    f = fmt4
+    form = rng.random()
+    if form < 0.4:
+        lines.append("G10 L2 P%d R%s" % (rng.choice([0, 0, rng.randint(1, 6)]), f(rng.uniform(-180, 180))))
+        for _ in range(rng.randint(1, 3)):
+            what = rng.random()
+            if what < 0.45:
+                lines.append("G10 L20 P%d %s" % (rng.choice([0, 0, 1, rng.randint(1, 6)]), axis_words(rng, big)))
+            elif what < 0.7:
+                lines.append("G52 %s" % axis_words(rng, big))
+            elif what < 0.95:
+                lines.append("G92 %s" % axis_words(rng, big))
+            else:
+                lines.append("G92.1")
+        if absolute and rng.random() < 0.5:
+            lines.append("G0 X0 Y0 Z0")
+            return [0.0, 0.0, 0.0], absolute
+        lines.append("%s %s" % (rng.choice(["G0", "G1"]), axis_words(rng, big)))
+        return None, absolute
+    if form < 0.7:
+        if not absolute:
+            lines.append("G90")
+            lines.append("G0 X0 Y0 Z0")
+        cycle = rng.choice(["G81", "G82 P0.1", "G83 Q%s" % f(0.1 * big), "G73 Q%s" % f(0.07 * big), "G85", "G89 P0.2"])
+        hole = lambda: "X%s Y%s Z%s R%s" % (f(rng.uniform(-2, 2) * big), f(rng.uniform(-2, 2) * big),
+                                             f(-0.4 * big), f(0.1 * big))
+        lines.append("%s %s %s" % (rng.choice(["G98", "G99"]), cycle, hole()))
+        if rng.random() < 0.5:
+            lines.append("X%s" % f(rng.uniform(-2, 2) * big))  # the cycle again, before the G53
+        lines.append("G53 %s %s" % (rng.choice(["G0", "G0", "G1"]),
+                                    rng.choice(["Z%s" % f(rng.uniform(-1, 2) * big), axis_words(rng, big, 2.0)])))
+        again = rng.random()
+        if again < 0.6:
+            lines.append("%s %s %s" % (rng.choice(["G98", "G99", ""]), cycle, hole()))
+        elif again < 0.8:
+            lines.append("X%s Y%s" % (f(rng.uniform(-2, 2) * big), f(rng.uniform(-2, 2) * big)))  # a G0 now
+        lines.append("G80")
+        lines.append("G0 X0 Y0 Z0")
+        return [0.0, 0.0, 0.0], True
+    # From a known point: the program point after the first line's G10 L2 is not (0, 0, 0).
+    pos = [round(rng.uniform(-2, 2) * big, 4) for _ in range(3)]
+    lines.append("G90 G0 X%s Y%s Z%s" % tuple(f(v) for v in pos))
+    plane, (a, b), (ca, cb) = rng.choice([("G17", (0, 1), ("I", "J")), ("G18", (2, 0), ("K", "I")),
+                                          ("G19", (1, 2), ("J", "K"))])
+    normal = 3 - a - b
+    r = rng.uniform(0.2, 2) * big
+    phi = rng.uniform(0, 6.283)
+    ia, ib = -r * math.cos(phi), -r * math.sin(phi)
+    letters = "XYZ"
+    end = rng.random()
+    if end < 0.3:
+        words = ""
+    elif end < 0.7:
+        words = "%s[#%d] %s[#%d] " % (letters[a], 5420 + a, letters[b], 5420 + b)
+    else:
+        words = "%s%s %s%s " % (letters[a], f(pos[a]), letters[b], f(pos[b]))
+    if rng.random() < 0.3:
+        pos[normal] = round(pos[normal] + rng.uniform(-0.5, 0.5) * big, 4)
+        words += "%s%s " % (letters[normal], f(pos[normal]))
+    turns = rng.choice(["", " P1", " P2", " P2", " P3"])
+    lines.append("%s %s %s%s%s %s%s%s" % (plane, rng.choice(["G2", "G3"]), words, ca, f(ia), cb, f(ib), turns))
+    lines.append("G17")
+    return pos, True
+
+
+def random_program(rng, focus=0.0):
     """A random program of the G-code both interpreters share: units, planes, G90/G91, G0-G3
     (centre and R forms, full circles, P turns), polar words, work offsets, G10 L2 rotations,
-    G10 L20, G52, G92, G53, canned cycles and o-word loops."""
-    f = lambda v: "%.4f" % v
+    G10 L20, G52, G92, G53, canned cycles and o-word loops. `focus` is the share of steps
+    given to `focus_feature`'s programs (issue 25)."""
+    f = fmt4
     units = rng.choice(["G20", "G21"])
     big = 1.0 if units == "G20" else 25.4
     lines = ["%s G90 G17 G40 G49 G80 G94 F%s" % (units, f(rng.uniform(5, 50) * big))]
@@ -246,6 +353,9 @@ def random_program(rng):
     pos = [0.0, 0.0, 0.0]  # the program point, tracked for arcs under G90 only
     absolute = True
     for _ in range(rng.randint(5, 25)):
+        if focus and rng.random() < focus:
+            pos, absolute = focus_feature(rng, lines, pos, absolute, big)
+            continue
         kind = rng.random()
         if kind < 0.05:
             # LinuxCNC's polar words: distance and/or angle, absolute or as changes (G91).
@@ -394,6 +504,11 @@ def main():
     ap.add_argument("--random", type=int, default=0, metavar="N",
                     help="also compare N random programs (written to a temporary folder, kept)")
     ap.add_argument("--seed", type=int, default=1, help="seed of --random")
+    ap.add_argument("--focus", type=float, default=0.0, metavar="SHARE",
+                    help="share (0-1) of each random program's steps given to G10 L20/G52/G92 in "
+                         "rotated systems, G53 inside canned cycles and full circles with P")
+    ap.add_argument("--strict", action="store_true",
+                    help="also fail (exit 1) when only one side refuses a program (for the cases/ set)")
     ap.add_argument("programs", nargs="*")
     a = ap.parse_args()
     if a.random:
@@ -402,7 +517,7 @@ def main():
         for i in range(a.random):
             path = os.path.join(folder, "random-%04d.ngc" % i)
             with open(path, "w") as f:
-                f.write(random_program(rng))
+                f.write(random_program(rng, a.focus))
             a.programs.append(path)
     with tempfile.TemporaryDirectory(prefix="oracle-tbl-") as tbl_dir:
         tool_table = a.tool_table or default_tool_table(tbl_dir)
@@ -431,7 +546,8 @@ def main():
             print("# mach-vision's refusals, most frequent first:")
             for reason, n in reasons.most_common(25):
                 print("#   %4d  %s" % (n, reason))
-        return 1 if verdicts["differ"] else 0
+        failed = verdicts["differ"] + (verdicts["refused"] + verdicts["rs274-refuses"] if a.strict else 0)
+        return 1 if failed else 0
 
 
 if __name__ == "__main__":

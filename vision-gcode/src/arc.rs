@@ -25,6 +25,13 @@ pub const RADIUS_TOLERANCE_MM: f64 = 0.000_05 * 25.4;
 /// LinuxCNC's relative limit on the start/end radius difference of a centre-format arc (0.1 %).
 const SPIRAL_RELATIVE_TOLERANCE: f64 = 0.001;
 
+/// An arc whose end angle is this close to its start's (radians) is a full turn (emccanon.cc,
+/// `min_arc_angle`).
+const FULL_TURN_ANGLE: f64 = 1e-12;
+/// An arc whose end is this close to its start in the plane (machine units) is a full turn
+/// (posemath's `CART_FUZZ`).
+const FULL_TURN_DISTANCE: f64 = 1e-8;
+
 /// A tolerance in machine units, the smallest radius allowed (machine units), and the factor
 /// that turns machine units into the program's units for error messages.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -82,12 +89,19 @@ impl Arc {
             return Err(RunProblem::ArcRadiusMismatch { start_radius: r0 * to_user, end_radius: r1 * to_user });
         }
         let (ea, eb) = in_plane(plane, end);
+        let (sa, sb) = in_plane(plane, start);
         let (a0, a1) = (arc.start_angle, (eb - center.1).atan2(ea - center.0));
         let mut sweep = match direction {
             ArcDirection::CounterClockwise => a1 - a0,
             ArcDirection::Clockwise => a0 - a1,
         };
-        if sweep <= 0.0 {
+        // An end on the start, up to rounding, is a full turn (LinuxCNC: emccanon.cc's
+        // `ARC_FEED` adds a turn when the end angle is within 1e-12 rad of the start's, and
+        // posemath's `pmCircleInit` when the points are within CART_FUZZ in the plane). Such an
+        // end comes from arithmetic (`X[#5420]` read back in other units, say), not intent.
+        if (ea - sa).hypot(eb - sb) < FULL_TURN_DISTANCE {
+            sweep = TAU;
+        } else if sweep <= FULL_TURN_ANGLE {
             sweep += TAU;
         }
         arc.angle = sweep + TAU * f64::from(turns.saturating_sub(1));
@@ -230,6 +244,14 @@ mod tests {
         let full =
             Arc::from_centre(Plane::Xy, s, s, (250.0, 250.0), ArcDirection::Clockwise, 3, T3).expect("full circle");
         assert!((full.angle - 3.0 * TAU).abs() < 1e-12);
+        // An end on the start up to rounding, on either side of it: a full turn each P.
+        for nudge in [1e-13, -1e-13, 4e-9, -4e-9] {
+            for direction in [ArcDirection::Clockwise, ArcDirection::CounterClockwise] {
+                let near = Xyz::new(s.x, s.y + nudge, s.z);
+                let arc = Arc::from_centre(Plane::Xy, s, near, (250.0, 250.0), direction, 2, T3).expect("full");
+                assert!((arc.angle - 2.0 * TAU).abs() < 1e-6, "{nudge} {direction:?}: {}", arc.angle);
+            }
+        }
         let bad =
             Arc::from_centre(Plane::Xy, s, Xyz::new(0.0, 300.0, 0.0), (250.0, 250.0), ArcDirection::Clockwise, 1, T3);
         assert!(matches!(bad, Err(RunProblem::ArcRadiusMismatch { .. })));

@@ -490,6 +490,12 @@ pub enum RunProblem {
     /// LinuxCNC: the text ended without M2/M30 or a closing `%`.
     #[error("the program ended with no M2/M30 or closing %: LinuxCNC refuses that; end it with M2")]
     NoProgramEnd,
+    /// LinuxCNC: a `%` line that neither opens the program (first line) nor closes one that a
+    /// `%` opened.
+    #[error(
+        "a % line inside the program: LinuxCNC refuses it (\"Bad character '%' used\"); % may only open the program on its first line and close it; remove this one"
+    )]
+    PercentInside,
     /// `endsub` or `return` with no call to return from.
     #[error("endsub/return outside a subroutine call")]
     FlowOutsideCall,

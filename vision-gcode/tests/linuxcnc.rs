@@ -509,3 +509,88 @@ fn mach4_applies_the_tool_xy_at_m6_and_the_length_at_g43() {
     run(&mut interp, "T1 M6\nG0 X0 Y0 Z0");
     assert_eq!(at(&interp), Xyz::new(0.0, 0.0, 0.0), "tool 1 has no X/Y offset");
 }
+
+// Issue 25: four programs where we differed from rs274, each with rs274's numbers.
+
+fn inch_machine(dialect: Dialect) -> Interpreter {
+    Interpreter::new(InterpreterConfig { dialect, ..InterpreterConfig::new(LengthUnit::Inch) })
+}
+
+#[test]
+fn g10_l20_in_a_rotated_system_makes_the_point_read_the_value_there() {
+    // rs274: after the G10 L20 the current point reads X5 in the system rotated by 30°, so
+    // both X and Y of the origin change; the G0 ends at (1.616, 0.933) (we ended at Y 2.5).
+    let mut interp = inch_machine(Dialect::LinuxCnc);
+    let events = run(&mut interp, "G20 G90\nG0 X1 Y2\nG10 L2 P1 R30\nG10 L20 P1 X5\nG0 X5 Y0\nM2");
+    let got = moves(&events);
+    let (s, c) = 30f64.to_radians().sin_cos();
+    let y = 2.0 * c - s; // the Y the point read in the rotated system before the G10 L20
+    assert_moves(&got, &[(R, [1.0, 2.0, 0.0]), (R, [1.0 + y * s, 2.0 - y * c, 0.0])]);
+    assert!((got[1].1[0] - 1.6160).abs() < 1e-4 && (got[1].1[1] - 0.9330).abs() < 1e-4, "{got:?}");
+    // The origin moved on both axes; the system's rotation stays.
+    assert!((interp.param(5221) - (1.0 - 5.0 * c + y * s)).abs() < 1e-9);
+    assert!((interp.param(5222) - (2.0 - 5.0 * s - y * c)).abs() < 1e-9);
+    assert_eq!(interp.param(5230), 30.0);
+}
+
+#[test]
+fn g53_ends_a_series_of_cycles_like_any_other_motion() {
+    // rs274: the second G81 starts a new series at the Z the G53 move left (Z2): it traverses
+    // at Z2 and, under G98, retracts there (we dropped to R at the old X/Y and traversed there).
+    let mut interp = inch_machine(Dialect::LinuxCnc);
+    let program = "G20 G90 F20\nG90 G81 X0 Y0 Z-0.5 R0.1\nG53 G0 Z2\nG90 G98 G81 X1 Y0 Z-0.5 R0.1\nM2";
+    let events = run(&mut interp, program);
+    #[rustfmt::skip]
+    let want = [
+        (R, [0.0, 0.0, 0.1]), (R, [0.0, 0.0, 0.1]), (F, [0.0, 0.0, -0.5]), (R, [0.0, 0.0, 0.1]),
+        (R, [0.0, 0.0, 2.0]),
+        (R, [1.0, 0.0, 2.0]), (R, [1.0, 0.0, 0.1]), (F, [1.0, 0.0, -0.5]), (R, [1.0, 0.0, 2.0]),
+    ];
+    assert_moves(&moves(&events), &want);
+    // The same with G0 Z2 (no G53), where we always agreed, and under the other dialects.
+    for dialect in [Dialect::LinuxCnc, Dialect::Mach4, Dialect::MachineMotion] {
+        let mut interp = inch_machine(dialect);
+        assert_moves(&moves(&run(&mut interp, program)), &want);
+        let mut interp = inch_machine(dialect);
+        assert_moves(&moves(&run(&mut interp, &program.replace("G53 G0", "G0"))), &want);
+    }
+}
+
+#[test]
+fn a_full_circle_whose_end_is_off_by_rounding_makes_every_turn() {
+    // An inch machine, a millimetre program: #5420/#5421 read back the current point through
+    // the units, one rounding step off it. rs274 prints ARC_FEED(…, 2, …): two turns.
+    let mut interp = inch_machine(Dialect::LinuxCnc);
+    let program = "G21 G90 G17 F500\nG0 X2.8884 Y1.8253\nG0 @4.1685 ^-124.2100\nG1 ^-156.0546\n\
+                   G99 G83 @4.2127 ^150.4638 Z-2 R1 Q0.7\nG80\nG3 X[#5420] Y[#5421] I-2.2923 J3.1370 P2\nM2";
+    let events = run(&mut interp, program);
+    let arc = events.iter().find_map(|e| if let Event::Arc(a) = e { Some(a) } else { None }).expect("the arc");
+    assert_eq!(arc.direction, ArcDirection::CounterClockwise);
+    assert_eq!(arc.extra_turns(), 1, "{arc:?}");
+    assert!((arc.angle - 2.0 * std::f64::consts::TAU).abs() < 1e-9, "{arc:?}");
+    // rs274's end (inches): (-0.14430, 0.08176, 0.03937).
+    assert!((arc.end - Xyz::new(-0.144_30, 0.081_76, 0.039_37)).norm() < 1e-5, "{arc:?}");
+    assert!((arc.end - arc.start).norm() < 1e-12);
+}
+
+#[test]
+fn a_percent_line_inside_a_program_is_refused_as_rs274_does() {
+    // rs274: "Bad character '%' used". The opening and closing % stay fine.
+    let program = "G21\nG0 X1 Y1\n%\nG0 X2\nM2";
+    let mut interp = linuxcnc_mm();
+    match interp.run(program, None, &mut Vec::new()) {
+        Err(GcodeError::Run { line: 3, problem: RunProblem::PercentInside }) => {}
+        other => panic!("{other:?}"),
+    }
+    let message = RunProblem::PercentInside.to_string();
+    assert!(message.contains("Bad character '%'"), "{message}");
+    run(&mut linuxcnc_mm(), "%\nG21\nG0 X1 Y1\n%\nG0 X2");
+    run(&mut linuxcnc_mm(), "\n%\nG21 G0 X1\nM2\n%");
+    // The same inside control flow.
+    assert_eq!(problem(&mut linuxcnc_mm(), "o1 if [1]\nG0 X1\no1 endif\n%\nM2"), RunProblem::PercentInside);
+    // Mach4 ignores it (the change is LinuxCNC's).
+    let config = InterpreterConfig { dialect: Dialect::Mach4, ..InterpreterConfig::new(LengthUnit::Millimetre) };
+    let mut mach4 = Interpreter::new(config);
+    run(&mut mach4, program);
+    assert_eq!(mach4.machine_position(), Xyz::new(2.0, 1.0, 0.0));
+}

@@ -13,6 +13,7 @@ use std::rc::Rc;
 
 use super::line::Flow;
 use super::{At, Interpreter, Piece, ProgramStream, RunOutcome};
+use crate::config::Dialect;
 use crate::error::{GcodeError, RunProblem, SyntaxProblem};
 use crate::event::EventSink;
 use crate::expr::eval;
@@ -368,6 +369,9 @@ impl Interpreter {
                     }
                     Flow::Percent if program.delimited && src == 0 => {
                         return Ok(Piece::Over(RunOutcome::Completed { lines: line }))
+                    }
+                    Flow::Percent if src == 0 && self.config.dialect == Dialect::LinuxCnc => {
+                        return Err(GcodeError::run(line, RunProblem::PercentInside))
                     }
                     Flow::Percent => program.delimited = false,
                     Flow::Continue | Flow::OWord => {}

@@ -78,6 +78,13 @@ impl LineRun<'_> {
                 for axis in (0..3).filter(|&a| given[a]) {
                     self.params.set(base + axis as u32, v.axis(axis));
                 }
+            } else if self.cfg.dialect == Dialect::LinuxCnc {
+                self.l20_origin(system, v, given)?;
+                if system == self.st.system {
+                    self.st.load_system(self.cfg, self.params);
+                    self.st.program = self.rotated_current(before.0, before.1);
+                }
+                return Ok(());
             } else {
                 let origin = self.origin_reading(v, system_rotation(self.cfg, self.params, system));
                 for axis in (0..3).filter(|&a| given[a]) {
@@ -99,7 +106,9 @@ impl LineRun<'_> {
         }
         if system == self.st.system {
             self.st.load_system(self.cfg, self.params);
-            if self.st.rotation == before.1 {
+            // rs274 moves its current point by the change (rotated_current) whether or not the
+            // rotation changed; the others have no rotation and re-derive it.
+            if self.st.rotation == before.1 && self.cfg.dialect != Dialect::LinuxCnc {
                 self.st.rederive_program(self.params);
             } else {
                 self.st.program = self.rotated_current(before.0, before.1);
@@ -140,6 +149,47 @@ impl LineRun<'_> {
         let moved = Point2::new(turned.x + old.x - new.x, turned.y + old.y - new.y);
         let back = SystemRotation::turn(-self.st.rotation, moved);
         Xyz::new(back.x, back.y, p.z + old.z - new.z)
+    }
+
+    /// LinuxCNC's G10 L20 (interp_convert.cc, `convert_setup`): the new origin of `system`
+    /// makes the current point, as read in that system, read `v` on the `given` axes. In a
+    /// rotated system the wanted and the old point are both rotated into the unrotated frame
+    /// first, so both X and Y of the origin change even when one word is given: the point then
+    /// reads `v` in the rotated system (changing X alone would move its Y reading too).
+    fn l20_origin(&mut self, system: u32, v: Xyz, given: [bool; 3]) -> Result<(), RunProblem> {
+        let base = work_offset_base(system);
+        let degrees = system_rotation(self.cfg, self.params, system);
+        let [ox, oy, oz] = self.params.triple(base);
+        let now = self.current_in_system(system);
+        let mut wanted = now;
+        for axis in (0..3).filter(|&a| given[a]) {
+            wanted.set_axis(axis, v.axis(axis));
+        }
+        let old = SystemRotation::turn(degrees, now.xy());
+        let new = SystemRotation::turn(degrees, wanted.xy());
+        let origin = Xyz::new(old.x + ox - new.x, old.y + oy - new.y, now.z + oz - wanted.z);
+        // Unrotated, an axis without a word keeps its origin exactly (rs274's arithmetic gives
+        // it back up to rounding).
+        let xy_moves = degrees != 0.0;
+        for axis in (0..3).filter(|&a| given[a] || (a < 2 && xy_moves)) {
+            let value =
+                in_range(origin.axis(axis), || format!("the G10 L20 origin's {}", char::from(AXIS_LETTERS[axis])))?;
+            self.params.set(base + axis as u32, value);
+        }
+        Ok(())
+    }
+
+    /// The current point as rs274 reads it in `system` (interp_find.cc,
+    /// `find_current_in_system`): with the G92 offset, rotated by the active system's rotation,
+    /// moved from the active origin to that system's, rotated back by its rotation, without
+    /// the G92 offset.
+    fn current_in_system(&self, system: u32) -> Xyz {
+        let (p, g92, active) = (self.st.program, self.g92_triple(), self.st.origin);
+        let [ox, oy, oz] = self.params.triple(work_offset_base(system));
+        let turned = SystemRotation::turn(self.st.rotation, Point2::new(p.x + g92.x, p.y + g92.y));
+        let moved = Point2::new(turned.x + active.x - ox, turned.y + active.y - oy);
+        let back = SystemRotation::turn(-system_rotation(self.cfg, self.params, system), moved);
+        Xyz::new(back.x - g92.x, back.y - g92.y, p.z + g92.z + active.z - oz - g92.z)
     }
 
     /// The origin (G10 L20) that makes the current machine point read program point `v` in a
@@ -221,6 +271,17 @@ impl LineRun<'_> {
 
     /// G92.1 / G92.2: the G92 offset back to zero (the program point is re-derived).
     pub(super) fn g92_reset(&mut self) {
+        if self.cfg.dialect == Dialect::LinuxCnc {
+            // rs274 (interp_convert.cc, `convert_axis_offsets`) adds the old offset to the
+            // current point: the same as re-deriving it, except where the point no longer
+            // reads the machine position (after a rotation change with a G92 offset in force).
+            let g92 = self.g92_triple();
+            self.st.program = self.st.program + g92;
+            for axis in 0..3 {
+                self.params.set(G92_OFFSET + axis, 0.0);
+            }
+            return;
+        }
         for axis in 0..3 {
             self.params.set(G92_OFFSET + axis, 0.0);
         }

@@ -188,6 +188,9 @@ impl Interpreter {
                 Flow::End(code) => return Ok(Piece::Over(RunOutcome::Ended { line, code })),
                 Flow::Percent if program.delimited => return Ok(Piece::Over(RunOutcome::Completed { lines: line })),
                 // `%` on the first non-blank line opens a delimited program; the next `%` ends it.
+                Flow::Percent if program.started && self.config.dialect == Dialect::LinuxCnc => {
+                    return Err(GcodeError::run(line, RunProblem::PercentInside))
+                }
                 Flow::Percent => program.delimited = !program.started,
                 Flow::OWord => return self.run_flow(text, i, None, program, handler, sink),
                 call @ (Flow::Call { .. } | Flow::Return) => {

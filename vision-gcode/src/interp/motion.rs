@@ -6,9 +6,10 @@ use crate::arc::{
 use crate::config::Dialect;
 use crate::error::{GCode, RunProblem};
 use crate::event::{ArcMove, Event, EventSink, LinearMove, PathMode, Rate};
-use crate::frame::Placement;
+use crate::frame::{Placement, SystemRotation};
 use crate::geom::{ArcDirection, Plane, Xyz, AXIS_LETTERS, CENTRE_LETTERS};
-use vision_math::LengthUnit;
+use crate::params::G92_OFFSET;
+use vision_math::{LengthUnit, Point2};
 
 use super::cycles::cycle_name;
 use super::line::{in_range, LineRun, Pending};
@@ -181,6 +182,10 @@ impl LineRun<'_> {
             return Err(RunProblem::Polar { problem: "not with G53: program X and Y there" });
         }
         if g53 {
+            // G53 moves with G0/G1, which end a series of cycles like any other motion: the
+            // next cycle starts its own, from the Z it finds (rs274's `convert_motion` clears
+            // `cycle_il_flag` for every non-cycle motion; G53 goes through there too).
+            self.st.cycle.initial_level = None;
             return self.g53();
         }
         if code == Some(800) {
@@ -259,6 +264,9 @@ impl LineRun<'_> {
             return Err(RunProblem::G53Form { hint: "switch to G90 first" });
         }
         let owner = if rate == Rate::Rapid { "G53 G0" } else { "G53 G1" };
+        if self.cfg.dialect == Dialect::LinuxCnc {
+            return self.g53_linuxcnc(owner, rate);
+        }
         let mut end = self.st.machine;
         for (axis, &letter) in AXIS_LETTERS.iter().enumerate() {
             if let Some(v) = self.length(letter, owner)? {
@@ -270,6 +278,45 @@ impl LineRun<'_> {
         self.emit(Event::Linear(LinearMove { line: self.line, start, end, rate, path: self.st.path }));
         self.st.machine = end;
         self.st.rederive_program(self.params);
+        Ok(())
+    }
+
+    /// LinuxCNC's G53 (interp_find.cc, `find_ends`): the end is a program point, an axis
+    /// without a word keeping the current point's coordinate (Z exactly; X/Y through the
+    /// system's rotation), a given one the machine coordinate less the offsets. Where the
+    /// current point no longer reads the machine position (after a rotation change with a G92
+    /// offset), the unmentioned axes go where the current point is, as rs274 sends them; and
+    /// a cycle after the G53 compares the very Z the program had with its R level.
+    fn g53_linuxcnc(&mut self, owner: &'static str, rate: Rate) -> Result<(), RunProblem> {
+        let (x, y, z) = (self.length(b'X', owner)?, self.length(b'Y', owner)?, self.length(b'Z', owner)?);
+        let p = self.st.program;
+        let [gx, gy, gz] = self.params.triple(G92_OFFSET);
+        let (origin, tool) = (self.st.origin, self.st.tool_offset);
+        let mut target = p;
+        if x.is_some() || y.is_some() {
+            let c = SystemRotation::turn(self.st.rotation, Point2::new(p.x + gx, p.y + gy));
+            let ex = x.map_or(c.x, |x| x - (origin.x - tool.x));
+            let ey = y.map_or(c.y, |y| y - (origin.y - tool.y));
+            let back = SystemRotation::turn(-self.st.rotation, Point2::new(ex, ey));
+            target.x = back.x - gx;
+            target.y = back.y - gy;
+        }
+        if let Some(z) = z {
+            target.z = ((z - origin.z) - gz) - tool.z - self.st.frame.local_z;
+        }
+        // The given machine coordinates exactly (the round trip through the offsets differs
+        // by rounding only).
+        let mut end = self.placement().machine_of(target);
+        for (axis, given) in [x, y, z].into_iter().enumerate() {
+            if let Some(v) = given {
+                end.set_axis(axis, v);
+            }
+        }
+        let end = self.checked(end)?;
+        let start = self.st.machine;
+        self.emit(Event::Linear(LinearMove { line: self.line, start, end, rate, path: self.st.path }));
+        self.st.program = target;
+        self.st.machine = end;
         Ok(())
     }
 
