@@ -205,10 +205,11 @@ impl LinearPart {
         }
     }
 
-    /// The error for parameters [`LinearPart::check`] refuses.
+    /// The error for parameters [`LinearPart::check`] refuses. By value, so that the common
+    /// path need not store the parameters for it.
     #[cold]
     #[inline(never)]
-    fn refusal(&self) -> MathError {
+    fn refusal(self) -> MathError {
         if !self.is_finite() {
             return MathError::DegenerateObserved;
         }
