@@ -1,8 +1,11 @@
 //! Deterministic inputs shared by the benchmarks (no RNG crate: a fixed LCG), the Keyence
-//! benchmarks' emulated camera, raw client and in-memory camera ([`keyence`]), and the path
-//! planner's programs ([`path`]).
+//! benchmarks' emulated camera, raw client and in-memory camera (`keyence`), and the path
+//! planner's programs (`path`); those two modules come with the `bench` feature only (the
+//! `guard` build of `speed-guard` needs neither).
 
+#[cfg(feature = "bench")]
 pub mod keyence;
+#[cfg(feature = "bench")]
 pub mod path;
 
 use std::fmt::Write as _;

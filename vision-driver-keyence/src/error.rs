@@ -185,15 +185,20 @@ impl KeyenceError {
                 format!("camera address {host}:{port} does not resolve ({reason})")
             }
             KeyenceError::ConnectTimeout { addr, timeout } => {
-                format!("no connection to the camera at {addr} within {}", secs(*timeout))
+                format!("timeout: no connection to the camera at {addr} within {}", secs(*timeout))
             }
             KeyenceError::Unreachable { addr, reason } => format!("camera at {addr} is unreachable ({reason})"),
-            KeyenceError::Refused { addr, reason } => format!("camera at {addr} refused the connection ({reason})"),
+            KeyenceError::Refused { addr, reason } => {
+                format!("connection refused: camera at {addr} refused the connection ({reason})")
+            }
             KeyenceError::Timeout { command, timeout, waiting_for, echoed, ignored } => {
                 let mut s = if *echoed {
-                    format!("the camera echoed {command} but sent no data within {}", secs(*timeout))
+                    format!("timeout: the camera echoed {command} but sent no data within {}", secs(*timeout))
                 } else {
-                    format!("no complete reply to {command} within {}: {waiting_for} never came", secs(*timeout))
+                    format!(
+                        "timeout: no complete reply to {command} within {}: {waiting_for} never came",
+                        secs(*timeout)
+                    )
                 };
                 if let Some(line) = ignored {
                     s.push_str(&format!("; ignored a line that answered no command: {line}"));
@@ -208,7 +213,7 @@ impl KeyenceError {
             }
             KeyenceError::Io { command, message, .. } => format!("socket error during {command}: {message}"),
             KeyenceError::Malformed { command, line, reason } => {
-                format!("reply to {command} not understood ({reason}): {line}")
+                format!("Malformed response: reply to {command} not understood ({reason}): {line}")
             }
             KeyenceError::Rejected { command, reply, previous, .. } => {
                 let mut s = String::from("camera replied ");
@@ -222,10 +227,10 @@ impl KeyenceError {
                 s
             }
             KeyenceError::LineTooLong { command, limit } => {
-                format!("a reply line to {command} is longer than {limit} bytes")
+                format!("Malformed response: a reply line to {command} is longer than {limit} bytes")
             }
             KeyenceError::TooManyLines { command, limit } => {
-                format!("the reply to {command} ran past {limit} lines without the expected answer")
+                format!("Malformed response: the reply to {command} ran past {limit} lines without the expected answer")
             }
             KeyenceError::InvalidJob { job } => format!("camera job {job} is out of range (0–999)"),
             KeyenceError::NoImageFolder => "VisionImageWatchDir is empty".into(),
@@ -459,7 +464,7 @@ mod tests {
         let user = user_text(timeout("the data line (the TRG echo arrived)", true));
         assert_eq!(
             user,
-            "the camera echoed TRG but sent no data within 3 s — the camera answered but sent no data: add a Data \
+            "timeout: the camera echoed TRG but sent no data within 3 s — the camera answered but sent no data: add a Data \
              Output (Non-Procedural) tool to the job, or raise VisionTimeout if the inspection takes longer"
         );
         assert!(!user.contains("unreachable"), "{user}");
@@ -467,13 +472,64 @@ mod tests {
         let silent = user_text(timeout("the TRG echo", false));
         assert!(
             silent.starts_with(
-                "no complete reply to TRG within 3 s: the TRG echo never came — check the camera is reachable"
+                "timeout: no complete reply to TRG within 3 s: the TRG echo never came — check the camera is \
+                 reachable"
             ),
             "{silent}"
         );
         // The advice follows whether the echo came, not the wording of what was missing.
         let e = timeout("the data line (the TRG echo arrived)", false);
         assert_eq!(e.fix(), timeout("the TRG echo", false).fix());
+    }
+
+    /// The manual's troubleshooting table names the symptoms "timeout", "connection refused" and
+    /// "Malformed response"; operators search for those words, so each message for those faults
+    /// starts with them, and keeps its own detail after.
+    #[test]
+    fn each_transport_fault_starts_with_the_manuals_symptom() {
+        let cases = [
+            (timeout("the TRG echo", false), "timeout: no complete reply to TRG within 3 s: the TRG echo never came"),
+            (timeout("the data line", true), "timeout: the camera echoed TRG but sent no data within 3 s"),
+            (
+                KeyenceError::ConnectTimeout { addr: "192.168.208.80:8500".into(), timeout: Duration::from_secs(1) },
+                "timeout: no connection to the camera at 192.168.208.80:8500 within 1 s",
+            ),
+            (
+                KeyenceError::Refused { addr: "192.168.208.80:8500".into(), reason: "os error 111".into() },
+                "connection refused: camera at 192.168.208.80:8500 refused the connection (os error 111)",
+            ),
+            (
+                KeyenceError::Malformed {
+                    command: "TRG".into(),
+                    line: "1,2,3,4,5,6,7".into(),
+                    reason: "7 fields".into(),
+                },
+                "Malformed response: reply to TRG not understood (7 fields): 1,2,3,4,5,6,7",
+            ),
+            (
+                KeyenceError::LineTooLong { command: "TRG".into(), limit: 512 },
+                "Malformed response: a reply line to TRG is longer than 512 bytes",
+            ),
+            (
+                KeyenceError::TooManyLines { command: "TRG".into(), limit: 8 },
+                "Malformed response: the reply to TRG ran past 8 lines without the expected answer",
+            ),
+        ];
+        for (e, start) in cases {
+            let kind = e.kind();
+            let user = user_text(e);
+            assert!(user.starts_with(&format!("{start} — ")), "{user}");
+            let symptom = match kind {
+                DriverErrorKind::Timeout => "timeout: ",
+                DriverErrorKind::Refused => "connection refused: ",
+                DriverErrorKind::Malformed => "Malformed response: ",
+                other => panic!("{other:?}"),
+            };
+            assert!(user.starts_with(symptom), "{user}");
+        }
+        // A camera that closed the connection is not one that refused it.
+        let closed = user_text(KeyenceError::Closed { command: "TRG".into(), waiting_for: "the TRG echo".into() });
+        assert!(!closed.contains("refused"), "{closed}");
     }
 
     #[test]

@@ -262,7 +262,7 @@ fn fault_silence_after_the_echo_names_the_data_output() {
             assert!(e.fix().contains("Data Output"), "{e}");
             // What the operator reads: the camera answered, it is not unreachable.
             let user = VisionError::from(vision_core::DriverError::from(e)).to_string();
-            assert!(user.starts_with("the camera echoed TRG but sent no data within"), "{user}");
+            assert!(user.starts_with("timeout: the camera echoed TRG but sent no data within"), "{user}");
             assert!(user.contains("the camera answered but sent no data"), "{user}");
             assert!(!user.contains("unreachable") && !user.contains("wrong IP"), "{user}");
         }
@@ -396,7 +396,10 @@ fn nothing_listening_is_refused_at_once() {
     assert!(matches!(e, KeyenceError::Refused { .. }), "{e}");
     let user = VisionError::from(vision_core::DriverError::from(e.clone())).to_string();
     assert_eq!(user, e.to_string(), "the driver's words, as they are");
-    assert!(user.starts_with("camera at 127.0.0.1:") && user.contains("refused the connection"), "{user}");
+    assert!(
+        user.starts_with("connection refused: camera at 127.0.0.1:") && user.contains("refused the connection"),
+        "{user}"
+    );
 }
 
 #[test]

@@ -112,7 +112,7 @@ impl Model {
         ) -> Result<Transform, MathError> {
             let m = Moments::new(model, commanded, observed)?;
             let p = model.solve(&m)?;
-            p.check()?;
+            p.check(model)?;
             Ok(Transform {
                 model,
                 rotation: p.rotation,
@@ -189,16 +189,35 @@ impl LinearPart {
 
     /// Refuses parameters no alignment can use: non-finite, or a scale outside
     /// `MIN_SCALE..1/MIN_SCALE`.
-    fn check(&self) -> Result<(), MathError> {
-        if !self.is_finite() {
-            return Err(MathError::DegenerateObserved);
-        }
-        let (sx, sy) = (self.scale.x, self.scale.y);
+    ///
+    /// A scale in range is finite, and for every model but affine finite scales imply finite
+    /// parameters (the rotation comes from [`unit`], which only returns finite directions, and
+    /// `L` and the shear are products of those), so the common case is two range tests; the
+    /// full finiteness test runs for the affine model and, to pick the error, on failure.
+    #[inline(always)]
+    fn check(&self, model: Model) -> Result<(), MathError> {
         let max = 1.0 / MIN_SCALE;
-        if [sx, sy].iter().all(|s| (MIN_SCALE..=max).contains(&s.abs())) {
+        let in_range = |s: f64| (MIN_SCALE..=max).contains(&s.abs());
+        if in_range(self.scale.x) && in_range(self.scale.y) && (model != Model::Affine || self.is_finite()) {
             Ok(())
         } else {
-            Err(MathError::DegenerateScale { scale_x: sx, scale_y: sy, min: MIN_SCALE, max })
+            Err(self.refusal())
+        }
+    }
+
+    /// The error for parameters [`LinearPart::check`] refuses. By value, so that the common
+    /// path need not store the parameters for it.
+    #[cold]
+    #[inline(never)]
+    fn refusal(self) -> MathError {
+        if !self.is_finite() {
+            return MathError::DegenerateObserved;
+        }
+        MathError::DegenerateScale {
+            scale_x: self.scale.x,
+            scale_y: self.scale.y,
+            min: MIN_SCALE,
+            max: 1.0 / MIN_SCALE,
         }
     }
 
@@ -346,10 +365,14 @@ impl Moments {
         let (mut sax, mut say, mut sqx, mut sqy) = (0.0, 0.0, 0.0, 0.0);
         let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
         let (mut pxx, mut pxy, mut pyx, mut pyy) = (0.0, 0.0, 0.0, 0.0);
-        let (mut n_mag, mut o_mag): (f64, f64) = (0.0, 0.0);
+        // The largest coordinate magnitude, per axis, commanded and observed together (which
+        // side it was on is only looked up when it is too large). `if a > b { a } else { b }`
+        // is one `maxsd`/`maxpd`, where `f64::max` adds a NaN test; a NaN coordinate is caught
+        // through the centroids instead.
+        let (mut mag_x, mut mag_y): (f64, f64) = (0.0, 0.0);
         for (n, o) in commanded.iter().zip(observed) {
-            n_mag = n_mag.max(n.x.abs()).max(n.y.abs());
-            o_mag = o_mag.max(o.x.abs()).max(o.y.abs());
+            mag_x = fast_max(mag_x, fast_max(n.x.abs(), o.x.abs()));
+            mag_y = fast_max(mag_y, fast_max(n.y.abs(), o.y.abs()));
             let (ax, ay) = (n.x - n0.x, n.y - n0.y);
             let (qx, qy) = (o.x - o0.x, o.y - o0.y);
             sax += ax;
@@ -377,23 +400,21 @@ impl Moments {
         pyx -= say * mqx;
         pyy -= say * mqy;
         // Any NaN or infinite coordinate reaches the centroids (NaN and ∞ survive addition), so
-        // these two checks cover the whole input; overflow of the products is caught on the
-        // result in `finish`.
-        if !(cn.x.is_finite() && cn.y.is_finite()) {
-            return Err(MathError::NonFinite { what: "a commanded point" });
-        }
-        if !(co.x.is_finite() && co.y.is_finite()) {
-            return Err(MathError::NonFinite { what: "an observed point" });
-        }
-        for (what, value) in [("a commanded point", n_mag), ("an observed point", o_mag)] {
-            if value > MAX_COORDINATE {
-                return Err(MathError::CoordinateTooLarge { what, value, limit: MAX_COORDINATE });
+        // their sum is finite only if every coordinate is (a finite sum that overflows falls to
+        // the exact test below); overflow of the products is caught on the result in `finish`.
+        // One test for the common case; `refuse_input` picks the error in the order the checks
+        // are documented: non-finite commanded, non-finite observed, then too large.
+        if !((cn.x + cn.y + co.x + co.y).is_finite() && fast_max(mag_x, mag_y) <= MAX_COORDINATE) {
+            if let Some(e) = refuse_input(cn, co, commanded, observed) {
+                return Err(e);
             }
         }
         let spread2 = (sxx + syy) * inv;
-        let magnitude = cn.x.abs().max(cn.y.abs());
-        let floor = (COINCIDENT * magnitude).max(MIN_SPREAD);
-        if spread2 == 0.0 || spread2 <= floor * floor {
+        // The centroid is finite here, so `fast_max` needs no NaN test; `floor` ≥ MIN_SPREAD > 0,
+        // so a zero spread is refused too.
+        let magnitude = fast_max(cn.x.abs(), cn.y.abs());
+        let floor = fast_max(COINCIDENT * magnitude, MIN_SPREAD);
+        if spread2 <= floor * floor {
             return Err(MathError::CoincidentPoints);
         }
         Ok(Moments { len, inv_len: inv, cn, co, sxx, sxy, syy, pxx, pxy, pyx, pyy })
@@ -421,7 +442,7 @@ impl Moments {
         commanded: &[Point2<f64>],
         observed: &[Point2<f64>],
     ) -> Result<Fit, MathError> {
-        p.check()?;
+        p.check(model)?;
         let LinearPart { rotation, scale, shear, linear } = p;
         // L spelled out so the loop below stays in registers.
         let (l11, l12, l21, l22) = (linear[(0, 0)], linear[(0, 1)], linear[(1, 0)], linear[(1, 1)]);
@@ -456,6 +477,42 @@ impl Moments {
             max_residual: max2.sqrt(),
         })
     }
+}
+
+/// `a` if `a > b`, else `b`: one `maxsd` (no NaN handling, unlike `f64::max`).
+#[inline(always)]
+fn fast_max(a: f64, b: f64) -> f64 {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
+/// The error for points whose centroids are not finite or with a coordinate beyond
+/// [`MAX_COORDINATE`], in that order, commanded before observed; `None` if there is none (the
+/// fast test in [`Moments::new`] only said there might be).
+#[cold]
+#[inline(never)]
+fn refuse_input(
+    cn: Vector2<f64>,
+    co: Vector2<f64>,
+    commanded: &[Point2<f64>],
+    observed: &[Point2<f64>],
+) -> Option<MathError> {
+    if !(cn.x.is_finite() && cn.y.is_finite()) {
+        return Some(MathError::NonFinite { what: "a commanded point" });
+    }
+    if !(co.x.is_finite() && co.y.is_finite()) {
+        return Some(MathError::NonFinite { what: "an observed point" });
+    }
+    for (what, points) in [("a commanded point", commanded), ("an observed point", observed)] {
+        let value = points.iter().fold(0.0, |m: f64, p| m.max(p.x.abs()).max(p.y.abs()));
+        if value > MAX_COORDINATE {
+            return Some(MathError::CoordinateTooLarge { what, value, limit: MAX_COORDINATE });
+        }
+    }
+    None
 }
 
 /// A unit complex from an unnormalised `(re, im)`, with the length it had; `None` when it has

@@ -360,3 +360,60 @@ fn collinear_observed_points_tiny_spreads_and_huge_coordinates_are_refused_for_t
         assert!(e.to_string().contains("1e200"), "{e}");
     }
 }
+
+/// A coordinate for [`input_checks_keep_their_order_and_reasons`]: ordinary, huge (beyond
+/// `MAX_COORDINATE`, but small enough that 8 of them cannot overflow a sum), NaN or ±∞.
+fn coordinate() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        6 => -100.0..100.0f64,
+        1 => (1e9f64..1e300).prop_map(|v| v * 1.000_000_1),
+        1 => (1e9f64..1e300).prop_map(|v| -v * 1.000_000_1),
+        1 => Just(f64::NAN),
+        1 => Just(f64::INFINITY),
+        1 => Just(f64::NEG_INFINITY),
+    ]
+}
+
+proptest! {
+    /// The input checks are one combined test with the error picked afterwards; this checks it
+    /// against the rules written out one by one: a non-finite commanded point, then a
+    /// non-finite observed point, then a commanded coordinate beyond `MAX_COORDINATE` (with the
+    /// largest one), then an observed one; and accepted parameters have a scale in range.
+    #[test]
+    fn input_checks_keep_their_order_and_reasons(
+        points in prop::collection::vec(((coordinate(), coordinate()), (coordinate(), coordinate())), 3..8),
+    ) {
+        let n: Vec<_> = points.iter().map(|((x, y), _)| Point2::new(*x, *y)).collect();
+        let o: Vec<_> = points.iter().map(|(_, (x, y))| Point2::new(*x, *y)).collect();
+        let finite = |p: &[Point2<f64>]| p.iter().all(|p| p.x.is_finite() && p.y.is_finite());
+        let largest = |p: &[Point2<f64>]| p.iter().fold(0.0f64, |m, p| m.max(p.x.abs()).max(p.y.abs()));
+        let expected = if !finite(&n) {
+            Some(MathError::NonFinite { what: "a commanded point" })
+        } else if !finite(&o) {
+            Some(MathError::NonFinite { what: "an observed point" })
+        } else if largest(&n) > MAX_COORDINATE {
+            Some(MathError::CoordinateTooLarge { what: "a commanded point", value: largest(&n), limit: MAX_COORDINATE })
+        } else if largest(&o) > MAX_COORDINATE {
+            Some(MathError::CoordinateTooLarge { what: "an observed point", value: largest(&o), limit: MAX_COORDINATE })
+        } else {
+            None
+        };
+        for model in Model::ALL {
+            let (fit, transform) = (model.fit(&n, &o), model.transform(&n, &o));
+            match &expected {
+                Some(e) => {
+                    prop_assert_eq!(fit.as_ref().err(), Some(e), "{}", model);
+                    prop_assert_eq!(transform.as_ref().err(), Some(e), "{}", model);
+                }
+                None => {
+                    for r in [fit.map(|f| f.transform), transform] {
+                        match r {
+                            Ok(t) => prop_assert!(t.scale.iter().all(|s| (MIN_SCALE..=1.0 / MIN_SCALE).contains(&s.abs()))),
+                            Err(e) => prop_assert!(!matches!(e, MathError::NonFinite { .. } | MathError::CoordinateTooLarge { .. }), "{model}: {e}"),
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
