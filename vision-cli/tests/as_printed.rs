@@ -110,9 +110,14 @@ const RENDERINGS: [&str; 2] = ["seed000", "seed001"];
 #[test]
 fn the_printed_copies_are_the_seed_manual_byte_for_byte() {
     let seeds = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/seeds");
+    // The seeds live beside the repository (as CI lays it out); a developer's clone without
+    // them says so and skips, CI never does.
+    if !seeds.is_dir() && std::env::var_os("CI").is_none() {
+        eprintln!("skipped: no seeds at {}", seeds.display());
+        return;
+    }
     for (rendering, seed) in [("seed000", "000_74b42e061a2997fa.txt"), ("seed001", "001_31fba2b3cfdebe60.txt")] {
-        // The seeds live beside the repository in the workplace; a clone without them skips.
-        let Ok(manual) = std::fs::read_to_string(seeds.join(seed)) else { return };
+        let manual = std::fs::read_to_string(seeds.join(seed)).unwrap_or_else(|e| panic!("{seed}: {e}"));
         for entry in std::fs::read_dir(programs().join("as-printed")).expect("as-printed") {
             let path = entry.expect("entry").path();
             let name = path.file_name().and_then(|n| n.to_str()).expect("name").to_string();

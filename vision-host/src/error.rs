@@ -42,3 +42,21 @@ impl HostError {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use vision_core::VisionError;
+
+    #[test]
+    fn a_bridge_finds_the_machine_failure_and_its_kind_wherever_it_sits() {
+        let stop = MachineError::new(MachineErrorKind::Stopped, "feed hold");
+        let inside = HostError::Mcode(McodeError::Vision(VisionError::Machine(stop.clone())));
+        assert_eq!(inside.machine_error().map(MachineError::kind), Some(MachineErrorKind::Stopped));
+        assert_eq!(inside.to_string(), "machine: feed hold");
+        let outside = HostError::host("mc.mcCntlGetLocalVar returned nil");
+        assert_eq!(outside.machine_error().map(MachineError::kind), Some(MachineErrorKind::Communication));
+        let refusal = HostError::Mcode(McodeError::Vision(VisionError::NotEnabled));
+        assert_eq!(refusal.machine_error(), None);
+    }
+}

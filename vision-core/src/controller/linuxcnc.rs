@@ -65,8 +65,7 @@ impl Controller for LinuxCnc {
         machine.set_pound(BASE_ROTATION_PARAM, alignment.base_rotation_deg)?;
         machine.set_pound(ALIGNMENT_ACTIVE_PARAM, 1.0)?;
         machine.run_gcode(&gcode)?;
-        let rigid = chain.rigid();
-        Ok(Applied { gcode, chain: rigid, active: rigid, linuxcnc: Some(alignment) })
+        Ok(Applied { gcode, chain: chain.rigid(), linuxcnc: Some(alignment) })
     }
 
     /// Read whole from the machine (the flag and θ₀ in persistent parameters, the G5x rotation

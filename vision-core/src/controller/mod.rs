@@ -40,8 +40,6 @@ pub struct Applied {
     /// The chain applied (program frame → work frame, current units): the fit's, or its rigid
     /// part where the controller cannot scale.
     pub chain: AlignmentChain,
-    /// The chain the machine now runs: [`Applied::chain`] as its G-code's decimals write it.
-    pub active: AlignmentChain,
     /// LinuxCNC's form of it (rotation of the G5x system, G52 shift, the scale left out).
     pub linuxcnc: Option<LinuxCncAlignment>,
 }
@@ -233,7 +231,7 @@ mod modal {
     use super::{Applied, CANCEL_LINE};
     use crate::error::VisionError;
     use crate::machine::{Machine, MachineError};
-    use vision_math::{AlignmentChain, MathError};
+    use vision_math::AlignmentChain;
 
     pub(super) fn cancel(machine: &mut dyn Machine) -> Result<Vec<String>, VisionError> {
         let gcode = vec![CANCEL_LINE.to_string()];
@@ -243,9 +241,8 @@ mod modal {
 
     pub(super) fn apply(machine: &mut dyn Machine, chain: &AlignmentChain) -> Result<Applied, VisionError> {
         let gcode = chain.gcode()?.to_vec();
-        let active = chain.as_emitted().ok_or(MathError::NonFinite { what: "the alignment chain" })?;
         machine.run_gcode(&gcode)?;
-        Ok(Applied { gcode, chain: *chain, active, linuxcnc: None })
+        Ok(Applied { gcode, chain: *chain, linuxcnc: None })
     }
 
     /// The remembered chain, unless the machine says no alignment is active.

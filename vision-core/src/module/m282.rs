@@ -192,8 +192,10 @@ impl VisionModule {
                 fit_piece(Piece::Scale { uniform: mode == RunMode::Similarity }, &commanded, &observed)?.chain
             }
         };
-        let Applied { gcode, chain, active, linuxcnc } = controller.apply_alignment(machine, &chain)?;
-        self.alignment = Some(active);
+        let Applied { gcode, chain, linuxcnc } = controller.apply_alignment(machine, &chain)?;
+        // What the machine runs: the chain as its G-code's decimals write it (a controller that
+        // keeps the alignment itself, LinuxCNC, is read back instead at the next call).
+        self.alignment = chain.as_emitted();
         let residuals: Vec<Vector2<f64>> =
             all_commanded.iter().zip(&all_observed).map(|(n, o)| chain.apply(*n) - o).collect();
         let used: Vec<f64> = residuals
