@@ -54,12 +54,13 @@
 //! in G90), over the sheet's last dot on success and back at the start position on failure.
 
 use vision_math::chain::fixed;
+use vision_math::show::number;
 use vision_math::{fit_rectangle, solve_linear, LengthUnit, Matrix2, PixelChain, Point2, Remap, Vector2, MM_PER_INCH};
 
 use crate::controller::{program_to_machine, rotation};
 use crate::driver::{CameraDriver, Reading};
 use crate::error::VisionError;
-use crate::machine::Machine;
+use crate::machine::{checked, Machine};
 use crate::module::capture::{centred_px, chain_with, k_in, mark_size, outside_image_note, require_mark};
 use crate::module::dro::Dro;
 use crate::params::Params;
@@ -395,7 +396,7 @@ impl<'a> Walker<'a> {
     fn position(&self) -> Result<Point2<f64>, VisionError> {
         match self.source {
             Source::Replay { at, .. } => Ok(at),
-            Source::Live(_) => Ok(self.machine.program_position()?),
+            Source::Live(_) => Ok(checked::program_position(self.machine)?),
         }
     }
 
@@ -415,7 +416,7 @@ impl<'a> Walker<'a> {
         self.triggers += 1;
         let (reading, pos, newest) = match &mut self.source {
             Source::Live(driver) => match driver.trigger() {
-                Ok(r) => (r, self.machine.program_position()?, true),
+                Ok(r) => (r, checked::program_position(self.machine)?, true),
                 Err(e) => {
                     let e = VisionError::from(e);
                     self.dro.failure(Some(-1), &e);
@@ -565,16 +566,20 @@ fn check_quick_scale(
     let near = |factor: f64| (ratio / factor - 1.0).abs() < 0.2;
     let hint = match unit {
         LengthUnit::Inch if near(MM_PER_INCH) => {
-            format!("; is it a millimetre value in an inch program (Q{} in inches)?", diameter / MM_PER_INCH)
+            format!("; is it a millimetre value in an inch program (Q{} in inches)?", number(diameter / MM_PER_INCH))
         }
         LengthUnit::Millimetre if near(1.0 / MM_PER_INCH) => {
-            format!("; is it an inch value in a millimetre program (Q{} in millimetres)?", diameter * MM_PER_INCH)
+            format!(
+                "; is it an inch value in a millimetre program (Q{} in millimetres)?",
+                number(diameter * MM_PER_INCH)
+            )
         }
         _ => String::new(),
     };
     Err(fail(format!(
-        "the dot diameter Q{diameter} {} makes the marks move {ratio:.3e}× the distance the axis-detect \
+        "the dot diameter Q{} {} makes the marks move {ratio:.3e}× the distance the axis-detect \
          bump moved{hint} — give the printed dot's diameter in the program's units",
+        number(diameter),
         unit.short_name()
     )))
 }

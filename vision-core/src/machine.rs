@@ -312,6 +312,42 @@ pub trait Machine {
     }
 }
 
+/// The controller's numbers as the module reads them: checked against
+/// [`vision_math::bounds`], so a position of 1e308 or a rotation of 1e308° (a units or DRO
+/// error) is refused before it reaches a capture or a G-code line.
+pub(crate) mod checked {
+    use vision_math::{bounds, MathError, Point2, Vector2};
+
+    use super::{Machine, MachineError, MachineErrorKind};
+
+    fn refused(e: MathError) -> MachineError {
+        MachineError::new(MachineErrorKind::OutOfRange, e)
+    }
+
+    /// [`Machine::program_position`], each axis within ±[`bounds::MAX_COORDINATE`].
+    pub(crate) fn program_position(machine: &dyn Machine) -> Result<Point2<f64>, MachineError> {
+        let p = machine.program_position()?;
+        Ok(Point2::new(
+            bounds::coordinate("the controller's X position", p.x).map_err(refused)?,
+            bounds::coordinate("the controller's Y position", p.y).map_err(refused)?,
+        ))
+    }
+
+    /// `v` (an offset `what` the controller reported), each axis within
+    /// ±[`bounds::MAX_COORDINATE`].
+    pub(crate) fn offset(what: &'static str, v: Vector2<f64>) -> Result<Vector2<f64>, MachineError> {
+        Ok(Vector2::new(
+            bounds::coordinate(what, v.x).map_err(refused)?,
+            bounds::coordinate(what, v.y).map_err(refused)?,
+        ))
+    }
+
+    /// `deg` (a rotation `what` the controller reported), within ±[`bounds::MAX_ROTATION_DEG`].
+    pub(crate) fn rotation_deg(what: &'static str, deg: f64) -> Result<f64, MachineError> {
+        bounds::rotation_deg(what, deg).map_err(refused)
+    }
+}
+
 #[cfg(test)]
 #[allow(clippy::float_cmp)]
 mod tests {

@@ -7,8 +7,9 @@ use vision_math::{LengthUnit, Point2};
 /// The largest magnitude of any coordinate, offset or length the interpreter lets reach the
 /// machine (machine units): far beyond any machine, well within the range where lengths,
 /// squares and sums stay finite. Axis words, moves, offsets and offset parameters beyond it are
-/// refused ([`crate::RunProblem::BeyondRange`]); the path planner uses the same bound.
-pub const MAX_COORDINATE: f64 = 1e9;
+/// refused ([`crate::RunProblem::BeyondRange`]); the path planner uses the same bound. One
+/// bound for every crate: [`vision_math::bounds::MAX_COORDINATE`].
+pub const MAX_COORDINATE: f64 = vision_math::bounds::MAX_COORDINATE;
 
 /// X, Y and Z values of one thing (a position, an offset), in the unit its context names.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]

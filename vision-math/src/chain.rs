@@ -2,7 +2,7 @@
 
 use nalgebra::{Matrix2, Point2, UnitComplex, Vector2};
 
-use crate::MathError;
+use crate::{bounds, MathError};
 
 /// Decimals for X/Y words (machine units): rounding moves a point by at most 5·10⁻⁸.
 pub const POSITION_DECIMALS: usize = 7;
@@ -137,13 +137,19 @@ impl AlignmentChain {
     /// ```
     ///
     /// # Errors
-    /// [`MathError::NonFinite`] if any field is NaN or infinite.
+    /// [`MathError::NonFinite`] if any field is NaN or infinite, [`MathError::BeyondBound`] past
+    /// [`crate::bounds`].
     pub fn gcode(&self) -> Result<[String; 4], MathError> {
         let all =
             [self.scale.x, self.scale.y, self.center.x, self.center.y, self.rotation_deg, self.shift.x, self.shift.y];
         if !all.iter().all(|v| v.is_finite()) {
             return Err(MathError::NonFinite { what: "the alignment chain" });
         }
+        // Past the bounds, fixed decimals would write hundreds of digits.
+        for v in [self.center.x, self.center.y, self.shift.x, self.shift.y] {
+            bounds::coordinate("the alignment's centre or shift", v)?;
+        }
+        bounds::rotation_deg("the alignment's rotation", self.rotation_deg)?;
         let p = |v: f64| fixed(v, POSITION_DECIMALS);
         Ok([
             CANCEL_LINE.to_string(),

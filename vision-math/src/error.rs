@@ -41,6 +41,20 @@ pub enum MathError {
         /// The bound, machine units.
         limit: f64,
     },
+    /// A value beyond its bound in [`crate::bounds`] (a position, an offset, a rotation): an
+    /// error of units or input, which G-code with fixed decimals would print as hundreds of
+    /// digits.
+    #[error("{what} is {}, beyond ±{} ({unit}); check the controller's value and units", crate::show::number(*value), crate::show::number(*limit))]
+    BeyondBound {
+        /// What the value is ("the G5x rotation before the alignment").
+        what: &'static str,
+        /// The value.
+        value: f64,
+        /// The bound.
+        limit: f64,
+        /// The bound's unit ("degrees", "machine units").
+        unit: &'static str,
+    },
     /// The fitted scale is near zero or huge: the observed points are collinear or collapse
     /// while the commanded ones span an area.
     #[error(

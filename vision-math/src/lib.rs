@@ -27,11 +27,13 @@
 //! # Ok::<(), vision_math::MathError>(())
 //! ```
 
+pub mod bounds;
 pub mod chain;
 mod error;
 pub mod fit;
 pub mod linuxcnc;
 pub mod pixel;
+pub mod show;
 pub mod units;
 
 pub use chain::AlignmentChain;

@@ -26,7 +26,7 @@ use nalgebra::Vector2;
 use nalgebra::{Matrix2, Point2};
 
 use crate::chain::{fixed, AlignmentChain, ANGLE_DECIMALS, POSITION_DECIMALS};
-use crate::MathError;
+use crate::{bounds, MathError};
 
 /// M282's alignment as LinuxCNC executes it: a G5x rotation and a G52 shift.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -108,11 +108,15 @@ impl LinuxCncAlignment {
     /// ```
     ///
     /// # Errors
-    /// [`MathError::NonFinite`] if a field is NaN or infinite.
+    /// [`MathError::NonFinite`] if a field is NaN or infinite, [`MathError::BeyondBound`] past
+    /// [`crate::bounds`].
     pub fn gcode(&self) -> Result<[String; 2], MathError> {
         if !(self.rotation_deg.is_finite() && self.g52.x.is_finite() && self.g52.y.is_finite()) {
             return Err(MathError::NonFinite { what: "the LinuxCNC alignment" });
         }
+        bounds::rotation_deg("the LinuxCNC alignment's G5x rotation", self.rotation_deg)?;
+        bounds::coordinate("the LinuxCNC alignment's G52 shift", self.g52.x)?;
+        bounds::coordinate("the LinuxCNC alignment's G52 shift", self.g52.y)?;
         Ok([rotation_line(self.rotation_deg), g52_line(self.g52)])
     }
 
@@ -143,11 +147,10 @@ pub const CLEAR_G52: &str = "G52 X0 Y0";
 /// ```
 ///
 /// # Errors
-/// [`MathError::NonFinite`] if `base_rotation_deg` is NaN or infinite.
+/// [`MathError::NonFinite`] if `base_rotation_deg` is NaN or infinite,
+/// [`MathError::BeyondBound`] past [`crate::bounds::MAX_ROTATION_DEG`].
 pub fn cancel_gcode(base_rotation_deg: f64) -> Result<[String; 2], MathError> {
-    if !base_rotation_deg.is_finite() {
-        return Err(MathError::NonFinite { what: "the G5x rotation before the alignment" });
-    }
+    bounds::rotation_deg("the G5x rotation before the alignment", base_rotation_deg)?;
     Ok([CLEAR_G52.to_string(), rotation_line(base_rotation_deg)])
 }
 

@@ -91,6 +91,12 @@ fn integer_word(v: f64) -> Option<i64> {
     (v.is_finite() && v.fract() == 0.0 && v.abs() < 1e15).then_some(v as i64)
 }
 
+/// A word as a message quotes it: its letter and its value, readable however large
+/// (`Q1e300`, not 301 digits).
+fn word(letter: char, v: f64) -> String {
+    format!("{letter}{}", vision_math::show::number(v))
+}
+
 fn bad(mcode: &'static str, word: String, reason: &str) -> McodeError {
     McodeError::BadWord { mcode, word, reason: reason.into() }
 }
@@ -100,7 +106,7 @@ fn run_mode_word(p: Option<f64>) -> Result<RunMode, McodeError> {
     match p.map(|v| (v, integer_word(v))) {
         None | Some((_, Some(4))) => Ok(RunMode::Rectangle),
         Some((_, Some(3))) => Ok(RunMode::Similarity),
-        Some((v, _)) => Err(bad("M280", format!("P{v}"), "P must be 3 (similarity) or 4 / omitted (rectangle)")),
+        Some((v, _)) => Err(bad("M280", word('P', v), "P must be 3 (similarity) or 4 / omitted (rectangle)")),
     }
 }
 
@@ -112,7 +118,7 @@ fn pieces_word(p: Option<f64>) -> Result<Pieces, McodeError> {
         Some((_, Some(2))) => Ok(Pieces::Rotation),
         Some((_, Some(3))) => Ok(Pieces::Scale),
         Some((v, _)) => {
-            Err(bad("M282", format!("P{v}"), "P must be 0 / omitted (all), 1 (shift), 2 (rotation) or 3 (scale)"))
+            Err(bad("M282", word('P', v), "P must be 0 / omitted (all), 1 (shift), 2 (rotation) or 3 (scale)"))
         }
     }
 }
@@ -121,11 +127,11 @@ fn pieces_word(p: Option<f64>) -> Result<Pieces, McodeError> {
 fn calibrate_words(q: Option<f64>, c: Option<f64>) -> Result<Calibrate, McodeError> {
     match (q, c) {
         (Some(d), None) if d > 0.0 => Ok(Calibrate::Quick { diameter: d }),
-        (Some(d), None) => Err(bad("M283", format!("Q{d}"), "Q is the dot diameter and must be positive")),
+        (Some(d), None) => Err(bad("M283", word('Q', d), "Q is the dot diameter and must be positive")),
         (None, Some(n)) => integer_word(n)
             .and_then(|n| u32::try_from(n).ok())
             .map(|n| Calibrate::Sheet { n })
-            .ok_or_else(|| bad("M283", format!("C{n}"), "C is a calibration sheet number (C1)")),
+            .ok_or_else(|| bad("M283", word('C', n), "C is a calibration sheet number (C1)")),
         _ => Err(bad("M283", String::new(), "give exactly one of Qd (quick, dot diameter d) or Cn (sheet n)")),
     }
 }
@@ -136,7 +142,7 @@ fn d_word(d: Option<f64>) -> Result<bool, McodeError> {
         None => Ok(false),
         Some(0.0) => Ok(false),
         Some(1.0) => Ok(true),
-        Some(v) => Err(bad("M281", format!("D{v}"), "D must be 0 / omitted (discard the image) or 1 (keep it)")),
+        Some(v) => Err(bad("M281", word('D', v), "D must be 0 / omitted (discard the image) or 1 (keep it)")),
     }
 }
 
@@ -148,8 +154,8 @@ fn job_word(p: Option<f64>) -> Result<Option<u32>, McodeError> {
             .ok()
             .filter(|j| *j <= vision_core::module::MAX_JOB)
             .map(Some)
-            .ok_or_else(|| bad("M284", format!("P{v}"), "P is the camera job and must be a whole number 0..999")),
-        Some((v, None)) => Err(bad("M284", format!("P{v}"), "P is the camera job and must be a whole number 0..999")),
+            .ok_or_else(|| bad("M284", word('P', v), "P is the camera job and must be a whole number 0..999")),
+        Some((v, None)) => Err(bad("M284", word('P', v), "P is the camera job and must be a whole number 0..999")),
     }
 }
 
@@ -197,6 +203,16 @@ mod tests {
             p(280, &[('P', 5.0)]).expect_err("P5").to_string(),
             "M280 P5 is invalid: P must be 3 (similarity) or 4 / omitted (rectangle)"
         );
+        // A missing word leaves no gap; a huge value reads short.
+        assert_eq!(
+            p(283, &[]).expect_err("no word").to_string(),
+            "M283 is invalid: give exactly one of Qd (quick, dot diameter d) or Cn (sheet n)"
+        );
+        assert_eq!(
+            p(284, &[('P', 1e300)]).expect_err("huge").to_string(),
+            "M284 P1e300 is invalid: P is the camera job and must be a whole number 0..999"
+        );
+        assert!(p(283, &[('Q', -1e-300)]).expect_err("tiny").to_string().starts_with("M283 Q-1e-300 is invalid"));
         for (m, words) in [
             (280, vec![('P', 5.0)]),
             (281, vec![('D', 2.0)]),
@@ -221,12 +237,13 @@ mod tests {
     proptest! {
         #[test]
         fn arbitrary_words_never_panic(m in 270u32..295, words in proptest::collection::vec(
-            (proptest::char::range('A', 'z'), prop_oneof![any::<f64>(), -5.0f64..1500.0, (0u32..6).prop_map(f64::from)]),
+            (proptest::char::range('A', 'z'), prop_oneof![any::<f64>(), -5.0f64..1500.0, proptest::num::f64::NORMAL, (0u32..6).prop_map(f64::from)]),
             0..4,
         )) {
             match VisionCall::parse(m, &words) {
                 Ok(call) => prop_assert_eq!(call.mcode(), m),
-                Err(e) => prop_assert!(!e.to_string().is_empty()),
+                // Short whatever the value (no 300-digit decimals).
+                Err(e) => prop_assert!(!e.to_string().is_empty() && e.to_string().len() < 200, "{}", e),
             }
         }
     }

@@ -47,8 +47,9 @@ pub enum McodeError {
         /// The letter.
         letter: char,
     },
-    /// A word whose value the M-code does not accept (e.g. `M280 P5`, `M284 P1000`).
-    #[error("{mcode} {word} is invalid: {reason}")]
+    /// A word whose value the M-code does not accept (e.g. `M280 P5`, `M284 P1000`), or a
+    /// word missing (`word` empty: "M283 is invalid: give exactly one of …").
+    #[error("{mcode}{}{word} is invalid: {reason}", if word.is_empty() { "" } else { " " })]
     BadWord {
         /// The M-code (`M280`, …).
         mcode: &'static str,

@@ -15,7 +15,7 @@ use vision_math::{AlignmentChain, Point2, Vector2};
 
 use super::{Applied, Controller};
 use crate::error::VisionError;
-use crate::machine::{Machine, MachineError};
+use crate::machine::{checked, Machine, MachineError};
 
 /// LinuxCNC 2.9. Its tool table holds the offset LinuxCNC *adds* to a programmed point
 /// (`machine = g5x + R·(p + g92) + tool`), the negative of the module's. A capture waits for the
@@ -77,9 +77,9 @@ impl Controller for LinuxCnc {
     ) -> Result<Option<AlignmentChain>, MachineError> {
         Ok(active_chain(
             machine.pound(ALIGNMENT_ACTIVE_PARAM)?,
-            machine.pound(BASE_ROTATION_PARAM)?,
-            machine.xy_rotation_deg()?,
-            machine.g92_offset()?,
+            checked::rotation_deg(BASE_ROTATION_WHAT, machine.pound(BASE_ROTATION_PARAM)?)?,
+            checked::rotation_deg(G5X_ROTATION_WHAT, machine.xy_rotation_deg()?)?,
+            checked::offset("the G92/G52 offset", machine.g92_offset()?)?,
         ))
     }
 
@@ -87,12 +87,17 @@ impl Controller for LinuxCnc {
     /// rotation now.
     fn base_rotation(&self, machine: &dyn Machine) -> Result<f64, MachineError> {
         if flag_set(machine.pound(ALIGNMENT_ACTIVE_PARAM)?) {
-            machine.pound(BASE_ROTATION_PARAM)
+            checked::rotation_deg(BASE_ROTATION_WHAT, machine.pound(BASE_ROTATION_PARAM)?)
         } else {
-            machine.xy_rotation_deg()
+            checked::rotation_deg(G5X_ROTATION_WHAT, machine.xy_rotation_deg()?)
         }
     }
 }
+
+/// What a θ₀ read from [`BASE_ROTATION_PARAM`] is called in a message.
+const BASE_ROTATION_WHAT: &str = "#3991 (the G5x rotation before the alignment)";
+/// What the G5x rotation read is called in a message.
+const G5X_ROTATION_WHAT: &str = "the G5x rotation";
 
 /// `#3990`: 1 while an M282 alignment is active, 0 after M280 (a persistent parameter).
 pub const ALIGNMENT_ACTIVE_PARAM: u32 = 3990;

@@ -26,7 +26,7 @@ use vision_math::linuxcnc::LinuxCncAlignment;
 use vision_math::{AlignmentChain, Matrix2, Vector2};
 
 use crate::error::VisionError;
-use crate::machine::{Machine, MachineError};
+use crate::machine::{checked, Machine, MachineError};
 
 pub use linuxcnc::LinuxCnc;
 pub use mach4::Mach4;
@@ -127,7 +127,8 @@ pub fn names() -> Vec<&'static str> {
 /// The Vision module's offset of `tool` (where its point lies from the spindle, current units),
 /// from `machine`'s table and its controller's sign.
 pub(crate) fn tool_offset(machine: &dyn Machine, tool: u32) -> Result<Vector2<f64>, MachineError> {
-    Ok(machine.controller().tool_table_sign() * machine.tool_offset(tool)?)
+    Ok(machine.controller().tool_table_sign()
+        * checked::offset("the tool table's X/Y offset", machine.tool_offset(tool)?)?)
 }
 
 /// Writes the Vision module's offset `offset` of `tool` into `machine`'s table, with its

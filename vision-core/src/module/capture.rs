@@ -7,7 +7,7 @@ use vision_math::{AlignmentChain, LengthUnit, Matrix2, PixelChain, Point2, Remap
 use crate::controller::machine_to_program;
 use crate::driver::{Judgment, Reading};
 use crate::error::VisionError;
-use crate::machine::Machine;
+use crate::machine::{checked, Machine};
 use crate::params::Params;
 use crate::ser;
 
@@ -143,7 +143,7 @@ pub(crate) fn observe(
     offset: Vector2<f64>,
 ) -> Result<(Point2<f64>, Point2<f64>), VisionError> {
     let offset = machine_to_program(offset, machine.controller().base_rotation(machine)?);
-    let c = machine.program_position()?;
+    let c = checked::program_position(machine)?;
     let observed = match alignment {
         None => c + offset,
         Some(chain) => chain.inverse(chain.apply(c) + offset).ok_or_else(|| VisionError::BadCalibration {

@@ -7,7 +7,7 @@ use super::{Dot, Reply, VisionModule};
 use crate::calibrate::{absolute_move, relative_move};
 use crate::driver::{ImageRequest, Reading};
 use crate::error::VisionError;
-use crate::machine::{Machine, Timestamp};
+use crate::machine::{checked, Machine, Timestamp};
 use crate::pound::{PoundBlock, SlotValues, SLOTS};
 
 impl VisionModule {
@@ -262,7 +262,7 @@ impl VisionModule {
         observed: Point2<f64>,
         alignment: Option<vision_math::AlignmentChain>,
     ) -> Result<Pass, VisionError> {
-        let lines = relative_move(observed - machine.program_position()?);
+        let lines = relative_move(observed - checked::program_position(machine)?);
         machine.run_gcode(&lines)?;
         machine.dwell(self.params.trigger_settle_s())?;
         // M281 D1 keeps the image of the reading reported.

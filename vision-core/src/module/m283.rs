@@ -9,7 +9,7 @@ use crate::calibrate::{absolute_move, quick, sheet_walk, CalReport, Calibrate, S
 use crate::controller;
 use crate::driver::Reading;
 use crate::error::VisionError;
-use crate::machine::{Machine, MachineError};
+use crate::machine::{checked, Machine, MachineError};
 use crate::params::Params;
 use crate::sheets::{cal_sheet, known_sheets};
 
@@ -155,7 +155,7 @@ impl VisionModule {
     /// Where the walk starts (program frame) and the machine's units, or the read's failure
     /// (shown in `LastStatus`; nothing moved).
     fn before_walk(&mut self, machine: &dyn Machine) -> Result<(Point2<f64>, LengthUnit), VisionError> {
-        let read = || -> Result<_, VisionError> { Ok((machine.program_position()?, machine.units()?)) };
+        let read = || -> Result<_, VisionError> { Ok((checked::program_position(machine)?, machine.units()?)) };
         read().inspect_err(|e| self.publish_failure(None, e))
     }
 
@@ -269,7 +269,7 @@ impl VisionModule {
             Ok(r) => r,
             Err(e) => return Err(self.walk_failed(e)),
         };
-        let at = match machine.program_position() {
+        let at = match checked::program_position(machine) {
             Ok(at) => at,
             Err(e) => return Err(self.walk_failed(e.into())),
         };

@@ -336,9 +336,9 @@ const COINCIDENT: f64 = 1e-10;
 /// Points whose RMS spread is below this, machine units, count as coincident whatever their
 /// magnitude (10⁻⁹ in or mm is far below any machine's resolution).
 pub const MIN_SPREAD: f64 = 1e-9;
-/// The largest coordinate magnitude a fit accepts, machine units (10⁹ in is 25 000 km; the
-/// fit's squared sums stay far from overflow).
-pub const MAX_COORDINATE: f64 = 1e9;
+/// The largest coordinate magnitude a fit accepts, machine units: [`crate::bounds`]' (the fit's
+/// squared sums stay far from overflow).
+pub use crate::bounds::MAX_COORDINATE;
 /// A fitted scale magnitude outside `MIN_SCALE..1/MIN_SCALE` is refused: it means collapsed or
 /// collinear observed points, and G51 with 10 decimals would print it as 0.
 pub const MIN_SCALE: f64 = 1e-6;

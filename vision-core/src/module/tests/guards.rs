@@ -136,3 +136,26 @@ fn a_pound_block_past_the_machines_last_variable_is_refused_before_anything_chan
     rig.module.set_param("VisionPoundVarBase", 4960).expect("in range");
     rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect("#4960..#4999 all exist");
 }
+
+/// A controller position past the bound (a units or DRO error) is refused before the trigger:
+/// no capture, no re-centring move (at 1e308 it read `G91 G0 X0.0000000 …`).
+#[test]
+fn a_position_past_the_bound_is_refused_before_anything_is_stored() {
+    for far in [1e308, -1.000_000_1e9] {
+        let mut rig = Rig::new();
+        rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect("m280");
+        rig.world().program = vision_math::Point2::new(0.0, far);
+        rig.world().script.push_back(Ok(Reading::position(900.0, 880.0)));
+        let log = rig.world().log.len();
+        let e = rig.module.m281(&mut rig.machine, false).expect_err("far");
+        let VisionError::Machine(m) = &e else { panic!("{e}") };
+        assert_eq!(m.kind(), crate::MachineErrorKind::OutOfRange, "{e}");
+        assert!(
+            e.to_string().contains("the controller's Y position is") && e.to_string().contains("beyond ±1e9"),
+            "{e}"
+        );
+        assert!(e.to_string().len() < 200, "{e}");
+        assert!(rig.module.dots().is_empty());
+        assert_eq!(rig.world().log.len(), log, "no G-code ran");
+    }
+}
