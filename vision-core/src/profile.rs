@@ -21,20 +21,31 @@
 //!
 //! Saving is atomic: the whole profile (so K11..K22 together) is written to a temporary file in
 //! the same folder, flushed to disk (`fsync`), and renamed over the old file; the folder is then
-//! synced (best effort). A failure at any step removes the temporary file and leaves the
+//! synced (best effort). A profile path that is a symbolic link is written through to its
+//! target, the temporary file beside the target.
+//!
+//! Several processes may share one profile (two Python sessions, the CLI beside Mach4). A save
+//! takes an advisory lock (`.<name>.lock` beside the file, kept), re-reads the file, and writes
+//! what is on disk with only what this session changed since it attached the store
+//! ([`ProfileStore::save_changes`]): the calibration as one unit (K with its date and units),
+//! every other parameter by name. So an older session's M284 job switch never writes back its
+//! stale K over a newer M283 of another process; the session takes the other's calibration in
+//! memory instead. Where the merge does not hold together (another process's value makes this
+//! session's change invalid) the save is refused: "the profile changed on disk …, re-run". A failure at any step removes the temporary file and leaves the
 //! previous profile intact. The file system steps go through the small [`ProfileFs`] trait so a
 //! test can inject a failure. A save first removes the temporary files that interrupted saves of
 //! dead processes left; [`ProfileStore::check_writable`] lets a caller find an unwritable folder
 //! before the motion whose result it will save.
 //!
-//! Bad input refused at load (naming the key): a path that is not a regular file, unknown keys
+//! Bad input refused at load (naming the key): an empty path or one with a NUL byte, a file
+//! larger than [`MAX_PROFILE_BYTES`], a path that is not a regular file, unknown keys
 //! or tables (a driver's table the store does not know is unknown), values out of range, a K that is singular or of an absurd scale
 //! ([`crate::Calibration::check_k`]). Text for a number or yes/no (`"8500"`, `"yes"`) is read
 //! as its type, as the host's own profile stores it.
 
 use std::collections::BTreeMap;
 use std::fs::{self, File, OpenOptions};
-use std::io::{self, Write};
+use std::io::{self, Read, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -96,6 +107,9 @@ pub struct ProfileStore {
     kept: Vec<(&'static str, ParamValue)>,
     /// What a load starts from (see [`ProfileStore::with_defaults`]).
     base: Params,
+    /// The session's parameters as of its last sync with the file (attach or save): a save
+    /// writes only what differs from them ([`ProfileStore::save_changes`]).
+    synced: Option<Params>,
 }
 
 impl std::fmt::Debug for ProfileStore {
@@ -130,7 +144,7 @@ impl ProfileStore {
     /// A store for `path` whose writes go through `fs`.
     #[must_use]
     pub fn with_fs(path: impl Into<PathBuf>, fs: Box<dyn ProfileFs>) -> ProfileStore {
-        ProfileStore { path: path.into(), fs, kept: Vec::new(), base: Params::default() }
+        ProfileStore { path: path.into(), fs, kept: Vec::new(), base: Params::default(), synced: None }
     }
 
     /// Loads start from `base` instead of the defaults: the parameters a missing file gives,
@@ -159,9 +173,10 @@ impl ProfileStore {
     /// # Errors
     /// [`VisionError::Profile`] saying what is wrong.
     pub fn check_writable(&self) -> Result<(), VisionError> {
-        self.require_regular_file()?;
-        let dir = self.dir();
-        let probe = self.temp_path();
+        let target = self.target()?;
+        self.require_regular_file(&target)?;
+        let dir = dir_of(&target);
+        let probe = self.temp_path(&target);
         match OpenOptions::new().write(true).create_new(true).open(&probe) {
             Ok(f) => {
                 drop(f);
@@ -185,12 +200,12 @@ impl ProfileStore {
     /// parameter in the file (validated).
     ///
     /// # Errors
-    /// [`VisionError::Profile`] when the file cannot be read or parsed, or names an unknown or
+    /// [`VisionError::Profile`] when the path is empty or holds a NUL byte, or the file cannot
+    /// be read, is larger than [`MAX_PROFILE_BYTES`], cannot be parsed, or names an unknown or
     /// read-only parameter or an invalid value.
     pub fn load(&self) -> Result<Params, VisionError> {
-        self.require_regular_file()?;
-        let text = fs::read_to_string(&self.path).map_err(|e| self.err(format!("cannot read: {e}")))?;
-        from_toml_with(&text, self.base.clone()).map_err(|e| self.err(e))
+        let target = self.target()?;
+        self.read(&target)
     }
 
     /// As [`ProfileStore::load`], but a missing file gives the defaults.
@@ -198,63 +213,184 @@ impl ProfileStore {
     /// # Errors
     /// As [`ProfileStore::load`] for a file that exists.
     pub fn load_or_default(&self) -> Result<Params, VisionError> {
-        if self.path.exists() {
-            self.load()
+        let target = self.target()?;
+        if target.exists() {
+            self.read(&target)
         } else {
             Ok(self.base.clone())
         }
     }
 
-    /// Saves every configuration parameter of `params` atomically (see the module doc).
+    /// Remembers `params` as the session's parameters in step with the file: later saves write
+    /// only what differs from them ([`ProfileStore::save_changes`]). The module calls it when
+    /// the store is attached.
+    pub fn mark_synced(&mut self, params: &Params) {
+        self.synced = Some(params.clone());
+    }
+
+    /// Saves the configuration parameters of `params` atomically (see the module doc), as
+    /// [`ProfileStore::save_changes`] does.
     ///
     /// # Errors
-    /// [`VisionError::Profile`]; the previous file is intact and no temporary file is left.
+    /// As [`ProfileStore::save_changes`].
     pub fn save(&mut self, params: &Params) -> Result<(), VisionError> {
-        self.require_regular_file()?;
-        let mut saved = params.clone();
-        for (name, value) in &self.kept {
-            saved.set(name, value.clone()).map_err(|e| self.err(e.to_string()))?;
-        }
-        let text = to_toml(&saved).map_err(|e| self.err(e))?;
-        let dir = self.dir();
-        self.remove_stale_temps(&dir);
-        let tmp = self.temp_path();
-        let previous = if self.path.exists() { "the previous profile is intact" } else { "no profile was written" };
+        self.save_changes(params).map(drop)
+    }
+
+    /// Saves `params` under the profile's lock and returns the parameters the session holds
+    /// now. When the store knows the session's parameters as of its last sync
+    /// ([`ProfileStore::mark_synced`]; every save syncs) and the file exists, what is written
+    /// is the file as it is now with what `params` changed since the sync (the calibration as
+    /// one unit, the rest by name; kept names keep the file's value); what is returned is that,
+    /// with `params`' values of the kept names. Otherwise every parameter of `params` is
+    /// written (kept names with their kept value) and `params` is returned.
+    ///
+    /// # Errors
+    /// [`VisionError::Profile`]: a bad path, a file on disk that cannot be read, a merge that
+    /// does not hold together, or a failed write; the previous file is intact and no temporary
+    /// file is left.
+    pub fn save_changes(&mut self, params: &Params) -> Result<Params, VisionError> {
+        let target = self.target()?;
+        self.require_regular_file(&target)?;
+        let dir = dir_of(&target);
+        let previous = if target.exists() { "the previous profile is intact" } else { "no profile was written" };
+        let _lock = self.lock(&target, &dir).map_err(|e| self.err(format!("{e}; {previous}")))?;
+        let (file, session) = match (&self.synced, target.exists()) {
+            (Some(synced), true) => {
+                let disk = self.read(&target).map_err(|e| {
+                    self.err(format!("changed on disk and cannot be read now ({e}); nothing was saved — fix or remove it, then re-run"))
+                })?;
+                self.merge(disk, synced, params)?
+            }
+            _ => {
+                let mut file = params.clone();
+                for (name, value) in &self.kept {
+                    file.set(name, value.clone()).map_err(|e| self.err(e.to_string()))?;
+                }
+                (file, params.clone())
+            }
+        };
+        let text = to_toml(&file).map_err(|e| self.err(e))?;
+        self.remove_stale_temps(&target, &dir);
+        let tmp = self.temp_path(&target);
         if let Err(e) = self.fs.write_synced(&tmp, text.as_bytes()) {
             let _ = self.fs.remove(&tmp);
             return Err(self.err(format!("cannot write {}: {e}; {previous}", tmp.display())));
         }
-        if let Err(e) = self.fs.rename(&tmp, &self.path) {
+        if let Err(e) = self.fs.rename(&tmp, &target) {
             let _ = self.fs.remove(&tmp);
             return Err(self.err(format!("cannot replace the profile: {e}; {previous}")));
         }
         let _ = self.fs.sync_dir(&dir);
-        Ok(())
+        self.synced = Some(session.clone());
+        Ok(session)
     }
 
-    fn dir(&self) -> PathBuf {
-        match self.path.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-            _ => PathBuf::from("."),
+    /// The file to write (`disk` with what `params` changed since `synced`) and the session's
+    /// parameters after the save.
+    fn merge(&self, disk: Params, synced: &Params, params: &Params) -> Result<(Params, Params), VisionError> {
+        let conflict = |e: String| {
+            self.err(format!(
+                "changed on disk since this session read it, and this session's change does not fit it: {e} — \
+                 nothing was saved; re-run"
+            ))
+        };
+        let is_kept = |name: &str| self.kept.iter().any(|(n, _)| *n == name);
+        let mut file = disk;
+        // The calibration is one unit: K with its date, units and axis flags.
+        if params.calibration != synced.calibration {
+            file.calibration = params.calibration.clone();
         }
+        for (name, value) in params.config_values() {
+            let changed = synced.get(name).ok().as_ref() != Some(&value);
+            if changed && params.calibration.get(name).is_none() && !is_kept(name) {
+                file.set(name, value).map_err(|e| conflict(e.to_string()))?;
+            }
+        }
+        file.calibration.check_k().map_err(|e| conflict(e.to_string()))?;
+        let mut session = file.clone();
+        for (name, _) in &self.kept {
+            let value = params.get(name).map_err(|e| self.err(e.to_string()))?;
+            session.set(name, value).map_err(|e| self.err(e.to_string()))?;
+        }
+        Ok((file, session))
     }
 
-    fn temp_prefix(&self) -> String {
-        let name = self.path.file_name().map_or_else(|| "profile".into(), |n| n.to_string_lossy().into_owned());
-        format!(".{name}.tmp-")
+    /// Takes the profile's advisory lock (`.<name>.lock` beside `target`), held until the
+    /// returned file is dropped. A separate file, because the save replaces the profile's own.
+    fn lock(&self, target: &Path, dir: &Path) -> Result<File, String> {
+        let path = dir.join(format!(".{}.lock", file_name(target)));
+        let file = OpenOptions::new().read(true).write(true).create(true).truncate(false).open(&path).map_err(|e| {
+            format!(
+                "cannot be saved: cannot create a file in {}: {e} — create the folder or make it writable",
+                dir.display()
+            )
+        })?;
+        file.lock().map_err(|e| format!("cannot be saved: cannot lock {}: {e}", path.display()))?;
+        Ok(file)
     }
 
-    /// A fresh temporary name beside the profile: `.<name>.tmp-<pid>-<n>`.
-    fn temp_path(&self) -> PathBuf {
+    /// The file the path names: the path itself, or the target of its chain of symbolic links
+    /// (which may not exist yet). Refuses an empty path, a NUL byte, and a loop of links.
+    fn target(&self) -> Result<PathBuf, VisionError> {
+        if self.path.as_os_str().is_empty() {
+            return Err(self.err("no profile path was given — give the path of a TOML file".into()));
+        }
+        if self.path.as_os_str().as_encoded_bytes().contains(&0) {
+            return Err(self.err("the path holds a NUL byte — give the path of a TOML file".into()));
+        }
+        let mut path = self.path.clone();
+        for _ in 0..MAX_LINKS {
+            match fs::symlink_metadata(&path) {
+                Ok(m) if m.file_type().is_symlink() => {
+                    let to = fs::read_link(&path).map_err(|e| self.err(format!("cannot read the link: {e}")))?;
+                    path = dir_of(&path).join(to);
+                }
+                _ => return Ok(path),
+            }
+        }
+        Err(self.err(format!("more than {MAX_LINKS} symbolic links (a loop?) — give the path of a TOML file")))
+    }
+
+    /// Reads and parses `target`, refusing a file larger than [`MAX_PROFILE_BYTES`].
+    fn read(&self, target: &Path) -> Result<Params, VisionError> {
+        self.require_regular_file(target)?;
+        let too_big = |bytes: u64| {
+            self.err(format!(
+                "is {bytes} bytes; a profile is at most {MAX_PROFILE_BYTES} bytes (a few kB is usual) — give the \
+                 path of a mach-vision profile"
+            ))
+        };
+        let file = File::open(target).map_err(|e| self.err(format!("cannot read: {e}")))?;
+        let len = file.metadata().map_err(|e| self.err(format!("cannot read: {e}")))?.len();
+        if len > MAX_PROFILE_BYTES {
+            return Err(too_big(len));
+        }
+        let mut bytes = Vec::new();
+        // Bounded even when the file grows while it is read.
+        file.take(MAX_PROFILE_BYTES + 1).read_to_end(&mut bytes).map_err(|e| self.err(format!("cannot read: {e}")))?;
+        if bytes.len() as u64 > MAX_PROFILE_BYTES {
+            return Err(too_big(bytes.len() as u64));
+        }
+        let text = String::from_utf8(bytes).map_err(|e| self.err(format!("cannot read: not UTF-8 text ({e})")))?;
+        from_toml_with(&text, self.base.clone()).map_err(|e| self.err(e))
+    }
+
+    fn temp_prefix(target: &Path) -> String {
+        format!(".{}.tmp-", file_name(target))
+    }
+
+    /// A fresh temporary name beside `target`: `.<name>.tmp-<pid>-<n>`.
+    fn temp_path(&self, target: &Path) -> PathBuf {
         let n = TEMP_COUNTER.fetch_add(1, Ordering::Relaxed);
-        self.dir().join(format!("{}{}-{n}", self.temp_prefix(), std::process::id()))
+        dir_of(target).join(format!("{}{}-{n}", ProfileStore::temp_prefix(target), std::process::id()))
     }
 
     /// Removes the temporary files interrupted saves of dead processes left beside the profile
     /// (best effort). A file whose process is alive, or whose liveness cannot be told (no
     /// `/proc`), is left alone: it may be a save in progress.
-    fn remove_stale_temps(&mut self, dir: &Path) {
-        let prefix = self.temp_prefix();
+    fn remove_stale_temps(&mut self, target: &Path, dir: &Path) {
+        let prefix = ProfileStore::temp_prefix(target);
         let Ok(entries) = fs::read_dir(dir) else { return };
         let stale: Vec<PathBuf> = entries
             .flatten()
@@ -275,10 +411,9 @@ impl ProfileStore {
     }
 
     /// Refuses a path that is not a regular file (a FIFO would block the read for ever, a
-    /// device would be read or overwritten, a folder cannot be replaced). Symbolic links are
-    /// followed.
-    fn require_regular_file(&self) -> Result<(), VisionError> {
-        match fs::metadata(&self.path) {
+    /// device would be read or overwritten, a folder cannot be replaced).
+    fn require_regular_file(&self, target: &Path) -> Result<(), VisionError> {
+        match fs::metadata(target) {
             Ok(m) if !m.is_file() => {
                 Err(self.err("is not a regular file (a folder, FIFO or device) — give the path of a TOML file".into()))
             }
@@ -289,6 +424,25 @@ impl ProfileStore {
     fn err(&self, reason: String) -> VisionError {
         VisionError::Profile { path: self.path.display().to_string(), reason }
     }
+}
+
+/// The largest profile read, bytes (a real one is a few kB; a bigger file is not a profile).
+pub const MAX_PROFILE_BYTES: u64 = 1 << 20;
+
+/// The most symbolic links followed to the profile's file (as Linux's `ELOOP` bound).
+const MAX_LINKS: usize = 40;
+
+/// The folder of `path` (`.` for a bare name).
+fn dir_of(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// The file name of `path`, for the names beside it.
+fn file_name(path: &Path) -> String {
+    path.file_name().map_or_else(|| "profile".into(), |n| n.to_string_lossy().into_owned())
 }
 
 /// True when process `pid` is known not to exist (Linux `/proc`); false when it exists or
@@ -423,9 +577,10 @@ mod tests {
         assert_eq!(back.cal_units(), LengthUnit::Millimetre);
         assert_eq!(back.camera_res_x(), 1600);
         assert_eq!(back, p);
-        // No temporary file is left behind.
-        let names: Vec<_> = fs::read_dir(&dir).expect("dir").flatten().map(|e| e.file_name()).collect();
-        assert_eq!(names, vec![std::ffi::OsString::from("vision.toml")]);
+        // No temporary file is left behind; the lock file stays (removing it would race).
+        let mut names: Vec<_> = fs::read_dir(&dir).expect("dir").flatten().map(|e| e.file_name()).collect();
+        names.sort();
+        assert_eq!(names, [".vision.toml.lock", "vision.toml"].map(std::ffi::OsString::from));
         let _ = fs::remove_dir_all(&dir);
     }
 
@@ -511,7 +666,7 @@ mod tests {
             assert_eq!(fs::read(&path).expect("read"), before);
             assert_eq!(ProfileStore::new(&path).load().expect("load").cal_k(), old.cal_k());
             let count = fs::read_dir(&dir).expect("dir").count();
-            assert_eq!(count, 1, "the temporary file was removed");
+            assert_eq!(count, 2, "the temporary file was removed (the profile and its lock file stay)");
         }
         let _ = fs::remove_dir_all(&dir);
     }
@@ -635,5 +790,132 @@ mod tests {
         assert!(in_progress.exists(), "a live process's is kept");
         assert!(other.exists(), "another profile's is kept");
         let _ = fs::remove_dir_all(&dir);
+    }
+
+    fn job(p: &Params) -> ParamValue {
+        p.get("VisionActiveJob").expect("job")
+    }
+
+    /// Two sessions attached to one file: each save writes only its own change, and the
+    /// session takes the other's calibration in memory.
+    #[test]
+    fn a_save_writes_only_what_the_session_changed() {
+        let dir = tmp_dir("merge");
+        let path = dir.join("vision.toml");
+        let start = Params::default();
+        ProfileStore::new(&path).save(&start).expect("first save");
+        let (mut a, mut b) = (ProfileStore::new(&path), ProfileStore::new(&path));
+        a.mark_synced(&start);
+        b.mark_synced(&start);
+        // A calibrates (M283), then B, still holding the old K, switches the job (M284).
+        let a_now = a.save_changes(&calibrated()).expect("a saves");
+        let mut b_next = start.clone();
+        b_next.set("VisionActiveJob", 12).expect("job");
+        let b_now = b.save_changes(&b_next).expect("b saves");
+        let file = ProfileStore::new(&path).load().expect("load");
+        assert_eq!(file.calibration, calibrated().calibration, "A's calibration is not lost");
+        assert_eq!(job(&file), ParamValue::Int(12), "B's job is saved");
+        assert_eq!(file.enabled(), calibrated().enabled(), "A's change by name is kept");
+        assert_eq!(b_now, file, "B now holds A's calibration");
+        // A's next save (nothing changed) keeps B's job, and A takes it.
+        assert_eq!(a.save_changes(&a_now).expect("a again"), file);
+        assert_eq!(ProfileStore::new(&path).load().expect("load"), file);
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_save_over_a_file_that_became_unreadable_is_refused_and_writes_nothing() {
+        let dir = tmp_dir("unreadable");
+        let path = dir.join("vision.toml");
+        let start = Params::default();
+        ProfileStore::new(&path).save(&start).expect("first save");
+        let mut b = ProfileStore::new(&path);
+        b.mark_synced(&start);
+        fs::write(&path, "[vision]\nVisionBogus = 1\n").expect("hand edit");
+        let e = b.save_changes(&calibrated()).expect_err("cannot merge");
+        assert!(
+            e.to_string().contains("changed on disk and cannot be read now") && e.to_string().contains("VisionBogus"),
+            "{e}"
+        );
+        assert_eq!(fs::read_to_string(&path).expect("read"), "[vision]\nVisionBogus = 1\n");
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    /// A save waits for another process's save: the lock is held from the read to the rename.
+    #[test]
+    fn a_save_waits_for_the_lock() {
+        let dir = tmp_dir("lock");
+        let path = dir.join("vision.toml");
+        ProfileStore::new(&path).save(&Params::default()).expect("first save");
+        let lock = OpenOptions::new().write(true).open(dir.join(".vision.toml.lock")).expect("lock file");
+        lock.lock().expect("lock");
+        let saver = {
+            let path = path.clone();
+            std::thread::spawn(move || {
+                let mut store = ProfileStore::new(&path);
+                store.mark_synced(&Params::default());
+                store.save_changes(&calibrated()).map(|_| ())
+            })
+        };
+        std::thread::sleep(std::time::Duration::from_millis(200));
+        assert_eq!(ProfileStore::new(&path).load().expect("load"), Params::default(), "not saved while locked");
+        lock.unlock().expect("unlock");
+        saver.join().expect("thread").expect("save");
+        assert_eq!(ProfileStore::new(&path).load().expect("load").calibration, calibrated().calibration);
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_symbolic_link_is_written_through_to_its_target() {
+        let dir = tmp_dir("symlink");
+        let real = dir.join("real");
+        fs::create_dir_all(&real).expect("dir");
+        let target = real.join("vision.toml");
+        let link = dir.join("link.toml");
+        // A relative link, through a second link.
+        std::os::unix::fs::symlink("real/vision.toml", dir.join("hop.toml")).expect("link");
+        std::os::unix::fs::symlink("hop.toml", &link).expect("link");
+        let mut store = ProfileStore::new(&link);
+        assert!(store.check_writable().is_ok(), "a dangling link to a writable folder");
+        store.save(&calibrated()).expect("save");
+        assert!(fs::symlink_metadata(&link).expect("link").file_type().is_symlink(), "still a link");
+        assert_eq!(ProfileStore::new(&target).load().expect("target"), calibrated());
+        let mut names: Vec<_> = fs::read_dir(&real).expect("dir").flatten().map(|e| e.file_name()).collect();
+        names.sort();
+        assert_eq!(names, [".vision.toml.lock", "vision.toml"].map(std::ffi::OsString::from));
+        // A loop of links is refused.
+        std::os::unix::fs::symlink("loop.toml", dir.join("loop.toml")).expect("link");
+        let e = ProfileStore::new(dir.join("loop.toml")).load_or_default().expect_err("loop");
+        assert!(e.to_string().contains("symbolic links (a loop?)"), "{e}");
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_file_larger_than_a_profile_is_refused_unread() {
+        let dir = tmp_dir("big");
+        let path = dir.join("vision.toml");
+        let mut text = "[vision]\n".to_string();
+        text.push_str(&"#".repeat(usize::try_from(MAX_PROFILE_BYTES).expect("fits")));
+        fs::write(&path, &text).expect("write");
+        let e = ProfileStore::new(&path).load().expect_err("too big");
+        assert!(e.to_string().contains(&format!("is {} bytes; a profile is at most 1048576 bytes", text.len())), "{e}");
+        fs::write(&path, &text[..usize::try_from(MAX_PROFILE_BYTES).expect("fits")]).expect("write");
+        assert!(ProfileStore::new(&path).load().is_ok(), "exactly the bound is read");
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn an_empty_path_or_a_nul_byte_is_refused() {
+        for (path, says) in [("", "no profile path was given"), ("vision\0.toml", "NUL byte")] {
+            let mut store = ProfileStore::new(path);
+            for e in [
+                store.load_or_default().expect_err(path),
+                store.check_writable().expect_err(path),
+                store.save(&Params::default()).expect_err(path),
+            ] {
+                assert!(e.to_string().contains(says), "{e}");
+            }
+        }
     }
 }

@@ -162,9 +162,12 @@ impl VisionModule {
         self.driver.as_deref()
     }
 
-    /// Persists calibration and configuration to `store` (M283 and M284 save on success).
+    /// Persists calibration and configuration to `store` (M283 and M284 save on success). The
+    /// module's parameters now are what a save compares with: it writes only what changed
+    /// since ([`ProfileStore::save_changes`]).
     #[must_use]
-    pub fn with_profile(mut self, store: ProfileStore) -> VisionModule {
+    pub fn with_profile(mut self, mut store: ProfileStore) -> VisionModule {
+        store.mark_synced(&self.params);
         self.profile = Some(store);
         self
     }
@@ -249,25 +252,24 @@ impl VisionModule {
         &self.run.dots
     }
 
-    /// Saves the configuration to the attached profile (atomically); no-op without a profile.
+    /// Saves what this module changed to the attached profile (atomically, merged with what
+    /// other processes saved meanwhile, which the module takes in memory); no-op without a
+    /// profile.
     ///
     /// # Errors
-    /// [`VisionError::Profile`]; the previous file is intact.
+    /// [`VisionError::Profile`]; the previous file is intact and the parameters unchanged.
     pub fn save_profile(&mut self) -> Result<(), VisionError> {
-        match self.profile.as_mut() {
-            Some(store) => store.save(&self.params),
-            None => Ok(()),
-        }
+        self.commit_params(self.params.clone())
     }
 
-    /// Makes `next` the module's parameters: saved to the attached profile first (atomically),
-    /// then taken in memory, so the file and the module never disagree. On a failed save
-    /// nothing changes.
+    /// Makes `next` the module's parameters: saved to the attached profile first (atomically,
+    /// with what other processes saved meanwhile: [`ProfileStore::save_changes`]), then taken in
+    /// memory, so the file and the module never disagree. On a failed save nothing changes.
     pub(crate) fn commit_params(&mut self, next: Params) -> Result<(), VisionError> {
-        if let Some(store) = self.profile.as_mut() {
-            store.save(&next)?;
-        }
-        self.params = next;
+        self.params = match self.profile.as_mut() {
+            Some(store) => store.save_changes(&next)?,
+            None => next,
+        };
         Ok(())
     }
 

@@ -247,6 +247,14 @@ fn a_failed_verify_writes_nothing() {
     assert_eq!(rig.machine.tool_offset(98).expect("tool"), Vector2::new(3.0, -1.5));
 }
 
+/// A profile path in a fresh folder of this test's own (a save reads and locks beside it).
+fn broken_disk_path(test: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("vision-core-broken-{test}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("tmp");
+    dir.join("vision.toml")
+}
+
 /// Fails every save.
 struct BrokenDisk;
 impl ProfileFs for BrokenDisk {
@@ -268,7 +276,7 @@ impl ProfileFs for BrokenDisk {
 fn a_failed_save_undoes_the_calibration() {
     let mut rig = standard_rig();
     let start = rig.machine.program_position().expect("a position");
-    with_store(&mut rig, ProfileStore::with_fs(std::env::temp_dir().join("vision.toml"), Box::new(BrokenDisk)));
+    with_store(&mut rig, ProfileStore::with_fs(broken_disk_path("undo"), Box::new(BrokenDisk)));
     let e = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect_err("save fails");
     assert!(matches!(e, VisionError::Profile { .. }), "{e}");
     assert_untouched(&rig, start);
@@ -277,7 +285,7 @@ fn a_failed_save_undoes_the_calibration() {
 #[test]
 fn a_failed_save_whose_offset_restore_fails_says_what_to_set_by_hand() {
     let mut rig = standard_rig();
-    with_store(&mut rig, ProfileStore::with_fs(std::env::temp_dir().join("vision.toml"), Box::new(BrokenDisk)));
+    with_store(&mut rig, ProfileStore::with_fs(broken_disk_path("restore"), Box::new(BrokenDisk)));
     // The offset write succeeds, the save fails, the restoring write fails.
     rig.world().fail_offset_after = Some(1);
     let e = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect_err("save fails");
