@@ -338,8 +338,19 @@ fn frame_error(
 ) -> KeyenceError {
     match e {
         FrameError::TooLong => KeyenceError::LineTooLong { command: at.name.to_string(), limit: limits.max_line_len },
-        FrameError::Eof => KeyenceError::Closed { command: at.name.to_string(), waiting_for: at.describe() },
+        FrameError::Eof => closed(at.name, at.describe(), at.echoed, ignored),
         FrameError::Io(e) => io_error(e, at.name, at.describe(), at.echoed, timeout, ignored),
+    }
+}
+
+/// The camera closed the connection while `waiting_for`. When, before any echo, it had sent a
+/// line that answered nothing (`ER,TRG,6`, `TRG,<payload>` in place of the echo), that line is
+/// the cause, quoted: a camera that closes after a reply it should not have sent is not one
+/// another client holds. (A stray line before an echo that did come is only a stale output.)
+fn closed(name: &str, waiting_for: String, echoed: bool, ignored: Option<String>) -> KeyenceError {
+    match ignored.filter(|_| !echoed) {
+        Some(line) => malformed(name, line, format!("then the camera closed the connection; {waiting_for} never came")),
+        None => KeyenceError::Closed { command: name.to_string(), waiting_for },
     }
 }
 
@@ -357,7 +368,7 @@ fn io_error(
             KeyenceError::Timeout { command: name.to_string(), timeout, waiting_for, echoed, ignored }
         }
         K::ConnectionReset | K::ConnectionAborted | K::BrokenPipe | K::UnexpectedEof | K::NotConnected => {
-            KeyenceError::Closed { command: name.to_string(), waiting_for }
+            closed(name, waiting_for, echoed, ignored)
         }
         kind => KeyenceError::Io { command: name.to_string(), kind, message: e.to_string() },
     }
@@ -481,6 +492,30 @@ mod tests {
         assert!(matches!(s.trigger(), Err(KeyenceError::Closed { .. })));
         let mut s = exchange(vec![Step::write(b"TRG\r"), Step::ReadErr(io::ErrorKind::PermissionDenied)]);
         assert!(matches!(s.trigger(), Err(KeyenceError::Io { kind: io::ErrorKind::PermissionDenied, .. })));
+    }
+
+    /// A line that answers nothing, then a close: the line is the cause, quoted, in the
+    /// manual's words (not "another client holds the socket").
+    #[test]
+    fn a_malformed_reply_then_a_close_quotes_the_reply() {
+        for (reply, end) in [
+            (&b"ER,TRG,6\r"[..], None),
+            (&b"TRG,1,2,3\r"[..], None),
+            (&b"RT,xyz\r"[..], Some(io::ErrorKind::ConnectionReset)),
+        ] {
+            let mut steps = trg(reply);
+            if let Some(kind) = end {
+                steps.push(Step::ReadErr(kind));
+            }
+            let mut s = exchange(steps);
+            let e = s.trigger().expect_err("closed");
+            let KeyenceError::Malformed { line, .. } = &e else { panic!("{e:?}") };
+            assert_eq!(line.as_bytes(), &reply[..reply.len() - 1]);
+            let text = e.to_string();
+            assert!(text.starts_with("Malformed response: reply to TRG not understood"), "{text}");
+            assert!(text.contains("then the camera closed the connection") && text.contains(line.as_str()), "{text}");
+            assert!(!text.contains("another client"), "{text}");
+        }
     }
 
     #[test]
