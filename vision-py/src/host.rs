@@ -1,7 +1,10 @@
 //! [`PyHost`]: [`Machine`] over the Python object LinuxCNC's remap hands the session
 //! (`hosts/linuxcnc/remap.py`'s `Host`).
 
+use std::cell::RefCell;
+
 use pyo3::call::PyCallArgs;
+use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
 use vision_host::{printable_line, Controller, Machine, MachineError, MachineErrorKind, MAX_MESSAGE_CHARS};
 use vision_math::{LengthUnit, Point2, Vector2};
@@ -17,16 +20,26 @@ use crate::VisionError;
 /// G52, and the alignment's state is read from the machine at every call.
 ///
 /// A Python exception raised by a method, or a value of the wrong type, becomes
-/// a [`MachineError`] with Python's message; nothing here panics on what Python returns.
+/// a [`MachineError`] with Python's message; nothing here panics on what Python returns. A
+/// `BaseException` that is not an `Exception` (`KeyboardInterrupt`, `SystemExit`) fails the
+/// call too, and is kept to be raised unchanged ([`PyHost::take_interrupt`]).
 pub struct PyHost<'py> {
     object: Bound<'py, PyAny>,
+    /// The first `KeyboardInterrupt`, `SystemExit` or other non-`Exception` a method raised.
+    interrupt: RefCell<Option<PyErr>>,
 }
 
 impl<'py> PyHost<'py> {
     /// The host over `object` (a `remap.Host`).
     #[must_use]
     pub fn new(object: Bound<'py, PyAny>) -> PyHost<'py> {
-        PyHost { object }
+        PyHost { object, interrupt: RefCell::new(None) }
+    }
+
+    /// The first `BaseException` that is not an `Exception` a method raised (the operator's
+    /// Ctrl-C, `sys.exit`): the session raises it unchanged instead of a `VisionError`.
+    pub fn take_interrupt(&self) -> Option<PyErr> {
+        self.interrupt.borrow_mut().take()
     }
 
     /// The Python object.
@@ -40,7 +53,16 @@ impl<'py> PyHost<'py> {
     /// # Errors
     /// A [`MachineError`] with the exception's message when the method is missing or raises.
     pub fn call(&self, method: &str, args: impl PyCallArgs<'py>) -> Result<Bound<'py, PyAny>, MachineError> {
-        self.object.call_method1(method, args).map_err(|e| python_error(self.object.py(), method, &e))
+        self.object.call_method1(method, args).map_err(|e| {
+            let py = self.object.py();
+            if !e.is_instance_of::<PyException>(py) {
+                let mut kept = self.interrupt.borrow_mut();
+                if kept.is_none() {
+                    *kept = Some(e.clone_ref(py));
+                }
+            }
+            python_error(py, method, &e)
+        })
     }
 
     /// `object.method(*args)` as a `T`.

@@ -29,6 +29,8 @@ mod sim;
 mod words;
 
 use std::path::PathBuf;
+use std::sync::Mutex;
+use std::thread::ThreadId;
 
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
@@ -52,8 +54,22 @@ fn vision_error(e: &impl std::fmt::Display) -> PyErr {
 
 /// `mach_vision.Session`: the Vision module of one LinuxCNC interpreter, kept between M-code
 /// calls (parameters, the run's dot list, the camera connection, the profile).
-#[pyclass(unsendable, module = "mach_vision", name = "Session")]
+///
+/// Decision: a session belongs to the thread that created it (LinuxCNC's interpreter runs on
+/// one); a call from another thread raises `VisionError` saying so, and so does a call made
+/// while another is running (a `Host` method calling back into its session). Not pyo3's
+/// `unsendable`: that raises a `PanicException`, which escapes `except VisionError`, and leaks
+/// a session dropped on another thread; this one is dropped wherever Python drops it.
+#[pyclass(module = "mach_vision", name = "Session")]
 pub struct PySession {
+    /// The thread that created the session.
+    owner: ThreadId,
+    /// The session; a lock that is never waited on (see [`PySession::with`]).
+    inner: Mutex<Inner>,
+}
+
+/// The session's state behind [`PySession`]'s lock.
+struct Inner {
     session: Session,
     /// The simulated rig behind the camera (`Session.simulated`; tests only).
     #[cfg(feature = "sim")]
@@ -62,26 +78,60 @@ pub struct PySession {
 
 impl PySession {
     fn wrap(session: Session) -> PySession {
-        PySession {
+        PySession::from_inner(Inner {
             session,
             #[cfg(feature = "sim")]
             sim: None,
+        })
+    }
+
+    fn from_inner(inner: Inner) -> PySession {
+        PySession { owner: std::thread::current().id(), inner: Mutex::new(inner) }
+    }
+
+    /// Runs `f` on the session: `VisionError` from another thread than the creator's, or while
+    /// another call on the session is running (never waits: a wait would hold Python's lock).
+    fn with<T>(&self, f: impl FnOnce(&mut Inner) -> PyResult<T>) -> PyResult<T> {
+        let here = std::thread::current().id();
+        if here != self.owner {
+            return Err(VisionError::new_err(format!(
+                "this mach_vision.Session was created on another thread ({:?}, called from {here:?}); use a session \
+                 only on the thread that created it — create one per thread",
+                self.owner
+            )));
         }
+        let mut inner = self.inner.try_lock().map_err(|e| match e {
+            std::sync::TryLockError::WouldBlock => VisionError::new_err(
+                "this mach_vision.Session is already running a call (a Host method called back into its session); \
+                 call the session from the remap only",
+            ),
+            std::sync::TryLockError::Poisoned(_) => {
+                VisionError::new_err("this mach_vision.Session failed in an earlier call; create a new Session")
+            }
+        })?;
+        f(&mut inner)
     }
 
     /// Runs `step` of the session on the Python host object `host`; a refusal becomes
-    /// `VisionError`. The simulated camera (tests) first looks from where the host's machine is.
+    /// `VisionError`, a `KeyboardInterrupt` or `SystemExit` a host method raised is raised
+    /// unchanged. The simulated camera (tests) first looks from where the host's machine is.
     fn on_host<'py, T>(
-        &mut self,
+        &self,
         host: Bound<'py, PyAny>,
         step: impl FnOnce(&mut Session, &mut PyHost<'py>) -> Result<T, HostError>,
     ) -> PyResult<T> {
-        let mut host = PyHost::new(host);
-        #[cfg(feature = "sim")]
-        if let Some(sim) = &self.sim {
-            sim.place_head(&host).map_err(|e| vision_error(&e))?;
-        }
-        step(&mut self.session, &mut host).map_err(|e| vision_error(&e))
+        self.with(|inner| {
+            let mut host = PyHost::new(host);
+            #[cfg(feature = "sim")]
+            if let Some(sim) = &inner.sim {
+                sim.place_head(&host).map_err(|e| vision_error(&e))?;
+            }
+            let result = step(&mut inner.session, &mut host).map_err(|e| vision_error(&e));
+            match host.take_interrupt() {
+                Some(interrupt) => Err(interrupt),
+                None => result,
+            }
+        })
     }
 }
 
@@ -111,7 +161,7 @@ impl PySession {
     /// (`{"p": 3.0}`) on `host`; returns the G-code lines it already ran through
     /// `host.execute` (a record, never to be run again). Raises `VisionError` with the
     /// operator's message when the M-code is refused or the host fails.
-    fn call(&mut self, mcode: u32, words: &Bound<'_, PyDict>, host: Bound<'_, PyAny>) -> PyResult<Vec<String>> {
+    fn call(&self, mcode: u32, words: &Bound<'_, PyDict>, host: Bound<'_, PyAny>) -> PyResult<Vec<String>> {
         let words = block_words(words)?;
         let outcome = self.on_host(host, |session, host| session.mcode(host, mcode, &words))?;
         Ok(outcome.gcode().to_vec())
@@ -120,7 +170,7 @@ impl PySession {
     /// `walk_begin(words, host)`: M283's prolog. Checks M283's words (`{"q": d}` or
     /// `{"c": n}`) and everything M283 checks, and plans the walk; nothing moves. Raises
     /// `VisionError` when M283 is refused.
-    fn walk_begin(&mut self, words: &Bound<'_, PyDict>, host: Bound<'_, PyAny>) -> PyResult<()> {
+    fn walk_begin(&self, words: &Bound<'_, PyDict>, host: Bound<'_, PyAny>) -> PyResult<()> {
         let words = block_words(words)?;
         self.on_host(host, |session, host| session.walk_begin(host, &words))
     }
@@ -128,7 +178,7 @@ impl PySession {
     /// `walk_next(host)`: the walk's next point, `(x, y)` in the program frame and units, for
     /// `m283.ngc` to move to before `walk_capture`; `None` when the walk has every capture. It
     /// depends on the captures so far. Raises `VisionError` (no walk, or the walk failed).
-    fn walk_next(&mut self, host: Bound<'_, PyAny>) -> PyResult<Option<(f64, f64)>> {
+    fn walk_next(&self, host: Bound<'_, PyAny>) -> PyResult<Option<(f64, f64)>> {
         let next = self.on_host(host, |session, host| session.walk_next(host))?;
         Ok(next.map(|p| (p.x, p.y)))
     }
@@ -136,14 +186,14 @@ impl PySession {
     /// `walk_capture(host)`: triggers where the machine now is, for the point `walk_next` gave
     /// (M289, after the sync). Raises `VisionError` on an NG or a camera failure (the walk is
     /// dropped, nothing written).
-    fn walk_capture(&mut self, host: Bound<'_, PyAny>) -> PyResult<()> {
+    fn walk_capture(&self, host: Bound<'_, PyAny>) -> PyResult<()> {
         self.on_host(host, |session, host| session.walk_capture(host))
     }
 
     /// `walk_finish(host)`: M283's epilog. Solves the walk and writes K, the camera tool's
     /// offset and the profile (all or nothing); returns the G-code lines it ran (a record).
     /// Raises `VisionError` when the calibration is refused.
-    fn walk_finish(&mut self, host: Bound<'_, PyAny>) -> PyResult<Vec<String>> {
+    fn walk_finish(&self, host: Bound<'_, PyAny>) -> PyResult<Vec<String>> {
         let outcome = self.on_host(host, |session, host| session.walk_finish(host))?;
         Ok(outcome.gcode().to_vec())
     }
@@ -172,14 +222,14 @@ impl PySession {
         let params = params.unwrap_or_default();
         let (simulated, session) =
             sim::Simulated::new(camera, pose, calibrated, &params).map_err(|e| vision_error(&e))?;
-        Ok(PySession { session, sim: Some(simulated) })
+        Ok(PySession::from_inner(Inner { session, sim: Some(simulated) }))
     }
 
     /// `true_point(x, y)` — **tests only**: where nominal part point (x, y) (work coordinates,
     /// inches) really is on the simulated table, machine X, Y (inches).
     #[cfg(feature = "sim")]
     fn true_point(&self, x: f64, y: f64) -> PyResult<(f64, f64)> {
-        self.simulated_rig()?.true_point(x, y).map_err(|e| vision_error(&e))
+        self.with(|inner| Inner::simulated_rig(inner)?.true_point(x, y).map_err(|e| vision_error(&e)))
     }
 
     /// `setup()` — **tests only**: what the controller must hold for the simulated world, a
@@ -187,12 +237,12 @@ impl PySession {
     /// (the camera tool's X, Y as LinuxCNC's tool table holds it, inches), `unit` (`"in"`).
     #[cfg(feature = "sim")]
     fn setup<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        self.simulated_rig()?.setup(py)
+        self.with(|inner| Inner::simulated_rig(inner)?.setup(py))
     }
 }
 
 #[cfg(feature = "sim")]
-impl PySession {
+impl Inner {
     fn simulated_rig(&self) -> PyResult<&sim::Simulated> {
         self.sim.as_ref().ok_or_else(|| VisionError::new_err("not a simulated session (Session.simulated)"))
     }
@@ -212,5 +262,107 @@ mod mach_vision {
     fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {
         m.add("__version__", env!("CARGO_PKG_VERSION"))?;
         m.add("PERSISTENT_PARAMS", vision_host::linuxcnc::PERSISTENT_PARAMS.to_vec())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use pyo3::types::PyDict;
+
+    use super::*;
+
+    /// Runs Python `code` with `mach_vision` imported and `profile` (a path in a fresh folder,
+    /// an enabled profile with the Keyence driver) defined; the code asserts.
+    fn run(code: &std::ffi::CStr, test: &str) {
+        let dir = std::env::temp_dir().join(format!("vision-py-{test}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("tmp");
+        let profile = dir.join("vision.toml");
+        std::fs::write(&profile, "[vision]\nVisionEnabled = true\nVisionDriver = \"Keyence\"\n").expect("profile");
+        Python::initialize();
+        Python::attach(|py| {
+            let globals = PyDict::new(py);
+            globals.set_item("mach_vision", pyo3::wrap_pymodule!(mach_vision)(py)).expect("module");
+            globals.set_item("profile", profile.to_string_lossy().as_ref()).expect("path");
+            if let Err(e) = py.run(code, Some(&globals), None) {
+                panic!("{e}");
+            }
+        });
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_session_used_from_another_thread_raises_vision_error() {
+        run(
+            cr#"
+import threading
+s = mach_vision.Session(profile)
+got = []
+def use():
+    try:
+        s.call(280, {}, object())
+        got.append("no error")
+    except mach_vision.VisionError as e:
+        got.append(str(e))
+    except BaseException as e:
+        got.append("escaped: %r" % (e,))
+t = threading.Thread(target=use)
+t.start()
+t.join()
+assert len(got) == 1 and "created on another thread" in got[0], got
+# Dropped on another thread: an ordinary drop, no panic.
+holder = [mach_vision.Session(profile)]
+t = threading.Thread(target=holder.clear)
+t.start()
+t.join()
+"#,
+            "thread",
+        );
+    }
+
+    #[test]
+    fn keyboard_interrupt_and_system_exit_in_a_host_method_propagate_unchanged() {
+        run(
+            cr#"
+class Host:
+    def __init__(self, kind):
+        self.kind = kind
+    def __getattr__(self, name):
+        def method(*args):
+            raise self.kind("from Host." + name)
+        return method
+s = mach_vision.Session(profile)
+for kind in (KeyboardInterrupt, SystemExit):
+    try:
+        s.call(280, {}, Host(kind))
+        raise AssertionError("no error")
+    except kind as e:
+        assert str(e).startswith("from Host."), e
+    except mach_vision.VisionError as e:
+        raise AssertionError("swallowed into VisionError: %s" % e)
+# An ordinary exception is still the M-code's refusal.
+try:
+    s.call(280, {}, Host(ValueError))
+    raise AssertionError("no error")
+except mach_vision.VisionError as e:
+    assert "ValueError" in str(e), e
+"#,
+            "interrupt",
+        );
+    }
+
+    #[test]
+    fn an_empty_path_or_a_nul_byte_is_refused() {
+        run(
+            cr#"
+for path, says in (("", "no profile path was given"), ("vision\0.toml", "NUL byte")):
+    try:
+        mach_vision.Session(path)
+        raise AssertionError("accepted %r" % path)
+    except mach_vision.VisionError as e:
+        assert says in str(e), e
+"#,
+            "paths",
+        );
     }
 }
