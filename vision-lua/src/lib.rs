@@ -14,7 +14,10 @@
 //!
 //! Lua API (every function returns `ok, message, gcode`: `true, nil, {lines}` on success, the
 //! lines being a record of the G-code the M-code already ran on Mach4, never to be run again;
-//! `false, "why", {}` after reporting the failure to Mach4):
+//! `false, "why", {}` after reporting the failure to Mach4 and stopping the cycle). When the
+//! cycle cannot be stopped (`mc.mcCntlCycleStop` missing, failing or returning an error code)
+//! the function raises a Lua error with both messages instead: Mach4 aborts the macro, and the
+//! program does not go on after a refused M-code.
 //!
 //! * `mach_vision.mcode(m, hParam)`: runs M-code `m` (280–284) with the words of `hParam`.
 //! * `mach_vision.open(path)`: (re)opens the session from profile file `path`.
@@ -62,34 +65,39 @@ pub fn install(lua: &Lua, session: Session) {
 #[cfg_attr(feature = "module", mlua::lua_module(name = "mach_vision"))]
 pub fn mach_vision(lua: &Lua) -> mlua::Result<Table> {
     let exports = lua.create_table()?;
-    exports.set("mcode", lua.create_function(|lua, (m, h_param): (u32, Value)| Ok(mcode(lua, m, &h_param)))?)?;
-    exports.set("open", lua.create_function(|lua, path: String| Ok(open(lua, PathBuf::from(path))))?)?;
+    exports.set("mcode", lua.create_function(|lua, (m, h_param): (u32, Value)| mcode(lua, m, &h_param))?)?;
+    exports.set("open", lua.create_function(|lua, path: String| open(lua, PathBuf::from(path)))?)?;
     exports.set("version", env!("CARGO_PKG_VERSION"))?;
     Ok(exports)
 }
 
-/// The answer of a call that failed after `host` reported it to the operator.
-fn refused(host: Option<&Mach4>, e: &HostError) -> Answer {
+/// The answer of a call that failed, after `host` reported it to the operator and stopped the
+/// cycle; a Lua error carrying both messages when the cycle could not be stopped.
+fn refused(host: Option<&Mach4>, e: &HostError) -> mlua::Result<Answer> {
     // Messages quote profile paths and camera replies: shown escaped and bounded.
     let message = printable_line(&e.to_string(), MAX_MESSAGE_CHARS);
     if let Some(host) = host {
-        host.fail(&message);
+        if let Err(stop) = host.fail(&message) {
+            return Err(mlua::Error::RuntimeError(format!(
+                "{message} — and the program could not be stopped ({stop}): stop it by hand"
+            )));
+        }
     }
-    (false, Some(message), Vec::new())
+    Ok((false, Some(message), Vec::new()))
 }
 
-fn open(lua: &Lua, path: PathBuf) -> Answer {
+fn open(lua: &Lua, path: PathBuf) -> mlua::Result<Answer> {
     let host = Mach4::new(lua).ok();
     match Session::open(&path, &registry()) {
         Ok(session) => {
             install(lua, session);
-            (true, None, Vec::new())
+            Ok((true, None, Vec::new()))
         }
         Err(e) => refused(host.as_ref(), &e),
     }
 }
 
-fn mcode(lua: &Lua, m: u32, h_param: &Value) -> Answer {
+fn mcode(lua: &Lua, m: u32, h_param: &Value) -> mlua::Result<Answer> {
     let mut host = match Mach4::new(lua) {
         Ok(host) => host,
         Err(e) => return refused(None, &e.into()),
@@ -106,7 +114,7 @@ fn mcode(lua: &Lua, m: u32, h_param: &Value) -> Answer {
     let result = host.words(h_param).map_err(HostError::from).and_then(|words| session.mcode(&mut host, m, &words));
     install(lua, session);
     match result {
-        Ok(outcome) => (true, None, outcome.gcode().to_vec()),
+        Ok(outcome) => Ok((true, None, outcome.gcode().to_vec())),
         Err(e) => refused(Some(&host), &e),
     }
 }

@@ -101,11 +101,14 @@ impl Mach4 {
     }
 
     /// Reports `message` to the operator as an error and stops the program.
-    pub fn fail(&self, message: &str) {
-        // Nothing more can be done if Mach4 refuses to show or stop: the M-code's return
-        // values still carry the message.
+    ///
+    /// # Errors
+    /// `mc.mcCntlCycleStop` is missing, raised a Lua error or returned an error code: the
+    /// program was not stopped (the caller must abort the macro). A message line Mach4 refuses
+    /// is not an error: the stop is what matters, and the M-code's answer carries the message.
+    pub fn fail(&self, message: &str) -> Result<(), MachineError> {
         let _ = self.call("mcCntlSetLastError", (self.inst.clone(), message));
-        let _ = self.call("mcCntlCycleStop", self.inst.clone());
+        self.status("mcCntlCycleStop", self.inst.clone())
     }
 
     /// The words of the M-code's line, from its local variables (`hParam`).

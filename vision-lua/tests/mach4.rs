@@ -308,3 +308,29 @@ fn mach4_return_codes_are_reported_by_name() {
     assert!(!ok);
     assert!(message.is_some_and(|m| m.contains("neither 200 (G20) nor 210 (G21)")));
 }
+
+/// A refusal whose cycle stop fails (an error code, a Lua error, no such call) raises a Lua
+/// error with both messages: Mach4 aborts the macro instead of running on after it.
+#[test]
+fn a_refusal_that_cannot_stop_the_cycle_raises_a_lua_error_with_both_messages() {
+    for (stop, says) in [
+        (
+            "function mc.mcCntlCycleStop(inst) return mc.MERROR_NOT_NOW end",
+            "mc.mcCntlCycleStop returned error code -18",
+        ),
+        ("function mc.mcCntlCycleStop(inst) error('cycle stop broken') end", "cycle stop broken"),
+        ("mc.mcCntlCycleStop = nil", "this Mach4 has no mc.mcCntlCycleStop"),
+    ] {
+        let lua = mach4_lua();
+        let dir = std::env::temp_dir().join(format!("mach-vision-lua-stop-{}", std::process::id()));
+        fake(&lua).set("machDir", dir.display().to_string()).expect("dir");
+        lua.load(stop).exec().expect("mc");
+        // No profile yet: M280 is refused (not enabled), and the stop fails.
+        let run: Function = lua.globals().get("m280").expect("m280");
+        let e = run.call::<(bool, Option<String>, Vec<String>)>(H_PARAM).expect_err("a Lua error");
+        let text = e.to_string();
+        assert!(text.contains("not enabled") && text.contains(says) && text.contains("could not be stopped"), "{text}");
+        let errors: Vec<String> = fake(&lua).get("errors").expect("errors");
+        assert!(errors.last().is_some_and(|m| m.contains("not enabled")), "{errors:?}");
+    }
+}

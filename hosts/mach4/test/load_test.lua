@@ -54,3 +54,11 @@ check(log.stopped, "M281's refusal did not stop the cycle")
 check(#log.executed == 1, "M281's refusal ran G-code")
 
 print("load test: mach_vision " .. vision.version .. " loads in " .. _VERSION .. " and runs M280/M281")
+
+-- A refusal whose cycle stop fails raises a Lua error with both messages (Mach4 aborts the
+-- macro), in the stock Lua too.
+mc.mcCntlCycleStop = function(inst) return -18 end
+local raised, err = pcall(m281, 7)
+check(not raised and tostring(err):find("K matrix is zero", 1, true) and tostring(err):find("error code -18", 1, true),
+      "a failed cycle stop: " .. tostring(err))
+print("load test: a refusal whose cycle stop fails raises a Lua error")
