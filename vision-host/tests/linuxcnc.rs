@@ -497,3 +497,22 @@ fn m283_is_refused_while_an_alignment_is_active_and_the_refusal_names_m280() {
     fresh.mcode(&mut host, 280, &[]).expect("cancelled");
     fresh.walk_begin(&mut host, &[('Q', 0.5)]).expect("no alignment now");
 }
+
+/// A base rotation of 1e308 (#3991 while aligned, or the G5x rotation) is refused as out of
+/// range, never written back as a 309-digit `G10 L2 P0 R…`.
+#[test]
+fn a_base_rotation_past_the_bound_is_refused_and_writes_no_line() {
+    let (mut session, mut host) = rig(0.0, 0.4, Vector2::new(0.06, -0.04), 1.0, 2.0);
+    align(&mut session, &mut host).expect("aligned");
+    host.params.insert(linuxcnc::BASE_ROTATION_PARAM, 1e308);
+    let ran = host.lines.len();
+    let e = session.mcode(&mut host, 280, &[]).expect_err("θ₀ of 1e308");
+    assert!(e.to_string().contains("#3991") && e.to_string().contains("1e308"), "{e}");
+    assert!(e.to_string().len() < 400, "{e}");
+    assert_eq!(host.lines.len(), ran, "no line ran: {:?}", &host.lines[ran..]);
+    // Not aligned: the G5x rotation itself.
+    let (mut session, mut host) = rig(0.0, 0.4, Vector2::new(0.06, -0.04), 1.0, 2.0);
+    host.rotation_deg = -1e308;
+    let e = session.mcode(&mut host, 280, &[]).expect_err("G5x rotation of -1e308");
+    assert!(e.to_string().contains("the G5x rotation is -1e308"), "{e}");
+}

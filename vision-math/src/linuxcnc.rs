@@ -53,6 +53,7 @@ impl LinuxCncAlignment {
     ///
     /// # Errors
     /// [`MathError::NonFinite`] when the chain, the base rotation or the gate is not finite;
+    /// [`MathError::BeyondBound`] for a base rotation past [`crate::bounds::MAX_ROTATION_DEG`];
     /// [`MathError::ScaleNotExpressible`] when the scale is outside the gate.
     pub fn from_chain(
         chain: &AlignmentChain,
@@ -71,9 +72,7 @@ impl LinuxCncAlignment {
         if !all.iter().all(|v| v.is_finite()) {
             return Err(MathError::NonFinite { what: "the alignment chain" });
         }
-        if !base_rotation_deg.is_finite() {
-            return Err(MathError::NonFinite { what: "the G5x rotation before the alignment" });
-        }
+        bounds::rotation_deg("the G5x rotation before the alignment", base_rotation_deg)?;
         if !max_scale_dev_pct.is_finite() {
             return Err(MathError::NonFinite { what: "the scale gate" });
         }
@@ -221,6 +220,16 @@ mod tests {
         assert_eq!(a.gcode().expect("finite")[0], "G10 L2 P0 R-10.750000000");
         assert_eq!(a.cancel_gcode().expect("finite"), ["G52 X0 Y0", "G10 L2 P0 R-12.250000000"]);
         assert!(cancel_gcode(f64::NAN).is_err());
+        // A base rotation of 1e308 (#3991 or the G5x rotation) is refused, never written as
+        // a 309-digit `G10 L2 P0 R…`.
+        for far in [1e308, -2e6] {
+            let e = cancel_gcode(far).expect_err("far");
+            assert!(matches!(e, MathError::BeyondBound { .. }), "{e:?}");
+            assert!(e.to_string().len() < 200, "{e}");
+            assert!(LinuxCncAlignment::from_chain(&chain, far, 2.0).is_err());
+            let a = LinuxCncAlignment { rotation_deg: far, ..a };
+            assert!(matches!(a.gcode(), Err(MathError::BeyondBound { .. })));
+        }
     }
 
     #[test]
