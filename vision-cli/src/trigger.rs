@@ -65,7 +65,7 @@ pub(crate) fn run(args: &TriggerArgs) -> Result<String, Failure> {
 /// `--timeout` as a duration: more than 0 and at most the driver's [`MAX_TIMEOUT`] (300 s).
 fn timeout(seconds: f64) -> Result<Duration, String> {
     // A huge value reads better as 1e30 than as its 31 digits.
-    let shown = if seconds.abs() >= 1e6 { format!("{seconds:e}") } else { seconds.to_string() };
+    let shown = vision_math::show::number(seconds);
     if !(seconds > 0.0) {
         return Err(format!("--timeout {shown} must be more than 0 s (seconds for the whole exchange)"));
     }

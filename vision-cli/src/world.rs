@@ -25,6 +25,7 @@ pub(crate) fn load(path: Option<&Path>) -> Result<World, Failure> {
 /// The world's `machine.max_speed` / `max_accel` within the planner's physical range, so a
 /// bad value is refused at load, naming the field, rather than planned for ever or to 0 s.
 fn check_motion_limits(world: &World) -> Result<(), String> {
+    use vision_math::show::number;
     let (speed, accel) = world.machine.motion_limits(world.unit);
     let u = world.length_unit().short_name();
     for (field, value, range) in
@@ -32,9 +33,10 @@ fn check_motion_limits(world: &World) -> Result<(), String> {
     {
         if !range.contains(&value) {
             return Err(format!(
-                "{field} = {value} is invalid: the path planner accepts {} to {} {u}/s{}",
-                range.start(),
-                range.end(),
+                "{field} = {} is invalid: the path planner accepts {} to {} {u}/s{}",
+                number(value),
+                number(*range.start()),
+                number(*range.end()),
                 if field.ends_with("accel") { "²" } else { "" }
             ));
         }

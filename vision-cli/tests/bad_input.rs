@@ -39,11 +39,19 @@ fn one_short_line(out: &Output, names: &str) -> String {
 #[test]
 fn huge_quoted_input_is_cut_in_messages() {
     let huge = "a!".repeat(5_000_000);
-    let profile = scratch("huge.toml", format!("[vision]\nVisionIP = \"{huge}\"\n").as_bytes());
+    // A profile under the size cap quoting a long value: cut in the message.
+    let long = "a!".repeat(200_000);
+    let profile = scratch("long.toml", format!("[vision]\nVisionIP = \"{long}\"\n").as_bytes());
     let out =
         bin().args(["run", "--profile", arg(&profile)]).arg(example("04-rectangle-fit.nc")).output().expect("run");
     let err = one_short_line(&out, "VisionIP");
     assert!(err.contains("characters cut") && err.contains("must be an IP address"), "{err}");
+    // Past the cap (1 MiB): refused unread.
+    let profile = scratch("huge.toml", format!("[vision]\nVisionIP = \"{huge}\"\n").as_bytes());
+    let out =
+        bin().args(["run", "--profile", arg(&profile)]).arg(example("04-rectangle-fit.nc")).output().expect("run");
+    let err = one_short_line(&out, "huge.toml");
+    assert!(err.contains("is 10000023 bytes; a profile is at most 1048576 bytes"), "{err}");
 
     let world = scratch("huge-world.toml", format!("unit = \"{huge}\"\n").as_bytes());
     let out = bin().args(["run", "--world", arg(&world)]).arg(example("04-rectangle-fit.nc")).output().expect("run");

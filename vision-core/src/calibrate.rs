@@ -577,10 +577,11 @@ fn check_quick_scale(
         _ => String::new(),
     };
     Err(fail(format!(
-        "the dot diameter Q{} {} makes the marks move {ratio:.3e}× the distance the axis-detect \
+        "the dot diameter Q{} {} makes the marks move {}× the distance the axis-detect \
          bump moved{hint} — give the printed dot's diameter in the program's units",
         number(diameter),
-        unit.short_name()
+        unit.short_name(),
+        number(ratio)
     )))
 }
 

@@ -495,7 +495,13 @@ pub fn from_toml(text: &str) -> Result<Params, String> {
 /// A parse error, a missing `[vision]`, an unknown table or key, an unknown or telemetry name,
 /// or an invalid value (the message says which).
 pub fn from_toml_with(text: &str, base: Params) -> Result<Params, String> {
-    let mut file: toml::Table = toml::from_str(text).map_err(|e| format!("cannot parse: {e}"))?;
+    if text.trim().is_empty() {
+        return Err("cannot parse: the file is empty — a profile holds a [vision] table; remove the file to start \
+                    from the defaults"
+            .into());
+    }
+    let mut file: toml::Table =
+        toml::from_str(text).map_err(|e| format!("cannot parse: {}", crate::text::toml_error(&e, text)))?;
     let known: Vec<&str> = base.drivers_settings().map(|d| d.table()).collect();
     if let Some(key) = file.keys().find(|k| *k != VISION && !known.contains(&k.as_str())) {
         let tables: String = std::iter::once(VISION).chain(known.iter().copied()).map(|t| format!("[{t}]")).collect();
@@ -506,7 +512,7 @@ pub fn from_toml_with(text: &str, base: Params) -> Result<Params, String> {
     let mut params = base;
     let tables = |v: toml::Value, name: &str| match v {
         toml::Value::Table(t) => Ok(t),
-        other => Err(format!("cannot parse: `{name}` must be a table [{name}], not {other}")),
+        other => Err(format!("cannot parse: `{name}` must be a table [{name}], not {}", shown(&other))),
     };
     let vision = tables(file.remove(VISION).ok_or("cannot parse: missing table [vision]")?, VISION)?;
     for (name, value) in vision {
@@ -537,8 +543,19 @@ fn param_value(name: &str, value: toml::Value) -> Result<ParamValue, String> {
         toml::Value::Integer(i) => ParamValue::Int(i),
         toml::Value::Float(f) => ParamValue::Float(f),
         toml::Value::String(s) => ParamValue::Text(s),
-        other => return Err(format!("{name}: unsupported value {other}")),
+        // Read as its text, as a number written as text is read as its type.
+        toml::Value::Datetime(d) => ParamValue::Text(d.to_string()),
+        other => return Err(format!("{name}: unsupported value {}", shown(&other))),
     })
+}
+
+/// A TOML value for a message: a date-time as written (toml's `Display` shows its private
+/// table), anything else as TOML.
+fn shown(value: &toml::Value) -> String {
+    match value {
+        toml::Value::Datetime(d) => d.to_string(),
+        other => other.to_string(),
+    }
 }
 
 #[cfg(test)]
@@ -618,7 +635,19 @@ mod tests {
         assert!(from_toml("not toml [").expect_err("parse").starts_with("cannot parse"));
         assert!(from_toml("[vision]\nVisionDriver = [1]\n").expect_err("array").contains("unsupported"));
         assert!(from_toml("vision = 1\n").expect_err("not a table").contains("[vision]"));
-        assert!(from_toml("").expect_err("no [vision]").contains("missing table [vision]"));
+        assert!(from_toml("# nothing\n").expect_err("no [vision]").contains("missing table [vision]"));
+        assert!(from_toml(" \n").expect_err("empty").contains("the file is empty — a profile holds a [vision] table"));
+        let e = from_toml("[vision]\nVisionCameraResX = 16x\n").expect_err("syntax");
+        assert!(e.starts_with("cannot parse: line 2, column ") && e.contains("(`VisionCameraResX = 16x`)"), "{e}");
+        assert!(!e.contains('\n'), "{e}");
+        // A date-time is read as its text (a calibration date written unquoted), and shown as
+        // written, never as toml's private table.
+        let p = from_toml("[vision]\nVisionCal_Date = 2024-01-02T03:04:05Z\n").expect("a date");
+        assert_eq!(p.cal_date(), "2024-01-02T03:04:05Z");
+        let e = from_toml("vision = 2024-01-02\n").expect_err("not a table");
+        assert!(e.ends_with("not 2024-01-02"), "{e}");
+        let e = from_toml("[vision]\nVisionCameraResX = 2024-01-02\n").expect_err("not a number");
+        assert!(e.contains("VisionCameraResX") && !e.contains("$__toml"), "{e}");
         assert_eq!(from_toml("[vision]\n"), Ok(Params::default()));
     }
 

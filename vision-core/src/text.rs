@@ -55,8 +55,53 @@ fn escape_controls(text: &str, keep_newlines: bool) -> String {
     out
 }
 
+/// Characters of the offending line [`toml_error`] quotes.
+const QUOTED_CHARS: usize = 60;
+
+/// A TOML file's parse error as one line: `line 2, column 13 (`max_speed = 2024-01-01`): invalid
+/// type: …` (the position
+/// as G-code messages give it), or `the file is empty` — not toml's multi-line excerpt, and not
+/// its private names (a date-time shows as `$__toml_private_datetime`).
+#[must_use]
+pub fn toml_error(e: &toml::de::Error, text: &str) -> String {
+    if text.trim().is_empty() {
+        return "the file is empty".to_string();
+    }
+    let message = e.message().trim().replace("$__toml_private_datetime", "date-time");
+    match e.span() {
+        Some(span) => {
+            let before = text.get(..span.start).unwrap_or(text);
+            let line = before.matches('\n').count() + 1;
+            let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+            // The line itself, short: it names the key when the message does not.
+            let start = before.rfind('\n').map_or(0, |i| i + 1);
+            let source = text[start..].lines().next().unwrap_or("").trim();
+            let quoted: String = source.chars().take(QUOTED_CHARS).collect();
+            let cut = if source.chars().count() > QUOTED_CHARS { "…" } else { "" };
+            format!("line {line}, column {column} (`{quoted}{cut}`): {message}")
+        }
+        None => message,
+    }
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn a_toml_error_is_one_line_with_its_position() {
+        let text = "[machine]\nmax_speed = 2024-01-01\n";
+        let e = toml::from_str::<std::collections::BTreeMap<String, std::collections::BTreeMap<String, f64>>>(text)
+            .expect_err("a date");
+        let line = super::toml_error(&e, text);
+        assert!(line.starts_with("line 2, column 13 (`max_speed = 2024-01-01`): ") && !line.contains('\n'), "{line}");
+        assert!(!line.contains("$__toml_private"), "{line}");
+        let e = toml::from_str::<std::collections::BTreeMap<String, f64>>("x = [").expect_err("syntax");
+        assert!(super::toml_error(&e, "x = [").starts_with("line 1, column "), "{e}");
+        let e = toml::from_str::<std::collections::BTreeMap<String, f64>>("").map(|_| ()).err();
+        if let Some(e) = e {
+            assert_eq!(super::toml_error(&e, " \n"), "the file is empty");
+        }
+    }
+
     use super::*;
 
     #[test]

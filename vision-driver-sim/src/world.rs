@@ -309,7 +309,8 @@ impl World {
     /// [`SimError::Parse`] for TOML that does not match the schema (unknown fields included),
     /// [`SimError::Invalid`] for values out of range.
     pub fn from_toml(text: &str) -> Result<World, SimError> {
-        let world: World = toml::from_str(text).map_err(|e| SimError::Parse { reason: e.to_string() })?;
+        let world: World =
+            toml::from_str(text).map_err(|e| SimError::Parse { reason: vision_core::text::toml_error(&e, text) })?;
         world.validate()?;
         Ok(world)
     }

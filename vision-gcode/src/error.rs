@@ -5,6 +5,22 @@
 
 use std::fmt;
 
+use vision_math::show::number;
+
+/// Why a word is not a whole, non-negative number of at most `u32::MAX` (`L1e15` is whole, and
+/// too large).
+fn whole_problem(value: f64) -> String {
+    if value.is_finite() && value.fract() == 0.0 {
+        if value < 0.0 {
+            "must not be negative".to_string()
+        } else {
+            format!("is too large: at most {}", u32::MAX)
+        }
+    } else {
+        "must be a whole number".to_string()
+    }
+}
+
 /// A G-code number as written, in tenths: `G90.1` is `GCode(901)`, `G1` is `GCode(10)`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct GCode(pub u16);
@@ -19,13 +35,23 @@ impl fmt::Display for GCode {
     }
 }
 
+/// Where a message points in the source: `line 3`, or `line 3, column 7` (1-based, characters).
+/// The one format of every message with a position, whichever tool reports it.
+#[must_use]
+pub fn source_position(line: u64, column: Option<u32>) -> String {
+    match column {
+        Some(column) => format!("line {line}, column {column}"),
+        None => format!("line {line}"),
+    }
+}
+
 /// Why a program stopped. Nothing is ever silently ignored: an unknown code or an unused word
 /// is one of these, with its line.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum GcodeError {
     /// The line does not parse.
-    #[error("line {line}, column {column}: {problem}")]
+    #[error("{}: {problem}", source_position(u64::from(*line), Some(*column)))]
     Syntax {
         /// 1-based line number in the text being run.
         line: u32,
@@ -219,7 +245,7 @@ pub enum RunProblem {
         code: GCode,
     },
     /// A G value that is not a whole number of tenths (e.g. `G1.25`) or is out of range.
-    #[error("G{value} is not a G-code: G numbers have at most one decimal")]
+    #[error("G{} is not a G-code: G numbers have at most one decimal", number(*value))]
     BadGCode {
         /// The value written.
         value: f64,
@@ -237,7 +263,7 @@ pub enum RunProblem {
         user_high: u32,
     },
     /// An M value that is not a non-negative whole number.
-    #[error("M{value} is not an M-code: M numbers are whole and non-negative")]
+    #[error("M{} is not an M-code: M numbers are whole and non-negative", number(*value))]
     BadMCode {
         /// The value written.
         value: f64,
@@ -294,8 +320,8 @@ pub enum RunProblem {
         /// 2 or 30.
         code: u32,
     },
-    /// A word that must be a whole number.
-    #[error("`{letter}{value}` must be a whole number")]
+    /// A word that must be a whole, non-negative number (up to `u32::MAX`).
+    #[error("`{letter}{}` {}", number(*value), whole_problem(*value))]
     NotWhole {
         /// The word letter.
         letter: char,
@@ -313,7 +339,7 @@ pub enum RunProblem {
         hint: &'static str,
     },
     /// A word value out of its range.
-    #[error("{code}: `{letter}{value}` is out of range: {hint}")]
+    #[error("{code}: `{letter}{}` is out of range: {hint}", number(*value))]
     OutOfRange {
         /// The code.
         code: &'static str,
@@ -570,7 +596,7 @@ pub enum RunProblem {
         letter: char,
     },
     /// A negative or non-finite time/feed/tolerance.
-    #[error("{code}: `{letter}{value}` must not be negative")]
+    #[error("{code}: `{letter}{}` must not be negative", number(*value))]
     Negative {
         /// The code.
         code: &'static str,
@@ -595,7 +621,7 @@ pub enum RunProblem {
     #[error("R is not allowed on G10 L20: rotate the system with G10 L2 P… R…, then set its origin with G10 L20")]
     G10RotationL20,
     /// A word, computed position or offset beyond ±[`crate::MAX_COORDINATE`] machine units.
-    #[error("{what} is {value:e} machine units, beyond ±{max:e}: check the program's units and values", max = crate::MAX_COORDINATE)]
+    #[error("{what} is {} machine units, beyond ±{}: check the program's units and values", number(*value), number(crate::MAX_COORDINATE))]
     BeyondRange {
         /// What it is (`the X word`, `the move's machine position`, `#5221`).
         what: String,

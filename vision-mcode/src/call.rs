@@ -1,6 +1,7 @@
 //! M280–M284 words → a typed [`VisionCall`].
 
 use vision_core::{Calibrate, Pieces, RunMode};
+use vision_math::bounds::MAX_COORDINATE;
 
 use crate::error::McodeError;
 
@@ -126,8 +127,8 @@ fn pieces_word(p: Option<f64>) -> Result<Pieces, McodeError> {
 /// M283's words: exactly one of `Q` (dot diameter, positive) and `C` (sheet number).
 fn calibrate_words(q: Option<f64>, c: Option<f64>) -> Result<Calibrate, McodeError> {
     match (q, c) {
-        (Some(d), None) if d > 0.0 => Ok(Calibrate::Quick { diameter: d }),
-        (Some(d), None) => Err(bad("M283", word('Q', d), "Q is the dot diameter and must be positive")),
+        (Some(d), None) if d > 0.0 && d <= MAX_COORDINATE => Ok(Calibrate::Quick { diameter: d }),
+        (Some(d), None) => Err(bad("M283", word('Q', d), "Q is the dot diameter and must be positive, at most 1e9")),
         (None, Some(n)) => integer_word(n)
             .and_then(|n| u32::try_from(n).ok())
             .map(|n| Calibrate::Sheet { n })
@@ -213,6 +214,8 @@ mod tests {
             "M284 P1e300 is invalid: P is the camera job and must be a whole number 0..999"
         );
         assert!(p(283, &[('Q', -1e-300)]).expect_err("tiny").to_string().starts_with("M283 Q-1e-300 is invalid"));
+        // A diameter past the bound of lengths is refused as a word, not calibrated with.
+        assert!(p(283, &[('Q', 1e300)]).expect_err("huge").to_string().starts_with("M283 Q1e300 is invalid"));
         for (m, words) in [
             (280, vec![('P', 5.0)]),
             (281, vec![('D', 2.0)]),

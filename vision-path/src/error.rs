@@ -9,7 +9,7 @@
 #[non_exhaustive]
 pub enum PathError {
     /// A limit, the period or another configuration number is out of range.
-    #[error("{what} = {value} is invalid: {reason}")]
+    #[error("{what} = {} is invalid: {reason}", vision_math::show::number(*value))]
     InvalidConfig {
         /// The setting, with its unit (`max path acceleration (units/s²)`).
         what: &'static str,
@@ -27,10 +27,12 @@ pub enum PathError {
         reason: String,
     },
     /// The G-code interpreter (or another item source) failed at a line.
-    #[error("line {line}: {message}")]
+    #[error("{}: {message}", vision_gcode::error::source_position(*line as u64, *column))]
     Program {
         /// Source line where the program failed.
         line: usize,
+        /// The column (1-based, characters) of a syntax error.
+        column: Option<u32>,
         /// The source's message.
         message: String,
     },

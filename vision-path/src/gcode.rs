@@ -216,10 +216,10 @@ pub fn item(event: &GEvent, line: usize) -> Item {
 /// The interpreter's error for a line run alone (numbered 1), told at its real `line`.
 fn program_error(e: &GcodeError, line: u32) -> PathError {
     let text = e.to_string();
-    let own = format!("line {}", e.line());
+    let own = vision_gcode::error::source_position(u64::from(e.line()), e.column());
     let message = match text.strip_prefix(&own) {
-        Some(rest) => rest.trim_start_matches([':', ',', ' ']).to_string(),
+        Some(rest) => rest.trim_start_matches([':', ' ']).to_string(),
         None => text,
     };
-    PathError::Program { line: line as usize, message }
+    PathError::Program { line: line as usize, column: e.column(), message }
 }

@@ -121,7 +121,11 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Shaper<I> {
                 if !(seconds.is_finite() && (0.0..=MAX_DWELL).contains(&seconds)) {
                     return Err(invalid(
                         line,
-                        format!("dwell of {seconds} s is invalid; use 0 to {MAX_DWELL} seconds"),
+                        format!(
+                            "dwell of {} s is invalid; use 0 to {} seconds",
+                            vision_math::show::number(seconds),
+                            vision_math::show::number(MAX_DWELL)
+                        ),
                     ));
                 }
                 self.flush();
@@ -170,9 +174,10 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Shaper<I> {
                 return Err(invalid(
                     line,
                     format!(
-                        "feed F{f} is invalid; program a feed between {} and {} units/min",
-                        Limits::SPEED_RANGE.start() * 60.0,
-                        Limits::SPEED_RANGE.end() * 60.0
+                        "feed F{} is invalid; program a feed between {} and {} units/min",
+                        vision_math::show::number(f),
+                        vision_math::show::number(Limits::SPEED_RANGE.start() * 60.0),
+                        vision_math::show::number(Limits::SPEED_RANGE.end() * 60.0)
                     ),
                 ))
             }

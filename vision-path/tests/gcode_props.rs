@@ -163,9 +163,11 @@ proptest! {
         prop_assert_eq!(last.position, m, "\n{}", text);
         match (outcome, failure) {
             (Ok(_), None) => {}
-            (Err(e), Some(PathError::Program { line, message })) => {
+            (Err(e), Some(failure @ PathError::Program { line, column, .. })) => {
                 prop_assert_eq!(line, e.line() as usize);
-                prop_assert!(e.to_string().ends_with(&message), "{} vs {}", e, message);
+                prop_assert_eq!(column, e.column());
+                // One position format: the planner says it as the interpreter does.
+                prop_assert_eq!(failure.to_string(), e.to_string());
             }
             (o, f) => prop_assert!(false, "interpreter {:?} but planner {:?}\n{}", o, f, text),
         }

@@ -257,7 +257,7 @@ fn start_gcode_checks_the_whole_program_before_anything_moves() {
     let err =
         follower.start_gcode(&machine_motion(), "G21 G90\nG0 X10\nG1 X20 Q3", 1000.0, Writes::default(), Pace::Unpaced);
     match err {
-        Err(PathError::Program { line: 3, message }) => assert!(!message.starts_with("line"), "{message}"),
+        Err(PathError::Program { line: 3, message, .. }) => assert!(!message.starts_with("line"), "{message}"),
         other => panic!("{other:?}"),
     }
     // The interpreter knows tools 1–254; the follower's table has only tool 1 wired.

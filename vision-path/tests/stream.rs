@@ -244,7 +244,7 @@ fn an_error_arrives_at_its_place_after_the_motion_before_it_comes_to_rest() {
         rate: Rate::Feed(6000.0),
         mode: PathMode::Blend { tolerance: None },
     };
-    let failure = PathError::Program { line: 2, message: "unknown word Q".into() };
+    let failure = PathError::Program { line: 2, column: None, message: "unknown word Q".into() };
     let items = vec![Ok(Item::Move(seg)), Err(failure.clone()), Ok(Item::End { line: 3 })];
     let steps: Vec<_> = Setpoints::new(&config(), items.into_iter()).unwrap().collect();
     let (last_ok, err) = (&steps[steps.len() - 2], &steps[steps.len() - 1]);
