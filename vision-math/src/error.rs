@@ -32,7 +32,7 @@ pub enum MathError {
     },
     /// A coordinate beyond [`crate::fit::MAX_COORDINATE`]: no machine travels that far, and the
     /// fit's sums would overflow.
-    #[error("{what} has a coordinate of {value:e}, beyond ±{limit:e} (no machine travels that far); check the input's units")]
+    #[error("{what} has a coordinate of {}, beyond ±{} (no machine travels that far); check the input's units", crate::show::number(*value), crate::show::number(*limit))]
     CoordinateTooLarge {
         /// Which set: "a commanded point" or "an observed point".
         what: &'static str,

@@ -405,7 +405,7 @@ impl Moments {
         // One test for the common case; `refuse_input` picks the error in the order the checks
         // are documented: non-finite commanded, non-finite observed, then too large.
         if !((cn.x + cn.y + co.x + co.y).is_finite() && fast_max(mag_x, mag_y) <= MAX_COORDINATE) {
-            if let Some(e) = refuse_input(cn, co, commanded, observed) {
+            if let Some(e) = refuse_input(commanded, observed) {
                 return Err(e);
             }
         }
@@ -494,16 +494,14 @@ fn fast_max(a: f64, b: f64) -> f64 {
 /// fast test in [`Moments::new`] only said there might be).
 #[cold]
 #[inline(never)]
-fn refuse_input(
-    cn: Vector2<f64>,
-    co: Vector2<f64>,
-    commanded: &[Point2<f64>],
-    observed: &[Point2<f64>],
-) -> Option<MathError> {
-    if !(cn.x.is_finite() && cn.y.is_finite()) {
+fn refuse_input(commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Option<MathError> {
+    // The points themselves, not the centroids: a sum of finite values near 1e308 overflows,
+    // and such a point is too large, not "not a finite number".
+    let non_finite = |points: &[Point2<f64>]| points.iter().any(|p| !(p.x.is_finite() && p.y.is_finite()));
+    if non_finite(commanded) {
         return Some(MathError::NonFinite { what: "a commanded point" });
     }
-    if !(co.x.is_finite() && co.y.is_finite()) {
+    if non_finite(observed) {
         return Some(MathError::NonFinite { what: "an observed point" });
     }
     for (what, points) in [("a commanded point", commanded), ("an observed point", observed)] {

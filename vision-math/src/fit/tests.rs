@@ -362,12 +362,15 @@ fn collinear_observed_points_tiny_spreads_and_huge_coordinates_are_refused_for_t
 }
 
 /// A coordinate for [`input_checks_keep_their_order_and_reasons`]: ordinary, huge (beyond
-/// `MAX_COORDINATE`, but small enough that 8 of them cannot overflow a sum), NaN or ±∞.
+/// `MAX_COORDINATE`, up to near `f64::MAX`, where a sum of two overflows: still "too large",
+/// never "not a finite number"), NaN or ±∞.
 fn coordinate() -> impl Strategy<Value = f64> {
     prop_oneof![
         6 => -100.0..100.0f64,
         1 => (1e9f64..1e300).prop_map(|v| v * 1.000_000_1),
         1 => (1e9f64..1e300).prop_map(|v| -v * 1.000_000_1),
+        1 => (1e307f64..1.7e308),
+        1 => (1e307f64..1.7e308).prop_map(|v| -v),
         1 => Just(f64::NAN),
         1 => Just(f64::INFINITY),
         1 => Just(f64::NEG_INFINITY),
