@@ -67,7 +67,15 @@ pub fn toml_error(e: &toml::de::Error, text: &str) -> String {
     if text.trim().is_empty() {
         return "the file is empty".to_string();
     }
-    let message = e.message().trim().replace("$__toml_private_datetime", "date-time");
+    // toml's own message may span lines ("invalid table header\nexpected `.`, `]`").
+    let message = e
+        .message()
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .collect::<Vec<_>>()
+        .join("; ")
+        .replace("$__toml_private_datetime", "date-time");
     match e.span() {
         Some(span) => {
             let before = text.get(..span.start).unwrap_or(text);
