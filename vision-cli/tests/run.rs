@@ -378,10 +378,11 @@ fn world_motion_limits_outside_the_planner_range_are_refused_at_load() {
     }
 }
 
-/// Re-centring costs machine time: on example 4 (the built-in machine, K from example 1) it
-/// adds at most 25 % to the alignment time (M280 to M282) of the seed's one-shot captures.
+/// Moving to re-centre and to measure the height costs machine time: on example 4 (the
+/// built-in machine, K from example 1) it adds at most 35 % (issue 28's budget) to the
+/// alignment time (M280 to M282) of the seed's one-shot captures.
 #[test]
-fn recentring_adds_at_most_a_quarter_to_example_4s_alignment_time() {
+fn moving_adds_at_most_35_percent_to_example_4s_alignment_time() {
     let dir = scratch("recentre");
     let profile = dir.join("p.toml");
     let with_profile = ["--json", "--profile", profile.to_str().expect("utf-8")];
@@ -396,7 +397,7 @@ fn recentring_adds_at_most_a_quarter_to_example_4s_alignment_time() {
     std::fs::write(&profile, text.replace("VisionRecenterPasses = 2", "VisionRecenterPasses = 0")).expect("write");
     let one_shot = time();
     println!("example 4 alignment time: one shot {one_shot:.3} s, re-centred {recentred:.3} s");
-    assert!(recentred > one_shot && recentred <= 1.25 * one_shot, "{one_shot} s → {recentred} s");
+    assert!(recentred > one_shot && recentred <= 1.35 * one_shot, "{one_shot} s → {recentred} s");
 }
 
 /// `run --report DIR` writes one SVG per sheet calibration and per fit, and each shows its
