@@ -427,3 +427,36 @@ fn run_report_writes_a_picture_per_fit_and_calibration() {
     let doc = roxmltree::Document::parse(&cal).expect("the SVG parses");
     assert_eq!(doc.descendants().filter(|n| n.attribute("class") == Some("commanded")).count(), 5);
 }
+
+/// Issue 28 end to end: calibrated by example 1 at 6.00 in, example 4 with the part at 6.25 in
+/// (+4.17 %). The fit reports the change in the text, the JSON and the telemetry, within 3σ
+/// of the truth, with the manual's advice; at the calibration height it reports no warning.
+#[test]
+fn a_height_change_is_reported_in_text_json_and_telemetry() {
+    let dir = scratch("height");
+    let profile = dir.join("p.toml");
+    let profile_arg = profile.to_str().expect("utf-8");
+    json(&run(&["--json", "--profile", profile_arg], &[&example("01-calibrate-sheet.nc")]));
+    let world = vision_driver_sim::DEFAULT_WORLD_TOML;
+    assert!(world.contains("working_distance = 6.0 "), "the built-in world's working distance");
+    let higher = write(&dir, "w.toml", &world.replace("working_distance = 6.0 ", "working_distance = 6.25 "));
+    let world_arg = higher.to_str().expect("utf-8");
+    let r = json(&run(&["--json", "--profile", profile_arg, "--world", world_arg], &[&example("04-rectangle-fit.nc")]));
+    let fit = steps(&r, "fit")[0];
+    let h = &fit["height"];
+    let (change, sigma) = (f(&h["change_pct"]), f(&h["sigma_pct"]));
+    assert!((change - 25.0 / 6.0).abs() < 3.0 * sigma && sigma < 0.3, "{h}");
+    assert!((f(&h["change"]) - change / 100.0 * 6.0).abs() < 1e-9 && h["corrected"] == true, "{h}");
+    let warning = h["warning"].as_str().expect("a warning above 1 %");
+    assert!(warning.contains("farther from the camera") && warning.contains("re-run M283 C1 at this height"));
+    let t = &r["telemetry"];
+    assert_eq!((f(&t["VisionRun_HeightChangePct"]), f(&t["VisionRun_HeightSigmaPct"])), (change, sigma));
+    assert!(t["VisionLastStatus"].as_str().expect("status").contains("re-run M283 C1"), "{t}");
+    let out = run(&["--profile", profile_arg, "--world", world_arg], &[&example("04-rectangle-fit.nc")]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("working distance +4.") && text.contains("captures corrected"), "{text}");
+    // At the calibration height: measured near 0, no warning.
+    let r = json(&run(&["--json", "--profile", profile_arg], &[&example("04-rectangle-fit.nc")]));
+    let h = &steps(&r, "fit")[0]["height"];
+    assert!(f(&h["change_pct"]).abs() < 3.0 * f(&h["sigma_pct"]) && h["warning"].is_null(), "{h}");
+}
