@@ -283,7 +283,7 @@ impl VisionModule {
             format!(
                 "the mark measures {measured:.4} {u} against VisionMarkDiameter {diameter:.4} {u} ({off_pct:+.2} %): \
                  the part is about {:.1} % {} than where K was calibrated; offsets far from the image centre carry \
-                 that error (re-centring removes it) — check the part's height or recalibrate at it",
+                 that error (M282 measures it from the camera moves and corrects it) — check the part's height or recalibrate at it",
                 distance_pct.abs(),
                 if distance_pct < 0.0 { "closer to the camera" } else { "farther from the camera" }
             )
