@@ -627,3 +627,270 @@ fn recentring_keeps_the_floor_at_the_calibration_height_over_many_worlds() {
     recentring_stays_at_the_floor(2000..6000, false);
     recentring_stays_at_the_floor(6000..7000, true);
 }
+
+// Issue 28: the part at another height than the calibration's. Calibrated by the sheet walk at
+// 6.00 in (calibration error included), aligned at 5.75, 6.06 and 6.25 in and at 6.00 in itself.
+
+/// The heights of issue 28, as working distance over the calibration's (6.00 in).
+const HEIGHTS: [(&str, f64); 4] =
+    [("6.00 in", 1.0), ("5.75 in", 5.75 / 6.0), ("6.06 in", 6.06 / 6.0), ("6.25 in", 6.25 / 6.0)];
+
+/// How a part lies: `near` nominal (shift ±0.02 in, rotation ±0.1°: most marks are seen a few
+/// pixels off centre) or `any` (shift ±0.5 in, rotation ±5°).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Placement {
+    Near,
+    Any,
+}
+
+/// Where the camera's optical axis meets the image: `Off` by up to ±5 px per axis from the
+/// image centre (as in every random world), which the walk absorbs into the camera offset at its
+/// own height and which no camera move can measure elsewhere; or `Known` (on the image centre,
+/// as with `VisionPxCenterOffset` set right).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Centre {
+    Off,
+    Known,
+}
+
+/// M281's and M282's settings: issue 28's defaults, or issue 25's (`VisionRecenterTolerance`
+/// 16 px, no probe, no height correction), which reproduce the cuts from before issue 28.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Settings {
+    Default,
+    Issue25,
+}
+
+/// One world calibrated by the sheet walk at 6.00 in: its parameters and the camera tool's
+/// offset as the walk left it in the tool table (world unit, the world's sign convention).
+struct Walked {
+    world: World,
+    params: Vec<(&'static str, vision_core::ParamValue)>,
+    camera_offset: [f64; 2],
+}
+
+fn walked(case: u64, centre: Centre) -> Walked {
+    let mut world = random_world(case, 0.1, 1.0);
+    if centre == Centre::Known {
+        world.camera.center_bias_px = [0.0, 0.0];
+    }
+    world.camera.working_distance = 6.0;
+    world.camera.reference_working_distance = Some(6.0);
+    let mut rig = Rig::new(world.clone(), false);
+    rig.run(EX1);
+    let interp = rig.machine.interpreter();
+    let sign = world.machine.controller().tool_table_sign();
+    let table = interp.tool_offset(world.machine.camera_tool).expect("camera tool").xy();
+    let params = rig.handler.session().module().params().config_values();
+    Walked { world, params, camera_offset: [table.x / sign, table.y / sign] }
+}
+
+/// `walked`'s world with the part placed by `placement` (drawn from `case`), the camera at
+/// `height` × the calibration's working distance, only `present` on the table.
+fn walked_rig(w: &Walked, case: u64, height: f64, placement: Placement, present: &str, settings: Settings) -> Rig {
+    let mut world = w.world.clone();
+    let mut rng = Lcg(case ^ 0x5DEE_CE66_D1CE_4E5B);
+    let (shift, turn) = match placement {
+        Placement::Near => (0.02, 0.1),
+        Placement::Any => (0.5, 5.0),
+    };
+    for f in &mut world.fixtures {
+        f.present = f.name == present;
+        if f.sheet.is_none() {
+            f.shift = [rng.within(shift), rng.within(shift)];
+            f.rotation_deg = rng.within(turn);
+        }
+    }
+    world.camera.working_distance = 6.0 * height;
+    world.machine.camera_table_offset = Some(w.camera_offset);
+    let mut rig = Rig::new(world, false);
+    let module = rig.handler.session_mut().module_mut();
+    for (name, value) in &w.params {
+        module.set_param(name, value.clone()).expect("calibration");
+    }
+    if settings == Settings::Issue25 {
+        module.set_param("VisionRecenterTolerance", 16.0).expect("set");
+        module.set_param("VisionHeightProbePx", 0.0).expect("set");
+        module.set_param("VisionHeightCorrection", false).expect("set");
+    }
+    rig
+}
+
+/// One alignment at a height: the true cut error and the predicted 99 % bound, inches.
+#[derive(Debug, Clone, Copy)]
+struct HeightFit {
+    cut: f64,
+    bound: f64,
+}
+
+/// The rectangle and similarity fits of `worlds` (calibrated by the walk with `centre`) with
+/// the part placed by `placement`, at `height` × the calibration's working distance.
+fn height_fits(
+    worlds: std::ops::Range<u64>,
+    height: f64,
+    placement: Placement,
+    centre: Centre,
+    settings: Settings,
+) -> Vec<HeightFit> {
+    let mut out = Vec::new();
+    for case in worlds {
+        let w = walked(case, centre);
+        for (fixture, program, size) in [("rectangle part", EX4, (6.0, 4.0)), ("similarity part", EX5, (8.0, 6.0))] {
+            let mut rig = walked_rig(&w, case, height, placement, fixture, settings);
+            let records = rig.run(program);
+            let fit = last_fit(&records).expect("accepted");
+            let p = fit.predicted;
+            let cut = rig.max_cut_error(&records, fixture, &grid(size.0, size.1));
+            out.push(HeightFit { cut, bound: p.bound99 });
+        }
+    }
+    out
+}
+
+/// The 95th percentile of `v`.
+fn p95(v: impl Iterator<Item = f64>) -> f64 {
+    let mut v: Vec<f64> = v.collect();
+    v.sort_by(f64::total_cmp);
+    let i = ((v.len() as f64) * 0.95).ceil() as usize;
+    v[i.clamp(1, v.len()) - 1]
+}
+
+/// What one case measured: cut p95 over the calibration height's (same worlds, marks and
+/// settings), the share of fits inside the predicted 99 % bound, and the root-mean-square cut.
+#[derive(Debug, Clone, Copy)]
+struct CaseFigures {
+    p95_ratio: f64,
+    coverage: f64,
+    rms: f64,
+}
+
+fn case_figures(fits: &[HeightFit], floor95: f64) -> CaseFigures {
+    let coverage = fits.iter().filter(|f| f.cut <= f.bound).count() as f64 / fits.len() as f64;
+    let rms = (fits.iter().map(|f| f.cut * f.cut).sum::<f64>() / fits.len() as f64).sqrt();
+    CaseFigures { p95_ratio: p95(fits.iter().map(|f| f.cut)) / floor95, coverage, rms }
+}
+
+/// Issue 28's figures over `worlds`: per optical centre, placement and height, the cut error's
+/// p95 against the p95 of the same worlds and marks at the calibration height (the floor of the
+/// same marks and noise), and the share of fits whose true cut error lies inside the predicted
+/// 99 % bound; with `before`, the same under issue 25's settings. The bound must cover ≥
+/// `coverage` everywhere; the p95 must stay within `slack` × 1.2 the floor wherever the camera
+/// moves can measure what is wrong: every height with the centre known, and 6.06 in with it
+/// off. At ±4 % with the centre off, the shift ε × centre error × K (up to 0.0006 in) is left,
+/// which only a calibration at that height removes: there within `slack` × 2 (it was 3.2–3.6×
+/// before issue 28).
+fn height_cases(worlds: std::ops::Range<u64>, coverage: f64, slack: f64, before: bool) {
+    let mut failures = Vec::new();
+    for centre in [Centre::Off, Centre::Known] {
+        for placement in [Placement::Near, Placement::Any] {
+            let mut settings = vec![Settings::Default];
+            if before {
+                settings.push(Settings::Issue25);
+            }
+            let mut floors = Vec::new();
+            for s in &settings {
+                let at = height_fits(worlds.clone(), 1.0, placement, centre, *s);
+                floors.push((at.clone(), p95(at.iter().map(|f| f.cut))));
+            }
+            for (name, height) in HEIGHTS {
+                let mut line = format!("height {name}, centre {centre:?}, part {placement:?}:");
+                for (s, (at, floor95)) in settings.iter().zip(&floors) {
+                    let fits = if height == 1.0 {
+                        at.clone()
+                    } else {
+                        height_fits(worlds.clone(), height, placement, centre, *s)
+                    };
+                    let f = case_figures(&fits, *floor95);
+                    line += &format!(
+                        " {s:?}: cut p95 {:.3} × {floor95:.6} in, rms {:.6} in, covered {:.1} % of {};",
+                        f.p95_ratio,
+                        f.rms,
+                        f.coverage * 100.0,
+                        fits.len()
+                    );
+                    if *s == Settings::Default {
+                        let measurable = centre == Centre::Known || (height - 1.0).abs() < 0.02;
+                        let allowed = slack * if measurable { 1.2 } else { 2.0 };
+                        if f.p95_ratio > allowed || f.coverage < coverage {
+                            failures.push(format!("{name} {centre:?} {placement:?}: {f:?}"));
+                        }
+                    }
+                }
+                println!("{line}");
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:?}");
+}
+
+/// The quick form, always run: 12 worlds, 24 fits per case. The p95 of 24 is their second
+/// largest and one miss is 4 %, so the limits allow for it (before issue 28: ×3–4, 17–40 %).
+#[test]
+fn a_height_change_is_measured_corrected_and_predicted() {
+    height_cases(3000..3012, 0.95, 1.25, false);
+}
+
+/// The README's figures: 60 worlds, 120 fits per case, with issue 25's settings beside
+/// (`cargo test --release -p vision-cli --test acceptance height -- --ignored --nocapture`).
+#[test]
+#[ignore = "about 3 s in a release build; the quick form runs always"]
+fn a_height_change_is_measured_corrected_and_predicted_over_many_worlds() {
+    height_cases(3100..3160, 0.98, 1.0, true);
+}
+
+/// Nothing changes at the calibration height: over 1000 walked worlds × (rectangle +
+/// similarity) per placement, the root-mean-square cut error with issue 28's settings within
+/// 1.05× of issue 25's (the captures are the same one-shot or re-centred readings; only the
+/// noise draws differ, by the probe's extra trigger).
+#[test]
+#[ignore = "about 10 s in a release build"]
+fn the_calibration_height_cuts_as_before() {
+    for placement in [Placement::Near, Placement::Any] {
+        let rms = |s| case_figures(&height_fits(5000..6000, 1.0, placement, Centre::Off, s), 1.0).rms;
+        let (before, after) = (rms(Settings::Issue25), rms(Settings::Default));
+        println!(
+            "calibration height, part {placement:?}, 2000 fits: rms cut {before:.6} in with issue 25's settings, \
+             {after:.6} in now (×{:.4})",
+            after / before
+        );
+        assert!(after <= 1.05 * before, "{placement:?}: {after} vs {before}");
+    }
+}
+
+/// Issue 28's property: over random height changes (±6 %), camera noise (0.05–0.3 px, told to
+/// M282 through `VisionCameraNoisePx`) and worlds, calibrated perfectly at the reference height,
+/// the working-distance change M282 reports is unbiased and its stated 1σ honest: the z-scores
+/// `(reported − true) / reported σ` have mean ≈ 0 and spread ≈ 1.
+#[test]
+fn the_measured_height_change_is_unbiased_and_its_sigma_honest() {
+    let (mut sum, mut sum2, mut n, mut worst) = (0.0, 0.0, 0u32, 0.0f64);
+    for case in 4000..4100 {
+        let mut rng = Lcg(case ^ 0x0028_0028);
+        let height = 1.0 + rng.within(0.06);
+        let noise = 0.05 + 0.25 * rng.unit();
+        for (fixture, program) in [("rectangle part", EX4), ("similarity part", EX5)] {
+            let mut w = random_world(case, noise, 1.0);
+            w.machine.camera_table_offset = None;
+            w.camera.reference_working_distance = Some(w.camera.working_distance);
+            let params = Rig::new(w.clone(), true).handler.session().module().params().clone();
+            w.camera.working_distance *= height;
+            w.fixtures.iter_mut().for_each(|f| f.present = f.name == fixture);
+            let mut rig = Rig::new(w, false);
+            for (name, value) in params.config_values() {
+                rig.handler.session_mut().module_mut().set_param(name, value).expect("calibration");
+            }
+            rig.handler.session_mut().module_mut().set_param("VisionCameraNoisePx", noise).expect("set");
+            let h = last_fit(&rig.run(program)).expect("accepted").height.expect("measured");
+            let z = (h.change_pct - (height - 1.0) * 100.0) / h.sigma_pct;
+            sum += z;
+            sum2 += z * z;
+            n += 1;
+            worst = worst.max(z.abs());
+        }
+    }
+    let mean = sum / f64::from(n);
+    let spread = (sum2 / f64::from(n) - mean * mean).sqrt();
+    println!("height change over {n} fits: z-scores mean {mean:.3}, spread {spread:.3}, worst |z| {worst:.2}");
+    // 200 fits: the mean's own 1σ is 0.07, the spread's 0.05.
+    assert!(mean.abs() < 0.25 && (spread - 1.0).abs() < 0.2, "mean {mean}, spread {spread}");
+}

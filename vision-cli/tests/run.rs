@@ -378,10 +378,11 @@ fn world_motion_limits_outside_the_planner_range_are_refused_at_load() {
     }
 }
 
-/// Re-centring costs machine time: on example 4 (the built-in machine, K from example 1) it
-/// adds at most 25 % to the alignment time (M280 to M282) of the seed's one-shot captures.
+/// Moving to re-centre and to measure the height costs machine time: on example 4 (the
+/// built-in machine, K from example 1) it adds at most 35 % (issue 28's budget) to the
+/// alignment time (M280 to M282) of the seed's one-shot captures.
 #[test]
-fn recentring_adds_at_most_a_quarter_to_example_4s_alignment_time() {
+fn moving_adds_at_most_35_percent_to_example_4s_alignment_time() {
     let dir = scratch("recentre");
     let profile = dir.join("p.toml");
     let with_profile = ["--json", "--profile", profile.to_str().expect("utf-8")];
@@ -396,7 +397,7 @@ fn recentring_adds_at_most_a_quarter_to_example_4s_alignment_time() {
     std::fs::write(&profile, text.replace("VisionRecenterPasses = 2", "VisionRecenterPasses = 0")).expect("write");
     let one_shot = time();
     println!("example 4 alignment time: one shot {one_shot:.3} s, re-centred {recentred:.3} s");
-    assert!(recentred > one_shot && recentred <= 1.25 * one_shot, "{one_shot} s → {recentred} s");
+    assert!(recentred > one_shot && recentred <= 1.35 * one_shot, "{one_shot} s → {recentred} s");
 }
 
 /// `run --report DIR` writes one SVG per sheet calibration and per fit, and each shows its
@@ -425,4 +426,37 @@ fn run_report_writes_a_picture_per_fit_and_calibration() {
     let cal = std::fs::read_to_string(dir.join(&names[0])).expect("svg");
     let doc = roxmltree::Document::parse(&cal).expect("the SVG parses");
     assert_eq!(doc.descendants().filter(|n| n.attribute("class") == Some("commanded")).count(), 5);
+}
+
+/// Issue 28 end to end: calibrated by example 1 at 6.00 in, example 4 with the part at 6.25 in
+/// (+4.17 %). The fit reports the change in the text, the JSON and the telemetry, within 3σ
+/// of the truth, with the manual's advice; at the calibration height it reports no warning.
+#[test]
+fn a_height_change_is_reported_in_text_json_and_telemetry() {
+    let dir = scratch("height");
+    let profile = dir.join("p.toml");
+    let profile_arg = profile.to_str().expect("utf-8");
+    json(&run(&["--json", "--profile", profile_arg], &[&example("01-calibrate-sheet.nc")]));
+    let world = vision_driver_sim::DEFAULT_WORLD_TOML;
+    assert!(world.contains("working_distance = 6.0 "), "the built-in world's working distance");
+    let higher = write(&dir, "w.toml", &world.replace("working_distance = 6.0 ", "working_distance = 6.25 "));
+    let world_arg = higher.to_str().expect("utf-8");
+    let r = json(&run(&["--json", "--profile", profile_arg, "--world", world_arg], &[&example("04-rectangle-fit.nc")]));
+    let fit = steps(&r, "fit")[0];
+    let h = &fit["height"];
+    let (change, sigma) = (f(&h["change_pct"]), f(&h["sigma_pct"]));
+    assert!((change - 25.0 / 6.0).abs() < 3.0 * sigma && sigma < 0.3, "{h}");
+    assert!((f(&h["change"]) - change / 100.0 * 6.0).abs() < 1e-9 && h["corrected"] == true, "{h}");
+    let warning = h["warning"].as_str().expect("a warning above 1 %");
+    assert!(warning.contains("farther from the camera") && warning.contains("re-run M283 C1 at this height"));
+    let t = &r["telemetry"];
+    assert_eq!((f(&t["VisionRun_HeightChangePct"]), f(&t["VisionRun_HeightSigmaPct"])), (change, sigma));
+    assert!(t["VisionLastStatus"].as_str().expect("status").contains("re-run M283 C1"), "{t}");
+    let out = run(&["--profile", profile_arg, "--world", world_arg], &[&example("04-rectangle-fit.nc")]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("working distance +4.") && text.contains("captures corrected"), "{text}");
+    // At the calibration height: measured near 0, no warning.
+    let r = json(&run(&["--json", "--profile", profile_arg], &[&example("04-rectangle-fit.nc")]));
+    let h = &steps(&r, "fit")[0]["height"];
+    assert!(f(&h["change_pct"]).abs() < 3.0 * f(&h["sigma_pct"]) && h["warning"].is_null(), "{h}");
 }

@@ -33,6 +33,7 @@ mod error;
 pub mod fit;
 pub mod linuxcnc;
 pub mod pixel;
+pub mod scale;
 pub mod show;
 pub mod units;
 
@@ -44,4 +45,5 @@ pub use fit::{
 };
 pub use nalgebra::{Matrix2, Point2, UnitComplex, Vector2};
 pub use pixel::{PixelChain, Remap};
+pub use scale::{ScaleEstimate, ScaleEvidence};
 pub use units::{inch_to_mm, mm_to_inch, LengthUnit, MM_PER_INCH};

@@ -113,7 +113,8 @@ fn step(s: &mut String, step: &Step, world_unit: &str) {
             if let Some(r) = &c.recentred {
                 let _ = writeln!(
                     s,
-                    "              re-centred in {} pass{}: first seen at pixels {:+.3} {:+.3}",
+                    "              {} in {} pass{}: first seen at pixels {:+.3} {:+.3}",
+                    if r.probe { "probed (scale) and kept the reading nearest the centre" } else { "re-centred" },
                     r.passes,
                     if r.passes == 1 { "" } else { "es" },
                     r.first_px.x,
@@ -173,6 +174,29 @@ fn step(s: &mut String, step: &Step, world_unit: &str) {
                 l(p.bound99),
                 l(p.noise)
             );
+            match &a.height {
+                Some(h) => {
+                    let _ = writeln!(
+                        s,
+                        "              working distance {:+.3} % ({:+.4} {unit}) +/- {:.3} % from the calibration's, \
+                         measured by {} mark{}; captures {}",
+                        h.change_pct,
+                        h.change,
+                        h.sigma_pct,
+                        h.marks,
+                        if h.marks == 1 { "" } else { "s" },
+                        if h.corrected { "corrected" } else { "not corrected (VisionHeightCorrection off)" }
+                    );
+                    if let Some(size) = h.mark_size_pct {
+                        let _ = writeln!(s, "              mark size says {size:+.3} %");
+                    }
+                    warning(s, h.warning.as_deref());
+                }
+                None => {
+                    let _ =
+                        writeln!(s, "              working distance not measured: no M281 of the run moved the camera");
+                }
+            }
             for g in gcode {
                 let _ = writeln!(s, "              | {g}");
             }

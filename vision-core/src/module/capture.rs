@@ -60,6 +60,9 @@ pub struct Recentred {
     /// The centred pixel offset of the first reading, pixels.
     #[serde(serialize_with = "ser::vector")]
     pub first_px: Vector2<f64>,
+    /// Whether one move was a probe (`VisionHeightProbePx`): the mark read on the far side of
+    /// the centre to measure the image scale, the capture being the reading nearer the centre.
+    pub probe: bool,
 }
 
 /// K converted from `Cal_Units` to `unit` (units per pixel).

@@ -63,7 +63,7 @@ impl VisionModule {
         PoundBlock::on_machine(self.params.pound_var_base(), machine)?;
         let gcode = machine.controller().cancel_alignment(machine)?;
         self.alignment = None;
-        self.run = Run { mode, active: true, dots: Vec::new() };
+        self.run = Run { mode, active: true, dots: Vec::new(), scale: vision_math::ScaleEvidence::default() };
         self.publish_run();
         Ok(Reply { gcode, report: mode })
     }

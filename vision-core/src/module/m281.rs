@@ -1,8 +1,9 @@
 //! M281: capture one mark.
 
-use vision_math::{LengthUnit, Point2};
+use vision_math::{LengthUnit, Point2, ScaleEvidence, Vector2};
 
 use super::capture::{mark_size, observe, outside_image_note, pixel_chain, require_mark, Capture, Recentred};
+use super::height::{self, NextMove};
 use super::{Dot, Reply, VisionModule};
 use crate::calibrate::{absolute_move, relative_move};
 use crate::driver::{ImageRequest, Reading};
@@ -13,16 +14,26 @@ use crate::pound::{PoundBlock, SlotValues, SLOTS};
 impl VisionModule {
     /// **M281**: triggers at the current commanded position and stores the observed point.
     ///
-    /// Re-centring: while the mark is more than `VisionRecenterTolerance` pixels from the image
-    /// centre and fewer than `VisionRecenterPasses` passes ran, the camera moves over the point
-    /// just observed (an incremental `G91 G0`, then `G90`), settles `VisionTriggerSettleSec` and
-    /// triggers again; the last reading is the capture, `commanded` stays where the program put
-    /// the camera, and the reply lists the moves. `VisionRecenterPasses` = 0 reads in one shot.
+    /// Moves (re-centring and probes, issue 28): a mark read off the image centre carries K's
+    /// error at the part's height times its distance from the centre. After each reading M281
+    /// decides from the error budget whether to move (`VisionRecenterTolerance` 0, the
+    /// default): it moves when the scale's 1σ the run has measured so far (6 % before any
+    /// move) times the distance of the reading nearest the centre exceeds 0.3 × the camera's
+    /// noise (`VisionCameraNoisePx`). It then moves the camera over that reading (re-centring)
+    /// or, when the mark is closer to the centre than a quarter of `VisionHeightProbePx` and not yet
+    /// probed, so that the mark lands `VisionHeightProbePx` on the far side (a probe: a long
+    /// baseline for the scale). Each move is an incremental `G91 G0`, then `G90`, a settle of
+    /// `VisionTriggerSettleSec` and a trigger, at most `VisionRecenterPasses` times (0 reads in
+    /// one shot); `VisionRecenterTolerance` > 0 is issue 25's fixed rule instead (re-centre
+    /// while farther than it, no probes). The capture is the reading nearest the image centre;
+    /// every reading of the mark inside the image measures the image scale at the part's
+    /// height ([`vision_math::scale`]), which the run collects for M282. `commanded` stays
+    /// where the program put the camera, and the reply lists the moves.
     /// After the last reading the camera moves back to where the program put it, and the
     /// program's modal state, saved before the first move, is restored
     /// ([`Machine::save_modal_state`]), on success and failure alike: the program goes on from
     /// its own point in the modes it had (a feed move stays a feed move). Only a reading inside the image is
-    /// moved to, so a move never exceeds the field of view. A controller may forbid moving
+    /// moved from, so a move never exceeds the field of view. A controller may forbid moving
     /// ([`crate::Controller::may_recentre`]: LinuxCNC triggers after waiting for the machine,
     /// after which a remap may not queue G-code); M281 then reads in one shot.
     ///
@@ -62,27 +73,42 @@ impl VisionModule {
                 return Err(e);
             }
         };
-        let mut trigger_time = machine.now();
-        let mut reading = self.trigger_mark()?;
-        let mut native = Point2::new(reading.x_px, reading.y_px);
-        let (commanded, mut observed) = self.observe(machine, alignment, chain.delta(native))?;
-        // Re-centring: a mark read far off the image centre carries K's error times that
-        // distance (a part closer or farther than the calibration height); read over it again.
+        let trigger_time = machine.now();
+        let reading = self.trigger_mark()?;
+        let native = Point2::new(reading.x_px, reading.y_px);
+        let (commanded, observed) = self.observe(machine, alignment, chain.delta(native))?;
         let first_px = chain.centred(native);
-        let tolerance = self.params.recenter_tolerance_px();
-        let mut gcode = Vec::new();
-        let mut passes = 0;
+        // Every reading of this mark: the camera's position and the offset read from it
+        // (program frame), the evidence of the image scale at the part's height.
+        let noise = height::noise_px(&self.params) * chain.k().singular_values().max();
+        let mut readings = vec![(commanded, observed - commanded)];
+        // The capture is the reading nearest the image centre: a scale error of K acts on
+        // the offset it read.
+        let mut best = Kept { time: trigger_time, reading, native, observed, camera: commanded };
+        let mut mark_scale = ScaleEvidence::default();
+        let (mut passes, mut probed) = (0, false);
         let max_passes = if machine.controller().may_recentre() { self.params.recenter_passes() } else { 0 };
         // The program's modal state is saved before the first move and put back after the
         // last, whatever happens in between: a feed move after M281 stays a feed move.
         let mut saved = false;
         let mut failure = None;
+        let mut gcode = Vec::new();
         // A reading outside the image is no distance to move by (a wrong resolution or K):
-        // every re-centring move stays within the field of view.
-        while passes < max_passes
-            && chain.centred(native).norm() > tolerance
-            && outside_image_note(&self.params, native).is_none()
-        {
+        // every move stays within the field of view.
+        while passes < max_passes && outside_image_note(&self.params, best.native).is_none() {
+            let sigma = self.run.scale.merged(mark_scale).estimate().map(|e| e.sigma);
+            let step = height::next_move(&self.params, chain.centred(best.native).norm(), sigma, probed);
+            let target = match step {
+                NextMove::Stay => break,
+                NextMove::Recentre => best.observed,
+                NextMove::Probe => {
+                    // The mark lands `VisionHeightProbePx` on the far side of the centre.
+                    let reach = best.observed - best.camera;
+                    let away = if reach.norm() > 0.0 { reach / reach.norm() } else { Vector2::x() };
+                    probed = true;
+                    best.observed + away * (self.params.height_probe_px() * chain.k().singular_values().max())
+                }
+            };
             if !saved {
                 if let Err(e) = machine.save_modal_state() {
                     failure = Some(VisionError::from(e));
@@ -90,10 +116,28 @@ impl VisionModule {
                 }
                 saved = true;
             }
-            match self.recentre_pass(machine, &chain, observed, alignment) {
+            match self.recentre_pass(machine, &chain, target, alignment) {
                 Ok(pass) => {
                     gcode.extend(pass.lines);
-                    (trigger_time, reading, native, observed) = (pass.time, pass.reading, pass.native, pass.observed);
+                    let inside = outside_image_note(&self.params, pass.native).is_none();
+                    if inside {
+                        readings.push((pass.camera, pass.observed - pass.camera));
+                        // One regression over all of the mark's readings (recomputed whole);
+                        // a refused one (a non-finite noise from a broken K) adds nothing.
+                        let mut fresh = ScaleEvidence::default();
+                        if fresh.add_mark(&readings, noise).is_ok() {
+                            mark_scale = fresh;
+                        }
+                    }
+                    if inside && chain.centred(pass.native).norm() <= chain.centred(best.native).norm() {
+                        best = Kept {
+                            time: pass.time,
+                            reading: pass.reading,
+                            native: pass.native,
+                            observed: pass.observed,
+                            camera: pass.camera,
+                        };
+                    }
                 }
                 Err(e) => {
                     failure = Some(e);
@@ -119,6 +163,7 @@ impl VisionModule {
             self.publish_failure(None, &e);
             return Err(e);
         }
+        let Kept { time: trigger_time, reading, native, observed, camera } = best;
         let offset = chain.delta(native);
         let (width, height) = mark_size(&chain, &reading);
         let values = SlotValues {
@@ -139,9 +184,11 @@ impl VisionModule {
         }
         write_pounds(machine, &writes)?;
 
-        // Committed: the capture counts from here on.
+        // Committed: the capture counts from here on, and so does its evidence of the scale.
+        self.run.scale = self.run.scale.merged(mark_scale);
         if in_run {
-            self.run.dots.push(Dot { commanded, observed, unit });
+            let mark_size = (width.abs() + height.abs()) / 2.0;
+            self.run.dots.push(Dot { commanded, observed, unit, reach: observed - camera, mark_size });
             self.publish_run();
         }
         let centred = chain.centred(native);
@@ -189,7 +236,7 @@ impl VisionModule {
                 slot,
                 image,
                 warning,
-                recentred: (passes > 0).then_some(Recentred { passes, first_px }),
+                recentred: (passes > 0).then_some(Recentred { passes, first_px, probe: probed }),
             },
         })
     }
@@ -236,7 +283,7 @@ impl VisionModule {
             format!(
                 "the mark measures {measured:.4} {u} against VisionMarkDiameter {diameter:.4} {u} ({off_pct:+.2} %): \
                  the part is about {:.1} % {} than where K was calibrated; offsets far from the image centre carry \
-                 that error (re-centring removes it) — check the part's height or recalibrate at it",
+                 that error (M282 measures it from the camera moves and corrects it) — check the part's height or recalibrate at it",
                 distance_pct.abs(),
                 if distance_pct < 0.0 { "closer to the camera" } else { "farther from the camera" }
             )
@@ -244,33 +291,46 @@ impl VisionModule {
     }
 }
 
-/// One re-centring pass: the move over the point last observed, and the reading there.
+/// One pass: the move to a target point (over the mark, or a probe beside it), and the
+/// reading there.
 struct Pass {
     lines: Vec<String>,
     time: Timestamp,
     reading: Reading,
     native: Point2<f64>,
     observed: Point2<f64>,
+    /// The camera's position at the reading, program frame.
+    camera: Point2<f64>,
+}
+
+/// The reading M281 keeps as its capture: the one nearest the image centre.
+struct Kept {
+    time: Timestamp,
+    reading: Reading,
+    native: Point2<f64>,
+    observed: Point2<f64>,
+    /// The camera's position at the reading, program frame.
+    camera: Point2<f64>,
 }
 
 impl VisionModule {
-    /// Moves the camera over `observed` (program frame), settles, triggers and observes again.
+    /// Moves the camera to `target` (program frame), settles, triggers and observes again.
     fn recentre_pass(
         &mut self,
         machine: &mut dyn Machine,
         chain: &vision_math::PixelChain,
-        observed: Point2<f64>,
+        target: Point2<f64>,
         alignment: Option<vision_math::AlignmentChain>,
     ) -> Result<Pass, VisionError> {
-        let lines = relative_move(observed - checked::program_position(machine)?);
+        let lines = relative_move(target - checked::program_position(machine)?);
         machine.run_gcode(&lines)?;
         machine.dwell(self.params.trigger_settle_s())?;
         // M281 D1 keeps the image of the reading reported.
         let time = machine.now();
         let reading = self.trigger_mark()?;
         let native = Point2::new(reading.x_px, reading.y_px);
-        let observed = observe(machine, alignment, chain.delta(native))?.1;
-        Ok(Pass { lines, time, reading, native, observed })
+        let (camera, observed) = observe(machine, alignment, chain.delta(native))?;
+        Ok(Pass { lines, time, reading, native, observed, camera })
     }
 
     /// [`observe`], a failure shown in `LastStatus` (the trigger already happened).

@@ -1,11 +1,12 @@
 //! M282: solve the run's fit and emit it as modal G51 / G68 / G52.
 
-use vision_math::fit::{find_outlier, residual_sigma};
+use vision_math::fit::{find_outlier, residual_sigma, Shared};
 use vision_math::linuxcnc::LinuxCncAlignment;
 use vision_math::{
     fit_piece, fit_rectangle, fit_similarity, AlignmentChain, Fit, LengthUnit, Model, Piece, Point2, Vector2,
 };
 
+use super::height::{self, HeightReport};
 use super::m280::RunMode;
 use super::{Reply, VisionModule};
 use crate::controller::Applied;
@@ -80,6 +81,10 @@ pub struct AlignReport {
     pub predicted: PredictedError,
     /// The mark left out of the fit as an outlier, if any (its residual is still listed).
     pub dropped: Option<DroppedMark>,
+    /// The working-distance change the run's camera moves measured (and, with
+    /// `VisionHeightCorrection`, corrected the captures for); `None` when no M281 of the run
+    /// read its mark from two positions.
+    pub height: Option<HeightReport>,
     /// On a LinuxCNC host: the lines' values (`G10 L2 P0 R`, `G52`), θ₀, and the scale that
     /// was not applied; `None` on Mach4 (and left out of the JSON then).
     #[serde(skip_serializing_if = "Option::is_none", serialize_with = "ser::linuxcnc")]
@@ -88,8 +93,11 @@ pub struct AlignReport {
 
 /// The cut error a fit predicts over the part (see [`vision_math::fit::Prediction`]): from the
 /// parameters' covariance given a per-coordinate noise σ, at the worst corner of the marks'
-/// bounding box. The fit's own error only: a wrong K or camera offset is not in it. Lengths in
-/// the report's unit.
+/// bounding box. When the run measured the working distance ([`AlignReport::height`]) it also
+/// holds what of K's scale error there remains (its 1σ once corrected, all of it with
+/// `VisionHeightCorrection` off) and the shift a misplaced optical centre makes at that height
+/// (`VisionCenterUncertaintyPx`); a wrong camera offset is not in it. Lengths in the report's
+/// unit.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct PredictedError {
     /// The noise σ per observed coordinate used: the larger of the camera's
@@ -141,6 +149,14 @@ impl VisionModule {
     /// Every accepted fit predicts its cut error over the marks' bounding box
     /// ([`AlignReport::predicted`], `VisionRun_PredictedSigma` / `…Bound`).
     ///
+    /// Height (issue 28): when the run's M281s read marks from more than one camera position,
+    /// the image scale they measured ([`vision_math::ScaleEvidence`]) is the working-distance
+    /// change, reported with its 1σ in [`AlignReport::height`] and `VisionRun_Height*`. With
+    /// `VisionHeightCorrection` (default) every capture is corrected first, its offset from the
+    /// camera ([`super::Dot::reach`]) times `1 + ε` (scale ∝ working distance), before the
+    /// outlier search, the fit and the gates. Beyond `VisionHeightWarnPct` the report warns
+    /// with the manual's advice, and so does `VisionLastStatus`.
+    ///
     /// Works after a run's M282 too (the dot list stays until the next M280), so a second M282
     /// can emit another selection from the same captures; the output replaces, never compounds.
     ///
@@ -160,8 +176,23 @@ impl VisionModule {
             return Err(VisionError::TooFewDots { mode: mode.name(), needed, got: self.run.dots.len() });
         }
         let unit = machine.units()?;
-        let (all_commanded, all_observed): (Vec<Point2<f64>>, Vec<Point2<f64>>) =
+        let (all_commanded, as_read): (Vec<Point2<f64>>, Vec<Point2<f64>>) =
             self.run.dots.iter().map(|d| d.in_unit(unit)).unzip();
+        let all_reach: Vec<Vector2<f64>> = self.run.dots.iter().map(|d| d.reach_in(unit)).collect();
+        // The image scale the camera moves measured at the part's height: each capture's
+        // offset from the camera is K's length times (1 + ε) (scale ∝ working distance).
+        let scale = self.run.scale.estimate();
+        let correct = self.params.height_correction();
+        let all_observed: Vec<Point2<f64>> = match scale.filter(|_| correct) {
+            Some(e) => as_read.iter().zip(&all_reach).map(|(o, r)| o + r * e.error).collect(),
+            None => as_read,
+        };
+        // What of the scale the captures still carry: its 1σ once corrected, else all of it.
+        let scale_sigma = scale.map_or(0.0, |e| if correct { e.sigma } else { e.error.hypot(e.sigma) });
+        // And the shift a misplaced optical centre makes at this height (unmeasurable: it moves
+        // every capture alike, as the part's own shift would): ε × the centre's uncertainty.
+        let shift_sigma =
+            scale.map_or(0.0, |e| e.error.hypot(e.sigma) * self.params.center_uncertainty_px() * self.k_largest(unit));
         let model = match mode {
             RunMode::Rectangle => Model::Rectangle,
             RunMode::Similarity => Model::Similarity,
@@ -172,6 +203,12 @@ impl VisionModule {
             v.iter().enumerate().filter(|(i, _)| dropped.is_none_or(|d| d.mark != i + 1)).map(|(_, p)| *p).collect()
         };
         let (commanded, observed) = (kept(&all_commanded), kept(&all_observed));
+        let reach: Vec<Vector2<f64>> = all_reach
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| dropped.is_none_or(|d| d.mark != i + 1))
+            .map(|(_, r)| *r)
+            .collect();
         let fit = match mode {
             RunMode::Rectangle => fit_rectangle(&commanded, &observed)?,
             RunMode::Similarity => fit_similarity(&commanded, &observed)?,
@@ -181,7 +218,7 @@ impl VisionModule {
         let full = fit.transform.chain().ok_or(VisionError::Math(vision_math::MathError::DegenerateObserved))?;
         controller.check_fit(&full, self.params.fit_max_scale_dev_pct())?;
         self.check_gates(&fit, &commanded, &observed, unit)?;
-        let predicted = predict(&fit, &commanded, camera_noise)?;
+        let predicted = predict(&fit, &commanded, camera_noise, &reach, [scale_sigma, shift_sigma])?;
         let chain = match pieces {
             Pieces::All => {
                 fit.transform.chain().ok_or(VisionError::Math(vision_math::MathError::DegenerateObserved))?
@@ -208,6 +245,9 @@ impl VisionModule {
         #[allow(clippy::cast_precision_loss)] // a handful of marks
         let rms = (used.iter().map(|r| r * r).sum::<f64>() / used.len() as f64).sqrt();
 
+        let sizes: Vec<f64> = self.run.dots.iter().map(|d| d.mark_size * d.unit.factor_to(unit)).collect();
+        let height = scale.map(|e| height::report(&self.params, e, unit, &sizes));
+
         self.run.active = false;
         self.publish_run();
         self.dro.write(|p| {
@@ -220,7 +260,14 @@ impl VisionModule {
             p.run_center_y = chain.center.y;
             p.run_predicted_sigma = predicted.sigma;
             p.run_predicted_bound = predicted.bound99;
+            p.run_height_change_pct = height.as_ref().map_or(0.0, |h| h.change_pct);
+            p.run_height_change = height.as_ref().map_or(0.0, |h| h.change);
+            p.run_height_sigma_pct = height.as_ref().map_or(0.0, |h| h.sigma_pct);
         });
+        // A height warning reaches the host's status line as M281's do.
+        if let Some(w) = height.as_ref().and_then(|h| h.warning.as_deref()) {
+            self.dro.ok(Some(w));
+        }
         Ok(Reply {
             gcode,
             report: AlignReport {
@@ -234,6 +281,7 @@ impl VisionModule {
                 max_residual,
                 predicted,
                 dropped,
+                height,
                 linuxcnc,
             },
         })
@@ -242,11 +290,14 @@ impl VisionModule {
     /// The camera's noise per observed coordinate in `unit`: `VisionCameraNoisePx` times K's
     /// largest singular value (the worst direction), 0 while K is unset.
     fn camera_noise(&self, unit: LengthUnit) -> f64 {
-        let k = self.params.cal_k();
-        let largest = k.singular_values().max();
-        let noise = self.params.camera_noise_px() * largest * self.params.cal_units().factor_to(unit);
-        if noise.is_finite() {
-            noise
+        self.params.camera_noise_px() * self.k_largest(unit)
+    }
+
+    /// K's largest singular value in `unit` per pixel, 0 while K is unset or not finite.
+    fn k_largest(&self, unit: LengthUnit) -> f64 {
+        let largest = self.params.cal_k().singular_values().max() * self.params.cal_units().factor_to(unit);
+        if largest.is_finite() {
+            largest
         } else {
             0.0
         }
@@ -335,8 +386,16 @@ fn axis_scale_miss(fit: &Fit, commanded: &[Point2<f64>], observed: &[Point2<f64>
 }
 
 /// The prediction of `fit` over the bounding box of `commanded`, with the larger of the camera's
-/// noise and the residuals' own σ.
-fn predict(fit: &Fit, commanded: &[Point2<f64>], camera_noise: f64) -> Result<PredictedError, VisionError> {
+/// noise and the residuals' own σ, and two errors the marks share: a scale error of 1σ
+/// `scale_sigma` acting on each mark's `reach` (its offset from the camera), and a shift of 1σ
+/// `shift_sigma` (report unit) per axis.
+fn predict(
+    fit: &Fit,
+    commanded: &[Point2<f64>],
+    camera_noise: f64,
+    reach: &[Vector2<f64>],
+    [scale_sigma, shift_sigma]: [f64; 2],
+) -> Result<PredictedError, VisionError> {
     let model = fit.transform.model;
     let noise = residual_sigma(model, fit.len, fit.rms).map_or(camera_noise, |s| s.max(camera_noise));
     let (lo, hi) = commanded.iter().fold(
@@ -344,6 +403,12 @@ fn predict(fit: &Fit, commanded: &[Point2<f64>], camera_noise: f64) -> Result<Pr
         |(lo, hi), p| (Point2::new(lo.x.min(p.x), lo.y.min(p.y)), Point2::new(hi.x.max(p.x), hi.y.max(p.y))),
     );
     let corners = [lo, Point2::new(hi.x, lo.y), hi, Point2::new(lo.x, hi.y)];
-    let p = fit.transform.predict(commanded, noise, &corners)?;
+    let (x, y) = (vec![Vector2::x(); commanded.len()], vec![Vector2::y(); commanded.len()]);
+    let shared = [
+        Shared { along: reach, sigma: scale_sigma },
+        Shared { along: &x, sigma: shift_sigma },
+        Shared { along: &y, sigma: shift_sigma },
+    ];
+    let p = fit.transform.predict_shared(commanded, noise, &corners, &shared)?;
     Ok(PredictedError { noise, camera_noise, sigma: p.sigma, bound99: p.bound99 })
 }

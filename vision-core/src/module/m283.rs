@@ -358,6 +358,8 @@ impl VisionModule {
             }
             return Err(save);
         }
+        // The run's evidence of the image scale measured the old K's error, not the new one's.
+        self.run.scale = vision_math::ScaleEvidence::default();
         Ok(solution.report)
     }
 }

@@ -16,6 +16,7 @@
 
 pub(crate) mod capture;
 pub(crate) mod dro;
+mod height;
 mod m280;
 mod m281;
 mod m282;
@@ -28,7 +29,7 @@ mod tests;
 
 use std::path::{Path, PathBuf};
 
-use vision_math::{AlignmentChain, LengthUnit, Point2};
+use vision_math::{AlignmentChain, LengthUnit, Point2, ScaleEvidence, Vector2};
 
 use crate::driver::CameraDriver;
 use crate::error::VisionError;
@@ -40,6 +41,7 @@ use dro::Dro;
 
 pub use capture::{Capture, Recentred};
 pub use dro::TelemetrySink;
+pub use height::HeightReport;
 pub use m280::RunMode;
 pub use m282::{AlignReport, DroppedMark, Pieces, PredictedError};
 pub use m283::StepwiseWalk;
@@ -64,6 +66,11 @@ pub struct Dot {
     pub observed: Point2<f64>,
     /// The machine unit at capture time.
     pub unit: LengthUnit,
+    /// `observed` less the camera's position at the reading kept (program frame, `unit`): the
+    /// length K measured, which a scale error of K at the part's height acts on.
+    pub reach: Vector2<f64>,
+    /// The mark's measured diameter, the mean of its width and height, `unit`.
+    pub mark_size: f64,
 }
 
 impl Dot {
@@ -72,6 +79,12 @@ impl Dot {
     pub fn in_unit(&self, to: LengthUnit) -> (Point2<f64>, Point2<f64>) {
         let f = self.unit.factor_to(to);
         (self.commanded * f, self.observed * f)
+    }
+
+    /// [`Dot::reach`] converted to `to`.
+    #[must_use]
+    pub fn reach_in(&self, to: LengthUnit) -> Vector2<f64> {
+        self.reach * self.unit.factor_to(to)
     }
 }
 
@@ -86,6 +99,9 @@ pub struct Run {
     /// The run's captures, in order (all of them, not only the four in the slots); kept after
     /// M282 until the next M280, so a second M282 can emit another selection.
     pub dots: Vec<Dot>,
+    /// The image scale at the part's height as the run's camera moves measured it (every M281
+    /// since M280 that read its mark from more than one position).
+    pub scale: ScaleEvidence,
 }
 
 /// The Vision module: the profile's parameters, the current run, the telemetry it writes, the

@@ -1,6 +1,8 @@
 //! [`Config`]: the operator's settings.
 
-use super::checks::{any, driver_name, job, noise_px, non_negative, passes, pound_base, resolution, seconds_60, tool};
+use super::checks::{
+    any, driver_name, job, noise_px, noise_px_wide, non_negative, passes, pound_base, resolution, seconds_60, tool,
+};
 
 profile_part! {
     /// The persisted configuration: the driver's name, the camera, pound-variable output and the
@@ -33,12 +35,52 @@ profile_part! {
         /// Default 2: one pass brings the mark to within K's error times its first distance,
         /// the second to the noise.
         (Connection) recenter_passes: i64 => i64 = 2, "VisionRecenterPasses", passes;
-        /// `VisionRecenterTolerance`: M281 re-centres while the mark is farther than this from
-        /// the image centre, pixels. Default 16 px: with the part 4 % closer or farther than at
-        /// calibration a mark 16 px off centre is read 0.64 px (0.0013 in at 0.002 in/px) wrong,
-        /// and the acceptance runs at ±4 % then cut within 0.002 in; on example 4 it re-reads
-        /// one mark of four, adding 21 % to the alignment time (the issue allows 25 %).
-        (Connection) recenter_tolerance_px: f64 => f64 = 16.0, "VisionRecenterTolerance", non_negative;
+        /// `VisionRecenterTolerance`: 0 (default) = M281 decides from the error budget when to
+        /// move (see `VisionHeightProbePx`); > 0 = the fixed rule of issue 25, pixels: re-centre
+        /// while the mark is farther than this from the image centre, and make no probe move.
+        /// Why 0: a fixed 16 px left marks 3–11 px off centre read in one shot, so a part 4 %
+        /// higher than at calibration cut 3.5× the floor and nothing measured it; the budget
+        /// moves only when the scale's remaining uncertainty times the mark's distance would
+        /// add more than 0.3 of the camera's noise (≤ 4.4 % in quadrature).
+        (Connection) recenter_tolerance_px: f64 => f64 = 0.0, "VisionRecenterTolerance", non_negative;
+        /// `VisionHeightProbePx`: the length of M281's deliberate probe move, pixels: when the
+        /// scale's budget asks for a move and the mark is seen closer to the centre than a
+        /// quarter of this (a re-centring move would measure little), the camera moves so the
+        /// mark lands this far
+        /// on the other side, reads it, and keeps the reading nearer the centre. 0 = never
+        /// probe (only re-centring moves measure the scale). Default 120 px: with the mark
+        /// first seen ~16 px off centre the two readings lie ~136 px apart and measure the scale
+        /// to √2 × 0.1 px / 136 px = 0.10 % (1σ), so every later mark within 29 px is read in
+        /// one shot within budget; on example 4 the probe costs 0.94 s (+31 % over one shot,
+        /// 200 px would cost +34 %, a 16 px re-centring pass +24 %).
+        (Connection) height_probe_px: f64 => f64 = 120.0, "VisionHeightProbePx", non_negative;
+        /// `VisionHeightCorrection`: M282 corrects the run's captures for the image scale the
+        /// camera moves measured (scale ∝ working distance: each capture's offset from the
+        /// camera × (1 + ε)) and widens its predicted error by the scale's remaining 1σ. Off:
+        /// the captures are used as read (the manual's behaviour) and the prediction is widened
+        /// by the whole measured scale error instead. Default on: at the calibration height it
+        /// changes the cut by less than the noise (ε ≈ 0 ± 0.1 %), and off it a part 4 % higher
+        /// cuts at 3.5× the floor with a bound that misses three fits in four.
+        (Connection) height_correction: bool => bool = true, "VisionHeightCorrection", any;
+        /// `VisionHeightWarnPct`: M282's report warns, with the manual's advice, when the
+        /// measured working-distance change exceeds this, percent (0 disables). Default 1 %:
+        /// the manual's "even a 1 % standoff change … puts the verify residual out of spec".
+        (Connection) height_warn_pct: f64 => f64 = 1.0, "VisionHeightWarnPct", non_negative;
+        /// `VisionCenterUncertaintyPx`: how far, 1σ per pixel axis, the optical axis may meet the
+        /// image from the centre the profile assumes (image centre + `VisionPxCenterOffset`),
+        /// pixels. The sheet walk cannot see that error at its own height — it is absorbed into
+        /// the camera offset exactly — but at a height `ε` away it shifts every capture by
+        /// `ε` × it × K, a shift no camera move can measure (it looks like the part's own).
+        /// M282 widens its prediction by it whenever the run measured a height change.
+        /// Default 3 px: the simulator's cameras are off by up to ±5 px per axis (σ 2.9 px); a
+        /// real lens can be off by tens of pixels — a camera calibrated at the part's height
+        /// (the manual's advice) carries none of it.
+        (Connection) center_uncertainty_px: f64 => f64 = 3.0, "VisionCenterUncertaintyPx", noise_px_wide;
+        /// `VisionWorkingDistance`: the lens-to-part distance at which K was calibrated, inches
+        /// (25.4 mm per inch); it turns the measured relative change into a length in the
+        /// reports (0 = report the percentage only). Default 6 in: the manual's "typical 6″
+        /// working distance"; set it to the machine's.
+        (Connection) working_distance_in: f64 => f64 = 6.0, "VisionWorkingDistance", non_negative;
         /// `VisionMarkDiameter`: the fiducial's true diameter, inches (0 disables the height
         /// check). M281 compares the measured mark size with it and warns when they differ by
         /// more than `VisionMarkSizeTolerance`, with the implied working-distance change.

@@ -54,6 +54,15 @@ param_struct! {
         /// `VisionRun_PredictedBound`: a radius that holds the last fit's largest cut error over
         /// the marks' bounding box with ≥ 99 % probability, current units.
         (RunState) run_predicted_bound: f64 => f64 = 0.0, "VisionRun_PredictedBound", any;
+        /// `VisionRun_HeightChangePct`: the working-distance change the last fit's camera moves
+        /// measured, percent of the calibration's (+ = the part farther from the camera); 0
+        /// with `VisionRun_HeightSigmaPct` 0 when the run made no move to measure it.
+        (RunState) run_height_change_pct: f64 => f64 = 0.0, "VisionRun_HeightChangePct", any;
+        /// `VisionRun_HeightChange`: the same as a length (`VisionWorkingDistance` × the
+        /// change), current units.
+        (RunState) run_height_change: f64 => f64 = 0.0, "VisionRun_HeightChange", any;
+        /// `VisionRun_HeightSigmaPct`: the 1σ of `VisionRun_HeightChangePct`, percent.
+        (RunState) run_height_sigma_pct: f64 => f64 = 0.0, "VisionRun_HeightSigmaPct", any;
     }
 }
 

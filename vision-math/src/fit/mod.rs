@@ -25,7 +25,7 @@ mod similarity;
 pub use affine::fit_affine;
 pub use linear::{solve_linear, LinearFit};
 pub use partial::{fit_piece, PartialFit, Piece};
-pub use quality::{find_outlier, residual_sigma, Outlier, Prediction, MIN_MARKS_FOR_OUTLIERS};
+pub use quality::{find_outlier, residual_sigma, Outlier, Prediction, Shared, MIN_MARKS_FOR_OUTLIERS};
 pub use rectangle::fit_rectangle;
 pub use rigid::fit_rigid;
 pub use similarity::fit_similarity;

@@ -44,6 +44,16 @@ pub struct Prediction {
     pub bound99: f64,
 }
 
+/// An error the marks of a fit share (see [`Transform::predict_shared`]): mark `i` is off by
+/// `δ·along[i]`, one `δ` of standard deviation `sigma` (dimensionless) for all marks.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Shared<'a> {
+    /// One vector per mark, in the order of the commanded points (machine units per unit `δ`).
+    pub along: &'a [Vector2<f64>],
+    /// The standard deviation of `δ`.
+    pub sigma: f64,
+}
+
 impl Model {
     /// Free parameters of the linear part (besides the 2 of the shift).
     #[must_use]
@@ -99,8 +109,40 @@ impl Transform {
         sigma: f64,
         region: &[Point2<f64>],
     ) -> Result<Prediction, MathError> {
+        self.predict_shared(commanded, sigma, region, &[])
+    }
+
+    /// [`Transform::predict`] with errors the marks share besides their independent noise:
+    /// for each [`Shared`], observed point `i` is off by `δ·along[i]` with one `δ` of standard
+    /// deviation `sigma` for all marks (a scale error of K acting on each mark's offset from
+    /// the camera; a shift of every capture). Each adds the fit's linear response `g(p)` to
+    /// its perturbation as `sigma²·g·gᵀ` to the covariance at `p`. No shared error is exactly
+    /// [`Transform::predict`].
+    ///
+    /// # Errors
+    /// As [`Transform::predict`]; [`MathError::LengthMismatch`] when a shared error has not one
+    /// vector per mark; [`MathError::NonFinite`] for a negative or non-finite shared σ or a
+    /// non-finite vector.
+    pub fn predict_shared(
+        &self,
+        commanded: &[Point2<f64>],
+        sigma: f64,
+        region: &[Point2<f64>],
+        shared: &[Shared<'_>],
+    ) -> Result<Prediction, MathError> {
         if !(sigma.is_finite() && sigma >= 0.0) {
             return Err(MathError::NonFinite { what: "the noise σ" });
+        }
+        for e in shared {
+            if !(e.sigma.is_finite() && e.sigma >= 0.0) {
+                return Err(MathError::NonFinite { what: "a shared error's σ" });
+            }
+            if e.along.len() != commanded.len() {
+                return Err(MathError::LengthMismatch { commanded: commanded.len(), observed: e.along.len() });
+            }
+            if e.along.iter().any(|v| !(v.x.is_finite() && v.y.is_finite())) {
+                return Err(MathError::NonFinite { what: "a shared error vector" });
+            }
         }
         let k = self.model.parameters();
         let mut normal = DMatrix::<f64>::zeros(k, k);
@@ -124,6 +166,19 @@ impl Transform {
             return Err(singular);
         }
         let inverse = cholesky.inverse();
+        // The parameters' response to each shared perturbation: (JᵀJ)⁻¹·Σ Jᵢᵀ·alongᵢ.
+        let responses: Vec<(Vec<f64>, f64)> = shared
+            .iter()
+            .map(|e| {
+                let mut pull = vec![0.0; k];
+                for (n, v) in commanded.iter().zip(e.along) {
+                    for (l, jl) in self.jacobian(*n).iter().enumerate() {
+                        pull[l] += jl.dot(v);
+                    }
+                }
+                ((0..k).map(|i| (0..k).map(|l| inverse[(i, l)] * pull[l]).sum()).collect(), e.sigma)
+            })
+            .collect();
         let points = if region.is_empty() { commanded } else { region };
         #[allow(clippy::cast_precision_loss)] // a handful of corners
         let quantile = -2.0 * (0.01 / points.len().max(1) as f64).ln();
@@ -137,6 +192,10 @@ impl Transform {
                 }
             }
             cov *= sigma * sigma;
+            for (response, shared_sigma) in &responses {
+                let g = j.iter().zip(response).fold(Vector2::zeros(), |a, (jl, r)| a + jl * *r);
+                cov += g * g.transpose() * (shared_sigma * shared_sigma);
+            }
             let half_tr = 0.5 * (cov[(0, 0)] + cov[(1, 1)]);
             let det = cov[(0, 0)] * cov[(1, 1)] - cov[(0, 1)] * cov[(1, 0)];
             let lmax = half_tr + (half_tr * half_tr - det).max(0.0).sqrt();
@@ -282,6 +341,55 @@ mod tests {
     fn map(t: &Transform, p: Point2<f64>) -> Point2<f64> {
         let u = Matrix2::new(t.scale.x, t.shear, 0.0, t.scale.y);
         t.observed_centroid + t.rotation.to_rotation_matrix().into_inner() * u * (p - t.commanded_centroid)
+    }
+
+    /// A shared error (one scale error δ of σ 0.5 % acting on each mark's offset from the
+    /// camera) beside the independent noise: the prediction with it matches the measured error
+    /// and covers the largest error over the region; without it, it does not.
+    #[test]
+    fn a_shared_error_widens_the_prediction_by_what_it_does() {
+        let (sigma, common_sigma) = (0.0002, 0.005);
+        let region = [Point2::new(0.0, 0.0), Point2::new(6.0, 0.0), Point2::new(6.0, 4.0), Point2::new(0.0, 4.0)];
+        let commanded = marks(4);
+        let reach =
+            [Vector2::new(0.06, 0.01), Vector2::new(-0.02, 0.05), Vector2::new(0.08, -0.07), Vector2::new(0.0, 0.03)];
+        let mut noise = Noise(0x28);
+        let trials = 4000;
+        let (mut inside, mut inside_without, mut sum2) = (0u32, 0u32, [0.0; 4]);
+        let mut predicted = None;
+        for _ in 0..trials {
+            let delta = common_sigma * noise.gauss();
+            let observed: Vec<Point2<f64>> =
+                noisy(&mut noise, &commanded, sigma).iter().zip(&reach).map(|(o, r)| o + r * delta).collect();
+            let t = Model::Rectangle.transform(&commanded, &observed).expect("fit");
+            let p = t
+                .predict_shared(&commanded, sigma, &region, &[Shared { along: &reach, sigma: common_sigma }])
+                .expect("prediction");
+            let without = t.predict(&commanded, sigma, &region).expect("prediction");
+            predicted.get_or_insert(p);
+            let errors: Vec<f64> = region.iter().map(|q| (map(&t, *q) - truth(*q)).norm()).collect();
+            let worst = errors.iter().copied().fold(0.0, f64::max);
+            inside += u32::from(worst <= p.bound99);
+            inside_without += u32::from(worst <= without.bound99);
+            for (s, e) in sum2.iter_mut().zip(&errors) {
+                *s += e * e;
+            }
+        }
+        let p = predicted.expect("trials ran");
+        let rms = sum2.iter().map(|s| (s / f64::from(trials)).sqrt()).fold(0.0, f64::max);
+        assert!((rms / p.sigma - 1.0).abs() < 0.05, "measured {rms} vs predicted {}", p.sigma);
+        let (coverage, without) =
+            (f64::from(inside) / f64::from(trials), f64::from(inside_without) / f64::from(trials));
+        assert!(coverage >= 0.985 && without < 0.97, "coverage {coverage} with the shared error, {without} without");
+        let t = Model::Rectangle.transform(&commanded, &noisy(&mut noise, &commanded, sigma)).expect("fit");
+        assert_eq!(
+            t.predict_shared(&commanded, sigma, &region, &[Shared { along: &reach, sigma: 0.0 }]),
+            t.predict(&commanded, sigma, &region)
+        );
+        assert!(matches!(
+            t.predict_shared(&commanded, sigma, &region, &[Shared { along: &reach[..2], sigma: 0.01 }]),
+            Err(MathError::LengthMismatch { .. })
+        ));
     }
 
     #[test]

@@ -47,12 +47,28 @@ fn slot(rig: &Rig, s: u32) -> [f64; 8] {
 fn m280_starts_a_run_and_cancels_alignment() {
     let mut rig = Rig::new();
     // A previous run's captures are dropped by the next M280.
-    rig.module.run.dots =
-        vec![Dot { commanded: Point2::origin(), observed: Point2::origin(), unit: LengthUnit::Inch }; 7];
+    rig.module.run.dots = vec![
+        Dot {
+            commanded: Point2::origin(),
+            observed: Point2::origin(),
+            unit: LengthUnit::Inch,
+            reach: vision_math::Vector2::zeros(),
+            mark_size: 0.0
+        };
+        7
+    ];
     let r = rig.module.m280(&mut rig.machine, RunMode::Similarity).expect("m280");
     assert_eq!(r.gcode, vec![CANCEL_LINE.to_string()]);
     assert_eq!(r.gcode[0], "G69 G50 G52 X0 Y0");
-    assert_eq!(rig.module.run(), &Run { mode: RunMode::Similarity, active: true, dots: Vec::new() });
+    assert_eq!(
+        rig.module.run(),
+        &Run {
+            mode: RunMode::Similarity,
+            active: true,
+            dots: Vec::new(),
+            scale: vision_math::ScaleEvidence::default()
+        }
+    );
     let t = rig.module.telemetry();
     assert_eq!((t.run_active(), t.run_mode(), t.run_dot_count()), (1, 3, 0));
     assert_eq!(rig.module.param("visionrun_mode"), Ok(ParamValue::Int(3)));
@@ -343,6 +359,8 @@ fn a_slipped_mark_among_six_is_dropped_and_reported() {
 #[test]
 fn every_fit_predicts_its_error_from_the_camera_noise_and_the_residuals() {
     let mut rig = Rig::new();
+    // Read in one shot: no camera move, so no height term (tested in `height_is_measured_…`).
+    rig.module.set_param("VisionRecenterPasses", 0).expect("set");
     rig.world().marks = PART.iter().map(|(x, y)| true_part().apply(Point2::new(*x, *y))).collect();
     rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect("m280");
     capture_all(&mut rig, &PART);
@@ -489,4 +507,55 @@ fn the_mark_size_and_the_pixel_range_warn_about_height_and_resolution() {
     let r = rig.module.m281(&mut rig.machine, false).expect("capture");
     assert_eq!((r.report.recentred, r.gcode.len()), (None, 0), "{:?}", r.gcode);
     assert!(r.report.warning.is_some_and(|w| w.contains("outside the 1000 x 1000 image")));
+}
+
+/// Issue 28: the part 4 % farther from the camera than at calibration (every pixel spans 4 %
+/// more). The first mark, seen about 33 px off centre, is probed; the run measures +4 % exactly
+/// (no noise), M282 corrects the captures so the fit lands on the part, warns with the manual's
+/// advice, and the mark size agrees. With the correction off the captures are used as read and
+/// the prediction, widened by the whole measured error, still holds the true error.
+#[test]
+fn height_is_measured_corrected_and_reported() {
+    let mut rig = Rig::new();
+    rig.world().marks = PART.iter().map(|(x, y)| true_part().apply(Point2::new(*x, *y))).collect();
+    rig.world().optics.pitch_in *= 1.04;
+    rig.module.set_param("VisionMarkDiameter", 0.5).expect("set");
+    // A probe longer than the default, so that the first mark (≈ 33 px off) is probed.
+    rig.module.set_param("VisionHeightProbePx", 200.0).expect("set");
+    rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect("m280");
+    rig.go(0.0, 0.0);
+    let first = rig.module.m281(&mut rig.machine, false).expect("capture").report;
+    let moved = first.recentred.expect("moved");
+    assert!(moved.probe && moved.passes == 1 && moved.first_px.norm() < 50.0, "{moved:?}");
+    assert_eq!(first.centred_px, moved.first_px, "the reading nearer the centre is the capture");
+    capture_all(&mut rig, &PART[1..]);
+    let a = rig.module.m282(&mut rig.machine, Pieces::All).expect("m282").report;
+    let h = a.height.clone().expect("measured");
+    assert!((h.change_pct - 4.0).abs() < 1e-6 && h.corrected && h.sigma_pct > 0.0, "{h:?}");
+    assert!((h.change - 0.24).abs() < 1e-6, "6 in × 4 %: {h:?}");
+    assert!((h.mark_size_pct.expect("configured") - 4.0).abs() < 1e-6, "{h:?}");
+    let w = h.warning.expect("above 1 %");
+    assert!(w.contains("farther from the camera") && w.contains("re-run M283 C1 at this height"), "{w}");
+    assert!(!w.contains("disagree"), "{w}");
+    for (x, y) in PART {
+        let p = Point2::new(x, y);
+        assert!((a.chain.apply(p) - true_part().apply(p)).norm() < 1e-9, "corrected: exact at {p:?}");
+    }
+    let t = rig.module.telemetry();
+    assert_eq!(
+        (t.run_height_change_pct(), t.run_height_change(), t.run_height_sigma_pct()),
+        (h.change_pct, h.change, h.sigma_pct)
+    );
+    assert_eq!(t.last_status(), format!("OK (warning: {w})"));
+
+    // Off: the captures as read; the bound is widened by the whole +4 %.
+    rig.module.set_param("VisionHeightCorrection", false).expect("set");
+    let b = rig.module.m282(&mut rig.machine, Pieces::All).expect("m282").report;
+    assert!(!b.height.as_ref().expect("measured").corrected);
+    let worst = PART
+        .iter()
+        .map(|(x, y)| (b.chain.apply(Point2::new(*x, *y)) - true_part().apply(Point2::new(*x, *y))).norm())
+        .fold(0.0, f64::max);
+    assert!(worst > 1e-5 && worst < b.predicted.bound99, "uncorrected error {worst} within {:?}", b.predicted);
+    assert!(b.predicted.bound99 > a.predicted.bound99);
 }
