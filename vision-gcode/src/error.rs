@@ -521,6 +521,26 @@ pub enum RunProblem {
         /// Its problem.
         message: String,
     },
+    /// A repeat count above [`crate::MAX_REPEATS`].
+    #[error("{code}: `{count}` exceeds the {limit} repeat bound: {instead}")]
+    RepeatBound {
+        /// The code (`G81`, `M98`, `G2`, `repeat`).
+        code: &'static str,
+        /// The count as written (`L10000000`).
+        count: String,
+        /// The bound.
+        limit: u32,
+        /// What to do instead.
+        instead: &'static str,
+    },
+    /// A canned-cycle line that would make more than [`crate::MAX_CYCLE_MOVES`] moves.
+    #[error("{code} would make more than {limit} moves (repeats × pecks): program fewer holes per line or a larger peck depth")]
+    CycleTooManyMoves {
+        /// The cycle.
+        code: &'static str,
+        /// The bound.
+        limit: u64,
+    },
     /// A loop ran more often than allowed.
     #[error("loops ran more than {limit} iterations: the program probably never leaves a loop")]
     TooManyIterations {

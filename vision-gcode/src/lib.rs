@@ -70,6 +70,9 @@ pub use event::{
 };
 pub use geom::{ArcDirection, Plane, Xyz, MAX_COORDINATE};
 pub use handler::{Context, HandlerError, MCodeHandler, UserMCode};
-pub use interp::{needs_program, Interpreter, MotionMode, Piece, ProgramStream, RunOutcome, MAX_SAVED_MODAL_STATES};
+pub use interp::{
+    needs_program, FlowRun, Interpreter, MotionMode, Piece, ProgramStream, RunOutcome, MAX_CYCLE_MOVES, MAX_REPEATS,
+    MAX_SAVED_MODAL_STATES,
+};
 pub use tools::{DigitalOutput, Tool, ToolOutputs, ToolTable};
 pub use watch::PositionWatch;

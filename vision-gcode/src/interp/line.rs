@@ -3,6 +3,7 @@
 //! Nothing here reaches the sink: events are queued in `out` and only flushed by the caller
 //! once the whole line succeeded, so a failing line emits nothing and changes nothing.
 
+use super::cycles::CyclePlan;
 use super::motion::Polyline;
 use crate::config::{Dialect, InterpreterConfig};
 use crate::error::{GCode, RunProblem};
@@ -10,6 +11,7 @@ use crate::event::{Coolant, Event, OutputChange, OutputWrite, PathMode, SpindleC
 use crate::frame::Placement;
 use crate::geom::{Plane, Xyz, MAX_COORDINATE};
 use crate::interp::modal::Modal;
+use crate::interp::MAX_REPEATS;
 use crate::params::{ParameterTable, G28_POSITION, G30_POSITION};
 use crate::words::{whole, Words};
 use vision_math::{LengthUnit, Point2};
@@ -43,6 +45,7 @@ pub(crate) enum Flow {
 pub(crate) enum Pending {
     Event(Event),
     Polyline(Polyline),
+    Cycle(CyclePlan),
 }
 
 /// Modal groups of the G-codes this interpreter knows.
@@ -404,10 +407,23 @@ impl LineRun<'_> {
         }
     }
 
-    /// A count word (turns, repeats): a whole number ≥ 1, 1 when absent.
-    pub(super) fn count(&mut self, letter: u8, code: &'static str, hint: &'static str) -> Result<u32, RunProblem> {
+    /// A count word (turns, repeats): a whole number from 1 to [`MAX_REPEATS`], 1 when absent.
+    /// `hint` says what the count is, `instead` what to do when it is over the bound.
+    pub(super) fn count(
+        &mut self,
+        letter: u8,
+        code: &'static str,
+        hint: &'static str,
+        instead: &'static str,
+    ) -> Result<u32, RunProblem> {
         match self.w.take(letter, code)? {
             None => Ok(1),
+            Some(v) if v > f64::from(MAX_REPEATS) => Err(RunProblem::RepeatBound {
+                code,
+                count: format!("{}{v}", char::from(letter)),
+                limit: MAX_REPEATS,
+                instead,
+            }),
             Some(v) => match whole(letter, v)? {
                 0 => Err(RunProblem::OutOfRange { code, letter: char::from(letter), value: v, hint }),
                 n => Ok(n),
@@ -609,7 +625,8 @@ impl LineRun<'_> {
             Some(98) => {
                 let p = self.require(b'P', "M98", "the program number to call, e.g. M98 P1000 for O1000")?;
                 let program = whole(b'P', p)?;
-                let repeats = self.count(b'L', "M98", "L counts calls and must be at least 1")?;
+                let repeats =
+                    self.count(b'L', "M98", "L counts calls and must be at least 1", "call it from a loop instead")?;
                 Ok(Flow::Call { program, repeats })
             }
             Some(99) => Ok(Flow::Return),

@@ -9,7 +9,8 @@ mod motion;
 
 use vision_math::{AlignmentChain, LengthUnit, Point2, Vector2};
 
-pub use flow::needs_program;
+pub use cycles::MAX_CYCLE_MOVES;
+pub use flow::{needs_program, FlowRun};
 pub use modal::MotionMode;
 
 use crate::config::{Dialect, InterpreterConfig};
@@ -94,6 +95,12 @@ pub struct Interpreter {
     /// Modal states saved by [`Interpreter::push_modal_state`], newest last.
     saved_modal: Vec<Modal>,
 }
+
+/// The largest repeat count a program may write: a canned cycle's and M98's `L`, G2/G3's `P`
+/// turns, an o-word `repeat [n]`. Above it a count is a typo (`L10000000`) that would run for
+/// hours; the loops without a count (`while`, `do`) are bounded by
+/// [`InterpreterConfig::max_loop_iterations`] instead.
+pub const MAX_REPEATS: u32 = 100_000;
 
 /// The most modal states [`Interpreter::push_modal_state`] keeps at once.
 pub const MAX_SAVED_MODAL_STATES: usize = 16;
@@ -312,6 +319,7 @@ impl Interpreter {
                     match pending {
                         Pending::Event(e) => sink.event(&e),
                         Pending::Polyline(p) => p.emit(sink),
+                        Pending::Cycle(c) => c.emit(sink),
                     }
                 }
                 self.refresh_mirrors();
