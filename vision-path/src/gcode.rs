@@ -1,7 +1,8 @@
 //! The adapter from the G-code interpreter (`vision-gcode`) to the planner: program text in,
 //! [`Item`]s out, one line at a time, so memory stays bounded by one line's events. From the
 //! first line that needs control flow (an o-word, M98, M99: [`vision_gcode::needs_program`])
-//! the rest of the text runs in one call and its items are queued whole.
+//! the rest of the text is indexed once and still runs a line at a time
+//! ([`Interpreter::step_flow`]), so a loop of any length streams too.
 //!
 //! | interpreter event | planner item |
 //! | --- | --- |
@@ -22,8 +23,8 @@
 use std::collections::VecDeque;
 
 use vision_gcode::{
-    needs_program, Event as GEvent, GcodeError, Interpreter, InterpreterConfig, Piece, Plane, ProgramStream, Rate,
-    RunOutcome, Xyz,
+    needs_program, Event as GEvent, FlowRun, GcodeError, Interpreter, InterpreterConfig, Piece, Plane, ProgramStream,
+    Rate, RunOutcome, Xyz,
 };
 
 use crate::follower::check_axes;
@@ -48,6 +49,9 @@ pub struct GcodeItems<T = String> {
     line: u32,
     queue: VecDeque<Result<Item, PathError>>,
     done: bool,
+    /// From the first control-flow line on: the run, and the line before it (its lines count
+    /// from there).
+    flow: Option<(FlowRun, u32)>,
 }
 
 impl<T: AsRef<str>> GcodeItems<T> {
@@ -61,6 +65,7 @@ impl<T: AsRef<str>> GcodeItems<T> {
             line: 0,
             queue: VecDeque::new(),
             done: false,
+            flow: None,
         }
     }
 
@@ -71,6 +76,17 @@ impl<T: AsRef<str>> GcodeItems<T> {
 
     /// Run the next line, queueing its items.
     fn step(&mut self) {
+        if let Some((run, base)) = &mut self.flow {
+            let base = *base;
+            let queue = &mut self.queue;
+            let outcome = self.interp.step_flow(run, &mut self.program, &mut |e: &GEvent| {
+                queue.push_back(Ok(item(e, base.saturating_add(e.line()) as usize)));
+            });
+            if let Ok(Some(_)) | Err(_) = outcome {
+                self.flow = None;
+            }
+            return self.after(outcome, true, |n| base.saturating_add(n));
+        }
         // The end of the text (a final newline does not start another line): the program
         // ended without M2/M30 or a closing `%`, which LinuxCNC refuses.
         let Some(start) = self.next.filter(|&start| start < self.text.as_ref().len()) else {
@@ -91,25 +107,36 @@ impl<T: AsRef<str>> GcodeItems<T> {
         self.line = self.line.saturating_add(1);
         let line = self.line;
         let queue = &mut self.queue;
-        // Control flow needs the rest of the text at once (its subroutines may come later):
-        // from here the items are queued whole, not streamed.
-        let whole = needs_program(raw);
-        let (piece, base) = if whole { (rest, line - 1) } else { (raw, line) };
-        let at = |n: u32| if whole { base.saturating_add(n) } else { line };
-        let outcome = self.interp.run_streamed(&mut self.program, piece, None, &mut |e: &GEvent| {
-            queue.push_back(Ok(item(e, at(e.line()) as usize)));
-        });
+        let mut sink = |e: &GEvent| queue.push_back(Ok(item(e, line as usize)));
+        if needs_program(raw) {
+            // Control flow needs the rest of the text at once (its subroutines may come later):
+            // it is indexed now and run a line at a time from here.
+            let base = line - 1;
+            match self.interp.start_flow(&mut self.program, rest, &mut sink) {
+                Ok(run) => self.flow = Some((run, base)),
+                Err(e) => self.after(Err(e), true, |n| base.saturating_add(n)),
+            }
+            return;
+        }
+        let outcome = self.interp.run_streamed(&mut self.program, raw, None, &mut sink);
+        self.after(outcome.map(Some), false, |_| line);
+    }
+
+    /// What a line's `outcome` means for the stream: `whole` when it ran under control flow
+    /// (on the rest of the text), `at` gives a line of the piece its number in the text.
+    fn after(&mut self, outcome: Result<Option<Piece>, GcodeError>, whole: bool, at: impl Fn(u32) -> u32) {
         match outcome {
-            Ok(Piece::RanOut { lines }) if whole => {
-                // The rest ran: the text has ended.
+            Ok(None) => {}
+            Ok(Some(Piece::RanOut { lines })) if whole => {
+                // The control flow ran to the end of the text.
                 self.next = None;
                 self.line = at(lines);
             }
-            Ok(Piece::RanOut { .. }) => {}
+            Ok(Some(Piece::RanOut { .. })) => {}
             // M2/M30 queued its own end.
-            Ok(Piece::Over(RunOutcome::Ended { .. })) => self.done = true,
+            Ok(Some(Piece::Over(RunOutcome::Ended { .. }))) => self.done = true,
             // The closing `%`.
-            Ok(Piece::Over(RunOutcome::Completed { lines })) => {
+            Ok(Some(Piece::Over(RunOutcome::Completed { lines }))) => {
                 self.queue.push_back(Ok(Item::End { line: at(lines) as usize }));
                 self.done = true;
             }
