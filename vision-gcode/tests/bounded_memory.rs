@@ -138,3 +138,30 @@ fn a_cycle_that_fails_at_a_late_hole_emits_nothing() {
     assert!(matches!(problem(result), RunProblem::BeyondRange { .. }));
     assert_eq!(moves, 1, "only the G0");
 }
+
+#[test]
+fn chunked_events_are_the_same_events_in_bounded_chunks() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    // A polyline (G51 scales X and Y apart) of about 10 000 segments, pecks, holes with a dwell.
+    let text = "G20 G90 F10\nG51 X2 Y1\nG2 X0 Y0 I1 J0\nG50\nG0 Z1\nG91 G83 X0.5 Z-0.3 R0.1 Q0.05 L3\nG80\n\
+                G90 G82 X1 Y1 Z-0.2 R0.1 P0.5\nG80\nM2";
+    let config = InterpreterConfig { max_arc_segments: 20_000, chord_tolerance: 1e-7, ..InterpreterConfig::default() };
+    let mut whole = Vec::new();
+    Interpreter::new(config.clone()).run(text, None, &mut whole).expect("runs");
+    let mut interp = Interpreter::new(config);
+    interp.set_chunked_events(true);
+    let mut chunked: Vec<Event> = Vec::new();
+    interp.run(text, None, &mut chunked).expect("runs");
+    let mut largest = 0;
+    loop {
+        let before = chunked.len();
+        let more = interp.emit_held(&mut chunked);
+        largest = largest.max(chunked.len() - before);
+        if !more {
+            break;
+        }
+    }
+    assert!(whole.len() > 9000, "{} events", whole.len());
+    assert_eq!(chunked, whole);
+    assert!(largest <= 1024, "a chunk of {largest} events");
+}

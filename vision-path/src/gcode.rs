@@ -52,11 +52,19 @@ pub struct GcodeItems<T = String> {
     /// From the first control-flow line on: the run, and the line before it (its lines count
     /// from there).
     flow: Option<(FlowRun, u32)>,
+    /// How the last line's events are numbered: `(true, base)` under control flow (`base` plus
+    /// the line in the rest of the text), `(false, line)` for a plain line.
+    tags: (bool, u32),
+    /// The last line's outcome, handled once its held events are queued.
+    outcome: Option<Result<Option<Piece>, GcodeError>>,
 }
 
 impl<T: AsRef<str>> GcodeItems<T> {
     /// Run `text` on `interp` (in its current state and machine position), lazily.
-    pub fn new(interp: Interpreter, text: T) -> GcodeItems<T> {
+    pub fn new(mut interp: Interpreter, text: T) -> GcodeItems<T> {
+        // A line's events reach the queue a chunk at a time (a canned cycle of a million
+        // moves is one line).
+        interp.set_chunked_events(true);
         GcodeItems {
             interp,
             program: ProgramStream::default(),
@@ -66,6 +74,8 @@ impl<T: AsRef<str>> GcodeItems<T> {
             queue: VecDeque::new(),
             done: false,
             flow: None,
+            tags: (false, 0),
+            outcome: None,
         }
     }
 
@@ -74,18 +84,23 @@ impl<T: AsRef<str>> GcodeItems<T> {
         self.interp.machine_position()
     }
 
-    /// Run the next line, queueing its items.
+    /// Queue the next chunk of the last line's items, or its outcome, or run the next line.
     fn step(&mut self) {
+        let tags = self.tags;
+        if self.interp.emit_held(&mut queue_into(&mut self.queue, tags)) {
+            return;
+        }
+        if let Some(outcome) = self.outcome.take() {
+            return self.after(outcome, tags.0, |n| tag(tags, n));
+        }
         if let Some((run, base)) = &mut self.flow {
-            let base = *base;
-            let queue = &mut self.queue;
-            let outcome = self.interp.step_flow(run, &mut self.program, &mut |e: &GEvent| {
-                queue.push_back(Ok(item(e, base.saturating_add(e.line()) as usize)));
-            });
+            self.tags = (true, *base);
+            let outcome = self.interp.step_flow(run, &mut self.program, &mut queue_into(&mut self.queue, self.tags));
             if let Ok(Some(_)) | Err(_) = outcome {
                 self.flow = None;
             }
-            return self.after(outcome, true, |n| base.saturating_add(n));
+            self.outcome = Some(outcome);
+            return;
         }
         // The end of the text (a final newline does not start another line): the program
         // ended without M2/M30 or a closing `%`, which LinuxCNC refuses.
@@ -106,20 +121,20 @@ impl<T: AsRef<str>> GcodeItems<T> {
         self.next = next;
         self.line = self.line.saturating_add(1);
         let line = self.line;
-        let queue = &mut self.queue;
-        let mut sink = |e: &GEvent| queue.push_back(Ok(item(e, line as usize)));
         if needs_program(raw) {
             // Control flow needs the rest of the text at once (its subroutines may come later):
             // it is indexed now and run a line at a time from here.
             let base = line - 1;
-            match self.interp.start_flow(&mut self.program, rest, &mut sink) {
+            self.tags = (true, base);
+            match self.interp.start_flow(&mut self.program, rest, &mut queue_into(&mut self.queue, self.tags)) {
                 Ok(run) => self.flow = Some((run, base)),
-                Err(e) => self.after(Err(e), true, |n| base.saturating_add(n)),
+                Err(e) => self.outcome = Some(Err(e)),
             }
             return;
         }
-        let outcome = self.interp.run_streamed(&mut self.program, raw, None, &mut sink);
-        self.after(outcome.map(Some), false, |_| line);
+        self.tags = (false, line);
+        let mut sink = queue_into(&mut self.queue, self.tags);
+        self.outcome = Some(self.interp.run_streamed(&mut self.program, raw, None, &mut sink).map(Some));
     }
 
     /// What a line's `outcome` means for the stream: `whole` when it ran under control flow
@@ -199,6 +214,20 @@ impl PathFollower {
         }
         self.start(GcodeItems::new(fresh()?, text), max_path_accel, sink, pace)
     }
+}
+
+/// The line of the text an event of line `n` stands for, under `tags` ([`GcodeItems::tags`]).
+fn tag((whole, base): (bool, u32), n: u32) -> u32 {
+    if whole {
+        base.saturating_add(n)
+    } else {
+        base
+    }
+}
+
+/// A sink that queues each event as its planner item, numbered by `tags`.
+fn queue_into(queue: &mut VecDeque<Result<Item, PathError>>, tags: (bool, u32)) -> impl FnMut(&GEvent) + '_ {
+    move |e: &GEvent| queue.push_back(Ok(item(e, tag(tags, e.line()) as usize)))
 }
 
 /// The planner item for one interpreter event, tagged with `line`.

@@ -205,7 +205,7 @@ impl LineRun<'_> {
             self.st.program = program;
             self.st.machine = machine;
         }
-        self.out.push(Pending::Cycle(plan));
+        self.out.push(Pending::Cycle(CycleCursor::new(plan)));
         self.st.cycle.r = r_word;
         self.st.cycle.z = z_word;
         self.st.cycle.p = dwell;
@@ -266,78 +266,112 @@ pub(crate) struct CyclePlan {
 impl CyclePlan {
     /// Walks the cycle's steps in order (LinuxCNC's `convert_cycle_xy`), stopping at the first
     /// error `f` returns.
-    fn walk(&self, f: &mut dyn FnMut(CycleStep) -> Result<(), RunProblem>) -> Result<(), RunProblem> {
-        let (r, bottom, clear, feed) = (self.r, self.bottom, self.clear, self.feed);
-        let to = |x: f64, y: f64, z: f64, rate: Rate| CycleStep::Move(Xyz::new(x, y, z), rate);
-        let mut current = self.start.z;
-        if self.rise_to_r {
-            f(to(self.start.x, self.start.y, r, Rate::Rapid))?;
-            current = r;
-        }
-        let (mut x, mut y) = self.first;
-        for repeat in 0..self.repeats {
-            x += self.step.0;
-            y += self.step.1;
-            (x, y) = polar_step(x, y, self.polar_step.0, self.polar_step.1)?;
-            if repeat == 0 && current > r {
-                f(to(x, y, current, Rate::Rapid))?;
-                f(to(x, y, r, Rate::Rapid))?;
-            } else {
-                f(to(x, y, clear, Rate::Rapid))?;
-                if clear > r {
-                    f(to(x, y, r, Rate::Rapid))?;
-                }
-            }
-            match self.code {
-                730 | 830 => {
-                    // Counted in program units, as rs274 does: converted to machine units, a hole
-                    // depth that is an exact multiple of Q can round to one peck more or less.
-                    let mut depth_written = self.r_written - self.peck;
-                    while depth_written > self.bottom_written {
-                        let depth = self.units.convert(depth_written, self.machine_unit);
-                        f(to(x, y, depth, Rate::Feed(feed)))?;
-                        if self.code == 830 {
-                            f(to(x, y, r, Rate::Rapid))?;
-                        }
-                        f(to(x, y, depth + self.clearance, Rate::Rapid))?;
-                        depth_written -= self.peck;
-                    }
-                    f(to(x, y, bottom, Rate::Feed(feed)))?;
-                    f(to(x, y, clear, Rate::Rapid))?;
-                }
-                850 => {
-                    f(to(x, y, bottom, Rate::Feed(feed)))?;
-                    f(to(x, y, r, Rate::Feed(feed)))?;
-                    f(to(x, y, clear, Rate::Rapid))?;
-                }
-                _ => {
-                    f(to(x, y, bottom, Rate::Feed(feed)))?;
-                    if matches!(self.code, 820 | 890) {
-                        f(CycleStep::Dwell)?;
-                    }
-                    let out = if self.code == 890 { Rate::Feed(feed) } else { Rate::Rapid };
-                    f(to(x, y, clear, out))?;
-                }
-            }
-        }
+    fn walk(self, f: &mut dyn FnMut(CycleStep) -> Result<(), RunProblem>) -> Result<(), RunProblem> {
+        let mut holes = CycleCursor::new(self);
+        while holes.hole(f)? {}
         Ok(())
     }
+}
 
-    /// Emits the moves (exact stop at each) and dwells; the plan was checked when its line
-    /// ran, so no step fails here.
-    pub(crate) fn emit(&self, sink: &mut dyn EventSink) {
-        let mut from = self.machine;
-        let _ = self.walk(&mut |step| {
+/// A checked canned cycle on its way to the sink, a hole at a time.
+#[derive(Debug, Clone)]
+pub(crate) struct CycleCursor {
+    plan: CyclePlan,
+    /// Holes walked so far.
+    repeat: u32,
+    /// X/Y of the last hole (before the first: where the steps start).
+    x: f64,
+    y: f64,
+    /// Machine position after the last step emitted.
+    from: Xyz,
+}
+
+impl CycleCursor {
+    fn new(plan: CyclePlan) -> CycleCursor {
+        CycleCursor { plan, repeat: 0, x: plan.first.0, y: plan.first.1, from: plan.machine }
+    }
+
+    /// Walks the next hole (after the rise to R, for the first); whether holes are left.
+    fn hole(&mut self, f: &mut dyn FnMut(CycleStep) -> Result<(), RunProblem>) -> Result<bool, RunProblem> {
+        let p = self.plan;
+        if self.repeat >= p.repeats {
+            return Ok(false);
+        }
+        let (r, bottom, clear, feed) = (p.r, p.bottom, p.clear, p.feed);
+        let to = |x: f64, y: f64, z: f64, rate: Rate| CycleStep::Move(Xyz::new(x, y, z), rate);
+        let current = if p.rise_to_r { r } else { p.start.z };
+        if self.repeat == 0 && p.rise_to_r {
+            f(to(p.start.x, p.start.y, r, Rate::Rapid))?;
+        }
+        let (x, y) = polar_step(self.x + p.step.0, self.y + p.step.1, p.polar_step.0, p.polar_step.1)?;
+        (self.x, self.y) = (x, y);
+        if self.repeat == 0 && current > r {
+            f(to(x, y, current, Rate::Rapid))?;
+            f(to(x, y, r, Rate::Rapid))?;
+        } else {
+            f(to(x, y, clear, Rate::Rapid))?;
+            if clear > r {
+                f(to(x, y, r, Rate::Rapid))?;
+            }
+        }
+        match p.code {
+            730 | 830 => {
+                // Counted in program units, as rs274 does: converted to machine units, a hole
+                // depth that is an exact multiple of Q can round to one peck more or less.
+                let mut depth_written = p.r_written - p.peck;
+                while depth_written > p.bottom_written {
+                    let depth = p.units.convert(depth_written, p.machine_unit);
+                    f(to(x, y, depth, Rate::Feed(feed)))?;
+                    if p.code == 830 {
+                        f(to(x, y, r, Rate::Rapid))?;
+                    }
+                    f(to(x, y, depth + p.clearance, Rate::Rapid))?;
+                    depth_written -= p.peck;
+                }
+                f(to(x, y, bottom, Rate::Feed(feed)))?;
+                f(to(x, y, clear, Rate::Rapid))?;
+            }
+            850 => {
+                f(to(x, y, bottom, Rate::Feed(feed)))?;
+                f(to(x, y, r, Rate::Feed(feed)))?;
+                f(to(x, y, clear, Rate::Rapid))?;
+            }
+            _ => {
+                f(to(x, y, bottom, Rate::Feed(feed)))?;
+                if matches!(p.code, 820 | 890) {
+                    f(CycleStep::Dwell)?;
+                }
+                let out = if p.code == 890 { Rate::Feed(feed) } else { Rate::Rapid };
+                f(to(x, y, clear, out))?;
+            }
+        }
+        self.repeat += 1;
+        Ok(self.repeat < p.repeats)
+    }
+
+    /// Emits every remaining move (exact stop at each) and dwell; the plan was checked when its
+    /// line ran, so no step fails here.
+    pub(crate) fn emit(&mut self, sink: &mut dyn EventSink) {
+        while self.emit_some(sink) {}
+    }
+
+    /// Emits the next hole; whether holes are left.
+    pub(crate) fn emit_some(&mut self, sink: &mut dyn EventSink) -> bool {
+        let (line, placement, dwell) = (self.plan.line, self.plan.placement, self.plan.dwell);
+        let mut from = self.from;
+        let more = self.hole(&mut |step| {
             let event = match step {
                 CycleStep::Move(p, rate) => {
-                    let end = self.placement.machine_of(p);
+                    let end = placement.machine_of(p);
                     let start = std::mem::replace(&mut from, end);
-                    Event::Linear(LinearMove { line: self.line, start, end, rate, path: PathMode::ExactStop })
+                    Event::Linear(LinearMove { line, start, end, rate, path: PathMode::ExactStop })
                 }
-                CycleStep::Dwell => Event::Dwell { line: self.line, seconds: self.dwell },
+                CycleStep::Dwell => Event::Dwell { line, seconds: dwell },
             };
             sink.event(&event);
             Ok(())
         });
+        self.from = from;
+        more.unwrap_or(false)
     }
 }

@@ -3,7 +3,7 @@
 //! Nothing here reaches the sink: events are queued in `out` and only flushed by the caller
 //! once the whole line succeeded, so a failing line emits nothing and changes nothing.
 
-use super::cycles::CyclePlan;
+use super::cycles::CycleCursor;
 use super::motion::Polyline;
 use crate::config::{Dialect, InterpreterConfig};
 use crate::error::{GCode, RunProblem};
@@ -45,7 +45,7 @@ pub(crate) enum Flow {
 pub(crate) enum Pending {
     Event(Event),
     Polyline(Polyline),
-    Cycle(CyclePlan),
+    Cycle(CycleCursor),
 }
 
 /// Modal groups of the G-codes this interpreter knows.

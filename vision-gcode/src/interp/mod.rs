@@ -7,6 +7,8 @@ mod line;
 mod modal;
 mod motion;
 
+use std::collections::VecDeque;
+
 use vision_math::{AlignmentChain, LengthUnit, Point2, Vector2};
 
 pub use cycles::MAX_CYCLE_MOVES;
@@ -94,6 +96,10 @@ pub struct Interpreter {
     publisher: Publisher,
     /// Modal states saved by [`Interpreter::push_modal_state`], newest last.
     saved_modal: Vec<Modal>,
+    /// Whether committed lines keep their events for [`Interpreter::emit_held`].
+    chunked: bool,
+    /// Events of committed lines not emitted yet (chunked only), in order.
+    held: VecDeque<Pending>,
 }
 
 /// The largest repeat count a program may write: a canned cycle's and M98's `L`, G2/G3's `P`
@@ -122,6 +128,8 @@ impl Interpreter {
             pending: Vec::new(),
             publisher: Publisher::default(),
             saved_modal: Vec::new(),
+            chunked: false,
+            held: VecDeque::new(),
         };
         interp.refresh_mirrors();
         interp
@@ -213,6 +221,37 @@ impl Interpreter {
         Ok(Piece::RanOut { lines })
     }
 
+    /// Chunked events, for a caller that pulls them (the path planner): when on, a line that
+    /// commits keeps its events, and [`Interpreter::emit_held`] hands them out a bounded chunk
+    /// at a time — a canned cycle one hole at a time, an arc's polyline 1024 segments at a
+    /// time — so a line that expands into millions of moves never sits whole in the caller's
+    /// queue. Held events go out before the next line runs in any case.
+    pub fn set_chunked_events(&mut self, on: bool) {
+        self.chunked = on;
+    }
+
+    /// Emits the next part of the events held back by chunked lines: the plain events up to
+    /// and including one chunk of a long expansion. Whether more is held.
+    pub fn emit_held(&mut self, sink: &mut dyn EventSink) -> bool {
+        while let Some(front) = self.held.front_mut() {
+            let more = match front {
+                Pending::Event(e) => {
+                    sink.event(e);
+                    false
+                }
+                Pending::Polyline(p) => p.emit_some(sink),
+                Pending::Cycle(c) => c.emit_some(sink),
+            };
+            if more {
+                return true;
+            }
+            if !matches!(self.held.pop_front(), Some(Pending::Event(_))) {
+                return !self.held.is_empty();
+            }
+        }
+        false
+    }
+
     /// Host-side access to the same operations a handler has (positions, parameters, tools,
     /// synchronous G-code, dwell), outside any program. Events of `execute` and `dwell` go to
     /// `sink` tagged with line 0.
@@ -252,6 +291,10 @@ impl Interpreter {
         handler: Option<&mut (dyn MCodeHandler + 'h)>,
         sink: &mut dyn EventSink,
     ) -> Result<Flow, GcodeError> {
+        if !self.held.is_empty() {
+            // Events held back go out before the next line runs.
+            while self.emit_held(sink) {}
+        }
         let line = at.line;
         let block = self.parser.parse_line(text, line)?;
         if block.is_empty() || (self.config.block_delete && block.block_delete()) {
@@ -315,11 +358,14 @@ impl Interpreter {
         match outcome {
             Ok(flow) => {
                 self.modal = st;
+                if self.chunked {
+                    self.held.extend(self.pending.drain(..));
+                }
                 for pending in self.pending.drain(..) {
                     match pending {
                         Pending::Event(e) => sink.event(&e),
-                        Pending::Polyline(p) => p.emit(sink),
-                        Pending::Cycle(c) => c.emit(sink),
+                        Pending::Polyline(mut p) => p.emit(sink),
+                        Pending::Cycle(mut c) => c.emit(sink),
                     }
                 }
                 self.refresh_mirrors();
