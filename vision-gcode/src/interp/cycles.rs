@@ -76,8 +76,7 @@ impl LineRun<'_> {
                 return Err(RunProblem::MissingWord { code: name, letter: 'R', hint: "the retract plane, e.g. R0.1" })
             }
         };
-        let repeats =
-            self.count(b'L', name, "L counts repeats and must be at least 1", "split the holes over several lines")?;
+        let repeats = self.count(b'L', name, "L counts repeats and must be at least 1")?;
         let z_word = match (self.length_as_written(b'Z', name)?, repeated) {
             (Some(z), _) => z,
             (None, true) => self.st.cycle.z,
@@ -205,7 +204,7 @@ impl LineRun<'_> {
             self.st.program = program;
             self.st.machine = machine;
         }
-        self.out.push(Pending::Cycle(CycleCursor::new(plan)));
+        self.out.push(Pending::Cycle(Box::new(CycleCursor::new(plan))));
         self.st.cycle.r = r_word;
         self.st.cycle.z = z_word;
         self.st.cycle.p = dwell;

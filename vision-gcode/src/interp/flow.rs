@@ -545,12 +545,7 @@ impl Interpreter {
                     if count > f64::from(MAX_REPEATS) {
                         return Err(GcodeError::run(
                             line,
-                            RunProblem::RepeatBound {
-                                code: "repeat",
-                                count: format!("[{count}]"),
-                                limit: MAX_REPEATS,
-                                instead: "nest two repeats, or use a while loop",
-                            },
+                            RunProblem::RepeatBound { code: "repeat", letter: None, value: count, limit: MAX_REPEATS },
                         ));
                     }
                     if count >= 1.0 {

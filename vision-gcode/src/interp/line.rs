@@ -45,7 +45,8 @@ pub(crate) enum Flow {
 pub(crate) enum Pending {
     Event(Event),
     Polyline(Polyline),
-    Cycle(CycleCursor),
+    // Boxed: a cycle is rare and its plan large; every queued event would pay for its size.
+    Cycle(Box<CycleCursor>),
 }
 
 /// Modal groups of the G-codes this interpreter knows.
@@ -408,22 +409,12 @@ impl LineRun<'_> {
     }
 
     /// A count word (turns, repeats): a whole number from 1 to [`MAX_REPEATS`], 1 when absent.
-    /// `hint` says what the count is, `instead` what to do when it is over the bound.
-    pub(super) fn count(
-        &mut self,
-        letter: u8,
-        code: &'static str,
-        hint: &'static str,
-        instead: &'static str,
-    ) -> Result<u32, RunProblem> {
+    pub(super) fn count(&mut self, letter: u8, code: &'static str, hint: &'static str) -> Result<u32, RunProblem> {
         match self.w.take(letter, code)? {
             None => Ok(1),
-            Some(v) if v > f64::from(MAX_REPEATS) => Err(RunProblem::RepeatBound {
-                code,
-                count: format!("{}{v}", char::from(letter)),
-                limit: MAX_REPEATS,
-                instead,
-            }),
+            Some(v) if v > f64::from(MAX_REPEATS) => {
+                Err(RunProblem::RepeatBound { code, letter: Some(char::from(letter)), value: v, limit: MAX_REPEATS })
+            }
             Some(v) => match whole(letter, v)? {
                 0 => Err(RunProblem::OutOfRange { code, letter: char::from(letter), value: v, hint }),
                 n => Ok(n),
@@ -625,8 +616,7 @@ impl LineRun<'_> {
             Some(98) => {
                 let p = self.require(b'P', "M98", "the program number to call, e.g. M98 P1000 for O1000")?;
                 let program = whole(b'P', p)?;
-                let repeats =
-                    self.count(b'L', "M98", "L counts calls and must be at least 1", "call it from a loop instead")?;
+                let repeats = self.count(b'L', "M98", "L counts calls and must be at least 1")?;
                 Ok(Flow::Call { program, repeats })
             }
             Some(99) => Ok(Flow::Return),

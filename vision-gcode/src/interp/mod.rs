@@ -230,6 +230,20 @@ impl Interpreter {
         self.chunked = on;
     }
 
+    /// Events held back go out before the next line runs (off the hot path of every line).
+    #[cold]
+    #[inline(never)]
+    fn flush_held(&mut self, sink: &mut dyn EventSink) {
+        while self.emit_held(sink) {}
+    }
+
+    /// Keeps the committed line's events for [`Interpreter::emit_held`].
+    #[cold]
+    #[inline(never)]
+    fn hold_pending(&mut self) {
+        self.held.extend(self.pending.drain(..));
+    }
+
     /// Emits the next part of the events held back by chunked lines: the plain events up to
     /// and including one chunk of a long expansion. Whether more is held.
     pub fn emit_held(&mut self, sink: &mut dyn EventSink) -> bool {
@@ -292,8 +306,7 @@ impl Interpreter {
         sink: &mut dyn EventSink,
     ) -> Result<Flow, GcodeError> {
         if !self.held.is_empty() {
-            // Events held back go out before the next line runs.
-            while self.emit_held(sink) {}
+            self.flush_held(sink);
         }
         let line = at.line;
         let block = self.parser.parse_line(text, line)?;
@@ -359,7 +372,7 @@ impl Interpreter {
             Ok(flow) => {
                 self.modal = st;
                 if self.chunked {
-                    self.held.extend(self.pending.drain(..));
+                    self.hold_pending();
                 }
                 for pending in self.pending.drain(..) {
                     match pending {

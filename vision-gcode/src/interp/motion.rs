@@ -359,12 +359,7 @@ impl LineRun<'_> {
         let radius = self.length(b'R', name)?;
         let ca = self.length(la, name)?;
         let cb = self.length(lb, name)?;
-        let turns = self.count(
-            b'P',
-            name,
-            "P counts full turns and must be at least 1",
-            "program the turns over several lines",
-        )?;
+        let turns = self.count(b'P', name, "P counts full turns and must be at least 1")?;
         let feed = self.feed(name)?;
         let start = self.st.program;
         let to_user = self.cfg.machine_unit.factor_to(self.st.units);
