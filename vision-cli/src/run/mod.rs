@@ -292,14 +292,19 @@ const PLAN_BATCH: usize = 1024;
 struct StreamedPlan {
     batch: Vec<vision_path::Item>,
     sender: Option<std::sync::mpsc::SyncSender<Vec<vision_path::Item>>>,
-    thread: std::thread::JoinHandle<Result<f64, String>>,
+    /// The planner's thread, or why it could not start.
+    thread: Result<std::thread::JoinHandle<Result<f64, String>>, String>,
 }
 
 impl StreamedPlan {
     fn start(config: PlanConfig) -> StreamedPlan {
         let (sender, receiver) = std::sync::mpsc::sync_channel::<Vec<vision_path::Item>>(4);
-        let thread = std::thread::spawn(move || plan_time(&config, receiver.into_iter().flatten()));
-        StreamedPlan { batch: Vec::with_capacity(PLAN_BATCH), sender: Some(sender), thread }
+        let thread = std::thread::Builder::new()
+            .name("cycle-time planner".into())
+            .spawn(move || plan_time(&config, receiver.into_iter().flatten()))
+            .map_err(|e| format!("the path planner could not start: {e}"));
+        let sender = thread.is_ok().then_some(sender);
+        StreamedPlan { batch: Vec::with_capacity(PLAN_BATCH), sender, thread }
     }
 
     fn push(&mut self, item: vision_path::Item) {
@@ -324,7 +329,7 @@ impl StreamedPlan {
     fn finish(mut self) -> Result<f64, String> {
         self.send();
         self.sender = None;
-        self.thread.join().unwrap_or_else(|_| Err("the path planner stopped unexpectedly".to_string()))
+        self.thread?.join().unwrap_or_else(|_| Err("the path planner stopped unexpectedly".to_string()))
     }
 }
 
