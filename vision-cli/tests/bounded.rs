@@ -61,3 +61,21 @@ fn a_path_past_the_setpoint_bound_is_refused_when_it_is_planned() {
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(err.contains("line 2: the path runs longer than 1000000000 setpoints"), "{err}");
 }
+
+#[test]
+fn run_of_a_million_moves_fits_in_a_small_address_space() {
+    // Issue 26: `run` held every move, 172 MB for a million; it now streams them into the
+    // planner and keeps the first 100 000 for the alignment time (about 80 MB of address space
+    // in all, threads and the binary included; the old build needed more than 150 MB).
+    let mut text = String::from("G20 G90 F100\no100 repeat [100000]\n");
+    for x in 1..=5 {
+        text.push_str(&format!("G1 X0.00{x}\nG1 X0\n"));
+    }
+    text.push_str("o100 endrepeat\nM2\n");
+    let program = scratch("loop-1m.ngc", &text);
+    let path = program.to_str().expect("utf-8");
+    let out = bounded(&["run", "--dialect", "linuxcnc", path], 120, 300).expect("ran in time");
+    let report = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(report.contains("ended by M2 at line 14 (1000000 moves, cycle time"), "{report}");
+}
