@@ -547,6 +547,26 @@ pub enum RunProblem {
         /// Its problem.
         message: String,
     },
+    /// A repeat count above [`crate::MAX_REPEATS`].
+    #[error("{code}: `{}` exceeds the {limit} repeat bound: {}", repeat_word(*.letter, *.value), repeat_advice(.code))]
+    RepeatBound {
+        /// The code (`G81`, `M98`, `G2`, `repeat`).
+        code: &'static str,
+        /// The count's letter (`L`, `P`), `None` for an o-word `repeat [n]`.
+        letter: Option<char>,
+        /// The count written.
+        value: f64,
+        /// The bound.
+        limit: u32,
+    },
+    /// A canned-cycle line that would make more than [`crate::MAX_CYCLE_MOVES`] moves.
+    #[error("{code} would make more than {limit} moves (repeats × pecks): program fewer holes per line or a larger peck depth")]
+    CycleTooManyMoves {
+        /// The cycle.
+        code: &'static str,
+        /// The bound.
+        limit: u64,
+    },
     /// A loop ran more often than allowed.
     #[error("loops ran more than {limit} iterations: the program probably never leaves a loop")]
     TooManyIterations {
@@ -631,4 +651,22 @@ pub enum RunProblem {
     /// A computed machine position that is not finite (e.g. huge values through G51).
     #[error("the move's machine position is not a finite number: check the values and the active G51 scale")]
     NonFinitePosition,
+}
+
+/// A repeat count as written: `L10000000`, or `[200000]` for an o-word `repeat`.
+fn repeat_word(letter: Option<char>, value: f64) -> String {
+    match letter {
+        Some(l) => format!("{l}{value}"),
+        None => format!("[{value}]"),
+    }
+}
+
+/// What to do instead of a repeat count over the bound, by code.
+fn repeat_advice(code: &str) -> &'static str {
+    match code {
+        "M98" => "call it from a loop instead",
+        "repeat" => "nest two repeats, or use a while loop",
+        "G2" | "G3" => "program the turns over several lines",
+        _ => "split the holes over several lines",
+    }
 }

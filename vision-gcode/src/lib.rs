@@ -31,7 +31,12 @@
 //! ([`Dialect`]: seed 002's `MachineMotion`, `Mach4`, `LinuxCnc`, for the few rules where the
 //! controllers differ) and the limits. [`Interpreter::run`] runs a whole text;
 //! [`Interpreter::run_streamed`] runs a program fed in pieces by the same rules (the path
-//! planner streams it line by line). A failing line changes nothing and emits nothing; the
+//! planner streams it line by line; from its first o-word line on, [`Interpreter::start_flow`]
+//! and [`Interpreter::step_flow`] run it a line at a time, and
+//! [`Interpreter::set_chunked_events`] hands a long line's events out in bounded chunks).
+//! Memory does not grow with a program's moves or loop iterations: events are never collected,
+//! a canned cycle's holes are walked rather than held, and every repeat count is at most
+//! [`MAX_REPEATS`]. A failing line changes nothing and emits nothing; the
 //! error ([`GcodeError`]) names the line and what to do.
 //!
 //! How it works and why — the frame chain, and every decision taken where the spec is open
@@ -70,6 +75,9 @@ pub use event::{
 };
 pub use geom::{ArcDirection, Plane, Xyz, MAX_COORDINATE};
 pub use handler::{Context, HandlerError, MCodeHandler, UserMCode};
-pub use interp::{needs_program, Interpreter, MotionMode, Piece, ProgramStream, RunOutcome, MAX_SAVED_MODAL_STATES};
+pub use interp::{
+    needs_program, FlowRun, Interpreter, MotionMode, Piece, ProgramStream, RunOutcome, MAX_CYCLE_MOVES, MAX_REPEATS,
+    MAX_SAVED_MODAL_STATES,
+};
 pub use tools::{DigitalOutput, Tool, ToolOutputs, ToolTable};
 pub use watch::PositionWatch;

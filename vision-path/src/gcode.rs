@@ -1,7 +1,8 @@
 //! The adapter from the G-code interpreter (`vision-gcode`) to the planner: program text in,
 //! [`Item`]s out, one line at a time, so memory stays bounded by one line's events. From the
 //! first line that needs control flow (an o-word, M98, M99: [`vision_gcode::needs_program`])
-//! the rest of the text runs in one call and its items are queued whole.
+//! the rest of the text is indexed once and still runs a line at a time
+//! ([`Interpreter::step_flow`]), so a loop of any length streams too.
 //!
 //! | interpreter event | planner item |
 //! | --- | --- |
@@ -22,8 +23,8 @@
 use std::collections::VecDeque;
 
 use vision_gcode::{
-    needs_program, Event as GEvent, GcodeError, Interpreter, InterpreterConfig, Piece, Plane, ProgramStream, Rate,
-    RunOutcome, Xyz,
+    needs_program, Event as GEvent, FlowRun, GcodeError, Interpreter, InterpreterConfig, Piece, Plane, ProgramStream,
+    Rate, RunOutcome, Xyz,
 };
 
 use crate::follower::check_axes;
@@ -48,11 +49,22 @@ pub struct GcodeItems<T = String> {
     line: u32,
     queue: VecDeque<Result<Item, PathError>>,
     done: bool,
+    /// From the first control-flow line on: the run, and the line before it (its lines count
+    /// from there).
+    flow: Option<(FlowRun, u32)>,
+    /// How the last line's events are numbered: `(true, base)` under control flow (`base` plus
+    /// the line in the rest of the text), `(false, line)` for a plain line.
+    tags: (bool, u32),
+    /// The last line's outcome, handled once its held events are queued.
+    outcome: Option<Result<Option<Piece>, GcodeError>>,
 }
 
 impl<T: AsRef<str>> GcodeItems<T> {
     /// Run `text` on `interp` (in its current state and machine position), lazily.
-    pub fn new(interp: Interpreter, text: T) -> GcodeItems<T> {
+    pub fn new(mut interp: Interpreter, text: T) -> GcodeItems<T> {
+        // A line's events reach the queue a chunk at a time (a canned cycle of a million
+        // moves is one line).
+        interp.set_chunked_events(true);
         GcodeItems {
             interp,
             program: ProgramStream::default(),
@@ -61,6 +73,9 @@ impl<T: AsRef<str>> GcodeItems<T> {
             line: 0,
             queue: VecDeque::new(),
             done: false,
+            flow: None,
+            tags: (false, 0),
+            outcome: None,
         }
     }
 
@@ -69,8 +84,24 @@ impl<T: AsRef<str>> GcodeItems<T> {
         self.interp.machine_position()
     }
 
-    /// Run the next line, queueing its items.
+    /// Queue the next chunk of the last line's items, or its outcome, or run the next line.
     fn step(&mut self) {
+        let tags = self.tags;
+        if self.interp.emit_held(&mut queue_into(&mut self.queue, tags)) {
+            return;
+        }
+        if let Some(outcome) = self.outcome.take() {
+            return self.after(outcome, tags.0, |n| tag(tags, n));
+        }
+        if let Some((run, base)) = &mut self.flow {
+            self.tags = (true, *base);
+            let outcome = self.interp.step_flow(run, &mut self.program, &mut queue_into(&mut self.queue, self.tags));
+            if let Ok(Some(_)) | Err(_) = outcome {
+                self.flow = None;
+            }
+            self.outcome = Some(outcome);
+            return;
+        }
         // The end of the text (a final newline does not start another line): the program
         // ended without M2/M30 or a closing `%`, which LinuxCNC refuses.
         let Some(start) = self.next.filter(|&start| start < self.text.as_ref().len()) else {
@@ -90,26 +121,37 @@ impl<T: AsRef<str>> GcodeItems<T> {
         self.next = next;
         self.line = self.line.saturating_add(1);
         let line = self.line;
-        let queue = &mut self.queue;
-        // Control flow needs the rest of the text at once (its subroutines may come later):
-        // from here the items are queued whole, not streamed.
-        let whole = needs_program(raw);
-        let (piece, base) = if whole { (rest, line - 1) } else { (raw, line) };
-        let at = |n: u32| if whole { base.saturating_add(n) } else { line };
-        let outcome = self.interp.run_streamed(&mut self.program, piece, None, &mut |e: &GEvent| {
-            queue.push_back(Ok(item(e, at(e.line()) as usize)));
-        });
+        if needs_program(raw) {
+            // Control flow needs the rest of the text at once (its subroutines may come later):
+            // it is indexed now and run a line at a time from here.
+            let base = line - 1;
+            self.tags = (true, base);
+            match self.interp.start_flow(&mut self.program, rest, &mut queue_into(&mut self.queue, self.tags)) {
+                Ok(run) => self.flow = Some((run, base)),
+                Err(e) => self.outcome = Some(Err(e)),
+            }
+            return;
+        }
+        self.tags = (false, line);
+        let mut sink = queue_into(&mut self.queue, self.tags);
+        self.outcome = Some(self.interp.run_streamed(&mut self.program, raw, None, &mut sink).map(Some));
+    }
+
+    /// What a line's `outcome` means for the stream: `whole` when it ran under control flow
+    /// (on the rest of the text), `at` gives a line of the piece its number in the text.
+    fn after(&mut self, outcome: Result<Option<Piece>, GcodeError>, whole: bool, at: impl Fn(u32) -> u32) {
         match outcome {
-            Ok(Piece::RanOut { lines }) if whole => {
-                // The rest ran: the text has ended.
+            Ok(None) => {}
+            Ok(Some(Piece::RanOut { lines })) if whole => {
+                // The control flow ran to the end of the text.
                 self.next = None;
                 self.line = at(lines);
             }
-            Ok(Piece::RanOut { .. }) => {}
+            Ok(Some(Piece::RanOut { .. })) => {}
             // M2/M30 queued its own end.
-            Ok(Piece::Over(RunOutcome::Ended { .. })) => self.done = true,
+            Ok(Some(Piece::Over(RunOutcome::Ended { .. }))) => self.done = true,
             // The closing `%`.
-            Ok(Piece::Over(RunOutcome::Completed { lines })) => {
+            Ok(Some(Piece::Over(RunOutcome::Completed { lines }))) => {
                 self.queue.push_back(Ok(Item::End { line: at(lines) as usize }));
                 self.done = true;
             }
@@ -172,6 +214,20 @@ impl PathFollower {
         }
         self.start(GcodeItems::new(fresh()?, text), max_path_accel, sink, pace)
     }
+}
+
+/// The line of the text an event of line `n` stands for, under `tags` ([`GcodeItems::tags`]).
+fn tag((whole, base): (bool, u32), n: u32) -> u32 {
+    if whole {
+        base.saturating_add(n)
+    } else {
+        base
+    }
+}
+
+/// A sink that queues each event as its planner item, numbered by `tags`.
+fn queue_into(queue: &mut VecDeque<Result<Item, PathError>>, tags: (bool, u32)) -> impl FnMut(&GEvent) + '_ {
+    move |e: &GEvent| queue.push_back(Ok(item(e, tag(tags, e.line()) as usize)))
 }
 
 /// The planner item for one interpreter event, tagged with `line`.

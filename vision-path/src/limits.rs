@@ -77,8 +77,9 @@ pub struct PlanConfig {
     pub lookahead: usize,
     /// Where the machine is when the path starts, machine coordinates.
     pub start: Xyz,
-    /// The most setpoints the stream delivers; a longer path ends with an error at the line
-    /// it reached ([`PlanConfig::DEFAULT_MAX_SETPOINTS`] by default).
+    /// The most setpoints the stream delivers ([`PlanConfig::DEFAULT_MAX_SETPOINTS`] by
+    /// default). A move or dwell that would end past it ends the stream with an error at its
+    /// line as soon as it is planned, before any of its setpoints.
     pub max_setpoints: u64,
 }
 

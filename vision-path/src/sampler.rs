@@ -291,7 +291,14 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Iterator for Setpoints<I> {
         if self.finished {
             return None;
         }
-        if self.tick >= self.max_setpoints {
+        let t = self.tick as f64 * self.period;
+        // `>=`: stops and events due at exactly `t` are taken before sampling `t`.
+        while t >= self.span_end() && self.last.is_none() {
+            self.advance();
+        }
+        // Checked when the span is planned, not when its setpoints run out: a circle of radius
+        // 10⁹ would otherwise be sampled for a minute before it failed.
+        if self.span_end() / self.period >= self.max_setpoints as f64 {
             self.finished = true;
             let line = match &self.span {
                 Span::Motion { piece, .. } => piece.line,
@@ -306,11 +313,6 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Iterator for Setpoints<I> {
                     self.max_setpoints
                 ),
             }));
-        }
-        let t = self.tick as f64 * self.period;
-        // `>=`: stops and events due at exactly `t` are taken before sampling `t`.
-        while t >= self.span_end() && self.last.is_none() {
-            self.advance();
         }
         let setpoint = self.sample(t);
         let tick = self.tick;

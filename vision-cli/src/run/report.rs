@@ -46,6 +46,9 @@ pub(crate) struct ProgramReport {
     pub cycle_note: Option<String>,
     /// The time from the program's last M280 to the M282 after it, seconds (null without).
     pub alignment_time_s: Option<f64>,
+    /// Why there is no alignment time although an M282 followed an M280, if so.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub alignment_note: Option<String>,
     /// Every Vision M-code, in order (the first [`vision_mcode::MAX_RECORDS`]).
     pub steps: Vec<Step>,
     /// Vision M-codes past the first [`vision_mcode::MAX_RECORDS`]: ran, but not listed.

@@ -77,6 +77,9 @@ fn program(s: &mut String, p: &ProgramReport, world_unit: &str) {
     if let Some(t) = p.alignment_time_s {
         let _ = writeln!(s, "  alignment time (M280 to M282) {t:.3} s");
     }
+    if let Some(note) = &p.alignment_note {
+        let _ = writeln!(s, "  alignment time (M280 to M282): {note}");
+    }
     if let Some(t) = &p.calibration_truth {
         let _ = writeln!(
             s,

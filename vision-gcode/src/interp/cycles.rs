@@ -4,11 +4,12 @@
 //! The cycle's own moves run in exact-stop mode; the path mode is restored after the line.
 
 use crate::error::{GCode, RunProblem};
-use crate::event::{Event, PathMode, Rate};
-use crate::geom::Plane;
+use crate::event::{Event, EventSink, LinearMove, PathMode, Rate};
+use crate::frame::Placement;
+use crate::geom::{Plane, Xyz};
 use vision_math::LengthUnit;
 
-use super::line::LineRun;
+use super::line::{LineRun, Pending};
 use super::modal::MotionMode;
 use super::motion::polar_step;
 
@@ -19,6 +20,11 @@ const PECK_CLEARANCE_INCH: f64 = 0.010;
 /// The most pecks one G73/G83 hole may take: a Q far below the hole depth is a typo, and would
 /// otherwise never end (a Q below the depth's rounding step does not deepen the hole at all).
 const MAX_PECKS: f64 = 100_000.0;
+
+/// The most moves one canned-cycle line may make (repeats × pecks): beyond it the program is a
+/// typo, and its moves would take hours to run or print. A cycle's moves are walked, not held,
+/// so the bound is one of time, not memory.
+pub const MAX_CYCLE_MOVES: u64 = 10_000_000;
 
 /// The G-code of a cycle.
 pub(crate) fn cycle_name(code: GCode) -> &'static str {
@@ -156,72 +162,215 @@ impl LineRun<'_> {
                 hint: "the hole would take more than 100 000 pecks; program a larger peck depth",
             });
         }
-        let saved_path = self.st.path;
-        self.st.path = PathMode::ExactStop;
-        let mut level = old_level;
-        let mut current = start.z;
-        if level < r {
-            self.cycle_move(start.x, start.y, r, Rate::Rapid)?;
-            level = r;
-            current = r;
-        }
-        let clear = if self.st.retract_to_r { r } else { level };
-        let clearance = LengthUnit::Inch.convert(PECK_CLEARANCE_INCH, self.cfg.machine_unit);
-        for repeat in 0..repeats {
-            x += step_x;
-            y += step_y;
-            (x, y) = polar_step(x, y, step_distance, step_angle)?;
-            if repeat == 0 && current > r {
-                self.cycle_move(x, y, current, Rate::Rapid)?;
-                self.cycle_move(x, y, r, Rate::Rapid)?;
-            } else {
-                self.cycle_move(x, y, clear, Rate::Rapid)?;
-                if clear > r {
-                    self.cycle_move(x, y, r, Rate::Rapid)?;
+        let clear_level = if self.st.retract_to_r { r } else { old_level.max(r) };
+        let plan = CyclePlan {
+            code: code.0,
+            line: self.line,
+            placement: self.placement(),
+            units: self.st.units,
+            machine_unit: self.cfg.machine_unit,
+            start,
+            machine: self.st.machine,
+            first: (x, y),
+            step: (step_x, step_y),
+            polar_step: (step_distance, step_angle),
+            repeats,
+            r,
+            bottom,
+            clear: clear_level,
+            r_written,
+            bottom_written,
+            peck: peck.0,
+            feed,
+            dwell,
+            rise_to_r: old_level < r,
+            clearance: LengthUnit::Inch.convert(PECK_CLEARANCE_INCH, self.cfg.machine_unit),
+        };
+        // Checked now, emitted when the line commits: a failing cycle emits nothing, and its
+        // moves are never held in memory (a cycle may make millions).
+        let mut moves = 0u64;
+        let mut last = None;
+        plan.walk(&mut |step| {
+            if let CycleStep::Move(p, _) = step {
+                moves += 1;
+                if moves > MAX_CYCLE_MOVES {
+                    return Err(RunProblem::CycleTooManyMoves { code: name, limit: MAX_CYCLE_MOVES });
                 }
+                last = Some((p, self.checked(plan.placement.machine_of(p))?));
             }
-            match code.0 {
-                730 | 830 => {
-                    // Counted in program units, as rs274 does: converted to machine units, a hole
-                    // depth that is an exact multiple of Q can round to one peck more or less.
-                    let mut depth_written = r_written - peck.0;
-                    while depth_written > bottom_written {
-                        let depth = self.st.units.convert(depth_written, self.cfg.machine_unit);
-                        self.cycle_move(x, y, depth, Rate::Feed(feed))?;
-                        if code.0 == 830 {
-                            self.cycle_move(x, y, r, Rate::Rapid)?;
-                        }
-                        self.cycle_move(x, y, depth + clearance, Rate::Rapid)?;
-                        depth_written -= peck.0;
-                    }
-                    self.cycle_move(x, y, bottom, Rate::Feed(feed))?;
-                    self.cycle_move(x, y, clear, Rate::Rapid)?;
-                }
-                850 => {
-                    self.cycle_move(x, y, bottom, Rate::Feed(feed))?;
-                    self.cycle_move(x, y, r, Rate::Feed(feed))?;
-                    self.cycle_move(x, y, clear, Rate::Rapid)?;
-                }
-                _ => {
-                    self.cycle_move(x, y, bottom, Rate::Feed(feed))?;
-                    if matches!(code.0, 820 | 890) {
-                        self.emit(Event::Dwell { line: self.line, seconds: dwell });
-                    }
-                    let out = if code.0 == 890 { Rate::Feed(feed) } else { Rate::Rapid };
-                    self.cycle_move(x, y, clear, out)?;
-                }
-            }
+            Ok(())
+        })?;
+        if let Some((program, machine)) = last {
+            self.st.program = program;
+            self.st.machine = machine;
         }
-        self.st.path = saved_path;
+        self.out.push(Pending::Cycle(Box::new(CycleCursor::new(plan))));
         self.st.cycle.r = r_word;
         self.st.cycle.z = z_word;
         self.st.cycle.p = dwell;
         self.st.cycle.q = peck;
         Ok(())
     }
+}
 
-    /// One straight move of a cycle to program point (x, y, z).
-    fn cycle_move(&mut self, x: f64, y: f64, z: f64, rate: Rate) -> Result<(), RunProblem> {
-        self.linear(crate::geom::Xyz::new(x, y, z), rate)
+/// One step of a canned cycle: a straight move to a program point, or the bottom dwell.
+#[derive(Debug, Clone, Copy)]
+enum CycleStep {
+    Move(Xyz, Rate),
+    Dwell,
+}
+
+/// A canned-cycle line, checked: everything needed to walk its moves again when the line
+/// commits. Lengths in machine units unless said otherwise.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct CyclePlan {
+    /// The cycle's code ×10 (810 = G81).
+    code: u16,
+    line: u32,
+    placement: Placement,
+    /// The program's units (pecks are counted in them).
+    units: LengthUnit,
+    machine_unit: LengthUnit,
+    /// The program point before the cycle.
+    start: Xyz,
+    /// The machine position before the cycle.
+    machine: Xyz,
+    /// X/Y before the first step (the hole position under G90).
+    first: (f64, f64),
+    /// X/Y step per repeat (G91).
+    step: (f64, f64),
+    /// LinuxCNC's polar step per repeat: distance (machine units) and angle (radians).
+    polar_step: (Option<f64>, Option<f64>),
+    repeats: u32,
+    /// The R plane and the hole bottom.
+    r: f64,
+    bottom: f64,
+    /// Where each hole retracts to (R under G99, else the initial level).
+    clear: f64,
+    /// R and the bottom in program units, for counting pecks as rs274 does.
+    r_written: f64,
+    bottom_written: f64,
+    /// The peck depth, program units (0 for cycles without pecks).
+    peck: f64,
+    /// Feed, machine units per minute.
+    feed: f64,
+    /// G82/G89's dwell at the bottom, seconds.
+    dwell: f64,
+    /// Whether the tool first rises from below R to R.
+    rise_to_r: bool,
+    /// The back-off of G73/G83 between pecks.
+    clearance: f64,
+}
+
+impl CyclePlan {
+    /// Walks the cycle's steps in order (LinuxCNC's `convert_cycle_xy`), stopping at the first
+    /// error `f` returns.
+    fn walk(self, f: &mut dyn FnMut(CycleStep) -> Result<(), RunProblem>) -> Result<(), RunProblem> {
+        let mut holes = CycleCursor::new(self);
+        while holes.hole(f)? {}
+        Ok(())
+    }
+}
+
+/// A checked canned cycle on its way to the sink, a hole at a time.
+#[derive(Debug, Clone)]
+pub(crate) struct CycleCursor {
+    plan: CyclePlan,
+    /// Holes walked so far.
+    repeat: u32,
+    /// X/Y of the last hole (before the first: where the steps start).
+    x: f64,
+    y: f64,
+    /// Machine position after the last step emitted.
+    from: Xyz,
+}
+
+impl CycleCursor {
+    fn new(plan: CyclePlan) -> CycleCursor {
+        CycleCursor { plan, repeat: 0, x: plan.first.0, y: plan.first.1, from: plan.machine }
+    }
+
+    /// Walks the next hole (after the rise to R, for the first); whether holes are left.
+    fn hole(&mut self, f: &mut dyn FnMut(CycleStep) -> Result<(), RunProblem>) -> Result<bool, RunProblem> {
+        let p = self.plan;
+        if self.repeat >= p.repeats {
+            return Ok(false);
+        }
+        let (r, bottom, clear, feed) = (p.r, p.bottom, p.clear, p.feed);
+        let to = |x: f64, y: f64, z: f64, rate: Rate| CycleStep::Move(Xyz::new(x, y, z), rate);
+        let current = if p.rise_to_r { r } else { p.start.z };
+        if self.repeat == 0 && p.rise_to_r {
+            f(to(p.start.x, p.start.y, r, Rate::Rapid))?;
+        }
+        let (x, y) = polar_step(self.x + p.step.0, self.y + p.step.1, p.polar_step.0, p.polar_step.1)?;
+        (self.x, self.y) = (x, y);
+        if self.repeat == 0 && current > r {
+            f(to(x, y, current, Rate::Rapid))?;
+            f(to(x, y, r, Rate::Rapid))?;
+        } else {
+            f(to(x, y, clear, Rate::Rapid))?;
+            if clear > r {
+                f(to(x, y, r, Rate::Rapid))?;
+            }
+        }
+        match p.code {
+            730 | 830 => {
+                // Counted in program units, as rs274 does: converted to machine units, a hole
+                // depth that is an exact multiple of Q can round to one peck more or less.
+                let mut depth_written = p.r_written - p.peck;
+                while depth_written > p.bottom_written {
+                    let depth = p.units.convert(depth_written, p.machine_unit);
+                    f(to(x, y, depth, Rate::Feed(feed)))?;
+                    if p.code == 830 {
+                        f(to(x, y, r, Rate::Rapid))?;
+                    }
+                    f(to(x, y, depth + p.clearance, Rate::Rapid))?;
+                    depth_written -= p.peck;
+                }
+                f(to(x, y, bottom, Rate::Feed(feed)))?;
+                f(to(x, y, clear, Rate::Rapid))?;
+            }
+            850 => {
+                f(to(x, y, bottom, Rate::Feed(feed)))?;
+                f(to(x, y, r, Rate::Feed(feed)))?;
+                f(to(x, y, clear, Rate::Rapid))?;
+            }
+            _ => {
+                f(to(x, y, bottom, Rate::Feed(feed)))?;
+                if matches!(p.code, 820 | 890) {
+                    f(CycleStep::Dwell)?;
+                }
+                let out = if p.code == 890 { Rate::Feed(feed) } else { Rate::Rapid };
+                f(to(x, y, clear, out))?;
+            }
+        }
+        self.repeat += 1;
+        Ok(self.repeat < p.repeats)
+    }
+
+    /// Emits every remaining move (exact stop at each) and dwell; the plan was checked when its
+    /// line ran, so no step fails here.
+    pub(crate) fn emit(&mut self, sink: &mut dyn EventSink) {
+        while self.emit_some(sink) {}
+    }
+
+    /// Emits the next hole; whether holes are left.
+    pub(crate) fn emit_some(&mut self, sink: &mut dyn EventSink) -> bool {
+        let (line, placement, dwell) = (self.plan.line, self.plan.placement, self.plan.dwell);
+        let mut from = self.from;
+        let more = self.hole(&mut |step| {
+            let event = match step {
+                CycleStep::Move(p, rate) => {
+                    let end = placement.machine_of(p);
+                    let start = std::mem::replace(&mut from, end);
+                    Event::Linear(LinearMove { line, start, end, rate, path: PathMode::ExactStop })
+                }
+                CycleStep::Dwell => Event::Dwell { line, seconds: dwell },
+            };
+            sink.event(&event);
+            Ok(())
+        });
+        self.from = from;
+        more.unwrap_or(false)
     }
 }

@@ -9,10 +9,10 @@
 
 use std::collections::HashMap;
 use std::path::PathBuf;
-use std::rc::Rc;
+use std::sync::Arc;
 
 use super::line::Flow;
-use super::{At, Interpreter, Piece, ProgramStream, RunOutcome};
+use super::{At, Interpreter, Piece, ProgramStream, RunOutcome, MAX_REPEATS};
 use crate::config::Dialect;
 use crate::error::{GcodeError, RunProblem, SyntaxProblem};
 use crate::event::EventSink;
@@ -111,7 +111,7 @@ struct Source {
     /// Byte range of each line.
     lines: Vec<(usize, usize)>,
     /// The o-line of each line, if any (shared: reading one costs no allocation).
-    olines: Vec<Option<Rc<OLine>>>,
+    olines: Vec<Option<Arc<OLine>>>,
 }
 
 fn syntax(line: usize, detail: impl Into<String>) -> GcodeError {
@@ -293,13 +293,13 @@ impl Source {
         let mut slots = vec![None; lines.len()];
         for (at, o) in olines {
             if let Some(slot) = slots.get_mut(at) {
-                *slot = Some(Rc::new(o));
+                *slot = Some(Arc::new(o));
             }
         }
         Ok(Source { text, lines, olines: slots })
     }
 
-    fn oline(&self, index: usize) -> Option<Rc<OLine>> {
+    fn oline(&self, index: usize) -> Option<Arc<OLine>> {
         self.olines.get(index).and_then(Clone::clone)
     }
 
@@ -320,6 +320,7 @@ struct CallFrame {
 }
 
 /// The control-flow run of one program.
+#[derive(Debug, Default)]
 struct Runner {
     sources: Vec<Source>,
     subs: HashMap<Box<str>, (usize, usize)>,
@@ -329,7 +330,70 @@ struct Runner {
     iterations: u64,
 }
 
+/// A program with control flow that runs a line at a time: started by
+/// [`Interpreter::start_flow`], advanced by [`Interpreter::step_flow`]. It holds the program's
+/// text (indexed), its calls and loops and where it stands, never its events, so a caller that
+/// pulls events (the path planner) runs a loop of any length in bounded memory.
+#[derive(Debug)]
+pub struct FlowRun {
+    r: Runner,
+    src: usize,
+    pc: usize,
+    /// The program ended on the line that started it.
+    over: Option<Piece>,
+}
+
 impl Interpreter {
+    /// Starts running `text` a line at a time, by [`Interpreter::run_streamed`]'s rules: its
+    /// first line — the one that needs the program ([`needs_program`]) — runs now, the rest
+    /// one [`Interpreter::step_flow`] at a time. Lines are numbered from 1 within `text`. No
+    /// handler: user M-codes are reported as events.
+    ///
+    /// # Errors
+    /// The first line's error, or a malformed o-word structure anywhere in `text`.
+    pub fn start_flow(
+        &mut self,
+        program: &mut ProgramStream,
+        text: &str,
+        sink: &mut dyn EventSink,
+    ) -> Result<FlowRun, GcodeError> {
+        let first = text.split('\n').next().unwrap_or("");
+        let at = At { line: 1, tag: 1, nested: false };
+        let over = |piece| FlowRun { r: Runner::default(), src: 0, pc: 0, over: Some(piece) };
+        match self.exec_line(first, at, None, sink)? {
+            Flow::OWord => self.flow_start(text, 0, None, program),
+            call @ (Flow::Call { .. } | Flow::Return) => self.flow_start(text, 1, Some(call), program),
+            Flow::End(code) => Ok(over(Piece::Over(RunOutcome::Ended { line: 1, code }))),
+            Flow::Percent if program.delimited => Ok(over(Piece::Over(RunOutcome::Completed { lines: 1 }))),
+            Flow::Percent if program.started && self.config.dialect == Dialect::LinuxCnc => {
+                Err(GcodeError::run(1, RunProblem::PercentInside))
+            }
+            // A comment that mentions M98: no control flow after all, but the rest runs here.
+            flow @ (Flow::Percent | Flow::Continue) => {
+                if flow == Flow::Percent {
+                    program.delimited = !program.started;
+                }
+                self.flow_start(text, 1, None, program)
+            }
+        }
+    }
+
+    /// Runs the next line of `run` (a G-code line, or one o-word line and its jump).
+    ///
+    /// # Errors
+    /// As [`Interpreter::run`]; the run is over then.
+    pub fn step_flow(
+        &mut self,
+        run: &mut FlowRun,
+        program: &mut ProgramStream,
+        sink: &mut dyn EventSink,
+    ) -> Result<Option<Piece>, GcodeError> {
+        if let Some(piece) = run.over.take() {
+            return Ok(Some(piece));
+        }
+        self.flow_line(run, program, None, sink)
+    }
+
     /// Runs `text` from line `from` (0-based; the first o-word line) with control flow.
     pub(super) fn run_flow(
         &mut self,
@@ -340,9 +404,25 @@ impl Interpreter {
         mut handler: Option<&mut dyn MCodeHandler>,
         sink: &mut dyn EventSink,
     ) -> Result<Piece, GcodeError> {
+        let mut run = self.flow_start(text, from, pending, program)?;
+        loop {
+            if let Some(piece) = self.flow_line(&mut run, program, handler.as_deref_mut(), sink)? {
+                return Ok(piece);
+            }
+        }
+    }
+
+    /// Indexes `text` and stands at line `from` (0-based), after the M98/M99 `pending` of the
+    /// line before it.
+    fn flow_start(
+        &mut self,
+        text: &str,
+        from: usize,
+        pending: Option<Flow>,
+        program: &mut ProgramStream,
+    ) -> Result<FlowRun, GcodeError> {
         let main = Source::index(text.to_string())?;
-        let mut r =
-            Runner { sources: Vec::new(), subs: HashMap::new(), calls: Vec::new(), repeats: Vec::new(), iterations: 0 };
+        let mut r = Runner::default();
         r.register(main);
         let (mut src, mut pc) = (0, from);
         if let Some(flow) = pending {
@@ -350,25 +430,43 @@ impl Interpreter {
             (src, pc) = self.m98(&mut r, flow, (src, pc), line)?;
         }
         program.started = true;
-        while let Some(source) = r.sources.get(src) {
+        Ok(FlowRun { r, src, pc, over: None })
+    }
+
+    /// One line of a run with control flow; `Some` when the program is over.
+    #[allow(clippy::too_many_lines)] // one arm per o-word keyword
+    fn flow_line<'h>(
+        &mut self,
+        run: &mut FlowRun,
+        program: &mut ProgramStream,
+        handler: Option<&mut (dyn MCodeHandler + 'h)>,
+        sink: &mut dyn EventSink,
+    ) -> Result<Option<Piece>, GcodeError> {
+        let (r, mut src, mut pc) = (&mut run.r, run.src, run.pc);
+        // `break 'step` ends the line, where the text's loop had `continue`.
+        'step: {
+            let Some(source) = r.sources.get(src) else {
+                return Ok(Some(Piece::RanOut { lines: 0 }));
+            };
             if pc >= source.lines.len() {
                 if src != 0 || !r.calls.is_empty() {
                     return Err(syntax(pc.saturating_sub(1), "the text ended inside a subroutine: add its endsub"));
                 }
-                break;
+                let lines = r.sources.first().map_or(0, |s| s.lines.len());
+                return Ok(Some(Piece::RanOut { lines: u32::try_from(lines).unwrap_or(u32::MAX) }));
             }
             let line = u32::try_from(pc + 1).unwrap_or(u32::MAX);
             let Some(o) = source.oline(pc) else {
                 let raw = source.line(pc);
                 let at = At { line, tag: line, nested: false };
-                match self.exec_line(raw, at, handler.as_deref_mut(), sink)? {
-                    Flow::End(code) => return Ok(Piece::Over(RunOutcome::Ended { line, code })),
+                match self.exec_line(raw, at, handler, sink)? {
+                    Flow::End(code) => return Ok(Some(Piece::Over(RunOutcome::Ended { line, code }))),
                     flow @ (Flow::Call { .. } | Flow::Return) => {
-                        (src, pc) = self.m98(&mut r, flow, (src, pc + 1), line)?;
-                        continue;
+                        (src, pc) = self.m98(r, flow, (src, pc + 1), line)?;
+                        break 'step;
                     }
                     Flow::Percent if program.delimited && src == 0 => {
-                        return Ok(Piece::Over(RunOutcome::Completed { lines: line }))
+                        return Ok(Some(Piece::Over(RunOutcome::Completed { lines: line })))
                     }
                     Flow::Percent if src == 0 && self.config.dialect == Dialect::LinuxCnc => {
                         return Err(GcodeError::run(line, RunProblem::PercentInside))
@@ -377,7 +475,7 @@ impl Interpreter {
                     Flow::Continue | Flow::OWord => {}
                 }
                 pc += 1;
-                continue;
+                break 'step;
             };
             let args = self.flow_args(source.line(pc).get(o.args..).unwrap_or(""), line)?;
             let cond = |args: &[f64]| args.first().is_some_and(|v| *v != 0.0);
@@ -388,8 +486,8 @@ impl Interpreter {
                     if let Some(&v) = args.first() {
                         let _ = self.params.write_named("_value", v);
                     }
-                    (src, pc) = self.leave(&mut r, line)?;
-                    continue;
+                    (src, pc) = self.leave(r, line)?;
+                    break 'step;
                 }
                 Keyword::Call => {
                     let target = r.find(&o.label, &self.config.subroutine_path, line)?;
@@ -416,7 +514,7 @@ impl Interpreter {
                     if cond(&args) {
                         pc + 1
                     } else {
-                        self.branch(&r, src, o.jump, line)?
+                        self.branch(r, src, o.jump, line)?
                     }
                 }
                 // Reached in sequence only from the end of a taken branch: leave the `if`.
@@ -444,8 +542,14 @@ impl Interpreter {
                 }
                 Keyword::Repeat => {
                     let count = args.first().copied().unwrap_or(0.0);
+                    if count > f64::from(MAX_REPEATS) {
+                        return Err(GcodeError::run(
+                            line,
+                            RunProblem::RepeatBound { code: "repeat", letter: None, value: count, limit: MAX_REPEATS },
+                        ));
+                    }
                     if count >= 1.0 {
-                        // A count beyond u64 is absurd; saturate.
+                        // At most MAX_REPEATS here.
                         #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
                         r.repeats.push((src, pc, count.floor() as u64));
                         pc + 1
@@ -484,7 +588,8 @@ impl Interpreter {
             };
             pc = next;
         }
-        Ok(Piece::RanOut { lines: u32::try_from(r.sources.first().map_or(0, |s| s.lines.len())).unwrap_or(u32::MAX) })
+        (run.src, run.pc) = (src, pc);
+        Ok(None)
     }
 
     /// Returns from the innermost call (endsub, return, M99): restores its caller's #1–#30 and

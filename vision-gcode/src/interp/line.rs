@@ -3,6 +3,7 @@
 //! Nothing here reaches the sink: events are queued in `out` and only flushed by the caller
 //! once the whole line succeeded, so a failing line emits nothing and changes nothing.
 
+use super::cycles::CycleCursor;
 use super::motion::Polyline;
 use crate::config::{Dialect, InterpreterConfig};
 use crate::error::{GCode, RunProblem};
@@ -10,6 +11,7 @@ use crate::event::{Coolant, Event, OutputChange, OutputWrite, PathMode, SpindleC
 use crate::frame::Placement;
 use crate::geom::{Plane, Xyz, MAX_COORDINATE};
 use crate::interp::modal::Modal;
+use crate::interp::MAX_REPEATS;
 use crate::params::{ParameterTable, G28_POSITION, G30_POSITION};
 use crate::words::{whole, Words};
 use vision_math::{LengthUnit, Point2};
@@ -43,6 +45,8 @@ pub(crate) enum Flow {
 pub(crate) enum Pending {
     Event(Event),
     Polyline(Polyline),
+    // Boxed: a cycle is rare and its plan large; every queued event would pay for its size.
+    Cycle(Box<CycleCursor>),
 }
 
 /// Modal groups of the G-codes this interpreter knows.
@@ -404,10 +408,13 @@ impl LineRun<'_> {
         }
     }
 
-    /// A count word (turns, repeats): a whole number ≥ 1, 1 when absent.
+    /// A count word (turns, repeats): a whole number from 1 to [`MAX_REPEATS`], 1 when absent.
     pub(super) fn count(&mut self, letter: u8, code: &'static str, hint: &'static str) -> Result<u32, RunProblem> {
         match self.w.take(letter, code)? {
             None => Ok(1),
+            Some(v) if v > f64::from(MAX_REPEATS) => {
+                Err(RunProblem::RepeatBound { code, letter: Some(char::from(letter)), value: v, limit: MAX_REPEATS })
+            }
             Some(v) => match whole(letter, v)? {
                 0 => Err(RunProblem::OutOfRange { code, letter: char::from(letter), value: v, hint }),
                 n => Ok(n),

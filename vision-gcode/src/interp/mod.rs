@@ -7,9 +7,12 @@ mod line;
 mod modal;
 mod motion;
 
+use std::collections::VecDeque;
+
 use vision_math::{AlignmentChain, LengthUnit, Point2, Vector2};
 
-pub use flow::needs_program;
+pub use cycles::MAX_CYCLE_MOVES;
+pub use flow::{needs_program, FlowRun};
 pub use modal::MotionMode;
 
 use crate::config::{Dialect, InterpreterConfig};
@@ -93,7 +96,17 @@ pub struct Interpreter {
     publisher: Publisher,
     /// Modal states saved by [`Interpreter::push_modal_state`], newest last.
     saved_modal: Vec<Modal>,
+    /// Whether committed lines keep their events for [`Interpreter::emit_held`].
+    chunked: bool,
+    /// Events of committed lines not emitted yet (chunked only), in order.
+    held: VecDeque<Pending>,
 }
+
+/// The largest repeat count a program may write: a canned cycle's and M98's `L`, G2/G3's `P`
+/// turns, an o-word `repeat [n]`. Above it a count is a typo (`L10000000`) that would run for
+/// hours; the loops without a count (`while`, `do`) are bounded by
+/// [`InterpreterConfig::max_loop_iterations`] instead.
+pub const MAX_REPEATS: u32 = 100_000;
 
 /// The most modal states [`Interpreter::push_modal_state`] keeps at once.
 pub const MAX_SAVED_MODAL_STATES: usize = 16;
@@ -115,6 +128,8 @@ impl Interpreter {
             pending: Vec::new(),
             publisher: Publisher::default(),
             saved_modal: Vec::new(),
+            chunked: false,
+            held: VecDeque::new(),
         };
         interp.refresh_mirrors();
         interp
@@ -206,6 +221,51 @@ impl Interpreter {
         Ok(Piece::RanOut { lines })
     }
 
+    /// Chunked events, for a caller that pulls them (the path planner): when on, a line that
+    /// commits keeps its events, and [`Interpreter::emit_held`] hands them out a bounded chunk
+    /// at a time — a canned cycle one hole at a time, an arc's polyline 1024 segments at a
+    /// time — so a line that expands into millions of moves never sits whole in the caller's
+    /// queue. Held events go out before the next line runs in any case.
+    pub fn set_chunked_events(&mut self, on: bool) {
+        self.chunked = on;
+    }
+
+    /// Events held back go out before the next line runs (off the hot path of every line).
+    #[cold]
+    #[inline(never)]
+    fn flush_held(&mut self, sink: &mut dyn EventSink) {
+        while self.emit_held(sink) {}
+    }
+
+    /// Keeps the committed line's events for [`Interpreter::emit_held`].
+    #[cold]
+    #[inline(never)]
+    fn hold_pending(&mut self) {
+        self.held.extend(self.pending.drain(..));
+    }
+
+    /// Emits the next part of the events held back by chunked lines: the plain events up to
+    /// and including one chunk of a long expansion. Whether more is held.
+    pub fn emit_held(&mut self, sink: &mut dyn EventSink) -> bool {
+        while let Some(front) = self.held.front_mut() {
+            let more = match front {
+                Pending::Event(e) => {
+                    sink.event(e);
+                    false
+                }
+                Pending::Polyline(p) => p.emit_some(sink),
+                Pending::Cycle(c) => c.emit_some(sink),
+            };
+            if more {
+                return true;
+            }
+            if !matches!(self.held.pop_front(), Some(Pending::Event(_))) {
+                return !self.held.is_empty();
+            }
+        }
+        false
+    }
+
     /// Host-side access to the same operations a handler has (positions, parameters, tools,
     /// synchronous G-code, dwell), outside any program. Events of `execute` and `dwell` go to
     /// `sink` tagged with line 0.
@@ -245,6 +305,9 @@ impl Interpreter {
         handler: Option<&mut (dyn MCodeHandler + 'h)>,
         sink: &mut dyn EventSink,
     ) -> Result<Flow, GcodeError> {
+        if !self.held.is_empty() {
+            self.flush_held(sink);
+        }
         let line = at.line;
         let block = self.parser.parse_line(text, line)?;
         if block.is_empty() || (self.config.block_delete && block.block_delete()) {
@@ -308,10 +371,14 @@ impl Interpreter {
         match outcome {
             Ok(flow) => {
                 self.modal = st;
+                if self.chunked {
+                    self.hold_pending();
+                }
                 for pending in self.pending.drain(..) {
                     match pending {
                         Pending::Event(e) => sink.event(&e),
-                        Pending::Polyline(p) => p.emit(sink),
+                        Pending::Polyline(mut p) => p.emit(sink),
+                        Pending::Cycle(mut c) => c.emit(sink),
                     }
                 }
                 self.refresh_mirrors();

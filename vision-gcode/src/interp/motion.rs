@@ -22,8 +22,10 @@ pub(crate) struct Polyline {
     arc: Arc,
     placement: Placement,
     segments: u64,
-    /// Machine position where the arc starts.
+    /// Machine position where the next segment starts (the arc's start before any).
     start: Xyz,
+    /// The next segment to emit, from 1.
+    next: u64,
     feed: f64,
     /// The line's path mode, for the last segment.
     path: PathMode,
@@ -31,13 +33,25 @@ pub(crate) struct Polyline {
     chord_tolerance: f64,
 }
 
+/// The most segments of a polyline emitted in one chunk ([`Polyline::emit_some`]).
+const SEGMENTS_PER_CHUNK: u64 = 1024;
+
 impl Polyline {
     /// Emits the segments; the last one ends exactly at the arc's mapped end point and carries
     /// the line's path mode, the others blend (G64 P chord tolerance) even under G61.
-    pub(crate) fn emit(&self, sink: &mut dyn EventSink) {
-        let mut from = self.start;
+    pub(crate) fn emit(&mut self, sink: &mut dyn EventSink) {
+        self.emit_up_to(self.segments, sink);
+    }
+
+    /// Emits the next chunk of segments; whether segments are left.
+    pub(crate) fn emit_some(&mut self, sink: &mut dyn EventSink) -> bool {
+        self.emit_up_to(self.next.saturating_add(SEGMENTS_PER_CHUNK - 1).min(self.segments), sink);
+        self.next <= self.segments
+    }
+
+    fn emit_up_to(&mut self, last: u64, sink: &mut dyn EventSink) {
         let interior = PathMode::Blend { tolerance: Some(self.chord_tolerance) };
-        for k in 1..=self.segments {
+        for k in self.next..=last {
             // k ≤ segments ≤ the configured limit (10⁷ by default): exact in f64.
             #[allow(clippy::cast_precision_loss)]
             let t = k as f64 / self.segments as f64;
@@ -45,13 +59,14 @@ impl Polyline {
             let path = if k == self.segments { self.path } else { interior };
             sink.event(&Event::Linear(LinearMove {
                 line: self.line,
-                start: from,
+                start: self.start,
                 end: to,
                 rate: Rate::Feed(self.feed),
                 path,
             }));
-            from = to;
+            self.start = to;
         }
+        self.next = self.next.max(last + 1);
     }
 }
 
@@ -405,6 +420,7 @@ impl LineRun<'_> {
                 placement: pl,
                 segments,
                 start: machine_start,
+                next: 1,
                 feed,
                 path: self.st.path,
                 chord_tolerance: self.cfg.chord_tolerance,
