@@ -79,17 +79,26 @@ class Host:
         if status != INTERP_OK:
             raise VisionError("LinuxCNC refused %r: %s" % (line, self._interp.get_errormsg()))
 
+    def _machine_to_program(self):
+        """Program units per machine unit: the tool table is in the machine's units
+        ([TRAJ]LINEAR_UNITS), the session works in the program's (G20/G21)."""
+        machine_metric = self._interp.params["_metric_machine"] == 1.0
+        if machine_metric == self.metric():
+            return 1.0
+        return 1.0 / 25.4 if machine_metric else 25.4
+
     def tool(self):
         """The tool in the spindle (0 when none)."""
         return max(self._interp.current_tool, 0)
 
     def tool_offset(self, tool):
-        """Tool-table X, Y offset of `tool` (machine units); VisionError when it is not there."""
+        """Tool-table X, Y offset of `tool`, program units; VisionError when it is not there."""
         status, pocket = self._interp.find_tool_pocket(tool)
         if status != INTERP_OK:
             raise VisionError("tool %d is not in the tool table; add it" % tool)
         offset = self._interp.tool_table[pocket].offset
-        return (offset.x, offset.y)
+        scale = self._machine_to_program()
+        return (offset.x * scale, offset.y * scale)
 
     def set_tool_offset(self, tool, x, y):
         """Writes the tool-table X, Y offset of `tool` (G10 L1)."""
@@ -182,12 +191,39 @@ def m284(self, **words):
     return _call(self, 284, words, synced=False)
 
 
+def sheet_words(words):
+    """M283's words in the manual's terms: LinuxCNC's `Pn` (sheet n) becomes the manual's `Cn`.
+
+    On LinuxCNC C is an axis word: on a machine without a C axis (any XYZ mill) the task refuses
+    `M283 C1` ("Bad character 'c' used") before the remap is called, so the sheet number is
+    written `P`. Where `C` does reach the remap (rs274; a machine with a C axis, which would also
+    move it), it is refused with a message that names `P`. Returns (words, None) or (None, the
+    refusal)."""
+    words = dict(words)
+    if "c" in words:
+        return None, "M283 C%g: on LinuxCNC the sheet number is P: write M283 P%g (C is an axis word)" % (
+            words["c"],
+            words["c"],
+        )
+    p = words.pop("p", None)
+    if p is None:
+        if "q" not in words:
+            return None, "M283: give exactly one of Qd (quick, dot diameter d) or Pn (sheet n)"
+        return words, None
+    if "q" in words:
+        return None, "M283: give exactly one of Qd (quick, dot diameter d) or Pn (sheet n), not both"
+    if p != int(p) or p < 1:
+        return None, "M283 P%g is invalid: P is a calibration sheet number (P1)" % p
+    words["c"] = p
+    return words, None
+
+
 def m283_begin(self, **words):
-    """M283's prolog: the session plans the walk (Q: one dot, C: a sheet)."""
-    # C is an axis word to LinuxCNC: left on the block, `M283 C1` would also move the C axis to 1
-    # in the active motion mode (G0 or G1) after the remap. Clearing the flag keeps it a sheet
-    # number (the block's motion is then a zero-length move).
-    self.blocks[self.remap_level].c_flag = False
+    """M283's prolog: the session plans the walk (Q: one dot, P: a sheet, the manual's C)."""
+    words, refusal = sheet_words(words)
+    if refusal is not None:
+        self.set_errormsg(refusal)
+        return INTERP_ERROR
     if not is_task(self):
         return _preview(self, 283)
     try:
