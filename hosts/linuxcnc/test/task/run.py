@@ -1,6 +1,6 @@
 """Runs the vision M-codes in LinuxCNC's real task, headless: `linuxcnc -r` with milltask,
 motion (uspace, not real-time) and HAL from the package's sim configs, on a trivkins XYZ inch
-mill and an XYZ millimetre mill at once. The shipped remaps (remap.py, oword.py, m283.ngc and
+mill and an XYZ millimetre mill, two LinuxCNCs per machine, all at once. The shipped remaps (remap.py, oword.py, m283.ngc and
 the INI lines of mach-vision.ini, from --host) and the real `mach_vision` module (built with
 the `sim` feature, from --module) run on a simulated camera; driver.py is the DISPLAY that runs
 the cases one after another in one LinuxCNC start per machine, and this script checks what the
@@ -40,14 +40,25 @@ CUT = [(2.0, 1.0), (4.0, 1.0), (4.0, 3.0), (4.0, 2.0), (2.0, 3.0), (2.0, 1.0), (
 # name. Each runs in its own IPC, PID and mount namespaces, with a private /tmp.
 ISOLATE = ["unshare", "--ipc", "--pid", "--fork", "--mount-proc", "sh", "-c", 'mount -t tmpfs tmpfs /tmp && exec "$@"', "sh"]
 
+# The cases of one LinuxCNC start (they run one after another): two starts per machine, at once.
+ALIGN = ["example-4", "ng", "base-rotation", "scaled-in-gate", "scaled-refused", "c-word"]
+CALIBRATE = ["sheet", "sheet-then-example-4", "quick"]
+# name: (LINEAR_UNITS, machine units per inch, TOPLEVEL, the cases it runs)
 MACHINES = {
-    # name: (LINEAR_UNITS, machine units per inch)
-    "inch": ("inch", 1.0),
-    "mm": ("mm", 25.4),
+    "inch": ("inch", 1.0, "test", ALIGN),
+    "inch-cal": ("inch", 1.0, "test", CALIBRATE),
+    "mm": ("mm", 25.4, "test", ALIGN),
+    "mm-cal": ("mm", 25.4, "test", CALIBRATE),
+    # From an installed package (--installed): its remaps, INI lines and example 4, with the
+    # tests' module (the simulated camera) ahead of the installed one on the path ...
+    "installed": ("inch", 1.0, "test", ["example-4"]),
+    # ... and its own TOPLEVEL and module, nothing of the tests', on the installed CLI's
+    # emulated Keyence camera over TCP.
+    "shipped": ("inch", 1.0, "shipped", ["shipped-m284"]),
 }
 
 
-def ini_text(machine, run_dir, host, units, per_inch):
+def ini_text(machine, run_dir, host, units, per_inch, toplevel):
     """The machine's INI: a trivkins XYZ mill with the package's sim HAL, fast limits (the
     cases run in seconds), and the shipped mach-vision.ini lines pointed at `host`, the test
     TOPLEVEL in place of the shipped one."""
@@ -69,7 +80,7 @@ def ini_text(machine, run_dir, host, units, per_inch):
         name, body = part.split("]", 1)
         sections[name] = [line for line in body.splitlines() if line.strip() and not line.startswith("#")]
     python = [
-        "TOPLEVEL = " + os.path.join(HERE, "task_toplevel.py") if line.startswith("TOPLEVEL") else line
+        "TOPLEVEL = " + os.path.join(HERE, "task_toplevel.py") if line.startswith("TOPLEVEL") and toplevel == "test" else line
         for line in sections["PYTHON"]
     ]
     return "\n".join(
@@ -121,6 +132,7 @@ def cases(host, setup):
         ("sheet-then-example-4", UNCALIBRATED, None, ex4),
         ("quick", {**UNCALIBRATED, "calibrated": True}, (0, 0), "G90 G20 G17\nG54\nT98 M6 G43\nG0 X6.0 Y0\nM283 Q0.5\nM284 P2\nM2\n"),
         ("c-word", RIGID, (0, 0), "G90 G20 G17\nG54\nT98 M6 G43\nG0 X-2.5 Y-4.0\nM283 C1\nM2\n"),
+        ("shipped-m284", {}, (0, 0), "G90 G20 G17\nG54\nT98 M6 G43\nM284 P2\nM2\n"),
     ]
 
 
@@ -140,9 +152,10 @@ def setup_lines(setup, camera_error):
     return lines
 
 
-def prepare(machine, work, host, module, only):
-    """The machine's run folder: INI, var file, tool table, programs and cases.json."""
-    units, per_inch = MACHINES[machine]
+def prepare(machine, work, host, module, only, camera_port):
+    """The machine's run folder: INI, var file, tool table, programs and cases.json; returns
+    it and LinuxCNC's environment."""
+    units, per_inch, toplevel, runs = MACHINES[machine]
     run_dir = os.path.join(work, machine)
     shutil.rmtree(run_dir, ignore_errors=True)
     os.makedirs(os.path.join(run_dir, "fifo"))
@@ -150,13 +163,15 @@ def prepare(machine, work, host, module, only):
 
     setup = mach_vision.Session.simulated().setup()
     with open(os.path.join(run_dir, "test.ini"), "w") as f:
-        f.write(ini_text(machine, run_dir, host, units, per_inch))
+        f.write(ini_text(machine, run_dir, host, units, per_inch, toplevel))
     with open(os.path.join(run_dir, "test.var"), "w") as f:
         f.write("".join("%d\t0\n" % n for n in mach_vision.PERSISTENT_PARAMS))
     with open(os.path.join(run_dir, "test.tbl"), "w") as f:
         f.write("T1 P1 ;cutter\nT%d P2 ;camera\n" % setup["camera_tool"])
     listed, world_id = [], None
     for name, world, camera_error, program in cases(host, setup):
+        if name not in runs:
+            continue
         if only and name not in only:
             continue
         path = os.path.join(run_dir, name + ".ngc")
@@ -179,10 +194,26 @@ def prepare(machine, work, host, module, only):
         RTAPI_UID=os.environ.get("RTAPI_UID", "65534"),
         RTAPI_FIFO_PATH=os.path.join(run_dir, "fifo", "rtapi_fifo"),
         PYTHONDONTWRITEBYTECODE="1",
-        PYTHONPATH=os.pathsep.join([module, TEST, HERE]),
-        MACH_VISION_TASK_DIR=run_dir,
-        MACH_VISION_SIM="{}",
     )
+    env.pop("PYTHONPATH", None)
+    if toplevel == "test":
+        env.update(
+            PYTHONPATH=os.pathsep.join([TEST, HERE]),
+            MACH_VISION_TEST_MODULE=module,
+            MACH_VISION_TASK_DIR=run_dir,
+            MACH_VISION_SIM="{}",
+        )
+    else:
+        # The shipped module on the emulated Keyence camera; M284 saves the profile.
+        profile = os.path.join(run_dir, "profile.toml")
+        with open(profile, "w") as f:
+            f.write(
+                "[vision]\nVisionEnabled = true\nVisionDriver = \"Keyence\"\nVisionCameraToolNumber = %d\n"
+                "VisionPoundVarBase = 500\n\n[keyence]\nVisionIP = \"127.0.0.1\"\nVisionPort = %d\n"
+                % (setup["camera_tool"], camera_port)
+            )
+        os.chmod(profile, 0o666)
+        env["MACH_VISION_PROFILE"] = profile
     return run_dir, env
 
 
@@ -252,8 +283,17 @@ def check_landing(check, where, result, truth, per_inch, tolerance):
     return max(worst, stood)
 
 
+def check_loaded(check, machine, run_dir, host, module):
+    """The task ran the remaps of `host` and the tests' module."""
+    with open(os.path.join(run_dir, "loaded.json")) as f:
+        loaded = json.load(f)
+    ok = all(os.path.dirname(loaded[m]) == host for m in ("remap", "oword"))
+    ok = ok and os.path.dirname(loaded["mach_vision"]) == module
+    check.that(machine, ok, "the task loaded %s" % loaded)
+
+
 def check_machine(check, machine, run_dir, module_truth):
-    units, per_inch = MACHINES[machine]
+    per_inch = MACHINES[machine][1]
     with open(os.path.join(run_dir, "results.json")) as f:
         out = json.load(f)
     captures = []
@@ -299,6 +339,11 @@ def check_machine(check, machine, run_dir, module_truth):
             check.that(where, not errors and any("M283: calibration done" in m for m in said), "%s %s" % (errors, said))
             check.that(where, any(m.startswith("M284: camera job") for m in said), "M284 P2: %s" % [m for m in said if "M284" in m])
             check_captures(check, where, captures_of(captures, name), per_inch, 3)
+        elif name == "shipped-m284":
+            with open(os.path.join(run_dir, "profile.toml")) as f:
+                saved = re.search(r"(?m)^VisionActiveJob = 2$", f.read()) is not None
+            ok = not errors and "M284: camera job selected" in said and saved
+            check.that(where, ok, "the installed module selected job 2 on the camera over TCP and saved it: %s %s" % (errors, said))
         elif name == "c-word":
             check.that(where, any("Bad character 'c' used" in m for m in errors), "the task refuses C on an XYZ machine: %s" % errors)
     return worst
@@ -310,7 +355,8 @@ def main():
     ap.add_argument("--host", default=REPO_HOST, help="the hosts/linuxcnc folder to run (the checkout's or the installed one)")
     ap.add_argument("--work", required=True, help="a scratch folder outside /tmp (each LinuxCNC gets a private /tmp)")
     ap.add_argument("--only", default="", help="comma-separated case names")
-    ap.add_argument("--machines", default="inch,mm")
+    ap.add_argument("--machines", default="inch,inch-cal,mm,mm-cal", help="of %s" % ",".join(MACHINES))
+    ap.add_argument("--installed", help="the installed package's hosts/linuxcnc folder: runs the machines installed,shipped on it")
     args = ap.parse_args()
     sys.path.insert(0, args.module)
     import mach_vision
@@ -321,6 +367,18 @@ def main():
         return mach_vision.Session.simulated(**{**world, **pairs})
 
     only = [n for n in args.only.split(",") if n]
+    machines = args.machines.split(",")
+    emulator, camera_port = None, 0
+    if args.installed:
+        args.host, machines = args.installed, ["installed", "shipped"]
+        # The installed CLI serves the emulated camera the shipped module talks to.
+        emulator = subprocess.Popen(["mach-vision", "emulate", "--port", "0"], stdout=subprocess.PIPE, text=True)
+        banner = emulator.stdout.readline()
+        found = re.search(r"127\.0\.0\.1:(\d+)", banner)
+        if not found:
+            emulator.kill()
+            raise SystemExit("run.py: mach-vision emulate said %r" % banner)
+        camera_port = int(found.group(1))
     args.work = os.path.abspath(args.work)
     os.makedirs(args.work, exist_ok=True)
     os.chmod(args.work, 0o777)
@@ -330,8 +388,8 @@ def main():
     # (root with CAP_SYS_ADMIN); else one after the other.
     isolated = subprocess.run(ISOLATE + ["true"], capture_output=True).returncode == 0
     print("LinuxCNC runs %s" % ("in parallel, isolated" if isolated else "one after the other (no unshare)"))
-    for machine in args.machines.split(","):
-        run_dir, env = prepare(machine, args.work, os.path.abspath(args.host), os.path.abspath(args.module), only)
+    for machine in machines:
+        run_dir, env = prepare(machine, args.work, os.path.abspath(args.host), os.path.abspath(args.module), only, camera_port)
         log = open(os.path.join(run_dir, "linuxcnc.log"), "w")
         cmd = ["timeout", "600", "linuxcnc", "-r", os.path.join(run_dir, "test.ini")]
         if isolated:
@@ -358,9 +416,14 @@ def main():
                 truths[key] = simulated(worlds[result["name"]])
             return truths[key]
 
+        if MACHINES[machine][2] == "test":
+            check_loaded(check, machine, run_dir, os.path.abspath(args.host), os.path.abspath(args.module))
         worst = check_machine(check, machine, run_dir, truth)
         for name, err in sorted(worst.items()):
             print("     %s %s: landing error %.6f in" % (machine, name, err))
+    if emulator is not None:
+        emulator.terminate()
+        emulator.wait()
     print("%d failure(s), %.1f s" % (check.failures, time.time() - start))
     return 1 if check.failures else 0
 

@@ -5,6 +5,7 @@ camera behind them, in a running LinuxCNC (milltask, motion, HAL).
   `world.json` ({"case", "world", "sim"}: the case's name, its world's id and
   Session.simulated's arguments) in $MACH_VISION_TASK_DIR before each program; the first
   vision M-code under a new world id builds that world's session (cases with one id share it).
+* The module is $MACH_VISION_TEST_MODULE's (with the `sim` feature), ahead of an installed one.
 * The Host is sim_toplevel's (the simulated head is parked where the interpreter's machine is,
   by LinuxCNC's canon) and, at every capture, logs that position beside the one
   `linuxcnc.stat` reports, to `captures.jsonl`: the check holds them together.
@@ -14,8 +15,14 @@ The task imports its TOPLEVEL twice into one namespace, so everything here can r
 
 import json
 import os
+import sys
 
 import linuxcnc
+
+# The tests' module (built with the simulated camera) ahead of any installed one: [PYTHON]
+# PATH_PREPEND puts the installed folder first.
+if sys.path[0] != os.environ["MACH_VISION_TEST_MODULE"]:
+    sys.path.insert(0, os.environ["MACH_VISION_TEST_MODULE"])
 
 import oword  # noqa: F401  (LinuxCNC looks the O-word procedures up in TOPLEVEL's `oword`)
 import remap
@@ -59,3 +66,6 @@ def session():
 
 
 remap.session = session
+# Which files the task loaded: the check holds them to --host (the checkout or the package).
+with open(os.path.join(DIR, "loaded.json"), "w") as f:
+    json.dump({"remap": remap.__file__, "oword": oword.__file__, "mach_vision": sys.modules["mach_vision"].__file__}, f)
