@@ -6,7 +6,9 @@ over vision-host). This file maps LinuxCNC's interpreter onto the `Host` interfa
 calls, and honours read-ahead and preview:
 
 * A capture (M281, M289) first yields INTERP_EXECUTE_FINISH so that it runs where the machine
-  really is; after that yield it may not call self.execute(), so its Host refuses to.
+  really is. G-code a handler runs (self.execute) is only queued: M281's re-centring moves are
+  handed back to the task and the handler yields again until the machine is there (LinuxCNC
+  2.9's task runs G-code queued after the yield).
 * In preview (self.task == 0: AXIS's preview, rs274) there is no camera: every vision M-code
   reports and emits nothing. MACH_VISION_RS274_AS_TASK=1 makes rs274 count as the task; only
   the tests set it.
@@ -43,8 +45,8 @@ class Host:
 
     def __init__(self, interp, synced):
         self._interp = interp
-        # True after `yield INTERP_EXECUTE_FINISH`: the machine is where the program says, and
-        # G-code can no longer be queued from this handler.
+        # True after `yield INTERP_EXECUTE_FINISH`: the machine is where the program says; a
+        # dwell is then a wait here (a G4 would only be queued behind the capture).
         self._synced = synced
 
     def program_position(self):
@@ -64,12 +66,8 @@ class Host:
         return self._interp.params["_metric"] == 1.0
 
     def execute(self, line):
-        """Runs one line of G-code; VisionError when LinuxCNC refuses it or after a sync."""
-        if self._synced:
-            raise VisionError(
-                "cannot run G-code (%s) after waiting for the machine: LinuxCNC does not allow "
-                "self.execute() after yield INTERP_EXECUTE_FINISH" % line
-            )
+        """Queues one line of G-code (the interpreter's state follows at once, the machine when
+        the handler yields or returns); VisionError when LinuxCNC refuses it."""
         try:
             status = self._interp.execute(line)
         except Exception:
@@ -86,6 +84,27 @@ class Host:
         if machine_metric == self.metric():
             return 1.0
         return 1.0 / 25.4 if machine_metric else 25.4
+
+    def save_modal_state(self):
+        """Before the module's own moves (M281's re-centring): M70 saves the distance, feed,
+        plane, units and offsets modes; the motion mode, which M72 does not restore, is kept in
+        #<_vision_saved_motion>. Refused under an arc or canned-cycle mode, which a bare word
+        cannot set back."""
+        motion = self._interp.params["_motion_mode"]
+        if motion not in _MOTION_WORDS:
+            raise VisionError(
+                "cannot move to re-centre under G%g (its mode cannot be set back after the move): "
+                "program G0, G1 or G80 before the capture, or set VisionRecenterPasses to 0" % (motion / 10.0)
+            )
+        self.execute("M70")
+        self._interp.params["_vision_saved_motion"] = motion
+
+    def restore_modal_state(self):
+        """M72, then the motion mode saved_modal_state() kept."""
+        self.execute("M72")
+        motion = self._interp.params["_vision_saved_motion"]
+        if self._interp.params["_motion_mode"] != motion:
+            self.execute(_MOTION_WORDS[motion])
 
     def tool(self):
         """The tool in the spindle (0 when none)."""
@@ -123,6 +142,9 @@ class Host:
         """A message to the operator (AXIS shows it; rs274 prints MESSAGE)."""
         emccanon.MESSAGE(text)
 
+
+# The motion modes (#<_motion_mode>: 10 × the G number) a bare word sets back.
+_MOTION_WORDS = {0.0: "G0", 10.0: "G1", 800.0: "G80"}
 
 # The Host class the handlers hand the session; install() replaces it.
 _HOST_CLASS = Host
@@ -169,12 +191,23 @@ def m280(self, **words):
 
 
 def m281(self, **words):
-    """Capture where the machine is: waits for the queued motion, then triggers."""
+    """Capture where the machine is: waits for the queued motion, then triggers. Re-centring
+    (VisionRecenterPasses): the session queues a move over the mark and the handler waits for
+    the machine again before the next trigger; the last step queues the move back and puts the
+    modal state back (M70/M72)."""
     if not is_task(self):
         yield _preview(self, 281)
         return
     yield INTERP_EXECUTE_FINISH
-    yield _call(self, 281, words, synced=True)
+    try:
+        moving = session().capture_begin(words, host_for(self, synced=True))
+        while moving:
+            yield INTERP_EXECUTE_FINISH
+            moving = session().capture_next(host_for(self, synced=True))
+    except VisionError as e:
+        yield fail(self, 281, e)
+        return
+    yield INTERP_OK
 
 
 def m282(self, **words):

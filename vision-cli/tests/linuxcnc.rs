@@ -72,11 +72,19 @@ fn example_4_aligns_with_g10_l2_r_and_g52_and_lands_on_the_true_part() {
     assert!(gcode[1].starts_with("G52 X"), "{gcode:?}");
     let landed = fit["cut_error"]["max"].as_f64().expect("the truth");
     assert!(landed < 0.0005, "example 4 lands {landed} in from the true part");
-    // Four captures, read in one shot each (LinuxCNC cannot move after a capture's wait), and
-    // the closing M280 put G54's rotation back: the program ran to its M2.
-    let captures = steps.iter().filter(|s| s["type"] == "capture").count();
-    assert_eq!(captures, 4);
-    assert!(steps.iter().all(|s| s["type"] != "capture" || s["recentred"].is_null()));
+    // Four captures; a mark first read farther than VisionRecenterTolerance (16 px) from the
+    // image centre is re-centred over (LinuxCNC's remap waits for the machine between the
+    // moves): here the third. The closing M280 put G54's rotation back: the program ran to M2.
+    let captures: Vec<&Value> = steps.iter().filter(|s| s["type"] == "capture").collect();
+    assert_eq!(captures.len(), 4);
+    let first_px = |s: &Value| {
+        let px = if s["recentred"].is_null() { &s["centred_px"] } else { &s["recentred"]["first_px"] };
+        px[0].as_f64().unwrap_or(f64::NAN).hypot(px[1].as_f64().unwrap_or(f64::NAN))
+    };
+    for s in &captures {
+        assert_eq!(!s["recentred"].is_null(), first_px(s) > 16.0, "{s}");
+    }
+    assert!(captures.iter().any(|s| !s["recentred"].is_null()), "{captures:?}");
     let report: Value = serde_json::from_str(&out).expect("JSON");
     assert_eq!(report["programs"][0]["outcome"], "ended by M2 at line 36");
     assert_eq!(steps.last().expect("a step")["type"], "begin");

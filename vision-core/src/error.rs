@@ -209,6 +209,14 @@ pub enum VisionError {
         /// What was out of order and what to do.
         what: &'static str,
     },
+
+    /// A step of the stepwise M281 (re-centring on a controller that waits itself) came out
+    /// of order.
+    #[error("M281: {what}")]
+    CaptureOrder {
+        /// What was out of order and what to do.
+        what: &'static str,
+    },
 }
 
 /// A driver failure as the operator reads it: the driver's words as they are, or, when the

@@ -271,9 +271,16 @@ fn a_shifted_and_rotated_part_lands_after_m282_also_on_an_operators_rotation() {
         let emitted: Vec<&String> =
             host.lines.iter().filter(|l| l.starts_with("G10") || l.starts_with("G52")).collect();
         assert!(host.lines.iter().all(|l| !l.contains("G68") && !l.contains("G51")), "{:?}", host.lines);
-        // M281 captures after waiting for the machine, so it never re-centres with a move,
-        // although these marks are read ~30 px off the image centre.
-        assert!(host.lines.iter().all(|l| !l.starts_with("G91")), "{:?}", host.lines);
+        // These marks are read ~30 px off the image centre: each capture re-centres over its
+        // mark (G91 G0, G90) and puts the camera back on the program's point.
+        let m280 = host.lines.iter().position(|l| l == "G52 X0 Y0").expect("M280's cancel");
+        for [x, y] in MARKS {
+            let at = m280
+                + host.lines[m280..].iter().position(|l| *l == format!("G0 X{x} Y{y}")).expect("the program's move");
+            assert!(host.lines[at + 1].starts_with("G91 G0 X"), "{:?}", &host.lines[at..]);
+            let back = format!("G90 G0 X{x:.7} Y{y:.7}");
+            assert!(host.lines[at + 2..].iter().take(4).any(|l| *l == back), "{back}: {:?}", &host.lines[at..]);
+        }
         assert!(emitted.len() >= 4, "{emitted:?}");
         assert!((host.rotation_deg - (base + 0.4)).abs() < 0.01, "rotation {}", host.rotation_deg);
         assert_eq!(host.params.get(&linuxcnc::ALIGNMENT_ACTIVE_PARAM), Some(&1.0));
@@ -314,6 +321,37 @@ fn a_capture_under_an_active_alignment_reads_in_the_program_frame() {
             assert!(miss < 0.001, "θ₀ {base}°: corner ({x}, {y}) reads {miss} in off");
         }
     }
+}
+
+/// M281 run stepwise (as the LinuxCNC remap runs it, waiting for the machine between the steps)
+/// is M281: the same moves, the same capture, the same report.
+#[test]
+fn m281_stepwise_is_m281() {
+    let (mut one_shot, mut host_a) = rig(0.0, 0.4, Vector2::new(0.06, -0.04), 1.0, 2.0);
+    let (mut stepwise, mut host_b) = rig(0.0, 0.4, Vector2::new(0.06, -0.04), 1.0, 2.0);
+    one_shot.mcode(&mut host_a, 280, &[]).expect("begun");
+    stepwise.mcode(&mut host_b, 280, &[]).expect("begun");
+    for [x, y] in MARKS {
+        let line = format!("G0 X{x} Y{y}");
+        host_a.execute(&line).expect("a move");
+        host_b.execute(&line).expect("a move");
+        let (from_a, from_b) = (host_a.lines.len(), host_b.lines.len());
+        one_shot.mcode(&mut host_a, 281, &[]).expect("a capture");
+        let mut steps = 1;
+        let mut moving = stepwise.capture_begin(&mut host_b, &[]).expect("a first step");
+        while moving {
+            moving = stepwise.capture_next(&mut host_b).expect("a next step");
+            steps += 1;
+        }
+        assert!(steps >= 2, "({x}, {y}) is read off centre: M281 must re-centre");
+        assert_eq!(host_a.lines[from_a..], host_b.lines[from_b..]);
+        assert_eq!(host_a.messages.last(), host_b.messages.last());
+    }
+    let (a, b) = (one_shot.mcode(&mut host_a, 282, &[]), stepwise.mcode(&mut host_b, 282, &[]));
+    assert_eq!(a.expect("aligned").gcode(), b.expect("aligned").gcode());
+    // A step out of order is refused in M281's words.
+    let e = stepwise.capture_next(&mut host_b).expect_err("no capture in progress");
+    assert_eq!(e.to_string(), "M281: no re-centring is in progress; M281 starts one");
 }
 
 #[test]

@@ -18,9 +18,11 @@ use crate::error::VisionError;
 use crate::machine::{Machine, MachineError};
 
 /// LinuxCNC 2.9. Its tool table holds the offset LinuxCNC *adds* to a programmed point
-/// (`machine = g5x + R·(p + g92) + tool`), the negative of the module's. A capture waits for the
-/// machine first (`yield INTERP_EXECUTE_FINISH`) and a remap may not queue G-code after that,
-/// so M281 does not re-centre, and M283 runs stepwise ([`crate::VisionModule::m283_begin`]).
+/// (`machine = g5x + R·(p + g92) + tool`), the negative of the module's. A remap only queues
+/// G-code, and a capture waits for the machine first (`yield INTERP_EXECUTE_FINISH`), so the
+/// bridge runs M281 stepwise when it re-centres ([`crate::VisionModule::m281_begin`]: the
+/// handler yields again after each move) and M283 stepwise
+/// ([`crate::VisionModule::m283_begin`]).
 #[derive(Debug, Clone, Copy, Default)]
 pub struct LinuxCnc;
 
@@ -35,10 +37,6 @@ impl Controller for LinuxCnc {
 
     fn tool_table_sign(&self) -> f64 {
         -1.0
-    }
-
-    fn may_recentre(&self) -> bool {
-        false
     }
 
     /// Runs `G52 X0 Y0` and `G10 L2 P0 R{θ₀}`, then clears the flag. When a line is refused the

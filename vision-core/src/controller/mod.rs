@@ -7,9 +7,8 @@
 //! ([`Controller::cancel_alignment`]), whether a fit can be applied at all (scale,
 //! [`Controller::check_fit`]), where the alignment's state lives
 //! ([`Controller::active_alignment`]), the G5x rotation under it ([`Controller::base_rotation`]),
-//! the tool table's sign ([`Controller::tool_table_sign`]), whether M281 may move to re-centre
-//! ([`Controller::may_recentre`]) and the G-code dialect its interpreter follows
-//! ([`Controller::dialect`]).
+//! the tool table's sign ([`Controller::tool_table_sign`]) and the G-code dialect its
+//! interpreter follows ([`Controller::dialect`]).
 //!
 //! Adding a controller: one file here implementing [`Controller`], one line in
 //! [`CONTROLLERS`], and its bridge crate implementing [`crate::Machine`] (see
@@ -58,10 +57,6 @@ pub trait Controller: fmt::Debug + Send + Sync {
     /// holds exactly that, −1 where the controller *adds* the table value to a programmed point
     /// (LinuxCNC).
     fn tool_table_sign(&self) -> f64;
-
-    /// Whether M281 may move the camera over the mark and trigger again (re-centring) inside
-    /// one M-code call.
-    fn may_recentre(&self) -> bool;
 
     /// M280: cancels any alignment on `machine`; returns the lines run.
     ///
@@ -183,10 +178,6 @@ macro_rules! modal_controller {
 
             fn tool_table_sign(&self) -> f64 {
                 1.0
-            }
-
-            fn may_recentre(&self) -> bool {
-                true
             }
 
             fn cancel_alignment(&self, machine: &mut dyn $crate::Machine) -> Result<Vec<String>, $crate::VisionError> {

@@ -1,6 +1,6 @@
 //! M281: capture one mark.
 
-use vision_math::{LengthUnit, Point2};
+use vision_math::{AlignmentChain, LengthUnit, PixelChain, Point2, Vector2};
 
 use super::capture::{mark_size, observe, outside_image_note, pixel_chain, require_mark, Capture, Recentred};
 use super::{Dot, Reply, VisionModule};
@@ -9,6 +9,44 @@ use crate::driver::{ImageRequest, Reading};
 use crate::error::VisionError;
 use crate::machine::{Machine, Timestamp};
 use crate::pound::{PoundBlock, SlotValues, SLOTS};
+
+/// An M281 between its re-centring moves ([`VisionModule::m281_begin`]): the readings so far
+/// and the program's state to put back. Opaque; hand it to [`VisionModule::m281_next`] once the
+/// machine has reached the move it asked for.
+#[derive(Debug)]
+pub struct StepwiseCapture {
+    keep_image: bool,
+    block: PoundBlock,
+    chain: PixelChain,
+    unit: LengthUnit,
+    alignment: Option<AlignmentChain>,
+    /// Where the program put the camera, program frame.
+    commanded: Point2<f64>,
+    /// The first reading's centred pixel offset, pixels.
+    first_px: Vector2<f64>,
+    /// The last reading, when it was triggered, its native pixel and its observed point.
+    reading: Reading,
+    trigger_time: Timestamp,
+    native: Point2<f64>,
+    observed: Point2<f64>,
+    /// The G-code run so far (the re-centring moves).
+    gcode: Vec<String>,
+    /// Re-centring moves made.
+    passes: i64,
+    /// True once the program's modal state is saved (before the first move).
+    saved: bool,
+}
+
+/// Where an M281 stands after [`VisionModule::m281_begin`] or [`VisionModule::m281_next`].
+#[derive(Debug)]
+pub enum CaptureStep {
+    /// A re-centring move was handed to the machine: wait until the machine is there, then
+    /// call [`VisionModule::m281_next`] with this.
+    Moving(StepwiseCapture),
+    /// The capture, committed; the G-code that puts the camera back where the program had it
+    /// and the program's modal state back was handed to the machine last.
+    Done(Reply<Capture>),
+}
 
 impl VisionModule {
     /// **M281**: triggers at the current commanded position and stores the observed point.
@@ -21,10 +59,12 @@ impl VisionModule {
     /// After the last reading the camera moves back to where the program put it, and the
     /// program's modal state, saved before the first move, is restored
     /// ([`Machine::save_modal_state`]), on success and failure alike: the program goes on from
-    /// its own point in the modes it had (a feed move stays a feed move). Only a reading inside the image is
-    /// moved to, so a move never exceeds the field of view. A controller may forbid moving
-    /// ([`crate::Controller::may_recentre`]: LinuxCNC triggers after waiting for the machine,
-    /// after which a remap may not queue G-code); M281 then reads in one shot.
+    /// its own point in the modes it had (a feed move stays a feed move). Only a reading inside
+    /// the image is moved to, so a move never exceeds the field of view. This runs
+    /// [`VisionModule::m281_begin`] and [`VisionModule::m281_next`] back to back, for a machine
+    /// whose [`Machine::run_gcode`] returns once the move is done (Mach4, the simulator); a
+    /// controller that only queues G-code from an M-code (LinuxCNC) calls them itself and waits
+    /// for its motion in between.
     ///
     /// `O = C + K·R·(p − res/2 − PxCenterOffset)` with K converted from `Cal_Units` to the
     /// machine's unit; with an alignment active, `O` is reported in the program frame (SPEC §2).
@@ -49,6 +89,22 @@ impl VisionModule {
     /// variables already written are restored). The dot list, the slots and `Run_DotCount`
     /// change only on success.
     pub fn m281(&mut self, machine: &mut dyn Machine, keep_image: bool) -> Result<Reply<Capture>, VisionError> {
+        let mut step = self.m281_begin(machine, keep_image)?;
+        loop {
+            match step {
+                CaptureStep::Done(reply) => return Ok(reply),
+                CaptureStep::Moving(capture) => step = self.m281_next(machine, capture)?,
+            }
+        }
+    }
+
+    /// M281's first step: the checks, the first trigger where the machine stands, then either
+    /// the capture committed ([`CaptureStep::Done`]) or the first re-centring move handed to
+    /// the machine ([`CaptureStep::Moving`]; the modal state saved first).
+    ///
+    /// # Errors
+    /// As [`VisionModule::m281`].
+    pub fn m281_begin(&mut self, machine: &mut dyn Machine, keep_image: bool) -> Result<CaptureStep, VisionError> {
         let ready = self.check_enabled().and_then(|()| self.check_tool(machine)).and_then(|()| {
             let block = PoundBlock::on_machine(self.params.pound_var_base(), machine)?;
             let unit = machine.units()?;
@@ -62,63 +118,146 @@ impl VisionModule {
                 return Err(e);
             }
         };
-        let mut trigger_time = machine.now();
-        let mut reading = self.trigger_mark()?;
-        let mut native = Point2::new(reading.x_px, reading.y_px);
-        let (commanded, mut observed) = self.observe(machine, alignment, chain.delta(native))?;
-        // Re-centring: a mark read far off the image centre carries K's error times that
-        // distance (a part closer or farther than the calibration height); read over it again.
-        let first_px = chain.centred(native);
-        let tolerance = self.params.recenter_tolerance_px();
-        let mut gcode = Vec::new();
-        let mut passes = 0;
-        let max_passes = if machine.controller().may_recentre() { self.params.recenter_passes() } else { 0 };
-        // The program's modal state is saved before the first move and put back after the
-        // last, whatever happens in between: a feed move after M281 stays a feed move.
-        let mut saved = false;
-        let mut failure = None;
+        let trigger_time = machine.now();
+        let reading = self.trigger_mark()?;
+        let native = Point2::new(reading.x_px, reading.y_px);
+        let (commanded, observed) = self.observe(machine, alignment, chain.delta(native))?;
+        let capture = StepwiseCapture {
+            keep_image,
+            block,
+            chain,
+            unit,
+            alignment,
+            commanded,
+            first_px: chain.centred(native),
+            reading,
+            trigger_time,
+            native,
+            observed,
+            gcode: Vec::new(),
+            passes: 0,
+            saved: false,
+        };
+        self.recentre_or_commit(machine, capture)
+    }
+
+    /// M281's next step, once the machine has reached the re-centring move: settles
+    /// `VisionTriggerSettleSec`, triggers and observes again, then moves again or commits as
+    /// [`VisionModule::m281_begin`] does.
+    ///
+    /// # Errors
+    /// As [`VisionModule::m281`]; the modal state is restored first (the camera stays where it
+    /// moved).
+    pub fn m281_next(
+        &mut self,
+        machine: &mut dyn Machine,
+        mut capture: StepwiseCapture,
+    ) -> Result<CaptureStep, VisionError> {
+        let pass = machine.dwell(self.params.trigger_settle_s()).map_err(VisionError::from).and_then(|()| {
+            // M281 D1 keeps the image of the reading reported.
+            let time = machine.now();
+            let reading = self.trigger_mark()?;
+            let native = Point2::new(reading.x_px, reading.y_px);
+            let observed = observe(machine, capture.alignment, capture.chain.delta(native))?.1;
+            Ok((time, reading, native, observed))
+        });
+        match pass {
+            Ok((time, reading, native, observed)) => {
+                (capture.trigger_time, capture.reading, capture.native, capture.observed) =
+                    (time, reading, native, observed);
+                self.recentre_or_commit(machine, capture)
+            }
+            Err(e) => Err(self.abandon(machine, &capture, e)),
+        }
+    }
+
+    /// Re-centring: a mark read far off the image centre carries K's error times that
+    /// distance (a part closer or farther than the calibration height); move over it and read
+    /// again, or, when it is close enough or the passes are spent, commit.
+    fn recentre_or_commit(
+        &mut self,
+        machine: &mut dyn Machine,
+        mut capture: StepwiseCapture,
+    ) -> Result<CaptureStep, VisionError> {
+        let centred = capture.chain.centred(capture.native);
         // A reading outside the image is no distance to move by (a wrong resolution or K):
         // every re-centring move stays within the field of view.
-        while passes < max_passes
-            && chain.centred(native).norm() > tolerance
-            && outside_image_note(&self.params, native).is_none()
+        if capture.passes < self.params.recenter_passes()
+            && centred.norm() > self.params.recenter_tolerance_px()
+            && outside_image_note(&self.params, capture.native).is_none()
         {
-            if !saved {
+            // The program's modal state is saved before the first move and put back after the
+            // last, whatever happens in between: a feed move after M281 stays a feed move.
+            if !capture.saved {
                 if let Err(e) = machine.save_modal_state() {
-                    failure = Some(VisionError::from(e));
-                    break;
+                    return Err(self.abandon(machine, &capture, e.into()));
                 }
-                saved = true;
+                capture.saved = true;
             }
-            match self.recentre_pass(machine, &chain, observed, alignment) {
-                Ok(pass) => {
-                    gcode.extend(pass.lines);
-                    (trigger_time, reading, native, observed) = (pass.time, pass.reading, pass.native, pass.observed);
+            let moved = machine
+                .program_position()
+                .map_err(VisionError::from)
+                .map(|at| relative_move(capture.observed - at))
+                .and_then(|lines| machine.run_gcode(&lines).map(|()| lines).map_err(VisionError::from));
+            return match moved {
+                Ok(lines) => {
+                    capture.gcode.extend(lines);
+                    capture.passes += 1;
+                    Ok(CaptureStep::Moving(capture))
                 }
-                Err(e) => {
-                    failure = Some(e);
-                    break;
-                }
-            }
-            passes += 1;
+                Err(e) => Err(self.abandon(machine, &capture, e)),
+            };
         }
-        if passes > 0 && failure.is_none() {
+        if capture.passes > 0 {
             // Back where the program put the camera: the program goes on from its own point.
-            let lines = vec![absolute_move(commanded)];
-            match machine.run_gcode(&lines).map(|()| lines) {
-                Ok(lines) => gcode.extend(lines),
-                Err(e) => failure = Some(e.into()),
+            let lines = vec![absolute_move(capture.commanded)];
+            if let Err(e) = machine.run_gcode(&lines) {
+                return Err(self.abandon(machine, &capture, e.into()));
             }
+            capture.gcode.extend(lines);
         }
-        if saved {
+        if capture.saved {
             if let Err(e) = machine.restore_modal_state() {
-                failure.get_or_insert(VisionError::from(e));
+                let e = VisionError::from(e);
+                self.publish_failure(None, &e);
+                return Err(e);
             }
         }
-        if let Some(e) = failure {
-            self.publish_failure(None, &e);
-            return Err(e);
+        self.commit_capture(machine, capture).map(CaptureStep::Done)
+    }
+
+    /// A failed step: the modal state put back when it was saved (the first failure is the one
+    /// reported), the failure shown in `LastStatus`.
+    fn abandon(&mut self, machine: &mut dyn Machine, capture: &StepwiseCapture, e: VisionError) -> VisionError {
+        if capture.saved {
+            // The first failure is the operator's news; a failed restore after it adds nothing.
+            let _ = machine.restore_modal_state();
         }
+        self.publish_failure(None, &e);
+        e
+    }
+
+    /// Writes the capture (slots, dot list, telemetry, image) and reports it.
+    fn commit_capture(
+        &mut self,
+        machine: &mut dyn Machine,
+        capture: StepwiseCapture,
+    ) -> Result<Reply<Capture>, VisionError> {
+        let StepwiseCapture {
+            keep_image,
+            block,
+            chain,
+            unit,
+            commanded,
+            first_px,
+            reading,
+            trigger_time,
+            native,
+            observed,
+            gcode,
+            passes,
+            ..
+        } = capture;
         let offset = chain.delta(native);
         let (width, height) = mark_size(&chain, &reading);
         let values = SlotValues {
@@ -244,35 +383,7 @@ impl VisionModule {
     }
 }
 
-/// One re-centring pass: the move over the point last observed, and the reading there.
-struct Pass {
-    lines: Vec<String>,
-    time: Timestamp,
-    reading: Reading,
-    native: Point2<f64>,
-    observed: Point2<f64>,
-}
-
 impl VisionModule {
-    /// Moves the camera over `observed` (program frame), settles, triggers and observes again.
-    fn recentre_pass(
-        &mut self,
-        machine: &mut dyn Machine,
-        chain: &vision_math::PixelChain,
-        observed: Point2<f64>,
-        alignment: Option<vision_math::AlignmentChain>,
-    ) -> Result<Pass, VisionError> {
-        let lines = relative_move(observed - machine.program_position()?);
-        machine.run_gcode(&lines)?;
-        machine.dwell(self.params.trigger_settle_s())?;
-        // M281 D1 keeps the image of the reading reported.
-        let time = machine.now();
-        let reading = self.trigger_mark()?;
-        let native = Point2::new(reading.x_px, reading.y_px);
-        let observed = observe(machine, alignment, chain.delta(native))?.1;
-        Ok(Pass { lines, time, reading, native, observed })
-    }
-
     /// [`observe`], a failure shown in `LastStatus` (the trigger already happened).
     fn observe(
         &mut self,

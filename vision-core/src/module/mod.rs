@@ -41,6 +41,7 @@ use dro::Dro;
 pub use capture::{Capture, Recentred};
 pub use dro::TelemetrySink;
 pub use m280::RunMode;
+pub use m281::{CaptureStep, StepwiseCapture};
 pub use m282::{AlignReport, DroppedMark, Pieces, PredictedError};
 pub use m283::StepwiseWalk;
 pub use m284::{JobReport, MAX_JOB};

@@ -41,7 +41,7 @@ CUT = [(2.0, 1.0), (4.0, 1.0), (4.0, 3.0), (4.0, 2.0), (2.0, 3.0), (2.0, 1.0), (
 ISOLATE = ["unshare", "--ipc", "--pid", "--fork", "--mount-proc", "sh", "-c", 'mount -t tmpfs tmpfs /tmp && exec "$@"', "sh"]
 
 # The cases of one LinuxCNC start (they run one after another): two starts per machine, at once.
-ALIGN = ["example-4", "ng", "base-rotation", "scaled-in-gate", "scaled-refused", "c-word"]
+ALIGN = ["example-4", "ng", "base-rotation", "scaled-in-gate", "scaled-refused", "c-word", "recentre-modes"]
 CALIBRATE = ["sheet", "sheet-then-example-4", "quick"]
 # name: (LINEAR_UNITS, machine units per inch, TOPLEVEL, the cases it runs)
 MACHINES = {
@@ -116,6 +116,27 @@ def example(host, name, replace=None):
     return "\n".join(lines) + "\n"
 
 
+# M281 re-centres over a mark read off the image centre (the part is shifted), in G91 G1 F30
+# G18: the interpreter itself checks that the modes and the position are the program's again
+# after M281 (an abort names what changed), and X0.5 must be an incremental feed move.
+RECENTRE_MODES = """G90 G20 G17
+G54
+T98 M6 G43
+G0 X6.0 Y0
+G91 G1 F30 G18
+M281
+o<modes> if [[#<_motion_mode> NE 10] OR [#<_incremental> NE 1] OR [#<_feed> NE 30] OR [#<_plane> NE 180] OR [#<_metric> NE 0]]
+    (abort, M281 changed the modal state)
+o<modes> endif
+o<at> if [[ABS[#<_x> - 6.0] GT 0.000001] OR [ABS[#<_y>] GT 0.000001]]
+    (abort, M281 left the camera off the program's point)
+o<at> endif
+X0.5
+(MSG, recentre-modes: the modes and the point are the program's)
+M2
+"""
+
+
 def cases(host, setup):
     """[(name, world, camera table error (X, Y, in), program text)]. Consecutive cases with the
     same world share one simulated session (the sheet calibration, then example 4 with its K)."""
@@ -132,6 +153,7 @@ def cases(host, setup):
         ("sheet-then-example-4", UNCALIBRATED, None, ex4),
         ("quick", {**UNCALIBRATED, "calibrated": True}, (0, 0), "G90 G20 G17\nG54\nT98 M6 G43\nG0 X6.0 Y0\nM283 Q0.5\nM284 P2\nM2\n"),
         ("c-word", RIGID, (0, 0), "G90 G20 G17\nG54\nT98 M6 G43\nG0 X-2.5 Y-4.0\nM283 C1\nM2\n"),
+        ("recentre-modes", RIGID, (0, 0), RECENTRE_MODES),
         ("shipped-m284", {}, (0, 0), "G90 G20 G17\nG54\nT98 M6 G43\nM284 P2\nM2\n"),
     ]
 
@@ -327,7 +349,7 @@ def check_machine(check, machine, run_dir, module_truth):
             scales = [float(v) for m in report for pair in re.findall(r"scale X ([\d.]+) / Y ([\d.]+) ignored", m) for v in pair]
             ok = len(scales) == 2 and all(abs(v - 1.001) < 2e-4 for v in scales)
             check.that(where, ok and not errors, "the ignored scale is reported: %s" % report)
-            worst[name] = check_landing(check, where, result, truth, per_inch, 0.001 * math.hypot(3, 2) + 1e-4)
+            worst[name] = check_landing(check, where, result, truth, per_inch, 0.001 * math.hypot(3, 2) + TOLERANCE_IN)
         elif name == "scaled-refused":
             refused = [m for m in errors if m.startswith("M282: ") and "scale" in m]
             check.that(where, bool(refused), "refused with: %s" % errors)
@@ -344,6 +366,20 @@ def check_machine(check, machine, run_dir, module_truth):
                 saved = re.search(r"(?m)^VisionActiveJob = 2$", f.read()) is not None
             ok = not errors and "M284: camera job selected" in said and saved
             check.that(where, ok, "the installed module selected job 2 on the camera over TCP and saved it: %s %s" % (errors, said))
+        elif name == "recentre-modes":
+            mine = captures_of(captures, name)
+            places = {tuple(round(v, 6) for v in c["canon"]) for c in mine}
+            check.that(where, len(mine) >= 2 and len(places) >= 2, "M281 re-centred: %d triggers at %d places" % (len(mine), len(places)))
+            check_captures(check, where, mine, per_inch, 2)
+            kept = any("recentre-modes: the modes and the point are the program's" in m for m in said)
+            check.that(where, kept and not errors, "the interpreter found the modes and the point unchanged: %s" % errors)
+            # X0.5 after M281 (G91): 0.5 in from where the program put the camera, which is
+            # where the first trigger was taken.
+            if mine:
+                point = mine[0]["canon"]
+                end = [v / per_inch for v in final["pos"][:2]]
+                off = math.dist(end, (point[0] + 0.5, point[1]))
+                check.that(where, off <= CAPTURE_TOLERANCE_IN, "X0.5 after M281 ends 0.5 in from the program's point (off by %.1e in)" % off)
         elif name == "c-word":
             check.that(where, any("Bad character 'c' used" in m for m in errors), "the task refuses C on an XYZ machine: %s" % errors)
     return worst
