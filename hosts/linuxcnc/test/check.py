@@ -255,6 +255,15 @@ def full_runs(check, rig, module):
     stopped = moves[-1:] == [MARKS[-1]] and (2.0, 1.0) not in moves
     check.that(case, stopped, "the program stopped at M282 (last move to %s)" % (moves[-1:],))
 
+    # Re-centring under an arc mode: G2 cannot be set back by a bare word after the move, so
+    # M281 refuses to move (the mark is read ~30 px off centre) and nothing moves after it.
+    case = "recentre-under-arc"
+    program = "G90 G20 G17\nG54\nT98 M6 G43\nG0 X5.9 Y0\nG2 X6.0 Y0 I0.05 J0 F30\nM281\nG0 X0 Y0\nM2\n"
+    status, calls, other = rig.run(program, RIGID)
+    said = [line for line in other if line.startswith("M281: ") and "cannot move to re-centre under G2" in line]
+    check.that(case, status != 0 and bool(said), "stopped with: %s" % other[-2:])
+    check.that(case, traverses(calls)[-1:] == [(5.9, 0.0)], "nothing moved after it: %s" % traverses(calls))
+
     # A word M280 refuses: the program stops with the M-code's own message, named once.
     case = "bad-word"
     status, calls, other = rig.run(example_4({"M280 P4": "M280 P5"}), RIGID)

@@ -324,6 +324,8 @@ def check_machine(check, machine, run_dir, module_truth):
         with open(path) as f:
             captures = [json.loads(line) for line in f]
     check.that(machine, "exception" not in out, out.get("exception", "the driver ran every case")[:400])
+    if captures:
+        print("     %s: %d captures, %d extra waits for the machine" % (machine, len(captures), captures[-1]["rewaits"]))
     worst = {}
     for result in out["cases"]:
         name, where = result["name"], "%s %s" % (machine, result["name"])

@@ -48,6 +48,7 @@ class TaskHost(sim_toplevel.SimHost):
                 "metric": self.metric(),
                 "position": list(_STAT.position[:2]),
                 "actual": list(_STAT.actual_position[:2]),
+                "rewaits": remap.arrival_rewaits,
             }
             with open(os.path.join(DIR, "captures.jsonl"), "a") as f:
                 f.write(json.dumps(record) + "\n")
