@@ -293,39 +293,9 @@ def m284(self, **words):
     return _call(self, 284, words, synced=False)
 
 
-def sheet_words(words):
-    """M283's words in the manual's terms: LinuxCNC's `Pn` (sheet n) becomes the manual's `Cn`.
-
-    On LinuxCNC C is an axis word: on a machine without a C axis (any XYZ mill) the task refuses
-    `M283 C1` ("Bad character 'c' used") before the remap is called, so the sheet number is
-    written `P`. Where `C` does reach the remap (rs274; a machine with a C axis, which would also
-    move it), it is refused with a message that names `P`. Returns (words, None) or (None, the
-    refusal)."""
-    words = dict(words)
-    if "c" in words:
-        return None, "M283 C%g: on LinuxCNC the sheet number is P: write M283 P%g (C is an axis word)" % (
-            words["c"],
-            words["c"],
-        )
-    p = words.pop("p", None)
-    if p is None:
-        if "q" not in words:
-            return None, "M283: give exactly one of Qd (quick, dot diameter d) or Pn (sheet n)"
-        return words, None
-    if "q" in words:
-        return None, "M283: give exactly one of Qd (quick, dot diameter d) or Pn (sheet n), not both"
-    if p != int(p) or p < 1:
-        return None, "M283 P%g is invalid: P is a calibration sheet number (P1)" % p
-    words["c"] = p
-    return words, None
-
-
 def m283_begin(self, **words):
-    """M283's prolog: the session plans the walk (Q: one dot, P: a sheet, the manual's C)."""
-    words, refusal = sheet_words(words)
-    if refusal is not None:
-        self.set_errormsg(refusal)
-        return INTERP_ERROR
+    """M283's prolog: the session plans the walk (Q: one dot, P: a sheet, the manual's C; the
+    session's LinuxCNC controller maps P to C and refuses C, naming P)."""
     if not is_task(self):
         return _preview(self, 283)
     try:

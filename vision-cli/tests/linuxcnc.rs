@@ -112,6 +112,29 @@ fn a_part_printed_large_is_aligned_rigidly_and_the_scale_left_out_is_reported() 
     }
 }
 
+/// The manual's example 1 on LinuxCNC: `M283 P1` walks sheet 1 (the controller maps it to the
+/// manual's `C1`) and finds the camera's offset as LinuxCNC's table holds it; `M283 C1` is
+/// refused naming `P`.
+#[test]
+fn example_1_walks_the_sheet_with_m283_p1_and_m283_c1_names_p() {
+    let (ok, out, err) = run(&["--json"], &example("01-calibrate-sheet.ngc"));
+    assert!(ok, "{err}");
+    let report: Value = serde_json::from_str(&out).expect("JSON");
+    let truth = &report["programs"][0]["calibration_truth"];
+    let offset_error = truth["offset_error"].as_f64().expect("the truth");
+    assert!(offset_error < 0.001, "the camera offset is {offset_error} in off: {truth}");
+    assert!(truth["k_relative"].as_f64().expect("the truth") < 0.001, "{truth}");
+
+    let dir = scratch("ex1-c");
+    let program = dir.join("c1.ngc");
+    let text = std::fs::read_to_string(example("01-calibrate-sheet.ngc")).expect("example 1");
+    std::fs::write(&program, text.replace("M283 P1 ", "M283 C1 ")).expect("write");
+    let (ok, out, err) = run(&[], &program);
+    assert!(!ok, "{out}");
+    assert!(err.contains("M283 C1: on LinuxCNC the sheet number is P: write M283 P1"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn a_part_printed_beyond_the_scale_gate_is_refused_with_the_reason() {
     let dir = scratch("ex5-refused");

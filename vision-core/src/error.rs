@@ -210,6 +210,14 @@ pub enum VisionError {
         what: &'static str,
     },
 
+    /// A word written as the manual writes it where the controller's dialect writes another
+    /// (LinuxCNC's M283 sheet `P` for the manual's `C`); the message names the replacement.
+    #[error("{message}")]
+    DialectWord {
+        /// What to write instead.
+        message: String,
+    },
+
     /// A step of the stepwise M281 (re-centring on a controller that waits itself) came out
     /// of order.
     #[error("M281: {what}")]

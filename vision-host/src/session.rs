@@ -87,7 +87,8 @@ impl Session {
     /// machine's failure during the call ([`VisionError::Machine`], with its kind). A refusal
     /// changes nothing.
     pub fn mcode(&mut self, machine: &mut dyn Machine, m: u32, words: &[(char, f64)]) -> Result<Outcome, HostError> {
-        let call = VisionCall::parse(m, words)?;
+        let words = machine.controller().manual_words(m, words).map_err(McodeError::from)?;
+        let call = VisionCall::parse(m, &words)?;
         let outcome = call.run(&mut self.module, machine).map_err(McodeError::from)?;
         machine.message(&summary(&outcome));
         Ok(outcome)
@@ -104,7 +105,8 @@ impl Session {
     /// A bad word or M281's refusal ([`HostError::Mcode`]); no capture is in progress then.
     pub fn capture_begin(&mut self, machine: &mut dyn Machine, words: &[(char, f64)]) -> Result<bool, HostError> {
         self.capture = None;
-        let VisionCall::Capture { keep_image } = VisionCall::parse(281, words)? else {
+        let words = machine.controller().manual_words(281, words).map_err(McodeError::from)?;
+        let VisionCall::Capture { keep_image } = VisionCall::parse(281, &words)? else {
             // `parse(281, …)` answers only Capture; kept typed all the same.
             return Err(HostError::Mcode(McodeError::BadWord {
                 mcode: "M281",
@@ -157,7 +159,8 @@ impl Session {
     /// the machine's failure; no walk is in progress then.
     pub fn walk_begin(&mut self, machine: &mut dyn Machine, words: &[(char, f64)]) -> Result<(), HostError> {
         self.walk = None;
-        let VisionCall::Calibrate(mode) = VisionCall::parse(283, words)? else {
+        let words = machine.controller().manual_words(283, words).map_err(McodeError::from)?;
+        let VisionCall::Calibrate(mode) = VisionCall::parse(283, &words)? else {
             // `parse(283, …)` answers only Calibrate; kept typed all the same.
             return Err(HostError::Mcode(McodeError::BadWord {
                 mcode: "M283",

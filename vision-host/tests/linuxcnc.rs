@@ -437,7 +437,7 @@ fn camera_offset(session: &Session, host: &FakeLinuxCnc) -> Vector2<f64> {
 #[test]
 fn the_stepwise_walk_solves_and_commits_as_the_one_shot_m283() {
     let error = Vector2::new(0.04, -0.03);
-    for (words, base) in [(vec![('C', 1.0)], 0.0), (vec![('C', 1.0)], 10.0), (vec![('Q', 0.5)], 10.0)] {
+    for (words, base) in [(vec![('P', 1.0)], 0.0), (vec![('P', 1.0)], 10.0), (vec![('Q', 0.5)], 10.0)] {
         let (mut one, mut one_host) = calibration_rig(base, error);
         let want = one.mcode(&mut one_host, 283, &words).expect("the one-shot M283");
         let (mut step, mut step_host) = calibration_rig(base, error);
@@ -476,7 +476,7 @@ fn the_stepwise_walk_solves_and_commits_as_the_one_shot_m283() {
 fn a_sheet_walk_on_an_operators_rotation_writes_k_and_the_offset_along_the_machine_axes() {
     for base in [0.0, 10.0] {
         let (mut session, mut host) = calibration_rig(base, Vector2::new(0.04, -0.03));
-        walk_stepwise(&mut session, &mut host, &[('C', 1.0)]).expect("calibrated");
+        walk_stepwise(&mut session, &mut host, &[('P', 1.0)]).expect("calibrated");
         let sim = host.machine.sim().clone();
         let offset = camera_offset(&session, &host);
         let e = sim.calibration_error(session.module().params(), offset, LengthUnit::Inch);
@@ -491,7 +491,7 @@ fn an_ng_capture_stops_the_walk_and_writes_nothing() {
     let (mut session, mut host) = calibration_rig(0.0, Vector2::new(0.04, -0.03));
     host.execute("G0 X30 Y30").expect("off the sheet");
     let before = (session.module().params().cal_k(), host.tools.clone());
-    session.walk_begin(&mut host, &[('C', 1.0)]).expect("begun");
+    session.walk_begin(&mut host, &[('P', 1.0)]).expect("begun");
     let p = session.walk_next(&mut host).expect("a point").expect("the first capture");
     host.execute(&format!("G0 X{} Y{}", p.x, p.y)).expect("a move");
     let e = session.walk_capture(&mut host).expect_err("no mark out there");
@@ -520,8 +520,16 @@ fn steps_out_of_order_are_refused_and_keep_the_walk() {
     }
     session.walk_finish(&mut host).expect("calibrated");
     // M283's own refusals come at the start, before anything moves.
-    let e = session.walk_begin(&mut host, &[('C', 9.0)]).expect_err("no sheet 9");
+    let e = session.walk_begin(&mut host, &[('P', 9.0)]).expect_err("no sheet 9");
     assert!(e.to_string().contains('9'), "{e}");
+    // LinuxCNC writes the manual's M283 C1 as P1 (C is an axis word there): C names P, and P
+    // is a sheet number, alone.
+    let e = session.walk_begin(&mut host, &[('C', 1.0)]).expect_err("C on LinuxCNC");
+    assert_eq!(e.to_string(), "M283 C1: on LinuxCNC the sheet number is P: write M283 P1 (C is an axis word)");
+    let e = session.walk_begin(&mut host, &[('P', 1.5)]).expect_err("no sheet number");
+    assert_eq!(e.to_string(), "M283 P1.5 is invalid: P is a calibration sheet number (P1)");
+    let e = session.walk_begin(&mut host, &[('P', 1.0), ('Q', 0.5)]).expect_err("both");
+    assert!(e.to_string().starts_with("M283 takes one of Qd"), "{e}");
 }
 
 #[test]

@@ -335,7 +335,7 @@ def calibrations(check, rig, module):
     for case, line, says in (
         ("m283-c-word", "M283 C1", "M283 C1: on LinuxCNC the sheet number is P: write M283 P1"),
         ("m283-bad-p", "M283 P1.5", "M283 P1.5 is invalid: P is a calibration sheet number (P1)"),
-        ("m283-p-and-q", "M283 P1 Q0.5", "M283: give exactly one of Qd (quick, dot diameter d) or Pn (sheet n), not both"),
+        ("m283-p-and-q", "M283 P1 Q0.5", "M283 takes one of Qd (quick, dot diameter d) or Pn (sheet n), not both"),
     ):
         program = "G90 G20 G17\nG54\nT98 M6 G43\nG0 X-2.5 Y-4.0\n%s\nG0 X0 Y0\nM2\n" % line
         status, calls, other = rig.run(program, sim)

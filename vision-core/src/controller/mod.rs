@@ -96,6 +96,17 @@ pub trait Controller: fmt::Debug + Send + Sync {
     /// # Errors
     /// The machine's refusal of a read.
     fn base_rotation(&self, machine: &dyn Machine) -> Result<f64, MachineError>;
+
+    /// Vision M-code `m`'s words as the manual writes them, from the words of its line in this
+    /// controller's dialect (letters in either case). The default takes them as they are.
+    ///
+    /// # Errors
+    /// [`VisionError::DialectWord`]: a word this controller writes otherwise, with the
+    /// replacement.
+    fn manual_words(&self, m: u32, words: &[(char, f64)]) -> Result<Vec<(char, f64)>, VisionError> {
+        let _ = m;
+        Ok(words.to_vec())
+    }
 }
 
 /// Every controller, by [`Controller::name`].
