@@ -148,7 +148,7 @@ def main():
         command.wait_complete()
         command.home(-1)
         command.wait_complete()
-        deadline = time.time() + 20
+        deadline = time.time() + 60
         while time.time() < deadline and not all(stat.homed[:3]):
             time.sleep(0.05)
             stat.poll()

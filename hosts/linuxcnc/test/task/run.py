@@ -430,6 +430,10 @@ def main():
         run_dir, env = prepare(machine, args.work, os.path.abspath(args.host), os.path.abspath(args.module), only, camera_port)
         log = open(os.path.join(run_dir, "linuxcnc.log"), "w")
         cmd = ["timeout", "600", "linuxcnc", "-r", os.path.join(run_dir, "test.ini")]
+        if os.geteuid() == 0:
+            # Not real-time: ahead of other work on a shared machine, the task and motion keep
+            # their cycles (starved, homing and moves time out).
+            cmd = ["nice", "-n", "-10"] + cmd
         if isolated:
             cmd = ISOLATE + cmd
         runs[machine] = (run_dir, subprocess.Popen(cmd, env=env, cwd=run_dir, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL))
