@@ -6,12 +6,15 @@ over vision-host). This file maps LinuxCNC's interpreter onto the `Host` interfa
 calls, and honours read-ahead and preview:
 
 * A capture (M281, M289) first yields INTERP_EXECUTE_FINISH so that it runs where the machine
-  really is; after that yield it may not call self.execute(), so its Host refuses to.
+  really is. G-code a handler runs (self.execute) is only queued: M281's re-centring moves are
+  handed back to the task and the handler yields again until the machine is there (LinuxCNC
+  2.9's task runs G-code queued after the yield).
 * In preview (self.task == 0: AXIS's preview, rs274) there is no camera: every vision M-code
   reports and emits nothing. MACH_VISION_RS274_AS_TASK=1 makes rs274 count as the task; only
   the tests set it.
 """
 
+import math
 import os
 import time
 
@@ -43,8 +46,8 @@ class Host:
 
     def __init__(self, interp, synced):
         self._interp = interp
-        # True after `yield INTERP_EXECUTE_FINISH`: the machine is where the program says, and
-        # G-code can no longer be queued from this handler.
+        # True after `yield INTERP_EXECUTE_FINISH`: the machine is where the program says; a
+        # dwell is then a wait here (a G4 would only be queued behind the capture).
         self._synced = synced
 
     def program_position(self):
@@ -64,12 +67,8 @@ class Host:
         return self._interp.params["_metric"] == 1.0
 
     def execute(self, line):
-        """Runs one line of G-code; VisionError when LinuxCNC refuses it or after a sync."""
-        if self._synced:
-            raise VisionError(
-                "cannot run G-code (%s) after waiting for the machine: LinuxCNC does not allow "
-                "self.execute() after yield INTERP_EXECUTE_FINISH" % line
-            )
+        """Queues one line of G-code (the interpreter's state follows at once, the machine when
+        the handler yields or returns); VisionError when LinuxCNC refuses it."""
         try:
             status = self._interp.execute(line)
         except Exception:
@@ -79,17 +78,47 @@ class Host:
         if status != INTERP_OK:
             raise VisionError("LinuxCNC refused %r: %s" % (line, self._interp.get_errormsg()))
 
+    def _machine_to_program(self):
+        """Program units per machine unit: the tool table is in the machine's units
+        ([TRAJ]LINEAR_UNITS), the session works in the program's (G20/G21)."""
+        machine_metric = self._interp.params["_metric_machine"] == 1.0
+        if machine_metric == self.metric():
+            return 1.0
+        return 1.0 / 25.4 if machine_metric else 25.4
+
+    def save_modal_state(self):
+        """Before the module's own moves (M281's re-centring): M70 saves the distance, feed,
+        plane, units and offsets modes; the motion mode, which M72 does not restore, is kept in
+        #<_vision_saved_motion>. Refused under an arc or canned-cycle mode, which a bare word
+        cannot set back."""
+        motion = self._interp.params["_motion_mode"]
+        if motion not in _MOTION_WORDS:
+            raise VisionError(
+                "cannot move to re-centre under G%g (its mode cannot be set back after the move): "
+                "program G0, G1 or G80 before the capture, or set VisionRecenterPasses to 0" % (motion / 10.0)
+            )
+        self.execute("M70")
+        self._interp.params["_vision_saved_motion"] = motion
+
+    def restore_modal_state(self):
+        """M72, then the motion mode saved_modal_state() kept."""
+        self.execute("M72")
+        motion = self._interp.params["_vision_saved_motion"]
+        if self._interp.params["_motion_mode"] != motion:
+            self.execute(_MOTION_WORDS[motion])
+
     def tool(self):
         """The tool in the spindle (0 when none)."""
         return max(self._interp.current_tool, 0)
 
     def tool_offset(self, tool):
-        """Tool-table X, Y offset of `tool` (machine units); VisionError when it is not there."""
+        """Tool-table X, Y offset of `tool`, program units; VisionError when it is not there."""
         status, pocket = self._interp.find_tool_pocket(tool)
         if status != INTERP_OK:
             raise VisionError("tool %d is not in the tool table; add it" % tool)
         offset = self._interp.tool_table[pocket].offset
-        return (offset.x, offset.y)
+        scale = self._machine_to_program()
+        return (offset.x * scale, offset.y * scale)
 
     def set_tool_offset(self, tool, x, y):
         """Writes the tool-table X, Y offset of `tool` (G10 L1)."""
@@ -114,6 +143,9 @@ class Host:
         """A message to the operator (AXIS shows it; rs274 prints MESSAGE)."""
         emccanon.MESSAGE(text)
 
+
+# The motion modes (#<_motion_mode>: 10 × the G number) a bare word sets back.
+_MOTION_WORDS = {0.0: "G0", 10.0: "G1", 800.0: "G80"}
 
 # The Host class the handlers hand the session; install() replaces it.
 _HOST_CLASS = Host
@@ -152,6 +184,69 @@ def _preview(interp, mcode):
     return INTERP_OK
 
 
+# A capture triggers only once linuxcnc.stat puts the machine within this of where the
+# interpreter put it, inches.
+ARRIVAL_TOLERANCE_IN = 1e-5
+# How many more times a capture waits for the machine (each wait at least one task cycle).
+ARRIVAL_WAITS = 500
+# Extra waits so far in this interpreter (the tests report it).
+arrival_rewaits = 0
+_STAT = []
+
+
+def _stat():
+    """linuxcnc.stat() of the running LinuxCNC, or None where there is none."""
+    if not _STAT:
+        try:
+            import linuxcnc
+
+            stat = linuxcnc.stat()
+            stat.poll()
+            _STAT.append(stat)
+        except Exception:
+            _STAT.append(None)
+    return _STAT[0]
+
+
+def machine_xy(interp):
+    """Where the interpreter has put the machine: X, Y in the machine's units, by LinuxCNC's
+    canon (g5x + R(rotation)·(p + g92) + tool)."""
+    c, s = math.cos(math.radians(interp.rotation_xy)), math.sin(math.radians(interp.rotation_xy))
+    px, py = interp.current_x + interp.axis_offset_x, interp.current_y + interp.axis_offset_y
+    x = interp.origin_offset_x + c * px - s * py + interp.tool_offset.x
+    y = interp.origin_offset_y + s * px + c * py + interp.tool_offset.y
+    machine_metric, metric = interp.params["_metric_machine"] == 1.0, interp.params["_metric"] == 1.0
+    scale = 1.0 if machine_metric == metric else (25.4 if machine_metric else 1.0 / 25.4)
+    return (x * scale, y * scale)
+
+
+def wait_for_machine(interp):
+    """Generator (`yield from`): waits for the queued motion (INTERP_EXECUTE_FINISH), then, in
+    the task, until linuxcnc.stat shows the machine where the interpreter put it. Returns None,
+    or the refusal when it never gets there.
+
+    Why the second wait: on a loaded machine 2.9's task was seen to resume a handler after the
+    yield before the last move had run, its interpreter resynchronised to the machine's old
+    position (test/task/, one sheet walk in several): a trigger then would read the wrong
+    place. Waiting again lets the move run and the interpreter resynchronise."""
+    global arrival_rewaits
+    yield INTERP_EXECUTE_FINISH
+    stat = _stat() if interp.task else None
+    if stat is None:
+        return None
+    per_inch = 25.4 if interp.params["_metric_machine"] == 1.0 else 1.0
+    for _ in range(ARRIVAL_WAITS):
+        stat.poll()
+        if math.dist(stat.position[:2], machine_xy(interp)) <= ARRIVAL_TOLERANCE_IN * per_inch:
+            return None
+        arrival_rewaits += 1
+        yield INTERP_EXECUTE_FINISH
+    return "the machine did not arrive where the program put the camera (at %s, sent to %s, machine units)" % (
+        tuple(round(v, 6) for v in stat.position[:2]),
+        tuple(round(v, 6) for v in machine_xy(interp)),
+    )
+
+
 def m280(self, **words):
     """Begin a run: cancels any alignment (G52 X0 Y0, G10 L2 P0 R back to the rotation before)."""
     if not is_task(self):
@@ -160,12 +255,28 @@ def m280(self, **words):
 
 
 def m281(self, **words):
-    """Capture where the machine is: waits for the queued motion, then triggers."""
+    """Capture where the machine is: waits for the queued motion, then triggers. Re-centring
+    (VisionRecenterPasses): the session queues a move over the mark and the handler waits for
+    the machine again before the next trigger; the last step queues the move back and puts the
+    modal state back (M70/M72)."""
     if not is_task(self):
         yield _preview(self, 281)
         return
-    yield INTERP_EXECUTE_FINISH
-    yield _call(self, 281, words, synced=True)
+    late = yield from wait_for_machine(self)
+    if late:
+        yield fail(self, 281, late)
+        return
+    try:
+        moving = session().capture_begin(words, host_for(self, synced=True))
+        while moving:
+            late = yield from wait_for_machine(self)
+            if late:
+                raise VisionError(late)
+            moving = session().capture_next(host_for(self, synced=True))
+    except VisionError as e:
+        yield fail(self, 281, e)
+        return
+    yield INTERP_OK
 
 
 def m282(self, **words):
@@ -183,11 +294,8 @@ def m284(self, **words):
 
 
 def m283_begin(self, **words):
-    """M283's prolog: the session plans the walk (Q: one dot, C: a sheet)."""
-    # C is an axis word to LinuxCNC: left on the block, `M283 C1` would also move the C axis to 1
-    # in the active motion mode (G0 or G1) after the remap. Clearing the flag keeps it a sheet
-    # number (the block's motion is then a zero-length move).
-    self.blocks[self.remap_level].c_flag = False
+    """M283's prolog: the session plans the walk (Q: one dot, P: a sheet, the manual's C; the
+    session's LinuxCNC controller maps P to C and refuses C, naming P)."""
     if not is_task(self):
         return _preview(self, 283)
     try:
@@ -202,7 +310,10 @@ def m289(self, **words):
     if not is_task(self):
         yield INTERP_OK
         return
-    yield INTERP_EXECUTE_FINISH
+    late = yield from wait_for_machine(self)
+    if late:
+        yield fail(self, 283, late)
+        return
     try:
         session().walk_capture(host_for(self, synced=True))
     except VisionError as e:

@@ -72,11 +72,19 @@ fn example_4_aligns_with_g10_l2_r_and_g52_and_lands_on_the_true_part() {
     assert!(gcode[1].starts_with("G52 X"), "{gcode:?}");
     let landed = fit["cut_error"]["max"].as_f64().expect("the truth");
     assert!(landed < 0.0005, "example 4 lands {landed} in from the true part");
-    // Four captures, read in one shot each (LinuxCNC cannot move after a capture's wait), and
-    // the closing M280 put G54's rotation back: the program ran to its M2.
-    let captures = steps.iter().filter(|s| s["type"] == "capture").count();
-    assert_eq!(captures, 4);
-    assert!(steps.iter().all(|s| s["type"] != "capture" || s["recentred"].is_null()));
+    // Four captures; a mark first read farther than VisionRecenterTolerance (16 px) from the
+    // image centre is re-centred over (LinuxCNC's remap waits for the machine between the
+    // moves): here the third. The closing M280 put G54's rotation back: the program ran to M2.
+    let captures: Vec<&Value> = steps.iter().filter(|s| s["type"] == "capture").collect();
+    assert_eq!(captures.len(), 4);
+    let first_px = |s: &Value| {
+        let px = if s["recentred"].is_null() { &s["centred_px"] } else { &s["recentred"]["first_px"] };
+        px[0].as_f64().unwrap_or(f64::NAN).hypot(px[1].as_f64().unwrap_or(f64::NAN))
+    };
+    for s in &captures {
+        assert_eq!(!s["recentred"].is_null(), first_px(s) > 16.0, "{s}");
+    }
+    assert!(captures.iter().any(|s| !s["recentred"].is_null()), "{captures:?}");
     let report: Value = serde_json::from_str(&out).expect("JSON");
     assert_eq!(report["programs"][0]["outcome"], "ended by M2 at line 36");
     assert_eq!(steps.last().expect("a step")["type"], "begin");
@@ -102,6 +110,29 @@ fn a_part_printed_large_is_aligned_rigidly_and_the_scale_left_out_is_reported() 
         assert!(landed < 0.0012 * 5.0 + 5e-4, "{name}: lands {landed} in");
         assert!(landed > 0.0005, "{name}: the ignored scale shows in the truth ({landed} in)");
     }
+}
+
+/// The manual's example 1 on LinuxCNC: `M283 P1` walks sheet 1 (the controller maps it to the
+/// manual's `C1`) and finds the camera's offset as LinuxCNC's table holds it; `M283 C1` is
+/// refused naming `P`.
+#[test]
+fn example_1_walks_the_sheet_with_m283_p1_and_m283_c1_names_p() {
+    let (ok, out, err) = run(&["--json"], &example("01-calibrate-sheet.ngc"));
+    assert!(ok, "{err}");
+    let report: Value = serde_json::from_str(&out).expect("JSON");
+    let truth = &report["programs"][0]["calibration_truth"];
+    let offset_error = truth["offset_error"].as_f64().expect("the truth");
+    assert!(offset_error < 0.001, "the camera offset is {offset_error} in off: {truth}");
+    assert!(truth["k_relative"].as_f64().expect("the truth") < 0.001, "{truth}");
+
+    let dir = scratch("ex1-c");
+    let program = dir.join("c1.ngc");
+    let text = std::fs::read_to_string(example("01-calibrate-sheet.ngc")).expect("example 1");
+    std::fs::write(&program, text.replace("M283 P1 ", "M283 C1 ")).expect("write");
+    let (ok, out, err) = run(&[], &program);
+    assert!(!ok, "{out}");
+    assert!(err.contains("M283 C1: on LinuxCNC the sheet number is P: write M283 P1"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]

@@ -209,6 +209,22 @@ pub enum VisionError {
         /// What was out of order and what to do.
         what: &'static str,
     },
+
+    /// A word written as the manual writes it where the controller's dialect writes another
+    /// (LinuxCNC's M283 sheet `P` for the manual's `C`); the message names the replacement.
+    #[error("{message}")]
+    DialectWord {
+        /// What to write instead.
+        message: String,
+    },
+
+    /// A step of the stepwise M281 (re-centring on a controller that waits itself) came out
+    /// of order.
+    #[error("M281: {what}")]
+    CaptureOrder {
+        /// What was out of order and what to do.
+        what: &'static str,
+    },
 }
 
 /// A driver failure as the operator reads it: the driver's words as they are, or, when the

@@ -2,7 +2,9 @@
 
 use std::path::Path;
 
-use vision_core::{DriverRegistry, Machine, ProfileStore, StepwiseWalk, VisionError, VisionModule};
+use vision_core::{
+    CaptureStep, DriverRegistry, Machine, ProfileStore, StepwiseCapture, StepwiseWalk, VisionError, VisionModule,
+};
 use vision_math::linuxcnc::LinuxCncAlignment;
 use vision_math::{AlignmentChain, Point2, Vector2};
 use vision_mcode::{McodeError, Outcome, VisionCall};
@@ -23,11 +25,17 @@ pub struct Session {
     module: VisionModule,
     /// The stepwise M283 walk in progress ([`Session::walk_begin`]).
     walk: Option<StepwiseWalk>,
+    /// The stepwise M281 between its re-centring moves ([`Session::capture_begin`]).
+    capture: Option<StepwiseCapture>,
 }
 
 impl std::fmt::Debug for Session {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Session").field("module", &self.module).field("walk", &self.walk).finish()
+        f.debug_struct("Session")
+            .field("module", &self.module)
+            .field("walk", &self.walk)
+            .field("capture", &self.capture)
+            .finish()
     }
 }
 
@@ -35,7 +43,7 @@ impl Session {
     /// A session around `module` (its driver and profile already set), no alignment active.
     #[must_use]
     pub fn new(module: VisionModule) -> Session {
-        Session { module, walk: None }
+        Session { module, walk: None, capture: None }
     }
 
     /// The session of the profile file `profile` (TOML; a missing file starts a fresh,
@@ -79,10 +87,65 @@ impl Session {
     /// machine's failure during the call ([`VisionError::Machine`], with its kind). A refusal
     /// changes nothing.
     pub fn mcode(&mut self, machine: &mut dyn Machine, m: u32, words: &[(char, f64)]) -> Result<Outcome, HostError> {
-        let call = VisionCall::parse(m, words)?;
+        let words = machine.controller().manual_words(m, words).map_err(McodeError::from)?;
+        let call = VisionCall::parse(m, &words)?;
         let outcome = call.run(&mut self.module, machine).map_err(McodeError::from)?;
         machine.message(&summary(&outcome));
         Ok(outcome)
+    }
+
+    /// Runs M281 stepwise, for a host whose M-code only queues G-code and must wait for the
+    /// machine itself (LinuxCNC's remap yields after each move): M281's words (`D`) and the
+    /// first trigger where the machine stands. `Ok(true)`: a re-centring move was handed to the
+    /// machine; wait until the machine is there, then call [`Session::capture_next`].
+    /// `Ok(false)`: the capture is done and the operator told, as [`Session::mcode`] does. A
+    /// capture already in progress is dropped.
+    ///
+    /// # Errors
+    /// A bad word or M281's refusal ([`HostError::Mcode`]); no capture is in progress then.
+    pub fn capture_begin(&mut self, machine: &mut dyn Machine, words: &[(char, f64)]) -> Result<bool, HostError> {
+        self.capture = None;
+        let words = machine.controller().manual_words(281, words).map_err(McodeError::from)?;
+        let VisionCall::Capture { keep_image } = VisionCall::parse(281, &words)? else {
+            // `parse(281, …)` answers only Capture; kept typed all the same.
+            return Err(HostError::Mcode(McodeError::BadWord {
+                mcode: "M281",
+                word: String::new(),
+                reason: "M281 takes D0 or D1".to_string(),
+            }));
+        };
+        let step = self.module.m281_begin(machine, keep_image).map_err(McodeError::from)?;
+        Ok(self.capture_step(machine, step))
+    }
+
+    /// M281's next step, once the machine has reached the move [`Session::capture_begin`] or
+    /// the last `capture_next` asked for: answers as `capture_begin` does.
+    ///
+    /// # Errors
+    /// No capture in progress, or M281's failure ([`HostError::Mcode`]; the capture is dropped,
+    /// nothing written, the program's modal state put back).
+    pub fn capture_next(&mut self, machine: &mut dyn Machine) -> Result<bool, HostError> {
+        let Some(capture) = self.capture.take() else {
+            return Err(HostError::Mcode(McodeError::from(VisionError::CaptureOrder {
+                what: "no re-centring is in progress; M281 starts one",
+            })));
+        };
+        let step = self.module.m281_next(machine, capture).map_err(McodeError::from)?;
+        Ok(self.capture_step(machine, step))
+    }
+
+    /// Keeps a capture that moves; reports a finished one.
+    fn capture_step(&mut self, machine: &mut dyn Machine, step: CaptureStep) -> bool {
+        match step {
+            CaptureStep::Moving(capture) => {
+                self.capture = Some(capture);
+                true
+            }
+            CaptureStep::Done(reply) => {
+                machine.message(&summary(&Outcome::Capture(reply)));
+                false
+            }
+        }
     }
 
     /// Starts M283 stepwise, for a host whose M-code cannot both move and trigger (LinuxCNC's
@@ -96,7 +159,8 @@ impl Session {
     /// the machine's failure; no walk is in progress then.
     pub fn walk_begin(&mut self, machine: &mut dyn Machine, words: &[(char, f64)]) -> Result<(), HostError> {
         self.walk = None;
-        let VisionCall::Calibrate(mode) = VisionCall::parse(283, words)? else {
+        let words = machine.controller().manual_words(283, words).map_err(McodeError::from)?;
+        let VisionCall::Calibrate(mode) = VisionCall::parse(283, &words)? else {
             // `parse(283, …)` answers only Calibrate; kept typed all the same.
             return Err(HostError::Mcode(McodeError::BadWord {
                 mcode: "M283",

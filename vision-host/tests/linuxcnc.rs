@@ -271,9 +271,16 @@ fn a_shifted_and_rotated_part_lands_after_m282_also_on_an_operators_rotation() {
         let emitted: Vec<&String> =
             host.lines.iter().filter(|l| l.starts_with("G10") || l.starts_with("G52")).collect();
         assert!(host.lines.iter().all(|l| !l.contains("G68") && !l.contains("G51")), "{:?}", host.lines);
-        // M281 captures after waiting for the machine, so it never re-centres with a move,
-        // although these marks are read ~30 px off the image centre.
-        assert!(host.lines.iter().all(|l| !l.starts_with("G91")), "{:?}", host.lines);
+        // These marks are read ~30 px off the image centre: each capture re-centres over its
+        // mark (G91 G0, G90) and puts the camera back on the program's point.
+        let m280 = host.lines.iter().position(|l| l == "G52 X0 Y0").expect("M280's cancel");
+        for [x, y] in MARKS {
+            let at = m280
+                + host.lines[m280..].iter().position(|l| *l == format!("G0 X{x} Y{y}")).expect("the program's move");
+            assert!(host.lines[at + 1].starts_with("G91 G0 X"), "{:?}", &host.lines[at..]);
+            let back = format!("G90 G0 X{x:.7} Y{y:.7}");
+            assert!(host.lines[at + 2..].iter().take(4).any(|l| *l == back), "{back}: {:?}", &host.lines[at..]);
+        }
         assert!(emitted.len() >= 4, "{emitted:?}");
         assert!((host.rotation_deg - (base + 0.4)).abs() < 0.01, "rotation {}", host.rotation_deg);
         assert_eq!(host.params.get(&linuxcnc::ALIGNMENT_ACTIVE_PARAM), Some(&1.0));
@@ -314,6 +321,37 @@ fn a_capture_under_an_active_alignment_reads_in_the_program_frame() {
             assert!(miss < 0.001, "θ₀ {base}°: corner ({x}, {y}) reads {miss} in off");
         }
     }
+}
+
+/// M281 run stepwise (as the LinuxCNC remap runs it, waiting for the machine between the steps)
+/// is M281: the same moves, the same capture, the same report.
+#[test]
+fn m281_stepwise_is_m281() {
+    let (mut one_shot, mut host_a) = rig(0.0, 0.4, Vector2::new(0.06, -0.04), 1.0, 2.0);
+    let (mut stepwise, mut host_b) = rig(0.0, 0.4, Vector2::new(0.06, -0.04), 1.0, 2.0);
+    one_shot.mcode(&mut host_a, 280, &[]).expect("begun");
+    stepwise.mcode(&mut host_b, 280, &[]).expect("begun");
+    for [x, y] in MARKS {
+        let line = format!("G0 X{x} Y{y}");
+        host_a.execute(&line).expect("a move");
+        host_b.execute(&line).expect("a move");
+        let (from_a, from_b) = (host_a.lines.len(), host_b.lines.len());
+        one_shot.mcode(&mut host_a, 281, &[]).expect("a capture");
+        let mut steps = 1;
+        let mut moving = stepwise.capture_begin(&mut host_b, &[]).expect("a first step");
+        while moving {
+            moving = stepwise.capture_next(&mut host_b).expect("a next step");
+            steps += 1;
+        }
+        assert!(steps >= 2, "({x}, {y}) is read off centre: M281 must re-centre");
+        assert_eq!(host_a.lines[from_a..], host_b.lines[from_b..]);
+        assert_eq!(host_a.messages.last(), host_b.messages.last());
+    }
+    let (a, b) = (one_shot.mcode(&mut host_a, 282, &[]), stepwise.mcode(&mut host_b, 282, &[]));
+    assert_eq!(a.expect("aligned").gcode(), b.expect("aligned").gcode());
+    // A step out of order is refused in M281's words.
+    let e = stepwise.capture_next(&mut host_b).expect_err("no capture in progress");
+    assert_eq!(e.to_string(), "M281: no re-centring is in progress; M281 starts one");
 }
 
 #[test]
@@ -399,7 +437,7 @@ fn camera_offset(session: &Session, host: &FakeLinuxCnc) -> Vector2<f64> {
 #[test]
 fn the_stepwise_walk_solves_and_commits_as_the_one_shot_m283() {
     let error = Vector2::new(0.04, -0.03);
-    for (words, base) in [(vec![('C', 1.0)], 0.0), (vec![('C', 1.0)], 10.0), (vec![('Q', 0.5)], 10.0)] {
+    for (words, base) in [(vec![('P', 1.0)], 0.0), (vec![('P', 1.0)], 10.0), (vec![('Q', 0.5)], 10.0)] {
         let (mut one, mut one_host) = calibration_rig(base, error);
         let want = one.mcode(&mut one_host, 283, &words).expect("the one-shot M283");
         let (mut step, mut step_host) = calibration_rig(base, error);
@@ -438,7 +476,7 @@ fn the_stepwise_walk_solves_and_commits_as_the_one_shot_m283() {
 fn a_sheet_walk_on_an_operators_rotation_writes_k_and_the_offset_along_the_machine_axes() {
     for base in [0.0, 10.0] {
         let (mut session, mut host) = calibration_rig(base, Vector2::new(0.04, -0.03));
-        walk_stepwise(&mut session, &mut host, &[('C', 1.0)]).expect("calibrated");
+        walk_stepwise(&mut session, &mut host, &[('P', 1.0)]).expect("calibrated");
         let sim = host.machine.sim().clone();
         let offset = camera_offset(&session, &host);
         let e = sim.calibration_error(session.module().params(), offset, LengthUnit::Inch);
@@ -453,7 +491,7 @@ fn an_ng_capture_stops_the_walk_and_writes_nothing() {
     let (mut session, mut host) = calibration_rig(0.0, Vector2::new(0.04, -0.03));
     host.execute("G0 X30 Y30").expect("off the sheet");
     let before = (session.module().params().cal_k(), host.tools.clone());
-    session.walk_begin(&mut host, &[('C', 1.0)]).expect("begun");
+    session.walk_begin(&mut host, &[('P', 1.0)]).expect("begun");
     let p = session.walk_next(&mut host).expect("a point").expect("the first capture");
     host.execute(&format!("G0 X{} Y{}", p.x, p.y)).expect("a move");
     let e = session.walk_capture(&mut host).expect_err("no mark out there");
@@ -482,8 +520,16 @@ fn steps_out_of_order_are_refused_and_keep_the_walk() {
     }
     session.walk_finish(&mut host).expect("calibrated");
     // M283's own refusals come at the start, before anything moves.
-    let e = session.walk_begin(&mut host, &[('C', 9.0)]).expect_err("no sheet 9");
+    let e = session.walk_begin(&mut host, &[('P', 9.0)]).expect_err("no sheet 9");
     assert!(e.to_string().contains('9'), "{e}");
+    // LinuxCNC writes the manual's M283 C1 as P1 (C is an axis word there): C names P, and P
+    // is a sheet number, alone.
+    let e = session.walk_begin(&mut host, &[('C', 1.0)]).expect_err("C on LinuxCNC");
+    assert_eq!(e.to_string(), "M283 C1: on LinuxCNC the sheet number is P: write M283 P1 (C is an axis word)");
+    let e = session.walk_begin(&mut host, &[('P', 1.5)]).expect_err("no sheet number");
+    assert_eq!(e.to_string(), "M283 P1.5 is invalid: P is a calibration sheet number (P1)");
+    let e = session.walk_begin(&mut host, &[('P', 1.0), ('Q', 0.5)]).expect_err("both");
+    assert!(e.to_string().starts_with("M283 takes one of Qd"), "{e}");
 }
 
 #[test]

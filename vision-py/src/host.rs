@@ -105,14 +105,15 @@ impl Machine for PyHost<'_> {
         self.call("execute", (line,)).map(|_| ()).map_err(|e| e.with_kind(MachineErrorKind::RefusedGcode))
     }
 
-    /// `M70`: LinuxCNC saves the modal state.
+    /// `Host.save_modal_state()`: LinuxCNC's `M70`, and the motion mode, which `M72` does not
+    /// put back.
     fn save_modal_state(&mut self) -> Result<(), MachineError> {
-        self.execute("M70")
+        self.call("save_modal_state", ()).map(|_| ()).map_err(|e| e.with_kind(MachineErrorKind::RefusedGcode))
     }
 
-    /// `M72`: LinuxCNC restores the modal state `M70` saved.
+    /// `Host.restore_modal_state()`: `M72`, then the saved motion mode set again.
     fn restore_modal_state(&mut self) -> Result<(), MachineError> {
-        self.execute("M72")
+        self.call("restore_modal_state", ()).map(|_| ()).map_err(|e| e.with_kind(MachineErrorKind::RefusedGcode))
     }
 
     fn pound(&self, index: u32) -> Result<f64, MachineError> {

@@ -167,6 +167,22 @@ impl PySession {
         Ok(outcome.gcode().to_vec())
     }
 
+    /// `capture_begin(words, host)`: M281 in the task, after the wait for the machine
+    /// (`{"d": 1.0}` or `{}`). Triggers where the machine stands; `True` when it handed the
+    /// host a re-centring move (the remap yields until the machine is there, then calls
+    /// `capture_next`), `False` when the capture is done and reported. Raises `VisionError`
+    /// when M281 is refused or fails (the program's modal state is put back).
+    fn capture_begin(&mut self, words: &Bound<'_, PyDict>, host: Bound<'_, PyAny>) -> PyResult<bool> {
+        let words = block_words(words)?;
+        self.on_host(host, |session, host| session.capture_begin(host, &words))
+    }
+
+    /// `capture_next(host)`: M281's next step once the machine has reached the re-centring
+    /// move: settles, triggers again; answers as `capture_begin`.
+    fn capture_next(&mut self, host: Bound<'_, PyAny>) -> PyResult<bool> {
+        self.on_host(host, |session, host| session.capture_next(host))
+    }
+
     /// `walk_begin(words, host)`: M283's prolog. Checks M283's words (`{"q": d}` or
     /// `{"c": n}`) and everything M283 checks, and plans the walk; nothing moves. Raises
     /// `VisionError` when M283 is refused.

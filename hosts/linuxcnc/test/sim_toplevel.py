@@ -32,9 +32,10 @@ class SimHost(remap.Host):
         )
 
 
-def _simulated(config):
+def simulated(config):
+    """Session.simulated from a JSON-shaped config (lists where it takes pairs)."""
     pairs = {k: tuple(v) for k, v in config.items() if k in ("shift", "scale")}
     return mach_vision.Session.simulated(**{**config, **pairs})
 
 
-remap.install(_simulated(json.loads(os.environ.get("MACH_VISION_SIM", "{}"))), SimHost)
+remap.install(simulated(json.loads(os.environ.get("MACH_VISION_SIM", "{}"))), SimHost)

@@ -185,8 +185,11 @@ impl Runner {
         let alignment = alignment_time(&config, &kept, &steps);
         let calibrated =
             steps.iter().any(|s| matches!(s, Step::SheetCalibration { .. } | Step::QuickCalibration { .. }));
-        let calibration_truth =
-            if calibrated { calibration_truth(&self.sim, &self.machine, self.module().params()) } else { None };
+        let calibration_truth = if calibrated {
+            calibration_truth(&self.sim, &self.machine, self.module().params(), self.handler.controller())
+        } else {
+            None
+        };
         let (outcome, error) = match result {
             Ok(RunOutcome::Completed { .. }) => ("completed".to_string(), None),
             Ok(RunOutcome::Ended { line, code }) => (format!("ended by M{code} at line {line}"), None),

@@ -202,12 +202,18 @@ fn cut_error(
     Some(CutError { fixture: fixture.name.clone(), tool: machine.interpreter().active_tool(), points: grid.len(), max })
 }
 
-/// The calibration truth now (after a program that calibrated).
-pub(crate) fn calibration_truth(sim: &Sim, machine: &SimMachine, params: &Params) -> Option<CalibrationTruth> {
+/// The calibration truth now (after a program that calibrated), the camera tool's table
+/// offset read in `controller`'s sign (LinuxCNC's table holds the negation).
+pub(crate) fn calibration_truth(
+    sim: &Sim,
+    machine: &SimMachine,
+    params: &Params,
+    controller: &dyn vision_host::Controller,
+) -> Option<CalibrationTruth> {
     let interp = machine.interpreter();
     let unit = interp.units();
     let tool = params.camera_tool().unwrap_or_else(|| interp.active_tool());
-    let offset = interp.tool_offset(tool)?.xy().coords;
+    let offset = interp.tool_offset(tool)?.xy().coords * controller.tool_table_sign();
     let e = sim.calibration_error(params, offset, unit);
     Some(CalibrationTruth {
         k_relative: e.k_relative,

@@ -18,9 +18,11 @@ use crate::error::VisionError;
 use crate::machine::{checked, Machine, MachineError};
 
 /// LinuxCNC 2.9. Its tool table holds the offset LinuxCNC *adds* to a programmed point
-/// (`machine = g5x + R·(p + g92) + tool`), the negative of the module's. A capture waits for the
-/// machine first (`yield INTERP_EXECUTE_FINISH`) and a remap may not queue G-code after that,
-/// so M281 does not re-centre, and M283 runs stepwise ([`crate::VisionModule::m283_begin`]).
+/// (`machine = g5x + R·(p + g92) + tool`), the negative of the module's. A remap only queues
+/// G-code, and a capture waits for the machine first (`yield INTERP_EXECUTE_FINISH`), so the
+/// bridge runs M281 stepwise when it re-centres ([`crate::VisionModule::m281_begin`]: the
+/// handler yields again after each move) and M283 stepwise
+/// ([`crate::VisionModule::m283_begin`]).
 #[derive(Debug, Clone, Copy, Default)]
 pub struct LinuxCnc;
 
@@ -29,16 +31,37 @@ impl Controller for LinuxCnc {
         "linuxcnc"
     }
 
+    /// M283's sheet is `Pn` on LinuxCNC, the manual's `Cn`: C is an axis word, which the task
+    /// refuses ("Bad character 'c' used") on a machine without a C axis before any remap runs,
+    /// and moves on a machine with one. `C` that reaches here (rs274, a C-axis machine) is
+    /// refused naming `P`; `P` that is no sheet number, or `P` with `Q`, in LinuxCNC's words.
+    fn manual_words(&self, m: u32, words: &[(char, f64)]) -> Result<Vec<(char, f64)>, VisionError> {
+        if m != 283 {
+            return Ok(words.to_vec());
+        }
+        let refuse = |message: String| Err(VisionError::DialectWord { message });
+        let find = |letter: char| words.iter().find(|(l, _)| l.eq_ignore_ascii_case(&letter)).map(|(_, v)| *v);
+        if let Some(c) = find('C') {
+            return refuse(format!(
+                "M283 C{c}: on LinuxCNC the sheet number is P: write M283 P{c} (C is an axis word)"
+            ));
+        }
+        let Some(p) = find('P') else { return Ok(words.to_vec()) };
+        if find('Q').is_some() {
+            return refuse("M283 takes one of Qd (quick, dot diameter d) or Pn (sheet n), not both".to_string());
+        }
+        if !(p >= 1.0 && p.fract() == 0.0) {
+            return refuse(format!("M283 P{p} is invalid: P is a calibration sheet number (P1)"));
+        }
+        Ok(words.iter().map(|&(l, v)| if l.eq_ignore_ascii_case(&'P') { ('C', v) } else { (l, v) }).collect())
+    }
+
     fn dialect(&self) -> &'static str {
         "linuxcnc"
     }
 
     fn tool_table_sign(&self) -> f64 {
         -1.0
-    }
-
-    fn may_recentre(&self) -> bool {
-        false
     }
 
     /// Runs `G52 X0 Y0` and `G10 L2 P0 R{θ₀}`, then clears the flag. When a line is refused the

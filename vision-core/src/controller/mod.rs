@@ -7,9 +7,8 @@
 //! ([`Controller::cancel_alignment`]), whether a fit can be applied at all (scale,
 //! [`Controller::check_fit`]), where the alignment's state lives
 //! ([`Controller::active_alignment`]), the G5x rotation under it ([`Controller::base_rotation`]),
-//! the tool table's sign ([`Controller::tool_table_sign`]), whether M281 may move to re-centre
-//! ([`Controller::may_recentre`]) and the G-code dialect its interpreter follows
-//! ([`Controller::dialect`]).
+//! the tool table's sign ([`Controller::tool_table_sign`]) and the G-code dialect its
+//! interpreter follows ([`Controller::dialect`]).
 //!
 //! Adding a controller: one file here implementing [`Controller`], one line in
 //! [`CONTROLLERS`], and its bridge crate implementing [`crate::Machine`] (see
@@ -59,10 +58,6 @@ pub trait Controller: fmt::Debug + Send + Sync {
     /// (LinuxCNC).
     fn tool_table_sign(&self) -> f64;
 
-    /// Whether M281 may move the camera over the mark and trigger again (re-centring) inside
-    /// one M-code call.
-    fn may_recentre(&self) -> bool;
-
     /// M280: cancels any alignment on `machine`; returns the lines run.
     ///
     /// # Errors
@@ -101,6 +96,17 @@ pub trait Controller: fmt::Debug + Send + Sync {
     /// # Errors
     /// The machine's refusal of a read.
     fn base_rotation(&self, machine: &dyn Machine) -> Result<f64, MachineError>;
+
+    /// Vision M-code `m`'s words as the manual writes them, from the words of its line in this
+    /// controller's dialect (letters in either case). The default takes them as they are.
+    ///
+    /// # Errors
+    /// [`VisionError::DialectWord`]: a word this controller writes otherwise, with the
+    /// replacement.
+    fn manual_words(&self, m: u32, words: &[(char, f64)]) -> Result<Vec<(char, f64)>, VisionError> {
+        let _ = m;
+        Ok(words.to_vec())
+    }
 }
 
 /// Every controller, by [`Controller::name`].
@@ -184,10 +190,6 @@ macro_rules! modal_controller {
 
             fn tool_table_sign(&self) -> f64 {
                 1.0
-            }
-
-            fn may_recentre(&self) -> bool {
-                true
             }
 
             fn cancel_alignment(&self, machine: &mut dyn $crate::Machine) -> Result<Vec<String>, $crate::VisionError> {

@@ -1,6 +1,6 @@
 //! M281: capture one mark.
 
-use vision_math::{LengthUnit, Point2, ScaleEvidence, Vector2};
+use vision_math::{AlignmentChain, LengthUnit, PixelChain, Point2, ScaleEvidence, Vector2};
 
 use super::capture::{mark_size, observe, outside_image_note, pixel_chain, require_mark, Capture, Recentred};
 use super::height::{self, NextMove};
@@ -11,6 +11,51 @@ use crate::error::VisionError;
 use crate::machine::{checked, Machine, Timestamp};
 use crate::pound::{PoundBlock, SlotValues, SLOTS};
 
+/// An M281 between its re-centring moves ([`VisionModule::m281_begin`]): the readings so far
+/// and the program's state to put back. Opaque; hand it to [`VisionModule::m281_next`] once the
+/// machine has reached the move it asked for.
+#[derive(Debug)]
+pub struct StepwiseCapture {
+    keep_image: bool,
+    block: PoundBlock,
+    chain: PixelChain,
+    unit: LengthUnit,
+    alignment: Option<AlignmentChain>,
+    /// Where the program put the camera, program frame.
+    commanded: Point2<f64>,
+    /// The first reading's centred pixel offset, pixels.
+    first_px: Vector2<f64>,
+    /// The reading kept as the capture: the one nearest the image centre (a scale error of K
+    /// acts on the offset it read).
+    best: Kept,
+    /// Every reading of this mark inside the image: the camera's position and the offset read
+    /// from it (program frame), the evidence of the image scale at the part's height.
+    readings: Vec<(Point2<f64>, Vector2<f64>)>,
+    /// The scale evidence of `readings`.
+    mark_scale: ScaleEvidence,
+    /// One reading's noise, machine units.
+    noise: f64,
+    /// True once a probe move was made.
+    probed: bool,
+    /// The G-code run so far (the re-centring moves).
+    gcode: Vec<String>,
+    /// Re-centring moves made.
+    passes: i64,
+    /// True once the program's modal state is saved (before the first move).
+    saved: bool,
+}
+
+/// Where an M281 stands after [`VisionModule::m281_begin`] or [`VisionModule::m281_next`].
+#[derive(Debug)]
+pub enum CaptureStep {
+    /// A re-centring move was handed to the machine: wait until the machine is there, then
+    /// call [`VisionModule::m281_next`] with this.
+    Moving(StepwiseCapture),
+    /// The capture, committed; the G-code that puts the camera back where the program had it
+    /// and the program's modal state back was handed to the machine last.
+    Done(Reply<Capture>),
+}
+
 impl VisionModule {
     /// **M281**: triggers at the current commanded position and stores the observed point.
     ///
@@ -20,8 +65,8 @@ impl VisionModule {
     /// default): it moves when the scale's 1σ the run has measured so far (6 % before any
     /// move) times the distance of the reading nearest the centre exceeds 0.3 × the camera's
     /// noise (`VisionCameraNoisePx`). It then moves the camera over that reading (re-centring)
-    /// or, when the mark is closer to the centre than a quarter of `VisionHeightProbePx` and not yet
-    /// probed, so that the mark lands `VisionHeightProbePx` on the far side (a probe: a long
+    /// or, when the mark is closer to the centre than a quarter of `VisionHeightProbePx` and not
+    /// yet probed, so that the mark lands `VisionHeightProbePx` on the far side (a probe: a long
     /// baseline for the scale). Each move is an incremental `G91 G0`, then `G90`, a settle of
     /// `VisionTriggerSettleSec` and a trigger, at most `VisionRecenterPasses` times (0 reads in
     /// one shot); `VisionRecenterTolerance` > 0 is issue 25's fixed rule instead (re-centre
@@ -32,10 +77,12 @@ impl VisionModule {
     /// After the last reading the camera moves back to where the program put it, and the
     /// program's modal state, saved before the first move, is restored
     /// ([`Machine::save_modal_state`]), on success and failure alike: the program goes on from
-    /// its own point in the modes it had (a feed move stays a feed move). Only a reading inside the image is
-    /// moved from, so a move never exceeds the field of view. A controller may forbid moving
-    /// ([`crate::Controller::may_recentre`]: LinuxCNC triggers after waiting for the machine,
-    /// after which a remap may not queue G-code); M281 then reads in one shot.
+    /// its own point in the modes it had (a feed move stays a feed move). Only a reading inside
+    /// the image is moved from, so a move never exceeds the field of view. This runs
+    /// [`VisionModule::m281_begin`] and [`VisionModule::m281_next`] back to back, for a machine
+    /// whose [`Machine::run_gcode`] returns once the move is done (Mach4, the simulator); a
+    /// controller that only queues G-code from an M-code (LinuxCNC) calls them itself and waits
+    /// for its motion in between.
     ///
     /// `O = C + K·R·(p − res/2 − PxCenterOffset)` with K converted from `Cal_Units` to the
     /// machine's unit; with an alignment active, `O` is reported in the program frame (SPEC §2).
@@ -60,6 +107,22 @@ impl VisionModule {
     /// variables already written are restored). The dot list, the slots and `Run_DotCount`
     /// change only on success.
     pub fn m281(&mut self, machine: &mut dyn Machine, keep_image: bool) -> Result<Reply<Capture>, VisionError> {
+        let mut step = self.m281_begin(machine, keep_image)?;
+        loop {
+            match step {
+                CaptureStep::Done(reply) => return Ok(reply),
+                CaptureStep::Moving(capture) => step = self.m281_next(machine, capture)?,
+            }
+        }
+    }
+
+    /// M281's first step: the checks, the first trigger where the machine stands, then either
+    /// the capture committed ([`CaptureStep::Done`]) or the first re-centring move handed to
+    /// the machine ([`CaptureStep::Moving`]; the modal state saved first).
+    ///
+    /// # Errors
+    /// As [`VisionModule::m281`].
+    pub fn m281_begin(&mut self, machine: &mut dyn Machine, keep_image: bool) -> Result<CaptureStep, VisionError> {
         let ready = self.check_enabled().and_then(|()| self.check_tool(machine)).and_then(|()| {
             let block = PoundBlock::on_machine(self.params.pound_var_base(), machine)?;
             let unit = machine.units()?;
@@ -77,93 +140,168 @@ impl VisionModule {
         let reading = self.trigger_mark()?;
         let native = Point2::new(reading.x_px, reading.y_px);
         let (commanded, observed) = self.observe(machine, alignment, chain.delta(native))?;
-        let first_px = chain.centred(native);
-        // Every reading of this mark: the camera's position and the offset read from it
-        // (program frame), the evidence of the image scale at the part's height.
         let noise = height::noise_px(&self.params) * chain.k().singular_values().max();
-        let mut readings = vec![(commanded, observed - commanded)];
-        // The capture is the reading nearest the image centre: a scale error of K acts on
-        // the offset it read.
-        let mut best = Kept { time: trigger_time, reading, native, observed, camera: commanded };
-        let mut mark_scale = ScaleEvidence::default();
-        let (mut passes, mut probed) = (0, false);
-        let max_passes = if machine.controller().may_recentre() { self.params.recenter_passes() } else { 0 };
-        // The program's modal state is saved before the first move and put back after the
-        // last, whatever happens in between: a feed move after M281 stays a feed move.
-        let mut saved = false;
-        let mut failure = None;
-        let mut gcode = Vec::new();
+        let capture = StepwiseCapture {
+            keep_image,
+            block,
+            chain,
+            unit,
+            alignment,
+            commanded,
+            first_px: chain.centred(native),
+            best: Kept { time: trigger_time, reading, native, observed, camera: commanded },
+            readings: vec![(commanded, observed - commanded)],
+            mark_scale: ScaleEvidence::default(),
+            noise,
+            probed: false,
+            gcode: Vec::new(),
+            passes: 0,
+            saved: false,
+        };
+        self.recentre_or_commit(machine, capture)
+    }
+
+    /// M281's next step, once the machine has reached the re-centring move: settles
+    /// `VisionTriggerSettleSec`, triggers and observes again, then moves again or commits as
+    /// [`VisionModule::m281_begin`] does.
+    ///
+    /// # Errors
+    /// As [`VisionModule::m281`]; the modal state is restored first (the camera stays where it
+    /// moved).
+    pub fn m281_next(
+        &mut self,
+        machine: &mut dyn Machine,
+        mut capture: StepwiseCapture,
+    ) -> Result<CaptureStep, VisionError> {
+        let pass = machine.dwell(self.params.trigger_settle_s()).map_err(VisionError::from).and_then(|()| {
+            // M281 D1 keeps the image of the reading reported.
+            let time = machine.now();
+            let reading = self.trigger_mark()?;
+            let native = Point2::new(reading.x_px, reading.y_px);
+            let (camera, observed) = observe(machine, capture.alignment, capture.chain.delta(native))?;
+            Ok(Kept { time, reading, native, observed, camera })
+        });
+        match pass {
+            Ok(pass) => {
+                if outside_image_note(&self.params, pass.native).is_none() {
+                    capture.readings.push((pass.camera, pass.observed - pass.camera));
+                    // One regression over all of the mark's readings (recomputed whole); a
+                    // refused one (a non-finite noise from a broken K) adds nothing.
+                    let mut fresh = ScaleEvidence::default();
+                    if fresh.add_mark(&capture.readings, capture.noise).is_ok() {
+                        capture.mark_scale = fresh;
+                    }
+                    let chain = &capture.chain;
+                    if chain.centred(pass.native).norm() <= chain.centred(capture.best.native).norm() {
+                        capture.best = pass;
+                    }
+                }
+                self.recentre_or_commit(machine, capture)
+            }
+            Err(e) => Err(self.abandon(machine, &capture, e)),
+        }
+    }
+
+    /// After a reading: move again (re-centre or probe, as [`VisionModule::m281`] describes),
+    /// or, when the budget says stay or the passes are spent, commit.
+    fn recentre_or_commit(
+        &mut self,
+        machine: &mut dyn Machine,
+        mut capture: StepwiseCapture,
+    ) -> Result<CaptureStep, VisionError> {
         // A reading outside the image is no distance to move by (a wrong resolution or K):
         // every move stays within the field of view.
-        while passes < max_passes && outside_image_note(&self.params, best.native).is_none() {
-            let sigma = self.run.scale.merged(mark_scale).estimate().map(|e| e.sigma);
-            let step = height::next_move(&self.params, chain.centred(best.native).norm(), sigma, probed);
-            let target = match step {
-                NextMove::Stay => break,
-                NextMove::Recentre => best.observed,
+        let target = if capture.passes < self.params.recenter_passes()
+            && outside_image_note(&self.params, capture.best.native).is_none()
+        {
+            let sigma = self.run.scale.merged(capture.mark_scale).estimate().map(|e| e.sigma);
+            let best = &capture.best;
+            match height::next_move(&self.params, capture.chain.centred(best.native).norm(), sigma, capture.probed) {
+                NextMove::Stay => None,
+                NextMove::Recentre => Some(best.observed),
                 NextMove::Probe => {
                     // The mark lands `VisionHeightProbePx` on the far side of the centre.
                     let reach = best.observed - best.camera;
                     let away = if reach.norm() > 0.0 { reach / reach.norm() } else { Vector2::x() };
-                    probed = true;
-                    best.observed + away * (self.params.height_probe_px() * chain.k().singular_values().max())
+                    capture.probed = true;
+                    let k = capture.chain.k().singular_values().max();
+                    Some(best.observed + away * (self.params.height_probe_px() * k))
                 }
-            };
-            if !saved {
+            }
+        } else {
+            None
+        };
+        if let Some(target) = target {
+            // The program's modal state is saved before the first move and put back after the
+            // last, whatever happens in between: a feed move after M281 stays a feed move.
+            if !capture.saved {
                 if let Err(e) = machine.save_modal_state() {
-                    failure = Some(VisionError::from(e));
-                    break;
+                    return Err(self.abandon(machine, &capture, e.into()));
                 }
-                saved = true;
+                capture.saved = true;
             }
-            match self.recentre_pass(machine, &chain, target, alignment) {
-                Ok(pass) => {
-                    gcode.extend(pass.lines);
-                    let inside = outside_image_note(&self.params, pass.native).is_none();
-                    if inside {
-                        readings.push((pass.camera, pass.observed - pass.camera));
-                        // One regression over all of the mark's readings (recomputed whole);
-                        // a refused one (a non-finite noise from a broken K) adds nothing.
-                        let mut fresh = ScaleEvidence::default();
-                        if fresh.add_mark(&readings, noise).is_ok() {
-                            mark_scale = fresh;
-                        }
-                    }
-                    if inside && chain.centred(pass.native).norm() <= chain.centred(best.native).norm() {
-                        best = Kept {
-                            time: pass.time,
-                            reading: pass.reading,
-                            native: pass.native,
-                            observed: pass.observed,
-                            camera: pass.camera,
-                        };
-                    }
+            let moved = checked::program_position(machine)
+                .map_err(VisionError::from)
+                .map(|at| relative_move(target - at))
+                .and_then(|lines| machine.run_gcode(&lines).map(|()| lines).map_err(VisionError::from));
+            return match moved {
+                Ok(lines) => {
+                    capture.gcode.extend(lines);
+                    capture.passes += 1;
+                    Ok(CaptureStep::Moving(capture))
                 }
-                Err(e) => {
-                    failure = Some(e);
-                    break;
-                }
-            }
-            passes += 1;
+                Err(e) => Err(self.abandon(machine, &capture, e)),
+            };
         }
-        if passes > 0 && failure.is_none() {
+        if capture.passes > 0 {
             // Back where the program put the camera: the program goes on from its own point.
-            let lines = vec![absolute_move(commanded)];
-            match machine.run_gcode(&lines).map(|()| lines) {
-                Ok(lines) => gcode.extend(lines),
-                Err(e) => failure = Some(e.into()),
+            let lines = vec![absolute_move(capture.commanded)];
+            if let Err(e) = machine.run_gcode(&lines) {
+                return Err(self.abandon(machine, &capture, e.into()));
             }
+            capture.gcode.extend(lines);
         }
-        if saved {
+        if capture.saved {
             if let Err(e) = machine.restore_modal_state() {
-                failure.get_or_insert(VisionError::from(e));
+                let e = VisionError::from(e);
+                self.publish_failure(None, &e);
+                return Err(e);
             }
         }
-        if let Some(e) = failure {
-            self.publish_failure(None, &e);
-            return Err(e);
+        self.commit_capture(machine, capture).map(CaptureStep::Done)
+    }
+
+    /// A failed step: the modal state put back when it was saved (the first failure is the one
+    /// reported), the failure shown in `LastStatus`.
+    fn abandon(&mut self, machine: &mut dyn Machine, capture: &StepwiseCapture, e: VisionError) -> VisionError {
+        if capture.saved {
+            // The first failure is the operator's news; a failed restore after it adds nothing.
+            let _ = machine.restore_modal_state();
         }
-        let Kept { time: trigger_time, reading, native, observed, camera } = best;
+        self.publish_failure(None, &e);
+        e
+    }
+
+    /// Writes the capture (slots, dot list, telemetry, image) and reports it.
+    fn commit_capture(
+        &mut self,
+        machine: &mut dyn Machine,
+        capture: StepwiseCapture,
+    ) -> Result<Reply<Capture>, VisionError> {
+        let StepwiseCapture {
+            keep_image,
+            block,
+            chain,
+            unit,
+            commanded,
+            first_px,
+            best: Kept { time: trigger_time, reading, native, observed, camera },
+            mark_scale,
+            probed,
+            gcode,
+            passes,
+            ..
+        } = capture;
         let offset = chain.delta(native);
         let (width, height) = mark_size(&chain, &reading);
         let values = SlotValues {
@@ -291,48 +429,7 @@ impl VisionModule {
     }
 }
 
-/// One pass: the move to a target point (over the mark, or a probe beside it), and the
-/// reading there.
-struct Pass {
-    lines: Vec<String>,
-    time: Timestamp,
-    reading: Reading,
-    native: Point2<f64>,
-    observed: Point2<f64>,
-    /// The camera's position at the reading, program frame.
-    camera: Point2<f64>,
-}
-
-/// The reading M281 keeps as its capture: the one nearest the image centre.
-struct Kept {
-    time: Timestamp,
-    reading: Reading,
-    native: Point2<f64>,
-    observed: Point2<f64>,
-    /// The camera's position at the reading, program frame.
-    camera: Point2<f64>,
-}
-
 impl VisionModule {
-    /// Moves the camera to `target` (program frame), settles, triggers and observes again.
-    fn recentre_pass(
-        &mut self,
-        machine: &mut dyn Machine,
-        chain: &vision_math::PixelChain,
-        target: Point2<f64>,
-        alignment: Option<vision_math::AlignmentChain>,
-    ) -> Result<Pass, VisionError> {
-        let lines = relative_move(target - checked::program_position(machine)?);
-        machine.run_gcode(&lines)?;
-        machine.dwell(self.params.trigger_settle_s())?;
-        // M281 D1 keeps the image of the reading reported.
-        let time = machine.now();
-        let reading = self.trigger_mark()?;
-        let native = Point2::new(reading.x_px, reading.y_px);
-        let (camera, observed) = observe(machine, alignment, chain.delta(native))?;
-        Ok(Pass { lines, time, reading, native, observed, camera })
-    }
-
     /// [`observe`], a failure shown in `LastStatus` (the trigger already happened).
     fn observe(
         &mut self,
@@ -342,6 +439,17 @@ impl VisionModule {
     ) -> Result<(Point2<f64>, Point2<f64>), VisionError> {
         observe(machine, alignment, offset).inspect_err(|e| self.publish_failure(None, e))
     }
+}
+
+/// A reading of the mark: when it was triggered, its native pixel, its observed point and the
+/// camera's position at it (program frame).
+#[derive(Debug)]
+struct Kept {
+    time: Timestamp,
+    reading: Reading,
+    native: Point2<f64>,
+    observed: Point2<f64>,
+    camera: Point2<f64>,
 }
 
 /// Writes `(address, value)` pairs; on failure restores the ones already written.

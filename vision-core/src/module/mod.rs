@@ -43,6 +43,7 @@ pub use capture::{Capture, Recentred};
 pub use dro::TelemetrySink;
 pub use height::HeightReport;
 pub use m280::RunMode;
+pub use m281::{CaptureStep, StepwiseCapture};
 pub use m282::{AlignReport, DroppedMark, Pieces, PredictedError};
 pub use m283::StepwiseWalk;
 pub use m284::{JobReport, MAX_JOB};
