@@ -10,7 +10,10 @@
 //! * [`SimMachine`]: the G-code interpreter set up from the world as a CNC whose moves move the
 //!   head; it runs whole programs, and gives host access through its interpreter's `Context`.
 //! * [`SimCamera`]: a [`vision_core::CameraDriver`] that sees the table from the head's true
-//!   position through the true optics ([`Optics`]).
+//!   position through the true optics ([`Optics`]) and reports the mark's pixel (reading mode).
+//! * [`Sim::render_frame`]: the image mode — the frame that camera would see, rendered with
+//!   `vision_locate::render` through the same optics ([`SimFrame`], [`ImageLook`]), for a
+//!   driver that finds the mark itself.
 //! * Truth: [`Sim::true_k`], [`Sim::true_camera_offset`], [`Sim::calibration_error`],
 //!   [`SimMachine::cut_error`].
 //!
@@ -49,6 +52,7 @@
 mod camera;
 mod error;
 mod fixture;
+mod frames;
 mod machine;
 mod optics;
 mod rng;
@@ -59,9 +63,13 @@ pub mod world;
 pub use camera::SimCamera;
 pub use error::SimError;
 pub use fixture::TrueMark;
+pub use frames::SimFrame;
 pub use machine::interpreter_dialect;
 pub use machine::SimMachine;
 pub use optics::Optics;
 pub use sim::Sim;
 pub use truth::CalibrationError;
-pub use world::{CameraMount, ControllerName, Fixture, Job, MachineSetup, Tool, World, WorldUnit, DEFAULT_WORLD_TOML};
+pub use world::{
+    CameraMount, ControllerName, Fixture, ImageLook, Job, MachineSetup, MarkShape, Tool, World, WorldUnit,
+    DEFAULT_WORLD_TOML,
+};

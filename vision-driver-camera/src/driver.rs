@@ -1,0 +1,259 @@
+//! [`FrameDriver`]: a frame source plus `vision-locate`, as a [`CameraDriver`].
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use vision_core::{CameraDriver, Capabilities, DriverError, DriverRegistry, ImageRequest, Judgment, Params, Reading};
+use vision_locate::{GrayImage, Located, NotFoundReason, Pixels};
+
+use crate::config::{CameraConfig, MarkKind, Polarity, Source};
+use crate::error::CameraError;
+use crate::frame::Frame;
+use crate::source::{FileSource, FrameSource, HttpSource};
+use crate::v4l2::{self, V4l2Source};
+
+/// The driver's registry name (`VisionDriver = Camera`).
+pub const DRIVER_NAME: &str = "Camera";
+
+/// Why the last trigger found no mark, in `vision-locate`'s words.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Miss {
+    /// The finder's reason (no candidate, several candidates, clipped, size out of range).
+    pub reason: String,
+    /// How many candidate marks it saw, when it says (2 or more: it refused to pick one).
+    pub candidates: Option<u32>,
+}
+
+/// A camera whose frames the driver searches itself.
+///
+/// Per trigger: a live source first gives `VisionCameraFlushFrames` frames that are thrown
+/// away (a V4L2 queue or a snapshot server's buffer may hold frames from before the last
+/// move); the next frame is searched for the mark. A found mark is an `OK` reading, count 1,
+/// its centre in native pixels (the finder's pixel-centre coordinates + ½: native (0, 0) is the
+/// top-left corner of the image, as the Keyence camera and the simulator count), width and
+/// height its diameter in pixels, angle in degrees, score 0–1. No mark, or several, is `NG`
+/// ([`FrameDriver::last_miss`] says why), as the Keyence camera judges a failed inspection.
+pub struct FrameDriver<S: FrameSource = Box<dyn FrameSource>> {
+    config: CameraConfig,
+    source: S,
+    last_frame: Option<Frame>,
+    last_miss: Option<Miss>,
+}
+
+impl<S: FrameSource> std::fmt::Debug for FrameDriver<S> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("FrameDriver").field("config", &self.config).field("source", &self.source.describe()).finish()
+    }
+}
+
+impl FrameSource for Box<dyn FrameSource> {
+    fn frame(&mut self) -> Result<Frame, CameraError> {
+        (**self).frame()
+    }
+    fn describe(&self) -> String {
+        (**self).describe()
+    }
+    fn is_live(&self) -> bool {
+        (**self).is_live()
+    }
+}
+
+impl FrameDriver {
+    /// A driver from its settings in `params`, on the source `VisionCameraSource` names. Opens
+    /// nothing until the first frame.
+    ///
+    /// # Errors
+    /// As [`CameraConfig::from_params`]; [`CameraError::DeviceOpen`] for a V4L2 device in a
+    /// build without the `v4l2` feature or a device that cannot be opened.
+    pub fn from_params(params: &Params) -> Result<FrameDriver, CameraError> {
+        let config = CameraConfig::from_params(params)?;
+        let source: Box<dyn FrameSource> = match &config.source {
+            Source::Files(path) => Box::new(FileSource::new(path.clone())),
+            Source::Http(url) => Box::new(HttpSource::new(url.clone(), config.timeout)),
+            Source::Device(path) => {
+                Box::new(V4l2Source::new(v4l2::open(path)?, config.format, config.size, config.timeout))
+            }
+        };
+        FrameDriver::new(config, source)
+    }
+}
+
+impl<S: FrameSource> FrameDriver<S> {
+    /// A driver searching `source`'s frames as `config` says (its `source` field is for
+    /// [`FrameDriver::from_params`]; here `source` is used).
+    ///
+    /// # Errors
+    /// [`CameraError::Config`] when the configuration is unusable.
+    pub fn new(config: CameraConfig, source: S) -> Result<FrameDriver<S>, CameraError> {
+        config.validate()?;
+        Ok(FrameDriver { config, source, last_frame: None, last_miss: None })
+    }
+
+    /// The configuration.
+    #[must_use]
+    pub fn config(&self) -> &CameraConfig {
+        &self.config
+    }
+
+    /// The frame source.
+    pub fn source(&self) -> &S {
+        &self.source
+    }
+
+    /// Why the last trigger found no mark (`None` after a found mark or before any trigger).
+    #[must_use]
+    pub fn last_miss(&self) -> Option<&Miss> {
+        self.last_miss.as_ref()
+    }
+
+    /// The frame the last trigger searched.
+    #[must_use]
+    pub fn last_frame(&self) -> Option<&Frame> {
+        self.last_frame.as_ref()
+    }
+
+    fn spec(&self) -> Result<vision_locate::MarkSpec, CameraError> {
+        let m = &self.config.mark;
+        let diameter = m.diameter_px.ok_or(CameraError::Config {
+            setting: "VisionCameraMarkDiameterPx",
+            reason: "is 0 and cannot be derived (VisionMarkDiameter or K is not set): give the mark's diameter in \
+                     image pixels"
+                .into(),
+        })?;
+        let kind = match m.kind {
+            MarkKind::Dot => vision_locate::MarkKind::Dot,
+            MarkKind::Ring => vision_locate::MarkKind::Ring,
+            MarkKind::Cross => vision_locate::MarkKind::Cross,
+        };
+        let polarity = match m.polarity {
+            Polarity::Dark => vision_locate::Polarity::DarkOnLight,
+            Polarity::Light => vision_locate::Polarity::LightOnDark,
+        };
+        vision_locate::MarkSpec::new(kind, diameter, m.tolerance_pct / 100.0, polarity)
+            .map_err(|e| CameraError::Config { setting: "VisionCameraMarkDiameterPx", reason: e.to_string() })
+    }
+
+    /// One frame, and its search: the reading as [`CameraDriver::trigger`] gives it.
+    ///
+    /// # Errors
+    /// The source's [`CameraError`], or [`CameraError::Config`] for an unusable mark.
+    pub fn measure(&mut self) -> Result<Reading, CameraError> {
+        let spec = self.spec()?;
+        if self.source.is_live() {
+            for _ in 0..self.config.flush_frames {
+                self.source.frame()?;
+            }
+        }
+        let frame = self.source.frame()?;
+        let reading = search(&frame, &spec, &mut self.last_miss);
+        self.last_frame = Some(frame);
+        reading
+    }
+}
+
+/// Searches `frame`; a miss is recorded in `miss`.
+fn search(frame: &Frame, spec: &vision_locate::MarkSpec, miss: &mut Option<Miss>) -> Result<Reading, CameraError> {
+    let image = GrayImage::new(frame.width() as usize, frame.height() as usize, Pixels::Gray8(frame.pixels()))
+        .map_err(|e| CameraError::Decode { from: "the frame".into(), reason: e.to_string() })?;
+    let located = vision_locate::locate(&image, spec)
+        .map_err(|e| CameraError::Config { setting: "VisionCameraMarkDiameterPx", reason: e.to_string() })?;
+    let ng = |count| Reading { judgment: Judgment::Ng, count: Some(count), ..Reading::position(0.0, 0.0) };
+    match located {
+        Located::Found(m) if [m.x, m.y, m.diameter, m.score, m.angle.unwrap_or(0.0)].iter().all(|v| v.is_finite()) => {
+            *miss = None;
+            Ok(Reading {
+                judgment: Judgment::Ok,
+                count: Some(1),
+                // Pixel centres → native pixels (corner origin).
+                x_px: m.x + 0.5,
+                y_px: m.y + 0.5,
+                width_px: m.diameter,
+                height_px: m.diameter,
+                // Radians towards +y (down) → degrees counter-clockwise as seen; 0 for a round mark.
+                angle_deg: m.angle.map_or(0.0, |a| -a.to_degrees()),
+                score: m.score,
+            })
+        }
+        Located::Found(m) => {
+            *miss = Some(Miss { reason: format!("the finder returned a non-finite mark {m:?}"), candidates: None });
+            Ok(ng(0))
+        }
+        Located::NotFound(reason) => {
+            let candidates = match reason {
+                NotFoundReason::SeveralCandidates { count } => Some(u32::try_from(count).unwrap_or(u32::MAX)),
+                _ => None,
+            };
+            *miss = Some(Miss { reason: reason.to_string(), candidates });
+            Ok(ng(candidates.unwrap_or(0)))
+        }
+    }
+}
+
+impl<S: FrameSource> CameraDriver for FrameDriver<S> {
+    fn name(&self) -> &str {
+        DRIVER_NAME
+    }
+
+    fn capabilities(&self) -> Capabilities {
+        Capabilities { select_job: false, grab_image: true }
+    }
+
+    fn trigger(&mut self) -> Result<Reading, DriverError> {
+        self.measure().map_err(DriverError::from)
+    }
+
+    fn select_job(&mut self, _job: u32) -> Result<(), DriverError> {
+        Err(CameraError::Unsupported { what: "switch camera jobs: it has none" }.into())
+    }
+
+    fn test_connection(&mut self) -> Result<String, DriverError> {
+        let frame = self.source.frame().map_err(DriverError::from)?;
+        let text = format!("{}: {}×{} frame", self.source.describe(), frame.width(), frame.height());
+        self.last_frame = Some(frame);
+        Ok(text)
+    }
+
+    /// M281 D1: the frame the last trigger searched, saved as `vision_<stamp>.png`.
+    fn grab_image(&mut self, request: &ImageRequest<'_>) -> Result<PathBuf, DriverError> {
+        let frame =
+            self.last_frame.as_ref().ok_or(CameraError::Unsupported { what: "keep an image before a trigger" })?;
+        let io = |e: &dyn std::fmt::Display| CameraError::File {
+            path: request.dir.display().to_string(),
+            reason: e.to_string(),
+        };
+        std::fs::create_dir_all(request.dir).map_err(|e| io(&e))?;
+        let image = image::GrayImage::from_raw(frame.width(), frame.height(), frame.pixels().to_vec())
+            .ok_or_else(|| io(&"the frame's size does not match its pixels"))?;
+        for n in 1..1000 {
+            let name = if n == 1 {
+                format!("vision_{}.png", request.stamp)
+            } else {
+                format!("vision_{}_{n}.png", request.stamp)
+            };
+            let path = request.dir.join(name);
+            // create_new: a file is never overwritten, even by a race.
+            match std::fs::OpenOptions::new().write(true).create_new(true).open(&path) {
+                Ok(file) => {
+                    let mut w = std::io::BufWriter::new(file);
+                    image.write_to(&mut w, image::ImageFormat::Png).map_err(|e| io(&e))?;
+                    return Ok(path);
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
+                Err(e) => return Err(io(&e).into()),
+            }
+        }
+        Err(io(&"999 images with this stamp already exist").into())
+    }
+
+    fn timeout(&self) -> Duration {
+        self.config.timeout
+    }
+}
+
+/// Registers the driver as `Camera` with its `[camera]` settings.
+pub fn register(registry: &mut DriverRegistry) {
+    registry.register_with_settings(DRIVER_NAME, &crate::settings::SETTINGS, |params: &Params| {
+        let driver = FrameDriver::from_params(params).map_err(DriverError::from)?;
+        Ok(Box::new(driver) as Box<dyn CameraDriver>)
+    });
+}
