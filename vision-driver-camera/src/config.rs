@@ -148,6 +148,9 @@ pub struct MarkSettings {
     pub tolerance_pct: f64,
     /// The contrast.
     pub polarity: Polarity,
+    /// Search only within this distance of the image centre, percent of half the shorter
+    /// image side (5–100; 100: the whole frame).
+    pub search_radius_pct: f64,
 }
 
 /// Everything the driver needs.
@@ -181,6 +184,7 @@ impl CameraConfig {
                 diameter_px: Some(diameter_px),
                 tolerance_pct: 25.0,
                 polarity: Polarity::Dark,
+                search_radius_pct: 100.0,
             },
             timeout: Duration::from_secs(3),
             flush_frames: 2,
@@ -246,7 +250,13 @@ impl CameraConfig {
             source,
             size,
             format,
-            mark: MarkSettings { kind, diameter_px, tolerance_pct: float("VisionCameraMarkTolerance")?, polarity },
+            mark: MarkSettings {
+                kind,
+                diameter_px,
+                tolerance_pct: float("VisionCameraMarkTolerance")?,
+                polarity,
+                search_radius_pct: float("VisionCameraSearchRadius")?,
+            },
             timeout: Duration::try_from_secs_f64(seconds)
                 .map_err(|_| bad("VisionCameraTimeout", format!("{seconds} s is not a duration")))?,
             flush_frames: int("VisionCameraFlushFrames", settings::MAX_FLUSH_FRAMES)?,
@@ -270,6 +280,10 @@ impl CameraConfig {
         }
         if !(self.mark.tolerance_pct.is_finite() && self.mark.tolerance_pct > 0.0 && self.mark.tolerance_pct < 100.0) {
             return bad("VisionCameraMarkTolerance", "must be more than 0 and less than 100 percent");
+        }
+        let r = self.mark.search_radius_pct;
+        if !(r.is_finite() && (settings::MIN_SEARCH_RADIUS_PCT..=100.0).contains(&r)) {
+            return bad("VisionCameraSearchRadius", "must be 5 to 100 percent");
         }
         if self.timeout.is_zero() || self.timeout.as_secs_f64() > settings::MAX_TIMEOUT_S {
             return bad("VisionCameraTimeout", "must be more than 0 and at most 300 seconds");

@@ -11,6 +11,7 @@ use crate::error::CameraError;
 use crate::frame::Frame;
 use crate::source::{FileSource, FrameSource, HttpSource};
 use crate::v4l2::{self, V4l2Source};
+use crate::window::window;
 
 /// The driver's registry name (`VisionDriver = Camera`).
 pub const DRIVER_NAME: &str = "Camera";
@@ -55,6 +56,12 @@ impl FrameSource for Box<dyn FrameSource> {
     }
     fn is_live(&self) -> bool {
         (**self).is_live()
+    }
+    fn has_jobs(&self) -> bool {
+        (**self).has_jobs()
+    }
+    fn select_job(&mut self, job: u32) -> Result<(), CameraError> {
+        (**self).select_job(job)
     }
 }
 
@@ -145,7 +152,16 @@ impl<S: FrameSource> FrameDriver<S> {
             }
         }
         let frame = self.source.frame()?;
-        let reading = search(&frame, &spec, &mut self.last_miss);
+        let reading = match window(&frame, self.config.mark.search_radius_pct) {
+            Some((part, x0, y0)) => search(&part, &spec, &mut self.last_miss).map(|r| {
+                if r.found() {
+                    Reading { x_px: r.x_px + f64::from(x0), y_px: r.y_px + f64::from(y0), ..r }
+                } else {
+                    r
+                }
+            }),
+            None => search(&frame, &spec, &mut self.last_miss),
+        };
         self.last_frame = Some(frame);
         reading
     }
@@ -195,15 +211,15 @@ impl<S: FrameSource> CameraDriver for FrameDriver<S> {
     }
 
     fn capabilities(&self) -> Capabilities {
-        Capabilities { select_job: false, grab_image: true }
+        Capabilities { select_job: self.source.has_jobs(), grab_image: true }
     }
 
     fn trigger(&mut self) -> Result<Reading, DriverError> {
         self.measure().map_err(DriverError::from)
     }
 
-    fn select_job(&mut self, _job: u32) -> Result<(), DriverError> {
-        Err(CameraError::Unsupported { what: "switch camera jobs: it has none" }.into())
+    fn select_job(&mut self, job: u32) -> Result<(), DriverError> {
+        self.source.select_job(job).map_err(DriverError::from)
     }
 
     fn test_connection(&mut self) -> Result<String, DriverError> {

@@ -177,6 +177,14 @@ pub enum CameraError {
         want: usize,
     },
 
+    /// The source refused a camera job switch.
+    Job {
+        /// The job asked for.
+        job: u32,
+        /// The source's words.
+        reason: String,
+    },
+
     /// The operation is not supported by this driver (a camera job switch).
     Unsupported {
         /// What was asked.
@@ -199,9 +207,10 @@ impl CameraError {
             | CameraError::Http { .. }
             | CameraError::Stream { .. }
             | CameraError::ShortFrame { .. } => DriverErrorKind::Malformed,
-            CameraError::Status { .. } | CameraError::Format { .. } | CameraError::FormatChanged { .. } => {
-                DriverErrorKind::Rejected
-            }
+            CameraError::Status { .. }
+            | CameraError::Format { .. }
+            | CameraError::FormatChanged { .. }
+            | CameraError::Job { .. } => DriverErrorKind::Rejected,
             CameraError::Unsupported { .. } => DriverErrorKind::Unsupported,
             CameraError::File { .. }
             | CameraError::EmptyFolder { .. }
@@ -260,6 +269,7 @@ impl CameraError {
             CameraError::ShortFrame { device, got, want } => {
                 format!("Malformed response: a frame from {device} has {got} bytes, its format needs {want}")
             }
+            CameraError::Job { job, reason } => format!("the camera refused job {job}: {reason}"),
             CameraError::Unsupported { what } => format!("the camera driver cannot {what}"),
         }
     }
@@ -308,6 +318,7 @@ impl CameraError {
                 "set VisionCameraWidth, VisionCameraHeight and VisionCameraPixelFormat to one the device offers (v4l2-ctl --list-formats-ext)".into()
             }
             CameraError::ShortFrame { .. } => "check the USB link (a hub or a long cable drops data) and retry".into(),
+            CameraError::Job { .. } => "use a job the camera has (M284 P), or P0 to leave its job alone".into(),
             CameraError::Unsupported { .. } => "leave the camera's job alone (M284 P0)".into(),
         }
     }

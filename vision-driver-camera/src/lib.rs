@@ -45,6 +45,7 @@ pub mod server;
 pub mod settings;
 mod source;
 pub mod v4l2;
+mod window;
 
 pub use config::{CameraConfig, MarkKind, MarkSettings, PixelFormat, Polarity, Source};
 pub use driver::{register, FrameDriver, Miss, DRIVER_NAME};

@@ -103,9 +103,7 @@ where
         match listener.accept() {
             Ok((stream, _)) => {
                 // One request per connection; a broken client only costs its own answer.
-                if answer(stream, encoding, &mut frame).unwrap_or(false) {
-                    served.fetch_add(1, Ordering::SeqCst);
-                }
+                let _ = answer(stream, encoding, &mut frame, served);
             }
             Err(e) if e.kind() == io::ErrorKind::WouldBlock => std::thread::sleep(Duration::from_millis(2)),
             Err(_) => std::thread::sleep(Duration::from_millis(20)),
@@ -113,8 +111,9 @@ where
     }
 }
 
-/// Answers one connection; true when a frame was sent.
-fn answer<F>(mut stream: TcpStream, encoding: Encoding, frame: &mut F) -> io::Result<bool>
+/// Answers one connection; counts the frame in `served` before sending it (so a client that
+/// has its frame sees it counted).
+fn answer<F>(mut stream: TcpStream, encoding: Encoding, frame: &mut F, served: &AtomicU64) -> io::Result<()>
 where
     F: FnMut() -> Result<Frame, String>,
 {
@@ -126,13 +125,13 @@ where
     while !head.windows(4).any(|w| w == b"\r\n\r\n") {
         let n = stream.read(&mut buf)?;
         if n == 0 || head.len() > 16 * 1024 {
-            return Ok(false);
+            return Ok(());
         }
         head.extend_from_slice(&buf[..n]);
     }
     if !head.starts_with(b"GET ") {
         stream.write_all(b"HTTP/1.1 405 Method Not Allowed\r\nContent-Length: 0\r\nConnection: close\r\n\r\n")?;
-        return Ok(false);
+        return Ok(());
     }
     let encoded = frame().and_then(|f| encode(&f, encoding));
     match encoded {
@@ -141,9 +140,9 @@ where
                 "HTTP/1.1 200 OK\r\nContent-Type: {kind}\r\nContent-Length: {}\r\nConnection: close\r\n\r\n",
                 body.len()
             );
+            served.fetch_add(1, Ordering::SeqCst);
             stream.write_all(head.as_bytes())?;
-            stream.write_all(&body)?;
-            Ok(true)
+            stream.write_all(&body)
         }
         Err(text) => {
             let head = format!(
@@ -151,8 +150,7 @@ where
                 text.len()
             );
             stream.write_all(head.as_bytes())?;
-            stream.write_all(text.as_bytes())?;
-            Ok(false)
+            stream.write_all(text.as_bytes())
         }
     }
 }
@@ -161,7 +159,14 @@ fn encode(frame: &Frame, encoding: Encoding) -> Result<(Vec<u8>, &'static str), 
     let mut out = io::Cursor::new(Vec::new());
     match encoding {
         Encoding::Png => {
-            image::codecs::png::PngEncoder::new(&mut out).write_image_luma8(frame).map_err(|e| e.to_string())?;
+            // Fast deflate: the server is on loopback, where bytes are cheap and time is not.
+            image::codecs::png::PngEncoder::new_with_quality(
+                &mut out,
+                image::codecs::png::CompressionType::Fast,
+                image::codecs::png::FilterType::Sub,
+            )
+            .write_image_luma8(frame)
+            .map_err(|e| e.to_string())?;
             Ok((out.into_inner(), "image/png"))
         }
         Encoding::Jpeg(q) => {

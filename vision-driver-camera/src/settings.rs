@@ -18,6 +18,8 @@ pub const MARKS: &[&str] = &["dot", "ring", "cross"];
 /// The polarities `VisionCameraPolarity` accepts: a dark mark on a light ground, or the reverse.
 pub const POLARITIES: &[&str] = &["dark", "light"];
 
+/// Smallest `VisionCameraSearchRadius`, percent.
+pub const MIN_SEARCH_RADIUS_PCT: f64 = 5.0;
 /// Longest `VisionCameraTimeout`, seconds.
 pub const MAX_TIMEOUT_S: f64 = 300.0;
 /// Most `VisionCameraFlushFrames`.
@@ -108,6 +110,17 @@ pub static SETTINGS: SettingsTable = SettingsTable {
         },
         Setting {
             spec: spec(
+                "VisionCameraSearchRadius",
+                ParamKind::Float,
+                "`VisionCameraSearchRadius`: search only within this distance of the image centre, percent of \
+                 half the shorter image side, 5 to 100 (100: the whole frame). M281 re-centres the mark, so a \
+                 radius that leaves neighbouring marks outside keeps them from making the view ambiguous.",
+            ),
+            default: || ParamValue::Float(100.0),
+            check: radius,
+        },
+        Setting {
+            spec: spec(
                 "VisionCameraTimeout",
                 ParamKind::Float,
                 "`VisionCameraTimeout`: time allowed for one frame (connect, request, whole image; or one \
@@ -166,6 +179,13 @@ fn tolerance(v: &ParamValue) -> Result<(), String> {
     match v {
         ParamValue::Float(t) if t.is_finite() && *t > 0.0 && *t < 100.0 => Ok(()),
         _ => Err("must be more than 0 and less than 100 percent".into()),
+    }
+}
+
+fn radius(v: &ParamValue) -> Result<(), String> {
+    match v {
+        ParamValue::Float(r) if r.is_finite() && (MIN_SEARCH_RADIUS_PCT..=100.0).contains(r) => Ok(()),
+        _ => Err("must be 5 to 100 percent".into()),
     }
 }
 

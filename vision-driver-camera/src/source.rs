@@ -28,6 +28,21 @@ pub trait FrameSource: Send {
     fn is_live(&self) -> bool {
         true
     }
+
+    /// True when the source has camera jobs to switch (M284); a plain camera has none.
+    fn has_jobs(&self) -> bool {
+        false
+    }
+
+    /// Switches to camera job `job` (1–999).
+    ///
+    /// # Errors
+    /// [`CameraError::Unsupported`] for a source without jobs (the default), or
+    /// [`CameraError::Job`] when the source has no such job.
+    fn select_job(&mut self, job: u32) -> Result<(), CameraError> {
+        let _ = job;
+        Err(CameraError::Unsupported { what: "switch camera jobs: it has none" })
+    }
 }
 
 /// Image files: one file, read again at every trigger, or a folder whose images (`.jpg`,

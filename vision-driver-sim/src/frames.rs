@@ -59,6 +59,27 @@ impl Sim {
         st.marks.first().map(|m| mean_size(&st, m.diameter))
     }
 
+    /// The largest search radius about the image centre, pixels, that leaves every other mark
+    /// wholly outside while the camera is centred on one (the closest two marks' distance in
+    /// pixels, less a mark radius and three blur σ); `None` with fewer than two marks.
+    #[must_use]
+    pub fn clear_radius_px(&self) -> Option<f64> {
+        let st = self.lock();
+        let look = st.world.camera.image.clone().unwrap_or_default();
+        let origin = st.optics.pixel(vision_math::Vector2::zeros());
+        let mut closest: Option<(f64, f64)> = None;
+        for (i, a) in st.marks.iter().enumerate() {
+            for b in &st.marks[i + 1..] {
+                let d = (st.optics.pixel(a.position - b.position) - origin).norm();
+                let r = 0.5 * mean_size(&st, a.diameter.max(b.diameter));
+                if closest.is_none_or(|(c, _)| d < c) {
+                    closest = Some((d, r));
+                }
+            }
+        }
+        closest.map(|(d, r)| d - r - 3.0 * (look.blur_px + look.defocus_px_per_pct * defocus_pct(&st)))
+    }
+
     /// Renders what the camera sees from the head's true position now. Each frame has its own
     /// noise (seeded by the world's seed and the frame number), so frames are reproducible.
     ///
@@ -82,6 +103,14 @@ fn mean_size(st: &State, diameter: f64) -> f64 {
     0.5 * (w + h)
 }
 
+/// The working-distance change from the focus distance, percent.
+fn defocus_pct(st: &State) -> f64 {
+    let camera = &st.world.camera;
+    let look = camera.image.clone().unwrap_or_default();
+    let focus = look.focus_distance.or(camera.reference_working_distance).unwrap_or(camera.working_distance);
+    (camera.working_distance - focus).abs() / focus * 100.0
+}
+
 /// The scene the camera sees now, the true mark centres (native pixels) and the diameter.
 fn scene(st: &State) -> (Scene, Vec<Point2<f64>>, f64) {
     let look = st.world.camera.image.clone().unwrap_or_default();
@@ -89,9 +118,7 @@ fn scene(st: &State) -> (Scene, Vec<Point2<f64>>, f64) {
     let res = st.optics.resolution();
     let axis = st.camera_axis();
     let centre = Point2::from(res * 0.5);
-    let focus = look.focus_distance.or(camera.reference_working_distance).unwrap_or(camera.working_distance);
-    let defocus_pct = (camera.working_distance - focus).abs() / focus * 100.0;
-    let blur = look.blur_px + look.defocus_px_per_pct * defocus_pct;
+    let blur = look.blur_px + look.defocus_px_per_pct * defocus_pct(st);
     let mut seen: Vec<(Point2<f64>, f64, f64)> = st
         .marks
         .iter()

@@ -53,10 +53,25 @@ impl FrameSource for SimFrames {
     fn is_live(&self) -> bool {
         false
     }
+
+    /// The world's camera jobs, as the reading-mode camera knows them.
+    fn has_jobs(&self) -> bool {
+        true
+    }
+
+    /// Switches the simulated camera's job as the reading-mode camera does (the world's jobs;
+    /// any job 1–999 when it lists none). Image mode renders and searches the same for every
+    /// job: a job's reading noise is a reading-mode setting, and the finder has one method.
+    fn select_job(&mut self, job: u32) -> Result<(), CameraError> {
+        vision_core::CameraDriver::select_job(&mut self.0.camera(), job)
+            .map_err(|e| CameraError::Job { job, reason: e.to_string() })
+    }
 }
 
 /// The mark settings the simulated operator sets for `sim`'s world: the shape and contrast
-/// printed, and, unless the profile gives one, the diameter the marks image at.
+/// printed; unless the profile gives one, the diameter the marks image at; and a search radius
+/// no larger than the one that leaves every neighbouring mark outside while the camera is
+/// centred on a mark ([`Sim::clear_radius_px`]), as an operator sets a camera's search window.
 ///
 /// # Errors
 /// As [`CameraConfig::from_params`].
@@ -72,6 +87,11 @@ pub fn sim_image_config(sim: &Sim, params: &Params) -> Result<CameraConfig, Came
     let explicit = params.get("VisionCameraMarkDiameterPx").ok().and_then(|v| v.as_f64()).is_some_and(|d| d > 0.0);
     if !explicit {
         config.mark.diameter_px = sim.mark_diameter_px().or(config.mark.diameter_px);
+    }
+    if let Some(clear) = sim.clear_radius_px() {
+        let res = sim.optics().resolution();
+        let pct = clear / (res.x.min(res.y) / 2.0) * 100.0;
+        config.mark.search_radius_pct = config.mark.search_radius_pct.min(pct.clamp(5.0, 100.0));
     }
     config.flush_frames = 0;
     Ok(config)
