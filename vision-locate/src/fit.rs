@@ -37,10 +37,14 @@ pub(crate) trait Model {
     /// Number of geometric parameters.
     const G: usize;
     /// M at (x, y) px and its gradient with respect to `g` written into `grad`; `None` outside
-    /// the pixels this model fits on.
-    fn eval(&self, g: &[f64], x: f64, y: f64, grad: &mut [f64]) -> Option<f64>;
+    /// the pixels fitted on, which are chosen by the geometry `sup` (held fixed over several
+    /// steps: a pixel set that followed every step made the fit flip between two states).
+    fn eval(&self, g: &[f64], sup: &[f64], x: f64, y: f64, grad: &mut [f64]) -> Option<f64>;
     /// Radius (px) around the centre holding every fitted pixel.
     fn reach(&self, g: &[f64]) -> f64;
+    /// Radius (px) around the centre holding the mark itself and its blurred edge: the mark is
+    /// clipped when this leaves the image.
+    fn extent(&self, g: &[f64]) -> f64;
     /// The x-offsets from the centre (px) of the fitted pixels in the row `dy` px below the
     /// centre, as up to two intervals (an empty one has lo > hi): rows of an annulus skip
     /// its hole instead of testing every pixel of the bounding box.
@@ -63,11 +67,11 @@ pub(crate) struct Disc;
 impl Model for Disc {
     const G: usize = 4;
     #[inline]
-    fn eval(&self, g: &[f64], x: f64, y: f64, grad: &mut [f64]) -> Option<f64> {
+    fn eval(&self, g: &[f64], sup: &[f64], x: f64, y: f64, grad: &mut [f64]) -> Option<f64> {
         let (dx, dy) = (x - g[0], y - g[1]);
         let rho = (dx * dx + dy * dy).sqrt();
         let (r, s) = (g[2], g[3]);
-        if (rho - r).abs() > band(s) {
+        if ((x - sup[0]).hypot(y - sup[1]) - sup[2]).abs() > band(sup[3]) {
             return None;
         }
         let t = (r - rho) / s;
@@ -82,6 +86,9 @@ impl Model for Disc {
     }
     fn reach(&self, g: &[f64]) -> f64 {
         g[2] + band(g[3])
+    }
+    fn extent(&self, g: &[f64]) -> f64 {
+        g[2] + 2.0 * g[3].min(3.0) + 0.5
     }
     fn span(&self, g: &[f64], dy: f64) -> [(f64, f64); 2] {
         let b = band(g[3]);
@@ -101,12 +108,12 @@ pub(crate) struct Annulus;
 impl Model for Annulus {
     const G: usize = 5;
     #[inline]
-    fn eval(&self, g: &[f64], x: f64, y: f64, grad: &mut [f64]) -> Option<f64> {
+    fn eval(&self, g: &[f64], sup: &[f64], x: f64, y: f64, grad: &mut [f64]) -> Option<f64> {
         let (dx, dy) = (x - g[0], y - g[1]);
         let rho = (dx * dx + dy * dy).sqrt();
         let (ro, ri, s) = (g[2], g[3], g[4]);
-        let b = band(s);
-        if rho > ro + b || rho < ri - b {
+        let (rs, b) = ((x - sup[0]).hypot(y - sup[1]), band(sup[4]));
+        if rs > sup[2] + b || rs < sup[3] - b {
             return None;
         }
         let (to, ti) = ((ro - rho) / s, (ri - rho) / s);
@@ -122,6 +129,9 @@ impl Model for Annulus {
     }
     fn reach(&self, g: &[f64]) -> f64 {
         g[2] + band(g[4])
+    }
+    fn extent(&self, g: &[f64]) -> f64 {
+        g[2] + 2.0 * g[4].min(3.0) + 0.5
     }
     fn span(&self, g: &[f64], dy: f64) -> [(f64, f64); 2] {
         let b = band(g[4]);
@@ -151,18 +161,22 @@ fn box1(t: f64, h: f64, s: f64) -> [f64; 4] {
 impl Model for Cross {
     const G: usize = 6;
     #[inline]
-    fn eval(&self, g: &[f64], x: f64, y: f64, grad: &mut [f64]) -> Option<f64> {
+    fn eval(&self, g: &[f64], sup: &[f64], x: f64, y: f64, grad: &mut [f64]) -> Option<f64> {
         let (dx, dy) = (x - g[0], y - g[1]);
         let (sn, c) = g[2].sin_cos();
         let u = dx * c + dy * sn;
         let v = -dx * sn + dy * c;
         let (a, w, s) = (g[3], g[4], g[5]);
-        let b = band(s);
-        let (au, av) = (u.abs(), v.abs());
-        let in_bar1 = au <= a + b && av <= w + b;
-        let in_bar2 = av <= a + b && au <= w + b;
-        if !(in_bar1 || in_bar2) {
-            return None;
+        {
+            let (ss, sc) = sup[2].sin_cos();
+            let (ex, ey) = (x - sup[0], y - sup[1]);
+            let (au, av) = ((ex * sc + ey * ss).abs(), (-ex * ss + ey * sc).abs());
+            let b = band(sup[5]);
+            let in_bar1 = au <= sup[3] + b && av <= sup[4] + b;
+            let in_bar2 = av <= sup[3] + b && au <= sup[4] + b;
+            if !(in_bar1 || in_bar2) {
+                return None;
+            }
         }
         let [ua, ua_t, ua_h, ua_s] = box1(u, a, s);
         let [uw, uw_t, uw_h, uw_s] = box1(u, w, s);
@@ -182,6 +196,9 @@ impl Model for Cross {
     fn reach(&self, g: &[f64]) -> f64 {
         let b = band(g[5]);
         (g[3] + b).hypot(g[4] + b)
+    }
+    fn extent(&self, g: &[f64]) -> f64 {
+        g[3].hypot(g[4]) + 2.0 * g[5].min(3.0) + 0.5
     }
     fn constrain(&self, g: &mut [f64], before: &[f64]) -> bool {
         limit_move(g, before, 0.25 * before[3]);
@@ -267,8 +284,14 @@ pub(crate) fn fit<M: Model, T: Copy + Into<f64>, const N: usize>(
     for (stage, &(stride, s_floor, tol, max_iter)) in STAGES.iter().enumerate().skip(first) {
         let last = stage == STAGES.len() - 1;
         g[ng - 1] = g[ng - 1].max(s_floor);
+        let mut sup = g;
         for _ in 0..max_iter {
-            let acc = accumulate::<M, T, N>(img, model, &g, &lin, xr, yr, inv, n, stride, false)?;
+            // Re-choose the fitted pixels only when the estimate has really moved.
+            let drift = (0..ng).map(|k| (g[k] - sup[k]).abs()).fold(0.0, f64::max);
+            if drift > 0.1 || (g[ng - 1] - sup[ng - 1]).abs() > 0.2 * sup[ng - 1] {
+                sup = g;
+            }
+            let acc = accumulate::<M, T, N>(img, model, &g, &sup, &lin, xr, yr, inv, n, stride, false)?;
             // First step: only the planes (the geometry guess is coarse, the planes unknown).
             let free: Vec<usize> = if iter == 0 { (ng..n).collect() } else { (0..n).collect() };
             let mut step = solve(&acc.h, &acc.b, &free).ok_or(FitFailure::Diverged)?;
@@ -304,7 +327,12 @@ pub(crate) fn fit<M: Model, T: Copy + Into<f64>, const N: usize>(
             iter += 1;
             if iter > 1 && moved < tol && sized < 100.0 * tol.max(1e-5) {
                 if last {
-                    let acc = accumulate::<M, T, N>(img, model, &g, &lin, xr, yr, inv, n, 1, true)?;
+                    let e = model.extent(&g[..ng]);
+                    let (xmax, ymax) = ((img.w - 1) as f64, (img.h - 1) as f64);
+                    if !(g[0] - e >= 0.0 && g[1] - e >= 0.0 && g[0] + e <= xmax && g[1] + e <= ymax) {
+                        return Err(FitFailure::Clipped);
+                    }
+                    let acc = accumulate::<M, T, N>(img, model, &g, &g, &lin, xr, yr, inv, n, 1, true)?;
                     let (r2, min_sector_r2) = acc.r2();
                     return Ok(FitResult { g, lin, r2, min_sector_r2, converged: true });
                 }
@@ -353,6 +381,7 @@ fn accumulate<M: Model, T: Copy + Into<f64>, const N: usize>(
     img: &Img<'_, T>,
     model: &M,
     g: &[f64; 6],
+    sup: &[f64; 6],
     lin: &[f64; 6],
     xr: f64,
     yr: f64,
@@ -362,12 +391,12 @@ fn accumulate<M: Model, T: Copy + Into<f64>, const N: usize>(
     sectors: bool,
 ) -> Result<Acc, FitFailure> {
     let ng = M::G;
-    let reach = model.reach(&g[..ng]);
-    let (x0, x1) = (g[0] - reach, g[0] + reach);
-    let (y0, y1) = (g[1] - reach, g[1] + reach);
-    if !(x0 >= 0.0 && y0 >= 0.0 && x1 <= (img.w - 1) as f64 && y1 <= (img.h - 1) as f64) {
-        return Err(FitFailure::Clipped);
-    }
+    let reach = model.reach(&sup[..ng]);
+    let (xmax, ymax) = ((img.w - 1) as f64, (img.h - 1) as f64);
+    // The band may run off the image: the model needs no particular pixels (whether the mark
+    // itself is cut is judged on the final estimate).
+    let (x0, x1) = ((sup[0] - reach).max(0.0), (sup[0] + reach).min(xmax));
+    let (y0, y1) = ((sup[1] - reach).max(0.0), (sup[1] + reach).min(ymax));
     let mut acc = Acc { h: [[0.0; MAXP]; MAXP], b: [0.0; MAXP], count: 0, sectors: [[0.0; 4]; 8] };
     let mut j = [0.0; MAXP];
     let mut grad = [0.0; 6];
@@ -378,17 +407,17 @@ fn accumulate<M: Model, T: Copy + Into<f64>, const N: usize>(
     for yi in (on_grid(y0)..=y1.floor() as usize).step_by(stride) {
         let y = yi as f64;
         let v = (y - yr) * inv;
-        for (lo, hi) in model.span(&g[..ng], y - g[1]) {
+        for (lo, hi) in model.span(&sup[..ng], y - sup[1]) {
             if lo > hi {
                 continue;
             }
-            let (xa, xb) = ((g[0] + lo).max(x0), (g[0] + hi).min(x1));
+            let (xa, xb) = ((sup[0] + lo).max(x0), (sup[0] + hi).min(x1));
             if xa > xb {
                 continue;
             }
             for xi in (on_grid(xa)..=xb.floor() as usize).step_by(stride) {
                 let x = xi as f64;
-                let Some(m) = model.eval(&g[..ng], x, y, &mut grad) else { continue };
+                let Some(m) = model.eval(&g[..ng], &sup[..ng], x, y, &mut grad) else { continue };
                 let u = (x - xr) * inv;
                 let q = lin[3] + lin[4] * u + lin[5] * v;
                 let pred = lin[0] + lin[1] * u + lin[2] * v + q * m;
@@ -506,7 +535,7 @@ pub(crate) fn crb<M: Model>(model: &M, g: &[f64], lin: &[f64; 6], scale: f64, si
     for yi in cy - reach..=cy + reach {
         for xi in cx - reach..=cx + reach {
             let (x, y) = (xi as f64, yi as f64);
-            let Some(m) = model.eval(g, x, y, &mut grad) else { continue };
+            let Some(m) = model.eval(g, g, x, y, &mut grad) else { continue };
             let (u, v) = ((x - g[0]) / scale, (y - g[1]) / scale);
             let q = lin[3] + lin[4] * u + lin[5] * v;
             for k in 0..ng {
@@ -566,9 +595,9 @@ mod tests {
             }
         };
         let (x, y) = (13.2, 9.1);
-        check(&|g, gr| Disc.eval(g, x, y, gr), &[3.0, 2.0, 13.0, 1.3]);
-        check(&|g, gr| Annulus.eval(g, x, y, gr), &[3.0, 2.0, 15.0, 12.0, 1.3]);
-        check(&|g, gr| Cross.eval(g, x, y, gr), &[3.0, 2.5, 0.3, 14.0, 3.0, 1.1]);
-        check(&|g, gr| Cross.eval(g, 4.0, 1.7, gr), &[3.0, 2.5, 0.3, 14.0, 3.0, 1.1]);
+        check(&|g, gr| Disc.eval(g, g, x, y, gr), &[3.0, 2.0, 13.0, 1.3]);
+        check(&|g, gr| Annulus.eval(g, g, x, y, gr), &[3.0, 2.0, 15.0, 12.0, 1.3]);
+        check(&|g, gr| Cross.eval(g, g, x, y, gr), &[3.0, 2.5, 0.3, 14.0, 3.0, 1.1]);
+        check(&|g, gr| Cross.eval(g, g, 4.0, 1.7, gr), &[3.0, 2.5, 0.3, 14.0, 3.0, 1.1]);
     }
 }
