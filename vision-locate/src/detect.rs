@@ -39,13 +39,13 @@ pub(crate) struct Search {
 /// Most candidates refined per image: a cluttered view is refused rather than slow.
 pub(crate) const MAX_CANDIDATES: usize = 12;
 
-pub(crate) fn search<T: Copy + Into<f64>>(img: &Img<'_, T>, spec: &MarkSpec, full_scale: f64) -> Search {
+pub(crate) fn search<T: Copy + Into<f64> + Into<u32>>(img: &Img<'_, T>, spec: &MarkSpec, full_scale: f64) -> Search {
     let dmin = spec.min_diameter();
     let dmax = spec.max_diameter();
-    // Blocks of about an eighth of the smallest diameter keep the mark ≥ 8 blocks wide.
-    let f = ((dmin / 8.0).floor() as usize).max(1);
+    // Blocks of about a sixth of the smallest diameter keep the mark ≥ 6 blocks wide.
+    let f = ((dmin / 6.0).round() as usize).max(1);
     let (w, h) = (img.w / f, img.h / f);
-    let noise = noise_sigma(img).max(0.3 * full_scale / 255.0);
+    let noise = noise_sigma(img, full_scale).max(0.3 * full_scale / 255.0);
     let mut out = Search { candidates: Vec::new(), clipped: 0, noise, factor: f };
     if w < 3 || h < 3 {
         return out;
@@ -209,69 +209,107 @@ fn describe(pixels: &[usize], contrast: &[f32], w: usize, h: usize, f: usize, sp
     })
 }
 
-/// Block average by `f` × `f` (the remainder rows and columns are dropped).
-fn downsample<T: Copy + Into<f64>>(img: &Img<'_, T>, f: usize, w: usize, h: usize) -> Vec<f32> {
+/// Block average by `f` × `f` (the remainder rows and columns are dropped). Column sums in
+/// integers first: that loop vectorises, and it reads every pixel of the frame once.
+fn downsample<T: Copy + Into<u32>>(img: &Img<'_, T>, f: usize, w: usize, h: usize) -> Vec<f32> {
     let mut out = vec![0.0f32; w * h];
-    let mut row = vec![0.0f64; w];
-    let norm = 1.0 / (f * f) as f64;
+    let mut cols = vec![0u32; w * f];
+    let norm = 1.0 / (f * f) as f32;
     for j in 0..h {
-        row.iter_mut().for_each(|v| *v = 0.0);
+        cols.iter_mut().for_each(|v| *v = 0);
         for y in j * f..(j + 1) * f {
             let line = &img.data[y * img.w..y * img.w + w * f];
-            for (acc, chunk) in row.iter_mut().zip(line.chunks_exact(f)) {
-                let mut s = 0.0;
-                for &v in chunk {
-                    s += v.into();
-                }
-                *acc += s;
+            let cols = &mut cols[..line.len()];
+            for i in 0..line.len() {
+                cols[i] += line[i].into();
             }
         }
-        for (o, v) in out[j * w..(j + 1) * w].iter_mut().zip(&row) {
-            *o = (v * norm) as f32;
+        for (o, chunk) in out[j * w..(j + 1) * w].iter_mut().zip(cols.chunks_exact(f)) {
+            *o = chunk.iter().sum::<u32>() as f32 * norm;
         }
     }
     out
 }
 
-/// Mean over a (2r + 1)² window, clipped at the borders, through a summed-area table.
+/// Mean over a (2r + 1)² window, clipped at the borders: running sums along rows, then along
+/// columns; the clipped window's pixel count is a product of its row and column extents.
 fn box_mean(img: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
-    let mut sat = vec![0.0f64; (w + 1) * (h + 1)];
-    for y in 0..h {
-        let mut rowsum = 0.0;
-        for x in 0..w {
-            rowsum += img[y * w + x] as f64;
-            sat[(y + 1) * (w + 1) + x + 1] = sat[y * (w + 1) + x + 1] + rowsum;
-        }
+    let mut tmp = vec![0.0f32; w * h];
+    for (src, dst) in img.chunks_exact(w).zip(tmp.chunks_exact_mut(w)) {
+        running_sum(src, dst, r);
     }
     let mut out = vec![0.0f32; w * h];
+    let mut col = vec![0.0f32; h];
+    let mut sums = vec![0.0f32; h];
+    for x in 0..w {
+        for y in 0..h {
+            col[y] = tmp[y * w + x];
+        }
+        running_sum(&col, &mut sums, r);
+        for y in 0..h {
+            out[y * w + x] = sums[y];
+        }
+    }
+    let extent = |i: usize, n: usize| ((i + r + 1).min(n) - i.saturating_sub(r)) as f32;
+    let inv_x: Vec<f32> = (0..w).map(|x| 1.0 / extent(x, w)).collect();
     for y in 0..h {
-        let (ya, yb) = (y.saturating_sub(r), (y + r + 1).min(h));
-        for x in 0..w {
-            let (xa, xb) = (x.saturating_sub(r), (x + r + 1).min(w));
-            let s = sat[yb * (w + 1) + xb] - sat[ya * (w + 1) + xb] - sat[yb * (w + 1) + xa] + sat[ya * (w + 1) + xa];
-            out[y * w + x] = (s / ((yb - ya) * (xb - xa)) as f64) as f32;
+        let iy = 1.0 / extent(y, h);
+        for (o, ix) in out[y * w..(y + 1) * w].iter_mut().zip(&inv_x) {
+            *o *= iy * ix;
         }
     }
     out
+}
+
+/// `dst[i]` = Σ `src[i − r ..= i + r]` (clipped), in f64 to keep long sums exact enough.
+fn running_sum(src: &[f32], dst: &mut [f32], r: usize) {
+    let n = src.len();
+    let mut acc = 0.0f64;
+    for v in src.iter().take(r.min(n)) {
+        acc += *v as f64;
+    }
+    for i in 0..n {
+        if i + r < n {
+            acc += src[i + r] as f64;
+        }
+        if i > r {
+            acc -= src[i - r - 1] as f64;
+        }
+        dst[i] = acc as f32;
+    }
 }
 
 /// Noise standard deviation (grey levels) from the median absolute difference of horizontal
-/// neighbours on every 8th row: robust to the few edges in view.
-fn noise_sigma<T: Copy + Into<f64>>(img: &Img<'_, T>) -> f64 {
+/// neighbours on every 16th row: robust to the few edges in view. The median comes from a
+/// histogram in steps of 1/8 of an 8-bit grey level.
+fn noise_sigma<T: Copy + Into<u32>>(img: &Img<'_, T>, full_scale: f64) -> f64 {
     if img.w < 2 {
         return 0.0;
     }
-    let step = if img.h >= 64 { 8 } else { 1 };
-    let mut d: Vec<f32> = Vec::with_capacity((img.h / step + 1) * img.w);
+    const BINS: usize = 4096;
+    let per_bin = full_scale / 255.0 / 8.0;
+    let inv = 1.0 / per_bin;
+    let mut hist = vec![0u32; BINS];
+    let step = if img.h >= 128 { 16 } else { 1 };
+    let mut n = 0u64;
     for y in (0..img.h).step_by(step) {
         let line = &img.data[y * img.w..(y + 1) * img.w];
         for pair in line.windows(2) {
-            let (a, b): (f64, f64) = (pair[0].into(), pair[1].into());
-            d.push((a - b).abs() as f32);
+            let (a, b): (u32, u32) = (pair[0].into(), pair[1].into());
+            let bin = ((a.abs_diff(b) as f64 * inv) as usize).min(BINS - 1);
+            hist[bin] += 1;
+            n += 1;
         }
     }
-    let mid = d.len() / 2;
-    let (_, m, _) = d.select_nth_unstable_by(mid, f32::total_cmp);
+    let mut seen = 0u64;
+    let mut median = 0.0;
+    for (k, &c) in hist.iter().enumerate() {
+        seen += c as u64;
+        if 2 * seen >= n {
+            median = k as f64 * per_bin;
+            break;
+        }
+    }
     // MAD of a difference of two samples: σ·√2·0.6745.
-    *m as f64 / (std::f64::consts::SQRT_2 * 0.6745)
+    median / (std::f64::consts::SQRT_2 * 0.6745)
 }

@@ -162,7 +162,7 @@ struct Verified {
     mark: Mark,
 }
 
-fn locate_in<T: Copy + Into<f64>>(img: &Img<'_, T>, spec: &MarkSpec, full_scale: f64) -> Located {
+fn locate_in<T: Copy + Into<f64> + Into<u32>>(img: &Img<'_, T>, spec: &MarkSpec, full_scale: f64) -> Located {
     let found = search(img, spec, full_scale);
     let mut marks: Vec<Verified> = Vec::new();
     let mut clipped = found.clipped > 0;
@@ -206,14 +206,14 @@ fn refine<T: Copy + Into<f64>>(
     factor: usize,
     full_scale: f64,
 ) -> Result<Option<Verified>, FitFailure> {
-    let s0 = (0.5 * factor as f64).max(1.0);
+    let s0 = (0.4 * factor as f64).max(1.0);
     let (lo, hi) = (0.25 * spec.min_diameter(), 0.75 * spec.max_diameter());
     let r_area = (c.area / std::f64::consts::PI).sqrt();
     let scale = spec.diameter_px / 2.0;
     let (res, diameter, angle) = match spec.kind {
         MarkKind::Dot => {
             let r0 = r_area.clamp(lo, hi);
-            let res = fit(img, &Disc, &[c.x, c.y, r0, s0], scale)?;
+            let res = fit::<_, _, 10>(img, &Disc, &[c.x, c.y, r0, s0], scale)?;
             if !check_shape(&res, res.g[3] <= 0.35 * res.g[2]) {
                 return Ok(None);
             }
@@ -223,7 +223,7 @@ fn refine<T: Copy + Into<f64>>(
         MarkKind::Ring => {
             let ro = ((c.bbox[2] - c.bbox[0]).max(c.bbox[3] - c.bbox[1]) / 2.0).clamp(lo, hi);
             let ri = (ro * ro - c.area / std::f64::consts::PI).max(0.0).sqrt().clamp(0.3 * ro, ro - 1.0);
-            let res = fit(img, &Annulus, &[c.x, c.y, ro, ri, s0], scale)?;
+            let res = fit::<_, _, 11>(img, &Annulus, &[c.x, c.y, ro, ri, s0], scale)?;
             let (ro, ri, s) = (res.g[2], res.g[3], res.g[4]);
             if !check_shape(&res, ri >= 0.15 * ro && ro - ri >= 1.0 && s <= 0.35 * ro && s <= ro - ri) {
                 return Ok(None);
@@ -233,7 +233,7 @@ fn refine<T: Copy + Into<f64>>(
         MarkKind::Cross => {
             let a0 = c.half_length.clamp(lo, hi);
             let w0 = (c.area / (8.0 * a0)).clamp(1.0, 0.4 * a0);
-            let res = fit(img, &Cross, &[c.x, c.y, c.angle, a0, w0, s0], scale)?;
+            let res = fit::<_, _, 12>(img, &Cross, &[c.x, c.y, c.angle, a0, w0, s0], scale)?;
             let (a, w, s) = (res.g[3], res.g[4], res.g[5]);
             if !check_shape(&res, w <= 0.45 * a && w >= 0.4 && s <= 0.5 * a) {
                 return Ok(None);
