@@ -52,6 +52,12 @@ impl Sim {
         self.lock().world.camera.image.clone().unwrap_or_default()
     }
 
+    /// How many frames [`Sim::render_frame`] has rendered.
+    #[must_use]
+    pub fn frames_rendered(&self) -> u64 {
+        self.lock().frames
+    }
+
     /// The marks' diameter in the image, pixels (the first mark's; the worlds print one size).
     #[must_use]
     pub fn mark_diameter_px(&self) -> Option<f64> {
