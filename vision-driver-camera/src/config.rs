@@ -375,3 +375,42 @@ mod tests {
         assert!(matches!(e, CameraError::Config { setting: "VisionCameraWidth", .. }), "{e}");
     }
 }
+
+#[cfg(test)]
+mod props {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Any text as VisionCameraSource: a source or a reason, never a panic.
+        #[test]
+        fn any_source_text_parses_or_says_why(text in "\\PC{0,80}") {
+            if let Ok(Source::Http(u)) = Source::parse(&text) {
+                prop_assert!(u.path.starts_with('/'));
+            }
+        }
+
+        /// Any value of any setting: the profile refuses it by name, or the typed config reads
+        /// it back within its range. Never a panic, never a NaN.
+        #[test]
+        fn any_setting_value_is_refused_or_read_in_range(
+            which in 0usize..11, f in proptest::num::f64::ANY, i in any::<i64>(), t in "\\PC{0,20}", kind in 0usize..3,
+        ) {
+            let name = settings::SETTINGS.settings[which].spec.name;
+            let value = match kind {
+                0 => ParamValue::Float(f),
+                1 => ParamValue::Int(i),
+                _ => ParamValue::Text(t),
+            };
+            let mut p = Params::default().with_driver_settings(&settings::SETTINGS);
+            if p.set(name, value).is_ok() {
+                // Width alone is refused by the typed read (it needs a height).
+                if let Ok(c) = CameraConfig::from_params(&p) {
+                    prop_assert!(c.validate().is_ok());
+                    prop_assert!(c.mark.tolerance_pct.is_finite() && c.mark.search_radius_pct.is_finite());
+                    prop_assert!(c.mark.diameter_px.is_none_or(f64::is_finite));
+                }
+            }
+        }
+    }
+}

@@ -273,3 +273,109 @@ pub fn register(registry: &mut DriverRegistry) {
         Ok(Box::new(driver) as Box<dyn CameraDriver>)
     });
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use vision_locate::render::{render, Depth, PlacedMark, Scene, Shape};
+    use vision_locate::OwnedPixels;
+
+    /// A live source of rendered frames: dots at `marks` (native pixels), counting its frames.
+    struct Rendered {
+        marks: Vec<(f64, f64)>,
+        frames: usize,
+    }
+
+    impl FrameSource for Rendered {
+        fn frame(&mut self) -> Result<Frame, CameraError> {
+            self.frames += 1;
+            let scene = Scene {
+                marks: self
+                    .marks
+                    .iter()
+                    .map(|&(x, y)| PlacedMark {
+                        shape: Shape::Dot { diameter: 40.0 },
+                        x: x - 0.5,
+                        y: y - 0.5,
+                        reflectance: 0.1,
+                    })
+                    .collect(),
+                blur_sigma: 1.0,
+                noise_sigma: 1.0,
+                seed: self.frames as u64,
+                ..Scene::blank(320, 240, Depth::Eight)
+            };
+            let OwnedPixels::Gray8(pixels) = render(&scene).expect("scene").into_pixels() else { unreachable!() };
+            Ok(Frame::new(320, 240, pixels).expect("frame"))
+        }
+        fn describe(&self) -> String {
+            "rendered".into()
+        }
+    }
+
+    fn driver(marks: Vec<(f64, f64)>) -> FrameDriver<Rendered> {
+        let config = CameraConfig::new(Source::Files("unused".into()), 40.0);
+        FrameDriver::new(config, Rendered { marks, frames: 0 }).expect("driver")
+    }
+
+    #[test]
+    fn a_mark_is_read_in_native_pixels_after_the_flushed_frames() {
+        let mut d = driver(vec![(150.3, 110.7)]);
+        let r = d.trigger().expect("reading");
+        assert_eq!((r.judgment, r.count), (Judgment::Ok, Some(1)));
+        assert!((r.x_px - 150.3).abs() < 0.05 && (r.y_px - 110.7).abs() < 0.05, "{r:?}");
+        assert!((r.width_px - 40.0).abs() < 0.5 && r.score > 0.8, "{r:?}");
+        assert_eq!(d.source().frames, 3, "two flushed, one searched");
+        assert!(d.last_miss().is_none());
+        assert_eq!(d.capabilities(), Capabilities { select_job: false, grab_image: true });
+        assert_eq!(d.select_job(1).expect_err("no jobs").kind(), vision_core::DriverErrorKind::Unsupported);
+    }
+
+    #[test]
+    fn two_marks_or_none_are_ng_and_say_why() {
+        let mut d = driver(vec![(80.0, 120.0), (240.0, 120.0)]);
+        let r = d.trigger().expect("reading");
+        assert_eq!((r.judgment, r.count, r.found()), (Judgment::Ng, Some(2), false));
+        let miss = d.last_miss().expect("a reason");
+        assert_eq!(miss.candidates, Some(2));
+        assert!(miss.reason.contains("2 marks in view"), "{miss:?}");
+        // A search radius that leaves the neighbour out reads the centred mark.
+        let mut d = driver(vec![(160.0, 120.0), (290.0, 120.0)]);
+        d.config.mark.search_radius_pct = 80.0;
+        let r = d.trigger().expect("reading");
+        assert!(r.found() && (r.x_px - 160.0).abs() < 0.05, "{r:?} {:?}", d.last_miss());
+        let mut d = driver(Vec::new());
+        let r = d.trigger().expect("reading");
+        assert_eq!((r.judgment, r.count), (Judgment::Ng, Some(0)));
+        assert!(d.last_miss().expect("a reason").reason.starts_with("no mark in view"));
+    }
+
+    #[test]
+    fn an_unknown_diameter_is_a_setting_error_before_any_frame() {
+        let mut config = CameraConfig::new(Source::Files("unused".into()), 40.0);
+        config.mark.diameter_px = None;
+        let mut d = FrameDriver::new(config, Rendered { marks: Vec::new(), frames: 0 }).expect("driver");
+        let e = d.trigger().expect_err("no diameter");
+        assert_eq!(e.kind(), vision_core::DriverErrorKind::InvalidArgument);
+        assert!(e.to_string().starts_with("invalid camera setting VisionCameraMarkDiameterPx: is 0"), "{e}");
+        assert_eq!(d.source().frames, 0);
+    }
+
+    #[test]
+    fn m281_d1_keeps_the_searched_frame_and_never_overwrites() {
+        let dir = std::env::temp_dir().join(format!("vision-camera-grab-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let mut d = driver(vec![(160.0, 120.0)]);
+        let request = ImageRequest { dir: &dir, since: std::time::SystemTime::now(), stamp: "20261126_000000_000" };
+        assert_eq!(d.grab_image(&request).expect_err("no frame yet").kind(), vision_core::DriverErrorKind::Unsupported);
+        d.trigger().expect("reading");
+        let first = d.grab_image(&request).expect("saved");
+        let second = d.grab_image(&request).expect("saved again");
+        assert!(
+            first.ends_with("vision_20261126_000000_000.png") && second.ends_with("vision_20261126_000000_000_2.png")
+        );
+        let saved = crate::decode_image(&std::fs::read(&first).expect("read"), "saved").expect("png");
+        assert_eq!(Some(&saved), d.last_frame());
+        std::fs::remove_dir_all(&dir).expect("clean up");
+    }
+}
