@@ -9,7 +9,8 @@
 //!   unchanged. [`register`] adds it to a [`vision_core::DriverRegistry`] as `Camera`.
 //! * [`settings`]: the driver's own `[camera]` profile table; [`CameraConfig`] reads it typed.
 //! * Frame sources behind [`FrameSource`]: [`v4l2`] devices (negotiation and decoding over a
-//!   small [`v4l2::Device`] interface; the kernel edge behind the `v4l2` cargo feature),
+//!   small [`v4l2::Device`] interface; the kernel edge, 64-bit Linux ioctls on memory-mapped
+//!   buffers, behind the `v4l2` cargo feature and not verified on a camera),
 //!   [`HttpSource`] snapshot URLs (a minimal HTTP/1.1 client, [`http`]), and [`FileSource`]
 //!   files or folders (replay).
 //! * [`CameraError`]: specific errors, mapped to [`vision_core::DriverErrorKind`].
@@ -45,6 +46,8 @@ pub mod server;
 pub mod settings;
 mod source;
 pub mod v4l2;
+#[cfg(all(feature = "v4l2", target_os = "linux", target_pointer_width = "64"))]
+mod v4l2_linux;
 mod window;
 
 pub use config::{CameraConfig, MarkKind, MarkSettings, PixelFormat, Polarity, Source};

@@ -171,21 +171,26 @@ impl<D: Device> FrameSource for V4l2Source<D> {
     }
 }
 
-/// Opens a V4L2 device node. This build has no kernel backend yet (see the README: the
-/// negotiation and decoding are tested against a fake device; no camera was available), so it
-/// answers [`CameraError::DeviceOpen`] saying so; an existing device is named as such.
+/// Opens a V4L2 device node. A build without the `v4l2` cargo feature (or not on 64-bit
+/// Linux) has no kernel backend and answers [`CameraError::DeviceOpen`] saying so; an
+/// existing device is named as such.
 ///
 /// # Errors
 /// [`CameraError::DeviceOpen`].
+#[cfg(not(all(feature = "v4l2", target_os = "linux", target_pointer_width = "64")))]
 pub fn open(path: &std::path::Path) -> Result<Box<dyn Device>, CameraError> {
     let reason = if path.exists() {
-        "this build of mach-vision has no V4L2 capture backend yet: serve the camera with mjpg-streamer or \
-         ustreamer and set VisionCameraSource to its http:// snapshot URL"
+        "this build of mach-vision has no V4L2 capture backend (build vision-driver-camera with the `v4l2` \
+         feature), or serve the camera with mjpg-streamer or ustreamer and set VisionCameraSource to its \
+         http:// snapshot URL"
     } else {
         "no such device"
     };
     Err(CameraError::DeviceOpen { device: path.display().to_string(), reason: reason.into() })
 }
+
+#[cfg(all(feature = "v4l2", target_os = "linux", target_pointer_width = "64"))]
+pub use crate::v4l2_linux::open;
 
 impl Device for Box<dyn Device> {
     fn path(&self) -> &str {
@@ -318,6 +323,7 @@ mod tests {
         assert_eq!(source.device.set_calls, 2, "renegotiated after the failure");
     }
 
+    #[cfg(not(feature = "v4l2"))]
     #[test]
     fn opening_says_what_to_do_instead() {
         let Err(e) = open(std::path::Path::new("/dev/video-none")) else { panic!("opened a missing device") };
