@@ -25,10 +25,13 @@
 //!   from motion events, so a move, a host placing the machine and a tool change can never
 //!   disagree with what the camera sees; a clone of the interpreter (a "where would this go?"
 //!   question) moves nothing. Without a machine the head stays at the world's start.
-//! * The crate depends on `vision-core` and `vision-gcode` only. [`SimMachine`] is not itself a
-//!   [`vision_core::Machine`]: the one bridge from an interpreter to that trait is
+//! * The crate depends on `vision-core`, `vision-gcode` and the pure `vision-locate` (its
+//!   renderer) only. [`SimMachine`] is not itself a [`vision_core::Machine`]: the one bridge
+//!   from an interpreter to that trait is
 //!   `vision_mcode::ContextMachine`, which a host wraps around [`SimMachine::context`].
-//! * The camera reports the in-view mark nearest the image centre (count = marks in view).
+//! * The reading-mode camera reports the in-view mark nearest the image centre (count = marks
+//!   in view); the image mode draws every mark that reaches into the frame, and the finder
+//!   judges (two marks in its search window: NG).
 //! * A fixture's pose is `R·diag(scale)·(nominal − pivot) + pivot + shift` in the work frame of
 //!   the world's G54; a sheet pivots about its origin (where the operator zeroed the spindle),
 //!   so a sheet offset is an operator zeroing error that no calibration can see.
