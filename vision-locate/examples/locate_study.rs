@@ -108,15 +108,7 @@ fn main() {
                     e2 += (dx * dx + dy * dy) / 2.0;
                     emax = emax.max(dx.hypot(dy));
                 }
-                Located::NotFound(r) => {
-                    if std::env::var_os("STUDY_DEBUG").is_some() {
-                        std::env::set_var("PROBE", "1");
-                        eprintln!("miss at {x:.2},{y:.2} d {d:.1} blur {blur:.2}");
-                        let _ = locate(&view, &spec);
-                        std::env::remove_var("PROBE");
-                    }
-                    misses.push(format!("d {d:.1} blur {blur:.2}: {r:?}"))
-                }
+                Located::NotFound(r) => misses.push(format!("d {d:.1} blur {blur:.2}: {r:?}")),
             }
         }
         let nf = found.max(1) as f64;

@@ -15,6 +15,9 @@ pub(crate) struct Candidate {
     pub(crate) bbox: [f64; 4],
     /// Area, px².
     pub(crate) area: f64,
+    /// Mean squared distance of the blob's pixels from its centroid, px²: with the area it
+    /// gives a ring's two radii.
+    pub(crate) mean_r2: f64,
     /// Cross only: bar direction from the blob's 4-fold moment, radians.
     pub(crate) angle: f64,
     /// Cross only: the largest distance of a blob pixel along a bar, px.
@@ -28,8 +31,6 @@ pub(crate) struct Candidate {
 /// The coarse search's findings.
 pub(crate) struct Search {
     pub(crate) candidates: Vec<Candidate>,
-    /// Blobs of a plausible size cut by the border.
-    pub(crate) clipped: usize,
     /// Noise estimate of the full image, grey levels.
     pub(crate) noise: f64,
     /// Block size of the coarse image, px.
@@ -46,7 +47,7 @@ pub(crate) fn search<T: Copy + Into<f64> + Into<u32>>(img: &Img<'_, T>, spec: &M
     let f = ((dmin / 6.0).round() as usize).max(1);
     let (w, h) = (img.w / f, img.h / f);
     let noise = noise_sigma(img, full_scale).max(0.3 * full_scale / 255.0);
-    let mut out = Search { candidates: Vec::new(), clipped: 0, noise, factor: f };
+    let mut out = Search { candidates: Vec::new(), noise, factor: f };
     if w < 3 || h < 3 {
         return out;
     }
@@ -72,7 +73,6 @@ pub(crate) fn search<T: Copy + Into<f64> + Into<u32>>(img: &Img<'_, T>, spec: &M
     let mut labels = vec![0u32; w * h];
     let mut stack = Vec::new();
     let mut pixels = Vec::new();
-    let mut clipped_at: Vec<(f64, f64)> = Vec::new();
     for &t in &levels {
         let t = t as f32;
         labels.iter_mut().for_each(|l| *l = 0);
@@ -108,18 +108,12 @@ pub(crate) fn search<T: Copy + Into<f64> + Into<u32>>(img: &Img<'_, T>, spec: &M
                 }
             }
             if let Some(c) = describe(&pixels, &contrast, w, h, f, spec) {
-                let dup = |x: f64, y: f64| (x - c.x).hypot(y - c.y) < 0.25 * dmin;
-                if c.at_border {
-                    if !clipped_at.iter().any(|&(x, y)| dup(x, y)) {
-                        clipped_at.push((c.x, c.y));
-                    }
-                } else if !out.candidates.iter().any(|o| dup(o.x, o.y)) {
+                if !out.candidates.iter().any(|o| (o.x - c.x).hypot(o.y - c.y) < 0.25 * dmin) {
                     out.candidates.push(c);
                 }
             }
         }
     }
-    out.clipped = clipped_at.len();
     out.candidates.sort_by(|a, b| b.mass.total_cmp(&a.mass));
     out.candidates.truncate(MAX_CANDIDATES);
     out
@@ -148,6 +142,13 @@ fn describe(pixels: &[usize], contrast: &[f32], w: usize, h: usize, f: usize, sp
     let bh = (y1 - y0 + 1) as f64 * ff;
     let area = n * ff * ff;
     let at_border = x0 == 0 || y0 == 0 || x1 + 1 == w || y1 + 1 == h;
+    // A block's own extent adds f²/6 to the mean squared distance of the pixels inside it.
+    let mean_r2 = pixels
+        .iter()
+        .map(|&p| (to_full((p % w) as f64) - cx).powi(2) + (to_full((p / w) as f64) - cy).powi(2))
+        .sum::<f64>()
+        / n
+        + ff * ff / 6.0;
     let (dmin, dmax) = (spec.min_diameter(), spec.max_diameter());
     let big = bw.max(bh);
     let small = bw.min(bh);
@@ -158,24 +159,16 @@ fn describe(pixels: &[usize], contrast: &[f32], w: usize, h: usize, f: usize, sp
     } - slack;
     let hi = 1.6 * dmax + slack;
     if at_border {
-        // Only a blob that could be a mark cut by the edge: not longer than one, and not a
-        // speck.
-        return (big <= hi && big >= 0.3 * dmin && small <= hi).then_some(Candidate {
-            x: cx,
-            y: cy,
-            bbox: [0.0; 4],
-            area,
-            angle: 0.0,
-            half_length: 0.0,
-            at_border,
-            mass,
-        });
-    }
-    if big < lo || big > hi || small < 0.5 * big {
+        // A blob cut by the border: only one that could be a mark (not longer than one, not a
+        // speck) is tried; the fit tells a whole mark near the edge from a cut one.
+        if !(big <= hi && big >= 0.3 * dmin && small <= hi) {
+            return None;
+        }
+    } else if big < lo || big > hi || small < 0.5 * big {
         return None;
     }
     let fill = area / (bw * bh);
-    if spec.kind == MarkKind::Dot && fill < 0.45 {
+    if !at_border && spec.kind == MarkKind::Dot && fill < 0.45 {
         return None;
     }
     let (mut angle, mut half_length) = (0.0, 0.0);
@@ -202,6 +195,7 @@ fn describe(pixels: &[usize], contrast: &[f32], w: usize, h: usize, f: usize, sp
         y: cy,
         bbox: [x0 as f64 * ff - 0.5, y0 as f64 * ff - 0.5, (x1 + 1) as f64 * ff - 0.5, (y1 + 1) as f64 * ff - 0.5],
         area,
+        mean_r2,
         angle,
         half_length,
         at_border,

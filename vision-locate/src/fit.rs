@@ -140,9 +140,10 @@ impl Model for Annulus {
     fn constrain(&self, g: &mut [f64], before: &[f64]) -> bool {
         limit_move(g, before, 0.25 * before[2]);
         g[2] = g[2].clamp(0.7 * before[2], 1.4 * before[2]);
+        // The line may thin by at most half per step: a ring must not collapse into a circle.
         let lw = (before[2] - before[3]).max(0.5);
-        g[3] = g[3].clamp(before[3] - 0.5 * lw, before[3] + 0.5 * lw).clamp(0.0, g[2] - 0.3);
-        g[4] = g[4].clamp(0.25 * before[4], 2.0 * before[4]).clamp(0.15, 0.5 * g[2]);
+        g[3] = g[3].clamp(before[3] - 0.5 * lw, before[3] + 0.5 * lw).clamp(0.0, g[2] - 0.5 * lw);
+        g[4] = g[4].clamp(0.25 * before[4], 2.0 * before[4]).clamp(0.15, 0.5 * g[2]).min(0.75 * (g[2] - g[3]) + 1.0);
         g[2] > 1.0
     }
 }
@@ -258,7 +259,7 @@ pub(crate) enum FitFailure {
     Diverged,
 }
 
-const MAX_ITER: usize = 30;
+const MAX_ITER: usize = 15;
 
 /// Fits `model` starting from geometry `g0`; `scale` px normalises the plane slopes.
 pub(crate) fn fit<M: Model, T: Copy + Into<f64>, const N: usize>(

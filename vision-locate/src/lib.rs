@@ -165,7 +165,7 @@ struct Verified {
 fn locate_in<T: Copy + Into<f64> + Into<u32>>(img: &Img<'_, T>, spec: &MarkSpec, full_scale: f64) -> Located {
     let found = search(img, spec, full_scale);
     let mut marks: Vec<Verified> = Vec::new();
-    let mut clipped = found.clipped > 0;
+    let mut clipped = false;
     for c in &found.candidates {
         match refine(img, spec, c, found.noise, found.factor, full_scale) {
             Ok(Some(v)) => {
@@ -175,7 +175,8 @@ fn locate_in<T: Copy + Into<f64> + Into<u32>>(img: &Img<'_, T>, spec: &MarkSpec,
                     marks.push(v);
                 }
             }
-            Ok(None) | Err(FitFailure::Diverged) => {}
+            // A blob at the border that does not fit as a whole mark is a cut one.
+            Ok(None) | Err(FitFailure::Diverged) => clipped |= c.at_border,
             Err(FitFailure::Clipped) => clipped = true,
         }
     }
@@ -221,8 +222,12 @@ fn refine<T: Copy + Into<f64>>(
             (res, d, None)
         }
         MarkKind::Ring => {
-            let ro = ((c.bbox[2] - c.bbox[0]).max(c.bbox[3] - c.bbox[1]) / 2.0).clamp(lo, hi);
-            let ri = (ro * ro - c.area / std::f64::consts::PI).max(0.0).sqrt().clamp(0.3 * ro, ro - 1.0);
+            // An annulus has mean r² = (Ro² + Ri²)/2 and area π(Ro² − Ri²).
+            let half = c.area / (2.0 * std::f64::consts::PI);
+            let ro = (c.mean_r2 + half).sqrt().clamp(lo, hi);
+            let ri = (c.mean_r2 - half).max(0.0).sqrt().clamp(0.2 * ro, ro - 1.0);
+            // A wide start blur would wash a thin line out: start below its width.
+            let s0 = s0.min(0.25 * (ro - ri)).max(0.5);
             let res = fit::<_, _, 11>(img, &Annulus, &[c.x, c.y, ro, ri, s0], scale)?;
             let (ro, ri, s) = (res.g[2], res.g[3], res.g[4]);
             if !check_shape(&res, ri >= 0.15 * ro && ro - ri >= 1.0 && s <= 0.35 * ro && s <= ro - ri) {
@@ -233,6 +238,7 @@ fn refine<T: Copy + Into<f64>>(
         MarkKind::Cross => {
             let a0 = c.half_length.clamp(lo, hi);
             let w0 = (c.area / (8.0 * a0)).clamp(1.0, 0.4 * a0);
+            let s0 = s0.min(0.5 * w0).max(0.5);
             let res = fit::<_, _, 12>(img, &Cross, &[c.x, c.y, c.angle, a0, w0, s0], scale)?;
             let (a, w, s) = (res.g[3], res.g[4], res.g[5]);
             if !check_shape(&res, w <= 0.45 * a && w >= 0.4 && s <= 0.5 * a) {
