@@ -5,6 +5,7 @@
 
 mod emulate;
 mod fit;
+mod locate;
 mod picture;
 mod plan;
 mod run;
@@ -40,6 +41,8 @@ enum Command {
     Emulate(emulate::EmulateArgs),
     /// Trigger a Keyence camera (real or emulated) once and print the decoded reading.
     Trigger(trigger::TriggerArgs),
+    /// Find the fiducial mark (dot, ring or cross) in image files: its centre in pixels.
+    Locate(locate::LocateArgs),
 }
 
 /// The text of file `path`; `what` names it in the error ("program", "world").
@@ -72,6 +75,7 @@ fn main() -> ExitCode {
         Command::Plan(args) => plan::run(&args),
         Command::Emulate(args) => emulate::run(&args),
         Command::Trigger(args) => trigger::run(&args),
+        Command::Locate(args) => locate::run(&args),
     };
     // Every text a person reads goes through `vision_core::text`: reports and messages quote
     // program comments, file contents and camera replies, which may hold escape sequences or

@@ -149,7 +149,7 @@ fn camera_takes_any_registered_name_in_any_case_and_lists_them_for_an_unknown_on
     assert!(text.starts_with("mach-vision run: world built-in, camera: simulated camera\n"), "{text}");
     let out = bin().args(["run", "--camera", "basler\u{7}"]).arg(example("04-rectangle-fit.nc")).output().expect("run");
     let err = one_short_line(&out, "--camera basler\\u{7}: no such camera");
-    assert!(err.contains("the cameras are sim, keyence (any case)"), "{err}");
+    assert!(err.contains("the cameras are sim, simimage, keyence, camera (any case)"), "{err}");
     let out = bin().args(["run", "--camera", "sim", "--ip", "10.0.0.1"]).arg(example("04-rectangle-fit.nc")).output();
     one_short_line(&out.expect("run"), "--ip needs --camera keyence");
 }

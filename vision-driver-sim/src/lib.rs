@@ -10,7 +10,10 @@
 //! * [`SimMachine`]: the G-code interpreter set up from the world as a CNC whose moves move the
 //!   head; it runs whole programs, and gives host access through its interpreter's `Context`.
 //! * [`SimCamera`]: a [`vision_core::CameraDriver`] that sees the table from the head's true
-//!   position through the true optics ([`Optics`]).
+//!   position through the true optics ([`Optics`]) and reports the mark's pixel (reading mode).
+//! * [`Sim::render_frame`]: the image mode — the frame that camera would see, rendered with
+//!   `vision_locate::render` through the same optics ([`SimFrame`], [`ImageLook`]), for a
+//!   driver that finds the mark itself.
 //! * Truth: [`Sim::true_k`], [`Sim::true_camera_offset`], [`Sim::calibration_error`],
 //!   [`SimMachine::cut_error`].
 //!
@@ -22,10 +25,13 @@
 //!   from motion events, so a move, a host placing the machine and a tool change can never
 //!   disagree with what the camera sees; a clone of the interpreter (a "where would this go?"
 //!   question) moves nothing. Without a machine the head stays at the world's start.
-//! * The crate depends on `vision-core` and `vision-gcode` only. [`SimMachine`] is not itself a
-//!   [`vision_core::Machine`]: the one bridge from an interpreter to that trait is
+//! * The crate depends on `vision-core`, `vision-gcode` and the pure `vision-locate` (its
+//!   renderer) only. [`SimMachine`] is not itself a [`vision_core::Machine`]: the one bridge
+//!   from an interpreter to that trait is
 //!   `vision_mcode::ContextMachine`, which a host wraps around [`SimMachine::context`].
-//! * The camera reports the in-view mark nearest the image centre (count = marks in view).
+//! * The reading-mode camera reports the in-view mark nearest the image centre (count = marks
+//!   in view); the image mode draws every mark that reaches into the frame, and the finder
+//!   judges (two marks in its search window: NG).
 //! * A fixture's pose is `R·diag(scale)·(nominal − pivot) + pivot + shift` in the work frame of
 //!   the world's G54; a sheet pivots about its origin (where the operator zeroed the spindle),
 //!   so a sheet offset is an operator zeroing error that no calibration can see.
@@ -49,6 +55,7 @@
 mod camera;
 mod error;
 mod fixture;
+mod frames;
 mod machine;
 mod optics;
 mod rng;
@@ -59,9 +66,13 @@ pub mod world;
 pub use camera::SimCamera;
 pub use error::SimError;
 pub use fixture::TrueMark;
+pub use frames::SimFrame;
 pub use machine::interpreter_dialect;
 pub use machine::SimMachine;
 pub use optics::Optics;
 pub use sim::Sim;
 pub use truth::CalibrationError;
-pub use world::{CameraMount, ControllerName, Fixture, Job, MachineSetup, Tool, World, WorldUnit, DEFAULT_WORLD_TOML};
+pub use world::{
+    CameraMount, ControllerName, Fixture, ImageLook, Job, MachineSetup, MarkShape, Tool, World, WorldUnit,
+    DEFAULT_WORLD_TOML,
+};

@@ -26,6 +26,8 @@ pub(crate) struct State {
     /// The selected camera job (0 = the base settings).
     pub(crate) job: u32,
     pub(crate) triggers: u64,
+    /// Frames rendered by the image-mode camera (each seeds its own noise).
+    pub(crate) frames: u64,
 }
 
 /// Where the spindle is: at the world's start until a machine drives it, then wherever that
@@ -98,6 +100,7 @@ impl Sim {
             rng: Rng::new(world.seed),
             job: 0,
             triggers: 0,
+            frames: 0,
             world,
         };
         Ok(Sim { shared: Arc::new(Mutex::new(state)) })

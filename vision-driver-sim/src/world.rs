@@ -143,6 +143,79 @@ pub struct CameraMount {
     /// settings.
     #[serde(default, rename = "job")]
     pub jobs: Vec<Job>,
+    /// What the camera's image looks like (`[camera.image]`), for the image-mode camera
+    /// ([`crate::Sim::render_frame`]); absent: [`ImageLook::default`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub image: Option<ImageLook>,
+}
+
+/// The printed mark's shape in a rendered frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MarkShape {
+    /// A filled disc of the fixture's diameter.
+    #[default]
+    Dot,
+    /// A ring whose outer diameter is the fixture's diameter.
+    Ring,
+    /// A cross whose bars are the fixture's diameter tip to tip, turned with the fixture.
+    Cross,
+}
+
+/// What the image-mode camera sees besides the geometry (which is the reading-mode camera's:
+/// the same optics, the same marks): the print, the focus, the light and the sensor.
+/// Reflectances are 0 (black) to 1 (white).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ImageLook {
+    /// The marks' shape.
+    pub mark: MarkShape,
+    /// Reflectance of the ink (a light mark on a dark ground when above `ground`).
+    pub ink: f64,
+    /// Reflectance of the paper or part around the marks.
+    pub ground: f64,
+    /// Ring line or cross bar width, percent of the mark's diameter.
+    pub line_width_pct: f64,
+    /// Gaussian blur σ of the lens in focus, pixels.
+    pub blur_px: f64,
+    /// Extra blur σ per percent of working-distance change from `focus_distance`, pixels: a
+    /// camera focused at one height sees a blurrier mark at another.
+    pub defocus_px_per_pct: f64,
+    /// The distance the lens is focused at, world unit (default: the reference working
+    /// distance, else the working distance).
+    pub focus_distance: Option<f64>,
+    /// Sensor noise σ, grey levels (8 bit).
+    pub noise_grey: f64,
+    /// Illumination at the image centre, fraction of full scale for a white ground.
+    pub light: f64,
+    /// Uneven light: the illumination changes by this much across the image, percent.
+    pub light_gradient_pct: f64,
+    /// The direction the light grows in, degrees from image +x towards +y.
+    pub light_angle_deg: f64,
+    /// How many clutter items (scratches, specks smaller than a fifth of a mark, a part
+    /// edge) each frame shows, away from the mark nearest the centre.
+    pub clutter: u32,
+}
+
+impl Default for ImageLook {
+    /// A black dot printed on white paper, slightly soft, σ = 2 grey levels of noise and a 20 %
+    /// light gradient, no clutter.
+    fn default() -> Self {
+        ImageLook {
+            mark: MarkShape::Dot,
+            ink: 0.08,
+            ground: 0.85,
+            line_width_pct: 20.0,
+            blur_px: 0.8,
+            defocus_px_per_pct: 0.5,
+            focus_distance: None,
+            noise_grey: 2.0,
+            light: 0.9,
+            light_gradient_pct: 20.0,
+            light_angle_deg: 30.0,
+            clutter: 0,
+        }
+    }
 }
 
 fn one() -> f64 {
@@ -363,6 +436,9 @@ impl World {
         if !margin_ok(c.margin_px) {
             return invalid("camera.margin_px", "must be ≥ 0 and less than half the smaller image side");
         }
+        if let Some(look) = &c.image {
+            look.validate()?;
+        }
         let mut ids = Vec::new();
         for j in &c.jobs {
             if !(1..=999).contains(&j.id) || ids.contains(&j.id) {
@@ -408,6 +484,47 @@ impl World {
         }
         for f in &self.fixtures {
             f.validate()?;
+        }
+        Ok(())
+    }
+}
+
+impl ImageLook {
+    fn validate(&self) -> Result<(), SimError> {
+        let unit = |field: &str, v: f64| {
+            if (0.0..=1.0).contains(&v) {
+                Ok(())
+            } else {
+                invalid(format!("camera.image.{field}"), "must be 0 to 1")
+            }
+        };
+        unit("ink", self.ink)?;
+        unit("ground", self.ground)?;
+        unit("light", self.light)?;
+        if (self.ink - self.ground).abs() < 0.05 {
+            return invalid("camera.image.ink", "must differ from ground by at least 0.05, or the mark is invisible");
+        }
+        let range = |field: &str, v: f64, max: f64| {
+            if v.is_finite() && (0.0..=max).contains(&v) {
+                Ok(())
+            } else {
+                invalid(format!("camera.image.{field}"), format!("must be 0 to {max}"))
+            }
+        };
+        range("line_width_pct", self.line_width_pct, 50.0)?;
+        if self.mark != MarkShape::Dot && self.line_width_pct < 1.0 {
+            return invalid("camera.image.line_width_pct", "must be at least 1 for a ring or a cross");
+        }
+        range("blur_px", self.blur_px, 50.0)?;
+        range("defocus_px_per_pct", self.defocus_px_per_pct, 50.0)?;
+        range("noise_grey", self.noise_grey, 100.0)?;
+        range("light_gradient_pct", self.light_gradient_pct, 90.0)?;
+        angle("camera.image.light_angle_deg", self.light_angle_deg)?;
+        if let Some(f) = self.focus_distance {
+            positive("camera.image.focus_distance", f, MAX_LENGTH)?;
+        }
+        if self.clutter > 1000 {
+            return invalid("camera.image.clutter", "must be at most 1000 items");
         }
         Ok(())
     }

@@ -35,7 +35,7 @@ mod session;
 #[cfg(feature = "testkit")]
 pub mod testkit;
 
-pub use cameras::cameras;
+pub use cameras::{cameras, sim_image_config, SimFrames, SIM_IMAGE};
 pub use error::HostError;
 pub use handler::{ProgramHandler, Record, MAX_RECORDS};
 pub use session::{registry, Session};

@@ -10,10 +10,12 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 use vision_core::{DriverRegistry, Params, ProfileStore, VisionModule};
+use vision_driver_camera::server::{Encoding, SnapshotServer};
+use vision_driver_camera::FrameSource;
 use vision_driver_keyence::emulator::EmulatorHandle;
 use vision_driver_sim::{ControllerName, Sim, SimMachine};
 use vision_gcode::{Event, RunOutcome};
-use vision_host::{ProgramHandler, Session};
+use vision_host::{ProgramHandler, Session, SimFrames};
 use vision_mcode::system_clock;
 use vision_path::{Limits, PlanConfig, Setpoints};
 
@@ -27,6 +29,11 @@ const CYCLE_PERIOD_S: f64 = 0.001;
 /// The Keyence driver's registry name: the one camera `--ip`/`--port` address, and the one the
 /// CLI can emulate on loopback.
 const KEYENCE: &str = vision_driver_keyence::DRIVER_NAME;
+
+/// The camera driver's registry name: any camera whose frames mach-vision searches itself;
+/// `--source` gives its frames, or the CLI serves the simulated camera's rendered frames over
+/// loopback HTTP.
+const CAMERA: &str = vision_driver_camera::DRIVER_NAME;
 
 /// Arguments of `mach-vision run`.
 #[derive(Debug, Args)]
@@ -44,8 +51,11 @@ pub(crate) struct RunArgs {
     #[arg(long, value_name = "P.toml")]
     profile: Option<PathBuf>,
     /// The camera: any registered driver's name, in any case (`sim`: the world's simulated
-    /// camera, called directly; `keyence`: a Keyence VS camera over TCP, at `--ip`/`--port`, or
-    /// without `--ip` an emulated VS camera on loopback backed by the world's simulated camera).
+    /// camera, called directly; `simimage`: the frames that camera sees, rendered and searched
+    /// with vision-locate; `keyence`: a Keyence VS camera over TCP, at `--ip`/`--port`, or
+    /// without `--ip` an emulated VS camera on loopback backed by the world's simulated camera;
+    /// `camera`: a USB, network or file camera at `--source`, or without `--source` the
+    /// simulated camera's rendered frames served as HTTP snapshots on loopback).
     #[arg(long, default_value = "sim", value_name = "NAME")]
     camera: String,
     /// Keyence camera address (with `--camera keyence`).
@@ -54,6 +64,11 @@ pub(crate) struct RunArgs {
     /// Keyence camera port (with `--camera keyence --ip`).
     #[arg(long, default_value_t = 8500)]
     port: u16,
+    /// Frame source for `--camera camera`: a V4L2 device, an `http://` snapshot URL, or an
+    /// image file or folder (the profile's `VisionCameraSource` when absent is replaced by the
+    /// loopback snapshots of the simulated camera).
+    #[arg(long, value_name = "DEVICE|URL|PATH")]
+    source: Option<String>,
     /// Print the report as one JSON object.
     #[arg(long)]
     json: bool,
@@ -77,6 +92,8 @@ struct Runner {
     camera: String,
     /// Keeps the loopback emulator alive for the session.
     _emulator: Option<EmulatorHandle>,
+    /// Keeps the loopback snapshot server alive for the session.
+    _snapshots: Option<SnapshotServer>,
 }
 
 fn set(params: &mut Params, name: &str, value: impl Into<vision_core::ParamValue>) -> Result<(), Failure> {
@@ -111,10 +128,29 @@ impl Runner {
         // The camera choices below are for this session: the profile keeps the file's.
         let file_connection = ["VisionDriver", "VisionIP", "VisionPort"]
             .map(|name| params.get(name).map(|v| (name, v)).map_err(|e| Failure::Input(e.to_string())));
+        let mut snapshots = None;
         let (camera, emulator) = match (driver.as_str(), &args.ip) {
             ("Sim", _) => {
                 set(&mut params, "VisionDriver", "Sim")?;
                 ("simulated camera".to_string(), None)
+            }
+            (CAMERA, _) => {
+                set(&mut params, "VisionDriver", CAMERA)?;
+                match &args.source {
+                    Some(source) => {
+                        set(&mut params, "VisionCameraSource", source.as_str())?;
+                        (format!("Camera driver -> {}", vision_core::text::printable_line(source, 120)), None)
+                    }
+                    None => {
+                        let server = serve_frames(&sim, &mut params)?;
+                        let text = format!(
+                            "Camera driver -> HTTP snapshots at {} (the simulated camera's rendered frames)",
+                            server.url("/snapshot")
+                        );
+                        snapshots = Some(server);
+                        (text, None)
+                    }
+                }
             }
             (KEYENCE, Some(ip)) => {
                 set(&mut params, "VisionDriver", "Keyence")?;
@@ -152,7 +188,7 @@ impl Runner {
         }
         let machine = SimMachine::new(&sim).map_err(|e| Failure::Input(e.to_string()))?;
         let handler = ProgramHandler::new(Session::new(module), sim.world().machine.controller(), system_clock());
-        Ok(Runner { sim, machine, handler, camera, _emulator: emulator })
+        Ok(Runner { sim, machine, handler, camera, _emulator: emulator, _snapshots: snapshots })
     }
 
     /// The Vision module.
@@ -336,6 +372,35 @@ impl StreamedPlan {
     }
 }
 
+/// Serves the simulated camera's rendered frames as PNG snapshots on a loopback port, and
+/// points the camera driver's settings at it with the mark settings the simulated operator
+/// would set ([`vision_host::sim_image_config`]); no frame is flushed (each is rendered at the
+/// request, so none is stale), and the timeout is 60 s (a frame is rendered at each request).
+fn serve_frames(sim: &Sim, params: &mut Params) -> Result<SnapshotServer, Failure> {
+    let config = vision_host::sim_image_config(sim, params).map_err(|e| Failure::Input(e.to_string()))?;
+    let mark = config.mark;
+    if let Some(d) = mark.diameter_px {
+        set(params, "VisionCameraMarkDiameterPx", d)?;
+    }
+    set(params, "VisionCameraSearchRadius", mark.search_radius_pct)?;
+    let kind = match mark.kind {
+        vision_driver_camera::MarkKind::Dot => "dot",
+        vision_driver_camera::MarkKind::Ring => "ring",
+        vision_driver_camera::MarkKind::Cross => "cross",
+    };
+    set(params, "VisionCameraMark", kind)?;
+    let polarity = if mark.polarity == vision_driver_camera::Polarity::Dark { "dark" } else { "light" };
+    set(params, "VisionCameraPolarity", polarity)?;
+    set(params, "VisionCameraFlushFrames", 0_i64)?;
+    // Rendering a frame takes a fraction of a second in a release build, seconds in a debug one.
+    set(params, "VisionCameraTimeout", 60.0)?;
+    let mut frames = SimFrames(sim.clone());
+    let server = SnapshotServer::bind("127.0.0.1:0", Encoding::Png, move || frames.frame().map_err(|e| e.to_string()))
+        .map_err(|e| Failure::Input(format!("cannot start the loopback snapshot server: {e}")))?;
+    set(params, "VisionCameraSource", server.url("/snapshot").as_str())?;
+    Ok(server)
+}
+
 /// The registered name `--camera` gives (any case).
 ///
 /// # Errors
@@ -354,6 +419,9 @@ fn camera_name(registry: &DriverRegistry, camera: &str) -> Result<String, Failur
 pub(crate) fn run(args: &RunArgs) -> Result<String, Failure> {
     if args.ip.is_some() && !args.camera.eq_ignore_ascii_case(KEYENCE) {
         return Err(Failure::Input("--ip needs --camera keyence".into()));
+    }
+    if args.source.is_some() && !args.camera.eq_ignore_ascii_case(CAMERA) {
+        return Err(Failure::Input("--source needs --camera camera".into()));
     }
     // Every program is read before anything runs: an unreadable file is bad input, not a
     // session cut off halfway with its report lost.

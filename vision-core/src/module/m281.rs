@@ -47,6 +47,8 @@ pub struct StepwiseCapture {
 
 /// Where an M281 stands after [`VisionModule::m281_begin`] or [`VisionModule::m281_next`].
 #[derive(Debug)]
+// One value per machine move, moved a few times: its size costs nothing worth a box.
+#[allow(clippy::large_enum_variant)]
 pub enum CaptureStep {
     /// A re-centring move was handed to the machine: wait until the machine is there, then
     /// call [`VisionModule::m281_next`] with this.

@@ -1,0 +1,131 @@
+//! `mach-vision locate` through the built binary, on images rendered with known truth.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+use vision_locate::render::{render, Depth, PlacedMark, Scene, Shape};
+use vision_locate::OwnedPixels;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_mach-vision"))
+}
+
+fn dir() -> PathBuf {
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("locate_cli");
+    std::fs::create_dir_all(&d).expect("scratch dir");
+    d
+}
+
+/// Renders a 200 × 150 image, with a dark dot of 40 px at (`x`, `y`) when given, and saves it
+/// as `name` (the extension picks the format; `rgb` stores it as colour).
+fn save(name: &str, mark: Option<(f64, f64)>, depth: Depth, rgb: bool) -> PathBuf {
+    let scene = Scene {
+        marks: mark
+            .map(|(x, y)| PlacedMark { shape: Shape::Dot { diameter: 40.0 }, x, y, reflectance: 0.1 })
+            .into_iter()
+            .collect(),
+        blur_sigma: 1.0,
+        noise_sigma: if depth == Depth::Eight { 1.5 } else { 1.5 * 257.0 },
+        seed: 9,
+        ..Scene::blank(200, 150, depth)
+    };
+    let path = dir().join(name);
+    match render(&scene).expect("scene").into_pixels() {
+        OwnedPixels::Gray8(px) if rgb => {
+            let rgb: Vec<u8> = px.iter().flat_map(|&v| [v, v, v]).collect();
+            image::RgbImage::from_raw(200, 150, rgb).expect("size").save(&path).expect("save")
+        }
+        OwnedPixels::Gray8(px) => image::GrayImage::from_raw(200, 150, px).expect("size").save(&path).expect("save"),
+        OwnedPixels::Gray16(px) => {
+            image::ImageBuffer::<image::Luma<u16>, _>::from_raw(200, 150, px).expect("size").save(&path).expect("save")
+        }
+    }
+    path
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().arg("locate").args(args).output().expect("run mach-vision")
+}
+
+fn json_lines(out: &Output) -> Vec<serde_json::Value> {
+    String::from_utf8(out.stdout.clone())
+        .expect("utf-8")
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("JSON"))
+        .collect()
+}
+
+#[test]
+fn finds_the_dot_in_png_jpeg_pgm_bmp_16_bit_and_colour() {
+    let files = [
+        save("dot.png", Some((101.3, 70.6)), Depth::Eight, false),
+        save("dot.pgm", Some((101.3, 70.6)), Depth::Eight, false),
+        save("dot.bmp", Some((101.3, 70.6)), Depth::Eight, true),
+        save("dot16.png", Some((101.3, 70.6)), Depth::Sixteen, false),
+        save("dot_rgb.png", Some((101.3, 70.6)), Depth::Eight, true),
+        save("dot.jpg", Some((101.3, 70.6)), Depth::Eight, false),
+    ];
+    let mut args = vec!["--diameter", "40", "--json"];
+    args.extend(files.iter().map(|p| p.to_str().expect("utf-8 path")));
+    let out = run(&args);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let lines = json_lines(&out);
+    assert_eq!(lines.len(), files.len());
+    for o in &lines {
+        assert_eq!(o["found"], true, "{o}");
+        let (x, y) = (o["x"].as_f64().unwrap(), o["y"].as_f64().unwrap());
+        assert!((x - 101.3).abs() < 0.05 && (y - 70.6).abs() < 0.05, "{o}");
+        assert!((o["diameter"].as_f64().unwrap() - 40.0).abs() < 0.5, "{o}");
+        assert!(o["score"].as_f64().unwrap() > 0.8, "{o}");
+    }
+    // The readable form says the same.
+    let out = run(&["--diameter", "40", files[0].to_str().unwrap()]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("found x=101.3") && text.contains("y=70.6"), "{text}");
+}
+
+#[test]
+fn an_image_without_the_mark_exits_1_with_the_reason() {
+    let good = save("good.png", Some((100.0, 75.0)), Depth::Eight, false);
+    let blank = save("blank.png", None, Depth::Eight, false);
+    let cut = save("cut.png", Some((3.0, 75.0)), Depth::Eight, false);
+    let out =
+        run(&["--diameter", "40", "--json", good.to_str().unwrap(), blank.to_str().unwrap(), cut.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let lines = json_lines(&out);
+    assert_eq!(lines[0]["found"], true);
+    assert_eq!(lines[1]["found"], false);
+    assert_eq!(lines[1]["reason"], "no_candidate");
+    assert_eq!(lines[2]["reason"], "clipped");
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(err.contains("2 of 3 images"), "{err}");
+    // Size out of range carries the measured size.
+    let out = run(&["--diameter", "25", "--tolerance", "10", "--json", good.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let o = &json_lines(&out)[0];
+    assert_eq!(o["reason"], "size_out_of_range");
+    assert!((o["diameter"].as_f64().unwrap() - 40.0).abs() < 0.5, "{o}");
+}
+
+#[test]
+fn bad_input_exits_2() {
+    let good = save("ok.png", Some((100.0, 75.0)), Depth::Eight, false);
+    let junk = dir().join("junk.png");
+    std::fs::write(&junk, b"not an image").unwrap();
+    let g = good.to_str().unwrap();
+    for args in [
+        vec!["--diameter", "40", "/nonexistent/frame.png"],
+        vec!["--diameter", "40", junk.to_str().unwrap()],
+        vec!["--diameter", "40", "--mark", "hexagon", g],
+        vec!["--diameter", "-3", g],
+        vec!["--diameter", "NaN", g],
+        vec!["--diameter", "40", "--tolerance", "150", g],
+        vec!["--diameter", "40", "--polarity", "grey", g],
+        vec![g],
+        vec!["--diameter", "40"],
+    ] {
+        let out = run(&args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+        assert!(out.stdout.is_empty(), "{args:?}");
+    }
+}

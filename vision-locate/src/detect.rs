@@ -1,0 +1,309 @@
+//! Coarse search: candidate blobs of about the right size, found on a block-averaged copy of
+//! the image against its local mean (so uneven light does not matter).
+
+use crate::fit::Img;
+use crate::spec::{MarkKind, MarkSpec, Polarity};
+
+/// A blob that may be the mark, in full-resolution pixels.
+#[derive(Clone, Debug)]
+pub(crate) struct Candidate {
+    /// Centroid, px.
+    pub(crate) x: f64,
+    /// Centroid, px.
+    pub(crate) y: f64,
+    /// Bounding box [x0, y0, x1, y1], px (inclusive pixel edges).
+    pub(crate) bbox: [f64; 4],
+    /// Area, px².
+    pub(crate) area: f64,
+    /// Mean squared distance of the blob's pixels from its centroid, px²: with the area it
+    /// gives a ring's two radii.
+    pub(crate) mean_r2: f64,
+    /// Cross only: bar direction from the blob's 4-fold moment, radians.
+    pub(crate) angle: f64,
+    /// Cross only: the largest distance of a blob pixel along a bar, px.
+    pub(crate) half_length: f64,
+    /// The blob touches the image border.
+    pub(crate) at_border: bool,
+    /// Sum of the blob's contrast (ranks candidates).
+    pub(crate) mass: f64,
+}
+
+/// The coarse search's findings.
+pub(crate) struct Search {
+    pub(crate) candidates: Vec<Candidate>,
+    /// Noise estimate of the full image, grey levels.
+    pub(crate) noise: f64,
+    /// Block size of the coarse image, px.
+    pub(crate) factor: usize,
+}
+
+/// Most candidates refined per image: a cluttered view is refused rather than slow.
+pub(crate) const MAX_CANDIDATES: usize = 12;
+
+pub(crate) fn search<T: Copy + Into<f64> + Into<u32>>(img: &Img<'_, T>, spec: &MarkSpec, full_scale: f64) -> Search {
+    let dmin = spec.min_diameter();
+    let dmax = spec.max_diameter();
+    // Blocks of about a sixth of the smallest diameter keep the mark ≥ 6 blocks wide.
+    let f = ((dmin / 6.0).round() as usize).max(1);
+    let (w, h) = (img.w / f, img.h / f);
+    let noise = noise_sigma(img, full_scale).max(0.3 * full_scale / 255.0);
+    let mut out = Search { candidates: Vec::new(), noise, factor: f };
+    if w < 3 || h < 3 {
+        return out;
+    }
+    let ds = downsample(img, f, w, h);
+    // Local mean over a window of 2.5 × the largest diameter: the mark is a minority in it.
+    let win = (((2.5 * dmax / f as f64).round() as usize) | 1).max(5);
+    let mean = box_mean(&ds, w, h, win / 2);
+    let sign = match spec.polarity {
+        Polarity::DarkOnLight => -1.0,
+        Polarity::LightOnDark => 1.0,
+    };
+    let contrast: Vec<f32> = ds.iter().zip(&mean).map(|(v, m)| sign * (v - m)).collect();
+    let cmax = contrast.iter().copied().fold(0.0f32, f32::max) as f64;
+    let noise_ds = noise / f as f64;
+    let floor = 5.0 * noise_ds + 2.0 * full_scale / 255.0;
+    if cmax < 2.0 * floor {
+        return out;
+    }
+    let mut levels: Vec<f64> = [0.5, 0.3, 0.15].iter().map(|k| k * cmax).filter(|&t| t >= floor).collect();
+    if levels.is_empty() {
+        levels.push(floor);
+    }
+    let mut labels = vec![0u32; w * h];
+    let mut stack = Vec::new();
+    let mut pixels = Vec::new();
+    for &t in &levels {
+        let t = t as f32;
+        labels.iter_mut().for_each(|l| *l = 0);
+        let mut next = 0u32;
+        for start in 0..w * h {
+            if labels[start] != 0 || contrast[start] < t {
+                continue;
+            }
+            next += 1;
+            labels[start] = next;
+            stack.push(start);
+            pixels.clear();
+            while let Some(p) = stack.pop() {
+                pixels.push(p);
+                let (px, py) = (p % w, p / w);
+                let mut visit = |q: usize| {
+                    if labels[q] == 0 && contrast[q] >= t {
+                        labels[q] = next;
+                        stack.push(q);
+                    }
+                };
+                if px > 0 {
+                    visit(p - 1);
+                }
+                if px + 1 < w {
+                    visit(p + 1);
+                }
+                if py > 0 {
+                    visit(p - w);
+                }
+                if py + 1 < h {
+                    visit(p + w);
+                }
+            }
+            if let Some(c) = describe(&pixels, &contrast, w, h, f, spec) {
+                if !out.candidates.iter().any(|o| (o.x - c.x).hypot(o.y - c.y) < 0.25 * dmin) {
+                    out.candidates.push(c);
+                }
+            }
+        }
+    }
+    out.candidates.sort_by(|a, b| b.mass.total_cmp(&a.mass));
+    out.candidates.truncate(MAX_CANDIDATES);
+    out
+}
+
+/// Measures a blob and keeps it when its size fits the spec loosely (the fit judges finely).
+fn describe(pixels: &[usize], contrast: &[f32], w: usize, h: usize, f: usize, spec: &MarkSpec) -> Option<Candidate> {
+    let ff = f as f64;
+    let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0, 0);
+    let (mut sx, mut sy, mut mass) = (0.0, 0.0, 0.0);
+    for &p in pixels {
+        let (x, y) = (p % w, p / w);
+        x0 = x0.min(x);
+        y0 = y0.min(y);
+        x1 = x1.max(x);
+        y1 = y1.max(y);
+        sx += x as f64;
+        sy += y as f64;
+        mass += contrast[p] as f64;
+    }
+    let n = pixels.len() as f64;
+    // A block (i, j) covers full pixels i·f … i·f + f − 1: its centre is i·f + (f − 1)/2.
+    let to_full = |c: f64| c * ff + (ff - 1.0) / 2.0;
+    let (cx, cy) = (to_full(sx / n), to_full(sy / n));
+    let bw = (x1 - x0 + 1) as f64 * ff;
+    let bh = (y1 - y0 + 1) as f64 * ff;
+    let area = n * ff * ff;
+    let at_border = x0 == 0 || y0 == 0 || x1 + 1 == w || y1 + 1 == h;
+    // A block's own extent adds f²/6 to the mean squared distance of the pixels inside it.
+    let mean_r2 = pixels
+        .iter()
+        .map(|&p| (to_full((p % w) as f64) - cx).powi(2) + (to_full((p / w) as f64) - cy).powi(2))
+        .sum::<f64>()
+        / n
+        + ff * ff / 6.0;
+    let (dmin, dmax) = (spec.min_diameter(), spec.max_diameter());
+    let big = bw.max(bh);
+    let small = bw.min(bh);
+    let slack = 2.0 * ff + 2.0;
+    let lo = match spec.kind {
+        MarkKind::Cross => 0.35 * dmin,
+        _ => 0.5 * dmin,
+    } - slack;
+    let hi = 1.6 * dmax + slack;
+    if at_border {
+        // A blob cut by the border: only one that could be a mark (not longer than one, not a
+        // speck) is tried; the fit tells a whole mark near the edge from a cut one.
+        if !(big <= hi && big >= 0.3 * dmin && small <= hi) {
+            return None;
+        }
+    } else if big < lo || big > hi || small < 0.5 * big {
+        return None;
+    }
+    let fill = area / (bw * bh);
+    if !at_border && spec.kind == MarkKind::Dot && fill < 0.45 {
+        return None;
+    }
+    let (mut angle, mut half_length) = (0.0, 0.0);
+    if spec.kind == MarkKind::Cross {
+        // The bars put the far pixels at θ + k·90°: the phase of Σ r²·e^{4iφ} is 4θ.
+        let (mut re, mut im) = (0.0, 0.0);
+        for &p in pixels {
+            let (dx, dy) = (to_full((p % w) as f64) - cx, to_full((p / w) as f64) - cy);
+            let r2 = dx * dx + dy * dy;
+            let phi = dy.atan2(dx);
+            re += r2 * (4.0 * phi).cos();
+            im += r2 * (4.0 * phi).sin();
+        }
+        angle = im.atan2(re) / 4.0;
+        let (s, c) = angle.sin_cos();
+        for &p in pixels {
+            let (dx, dy) = (to_full((p % w) as f64) - cx, to_full((p / w) as f64) - cy);
+            let far = (dx * c + dy * s).abs().max((-dx * s + dy * c).abs());
+            half_length = f64::max(half_length, far + ff / 2.0);
+        }
+    }
+    Some(Candidate {
+        x: cx,
+        y: cy,
+        bbox: [x0 as f64 * ff - 0.5, y0 as f64 * ff - 0.5, (x1 + 1) as f64 * ff - 0.5, (y1 + 1) as f64 * ff - 0.5],
+        area,
+        mean_r2,
+        angle,
+        half_length,
+        at_border,
+        mass,
+    })
+}
+
+/// Block average by `f` × `f` (the remainder rows and columns are dropped). Column sums in
+/// integers first: that loop vectorises, and it reads every pixel of the frame once.
+fn downsample<T: Copy + Into<u32>>(img: &Img<'_, T>, f: usize, w: usize, h: usize) -> Vec<f32> {
+    let mut out = vec![0.0f32; w * h];
+    let mut cols = vec![0u32; w * f];
+    let norm = 1.0 / (f * f) as f32;
+    for j in 0..h {
+        cols.iter_mut().for_each(|v| *v = 0);
+        for y in j * f..(j + 1) * f {
+            let line = &img.data[y * img.w..y * img.w + w * f];
+            let cols = &mut cols[..line.len()];
+            for i in 0..line.len() {
+                cols[i] += line[i].into();
+            }
+        }
+        for (o, chunk) in out[j * w..(j + 1) * w].iter_mut().zip(cols.chunks_exact(f)) {
+            *o = chunk.iter().sum::<u32>() as f32 * norm;
+        }
+    }
+    out
+}
+
+/// Mean over a (2r + 1)² window, clipped at the borders: running sums along rows, then along
+/// columns; the clipped window's pixel count is a product of its row and column extents.
+fn box_mean(img: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
+    let mut tmp = vec![0.0f32; w * h];
+    for (src, dst) in img.chunks_exact(w).zip(tmp.chunks_exact_mut(w)) {
+        running_sum(src, dst, r);
+    }
+    let mut out = vec![0.0f32; w * h];
+    let mut col = vec![0.0f32; h];
+    let mut sums = vec![0.0f32; h];
+    for x in 0..w {
+        for y in 0..h {
+            col[y] = tmp[y * w + x];
+        }
+        running_sum(&col, &mut sums, r);
+        for y in 0..h {
+            out[y * w + x] = sums[y];
+        }
+    }
+    let extent = |i: usize, n: usize| ((i + r + 1).min(n) - i.saturating_sub(r)) as f32;
+    let inv_x: Vec<f32> = (0..w).map(|x| 1.0 / extent(x, w)).collect();
+    for y in 0..h {
+        let iy = 1.0 / extent(y, h);
+        for (o, ix) in out[y * w..(y + 1) * w].iter_mut().zip(&inv_x) {
+            *o *= iy * ix;
+        }
+    }
+    out
+}
+
+/// `dst[i]` = Σ `src[i − r ..= i + r]` (clipped), in f64 to keep long sums exact enough.
+fn running_sum(src: &[f32], dst: &mut [f32], r: usize) {
+    let n = src.len();
+    let mut acc = 0.0f64;
+    for v in src.iter().take(r.min(n)) {
+        acc += *v as f64;
+    }
+    for i in 0..n {
+        if i + r < n {
+            acc += src[i + r] as f64;
+        }
+        if i > r {
+            acc -= src[i - r - 1] as f64;
+        }
+        dst[i] = acc as f32;
+    }
+}
+
+/// Noise standard deviation (grey levels) from the median absolute difference of horizontal
+/// neighbours on every 16th row: robust to the few edges in view. The median comes from a
+/// histogram in steps of 1/8 of an 8-bit grey level.
+fn noise_sigma<T: Copy + Into<u32>>(img: &Img<'_, T>, full_scale: f64) -> f64 {
+    if img.w < 2 {
+        return 0.0;
+    }
+    const BINS: usize = 4096;
+    let per_bin = full_scale / 255.0 / 8.0;
+    let inv = 1.0 / per_bin;
+    let mut hist = vec![0u32; BINS];
+    let step = if img.h >= 128 { 16 } else { 1 };
+    let mut n = 0u64;
+    for y in (0..img.h).step_by(step) {
+        let line = &img.data[y * img.w..(y + 1) * img.w];
+        for pair in line.windows(2) {
+            let (a, b): (u32, u32) = (pair[0].into(), pair[1].into());
+            let bin = ((a.abs_diff(b) as f64 * inv) as usize).min(BINS - 1);
+            hist[bin] += 1;
+            n += 1;
+        }
+    }
+    let mut seen = 0u64;
+    let mut median = 0.0;
+    for (k, &c) in hist.iter().enumerate() {
+        seen += c as u64;
+        if 2 * seen >= n {
+            median = k as f64 * per_bin;
+            break;
+        }
+    }
+    // MAD of a difference of two samples: σ·√2·0.6745.
+    median / (std::f64::consts::SQRT_2 * 0.6745)
+}

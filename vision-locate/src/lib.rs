@@ -1,0 +1,285 @@
+//! Finds a printed fiducial mark — a dot, a ring or a cross — in a grayscale image, to a
+//! fraction of a pixel, so an ordinary camera can align a CNC job.
+//!
+//! Pure: no I/O, no threads, no crate of ours. The input is a borrowed 8- or 16-bit
+//! [`GrayImage`] and a [`MarkSpec`] (kind, expected size in pixels with a tolerance, polarity);
+//! the answer is a [`Located`]: the [`Mark`] found, or why none was (no candidate, several,
+//! cut by the border, size out of range). It never guesses: with two marks in view it refuses.
+//!
+//! Pixel convention: (0, 0) is the centre of the top-left pixel, x to the right, y down.
+//!
+//! **Method.** (1) Coarse search: the image is block-averaged to about 8 blocks across the
+//! smallest accepted mark, compared with its local mean (uneven light cancels), and cut at three
+//! contrast levels into blobs; blobs of a plausible size are candidates. (2) Each candidate is
+//! refined by a least-squares fit of a blurred-shape model with planar background and contrast
+//! (see [`fit`](crate#method) notes in the source) to the pixels near its edges — the
+//! maximum-likelihood centre under Gaussian noise. (3) A fit is a mark only when its contrast,
+//! its polarity, its agreement with the pixels overall *and in each of eight sectors around it*
+//! hold up; its size then decides between found and out of range.
+//!
+//! [`render`] draws such marks with known truth (anti-aliased, blurred, lit, noisy) for tests,
+//! benchmarks and the simulator.
+//!
+//! ```
+//! use vision_locate::render::{render, Depth, PlacedMark, Scene, Shape};
+//! use vision_locate::{locate, Located, MarkKind, MarkSpec, Polarity};
+//!
+//! let scene = Scene {
+//!     marks: vec![PlacedMark { shape: Shape::Dot { diameter: 40.0 }, x: 161.3, y: 118.7, reflectance: 0.1 }],
+//!     blur_sigma: 1.5,
+//!     noise_sigma: 2.0,
+//!     seed: 1,
+//!     ..Scene::blank(320, 240, Depth::Eight)
+//! };
+//! let image = render(&scene)?;
+//! let spec = MarkSpec::new(MarkKind::Dot, 40.0, 0.2, Polarity::DarkOnLight)?;
+//! let Located::Found(mark) = locate(&image.view(), &spec)? else { panic!("the dot is in view") };
+//! assert!((mark.x - 161.3).abs() < 0.02 && (mark.y - 118.7).abs() < 0.02);
+//! assert!((mark.diameter - 40.0).abs() < 0.5);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+mod detect;
+mod fit;
+mod image;
+pub mod render;
+mod spec;
+mod special;
+
+use std::fmt;
+
+pub use image::{GrayImage, ImageError, OwnedImage, OwnedPixels, Pixels};
+pub use spec::{MarkKind, MarkSpec, Polarity, SpecError, MIN_DIAMETER_PX};
+
+use detect::search;
+use fit::{fit, Annulus, Cross, Disc, FitFailure, FitResult, Img, Model};
+
+/// A mark found in the image.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Mark {
+    /// Centre x, px (0 = centre of the left column).
+    pub x: f64,
+    /// Centre y, px (0 = centre of the top row, y down).
+    pub y: f64,
+    /// Measured size, px: a dot's or ring's outer diameter, a cross's tip-to-tip bar length.
+    pub diameter: f64,
+    /// A cross's bar direction, radians from +x towards +y, in [−π/4, π/4); `None` for round
+    /// marks.
+    pub angle: Option<f64>,
+    /// Agreement of the fitted model with the pixels around the mark's edges: the coefficient
+    /// of determination, 0 … 1 (1 = perfect; a mark is only reported above 0.8).
+    pub score: f64,
+}
+
+/// Why no mark is reported.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum NotFoundReason {
+    /// Nothing in view looks like the mark.
+    NoCandidate,
+    /// More than one mark in view (`count` of them); none is picked.
+    SeveralCandidates {
+        /// How many marks were found.
+        count: usize,
+    },
+    /// A mark-like blob is cut by the image border.
+    Clipped,
+    /// A mark of the right kind is in view but its size, `diameter` px, is outside the spec's
+    /// tolerance.
+    SizeOutOfRange {
+        /// The measured size, px.
+        diameter: f64,
+    },
+}
+
+impl fmt::Display for NotFoundReason {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            NotFoundReason::NoCandidate => write!(f, "no mark in view — check the position, focus and lighting"),
+            NotFoundReason::SeveralCandidates { count } => {
+                write!(f, "{count} marks in view — move closer or mask the others; none was picked")
+            }
+            NotFoundReason::Clipped => write!(f, "the mark is cut by the image border — centre it in the view"),
+            NotFoundReason::SizeOutOfRange { diameter } => {
+                write!(
+                    f,
+                    "a mark of {diameter:.1} px is in view but outside the size tolerance — check the diameter setting"
+                )
+            }
+        }
+    }
+}
+
+/// The finder's judgment.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Located {
+    /// Exactly one mark of the right kind and size is in view.
+    Found(Mark),
+    /// No mark is reported, for this reason.
+    NotFound(NotFoundReason),
+}
+
+/// Why the finder could not run at all (the input is unusable, as opposed to "no mark").
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum LocateError {
+    /// The mark description is invalid.
+    Spec(SpecError),
+}
+
+impl fmt::Display for LocateError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            LocateError::Spec(e) => e.fmt(f),
+        }
+    }
+}
+
+impl std::error::Error for LocateError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            LocateError::Spec(e) => Some(e),
+        }
+    }
+}
+
+impl From<SpecError> for LocateError {
+    fn from(e: SpecError) -> Self {
+        LocateError::Spec(e)
+    }
+}
+
+/// Finds the one mark described by `spec` in `image` (see the crate docs for the method).
+pub fn locate(image: &GrayImage<'_>, spec: &MarkSpec) -> Result<Located, LocateError> {
+    spec.validate()?;
+    Ok(match image.pixels() {
+        Pixels::Gray8(d) => locate_in(&Img { w: image.width(), h: image.height(), data: d }, spec, 255.0),
+        Pixels::Gray16(d) => locate_in(&Img { w: image.width(), h: image.height(), data: d }, spec, 65535.0),
+    })
+}
+
+/// A verified fit: the mark and its size judgement.
+struct Verified {
+    mark: Mark,
+}
+
+fn locate_in<T: Copy + Into<f64> + Into<u32>>(img: &Img<'_, T>, spec: &MarkSpec, full_scale: f64) -> Located {
+    let found = search(img, spec, full_scale);
+    let mut marks: Vec<Verified> = Vec::new();
+    let mut clipped = false;
+    for c in &found.candidates {
+        match refine(img, spec, c, found.noise, found.factor, full_scale) {
+            Ok(Some(v)) => {
+                // The same mark reached from two blobs counts once.
+                let r = v.mark.diameter / 4.0;
+                if !marks.iter().any(|m| (m.mark.x - v.mark.x).hypot(m.mark.y - v.mark.y) < r) {
+                    marks.push(v);
+                }
+            }
+            // A blob at the border that does not fit as a whole mark is a cut one.
+            Ok(None) | Err(FitFailure::Diverged) => clipped |= c.at_border,
+            Err(FitFailure::Clipped) => clipped = true,
+        }
+    }
+    let (dmin, dmax) = (spec.min_diameter(), spec.max_diameter());
+    let (good, wrong): (Vec<&Verified>, Vec<&Verified>) =
+        marks.iter().partition(|v| (dmin..=dmax).contains(&v.mark.diameter));
+    match good.len() {
+        1 => Located::Found(good[0].mark),
+        0 => Located::NotFound(match wrong.first() {
+            Some(v) => NotFoundReason::SizeOutOfRange { diameter: v.mark.diameter },
+            None if clipped => NotFoundReason::Clipped,
+            None => NotFoundReason::NoCandidate,
+        }),
+        count => Located::NotFound(NotFoundReason::SeveralCandidates { count }),
+    }
+}
+
+/// Least score (R² over all fitted pixels) of a reported mark.
+const MIN_SCORE: f64 = 0.8;
+/// Least R² in every one of the eight sectors: the edge must be there all round.
+const MIN_SECTOR_SCORE: f64 = 0.5;
+
+fn refine<T: Copy + Into<f64>>(
+    img: &Img<'_, T>,
+    spec: &MarkSpec,
+    c: &detect::Candidate,
+    noise: f64,
+    factor: usize,
+    full_scale: f64,
+) -> Result<Option<Verified>, FitFailure> {
+    let s0 = (0.4 * factor as f64).max(1.0);
+    let (lo, hi) = (0.25 * spec.min_diameter(), 0.75 * spec.max_diameter());
+    let r_area = (c.area / std::f64::consts::PI).sqrt();
+    let scale = spec.diameter_px / 2.0;
+    let (res, diameter, angle) = match spec.kind {
+        MarkKind::Dot => {
+            let r0 = r_area.clamp(lo, hi);
+            let res = fit::<_, _, 10>(img, &Disc, &[c.x, c.y, r0, s0], scale)?;
+            if !check_shape(&res, res.g[3] <= 0.35 * res.g[2]) {
+                return Ok(None);
+            }
+            let d = 2.0 * res.g[2];
+            (res, d, None)
+        }
+        MarkKind::Ring => {
+            // An annulus has mean r² = (Ro² + Ri²)/2 and area π(Ro² − Ri²).
+            let half = c.area / (2.0 * std::f64::consts::PI);
+            let ro = (c.mean_r2 + half).sqrt().clamp(lo, hi);
+            let ri = (c.mean_r2 - half).max(0.0).sqrt().clamp(0.2 * ro, ro - 1.0);
+            // A wide start blur would wash a thin line out: start below its width.
+            let s0 = s0.min(0.25 * (ro - ri)).max(0.5);
+            let res = fit::<_, _, 11>(img, &Annulus, &[c.x, c.y, ro, ri, s0], scale)?;
+            let (ro, ri, s) = (res.g[2], res.g[3], res.g[4]);
+            if !check_shape(&res, ri >= 0.15 * ro && ro - ri >= 1.0 && s <= 0.35 * ro && s <= ro - ri) {
+                return Ok(None);
+            }
+            (res, 2.0 * ro, None)
+        }
+        MarkKind::Cross => {
+            let a0 = c.half_length.clamp(lo, hi);
+            let w0 = (c.area / (8.0 * a0)).clamp(1.0, 0.4 * a0);
+            let s0 = s0.min(0.5 * w0).max(0.5);
+            let res = fit::<_, _, 12>(img, &Cross, &[c.x, c.y, c.angle, a0, w0, s0], scale)?;
+            let (a, w, s) = (res.g[3], res.g[4], res.g[5]);
+            if !check_shape(&res, w <= 0.45 * a && w >= 0.4 && s <= 0.5 * a) {
+                return Ok(None);
+            }
+            let quarter = std::f64::consts::FRAC_PI_2;
+            let angle = (res.g[2] + quarter / 2.0).rem_euclid(quarter) - quarter / 2.0;
+            (res, 2.0 * a, Some(angle))
+        }
+    };
+    // The pixels must agree: polarity, enough contrast over the noise, and the edge all round.
+    let contrast = res.lin[3];
+    let sign_ok = match spec.polarity {
+        Polarity::DarkOnLight => contrast < 0.0,
+        Polarity::LightOnDark => contrast > 0.0,
+    };
+    let enough = contrast.abs() >= (8.0 * noise).max(4.0 * full_scale / 255.0);
+    let inside = (c.bbox[0] - factor as f64..=c.bbox[2] + factor as f64).contains(&res.g[0])
+        && (c.bbox[1] - factor as f64..=c.bbox[3] + factor as f64).contains(&res.g[1]);
+    if !(res.converged && sign_ok && enough && inside && res.r2 >= MIN_SCORE && res.min_sector_r2 >= MIN_SECTOR_SCORE) {
+        return Ok(None);
+    }
+    Ok(Some(Verified { mark: Mark { x: res.g[0], y: res.g[1], diameter, angle, score: res.r2 } }))
+}
+
+fn check_shape(res: &FitResult, ok: bool) -> bool {
+    ok && res.g.iter().all(|v| v.is_finite())
+}
+
+/// The Cramér–Rao bound (px) on the centre's x and y of a dot of `diameter` px, edge blur
+/// `edge_sigma` px (defocus and pixel together), background `background` and contrast
+/// `contrast` grey levels, under white noise of `noise` grey levels, all parameters unknown.
+/// `None` when the information matrix is singular. For benchmarks: the best any unbiased
+/// finder can do on such an image.
+pub fn dot_crb(diameter: f64, edge_sigma: f64, background: f64, contrast: f64, noise: f64) -> Option<(f64, f64)> {
+    let g = [0.0, 0.0, diameter / 2.0, edge_sigma];
+    fit::crb(&Disc, &g, &[background, 0.0, 0.0, contrast, 0.0, 0.0], diameter / 2.0, noise)
+}
+
+#[doc(hidden)]
+/// For the model's own consistency check in tests.
+pub fn _disc_reach(diameter: f64, edge_sigma: f64) -> f64 {
+    Disc.reach(&[0.0, 0.0, diameter / 2.0, edge_sigma])
+}
