@@ -12,8 +12,8 @@
 //! smallest accepted mark, compared with its local mean (uneven light cancels), and cut at three
 //! contrast levels into blobs; blobs of a plausible size are candidates. (2) Each candidate is
 //! refined by a least-squares fit of a blurred-shape model with planar background and contrast
-//! (see [`fit`](crate#method) notes in the source) to the pixels near its edges — the
-//! maximum-likelihood centre under Gaussian noise. (3) A fit is a mark only when its contrast,
+//! (a Gaussian-blurred disc, ring or cross: erf profiles) to the pixels near its edges, by
+//! damped Gauss–Newton, coarse to fine — the maximum-likelihood centre under Gaussian noise. (3) A fit is a mark only when its contrast,
 //! its polarity, its agreement with the pixels overall *and in each of eight sectors around it*
 //! hold up; its size then decides between found and out of range.
 //!
