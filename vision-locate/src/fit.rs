@@ -71,7 +71,9 @@ impl Model for Disc {
         let (dx, dy) = (x - g[0], y - g[1]);
         let rho = (dx * dx + dy * dy).sqrt();
         let (r, s) = (g[2], g[3]);
-        if ((x - sup[0]).hypot(y - sup[1]) - sup[2]).abs() > band(sup[3]) {
+        // sqrt of the squares, not hypot: this runs per pixel and libm's hypot is slow.
+        let (ex, ey) = (x - sup[0], y - sup[1]);
+        if ((ex * ex + ey * ey).sqrt() - sup[2]).abs() > band(sup[3]) {
             return None;
         }
         let t = (r - rho) / s;
@@ -112,7 +114,8 @@ impl Model for Annulus {
         let (dx, dy) = (x - g[0], y - g[1]);
         let rho = (dx * dx + dy * dy).sqrt();
         let (ro, ri, s) = (g[2], g[3], g[4]);
-        let (rs, b) = ((x - sup[0]).hypot(y - sup[1]), band(sup[4]));
+        let (ex, ey) = (x - sup[0], y - sup[1]);
+        let (rs, b) = ((ex * ex + ey * ey).sqrt(), band(sup[4]));
         if rs > sup[2] + b || rs < sup[3] - b {
             return None;
         }

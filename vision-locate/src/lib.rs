@@ -12,8 +12,8 @@
 //! smallest accepted mark, compared with its local mean (uneven light cancels), and cut at three
 //! contrast levels into blobs; blobs of a plausible size are candidates. (2) Each candidate is
 //! refined by a least-squares fit of a blurred-shape model with planar background and contrast
-//! (see [`fit`](crate#method) notes in the source) to the pixels near its edges — the
-//! maximum-likelihood centre under Gaussian noise. (3) A fit is a mark only when its contrast,
+//! (a Gaussian-blurred disc, ring or cross: erf profiles) to the pixels near its edges, by
+//! damped Gauss–Newton, coarse to fine — the maximum-likelihood centre under Gaussian noise. (3) A fit is a mark only when its contrast,
 //! its polarity, its agreement with the pixels overall *and in each of eight sectors around it*
 //! hold up; its size then decides between found and out of range.
 //!
@@ -52,7 +52,7 @@ pub use image::{GrayImage, ImageError, OwnedImage, OwnedPixels, Pixels};
 pub use spec::{MarkKind, MarkSpec, Polarity, SpecError, MIN_DIAMETER_PX};
 
 use detect::search;
-use fit::{fit, Annulus, Cross, Disc, FitFailure, FitResult, Img, Model};
+use fit::{fit, Annulus, Cross, Disc, FitFailure, FitResult, Img};
 
 /// A mark found in the image.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -276,10 +276,4 @@ fn check_shape(res: &FitResult, ok: bool) -> bool {
 pub fn dot_crb(diameter: f64, edge_sigma: f64, background: f64, contrast: f64, noise: f64) -> Option<(f64, f64)> {
     let g = [0.0, 0.0, diameter / 2.0, edge_sigma];
     fit::crb(&Disc, &g, &[background, 0.0, 0.0, contrast, 0.0, 0.0], diameter / 2.0, noise)
-}
-
-#[doc(hidden)]
-/// For the model's own consistency check in tests.
-pub fn _disc_reach(diameter: f64, edge_sigma: f64) -> f64 {
-    Disc.reach(&[0.0, 0.0, diameter / 2.0, edge_sigma])
 }
