@@ -48,7 +48,8 @@ mkdir -p "$win"
 prefix_pid=$!
 
 # 1a. The shipped files (also installs MinGW-w64 and Debian's Rust when missing).
-"$root/scripts/build-windows"
+# (against lua53.dll, the Lua built below, whatever MACH4_LUA_DLL says)
+MACH4_LUA_DLL="" "$root/scripts/build-windows"
 
 # 1b. Windows Lua 5.3.6 from Debian's source package (its signed index vouches for the tarball),
 #     fetched through a private apt configuration with a deb-src line; built once per target/.
