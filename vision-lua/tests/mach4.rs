@@ -253,12 +253,14 @@ fn without_a_session_the_module_opens_the_profile_beside_mach4s() {
 }
 
 /// What reaches Mach4's message line is one escaped line, whatever it quotes (here a profile
-/// path holding a terminal escape).
+/// line holding a terminal escape, which the TOML parser's message quotes). The escape is in the
+/// file's text, not its name: Windows forbids control characters in file names.
 #[test]
 fn messages_to_the_operator_are_escaped() {
-    let dir = std::env::temp_dir().join(format!("mach-vision-lua-esc-\u{1b}[31m-{}", std::process::id()));
-    // The profile is a folder: refused, naming its path.
-    std::fs::create_dir_all(dir.join("Profiles/Mach4Mill/MachVision.toml")).expect("folder");
+    let dir = std::env::temp_dir().join(format!("mach-vision-lua-esc-{}", std::process::id()));
+    let profile = dir.join("Profiles/Mach4Mill");
+    std::fs::create_dir_all(&profile).expect("folder");
+    std::fs::write(profile.join("MachVision.toml"), "[vision]\nVisionEnabled = \u{1b}[31m\n").expect("profile");
     let lua = mach4_lua();
     fake(&lua).set("machDir", dir.display().to_string()).expect("dir");
     let run: Function = lua.globals().get("m280").expect("m280");
@@ -266,6 +268,7 @@ fn messages_to_the_operator_are_escaped() {
     assert!(!ok);
     let message = message.expect("a message");
     assert!(message.contains("\\u{1b}[31m") && !message.contains('\u{1b}'), "{message:?}");
+    assert!(!message.contains('\n'), "{message:?}");
     let errors: Vec<String> = fake(&lua).get("errors").expect("errors");
     assert_eq!(errors.last(), Some(&message));
     let _ = std::fs::remove_dir_all(&dir);

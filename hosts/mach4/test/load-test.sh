@@ -22,6 +22,7 @@ work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 # `require("mach_vision")` looks for mach_vision.so (mach_vision.dll on Windows).
 cp "$target/debug/libmach_vision.so" "$work/mach_vision.so"
+mkdir -p "$work/Profiles/LoadTest"
 
 # The module must take Lua from the process that loads it, never bring its own.
 if ldd "$work/mach_vision.so" | grep -qi 'liblua'; then

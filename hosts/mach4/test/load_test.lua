@@ -1,9 +1,16 @@
 -- Run by load-test.sh in the stock lua5.3: load mach_vision with a plain `require`, run the real
 -- m280.mcs (success: the cancel line reaches mcCntlGcodeExecuteWait) and m281.mcs (K not
 -- calibrated: mcCntlSetLastError with the manual's message, then mcCntlCycleStop).
--- Arguments: the folder holding mach_vision.so (also used as the Mach4 folder), the Macros folder.
-local dir, macros = arg[1], arg[2]
-package.cpath = dir .. "/?.so;" .. package.cpath
+-- With a third argument, the port of a Keyence emulator on 127.0.0.1 (`mach-vision emulate`), it
+-- also runs m284.mcs through the Keyence driver: `M284 P2` switches the camera's job and saves
+-- VisionActiveJob to the profile; the same call to a port nothing answers is refused with the
+-- driver's message and stops the cycle.
+-- Arguments: the folder holding the module (also used as the Mach4 folder; its
+-- Profiles/LoadTest folder must exist: Lua cannot make folders without a shell, and a shell's
+-- syntax differs between Linux and Windows), the Macros folder. Runs as is in Linux's lua5.3
+-- (mach_vision.so) and in Windows' lua.exe under Wine (mach_vision.dll; hosts/mach4/test/wine-test.sh).
+local dir, macros, port = arg[1], arg[2], tonumber(arg[3])
+package.cpath = dir .. "/?.so;" .. dir .. "/?.dll;" .. package.cpath
 
 local log = { executed = {}, errors = {}, stopped = false, locals = {} }
 local NOERROR = 0
@@ -27,7 +34,6 @@ function mc.mcCntlSetLastError(inst, message) table.insert(log.errors, message);
 function mc.mcCntlCycleStop(inst) log.stopped = true; return NOERROR end
 
 -- Vision enabled, Keyence at an address nothing answers (neither call below triggers).
-os.execute('mkdir -p "' .. dir .. '/Profiles/LoadTest"')
 local profile = assert(io.open(dir .. "/Profiles/LoadTest/MachVision.toml", "w"))
 profile:write('[vision]\nVisionEnabled = true\nVisionIP = "127.0.0.1"\n')
 profile:close()
@@ -53,7 +59,38 @@ check(log.errors[#log.errors] == message, "M281's refusal did not reach mcCntlSe
 check(log.stopped, "M281's refusal did not stop the cycle")
 check(#log.executed == 1, "M281's refusal ran G-code")
 
-print("load test: mach_vision " .. vision.version .. " loads in " .. _VERSION .. " and runs M280/M281")
+local ran = "M280/M281"
+if port then
+    dofile(macros .. "/m284.mcs")
+    local function keyence(path, at)
+        local f = assert(io.open(path, "w"))
+        f:write('[vision]\nVisionEnabled = true\nVisionDriver = "Keyence"\nVisionIP = "127.0.0.1"\nVisionPort = ' .. at ..
+            '\nVisionTimeout = 2.0\n')
+        f:close()
+        local opened, why = vision.open(path)
+        check(opened, "open " .. path .. ": " .. tostring(why))
+    end
+    local path = dir .. "/Profiles/LoadTest/Keyence.toml"
+    keyence(path, port)
+    log.locals, log.stopped = { [mc.SV_P] = 2 }, false
+    ok, message = m284(7)
+    check(ok, "M284 P2 through the Keyence driver: " .. tostring(message))
+    check(not log.stopped, "M284 stopped the cycle")
+    local f = assert(io.open(path))
+    local saved = f:read("a")
+    f:close()
+    check(saved:find("VisionActiveJob%s*=%s*2") ~= nil, "M284 P2 did not save VisionActiveJob:\n" .. saved)
+
+    -- Port 1 on loopback: nothing listens there.
+    keyence(path, 1)
+    log.stopped = false
+    ok, message = m284(7)
+    check(not ok and log.errors[#log.errors] == message, "M284 to a closed port: " .. tostring(message))
+    check(log.stopped, "the camera's refusal did not stop the cycle")
+    ran = ran .. ", and M284 through the Keyence driver to the emulator on port " .. port .. " (" .. message .. " without it)"
+end
+
+print("load test: mach_vision " .. vision.version .. " loads in " .. _VERSION .. " and runs " .. ran)
 
 -- A refusal whose cycle stop fails raises a Lua error with both messages (Mach4 aborts the
 -- macro), in the stock Lua too.
