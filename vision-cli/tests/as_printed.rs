@@ -20,7 +20,12 @@ fn programs() -> PathBuf {
 }
 
 fn run(program: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_mach-vision")).args(["run", "--json"]).arg(program).output().expect("spawn")
+    // One fixed clock: M283 stamps its calibration with the time, which two runs would not share.
+    Command::new(env!("CARGO_BIN_EXE_mach-vision"))
+        .args(["run", "--json", "--clock", "1764115200"])
+        .arg(program)
+        .output()
+        .expect("spawn")
 }
 
 fn report(program: &Path) -> Value {

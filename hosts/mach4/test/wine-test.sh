@@ -13,8 +13,7 @@
 #    mach-vision.exe's emulator (`emulate`), and to a port nothing answers (refused, cycle stopped).
 # 3. Runs mach-vision.exe on examples 1-8 under Wine: its standard output and exit code must be
 #    byte for byte those of the Linux build (LINUX_MACH_VISION, default target/debug/mach-vision,
-#    built when missing), but for the wall-clock time M283 prints (examples 1 and 3: the
-#    calibration date, to the second).
+#    built when missing), both on one fixed clock (`--clock`: M283 prints its calibration date).
 # 4. Runs, under Wine, the tests of vision-driver-keyence (the client against the scripted mock
 #    and the emulator over loopback TCP) and of vision-lua: the real, unmodified Macros/m28x.mcs in
 #    Lua 5.3.6 compiled for Windows, full cycles of examples 1, 2, 4, 5 and 7 on the simulated
@@ -106,21 +105,17 @@ say "mach-vision.exe run on examples 1-8 against $linux_exe"
 cd "$root"
 for program in examples/programs/0[1-8]-*.nc; do
     linux_rc=0 windows_rc=0
-    "$linux_exe" run "$program" >"$work/linux.out" 2>"$work/linux.err" || linux_rc=$?
-    "$wine" "$out/mach-vision.exe" run "$program" >"$work/windows.out" 2>"$work/windows.err" || windows_rc=$?
-    # The one thing two runs may print differently: the wall clock (M283's calibration date,
-    # to the second). Both outputs get the same placeholder there; every other byte must match.
-    clock='[0-9]{4}-[0-9]{2}-[0-9]{2}T[0-9]{2}:[0-9]{2}:[0-9]{2}([+-][0-9]{2}:[0-9]{2}|Z)'
-    sed -E "s/$clock/<clock>/g" "$work/linux.out" >"$work/linux.cmp"
-    sed -E "s/$clock/<clock>/g" "$work/windows.out" >"$work/windows.cmp"
-    if [ "$linux_rc" != "$windows_rc" ] || ! cmp -s "$work/linux.cmp" "$work/windows.cmp"; then
+    # One fixed clock for both (M283 prints its calibration date): every byte must match.
+    "$linux_exe" run --clock 1764115200 "$program" >"$work/linux.out" 2>"$work/linux.err" || linux_rc=$?
+    "$wine" "$out/mach-vision.exe" run --clock 1764115200 "$program" >"$work/windows.out" 2>"$work/windows.err" ||
+        windows_rc=$?
+    if [ "$linux_rc" != "$windows_rc" ] || ! cmp -s "$work/linux.out" "$work/windows.out"; then
         say "$program: mach-vision.exe (exit $windows_rc) differs from the Linux build (exit $linux_rc):"
         diff "$work/linux.out" "$work/windows.out" | head -20 >&2 || true
         cat "$work/windows.err" >&2
         exit 1
     fi
-    masked="$(grep -c '<clock>' "$work/linux.cmp" || true)"
-    echo "  $program: identical ($(wc -c <"$work/linux.out") bytes, exit $linux_rc; $masked line(s) with the clock)"
+    echo "  $program: identical ($(wc -c <"$work/linux.out") bytes, exit $linux_rc)"
 done
 rm -rf "$work"
 

@@ -16,7 +16,7 @@ use vision_driver_keyence::emulator::EmulatorHandle;
 use vision_driver_sim::{ControllerName, Sim, SimMachine};
 use vision_gcode::{Event, RunOutcome};
 use vision_host::{ProgramHandler, Session, SimFrames};
-use vision_mcode::system_clock;
+use vision_mcode::{fixed_clock, system_clock};
 use vision_path::{Limits, PlanConfig, Setpoints};
 
 use crate::trace::DialectArg;
@@ -81,6 +81,11 @@ pub(crate) struct RunArgs {
     /// `machine.dialect` (`mach4` unless the world says otherwise).
     #[arg(long, value_parser = DialectArg::parse)]
     dialect: Option<DialectArg>,
+    /// Run as if the clock read this many seconds after 1970-01-01 00:00 UTC (the time M283
+    /// stamps its calibration with and M281 D1 names images by), so that two runs print the
+    /// same report; default: the system clock.
+    #[arg(long, value_name = "UNIX_SECONDS")]
+    clock: Option<u64>,
 }
 
 /// Everything a run needs, set up: the simulated machine and camera, and the Vision session
@@ -187,7 +192,8 @@ impl Runner {
             module = module.with_profile(store);
         }
         let machine = SimMachine::new(&sim).map_err(|e| Failure::Input(e.to_string()))?;
-        let handler = ProgramHandler::new(Session::new(module), sim.world().machine.controller(), system_clock());
+        let clock = args.clock.map_or_else(system_clock, |s| fixed_clock(vision_core::Timestamp::from_unix(s, 0)));
+        let handler = ProgramHandler::new(Session::new(module), sim.world().machine.controller(), clock);
         Ok(Runner { sim, machine, handler, camera, _emulator: emulator, _snapshots: snapshots })
     }
 
