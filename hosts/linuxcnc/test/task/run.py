@@ -38,7 +38,15 @@ CUT = [(2.0, 1.0), (4.0, 1.0), (4.0, 3.0), (4.0, 2.0), (2.0, 3.0), (2.0, 1.0), (
 # Two LinuxCNCs cannot share a machine: NML and HAL use fixed System V shared-memory keys, the
 # `linuxcnc` script keeps /tmp/linuxcnc.lock and, at exit, stops milltask and linuxcncsvr by
 # name. Each runs in its own IPC, PID and mount namespaces, with a private /tmp.
-ISOLATE = ["unshare", "--ipc", "--pid", "--fork", "--mount-proc", "sh", "-c", 'mount -t tmpfs tmpfs /tmp && exec "$@"', "sh"]
+# A folder the run needs that lies under /tmp (a clone in /tmp, as a CI may make) would vanish
+# under the private /tmp: the current directory, which keeps pointing at the real folder after
+# the mount, is bound back at its own path.
+ISOLATE = [
+    "unshare", "--ipc", "--pid", "--fork", "--mount-proc", "sh", "-c",
+    'here="$(pwd -P)"; keep="${MV_KEEP:-$here}"; cd "$keep" && mount -t tmpfs tmpfs /tmp && '
+    'case "$keep/" in /tmp/*) mkdir -p "$keep" && mount --no-canonicalize --bind . "$keep" ;; esac && cd "$here" && exec "$@"',
+    "sh",
+]
 
 # The cases of one LinuxCNC start (they run one after another): two starts per machine, at once.
 ALIGN = ["example-4", "ng", "base-rotation", "scaled-in-gate", "scaled-refused", "c-word", "recentre-modes"]
@@ -428,6 +436,9 @@ def main():
     print("LinuxCNC runs %s" % ("in parallel, isolated" if isolated else "one after the other (no unshare)"))
     for machine in machines:
         run_dir, env = prepare(machine, args.work, os.path.abspath(args.host), os.path.abspath(args.module), only, camera_port)
+        # The one folder under /tmp holding all this run reads there (see ISOLATE).
+        read = [run_dir, args.host, args.module, os.path.dirname(__file__)]
+        env["MV_KEEP"] = os.path.commonpath([p for p in map(os.path.realpath, read) if p.startswith("/tmp/")] or [run_dir])
         log = open(os.path.join(run_dir, "linuxcnc.log"), "w")
         cmd = ["timeout", "600", "linuxcnc", "-r", os.path.join(run_dir, "test.ini")]
         if os.geteuid() == 0:
