@@ -337,3 +337,99 @@ fn a_refusal_that_cannot_stop_the_cycle_raises_a_lua_error_with_both_messages() 
         assert!(errors.last().is_some_and(|m| m.contains("not enabled")), "{errors:?}");
     }
 }
+
+/// One Vision call of a Mach4 instance in [`two_mach4_instances_on_one_profile_never_lose_a_calibration_or_a_job`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Op {
+    /// `M283 C1` over the sheet (m283.mcs).
+    Calibrate,
+    /// `M284 P<job>` (m284.mcs).
+    Job(u32),
+}
+
+/// Every interleaving of `a` and `b` (each keeps its order), as (instance, op) pairs.
+fn interleavings(a: &[Op], b: &[Op]) -> Vec<Vec<(usize, Op)>> {
+    let first = |who: usize, op: Op, rest: Vec<Vec<(usize, Op)>>| -> Vec<Vec<(usize, Op)>> {
+        rest.into_iter().map(|t| [vec![(who, op)], t].concat()).collect()
+    };
+    match (a.split_first(), b.split_first()) {
+        (None, None) => vec![Vec::new()],
+        (Some((x, rest)), None) => first(0, *x, interleavings(rest, b)),
+        (None, Some((y, rest))) => first(1, *y, interleavings(a, rest)),
+        (Some((x, ra)), Some((y, rb))) => {
+            let mut all = first(0, *x, interleavings(ra, b));
+            all.extend(first(1, *y, interleavings(a, rb)));
+            all
+        }
+    }
+}
+
+/// Two Mach4 instances (two Lua states, each with the module and its own session) on one
+/// profile file (issue 26, "calibration lost"): in every interleaving of their M283
+/// calibrations and M284 job switches, run through the real m283.mcs and m284.mcs, the file
+/// keeps the newest calibration (K and `VisionCal_Date`) and the last job after every call. A
+/// save that wrote the session's whole parameter set would put back the stale K (or job) of
+/// the instance that read the file before the other's save. Both cameras are one simulated
+/// world with one noise stream, so every calibration has its own K.
+#[test]
+fn two_mach4_instances_on_one_profile_never_lose_a_calibration_or_a_job() {
+    let sim = vision_host::testkit::sim();
+    let registry = vision_host::cameras(Some(&sim));
+    let start = vision_host::testkit::uncalibrated_params(&sim);
+    let dir = std::env::temp_dir().join(format!("mach-vision-lua-shared-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("tmp");
+    let path = dir.join("MachVision.toml");
+    let on_file = || vision_core::ProfileStore::new(&path).with_defaults(registry.params()).load().expect("load");
+    let programs = [
+        vec![Op::Calibrate],
+        vec![Op::Job(2)],
+        vec![Op::Calibrate, Op::Job(1)],
+        vec![Op::Job(2), Op::Calibrate],
+        vec![Op::Calibrate, Op::Calibrate],
+    ];
+    let mut runs = 0;
+    for a in &programs {
+        for b in &programs {
+            for order in interleavings(a, b) {
+                vision_core::ProfileStore::new(&path).save(&start).expect("a fresh profile");
+                let mut handlers = [0, 1].map(|_| {
+                    let lua = mach4_lua();
+                    mach_vision::install(&lua, Session::open(&path, &registry).expect("open"));
+                    MacroHandler { lua, calls: Vec::new(), executed: Vec::new() }
+                });
+                let (mut newest, mut job) = (start.calibration.clone(), 0);
+                let mut seen = vec![newest.cal_k()];
+                for (who, op) in &order {
+                    let program = match op {
+                        Op::Calibrate => "G90 G20 G54\nT98 M6\nG0 X-2.5 Y-4.0\nM283 C1\nM30\n".to_string(),
+                        Op::Job(j) => format!("M284 P{j}\nM30\n"),
+                    };
+                    let (_, end) = Rig { sim: sim.clone(), emulator: None }.run(&program, &mut handlers[*who]);
+                    assert!(end.is_ok(), "{order:?}: {who}'s {op:?}: {end:?}");
+                    let call = handlers[*who].calls.last().expect("a Vision call");
+                    assert!(call.result.is_ok(), "{order:?}: {who}'s {op:?}: {call:?}");
+                    let file = on_file();
+                    match op {
+                        Op::Calibrate => {
+                            // This instance's calibration, new (never seen in this run) and dated.
+                            assert!(!seen.contains(&file.cal_k()), "{order:?}: {who}'s {op:?}: K {}", file.cal_k());
+                            assert!(file.cal_date() >= newest.cal_date() && !file.cal_date().is_empty());
+                            newest = file.calibration.clone();
+                            seen.push(newest.cal_k());
+                        }
+                        Op::Job(j) => job = i64::from(*j),
+                    }
+                    assert_eq!(file.calibration, newest, "{order:?}: after {who}'s {op:?}");
+                    assert_eq!(file.active_job(), job, "{order:?}: after {who}'s {op:?}");
+                    let status: Vec<String> = fake(&handlers[*who].lua).get("errors").expect("errors");
+                    let says = if *op == Op::Calibrate { "M283: calibration done and saved" } else { "M284" };
+                    assert!(status.last().is_some_and(|m| m.contains(says)), "{order:?}: {status:?}");
+                    runs += 1;
+                }
+            }
+        }
+    }
+    assert!(runs > 150, "{runs}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -24,7 +24,7 @@
 //! ```
 
 mod host;
-#[cfg(feature = "sim")]
+#[cfg(any(test, feature = "sim"))]
 mod sim;
 mod words;
 
@@ -72,7 +72,7 @@ pub struct PySession {
 struct Inner {
     session: Session,
     /// The simulated rig behind the camera (`Session.simulated`; tests only).
-    #[cfg(feature = "sim")]
+    #[cfg(any(test, feature = "sim"))]
     sim: Option<sim::Simulated>,
 }
 
@@ -80,7 +80,7 @@ impl PySession {
     fn wrap(session: Session) -> PySession {
         PySession::from_inner(Inner {
             session,
-            #[cfg(feature = "sim")]
+            #[cfg(any(test, feature = "sim"))]
             sim: None,
         })
     }
@@ -122,7 +122,7 @@ impl PySession {
     ) -> PyResult<T> {
         self.with(|inner| {
             let mut host = PyHost::new(host);
-            #[cfg(feature = "sim")]
+            #[cfg(any(test, feature = "sim"))]
             if let Some(sim) = &inner.sim {
                 sim.place_head(&host).map_err(|e| vision_error(&e))?;
             }
@@ -214,18 +214,22 @@ impl PySession {
         Ok(outcome.gcode().to_vec())
     }
 
-    /// `Session.simulated(camera="sim", rotation_deg=None, shift=None, scale=None)` — **tests
+    /// `Session.simulated(camera="sim", rotation_deg=None, shift=None, scale=None, …)` — **tests
     /// only** (feature `sim`): a session whose camera sees vision-driver-sim's built-in world,
     /// calibrated perfectly, directly (`camera="sim"`) or through the Keyence driver and its
     /// emulator on loopback (`camera="keyence"`). The part ("demo target") is placed with the
     /// given rotation (degrees counter-clockwise about its centre), shift (X, Y, inches) and
     /// scale (X, Y) instead of the world's; `calibrated=False` starts with K never calibrated
     /// (for M283); `params` sets numeric Vision parameters (`{"VisionFitMaxScaleDev": 0.05}`).
-    /// Before each call the simulated head is put where `host.machine_position()` (machine X,
-    /// Y, program units) says the machine is.
-    #[cfg(feature = "sim")]
+    /// `profile` opens the session from that profile file instead, as `Session(profile)` does
+    /// (M283 and M284 save to it; `calibrated` has no effect), with the simulated camera
+    /// available to its `VisionDriver` as `Sim`. Before each call the simulated head is put
+    /// where `host.machine_position()` (machine X, Y, program units) says the machine is.
+    #[cfg(any(test, feature = "sim"))]
     #[staticmethod]
-    #[pyo3(signature = (camera="sim", rotation_deg=None, shift=None, scale=None, calibrated=true, params=None))]
+    #[pyo3(signature = (
+        camera="sim", rotation_deg=None, shift=None, scale=None, calibrated=true, params=None, profile=None
+    ))]
     fn simulated(
         camera: &str,
         rotation_deg: Option<f64>,
@@ -233,17 +237,18 @@ impl PySession {
         scale: Option<(f64, f64)>,
         calibrated: bool,
         params: Option<std::collections::BTreeMap<String, f64>>,
+        profile: Option<PathBuf>,
     ) -> PyResult<PySession> {
         let pose = sim::Pose { rotation_deg, shift, scale };
         let params = params.unwrap_or_default();
         let (simulated, session) =
-            sim::Simulated::new(camera, pose, calibrated, &params).map_err(|e| vision_error(&e))?;
+            sim::Simulated::new(camera, pose, calibrated, &params, profile.as_deref()).map_err(|e| vision_error(&e))?;
         Ok(PySession::from_inner(Inner { session, sim: Some(simulated) }))
     }
 
     /// `true_point(x, y)` — **tests only**: where nominal part point (x, y) (work coordinates,
     /// inches) really is on the simulated table, machine X, Y (inches).
-    #[cfg(feature = "sim")]
+    #[cfg(any(test, feature = "sim"))]
     fn true_point(&self, x: f64, y: f64) -> PyResult<(f64, f64)> {
         self.with(|inner| Inner::simulated_rig(inner)?.true_point(x, y).map_err(|e| vision_error(&e)))
     }
@@ -251,13 +256,13 @@ impl PySession {
     /// `setup()` — **tests only**: what the controller must hold for the simulated world, a
     /// dict: `work_offset` (G54 X, Y, inches), `camera_tool` (its number), `camera_table_offset`
     /// (the camera tool's X, Y as LinuxCNC's tool table holds it, inches), `unit` (`"in"`).
-    #[cfg(feature = "sim")]
+    #[cfg(any(test, feature = "sim"))]
     fn setup<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         self.with(|inner| Inner::simulated_rig(inner)?.setup(py))
     }
 }
 
-#[cfg(feature = "sim")]
+#[cfg(any(test, feature = "sim"))]
 impl Inner {
     fn simulated_rig(&self) -> PyResult<&sim::Simulated> {
         self.sim.as_ref().ok_or_else(|| VisionError::new_err("not a simulated session (Session.simulated)"))
@@ -364,6 +369,156 @@ except mach_vision.VisionError as e:
     assert "ValueError" in str(e), e
 "#,
             "interrupt",
+        );
+    }
+
+    /// Two sessions on one profile file, as two LinuxCNC processes would hold it (issue 26,
+    /// "calibration lost"): in every interleaving of one session's M283 (the remap's stepwise
+    /// walk) and the other's M284 job switch, checked after every call, the file keeps the
+    /// newest calibration (K and `VisionCal_Date`) and the last job. A save that wrote the
+    /// session's whole parameter set would put back the stale K (or job) of the session that
+    /// read the file before the other's save.
+    #[test]
+    fn two_sessions_on_one_profile_never_lose_a_calibration_or_a_job() {
+        run(
+            cr#"
+import tomllib
+
+setup = mach_vision.Session.simulated().setup()
+TOOL = setup["camera_tool"]
+START = '[vision]\nVisionEnabled = true\nVisionDriver = "Sim"\nVisionCameraToolNumber = %d\n' % TOOL
+
+
+class Host:
+    """LinuxCNC as the remap's Host shows it, in G20 G54 with the camera tool loaded at the
+    sheet's first dot; moves are the walk's, made by setting x, y as m283.ngc's G0 does."""
+
+    def __init__(self):
+        self.x, self.y = -2.5, -4.0
+        self.tools = {TOOL: tuple(setup["camera_table_offset"])}
+        self.pounds = {5220: 1.0, 5221: setup["work_offset"][0], 5222: setup["work_offset"][1]}
+        self.messages = []
+
+    def program_position(self):
+        return (self.x, self.y)
+
+    def machine_position(self):
+        (wx, wy), (tx, ty) = setup["work_offset"], self.tools[TOOL]
+        return (wx + self.x + tx, wy + self.y + ty)
+
+    def xy_rotation_deg(self):
+        return 0.0
+
+    def g92_offset(self):
+        return (0.0, 0.0)
+
+    def metric(self):
+        return False
+
+    def execute(self, line):
+        raise AssertionError("no G-code expected here: %r" % line)
+
+    def save_modal_state(self):
+        pass
+
+    def restore_modal_state(self):
+        pass
+
+    def tool(self):
+        return TOOL
+
+    def tool_offset(self, tool):
+        return self.tools[tool]
+
+    def set_tool_offset(self, tool, x, y):
+        self.tools[tool] = (x, y)
+
+    def pound(self, n):
+        return self.pounds.get(n, 0.0)
+
+    def set_pound(self, n, value):
+        self.pounds[n] = value
+
+    def dwell(self, seconds):
+        pass
+
+    def message(self, text):
+        self.messages.append(text)
+
+
+def calibrate(session):
+    """M283 P1 as remap.py and m283.ngc run it: prolog, the walk's moves and captures, epilog."""
+    host = Host()
+    session.walk_begin({"p": 1.0}, host)
+    while True:
+        point = session.walk_next(host)
+        if point is None:
+            break
+        host.x, host.y = point
+        session.walk_capture(host)
+    session.walk_finish(host)
+    assert any("calibration done and saved" in m for m in host.messages), host.messages
+
+
+def switch(session, job):
+    """M284 P<job>."""
+    host = Host()
+    session.call(284, {"p": float(job)}, host)
+    assert any("M284" in m for m in host.messages), host.messages
+
+
+def on_file():
+    """K, VisionCal_Date and VisionActiveJob as the file holds them (defaults when absent)."""
+    with open(profile, "rb") as f:
+        flat = {}
+        tables = [tomllib.load(f)]
+        while tables:
+            for name, value in tables.pop().items():
+                if isinstance(value, dict):
+                    tables.append(value)
+                else:
+                    flat[name] = value
+    k = tuple(flat.get("VisionCal_K" + ij, 0.0) for ij in ("11", "12", "21", "22"))
+    return k, str(flat.get("VisionCal_Date", "")), flat.get("VisionActiveJob", 0)
+
+
+def interleavings(a, b):
+    """Every order of a's and b's calls (each keeps its own order), as (session, call) pairs."""
+    if not a or not b:
+        return [[(0, op) for op in a] + [(1, op) for op in b]]
+    return [[(0, a[0])] + t for t in interleavings(a[1:], b)] + [[(1, b[0])] + t for t in interleavings(a, b[1:])]
+
+
+CAL = "M283"
+programs = [[CAL], [2], [CAL, 1], [2, CAL], [CAL, CAL]]
+runs = 0
+for a in programs:
+    for b in programs:
+        for order in interleavings(a, b):
+            with open(profile, "w") as f:
+                f.write(START)
+            sessions = [mach_vision.Session.simulated(profile=profile) for _ in (0, 1)]
+            k, date, job = on_file()
+            assert k == (0.0,) * 4 and date == "" and job == 0, (k, date, job)
+            newest = (k, date)
+            for who, op in order:
+                if op == CAL:
+                    calibrate(sessions[who])
+                    k, date, _ = on_file()
+                    # Each simulated camera has its own noise stream: the two sessions' n-th
+                    # calibrations have the same K, but a later one never an earlier date.
+                    assert k != (0.0,) * 4 and date >= newest[1] and date, (order, who, k, date, newest)
+                    newest = (k, date)
+                else:
+                    switch(sessions[who], op)
+                    job = op
+                k, date, on_disk = on_file()
+                assert (k, date) == newest, "%r: after %d's %s: %r, want %r" % (order, who, op, (k, date), newest)
+                assert on_disk == job, "%r: after %d's %s: job %r, want %r" % (order, who, op, on_disk, job)
+                runs += 1
+assert runs > 150, runs
+"#,
+            "shared",
         );
     }
 

@@ -8,6 +8,7 @@
 //! ([`vision_driver_sim::Sim::place_head`]) before the camera can trigger.
 
 use std::collections::BTreeMap;
+use std::path::Path;
 
 use nalgebra::Point3;
 use pyo3::prelude::*;
@@ -39,8 +40,11 @@ const PART: &str = "demo target";
 
 impl Simulated {
     /// The rig for `camera` (`"sim"` or `"keyence"`) with the part at `pose`, and a session on
-    /// it (no profile file): perfectly calibrated, or with K never calibrated when not
-    /// `calibrated`, and with the numeric parameters `params` set.
+    /// it: without `profile`, no profile file, perfectly calibrated, or with K never calibrated
+    /// when not `calibrated`; with `profile`, the session of that file as `Session(profile)`
+    /// opens it (M283 and M284 save to it; `calibrated` has no effect), its `VisionDriver`
+    /// naming the simulated camera (`Sim`) or a real driver. Then the numeric parameters
+    /// `params` are set.
     ///
     /// # Errors
     /// An unknown camera name, a pose the world refuses or a parameter the module refuses, as a
@@ -50,6 +54,7 @@ impl Simulated {
         pose: Pose,
         calibrated: bool,
         params: &BTreeMap<String, f64>,
+        profile: Option<&Path>,
     ) -> Result<(Simulated, Session), String> {
         let camera = match camera {
             "sim" => Camera::Sim,
@@ -57,9 +62,13 @@ impl Simulated {
             other => return Err(format!("camera {other:?} is not simulated: use \"sim\" or \"keyence\"")),
         };
         let base = (!calibrated).then(|| testkit::uncalibrated_params(&testkit::sim()));
-        let (rig, mut module) = Rig::new(base, camera);
+        let (rig, module) = Rig::new(base, camera);
+        let mut session = match profile {
+            None => Session::new(module),
+            Some(path) => Session::open(path, &vision_host::cameras(Some(&rig.sim))).map_err(|e| e.to_string())?,
+        };
         for (name, value) in params {
-            module.set_param(name, *value).map_err(|e| e.to_string())?;
+            session.module_mut().set_param(name, *value).map_err(|e| e.to_string())?;
         }
         let mut fixtures = rig.sim.world().fixtures;
         let part = fixtures.iter_mut().find(|f| f.name == PART).ok_or_else(|| format!("no {PART:?} in the world"))?;
@@ -73,7 +82,7 @@ impl Simulated {
             part.scale = [x, y];
         }
         rig.sim.set_fixtures(fixtures).map_err(|e| e.to_string())?;
-        Ok((Simulated { rig }, Session::new(module)))
+        Ok((Simulated { rig }, session))
     }
 
     /// Parks the simulated head where `host.machine_position()` says the machine is (machine
