@@ -95,6 +95,7 @@ print("load test: mach_vision " .. vision.version .. " loads in " .. _VERSION ..
 -- A refusal whose cycle stop fails raises a Lua error with both messages (Mach4 aborts the
 -- macro), in the stock Lua too.
 mc.mcCntlCycleStop = function(inst) return -18 end
+log.locals = {}
 local raised, err = pcall(m281, 7)
 check(not raised and tostring(err):find("K matrix is zero", 1, true) and tostring(err):find("error code -18", 1, true),
       "a failed cycle stop: " .. tostring(err))
