@@ -29,7 +29,7 @@ pub enum VisionError {
     },
 
     /// K11..K22 are all zero.
-    #[error("K matrix is zero — run M283 to calibrate first (M283 C1 or M283 Q)")]
+    #[error("K matrix is zero — run M283 to calibrate first (M283 C1, on LinuxCNC M283 P1, or M283 Q)")]
     NotCalibrated,
 
     /// K cannot be inverted or holds a non-finite number.
@@ -278,7 +278,7 @@ mod tests {
     fn manual_wording() {
         assert_eq!(
             VisionError::NotCalibrated.to_string(),
-            "K matrix is zero — run M283 to calibrate first (M283 C1 or M283 Q)"
+            "K matrix is zero — run M283 to calibrate first (M283 C1, on LinuxCNC M283 P1, or M283 Q)"
         );
         assert!(VisionError::NotEnabled.to_string().starts_with("Vision is not enabled"));
         let e = VisionError::WrongTool { camera: 98, active: 1 };

@@ -439,7 +439,10 @@ fn failed_captures_change_nothing_but_the_last_status() {
     rig.module.params.set_cal_k(Matrix2::zeros()).expect("zero");
     let e = rig.module.m281(&mut rig.machine, false).expect_err("zero K");
     assert_eq!(e, VisionError::NotCalibrated);
-    assert_eq!(e.to_string(), "K matrix is zero — run M283 to calibrate first (M283 C1 or M283 Q)");
+    assert_eq!(
+        e.to_string(),
+        "K matrix is zero — run M283 to calibrate first (M283 C1, on LinuxCNC M283 P1, or M283 Q)"
+    );
     assert_eq!(rig.module.telemetry().last_status(), e.to_string(), "a refusal before the trigger is shown too");
     assert_eq!(rig.world().triggers, triggers);
     assert_eq!(block(&rig), pounds);
