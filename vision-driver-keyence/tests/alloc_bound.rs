@@ -2,37 +2,15 @@
 //! many, one exchange allocates at most a fixed amount. Measured with a counting allocator, so
 //! this binary holds a single test.
 
-use std::alloc::{GlobalAlloc, Layout, System};
 use std::io::{self, Read, Write};
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration;
 
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
 use vision_driver_keyence::{Exchange, Limits};
 
-struct Counting;
-
-static LIVE: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
-
-// SAFETY: forwards to the system allocator; only counts.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let live = LIVE.fetch_add(layout.size(), Ordering::SeqCst) + layout.size();
-        PEAK.fetch_max(live, Ordering::SeqCst);
-        // SAFETY: same contract as ours.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        LIVE.fetch_sub(layout.size(), Ordering::SeqCst);
-        // SAFETY: same contract as ours.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: vision_testalloc::PeakAlloc = vision_testalloc::PeakAlloc;
 
 /// Most bytes one session (its buffer included) may hold at once during an exchange.
 const BOUND: usize = 4 * 1024;
@@ -79,13 +57,12 @@ impl Write for Peer<'_> {
 /// Peak bytes allocated (above what was live before) while a session runs one `TRG` against
 /// `peer`, and the bytes the peer served.
 fn peak_during(peer: Peer<'_>) -> (usize, usize, bool) {
-    let base = LIVE.load(Ordering::SeqCst);
-    PEAK.store(base, Ordering::SeqCst);
-    let mut s = Exchange::new(peer, Limits::default(), Duration::from_secs(3));
-    let ok = s.trigger().is_ok();
-    let served = s.get_ref().served;
-    drop(s);
-    (PEAK.load(Ordering::SeqCst) - base, served, ok)
+    let ((served, ok), peak) = vision_testalloc::peak_during(|| {
+        let mut s = Exchange::new(peer, Limits::default(), Duration::from_secs(3));
+        let ok = s.trigger().is_ok();
+        (s.get_ref().served, ok)
+    });
+    (peak, served, ok)
 }
 
 #[test]

@@ -1,40 +1,14 @@
 //! Memory is bounded by design (issue 26): a canned cycle's repeats and a loop's iterations
 //! stream to the sink, none is held; every repeat count has a bound with its own message. A
-//! global allocator in this test binary tracks the peak of live bytes; the tests take a lock so
-//! that one test's allocations do not show in another's peak.
-
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
+//! global allocator in this test binary tracks the peak of live bytes (`vision-testalloc`); the
+//! tests run one at a time so that one test's allocations do not show in another's peak.
 
 use vision_gcode::{
     Dialect, Event, GcodeError, Interpreter, InterpreterConfig, RunProblem, MAX_CYCLE_MOVES, MAX_REPEATS,
 };
 
-struct Peak;
-
-static LIVE: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
-static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
-
-// SAFETY: forwards every call to the system allocator unchanged; only tracks sizes.
-unsafe impl GlobalAlloc for Peak {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let live = LIVE.fetch_add(layout.size(), Ordering::Relaxed) + layout.size();
-        PEAK.fetch_max(live, Ordering::Relaxed);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
 #[global_allocator]
-static GLOBAL: Peak = Peak;
+static GLOBAL: vision_testalloc::PeakAlloc = vision_testalloc::PeakAlloc;
 
 fn linuxcnc() -> Interpreter {
     Interpreter::new(InterpreterConfig { dialect: Dialect::LinuxCnc, ..InterpreterConfig::default() })
@@ -45,16 +19,16 @@ fn linuxcnc() -> Interpreter {
 fn run_counting(text: &str) -> (Result<(), GcodeError>, u64, usize) {
     let mut interp = linuxcnc();
     let mut moves = 0u64;
-    let before = LIVE.load(Ordering::Relaxed);
-    PEAK.store(before, Ordering::Relaxed);
-    let result = interp
-        .run(text, None, &mut |e: &Event| {
-            if matches!(e, Event::Linear(_) | Event::Arc(_)) {
-                moves += 1;
-            }
-        })
-        .map(drop);
-    (result, moves, PEAK.load(Ordering::Relaxed) - before)
+    let (result, peak) = vision_testalloc::peak_during(|| {
+        interp
+            .run(text, None, &mut |e: &Event| {
+                if matches!(e, Event::Linear(_) | Event::Arc(_)) {
+                    moves += 1;
+                }
+            })
+            .map(drop)
+    });
+    (result, moves, peak)
 }
 
 fn problem(result: Result<(), GcodeError>) -> RunProblem {
@@ -66,7 +40,6 @@ fn problem(result: Result<(), GcodeError>) -> RunProblem {
 
 #[test]
 fn a_cycle_at_the_repeat_bound_streams_its_moves_in_little_memory() {
-    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
     let text = format!("G20 G90 F10\nG0 Z1\nG91 G81 X0.001 Y0 Z-0.1 R0.1 L{MAX_REPEATS}\nG80\nM2");
     let (result, moves, extra) = run_counting(&text);
     result.expect("runs");
@@ -78,7 +51,6 @@ fn a_cycle_at_the_repeat_bound_streams_its_moves_in_little_memory() {
 
 #[test]
 fn a_long_loop_streams_in_little_memory() {
-    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
     let text = format!("G20 G90 F100\no100 repeat [{MAX_REPEATS}]\nG1 X1\nG1 X0\no100 endrepeat\nM2");
     let (result, moves, extra) = run_counting(&text);
     result.expect("runs");
@@ -88,7 +60,6 @@ fn a_long_loop_streams_in_little_memory() {
 
 #[test]
 fn repeat_counts_over_the_bound_are_refused_with_their_own_message() {
-    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
     // Issue 26's program: a 3 GB allocation before.
     let (result, moves, _) = run_counting("G20 G90 F10\nG0 Z1\nG91 G81 X0.001 Y0 Z-0.1 R0.1 L10000000\nG80\nM2");
     let error = result.expect_err("refused");
@@ -120,7 +91,6 @@ fn repeat_counts_over_the_bound_are_refused_with_their_own_message() {
 
 #[test]
 fn a_cycle_of_too_many_pecks_is_refused_before_it_emits() {
-    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
     // 99 999 pecks of 3 moves per hole, 100 holes: 30 million moves.
     let (result, moves, _) = run_counting("G20 G90 F10\nG0 Z1\nG91 G83 X0.001 Z-1 R0.1 Q0.00001 L100\nM2");
     assert_eq!(moves, 1);
@@ -132,7 +102,6 @@ fn a_cycle_of_too_many_pecks_is_refused_before_it_emits() {
 
 #[test]
 fn a_cycle_that_fails_at_a_late_hole_emits_nothing() {
-    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
     // The 4th hole lies beyond ±1e9 units: the line fails whole, as every line does.
     let (result, moves, _) = run_counting("G20 G90 F10\nG0 Z1\nG91 G81 X300000000 Z-1 R0.1 L5\nM2");
     assert!(matches!(problem(result), RunProblem::BeyondRange { .. }));
@@ -141,7 +110,11 @@ fn a_cycle_that_fails_at_a_late_hole_emits_nothing() {
 
 #[test]
 fn chunked_events_are_the_same_events_in_bounded_chunks() {
-    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    // Unmeasured, but large: alone, so its allocations do not show in another test's peak.
+    vision_testalloc::alone(chunked_events_in_bounded_chunks);
+}
+
+fn chunked_events_in_bounded_chunks() {
     // A polyline (G51 scales X and Y apart) of about 10 000 segments, pecks, holes with a dwell.
     let text = "G20 G90 F10\nG51 X2 Y1\nG2 X0 Y0 I1 J0\nG50\nG0 Z1\nG91 G83 X0.5 Z-0.3 R0.1 Q0.05 L3\nG80\n\
                 G90 G82 X1 Y1 Z-0.2 R0.1 P0.5\nG80\nM2";

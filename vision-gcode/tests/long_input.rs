@@ -2,34 +2,10 @@
 //! message, and refusing it takes little memory beyond the text itself: a global allocator in
 //! this test binary tracks the peak of live bytes.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
-
 use vision_gcode::{Event, GcodeError, Interpreter, InterpreterConfig, SyntaxProblem};
 
-struct Peak;
-
-static LIVE: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
-
-// SAFETY: forwards every call to the system allocator unchanged; only tracks sizes.
-unsafe impl GlobalAlloc for Peak {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let live = LIVE.fetch_add(layout.size(), Ordering::Relaxed) + layout.size();
-        PEAK.fetch_max(live, Ordering::Relaxed);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
 #[global_allocator]
-static GLOBAL: Peak = Peak;
+static GLOBAL: vision_testalloc::PeakAlloc = vision_testalloc::PeakAlloc;
 
 /// The documented limit: operands in one line's expressions.
 const LIMIT: usize = 10_000;
@@ -55,10 +31,7 @@ fn run(text: &str) -> (Result<(), GcodeError>, f64) {
 #[test]
 fn a_megabyte_expression_is_refused_in_little_memory() {
     let text = sum_line(5_000_000); // 10 MB
-    let before = LIVE.load(Ordering::Relaxed);
-    PEAK.store(before, Ordering::Relaxed);
-    let (result, _) = run(&text);
-    let extra = PEAK.load(Ordering::Relaxed) - before;
+    let ((result, _), extra) = vision_testalloc::peak_during(|| run(&text));
     match result {
         Err(GcodeError::Syntax { line: 1, problem: SyntaxProblem::TooLong { limit }, .. }) => {
             assert_eq!(limit, LIMIT);
