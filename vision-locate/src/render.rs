@@ -574,26 +574,25 @@ fn gaussian_blur(img: &mut [f64], w: usize, h: usize, sigma: f64) {
         line.clear();
         line.extend_from_slice(&img[y * w..(y + 1) * w]);
         for x in 0..w {
-            let mut acc = 0.0;
-            for (i, kv) in k.iter().enumerate() {
-                let xi = (x as isize + i as isize - r).clamp(0, w as isize - 1) as usize;
-                acc += kv * line[xi];
-            }
-            img[y * w + x] = acc;
+            img[y * w + x] = convolve_at(&line, &k, x);
         }
     }
     for x in 0..w {
         line.clear();
         line.extend((0..h).map(|y| img[y * w + x]));
         for y in 0..h {
-            let mut acc = 0.0;
-            for (i, kv) in k.iter().enumerate() {
-                let yi = (y as isize + i as isize - r).clamp(0, h as isize - 1) as usize;
-                acc += kv * line[yi];
-            }
-            img[y * w + x] = acc;
+            img[y * w + x] = convolve_at(&line, &k, y);
         }
     }
+}
+
+/// The centred kernel `k` (odd length) applied to `line` at `at`, the line's ends replicated.
+fn convolve_at(line: &[f64], k: &[f64], at: usize) -> f64 {
+    let r = (k.len() / 2) as isize;
+    let last = line.len() as isize - 1;
+    k.iter()
+        .enumerate()
+        .fold(0.0, |acc, (i, kv)| acc + kv * line[(at as isize + i as isize - r).clamp(0, last) as usize])
 }
 
 /// Random clutter for tests and benchmarks: `count` items (scratches, specks smaller than a
