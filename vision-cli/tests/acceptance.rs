@@ -70,14 +70,7 @@ impl Rig {
 
     /// The worst cut error over `grid` (world unit) with the alignment the last M282 emitted.
     fn max_cut_error(&self, records: &[Record], fixture: &str, grid: &[Point2<f64>]) -> f64 {
-        let setup = records
-            .iter()
-            .rev()
-            .find_map(|r| match &r.result {
-                Ok(Outcome::Apply(reply)) => Some(reply.gcode.clone()),
-                _ => None,
-            })
-            .expect("an M282 ran");
+        let setup = records.iter().rev().find_map(Record::applied_gcode).expect("an M282 ran").to_vec();
         grid.iter().map(|p| self.machine.cut_error(&setup, fixture, *p).expect("cut")).fold(0.0, f64::max)
     }
 }

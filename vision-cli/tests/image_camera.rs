@@ -13,7 +13,7 @@ use vision_driver_sim::{ImageLook, MarkShape, Sim, SimMachine, World};
 use vision_gcode::Event;
 use vision_host::{ProgramHandler, Record, Session, SimFrames};
 use vision_math::Point2;
-use vision_mcode::{fixed_clock, Outcome};
+use vision_mcode::fixed_clock;
 
 const EX4: &str = include_str!("../../examples/programs/04-rectangle-fit.nc");
 
@@ -41,14 +41,7 @@ fn example4(world: World, driver: &str, settings: impl FnOnce(&Sim, &mut Params)
     }
     let records: Vec<Record> = handler.take_records();
     let captures = records.iter().filter(|r| r.mcode == 281).count() as u64;
-    let setup = records
-        .iter()
-        .rev()
-        .find_map(|r| match &r.result {
-            Ok(Outcome::Apply(reply)) => Some(reply.gcode.clone()),
-            _ => None,
-        })
-        .expect("M282 ran");
+    let setup = records.iter().rev().find_map(Record::applied_gcode).expect("M282 ran").to_vec();
     let worst = grid().iter().map(|p| machine.cut_error(&setup, "demo target", *p).expect("cut")).fold(0.0, f64::max);
     (worst, captures, sim.frames_rendered())
 }

@@ -18,6 +18,18 @@ pub struct Record {
     pub result: Result<Outcome, HostError>,
 }
 
+impl Record {
+    /// The alignment G-code this record's M282 emitted (the `G10`/`G52`/`G68`/`G51` lines), or
+    /// `None` when the record is no successful M282.
+    #[must_use]
+    pub fn applied_gcode(&self) -> Option<&[String]> {
+        match &self.result {
+            Ok(Outcome::Apply(reply)) => Some(&reply.gcode),
+            _ => None,
+        }
+    }
+}
+
 /// The most [`Record`]s a handler keeps between two [`ProgramHandler::take_records`]: a program
 /// of millions of Vision M-codes keeps its memory bounded; the rest are only counted
 /// ([`ProgramHandler::records_dropped`]).
