@@ -61,7 +61,7 @@ use crate::controller::{program_to_machine, rotation};
 use crate::driver::{CameraDriver, Reading};
 use crate::error::VisionError;
 use crate::machine::{checked, Machine};
-use crate::module::capture::{centred_px, chain_with, k_in, mark_size, outside_image_note, require_mark};
+use crate::module::capture::{centred_px, chain_with, k_in, mark_size, outside_image_note};
 use crate::module::dro::Dro;
 use crate::params::Params;
 use crate::ser;
@@ -433,10 +433,14 @@ impl<'a> Walker<'a> {
             }
         };
         self.last = Some(reading);
-        if require_mark(&reading).is_err() {
+        if !reading.found() {
+            let why = match &self.source {
+                Source::Live(driver) => driver.miss_reason().map(|r| format!(" ({r})")).unwrap_or_default(),
+                Source::Replay { .. } => String::new(),
+            };
             let e = fail(format!(
-                "the camera lost the mark (NG / no mark) at X{} Y{} — keep the dot in view, check lighting and \
-                 the camera job",
+                "the camera lost the mark (NG / no mark{why}) at X{} Y{} — keep the dot in view, check lighting \
+                 and the camera job",
                 fixed(pos.x, 4),
                 fixed(pos.y, 4)
             ));

@@ -230,6 +230,13 @@ pub trait CameraDriver: Send {
         None
     }
 
+    /// Why the last trigger found no mark, in the driver's words (e.g. "the finder saw 2
+    /// candidate marks and would not pick one"), for the NG message. A camera that judges its
+    /// own job (Keyence) has nothing more to say than NG: the default is `None`.
+    fn miss_reason(&self) -> Option<String> {
+        None
+    }
+
     /// M281 D1: keeps the image of the trigger `request` describes, saved into `request.dir`,
     /// and returns the saved file's path. How the camera delivers images (a folder it pushes
     /// them to, a download, …) is the driver's business and its settings'. The default, for a

@@ -68,10 +68,15 @@ pub enum VisionError {
 
     /// The camera judged NG or found no mark.
     #[error(
-        "NG / no mark found — the camera job did not find a fiducial in the field of view; re-jog \
-         over the mark, check lighting, verify the camera job is locating the right feature"
+        "NG / no mark found — the camera job did not find a fiducial in the field of view{}; re-jog \
+         over the mark, check lighting, verify the camera job is locating the right feature",
+        miss_note(.reason)
     )]
-    NoMark,
+    NoMark {
+        /// Why, in the driver's words, when it says ([`crate::CameraDriver::miss_reason`]): a
+        /// camera that runs no job of its own (the `Camera` driver) knows what its finder saw.
+        reason: Option<String>,
+    },
 
     /// The driver failed. The text is the driver's own ([`DriverError`]'s `Display`): only the
     /// driver knows its camera, its protocol and what each refusal means, and it names the
@@ -229,6 +234,14 @@ pub enum VisionError {
 
 /// A driver failure as the operator reads it: the driver's words as they are, or, when the
 /// driver said nothing, what the core knows — the kind of failure.
+/// `NoMark`'s reason as a parenthesis after "field of view", or nothing.
+fn miss_note(reason: &Option<String>) -> String {
+    match reason.as_deref().map(str::trim) {
+        Some(r) if !r.is_empty() => format!(" ({r})"),
+        _ => String::new(),
+    }
+}
+
 fn driver_message(e: &DriverError) -> String {
     let text = e.to_string();
     if !text.trim().is_empty() {
@@ -281,6 +294,12 @@ mod tests {
             "K matrix is zero — run M283 to calibrate first (M283 C1, on LinuxCNC M283 P1, or M283 Q)"
         );
         assert!(VisionError::NotEnabled.to_string().starts_with("Vision is not enabled"));
+        // NG reads as the manual's message; a driver's reason sits inside it, a blank one not.
+        let ng = |reason: Option<&str>| VisionError::NoMark { reason: reason.map(String::from) }.to_string();
+        assert_eq!(ng(None), ng(Some("  ")));
+        assert!(ng(None)
+            .starts_with("NG / no mark found — the camera job did not find a fiducial in the field of view; re-jog"));
+        assert!(ng(Some("the finder: 2 marks in view")).contains("field of view (the finder: 2 marks in view); re-jog"));
         let e = VisionError::WrongTool { camera: 98, active: 1 };
         assert!(e.to_string().starts_with("camera tool T98 is not the active tool"));
         // A driver error reads as the driver words it, whatever its kind: the core puts no

@@ -222,6 +222,10 @@ impl<S: FrameSource> CameraDriver for FrameDriver<S> {
         self.source.select_job(job).map_err(DriverError::from)
     }
 
+    fn miss_reason(&self) -> Option<String> {
+        self.last_miss.as_ref().map(|m| format!("the finder: {}", m.reason))
+    }
+
     fn test_connection(&mut self) -> Result<String, DriverError> {
         let frame = self.source.frame().map_err(DriverError::from)?;
         let text = format!("{}: {}×{} frame", self.source.describe(), frame.width(), frame.height());
@@ -339,6 +343,9 @@ mod tests {
         let miss = d.last_miss().expect("a reason");
         assert_eq!(miss.candidates, Some(2));
         assert!(miss.reason.contains("2 marks in view"), "{miss:?}");
+        // The core's NG message carries it.
+        let ng = vision_core::VisionError::NoMark { reason: d.miss_reason() }.to_string();
+        assert!(ng.starts_with("NG / no mark found — the camera job did not find a fiducial in the field of view (the finder: 2 marks in view"), "{ng}");
         // A search radius that leaves the neighbour out reads the centred mark.
         let mut d = driver(vec![(160.0, 120.0), (290.0, 120.0)]);
         d.config.mark.search_radius_pct = 80.0;

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use vision_math::{AlignmentChain, LengthUnit, Matrix2, PixelChain, Point2, Remap, Vector2};
 
 use crate::controller::machine_to_program;
-use crate::driver::{Judgment, Reading};
+use crate::driver::{CameraDriver, Judgment, Reading};
 use crate::error::VisionError;
 use crate::machine::{checked, Machine};
 use crate::params::Params;
@@ -127,12 +127,12 @@ pub(crate) fn mark_size(chain: &PixelChain, reading: &Reading) -> (f64, f64) {
     }
 }
 
-/// Checks that a reading carries a usable mark.
-pub(crate) fn require_mark(reading: &Reading) -> Result<(), VisionError> {
+/// Checks that a reading carries a usable mark; `driver` says why not, when it can.
+pub(crate) fn require_mark(reading: &Reading, driver: &dyn CameraDriver) -> Result<(), VisionError> {
     if reading.found() {
         Ok(())
     } else {
-        Err(VisionError::NoMark)
+        Err(VisionError::NoMark { reason: driver.miss_reason() })
     }
 }
 

@@ -399,7 +399,7 @@ impl VisionModule {
                 return Err(e);
             }
         };
-        if let Err(e) = require_mark(&reading) {
+        if let Err(e) = require_mark(&reading, &*driver) {
             self.publish_failure(Some(i64::from(reading.judgment.code())), &e);
             return Err(e);
         }

@@ -412,7 +412,7 @@ fn failed_captures_change_nothing_but_the_last_status() {
     // NG.
     rig.world().script.push_back(Ok(Reading { judgment: Judgment::Ng, ..Reading::position(1.0, 1.0) }));
     let e = rig.module.m281(&mut rig.machine, false).expect_err("NG");
-    assert_eq!(e, VisionError::NoMark);
+    assert_eq!(e, VisionError::NoMark { reason: None });
     assert!(e.to_string().starts_with("NG / no mark found"));
     assert_eq!(rig.module.telemetry().last_judgment(), 0);
     assert_eq!(rig.module.telemetry().last_status(), e.to_string());
@@ -424,7 +424,7 @@ fn failed_captures_change_nothing_but_the_last_status() {
     );
     // Count 0.
     rig.world().script.push_back(Ok(Reading { count: Some(0), ..Reading::position(1.0, 1.0) }));
-    assert_eq!(rig.module.m281(&mut rig.machine, false).map(|_| ()), Err(VisionError::NoMark));
+    assert_eq!(rig.module.m281(&mut rig.machine, false).map(|_| ()), Err(VisionError::NoMark { reason: None }));
     // A pound write fails half-way: the writes already made are undone.
     rig.world().fail_pound = Some(500 + 8 * 3 + 2);
     rig.go(6.0, 4.0);
