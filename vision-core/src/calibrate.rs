@@ -521,7 +521,7 @@ pub(crate) fn quick(walker: &mut Walker<'_>, params: &Params, diameter: f64) -> 
     if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0) {
         return Err(fail(
             "the camera job does not report the mark's width and height — M283 Q needs a camera \
-             output that includes them (judgment,count,x,y,width,height,angle,score); or use M283 C1",
+             output that includes them (judgment,count,x,y,width,height,angle,score); or use M283 C1 (on LinuxCNC M283 P1)",
         ));
     }
     let k = Matrix2::new(diameter / w, 0.0, 0.0, diameter / h);

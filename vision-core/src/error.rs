@@ -33,7 +33,7 @@ pub enum VisionError {
     NotCalibrated,
 
     /// K cannot be inverted or holds a non-finite number.
-    #[error("K matrix is unusable ({reason}) — re-run M283 C1 to calibrate")]
+    #[error("K matrix is unusable ({reason}) — re-run M283 to calibrate (M283 C1, on LinuxCNC M283 P1, or M283 Q)")]
     BadCalibration {
         /// What is wrong with it.
         reason: String,
@@ -123,7 +123,7 @@ pub enum VisionError {
     /// A fit failed a quality gate (`VisionFitMax*`).
     #[error(
         "alignment refused: {reason} — likely causes: the camera found the wrong mark, the part \
-         moved during the run, a bad calibration (re-run M283 C1), or the marks were captured in \
+         moved during the run, a bad calibration (re-run M283 C1, on LinuxCNC M283 P1), or the marks were captured in \
          the wrong order; nothing was applied"
     )]
     FitRejected {

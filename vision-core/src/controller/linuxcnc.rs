@@ -56,6 +56,10 @@ impl Controller for LinuxCnc {
         Ok(words.iter().map(|&(l, v)| if l.eq_ignore_ascii_case(&'P') { ('C', v) } else { (l, v) }).collect())
     }
 
+    fn sheet_calibration(&self) -> &'static str {
+        "M283 P1"
+    }
+
     fn dialect(&self) -> &'static str {
         "linuxcnc"
     }

@@ -97,6 +97,12 @@ pub trait Controller: fmt::Debug + Send + Sync {
     /// The machine's refusal of a read.
     fn base_rotation(&self, machine: &dyn Machine) -> Result<f64, MachineError>;
 
+    /// How an operator calls the manual's sheet calibration on this controller, for advice in
+    /// messages: `M283 C1`, or what [`Controller::manual_words`] takes instead of `C`.
+    fn sheet_calibration(&self) -> &'static str {
+        "M283 C1"
+    }
+
     /// Vision M-code `m`'s words as the manual writes them, from the words of its line in this
     /// controller's dialect (letters in either case). The default takes them as they are.
     ///
@@ -271,6 +277,17 @@ mod tests {
         assert_eq!(names.len(), CONTROLLERS.len());
         let e = by_name("fanuc").unwrap_err();
         assert_eq!(e.to_string(), "unknown controller 'fanuc' — known controllers: mach4, linuxcnc, machinemotion");
+    }
+
+    #[test]
+    fn every_controller_takes_the_sheet_calibration_its_advice_names() {
+        for c in CONTROLLERS {
+            let call = c.sheet_calibration();
+            let word = call.strip_prefix("M283 ").expect("an M283 call");
+            let (letter, value) = word.split_at(1);
+            let words = [(letter.chars().next().expect("a letter"), value.parse::<f64>().expect("a number"))];
+            assert_eq!(c.manual_words(283, &words).expect(call), vec![('C', 1.0)], "{}", c.name());
+        }
     }
 
     #[test]

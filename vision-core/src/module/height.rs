@@ -87,8 +87,15 @@ pub struct HeightReport {
 }
 
 /// The report of `estimate` for a run: `mark_sizes` are the run's measured mean diameters in
-/// `unit` (for the cross-check with `VisionMarkDiameter`).
-pub(crate) fn report(params: &Params, estimate: ScaleEstimate, unit: LengthUnit, mark_sizes: &[f64]) -> HeightReport {
+/// `unit` (for the cross-check with `VisionMarkDiameter`); `sheet` is how the controller calls
+/// the sheet calibration ([`crate::Controller::sheet_calibration`]), for the advice.
+pub(crate) fn report(
+    params: &Params,
+    estimate: ScaleEstimate,
+    unit: LengthUnit,
+    mark_sizes: &[f64],
+    sheet: &str,
+) -> HeightReport {
     let distance = LengthUnit::Inch.convert(params.working_distance_in(), unit);
     let (change_pct, sigma_pct) = (estimate.error * 100.0, estimate.sigma * 100.0);
     let corrected = params.height_correction();
@@ -100,7 +107,7 @@ pub(crate) fn report(params: &Params, estimate: ScaleEstimate, unit: LengthUnit,
             if distance > 0.0 { format!(", {:.4} {u}", (estimate.error * distance).abs()) } else { String::new() };
         notes.push(format!(
             "the part is {:.2} % (±{sigma_pct:.2} %{length}) {} the camera than where K was calibrated, more than \
-             VisionHeightWarnPct = {warn} %; {} — re-run M283 C1 at this height, or set the height back to the \
+             VisionHeightWarnPct = {warn} %; {} — re-run {sheet} at this height, or set the height back to the \
              calibration's",
             change_pct.abs(),
             if change_pct > 0.0 { "farther from" } else { "closer to" },
@@ -176,27 +183,29 @@ mod tests {
     fn the_report_warns_above_the_threshold_and_cross_checks_the_mark_size() {
         let est = |e: f64| ScaleEstimate { error: e, sigma: 0.0007, marks: 4 };
         let p = Params::default();
-        let r = report(&p, est(0.0004), LengthUnit::Inch, &[]);
+        let r = report(&p, est(0.0004), LengthUnit::Inch, &[], "M283 C1");
         assert_eq!((r.warning.clone(), r.mark_size_pct, r.corrected), (None, None, true));
         assert!((r.change - 0.0024).abs() < 1e-12 && (r.sigma - 0.0042).abs() < 1e-12, "{r:?}");
-        let r = report(&p, est(0.0417), LengthUnit::Millimetre, &[]);
+        let r = report(&p, est(0.0417), LengthUnit::Millimetre, &[], "M283 C1");
         let w = r.warning.expect("above 1 %");
         assert!(w.contains("4.17 %") && w.contains("farther") && w.contains("6.3551 mm"), "{w}");
         assert!(w.contains("re-run M283 C1 at this height") && w.contains("were corrected"), "{w}");
         // The mark size: 0.25 in marks measured 0.24 in say +4.2 %, agreeing with +4.17 %; a
         // diameter configured wrong (0.30 in) says +25 % and disagrees.
         let sized = params(|p| p.set("VisionMarkDiameter", 0.25).expect("set"));
-        let r = report(&sized, est(0.0417), LengthUnit::Inch, &[0.24, 0.24]);
+        let r = report(&sized, est(0.0417), LengthUnit::Inch, &[0.24, 0.24], "M283 P1");
         assert!(
             (r.mark_size_pct.expect("configured") - 4.1667).abs() < 1e-3
                 && !r.warning.as_deref().unwrap_or("").contains("disagree")
         );
+        // The advice names the controller's own sheet word.
+        assert!(r.warning.expect("above 1 %").contains("re-run M283 P1 at this height"));
         let wrong = params(|p| p.set("VisionMarkDiameter", 0.30).expect("set"));
-        let r = report(&wrong, est(0.0), LengthUnit::Inch, &[0.24]);
+        let r = report(&wrong, est(0.0), LengthUnit::Inch, &[0.24], "M283 C1");
         let w = r.warning.expect("disagreement");
         assert!(w.contains("disagree") && w.contains("VisionMarkDiameter") && !w.contains("re-run"), "{w}");
         let off = params(|p| p.set("VisionHeightCorrection", false).expect("set"));
-        assert!(report(&off, est(-0.03), LengthUnit::Inch, &[])
+        assert!(report(&off, est(-0.03), LengthUnit::Inch, &[], "M283 C1")
             .warning
             .expect("warns")
             .contains("closer to the camera"));

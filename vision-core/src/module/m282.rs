@@ -246,7 +246,8 @@ impl VisionModule {
         let rms = (used.iter().map(|r| r * r).sum::<f64>() / used.len() as f64).sqrt();
 
         let sizes: Vec<f64> = self.run.dots.iter().map(|d| d.mark_size * d.unit.factor_to(unit)).collect();
-        let height = scale.map(|e| height::report(&self.params, e, unit, &sizes));
+        let height =
+            scale.map(|e| height::report(&self.params, e, unit, &sizes, machine.controller().sheet_calibration()));
 
         self.run.active = false;
         self.publish_run();
