@@ -55,7 +55,9 @@
 
 use vision_math::chain::fixed;
 use vision_math::show::number;
-use vision_math::{fit_rectangle, solve_linear, LengthUnit, Matrix2, PixelChain, Point2, Remap, Vector2, MM_PER_INCH};
+use vision_math::{
+    fit_centre, fit_rectangle, solve_linear, LengthUnit, Matrix2, PixelChain, Point2, Remap, Vector2, MM_PER_INCH,
+};
 
 use crate::controller::{program_to_machine, rotation};
 use crate::driver::{CameraDriver, Reading};
@@ -202,13 +204,39 @@ pub struct SheetReport {
     pub verify_rms: f64,
     /// Largest verify residual.
     pub verify_max: f64,
+    /// The optical centre: measured by the lift, or kept.
+    pub centre: CentreReport,
     /// Number of camera triggers used.
     pub triggers: usize,
     /// The `Cal_Date` written.
     pub date: String,
     /// A non-fatal problem: a reading outside the image (the resolution setting is wrong; see
-    /// the module doc). Also in `VisionLastStatus`.
+    /// the module doc), or a lift that could not measure the centre. Also in
+    /// `VisionLastStatus`.
     pub warning: Option<String>,
+}
+
+/// The optical centre as the sheet walk left it: measured by the calibration lift, or kept.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct CentreReport {
+    /// How far the camera rose (machine +Z), the report's unit; 0 when it did not.
+    pub lift: f64,
+    /// True when the lift measured the centre (written with its σ); false: the offset and
+    /// `VisionPxCenterSigmaPx` were kept as they were.
+    pub measured: bool,
+    /// `VisionPxCenterOffsetX/Y` written (measured) or kept, native pixels.
+    #[serde(serialize_with = "ser::vector")]
+    pub offset_px: Vector2<f64>,
+    /// The centre's 1σ, the larger pixel axis's, pixels: measured now, or kept (0: never
+    /// measured).
+    pub sigma_px: f64,
+    /// Pairs of readings (calibration height, lifted) the fit used.
+    pub pairs: usize,
+    /// The working distance the scale change implies, the report's unit: `lift·r/(1 − r)`
+    /// (0 when not measured).
+    pub working_distance: f64,
+    /// Why the centre was not measured (also the report's warning when the lift was asked for).
+    pub note: Option<String>,
 }
 
 /// M283's report (JSON: the inner report with `"mode": "quick"` or `"sheet"`).
@@ -228,6 +256,9 @@ pub(crate) struct Solution {
     pub(crate) remap: Remap,
     /// The camera tool and its new X/Y table offset, current units (sheet walk only).
     pub(crate) tool_offset: Option<(u32, Vector2<f64>)>,
+    /// The measured `VisionPxCenterOffsetX/Y` (pixels) and its 1σ (pixels), or `None`: keep
+    /// both as they are.
+    pub(crate) centre: Option<(Vector2<f64>, f64)>,
     pub(crate) report: CalReport,
 }
 
@@ -274,6 +305,8 @@ struct Shot {
     native: Point2<f64>,
     reading: Reading,
     dot: usize,
+    /// Taken by the sheet walk proper (at the calibration height), not by the lift.
+    in_fit: bool,
 }
 
 /// The lines of an incremental rapid by `d` (program frame), back to G90 after it (the Vision
@@ -316,6 +349,8 @@ pub(crate) struct Walker<'a> {
     /// The best K (current units per pixel) and remap known so far, for the DRO: the module's
     /// calibration at the start, then each one the routine solves.
     known: Option<(Matrix2<f64>, Remap)>,
+    /// True while the calibration lift reads: its shots stay out of the sheet fit.
+    lifting: bool,
 }
 
 impl<'a> Walker<'a> {
@@ -364,7 +399,23 @@ impl<'a> Walker<'a> {
             ran: Vec::new(),
             last: None,
             known,
+            lifting: false,
         }
+    }
+
+    /// True when the walker moves the machine itself (not a stepwise replay).
+    fn is_live(&self) -> bool {
+        matches!(self.source, Source::Live(_))
+    }
+
+    /// Moves the head by `dz` along machine Z (current units, `G91 G0 Z`, then G90) and
+    /// settles. `Err(true)`: the move ran but the settle failed (the head moved); `Err(false)`:
+    /// the controller refused the move (it did not).
+    fn move_z(&mut self, dz: f64) -> Result<(), (bool, VisionError)> {
+        let lines = vec![format!("G91 G0 Z{}", fixed(dz, MOVE_DECIMALS)), "G90".to_string()];
+        self.machine.run_gcode(&lines).map_err(|e| (false, e.into()))?;
+        self.ran.extend(lines);
+        self.machine.dwell(self.params.trigger_settle_s()).map_err(|e| (true, e.into()))
     }
 
     /// The lines run so far, in order, and the last trigger's reading.
@@ -450,7 +501,7 @@ impl<'a> Walker<'a> {
             let chain = self.known.and_then(|(k, remap)| chain_with(self.params, k, remap).ok());
             self.dro.reading(chain.as_ref(), centred_px(self.params, native), &reading);
         }
-        self.shots.push(Shot { pos, native, reading, dot });
+        self.shots.push(Shot { pos, native, reading, dot, in_fit: !self.lifting });
         Ok(self.shots.len() - 1)
     }
 
@@ -541,7 +592,7 @@ pub(crate) fn quick(walker: &mut Walker<'_>, params: &Params, diameter: f64) -> 
         date: walker.machine.now().iso_local(),
         warning: resolution_warning(params, &walker.shots),
     };
-    Ok(Solution { k, remap, tool_offset: None, report: CalReport::Quick(report) })
+    Ok(Solution { k, remap, tool_offset: None, centre: None, report: CalReport::Quick(report) })
 }
 
 /// How far (as a factor either way) the scale `Qd` implies may be from the scale the axis-detect
@@ -583,6 +634,176 @@ fn check_quick_scale(
         unit.short_name(),
         number(ratio)
     )))
+}
+
+/// Positions per axis of the calibration lift's grid (16 pairs of readings).
+pub const LIFT_GRID: usize = 4;
+
+/// What the calibration lift came to.
+struct Lifted {
+    /// The measured `VisionPxCenterOffsetX/Y` (pixels) and 1σ (pixels), or `None` (keep both).
+    centre: Option<(Vector2<f64>, f64)>,
+    report: CentreReport,
+    /// Why a lift that was asked for did not measure the centre.
+    warning: Option<String>,
+}
+
+/// The calibration lift (see the module doc): reads the mark of dot `dot` (its centre at
+/// `around`, program frame) from a [`LIFT_GRID`]² grid of camera positions `±step` about it at
+/// the calibration height, rises `VisionCalibrationLift`, reads the same positions again, comes
+/// back down and fits the pixel the image shrank about.
+///
+/// Decision: a lift that cannot measure (the rise refused, a mark lost, a fit without a scale
+/// change) does not cost the calibration: the walk commits with the centre kept and a warning.
+/// Only a head that cannot come back down fails the walk (the verify walk and the commit
+/// would run at the wrong height).
+///
+/// # Errors
+/// The move back down failed.
+fn lift_centre(
+    walker: &mut Walker<'_>,
+    params: &Params,
+    around: Point2<f64>,
+    step: f64,
+    dot: usize,
+) -> Result<Lifted, VisionError> {
+    let lift_in = params.calibration_lift_in();
+    let lift = LengthUnit::Inch.convert(lift_in, walker.unit);
+    let kept = |lift: f64, note: String, warn: bool| Lifted {
+        centre: None,
+        report: CentreReport {
+            lift,
+            measured: false,
+            offset_px: params.calibration.center_offset(),
+            sigma_px: params.px_center_sigma_px(),
+            pairs: 0,
+            working_distance: 0.0,
+            note: Some(note.clone()),
+        },
+        warning: warn.then_some(note),
+    };
+    if lift_in == 0.0 {
+        return Ok(kept(0.0, "VisionCalibrationLift is 0: calibrated at one height".into(), false));
+    }
+    if !walker.is_live() {
+        return Ok(kept(
+            0.0,
+            "the optical centre was not measured: the stepwise walk (LinuxCNC's M283) does not move Z yet; \
+             VisionPxCenterOffset kept (set VisionCalibrationLift 0 to calibrate at one height without this note)"
+                .into(),
+            true,
+        ));
+    }
+    let g = LIFT_GRID;
+    #[allow(clippy::cast_precision_loss)]
+    let t = |i: usize| -1.0 + 2.0 * i as f64 / (g - 1) as f64;
+    // Serpentine, so each move is one grid step.
+    let positions: Vec<Point2<f64>> = (0..g)
+        .flat_map(|i| (0..g).map(move |j| (i, if i % 2 == 0 { j } else { g - 1 - j })))
+        .map(|(i, j)| around + Vector2::new(t(i), t(j)) * step)
+        .collect();
+    walker.lifting = true;
+    let read = |walker: &mut Walker<'_>, at: &[Point2<f64>]| -> Result<Vec<Point2<f64>>, VisionError> {
+        let mut out = Vec::with_capacity(at.len());
+        for p in at {
+            walker.move_abs(*p)?;
+            let s = walker.shoot(dot)?;
+            out.push(walker.shots[s].native);
+        }
+        Ok(out)
+    };
+    let cannot = |what: &str, e: &VisionError| {
+        format!(
+            "the optical centre was not measured ({what}: {e}); VisionPxCenterOffset kept — the calibration \
+             stands at this height"
+        )
+    };
+    let before = match read(walker, &positions) {
+        Ok(v) => v,
+        Err(e) => {
+            walker.lifting = false;
+            return Ok(kept(0.0, cannot("a reading at the calibration height failed", &e), true));
+        }
+    };
+    let risen;
+    let after = match walker.move_z(lift) {
+        Err((moved, e)) => {
+            risen = moved;
+            Err(cannot(if moved { "the lift did not settle" } else { "the lift move was refused" }, &e))
+        }
+        Ok(()) => {
+            risen = true;
+            let back: Vec<Point2<f64>> = positions.iter().rev().copied().collect();
+            read(walker, &back)
+                .map(|mut v| {
+                    v.reverse();
+                    v
+                })
+                .map_err(|e| cannot("a reading at the lifted height failed", &e))
+        }
+    };
+    walker.lifting = false;
+    if risen {
+        if let Err((moved, e)) = walker.move_z(-lift) {
+            return Err(if moved {
+                e
+            } else {
+                fail(format!(
+                    "the camera could not come back down from the calibration lift ({e}): it is {} {} above the \
+                     calibration height — lower Z by that much before cutting, then re-run M283",
+                    number(lift),
+                    walker.unit.short_name()
+                ))
+            });
+        }
+    }
+    let after = match after {
+        Ok(v) => v,
+        Err(note) => return Ok(kept(0.0, note, true)),
+    };
+    let res = crate::module::capture::resolution(params);
+    let fit = match fit_centre(&before, &after, params.camera_noise_px()) {
+        Ok(fit) if fit.ratio < 1.0 => fit,
+        Ok(fit) => {
+            return Ok(kept(
+                0.0,
+                format!(
+                    "the optical centre was not measured: the image grew ×{} as the camera rose — check that +Z \
+                     moves the head up; VisionPxCenterOffset kept",
+                    number(1.0 / fit.ratio)
+                ),
+                true,
+            ))
+        }
+        Err(e) => return Ok(kept(0.0, cannot("the fit", &e.into()), true)),
+    };
+    let inside = (0.0..=res.x).contains(&fit.centre.x) && (0.0..=res.y).contains(&fit.centre.y);
+    if !inside {
+        return Ok(kept(
+            0.0,
+            format!(
+                "the optical centre was not measured: the lift put it at pixel ({:.1}, {:.1}), outside the \
+                 {}×{} image — check VisionCameraResX/ResY; VisionPxCenterOffset kept",
+                fit.centre.x, fit.centre.y, res.x, res.y
+            ),
+            true,
+        ));
+    }
+    let offset = fit.centre.coords - res * 0.5;
+    let sigma = fit.sigma.x.max(fit.sigma.y);
+    Ok(Lifted {
+        centre: Some((offset, sigma)),
+        report: CentreReport {
+            lift,
+            measured: true,
+            offset_px: offset,
+            sigma_px: sigma,
+            pairs: fit.pairs,
+            working_distance: lift * fit.ratio / (1.0 - fit.ratio),
+            note: None,
+        },
+        warning: None,
+    })
 }
 
 /// `M283 Cn`: walk, solve, verify (compensating for the offset not yet written); writes nothing.
@@ -629,6 +850,14 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
     // 3. The final K over every pair.
     let (k, k_rms) = solve_k(&walker.shots, &pairs, remap)?;
     walker.known = Some((k, remap));
+
+    // 3b. The optical centre from the lift over the last dot; the offset below is solved at it.
+    let lifted = lift_centre(walker, params, station, probe, nominal.len() - 1)?;
+    let mut solved = params.clone();
+    if let Some((offset, sigma)) = lifted.centre {
+        solved.calibration = solved.calibration.with_centre(offset, sigma)?;
+    }
+    let params = &solved;
     let chain: PixelChain = chain_with(params, k, remap)
         .map_err(|e| fail(format!("the solved K is unusable ({e}); check that the camera is rigidly mounted")))?;
     if k.determinant() <= 0.0 {
@@ -637,7 +866,7 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
 
     // 4. Sheet pose and camera offset from the dots.
     let mut sums = vec![(Vector2::zeros(), 0.0f64); nominal.len()];
-    for s in &walker.shots {
+    for s in walker.shots.iter().filter(|s| s.in_fit) {
         sums[s.dot].0 += (s.pos + chain.delta(s.native)).coords;
         sums[s.dot].1 += 1.0;
     }
@@ -689,11 +918,13 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
         verify,
         verify_rms,
         verify_max,
+        centre: lifted.report,
         triggers: walker.triggers,
         date: walker.machine.now().iso_local(),
-        warning: resolution_warning(params, &walker.shots),
+        warning: resolution_warning(params, &walker.shots).or(lifted.warning),
     };
-    Ok(Solution { k, remap, tool_offset: Some((tool, offset_written)), report: CalReport::Sheet(report) })
+    let centre = lifted.centre;
+    Ok(Solution { k, remap, tool_offset: Some((tool, offset_written)), centre, report: CalReport::Sheet(report) })
 }
 
 #[cfg(test)]

@@ -332,8 +332,11 @@ impl VisionModule {
 
     /// Applies a calibration solution: all of it, or nothing (see [`VisionModule::m283`]).
     fn apply_calibration(&mut self, machine: &mut dyn Machine, solution: Solution) -> Result<CalReport, VisionError> {
-        let calibration =
+        let mut calibration =
             self.params.calibration.solved(solution.k, solution.remap, machine.units()?, solution.report.date())?;
+        if let Some((offset, sigma)) = solution.centre {
+            calibration = calibration.with_centre(offset, sigma)?;
+        }
         let next = Params { calibration, ..self.params.clone() };
         let restore = match solution.tool_offset {
             Some((tool, offset)) => {
