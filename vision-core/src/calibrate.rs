@@ -80,6 +80,17 @@ pub const MAX_SHEET_SCALE_DEV: f64 = 0.10;
 /// Decimals of the coordinates in calibration moves.
 const MOVE_DECIMALS: usize = 7;
 
+/// Where a stepwise M283 walk needs its next capture (see
+/// [`crate::VisionModule::m283_next`]): the camera tool's X/Y and its height.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WalkTarget {
+    /// Program frame, current units.
+    pub at: Point2<f64>,
+    /// Height above the Z the walk started at, current units (machine +Z, up): 0, or
+    /// `VisionCalibrationLift` while the calibration lift reads.
+    pub lift: f64,
+}
+
 /// Which calibration M283 runs.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Calibrate {
@@ -329,7 +340,8 @@ enum Source<'a> {
     /// Readings taken before, each with the program position it was taken at. Moves are not
     /// run: the walker only tracks where they would have gone (`at`). A trigger past the last
     /// reading stops the walk and records where that capture is `needed`.
-    Replay { taken: &'a [(Point2<f64>, Reading)], next: usize, at: Point2<f64>, needed: Option<Point2<f64>> },
+    /// `lift`: how far above the walk's start Z the moves so far left the head (current units).
+    Replay { taken: &'a [(Point2<f64>, Reading)], next: usize, at: Point2<f64>, lift: f64, needed: Option<WalkTarget> },
 }
 
 /// Moves, dwells and triggers; writes every trigger to the DRO as it happens.
@@ -377,7 +389,13 @@ impl<'a> Walker<'a> {
         dro: &'a mut Dro,
         unit: LengthUnit,
     ) -> Self {
-        Walker::with_source(machine, Source::Replay { taken, next: 0, at: start, needed: None }, params, dro, unit)
+        Walker::with_source(
+            machine,
+            Source::Replay { taken, next: 0, at: start, lift: 0.0, needed: None },
+            params,
+            dro,
+            unit,
+        )
     }
 
     fn with_source(
@@ -403,16 +421,16 @@ impl<'a> Walker<'a> {
         }
     }
 
-    /// True when the walker moves the machine itself (not a stepwise replay).
-    fn is_live(&self) -> bool {
-        matches!(self.source, Source::Live(_))
-    }
-
     /// Moves the head by `dz` along machine Z (current units, `G91 G0 Z`, then G90) and
     /// settles. `Err(true)`: the move ran but the settle failed (the head moved); `Err(false)`:
     /// the controller refused the move (it did not).
     fn move_z(&mut self, dz: f64) -> Result<(), (bool, VisionError)> {
         let lines = vec![format!("G91 G0 Z{}", fixed(dz, MOVE_DECIMALS)), "G90".to_string()];
+        if let Source::Replay { lift, .. } = &mut self.source {
+            *lift += dz;
+            self.ran.extend(lines);
+            return Ok(());
+        }
         self.machine.run_gcode(&lines).map_err(|e| (false, e.into()))?;
         self.ran.extend(lines);
         self.machine.dwell(self.params.trigger_settle_s()).map_err(|e| (true, e.into()))
@@ -425,7 +443,7 @@ impl<'a> Walker<'a> {
 
     /// On a replay that ran out of readings: where the next capture must be taken (program
     /// frame).
-    pub(crate) fn needed(&self) -> Option<Point2<f64>> {
+    pub(crate) fn needed(&self) -> Option<WalkTarget> {
         match self.source {
             Source::Replay { needed, .. } => needed,
             Source::Live(_) => None,
@@ -474,9 +492,9 @@ impl<'a> Walker<'a> {
                     return Err(e);
                 }
             },
-            Source::Replay { taken, next, at, needed } => {
+            Source::Replay { taken, next, at, lift, needed } => {
                 let Some(&(pos, reading)) = taken.get(*next) else {
-                    *needed = Some(*at);
+                    *needed = Some(WalkTarget { at: *at, lift: *lift });
                     return Err(fail("a capture is needed to go on (the stepwise M283 walk)"));
                 };
                 *next += 1;
@@ -685,15 +703,6 @@ fn lift_centre(
     if lift_in == 0.0 {
         return Ok(kept(0.0, "VisionCalibrationLift is 0: calibrated at one height".into(), false));
     }
-    if !walker.is_live() {
-        return Ok(kept(
-            0.0,
-            "the optical centre was not measured: the stepwise walk (LinuxCNC's M283) does not move Z yet; \
-             VisionPxCenterOffset kept (set VisionCalibrationLift 0 to calibrate at one height without this note)"
-                .into(),
-            true,
-        ));
-    }
     let g = LIFT_GRID;
     #[allow(clippy::cast_precision_loss)]
     let t = |i: usize| -1.0 + 2.0 * i as f64 / (g - 1) as f64;
@@ -720,6 +729,11 @@ fn lift_centre(
     };
     let before = match read(walker, &positions) {
         Ok(v) => v,
+        // A stepwise walk that ran out of readings: the host captures, the replay goes on.
+        Err(e) if walker.needed().is_some() => {
+            walker.lifting = false;
+            return Err(e);
+        }
         Err(e) => {
             walker.lifting = false;
             return Ok(kept(0.0, cannot("a reading at the calibration height failed", &e), true));
@@ -743,6 +757,9 @@ fn lift_centre(
         }
     };
     walker.lifting = false;
+    if walker.needed().is_some() {
+        return Err(fail("a capture is needed to go on (the stepwise M283 walk)"));
+    }
     if risen {
         if let Err((moved, e)) = walker.move_z(-lift) {
             return Err(if moved {

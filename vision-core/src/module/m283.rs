@@ -5,7 +5,7 @@ use vision_math::{AlignmentChain, LengthUnit, Point2, Vector2};
 
 use super::capture::pixel_chain;
 use super::{Reply, VisionModule};
-use crate::calibrate::{absolute_move, quick, sheet_walk, CalReport, Calibrate, Solution, Walker};
+use crate::calibrate::{absolute_move, quick, sheet_walk, CalReport, Calibrate, Solution, WalkTarget, Walker};
 use crate::controller;
 use crate::driver::Reading;
 use crate::error::VisionError;
@@ -36,8 +36,8 @@ pub struct StepwiseWalk {
     tool: u32,
     start: Point2<f64>,
     taken: Vec<(Point2<f64>, Reading)>,
-    /// The point [`VisionModule::m283_next`] last gave, until it is captured.
-    pending: Option<Point2<f64>>,
+    /// The target [`VisionModule::m283_next`] last gave, until it is captured.
+    pending: Option<WalkTarget>,
 }
 
 impl StepwiseWalk {
@@ -56,8 +56,8 @@ impl StepwiseWalk {
 
 /// What a replay of a stepwise walk came to.
 enum Replayed {
-    /// It needs a capture at this point (program frame).
-    Needs(Point2<f64>),
+    /// It needs a capture at this target.
+    Needs(WalkTarget),
     /// It has every reading: the solution to commit, and the last reading.
     Done { solution: Box<Solution>, last: Option<Reading> },
     /// It failed on the readings so far.
@@ -232,8 +232,9 @@ impl VisionModule {
         Ok(StepwiseWalk { mode, tool, start, taken: Vec::new(), pending: None })
     }
 
-    /// The next point the stepwise walk must capture at (program frame, current units), or
-    /// `None` when it has every reading it needs.
+    /// The next target the stepwise walk must capture at (program frame X/Y and the height
+    /// above the walk's start Z, current units), or `None` when it has every reading it needs.
+    /// The host moves Z first, then X/Y: the lift rises and comes down over the last dot.
     ///
     /// # Errors
     /// The walk failed on the readings so far (as [`VisionModule::m283`] would: e.g. the axis
@@ -242,7 +243,7 @@ impl VisionModule {
         &mut self,
         machine: &mut dyn Machine,
         walk: &mut StepwiseWalk,
-    ) -> Result<Option<Point2<f64>>, VisionError> {
+    ) -> Result<Option<WalkTarget>, VisionError> {
         walk.pending = match self.replay(machine, walk) {
             Replayed::Needs(at) => Some(at),
             Replayed::Done { .. } => None,
