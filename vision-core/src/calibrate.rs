@@ -26,19 +26,31 @@
 //! the verify walk compensates: commanding `N + o₀ − a = N + b` puts the optical axis on `N`,
 //! and a capture there is seen at `C − b + K·R·c`, where the new offset will see it.
 //!
-//! # What the walk cannot see: the optical centre
+//! # The optical centre, measured by a lift
 //!
-//! The walk does not solve the optical centre, and at one working distance it cannot: moving the
-//! reference pixel (`res/2 + PxCenterOffset`) by `δ` pixels moves the solved offset by `K·R·δ`
-//! and leaves every residual unchanged (finding it takes a second working distance or lens
-//! distortion, which the walk does not measure). So a wrong `VisionCameraResX`/`ResY` calibrates
-//! exactly at the sheet's height, while re-centring then centres marks on a pixel `δ` away from
-//! the optical axis and a part at another height is off by the height change times `K·δ`. The
-//! evidence the calibration has is where the camera reports its marks: the walk centres each dot
-//! on the profile's image centre, and the first readings are wherever the operator put dot 1.
-//! Rule: a calibration reading outside `ResX` × `ResY` (threshold 0 px: a right setting never
-//! gives one) makes the report's `warning` say the resolution setting is wrong (the check
-//! M281 makes on every capture); the calibration itself still stands.
+//! At one working distance the walk cannot see the optical centre: moving the reference pixel
+//! (`res/2 + PxCenterOffset`) by `δ` pixels moves the solved offset by `K·R·δ` and leaves every
+//! residual unchanged. So the reference pixel calibrates exactly at the sheet's height, while a
+//! part at another height is off by the height change times `K·δ` (and re-centring centres marks
+//! on the wrong pixel) — a shift no camera move at that height can tell from the part's own.
+//! The pixel that matters is the one that sees the same table X/Y at every height: where the
+//! machine's Z direction meets the image. After the probe moves (K known) the walk measures it
+//! (`lift_centre`): it reads the last dot from a [`LIFT_GRID`]² grid of camera positions (±a
+//! fifth of the field) at the calibration height, rises `VisionCalibrationLift` (machine +Z:
+//! away from the part, marks move towards the image centre), reads the same positions again and
+//! comes back down. The image shrinks about the centre `c`: `p_lift = r·p₀ + (1 − r)·c`, fitted
+//! by [`vision_math::fit_centre`] with its 1σ. `VisionPxCenterOffsetX/Y = c − res/2` and its σ
+//! are written with K, and steps 4–5 below solve the sheet pose, the camera offset and the
+//! verify at that reference pixel (K does not depend on it). A lift that cannot measure (a
+//! refused rise, a lost mark, no scale change) keeps the centre and warns; the calibration
+//! stands. On a stepwise walk (LinuxCNC) the lift's targets carry their height
+//! ([`WalkTarget`]).
+//!
+//! A wrong `VisionCameraResX`/`ResY` still calibrates exactly at the sheet's height; the
+//! evidence the walk has of it is where the camera reports its marks. Rule: a calibration
+//! reading outside `ResX` × `ResY` (threshold 0 px: a right setting never gives one) makes the
+//! report's `warning` say the resolution setting is wrong (the check M281 makes on every
+//! capture); the calibration itself still stands.
 //!
 //! Nothing here commits: `sheet_walk` and `quick` return a `Solution` (K, remap, tool
 //! offset, report) and M283 applies it in one place, or nothing (see
@@ -147,6 +159,9 @@ pub struct QuickReport {
     /// Largest disagreement between the bump moves and the mark motion K predicts for them
     /// (shows rotation or anisotropy Q cannot represent).
     pub bump_error: f64,
+    /// The working-distance change the new K implies against the previous calibration's
+    /// (`None`: there was none).
+    pub k_change: Option<KChange>,
     /// The `Cal_Date` written.
     pub date: String,
     /// A non-fatal problem: a reading outside the image (the resolution setting is wrong; see
@@ -217,6 +232,9 @@ pub struct SheetReport {
     pub verify_max: f64,
     /// The optical centre: measured by the lift, or kept.
     pub centre: CentreReport,
+    /// The working-distance change the new K implies against the previous calibration's
+    /// (`None`: there was none).
+    pub k_change: Option<KChange>,
     /// Number of camera triggers used.
     pub triggers: usize,
     /// The `Cal_Date` written.
@@ -225,6 +243,30 @@ pub struct SheetReport {
     /// the module doc), or a lift that could not measure the centre. Also in
     /// `VisionLastStatus`.
     pub warning: Option<String>,
+}
+
+/// The working-distance change a new K implies against the previous calibration's (scale ∝
+/// working distance: each M283 measures K at the current height, so against the last K it
+/// measures how far the camera now looks from).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct KChange {
+    /// `√|det K_new| / √|det K_old| − 1`, percent: + the camera now looks from farther.
+    pub change_pct: f64,
+    /// The same as a length, `VisionWorkingDistance` × `change_pct` / 100, the report's unit
+    /// (0 when `VisionWorkingDistance` is 0).
+    pub change: f64,
+}
+
+/// The change from the calibration in `params` (K converted to `unit`) to `k` (`unit` per
+/// pixel); `None` when there was none (K all zero).
+fn k_change(params: &Params, unit: LengthUnit, k: Matrix2<f64>) -> Option<KChange> {
+    let scale = |m: Matrix2<f64>| m.determinant().abs().sqrt();
+    let (old, new) = (scale(k_in(params, unit)), scale(k));
+    let ratio = new / old - 1.0;
+    (old > 0.0 && ratio.is_finite()).then(|| KChange {
+        change_pct: ratio * 100.0,
+        change: LengthUnit::Inch.convert(params.working_distance_in(), unit) * ratio,
+    })
 }
 
 /// The optical centre as the sheet walk left it: measured by the calibration lift, or kept.
@@ -607,6 +649,7 @@ pub(crate) fn quick(walker: &mut Walker<'_>, params: &Params, diameter: f64) -> 
         confirm_size: Vector2::new(cw, ch),
         size_error,
         bump_error,
+        k_change: k_change(params, walker.unit, k),
         date: walker.machine.now().iso_local(),
         warning: resolution_warning(params, &walker.shots),
     };
@@ -936,6 +979,7 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
         verify_rms,
         verify_max,
         centre: lifted.report,
+        k_change: k_change(params, unit, k),
         triggers: walker.triggers,
         date: walker.machine.now().iso_local(),
         warning: resolution_warning(params, &walker.shots).or(lifted.warning),

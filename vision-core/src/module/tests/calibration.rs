@@ -595,3 +595,24 @@ fn no_lift_is_the_manuals_walk() {
     assert!(rig.module.params.set("VisionCalibrationLift", f64::NAN).is_err());
     assert!(rig.module.params.set("VisionPxCenterSigmaPx", -1.0).is_err());
 }
+
+/// Each walk measures K at its own height: against the previous calibration's K the report
+/// states the working-distance change it implies (none before the first).
+#[test]
+fn a_walk_reports_the_working_distance_change_against_the_previous_k() {
+    let mut rig = standard_rig();
+    let first = sheet_report(rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("first").report);
+    assert_eq!(first.k_change, None, "K was zero before");
+    // Each walk starts over dot 1 (the manual's setup step 3).
+    rig.go(-2.2, -4.2);
+    let again = sheet_report(rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("again").report);
+    let c = again.k_change.expect("a previous K");
+    assert!(c.change_pct.abs() < 1e-6 && c.change.abs() < 1e-6, "{c:?}");
+    // The head 0.06 in higher (1 % of the 6 in working distance): K 1 % larger.
+    rig.world().z = 0.06;
+    rig.go(-2.2, -4.2);
+    let higher = sheet_report(rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("higher").report);
+    let c = higher.k_change.expect("a previous K");
+    assert!((c.change_pct - 1.0).abs() < 1e-6 && (c.change - 0.06).abs() < 1e-6, "{c:?}");
+    assert!((rig.world().z - 0.06).abs() < 1e-12, "the lift came back to where the walk started");
+}
