@@ -71,15 +71,16 @@ impl VisionModule {
     ///
     /// * [`Calibrate::Quick`]: K = diag(d/width_px, d/height_px) (width and height along the
     ///   remapped axes), then re-triggers to confirm; no tool offset is written.
-    /// * [`Calibrate::Sheet`]: walks the sheet, solves the full K, the sheet pose and the camera
-    ///   tool's X/Y offset by least squares, re-walks every dot in G90 and reports (see
-    ///   [`crate::calibrate`]). The offset goes to `VisionCameraToolNumber`, or to the active
+    /// * [`Calibrate::Sheet`]: walks the sheet, solves the full K, measures the optical centre
+    ///   by the calibration lift (`VisionCalibrationLift`; Z comes back before the verify),
+    ///   solves the sheet pose and the camera tool's X/Y offset at it by least squares, re-walks
+    ///   every dot in G90 and reports (see [`crate::calibrate`]). The offset goes to `VisionCameraToolNumber`, or to the active
     ///   tool when that is 0.
     ///
     /// The walk writes nothing; its solution is applied here, in one place, or not at all:
     /// 1. the new [`crate::Calibration`] (K11..K22, the remap flags, `Cal_Date` from the machine
-    ///    clock, `Cal_Units` = the machine's unit; the pixel centre offset is kept) is built and
-    ///    validated;
+    ///    clock, `Cal_Units` = the machine's unit; the pixel centre offset and its σ as the
+    ///    calibration lift measured them, or kept) is built and validated;
     /// 2. the camera tool's offset is written to the machine's tool table (sheet walk only);
     /// 3. the profile is saved atomically, and only then the module takes the new calibration.
     ///
