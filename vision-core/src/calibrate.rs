@@ -730,10 +730,11 @@ fn lift_centre(
 ) -> Result<Lifted, VisionError> {
     let lift_in = params.calibration_lift_in();
     let lift = LengthUnit::Inch.convert(lift_in, walker.unit);
-    let kept = |lift: f64, note: String, warn: bool| Lifted {
+    // `rose`: the head went up (and came back) before the lift gave up.
+    let kept = |rose: bool, note: String, warn: bool| Lifted {
         centre: None,
         report: CentreReport {
-            lift,
+            lift: if rose { lift } else { 0.0 },
             measured: false,
             offset_px: params.calibration.center_offset(),
             sigma_px: params.px_center_sigma_px(),
@@ -744,7 +745,7 @@ fn lift_centre(
         warning: warn.then_some(note),
     };
     if lift_in == 0.0 {
-        return Ok(kept(0.0, "VisionCalibrationLift is 0: calibrated at one height".into(), false));
+        return Ok(kept(false, "VisionCalibrationLift is 0: calibrated at one height".into(), false));
     }
     let g = LIFT_GRID;
     #[allow(clippy::cast_precision_loss)]
@@ -779,7 +780,7 @@ fn lift_centre(
         }
         Err(e) => {
             walker.lifting = false;
-            return Ok(kept(0.0, cannot("a reading at the calibration height failed", &e), true));
+            return Ok(kept(false, cannot("a reading at the calibration height failed", &e), true));
         }
     };
     let risen;
@@ -819,14 +820,14 @@ fn lift_centre(
     }
     let after = match after {
         Ok(v) => v,
-        Err(note) => return Ok(kept(0.0, note, true)),
+        Err(note) => return Ok(kept(risen, note, true)),
     };
     let res = crate::module::capture::resolution(params);
     let fit = match fit_centre(&before, &after, params.camera_noise_px()) {
         Ok(fit) if fit.ratio < 1.0 => fit,
         Ok(fit) => {
             return Ok(kept(
-                0.0,
+                true,
                 format!(
                     "the optical centre was not measured: the image grew ×{} as the camera rose — check that +Z \
                      moves the head up; VisionPxCenterOffset kept",
@@ -835,12 +836,12 @@ fn lift_centre(
                 true,
             ))
         }
-        Err(e) => return Ok(kept(0.0, cannot("the fit", &e.into()), true)),
+        Err(e) => return Ok(kept(true, cannot("the fit", &e.into()), true)),
     };
     let inside = (0.0..=res.x).contains(&fit.centre.x) && (0.0..=res.y).contains(&fit.centre.y);
     if !inside {
         return Ok(kept(
-            0.0,
+            true,
             format!(
                 "the optical centre was not measured: the lift put it at pixel ({:.1}, {:.1}), outside the \
                  {}×{} image — check VisionCameraResX/ResY; VisionPxCenterOffset kept",

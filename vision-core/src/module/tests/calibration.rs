@@ -565,6 +565,7 @@ fn a_failed_lift_keeps_the_calibration_and_restores_z_and_the_modal_state() {
         let rep = sheet_report(r.report);
         let warning = rep.warning.clone().unwrap_or_default();
         assert!(!rep.centre.measured && warning.contains(what) && warning.contains("kept"), "{warning}");
+        assert_eq!(rep.centre.lift, if blind { 0.25 } else { 0.0 }, "how far it rose");
         let p = rig.module.params();
         assert!(p.cal_k() != Matrix2::zeros() && p.px_center_offset_x() == 2.0 && p.px_center_sigma_px() == 0.0);
         assert!(rig.module.telemetry().last_status().contains("warning"), "{:?}", rig.module.telemetry());
@@ -615,4 +616,17 @@ fn a_walk_reports_the_working_distance_change_against_the_previous_k() {
     let c = higher.k_change.expect("a previous K");
     assert!((c.change_pct - 1.0).abs() < 1e-6 && (c.change - 0.06).abs() < 1e-6, "{c:?}");
     assert!((rig.world().z - 0.06).abs() < 1e-12, "the lift came back to where the walk started");
+}
+
+/// A camera that does not ride the Z axis (its image does not change as the head rises) gives
+/// no centre: the walk says so and keeps the calibration.
+#[test]
+fn a_lift_that_changes_nothing_measures_nothing() {
+    let mut rig = standard_rig();
+    rig.world().working_distance_in = 1e9;
+    let rep = sheet_report(rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("calibrates").report);
+    let warning = rep.warning.unwrap_or_default();
+    assert!(!rep.centre.measured && warning.contains("did not change measurably"), "{warning}");
+    assert_eq!(rig.module.params().px_center_sigma_px(), 0.0);
+    assert!(rig.world().z.abs() < 1e-12);
 }
