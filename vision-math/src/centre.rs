@@ -14,7 +14,7 @@
 //! The centre's 1σ per axis: the pair noise σₚ (the residuals' σ, or the camera's `σ·√(1 + r²)`
 //! when larger: both readings are noisy) over the means, amplified by `1/(1 − r)`, plus the
 //! slope's share: `σ²(cₖ) = σₚ² / (1 − r)² · (1/N + (cₖ − p̄ₖ)² / Σ ‖pᵢ − p̄‖²)`. A lift of 4 % of
-//! the working distance makes `1/(1 − r)` ≈ 25: sixteen pairs at 0.1 px give about 0.9 px.
+//! the working distance makes `1/(1 − r)` ≈ 25: twenty-five pairs at 0.1 px give about 0.7 px.
 
 use nalgebra::{Point2, Vector2};
 

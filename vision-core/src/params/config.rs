@@ -84,8 +84,8 @@ profile_part! {
         /// image shrinks about the pixel that sees the same table point at both heights; the
         /// walk writes that pixel to `VisionPxCenterOffsetX/Y`, its 1σ to
         /// `VisionPxCenterSigmaPx`, and solves the camera offset at it. Default 0.25 in: ~4 %
-        /// of a 6 in working distance, which with 16 pairs of readings at 0.1 px finds the
-        /// centre to ~0.9 px (without it a ±4 % height change cuts at up to 1.7× the floor); the
+        /// of a 6 in working distance, which with 25 pairs of readings at 0.1 px finds the
+        /// centre to ~0.7 px (without it a ±4 % height change cuts at up to 1.7× the floor); the
         /// camera rises, away from the part, and comes back before the verify walk.
         (Connection) calibration_lift_in: f64 => f64 = 0.25, "VisionCalibrationLift", lift_in;
         /// `VisionWorkingDistance`: the lens-to-part distance at which K was calibrated, inches

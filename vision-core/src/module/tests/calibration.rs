@@ -488,17 +488,17 @@ fn every_calibration_trigger_reaches_the_dro_as_it_happens() {
         assert!(t.last_offset_px_x().hypot(t.last_offset_px_y()) > 50.0, "dot 1 sits off centre: {t:?}");
     }
     let offset = |t: &crate::params::Telemetry| t.last_offset_x().hypot(t.last_offset_y());
-    // The walk's shots, 5 per dot on sheet 1's five (the lift's 4 × 4 grid after them reaches
+    // The walk's shots, 5 per dot on sheet 1's five (the lift's 5 × 5 grid after them reaches
     // the diagonals).
     let walk_end = 3 + 5 * 5;
     let largest = at[3..walk_end].iter().map(|t| offset(t)).fold(0.0, f64::max);
     assert!((0.71..0.78).contains(&largest), "a probe shot is one probe move off: {largest}");
     // At the calibration height the dots measure their 0.5 in through K; lifted 0.25 in (over
     // a 6 in working distance) they look 4 % smaller.
-    let lift = walk_end..walk_end + 32;
+    let lift = walk_end..walk_end + 50;
     let size = |range: std::ops::Range<usize>, d: f64| at[range].iter().all(|t| (t.last_width() - d).abs() < 0.01);
     assert!(size(3..walk_end, 0.5) && size(lift.end..at.len(), 0.5), "the 0.5 in dots through K");
-    assert!(at[lift].iter().filter(|t| (t.last_width() - 0.5 * 6.0 / 6.25).abs() < 0.005).count() == 16, "lifted");
+    assert!(at[lift].iter().filter(|t| (t.last_width() - 0.5 * 6.0 / 6.25).abs() < 0.005).count() == 25, "lifted");
     let end = rig.module.telemetry();
     assert!(offset(end) < 1e-3 && end.last_status() == "OK", "{end:?}");
 }
@@ -540,10 +540,10 @@ fn the_lift_measures_the_optical_centre_and_the_offset_refers_to_it() {
         sheet_rig(optics, LengthUnit::Inch, Vector2::new(3.0, -1.5), sheet_marks(0.3, Vector2::new(1.0, 1.0)));
     let rep = sheet_report(rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("calibrates").report);
     let p = rig.module.params();
-    assert!(rep.centre.measured && rep.centre.pairs == 16, "{:?}", rep.centre);
+    assert!(rep.centre.measured && rep.centre.pairs == 25, "{:?}", rep.centre);
     assert!((p.calibration.center_offset() - Vector2::new(3.5, -4.0)).norm() < 1e-6, "{:?}", rep.centre);
     assert!((rep.centre.working_distance - 6.0).abs() < 1e-6, "{:?}", rep.centre);
-    // No noise: the σ floor is the camera's 0.1 px, over 16 pairs and a 4 % change.
+    // No noise: the σ floor is the camera's 0.1 px, over 25 pairs and a 4 % change.
     assert!(p.px_center_sigma_px() > 0.3 && p.px_center_sigma_px() < 1.5, "{}", p.px_center_sigma_px());
     assert!((rig.machine.tool_offset(98).expect("tool") - CAMERA).amax() < 1e-6);
     assert!(rep.verify_max < 1e-6 && rep.warning.is_none(), "{rep:?}");
