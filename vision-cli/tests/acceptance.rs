@@ -44,8 +44,19 @@ impl Rig {
         Rig { sim, machine, handler: ProgramHandler::new(Session::new(module), controller, clock) }
     }
 
-    /// Runs `program`; returns the Vision records it produced.
+    /// Brings the head back to the world's start Z (the calibration height) in machine
+    /// coordinates. The camera follows Z, and examples 4 and 5 end their demo cut at Z0.25 with
+    /// the cutter: each program here starts where an operator's next job would look from.
+    fn back_to_start_height(&mut self) {
+        let z = self.sim.world().machine.start[2];
+        let mut ignore = |_: &Event| {};
+        let line = format!("G20 G90 G53 G0 Z{z}\n");
+        self.machine.run_program(&line, None, &mut ignore).expect("G53 Z move");
+    }
+
+    /// Runs `program` from the start height; returns the Vision records it produced.
     fn run(&mut self, program: &str) -> Vec<Record> {
+        self.back_to_start_height();
         let mut ignore = |_: &Event| {};
         if let Err(e) = self.machine.run_program(program, Some(&mut self.handler), &mut ignore) {
             panic!("program failed: {e}\n{program}");
@@ -53,8 +64,10 @@ impl Rig {
         self.handler.take_records()
     }
 
-    /// Runs `program` up to its end or its first refusal; returns the Vision records.
+    /// Runs `program` from the start height up to its end or its first refusal; returns the
+    /// Vision records.
     fn run_to_refusal(&mut self, program: &str) -> Vec<Record> {
+        self.back_to_start_height();
         let mut ignore = |_: &Event| {};
         let _ = self.machine.run_program(program, Some(&mut self.handler), &mut ignore);
         self.handler.take_records()
@@ -637,9 +650,10 @@ enum Placement {
 }
 
 /// Where the camera's optical axis meets the image: `Off` by up to ±5 px per axis from the
-/// image centre (as in every random world), which the walk absorbs into the camera offset at its
-/// own height and which no camera move can measure elsewhere; or `Known` (on the image centre,
-/// as with `VisionPxCenterOffset` set right).
+/// image centre (as in every random world), or `Known` (on the image centre, as
+/// `VisionPxCenterOffset` 0 assumes). Either way the sheet walk's calibration lift (on by
+/// default) measures it: a walk at one height would absorb an error into the camera offset,
+/// and no camera move could measure it at another height.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Centre {
     Off,
@@ -767,11 +781,9 @@ fn case_figures(fits: &[HeightFit], floor95: f64) -> CaseFigures {
 /// p95 against the p95 of the same worlds and marks at the calibration height (the floor of the
 /// same marks and noise), and the share of fits whose true cut error lies inside the predicted
 /// 99 % bound; with `before`, the same under issue 25's settings. The bound must cover ≥
-/// `coverage` everywhere; the p95 must stay within `slack` × 1.2 the floor wherever the camera
-/// moves can measure what is wrong: every height with the centre known, and 6.06 in with it
-/// off. At ±4 % with the centre off, the shift ε × centre error × K (up to 0.0006 in) is left,
-/// which only a calibration at that height removes: there within `slack` × 2 (it was 3.2–3.6×
-/// before issue 28).
+/// `coverage` and the p95 stay within `slack` × 1.2 the floor everywhere: the calibration lift
+/// measured the optical centre, so what is left of the shift ε × centre error × K is the lift's
+/// noise (before the lift, at ±4 % with the centre off: 1.4–1.7×; before issue 28: 3.2–3.6×).
 fn height_cases(worlds: std::ops::Range<u64>, coverage: f64, slack: f64, before: bool) {
     let mut failures = Vec::new();
     for centre in [Centre::Off, Centre::Known] {
@@ -801,12 +813,8 @@ fn height_cases(worlds: std::ops::Range<u64>, coverage: f64, slack: f64, before:
                         f.coverage * 100.0,
                         fits.len()
                     );
-                    if *s == Settings::Default {
-                        let measurable = centre == Centre::Known || (height - 1.0).abs() < 0.02;
-                        let allowed = slack * if measurable { 1.2 } else { 2.0 };
-                        if f.p95_ratio > allowed || f.coverage < coverage {
-                            failures.push(format!("{name} {centre:?} {placement:?}: {f:?}"));
-                        }
+                    if *s == Settings::Default && (f.p95_ratio > slack * 1.2 || f.coverage < coverage) {
+                        failures.push(format!("{name} {centre:?} {placement:?}: {f:?}"));
                     }
                 }
                 println!("{line}");

@@ -26,19 +26,31 @@
 //! the verify walk compensates: commanding `N + o₀ − a = N + b` puts the optical axis on `N`,
 //! and a capture there is seen at `C − b + K·R·c`, where the new offset will see it.
 //!
-//! # What the walk cannot see: the optical centre
+//! # The optical centre, measured by a lift
 //!
-//! The walk does not solve the optical centre, and at one working distance it cannot: moving the
-//! reference pixel (`res/2 + PxCenterOffset`) by `δ` pixels moves the solved offset by `K·R·δ`
-//! and leaves every residual unchanged (finding it takes a second working distance or lens
-//! distortion, which the walk does not measure). So a wrong `VisionCameraResX`/`ResY` calibrates
-//! exactly at the sheet's height, while re-centring then centres marks on a pixel `δ` away from
-//! the optical axis and a part at another height is off by the height change times `K·δ`. The
-//! evidence the calibration has is where the camera reports its marks: the walk centres each dot
-//! on the profile's image centre, and the first readings are wherever the operator put dot 1.
-//! Rule: a calibration reading outside `ResX` × `ResY` (threshold 0 px: a right setting never
-//! gives one) makes the report's `warning` say the resolution setting is wrong (the check
-//! M281 makes on every capture); the calibration itself still stands.
+//! At one working distance the walk cannot see the optical centre: moving the reference pixel
+//! (`res/2 + PxCenterOffset`) by `δ` pixels moves the solved offset by `K·R·δ` and leaves every
+//! residual unchanged. So the reference pixel calibrates exactly at the sheet's height, while a
+//! part at another height is off by the height change times `K·δ` (and re-centring centres marks
+//! on the wrong pixel) — a shift no camera move at that height can tell from the part's own.
+//! The pixel that matters is the one that sees the same table X/Y at every height: where the
+//! machine's Z direction meets the image. After the probe moves (K known) the walk measures it
+//! (`lift_centre`): it reads the last dot from a [`LIFT_GRID`]² grid of camera positions (±a
+//! fifth of the field) at the calibration height, rises `VisionCalibrationLift` (machine +Z:
+//! away from the part, marks move towards the image centre), reads the same positions again and
+//! comes back down. The image shrinks about the centre `c`: `p_lift = r·p₀ + (1 − r)·c`, fitted
+//! by [`vision_math::fit_centre`] with its 1σ. `VisionPxCenterOffsetX/Y = c − res/2` and its σ
+//! are written with K, and steps 4–5 below solve the sheet pose, the camera offset and the
+//! verify at that reference pixel (K does not depend on it). A lift that cannot measure (a
+//! refused rise, a lost mark, no scale change) keeps the centre and warns; the calibration
+//! stands. On a stepwise walk (LinuxCNC) the lift's targets carry their height
+//! ([`WalkTarget`]).
+//!
+//! A wrong `VisionCameraResX`/`ResY` still calibrates exactly at the sheet's height; the
+//! evidence the walk has of it is where the camera reports its marks. Rule: a calibration
+//! reading outside `ResX` × `ResY` (threshold 0 px: a right setting never gives one) makes the
+//! report's `warning` say the resolution setting is wrong (the check M281 makes on every
+//! capture); the calibration itself still stands.
 //!
 //! Nothing here commits: `sheet_walk` and `quick` return a `Solution` (K, remap, tool
 //! offset, report) and M283 applies it in one place, or nothing (see
@@ -55,7 +67,9 @@
 
 use vision_math::chain::fixed;
 use vision_math::show::number;
-use vision_math::{fit_rectangle, solve_linear, LengthUnit, Matrix2, PixelChain, Point2, Remap, Vector2, MM_PER_INCH};
+use vision_math::{
+    fit_centre, fit_rectangle, solve_linear, LengthUnit, Matrix2, PixelChain, Point2, Remap, Vector2, MM_PER_INCH,
+};
 
 use crate::controller::{program_to_machine, rotation};
 use crate::driver::{CameraDriver, Reading};
@@ -77,6 +91,17 @@ pub const MIN_BUMP_PX: f64 = 2.0;
 pub const MAX_SHEET_SCALE_DEV: f64 = 0.10;
 /// Decimals of the coordinates in calibration moves.
 const MOVE_DECIMALS: usize = 7;
+
+/// Where a stepwise M283 walk needs its next capture (see
+/// [`crate::VisionModule::m283_next`]): the camera tool's X/Y and its height.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WalkTarget {
+    /// Program frame, current units.
+    pub at: Point2<f64>,
+    /// Height above the Z the walk started at, current units (machine +Z, up): 0, or
+    /// `VisionCalibrationLift` while the calibration lift reads.
+    pub lift: f64,
+}
 
 /// Which calibration M283 runs.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -134,6 +159,9 @@ pub struct QuickReport {
     /// Largest disagreement between the bump moves and the mark motion K predicts for them
     /// (shows rotation or anisotropy Q cannot represent).
     pub bump_error: f64,
+    /// The working-distance change the new K implies against the previous calibration's
+    /// (`None`: there was none).
+    pub k_change: Option<KChange>,
     /// The `Cal_Date` written.
     pub date: String,
     /// A non-fatal problem: a reading outside the image (the resolution setting is wrong; see
@@ -202,13 +230,66 @@ pub struct SheetReport {
     pub verify_rms: f64,
     /// Largest verify residual.
     pub verify_max: f64,
+    /// The optical centre: measured by the lift, or kept.
+    pub centre: CentreReport,
+    /// The working-distance change the new K implies against the previous calibration's
+    /// (`None`: there was none).
+    pub k_change: Option<KChange>,
     /// Number of camera triggers used.
     pub triggers: usize,
     /// The `Cal_Date` written.
     pub date: String,
     /// A non-fatal problem: a reading outside the image (the resolution setting is wrong; see
-    /// the module doc). Also in `VisionLastStatus`.
+    /// the module doc), or a lift that could not measure the centre. Also in
+    /// `VisionLastStatus`.
     pub warning: Option<String>,
+}
+
+/// The working-distance change a new K implies against the previous calibration's (scale ∝
+/// working distance: each M283 measures K at the current height, so against the last K it
+/// measures how far the camera now looks from).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct KChange {
+    /// `√|det K_new| / √|det K_old| − 1`, percent: + the camera now looks from farther.
+    pub change_pct: f64,
+    /// The same as a length, `VisionWorkingDistance` × `change_pct` / 100, the report's unit
+    /// (0 when `VisionWorkingDistance` is 0).
+    pub change: f64,
+}
+
+/// The change from the calibration in `params` (K converted to `unit`) to `k` (`unit` per
+/// pixel); `None` when there was none (K all zero).
+fn k_change(params: &Params, unit: LengthUnit, k: Matrix2<f64>) -> Option<KChange> {
+    let scale = |m: Matrix2<f64>| m.determinant().abs().sqrt();
+    let (old, new) = (scale(k_in(params, unit)), scale(k));
+    let ratio = new / old - 1.0;
+    (old > 0.0 && ratio.is_finite()).then(|| KChange {
+        change_pct: ratio * 100.0,
+        change: LengthUnit::Inch.convert(params.working_distance_in(), unit) * ratio,
+    })
+}
+
+/// The optical centre as the sheet walk left it: measured by the calibration lift, or kept.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct CentreReport {
+    /// How far the camera rose (machine +Z), the report's unit; 0 when it did not.
+    pub lift: f64,
+    /// True when the lift measured the centre (written with its σ); false: the offset and
+    /// `VisionPxCenterSigmaPx` were kept as they were.
+    pub measured: bool,
+    /// `VisionPxCenterOffsetX/Y` written (measured) or kept, native pixels.
+    #[serde(serialize_with = "ser::vector")]
+    pub offset_px: Vector2<f64>,
+    /// The centre's 1σ, the larger pixel axis's, pixels: measured now, or kept (0: never
+    /// measured).
+    pub sigma_px: f64,
+    /// Pairs of readings (calibration height, lifted) the fit used.
+    pub pairs: usize,
+    /// The working distance the scale change implies, the report's unit: `lift·r/(1 − r)`
+    /// (0 when not measured).
+    pub working_distance: f64,
+    /// Why the centre was not measured (also the report's warning when the lift was asked for).
+    pub note: Option<String>,
 }
 
 /// M283's report (JSON: the inner report with `"mode": "quick"` or `"sheet"`).
@@ -228,6 +309,9 @@ pub(crate) struct Solution {
     pub(crate) remap: Remap,
     /// The camera tool and its new X/Y table offset, current units (sheet walk only).
     pub(crate) tool_offset: Option<(u32, Vector2<f64>)>,
+    /// The measured `VisionPxCenterOffsetX/Y` (pixels) and its 1σ (pixels), or `None`: keep
+    /// both as they are.
+    pub(crate) centre: Option<(Vector2<f64>, f64)>,
     pub(crate) report: CalReport,
 }
 
@@ -274,6 +358,8 @@ struct Shot {
     native: Point2<f64>,
     reading: Reading,
     dot: usize,
+    /// Taken by the sheet walk proper (at the calibration height), not by the lift.
+    in_fit: bool,
 }
 
 /// The lines of an incremental rapid by `d` (program frame), back to G90 after it (the Vision
@@ -296,7 +382,8 @@ enum Source<'a> {
     /// Readings taken before, each with the program position it was taken at. Moves are not
     /// run: the walker only tracks where they would have gone (`at`). A trigger past the last
     /// reading stops the walk and records where that capture is `needed`.
-    Replay { taken: &'a [(Point2<f64>, Reading)], next: usize, at: Point2<f64>, needed: Option<Point2<f64>> },
+    /// `lift`: how far above the walk's start Z the moves so far left the head (current units).
+    Replay { taken: &'a [(Point2<f64>, Reading)], next: usize, at: Point2<f64>, lift: f64, needed: Option<WalkTarget> },
 }
 
 /// Moves, dwells and triggers; writes every trigger to the DRO as it happens.
@@ -316,6 +403,8 @@ pub(crate) struct Walker<'a> {
     /// The best K (current units per pixel) and remap known so far, for the DRO: the module's
     /// calibration at the start, then each one the routine solves.
     known: Option<(Matrix2<f64>, Remap)>,
+    /// True while the calibration lift reads: its shots stay out of the sheet fit.
+    lifting: bool,
 }
 
 impl<'a> Walker<'a> {
@@ -342,7 +431,13 @@ impl<'a> Walker<'a> {
         dro: &'a mut Dro,
         unit: LengthUnit,
     ) -> Self {
-        Walker::with_source(machine, Source::Replay { taken, next: 0, at: start, needed: None }, params, dro, unit)
+        Walker::with_source(
+            machine,
+            Source::Replay { taken, next: 0, at: start, lift: 0.0, needed: None },
+            params,
+            dro,
+            unit,
+        )
     }
 
     fn with_source(
@@ -364,7 +459,23 @@ impl<'a> Walker<'a> {
             ran: Vec::new(),
             last: None,
             known,
+            lifting: false,
         }
+    }
+
+    /// Moves the head by `dz` along machine Z (current units, `G91 G0 Z`, then G90) and
+    /// settles. `Err(true)`: the move ran but the settle failed (the head moved); `Err(false)`:
+    /// the controller refused the move (it did not).
+    fn move_z(&mut self, dz: f64) -> Result<(), (bool, VisionError)> {
+        let lines = vec![format!("G91 G0 Z{}", fixed(dz, MOVE_DECIMALS)), "G90".to_string()];
+        if let Source::Replay { lift, .. } = &mut self.source {
+            *lift += dz;
+            self.ran.extend(lines);
+            return Ok(());
+        }
+        self.machine.run_gcode(&lines).map_err(|e| (false, e.into()))?;
+        self.ran.extend(lines);
+        self.machine.dwell(self.params.trigger_settle_s()).map_err(|e| (true, e.into()))
     }
 
     /// The lines run so far, in order, and the last trigger's reading.
@@ -374,7 +485,7 @@ impl<'a> Walker<'a> {
 
     /// On a replay that ran out of readings: where the next capture must be taken (program
     /// frame).
-    pub(crate) fn needed(&self) -> Option<Point2<f64>> {
+    pub(crate) fn needed(&self) -> Option<WalkTarget> {
         match self.source {
             Source::Replay { needed, .. } => needed,
             Source::Live(_) => None,
@@ -423,9 +534,9 @@ impl<'a> Walker<'a> {
                     return Err(e);
                 }
             },
-            Source::Replay { taken, next, at, needed } => {
+            Source::Replay { taken, next, at, lift, needed } => {
                 let Some(&(pos, reading)) = taken.get(*next) else {
-                    *needed = Some(*at);
+                    *needed = Some(WalkTarget { at: *at, lift: *lift });
                     return Err(fail("a capture is needed to go on (the stepwise M283 walk)"));
                 };
                 *next += 1;
@@ -454,7 +565,7 @@ impl<'a> Walker<'a> {
             let chain = self.known.and_then(|(k, remap)| chain_with(self.params, k, remap).ok());
             self.dro.reading(chain.as_ref(), centred_px(self.params, native), &reading);
         }
-        self.shots.push(Shot { pos, native, reading, dot });
+        self.shots.push(Shot { pos, native, reading, dot, in_fit: !self.lifting });
         Ok(self.shots.len() - 1)
     }
 
@@ -542,10 +653,11 @@ pub(crate) fn quick(walker: &mut Walker<'_>, params: &Params, diameter: f64) -> 
         confirm_size: Vector2::new(cw, ch),
         size_error,
         bump_error,
+        k_change: k_change(params, walker.unit, k),
         date: walker.machine.now().iso_local(),
         warning: resolution_warning(params, &walker.shots),
     };
-    Ok(Solution { k, remap, tool_offset: None, report: CalReport::Quick(report) })
+    Ok(Solution { k, remap, tool_offset: None, centre: None, report: CalReport::Quick(report) })
 }
 
 /// How far (as a factor either way) the scale `Qd` implies may be from the scale the axis-detect
@@ -587,6 +699,177 @@ fn check_quick_scale(
         unit.short_name(),
         number(ratio)
     )))
+}
+
+/// Positions per axis of the calibration lift's grid (25 pairs of readings: the centre to
+/// ~0.7 px at 0.1 px noise and a 4 % lift; 16 left the ±4 % heights at 1.19× the floor).
+pub const LIFT_GRID: usize = 5;
+
+/// What the calibration lift came to.
+struct Lifted {
+    /// The measured `VisionPxCenterOffsetX/Y` (pixels) and 1σ (pixels), or `None` (keep both).
+    centre: Option<(Vector2<f64>, f64)>,
+    report: CentreReport,
+    /// Why a lift that was asked for did not measure the centre.
+    warning: Option<String>,
+}
+
+/// The calibration lift (see the module doc): reads the mark of dot `dot` (its centre at
+/// `around`, program frame) from a [`LIFT_GRID`]² grid of camera positions `±step` about it at
+/// the calibration height, rises `VisionCalibrationLift`, reads the same positions again, comes
+/// back down and fits the pixel the image shrank about.
+///
+/// Decision: a lift that cannot measure (the rise refused, a mark lost, a fit without a scale
+/// change) does not cost the calibration: the walk commits with the centre kept and a warning.
+/// Only a head that cannot come back down fails the walk (the verify walk and the commit
+/// would run at the wrong height).
+///
+/// # Errors
+/// The move back down failed.
+fn lift_centre(
+    walker: &mut Walker<'_>,
+    params: &Params,
+    around: Point2<f64>,
+    step: f64,
+    dot: usize,
+) -> Result<Lifted, VisionError> {
+    let lift_in = params.calibration_lift_in();
+    let lift = LengthUnit::Inch.convert(lift_in, walker.unit);
+    // `rose`: the head went up (and came back) before the lift gave up.
+    let kept = |rose: bool, note: String, warn: bool| Lifted {
+        centre: None,
+        report: CentreReport {
+            lift: if rose { lift } else { 0.0 },
+            measured: false,
+            offset_px: params.calibration.center_offset(),
+            sigma_px: params.px_center_sigma_px(),
+            pairs: 0,
+            working_distance: 0.0,
+            note: Some(note.clone()),
+        },
+        warning: warn.then_some(note),
+    };
+    if lift_in == 0.0 {
+        return Ok(kept(false, "VisionCalibrationLift is 0: calibrated at one height".into(), false));
+    }
+    let g = LIFT_GRID;
+    #[allow(clippy::cast_precision_loss)]
+    let t = |i: usize| -1.0 + 2.0 * i as f64 / (g - 1) as f64;
+    // Serpentine, so each move is one grid step.
+    let positions: Vec<Point2<f64>> = (0..g)
+        .flat_map(|i| (0..g).map(move |j| (i, if i % 2 == 0 { j } else { g - 1 - j })))
+        .map(|(i, j)| around + Vector2::new(t(i), t(j)) * step)
+        .collect();
+    walker.lifting = true;
+    let read = |walker: &mut Walker<'_>, at: &[Point2<f64>]| -> Result<Vec<Point2<f64>>, VisionError> {
+        let mut out = Vec::with_capacity(at.len());
+        for p in at {
+            walker.move_abs(*p)?;
+            let s = walker.shoot(dot)?;
+            out.push(walker.shots[s].native);
+        }
+        Ok(out)
+    };
+    let cannot = |what: &str, e: &VisionError| {
+        format!(
+            "the optical centre was not measured ({what}: {e}); VisionPxCenterOffset kept — the calibration \
+             stands at this height"
+        )
+    };
+    let before = match read(walker, &positions) {
+        Ok(v) => v,
+        // A stepwise walk that ran out of readings: the host captures, the replay goes on.
+        Err(e) if walker.needed().is_some() => {
+            walker.lifting = false;
+            return Err(e);
+        }
+        Err(e) => {
+            walker.lifting = false;
+            return Ok(kept(false, cannot("a reading at the calibration height failed", &e), true));
+        }
+    };
+    let risen;
+    let after = match walker.move_z(lift) {
+        Err((moved, e)) => {
+            risen = moved;
+            Err(cannot(if moved { "the lift did not settle" } else { "the lift move was refused" }, &e))
+        }
+        Ok(()) => {
+            risen = true;
+            let back: Vec<Point2<f64>> = positions.iter().rev().copied().collect();
+            read(walker, &back)
+                .map(|mut v| {
+                    v.reverse();
+                    v
+                })
+                .map_err(|e| cannot("a reading at the lifted height failed", &e))
+        }
+    };
+    walker.lifting = false;
+    if walker.needed().is_some() {
+        return Err(fail("a capture is needed to go on (the stepwise M283 walk)"));
+    }
+    if risen {
+        if let Err((moved, e)) = walker.move_z(-lift) {
+            return Err(if moved {
+                e
+            } else {
+                fail(format!(
+                    "the camera could not come back down from the calibration lift ({e}): it is {} {} above the \
+                     calibration height — lower Z by that much before cutting, then re-run M283",
+                    number(lift),
+                    walker.unit.short_name()
+                ))
+            });
+        }
+    }
+    let after = match after {
+        Ok(v) => v,
+        Err(note) => return Ok(kept(risen, note, true)),
+    };
+    let res = crate::module::capture::resolution(params);
+    let fit = match fit_centre(&before, &after, params.camera_noise_px()) {
+        Ok(fit) if fit.ratio < 1.0 => fit,
+        Ok(fit) => {
+            return Ok(kept(
+                true,
+                format!(
+                    "the optical centre was not measured: the image grew ×{} as the camera rose — check that +Z \
+                     moves the head up; VisionPxCenterOffset kept",
+                    number(1.0 / fit.ratio)
+                ),
+                true,
+            ))
+        }
+        Err(e) => return Ok(kept(true, cannot("the fit", &e.into()), true)),
+    };
+    let inside = (0.0..=res.x).contains(&fit.centre.x) && (0.0..=res.y).contains(&fit.centre.y);
+    if !inside {
+        return Ok(kept(
+            true,
+            format!(
+                "the optical centre was not measured: the lift put it at pixel ({:.1}, {:.1}), outside the \
+                 {}×{} image — check VisionCameraResX/ResY; VisionPxCenterOffset kept",
+                fit.centre.x, fit.centre.y, res.x, res.y
+            ),
+            true,
+        ));
+    }
+    let offset = fit.centre.coords - res * 0.5;
+    let sigma = fit.sigma.x.max(fit.sigma.y);
+    Ok(Lifted {
+        centre: Some((offset, sigma)),
+        report: CentreReport {
+            lift,
+            measured: true,
+            offset_px: offset,
+            sigma_px: sigma,
+            pairs: fit.pairs,
+            working_distance: lift * fit.ratio / (1.0 - fit.ratio),
+            note: None,
+        },
+        warning: None,
+    })
 }
 
 /// `M283 Cn`: walk, solve, verify (compensating for the offset not yet written); writes nothing.
@@ -633,6 +916,14 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
     // 3. The final K over every pair.
     let (k, k_rms) = solve_k(&walker.shots, &pairs, remap)?;
     walker.known = Some((k, remap));
+
+    // 3b. The optical centre from the lift over the last dot; the offset below is solved at it.
+    let lifted = lift_centre(walker, params, station, probe, nominal.len() - 1)?;
+    let mut solved = params.clone();
+    if let Some((offset, sigma)) = lifted.centre {
+        solved.calibration = solved.calibration.with_centre(offset, sigma)?;
+    }
+    let params = &solved;
     let chain: PixelChain = chain_with(params, k, remap)
         .map_err(|e| fail(format!("the solved K is unusable ({e}); check that the camera is rigidly mounted")))?;
     if k.determinant() <= 0.0 {
@@ -641,7 +932,7 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
 
     // 4. Sheet pose and camera offset from the dots.
     let mut sums = vec![(Vector2::zeros(), 0.0f64); nominal.len()];
-    for s in &walker.shots {
+    for s in walker.shots.iter().filter(|s| s.in_fit) {
         sums[s.dot].0 += (s.pos + chain.delta(s.native)).coords;
         sums[s.dot].1 += 1.0;
     }
@@ -693,11 +984,14 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
         verify,
         verify_rms,
         verify_max,
+        centre: lifted.report,
+        k_change: k_change(params, unit, k),
         triggers: walker.triggers,
         date: walker.machine.now().iso_local(),
-        warning: resolution_warning(params, &walker.shots),
+        warning: resolution_warning(params, &walker.shots).or(lifted.warning),
     };
-    Ok(Solution { k, remap, tool_offset: Some((tool, offset_written)), report: CalReport::Sheet(report) })
+    let centre = lifted.centre;
+    Ok(Solution { k, remap, tool_offset: Some((tool, offset_written)), centre, report: CalReport::Sheet(report) })
 }
 
 #[cfg(test)]

@@ -62,7 +62,9 @@ mod ser;
 pub mod sheets;
 pub mod text;
 
-pub use calibrate::{AxisReport, CalReport, Calibrate, DotVerify, QuickReport, SheetReport};
+pub use calibrate::{
+    AxisReport, CalReport, Calibrate, CentreReport, DotVerify, KChange, QuickReport, SheetReport, WalkTarget,
+};
 pub use controller::{Controller, CONTROLLERS};
 pub use driver::{CameraDriver, Capabilities, DriverError, DriverErrorKind, ImageRequest, Judgment, Reading};
 pub use error::VisionError;

@@ -50,17 +50,18 @@ impl CameraDriver for SimCamera {
         let (sigma, margin) = st.job_settings();
         let noise = (st.rng.gaussian() * sigma, st.rng.gaussian() * sigma);
         let axis = st.camera_axis();
-        let centre = Point2::from(st.optics.resolution() * 0.5);
+        let optics = st.optics();
+        let centre = Point2::from(optics.resolution() * 0.5);
         let seen: Vec<_> = st
             .marks
             .iter()
-            .map(|m| (m, st.optics.pixel(m.position - axis)))
-            .filter(|(_, p)| st.optics.in_view(*p, margin))
+            .map(|m| (m, optics.pixel(m.position - axis)))
+            .filter(|(_, p)| optics.in_view(*p, margin))
             .collect();
         let Some((mark, p)) = seen.iter().min_by(|a, b| (a.1 - centre).norm().total_cmp(&(b.1 - centre).norm())) else {
             return Ok(Reading { judgment: Judgment::Ng, count: Some(0), ..Reading::position(0.0, 0.0) });
         };
-        let (width_px, height_px) = st.optics.size_px(mark.diameter);
+        let (width_px, height_px) = optics.size_px(mark.diameter);
         let camera = &st.world.camera;
         let seen_angle =
             if camera.mirror { -(mark.angle_deg - camera.rotation_deg) } else { mark.angle_deg - camera.rotation_deg };

@@ -72,11 +72,11 @@ impl Sim {
     pub fn clear_radius_px(&self) -> Option<f64> {
         let st = self.lock();
         let look = st.world.camera.image.clone().unwrap_or_default();
-        let origin = st.optics.pixel(vision_math::Vector2::zeros());
+        let origin = st.optics().pixel(vision_math::Vector2::zeros());
         let mut closest: Option<(f64, f64)> = None;
         for (i, a) in st.marks.iter().enumerate() {
             for b in &st.marks[i + 1..] {
-                let d = (st.optics.pixel(a.position - b.position) - origin).norm();
+                let d = (st.optics().pixel(a.position - b.position) - origin).norm();
                 let r = 0.5 * mean_size(&st, a.diameter.max(b.diameter));
                 if closest.is_none_or(|(c, _)| d < c) {
                     closest = Some((d, r));
@@ -105,7 +105,7 @@ impl Sim {
 }
 
 fn mean_size(st: &State, diameter: f64) -> f64 {
-    let (w, h) = st.optics.size_px(diameter);
+    let (w, h) = st.optics().size_px(diameter);
     0.5 * (w + h)
 }
 
@@ -114,14 +114,14 @@ fn defocus_pct(st: &State) -> f64 {
     let camera = &st.world.camera;
     let look = camera.image.clone().unwrap_or_default();
     let focus = look.focus_distance.or(camera.reference_working_distance).unwrap_or(camera.working_distance);
-    (camera.working_distance - focus).abs() / focus * 100.0
+    (st.working_distance() - focus).abs() / focus * 100.0
 }
 
 /// The scene the camera sees now, the true mark centres (native pixels) and the diameter.
 fn scene(st: &State) -> (Scene, Vec<Point2<f64>>, f64) {
     let look = st.world.camera.image.clone().unwrap_or_default();
     let camera = &st.world.camera;
-    let res = st.optics.resolution();
+    let res = st.optics().resolution();
     let axis = st.camera_axis();
     let centre = Point2::from(res * 0.5);
     let blur = look.blur_px + look.defocus_px_per_pct * defocus_pct(st);
@@ -131,7 +131,7 @@ fn scene(st: &State) -> (Scene, Vec<Point2<f64>>, f64) {
         .map(|m| {
             let seen_deg =
                 if camera.mirror { -(m.angle_deg - camera.rotation_deg) } else { m.angle_deg - camera.rotation_deg };
-            (st.optics.pixel(m.position - axis), mean_size(st, m.diameter), seen_deg)
+            (st.optics().pixel(m.position - axis), mean_size(st, m.diameter), seen_deg)
         })
         // Anything that reaches into the frame (with its blur) is drawn, clipped or not.
         .filter(|(p, d, _)| {

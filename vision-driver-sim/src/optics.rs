@@ -6,6 +6,10 @@
 //!
 //! `p = res/2 + bias + (K·R)⁻¹·v`, with `K·R = s·Rot(φ)·[[a·m, 0], [0, −1]]`.
 //!
+//! The scale follows the working distance, which follows the head's Z ([`crate::World`]'s
+//! `camera.focus_z`): a point on the optical axis (`v` = 0) images at the optical centre
+//! `res/2 + bias` at every height, and the image grows or shrinks about it.
+//!
 //! (Image +y points down, hence the −1.) This is exactly the core's pixel chain run backwards,
 //! so with the right K, remap and centre offset the core recovers `v` exactly.
 
@@ -25,11 +29,20 @@ pub struct Optics {
 }
 
 impl Optics {
-    /// The optics of `mount` (validated by [`crate::World::validate`]).
+    /// The optics of `mount` (validated by [`crate::World::validate`]) with the spindle at the
+    /// mount's focus Z (working distance `mount.working_distance`).
     #[must_use]
     pub fn new(mount: &CameraMount) -> Optics {
+        Optics::at(mount, mount.working_distance)
+    }
+
+    /// The optics of `mount` at lens-to-surface distance `working_distance` (world unit,
+    /// positive): the image scales about the optical centre (`center_bias_px`), the one pixel
+    /// that sees the same table point at every distance.
+    #[must_use]
+    pub fn at(mount: &CameraMount, working_distance: f64) -> Optics {
         let reference = mount.reference_working_distance.unwrap_or(mount.working_distance);
-        let s = mount.units_per_pixel * mount.working_distance / reference;
+        let s = mount.units_per_pixel * working_distance / reference;
         let m = if mount.mirror { -1.0 } else { 1.0 };
         let (sin, cos) = mount.rotation_deg.to_radians().sin_cos();
         let kr = Matrix2::new(cos, -sin, sin, cos) * Matrix2::new(s * mount.pixel_aspect * m, 0.0, 0.0, -s);
@@ -117,6 +130,33 @@ mod tests {
         let v = Vector2::new(0.31, -0.77);
         assert_relative_eq!(o.offset(o.pixel(v)), v, epsilon = 1e-12);
         assert!(o.kr().determinant() > 0.0, "a mirrored image flips handedness");
+    }
+
+    #[test]
+    fn raising_the_head_shrinks_the_image_about_the_optical_centre() {
+        use crate::{Sim, SimMachine};
+        let mut world = World::default_world();
+        world.camera.noise_px = 0.0;
+        world.camera.center_bias_px = [4.5, -3.0];
+        let sim = Sim::new(world.clone()).expect("sim");
+        let mut machine = SimMachine::new(&sim).expect("machine");
+        let before = sim.optics();
+        let wd = world.camera.working_distance;
+        let mut ignore = |_: &vision_gcode::Event| {};
+        machine.run_program("G91 G0 Z0.25\nG90\n", None, &mut ignore).expect("lift");
+        let after = sim.optics();
+        // K grows with the working distance, one for one with Z.
+        assert_relative_eq!(after.kr(), before.kr() * ((wd + 0.25) / wd), epsilon = 1e-15);
+        // The optical centre sees the same table point at both heights; every other pixel
+        // moves towards it by the ratio of the distances.
+        let centre = Point2::from(before.resolution() * 0.5 + before.bias());
+        assert_relative_eq!(after.pixel(Vector2::zeros()), centre, epsilon = 1e-9);
+        let v = Vector2::new(0.5, -0.3);
+        let moved = centre + (before.pixel(v) - centre) * (wd / (wd + 0.25));
+        assert_relative_eq!(after.pixel(v), moved, epsilon = 1e-9);
+        // Back down: as before.
+        machine.run_program("G91 G0 Z-0.25\nG90\n", None, &mut ignore).expect("down");
+        assert_relative_eq!(sim.optics().kr(), before.kr(), epsilon = 1e-15);
     }
 
     #[test]

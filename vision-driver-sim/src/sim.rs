@@ -17,7 +17,6 @@ use crate::world::{Fixture, Job, World};
 #[derive(Debug)]
 pub(crate) struct State {
     pub(crate) world: World,
-    pub(crate) optics: Optics,
     /// Marks of every present fixture, machine coordinates.
     pub(crate) marks: Vec<TrueMark>,
     /// Where the spindle is.
@@ -61,6 +60,21 @@ impl State {
         (job.and_then(|j| j.noise_px).unwrap_or(c.noise_px), job.and_then(|j| j.margin_px).unwrap_or(c.margin_px))
     }
 
+    /// Lens-to-surface distance now, world unit: the world's at its focus Z, plus how far the
+    /// head rose since. Held at 1 % of the world's when the head went lower than the surface
+    /// (the simulator does not model a crash).
+    pub(crate) fn working_distance(&self) -> f64 {
+        let camera = &self.world.camera;
+        let focus_z = camera.focus_z.unwrap_or(self.world.machine.start[2]);
+        let wd = camera.working_distance + (self.spindle().z - focus_z);
+        wd.max(0.01 * camera.working_distance)
+    }
+
+    /// The true optics with the head where it is now.
+    pub(crate) fn optics(&self) -> Optics {
+        Optics::at(&self.world.camera, self.working_distance())
+    }
+
     /// The optical axis, machine coordinates.
     pub(crate) fn camera_axis(&self) -> Point2<f64> {
         let spindle = self.spindle();
@@ -94,7 +108,6 @@ impl Sim {
     pub fn new(world: World) -> Result<Sim, SimError> {
         world.validate()?;
         let state = State {
-            optics: Optics::new(&world.camera),
             marks: place(&world),
             head: Head::Parked(Point3::from(world.machine.start)),
             rng: Rng::new(world.seed),
@@ -124,10 +137,16 @@ impl Sim {
         self.lock().world.length_unit()
     }
 
-    /// The true optics.
+    /// The true optics with the head where it is now (the scale follows its Z).
     #[must_use]
     pub fn optics(&self) -> Optics {
-        self.lock().optics
+        self.lock().optics()
+    }
+
+    /// Lens-to-surface distance with the head where it is now, world unit.
+    #[must_use]
+    pub fn working_distance(&self) -> f64 {
+        self.lock().working_distance()
     }
 
     /// Spindle position, machine coordinates, world unit: the world's start, or where the

@@ -45,7 +45,7 @@ impl Sim {
     #[must_use]
     pub fn true_camera_offset(&self, px_center_offset: Vector2<f64>, unit: LengthUnit) -> Vector2<f64> {
         let st = self.lock();
-        let v = Vector2::from(st.world.camera.offset) + st.optics.kr() * (px_center_offset - st.optics.bias());
+        let v = Vector2::from(st.world.camera.offset) + st.optics().kr() * (px_center_offset - st.optics().bias());
         v * st.world.length_unit().factor_to(unit)
     }
 

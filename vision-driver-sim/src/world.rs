@@ -127,8 +127,15 @@ pub struct CameraMount {
     /// sensor).
     #[serde(default, deserialize_with = "exact::array")]
     pub center_bias_px: [f64; 2],
-    /// Lens-to-surface distance now, world unit. The scale on the table is proportional to it.
+    /// Lens-to-surface distance with the spindle at `focus_z`, world unit. The scale on the
+    /// table is proportional to the distance, which grows one for one with the machine's Z (the
+    /// camera rides on the head): `working_distance + (Z − focus_z)`.
     pub working_distance: f64,
+    /// The spindle's machine Z at which `working_distance` holds, world unit (defaults to the
+    /// start Z, `machine.start[2]`: a world whose head never moves in Z sees what it did before
+    /// the camera followed Z).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub focus_z: Option<f64>,
     /// The distance at which `units_per_pixel` holds, world unit (defaults to
     /// `working_distance`).
     #[serde(default)]
@@ -423,6 +430,9 @@ impl World {
         positive("camera.working_distance", c.working_distance, MAX_LENGTH)?;
         if let Some(r) = c.reference_working_distance {
             positive("camera.reference_working_distance", r, MAX_LENGTH)?;
+        }
+        if let Some(z) = c.focus_z {
+            lengths("camera.focus_z", &[z])?;
         }
         for (i, r) in c.resolution.iter().enumerate() {
             if !(2..=100_000).contains(r) {

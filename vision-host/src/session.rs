@@ -4,9 +4,10 @@ use std::path::Path;
 
 use vision_core::{
     CaptureStep, DriverRegistry, Machine, ProfileStore, StepwiseCapture, StepwiseWalk, VisionError, VisionModule,
+    WalkTarget,
 };
 use vision_math::linuxcnc::LinuxCncAlignment;
-use vision_math::{AlignmentChain, Point2, Vector2};
+use vision_math::{AlignmentChain, Vector2};
 use vision_mcode::{McodeError, Outcome, VisionCall};
 
 use crate::error::HostError;
@@ -172,13 +173,14 @@ impl Session {
         Ok(())
     }
 
-    /// The next point of the walk to move to (program frame, current units), or `None` when
-    /// the walk has every capture it needs. It depends on the captures so far.
+    /// The next target of the walk (program frame X/Y and the height above the walk's start Z,
+    /// current units; move Z first), or `None` when the walk has every capture it needs. It
+    /// depends on the captures so far.
     ///
     /// # Errors
     /// No walk in progress, the walk failed on its captures (M283's message; the walk is
     /// dropped and nothing written), or the machine's failure.
-    pub fn walk_next(&mut self, machine: &mut dyn Machine) -> Result<Option<Point2<f64>>, HostError> {
+    pub fn walk_next(&mut self, machine: &mut dyn Machine) -> Result<Option<WalkTarget>, HostError> {
         self.walk_step(machine, |module, machine, walk| module.m283_next(machine, walk))
     }
 
@@ -266,7 +268,7 @@ fn apply_summary(linuxcnc: Option<&LinuxCncAlignment>) -> String {
 mod tests {
     use super::*;
     use vision_core::{Capture, Judgment, Reply};
-    use vision_math::LengthUnit;
+    use vision_math::{LengthUnit, Point2};
 
     #[test]
     fn the_status_line_carries_the_calls_warning() {

@@ -31,6 +31,8 @@ struct FakeLinuxCnc {
     tool: u32,
     /// The spindle, machine coordinates.
     spindle: Vector2<f64>,
+    /// The spindle's Z, machine coordinates (program Z: no Z offsets here).
+    z: f64,
     incremental: bool,
     /// Distance modes saved by M70, newest last.
     saved: Vec<bool>,
@@ -60,6 +62,7 @@ impl FakeLinuxCnc {
             tools: BTreeMap::from([(camera, -camera_offset), (1, Vector2::zeros())]),
             tool: camera,
             spindle,
+            z: world.machine.start[2],
             incremental: false,
             saved: Vec::new(),
             params: BTreeMap::new(),
@@ -134,6 +137,12 @@ impl Machine for FakeLinuxCnc {
         } else if has(52.0) {
             self.g92 = Vector2::new(word('X').unwrap_or(self.g92.x), word('Y').unwrap_or(self.g92.y));
         } else if has(0.0) {
+            if let Some(z) = word('Z') {
+                self.z = if self.incremental { self.z + z } else { z };
+                let mut ignore = |_: &vision_gcode::Event| {};
+                let line = format!("G53 G0 Z{}", self.z);
+                self.machine.context(&mut ignore).execute(&line).expect("a G53 Z move");
+            }
             let now = self.program();
             let target = if self.incremental {
                 Point2::new(now.x + word('X').unwrap_or(0.0), now.y + word('Y').unwrap_or(0.0))
@@ -404,7 +413,8 @@ fn calibration_rig(base_deg: f64, table_error: Vector2<f64>) -> (Session, FakeLi
     (Session::new(module), host)
 }
 
-/// The stepwise walk as m283.ngc drives it: next point, `G0` there, capture; then finish.
+/// The stepwise walk as m283.ngc drives it: next target, `G0` to its height (the walk starts
+/// at Z 0 here) and then its X/Y, capture; then finish.
 fn walk_stepwise(
     session: &mut Session,
     host: &mut FakeLinuxCnc,
@@ -412,8 +422,9 @@ fn walk_stepwise(
 ) -> Result<vision_mcode::Outcome, HostError> {
     session.walk_begin(host, words)?;
     let mut captures = 0;
-    while let Some(p) = session.walk_next(host)? {
-        host.execute(&format!("G0 X{} Y{}", p.x, p.y))?;
+    while let Some(t) = session.walk_next(host)? {
+        host.execute(&format!("G0 Z{}", t.lift))?;
+        host.execute(&format!("G0 X{} Y{}", t.at.x, t.at.y))?;
         session.walk_capture(host)?;
         captures += 1;
         assert!(captures < 100, "the walk does not end");
@@ -448,6 +459,9 @@ fn the_stepwise_walk_solves_and_commits_as_the_one_shot_m283() {
         let (k1, k2) = match (want, got) {
             (vision_core::CalReport::Sheet(a), vision_core::CalReport::Sheet(b)) => {
                 assert_eq!(a.triggers, b.triggers);
+                // The calibration lift ran stepwise too (Z first, then X/Y): the same centre.
+                assert!(a.centre.measured && b.centre.measured, "{:?}\n{:?}", a.centre, b.centre);
+                assert!((a.centre.offset_px - b.centre.offset_px).norm() < 1e-6, "{:?}\n{:?}", a.centre, b.centre);
                 assert_eq!(a.verify.len(), b.verify.len());
                 assert!((a.offset_written - b.offset_written).norm() < 1e-9, "{a:?}\n{b:?}");
                 assert!((a.verify_rms - b.verify_rms).abs() < 1e-9, "{a:?}\n{b:?}");
@@ -492,7 +506,7 @@ fn an_ng_capture_stops_the_walk_and_writes_nothing() {
     host.execute("G0 X30 Y30").expect("off the sheet");
     let before = (session.module().params().cal_k(), host.tools.clone());
     session.walk_begin(&mut host, &[('P', 1.0)]).expect("begun");
-    let p = session.walk_next(&mut host).expect("a point").expect("the first capture");
+    let p = session.walk_next(&mut host).expect("a point").expect("the first capture").at;
     host.execute(&format!("G0 X{} Y{}", p.x, p.y)).expect("a move");
     let e = session.walk_capture(&mut host).expect_err("no mark out there");
     assert!(e.to_string().contains("lost the mark"), "{e}");
@@ -514,8 +528,9 @@ fn steps_out_of_order_are_refused_and_keep_the_walk() {
     let e = session.walk_finish(&mut host).expect_err("nothing captured");
     assert!(e.to_string().contains("the walk is not done"), "{e}");
     // Still the same walk: it runs to the end from here.
-    while let Some(p) = session.walk_next(&mut host).expect("a point") {
-        host.execute(&format!("G0 X{} Y{}", p.x, p.y)).expect("a move");
+    while let Some(t) = session.walk_next(&mut host).expect("a point") {
+        host.execute(&format!("G0 Z{}", t.lift)).expect("a move");
+        host.execute(&format!("G0 X{} Y{}", t.at.x, t.at.y)).expect("a move");
         session.walk_capture(&mut host).expect("a capture");
     }
     session.walk_finish(&mut host).expect("calibrated");

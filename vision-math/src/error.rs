@@ -100,6 +100,18 @@ pub enum MathError {
         /// The gate, percent.
         max_dev_pct: f64,
     },
+    /// Two sets of readings meant to differ in image scale (a calibration lift) do not: the
+    /// height change did not reach the camera's image, or was lost in the noise.
+    #[error(
+        "the image scale did not change measurably between the two heights (ratio {ratio:.5} ± {sigma:.5}); \
+         check that the lift moves the camera (VisionCalibrationLift) and that the camera moves with the head"
+    )]
+    NoScaleChange {
+        /// The measured scale ratio (second height over first), dimensionless.
+        ratio: f64,
+        /// Its 1σ, dimensionless.
+        sigma: f64,
+    },
     /// K is all zero: the camera has not been calibrated.
     #[error("K matrix is zero; run M283 to calibrate first")]
     NotCalibrated,

@@ -28,6 +28,7 @@
 //! ```
 
 pub mod bounds;
+pub mod centre;
 pub mod chain;
 mod error;
 pub mod fit;
@@ -37,6 +38,7 @@ pub mod scale;
 pub mod show;
 pub mod units;
 
+pub use centre::{fit_centre, CentreFit};
 pub use chain::AlignmentChain;
 pub use error::MathError;
 pub use fit::{

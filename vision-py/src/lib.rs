@@ -191,12 +191,14 @@ impl PySession {
         self.on_host(host, |session, host| session.walk_begin(host, &words))
     }
 
-    /// `walk_next(host)`: the walk's next point, `(x, y)` in the program frame and units, for
-    /// `m283.ngc` to move to before `walk_capture`; `None` when the walk has every capture. It
-    /// depends on the captures so far. Raises `VisionError` (no walk, or the walk failed).
-    fn walk_next(&self, host: Bound<'_, PyAny>) -> PyResult<Option<(f64, f64)>> {
+    /// `walk_next(host)`: the walk's next target, `(x, y, lift)`: X, Y in the program frame
+    /// and units, and the height above the Z the walk started at (program units; 0, or
+    /// `VisionCalibrationLift` while the calibration lift reads), for `m283.ngc` to move to (Z
+    /// first) before `walk_capture`; `None` when the walk has every capture. It depends on the
+    /// captures so far. Raises `VisionError` (no walk, or the walk failed).
+    fn walk_next(&self, host: Bound<'_, PyAny>) -> PyResult<Option<(f64, f64, f64)>> {
         let next = self.on_host(host, |session, host| session.walk_next(host))?;
-        Ok(next.map(|p| (p.x, p.y)))
+        Ok(next.map(|t| (t.at.x, t.at.y, t.lift)))
     }
 
     /// `walk_capture(host)`: triggers where the machine now is, for the point `walk_next` gave
@@ -224,7 +226,8 @@ impl PySession {
     /// `profile` opens the session from that profile file instead, as `Session(profile)` does
     /// (M283 and M284 save to it; `calibrated` has no effect), with the simulated camera
     /// available to its `VisionDriver` as `Sim`. Before each call the simulated head is put
-    /// where `host.machine_position()` (machine X, Y, program units) says the machine is.
+    /// where `host.machine_position()` (machine X, Y and optionally Z, program units) says the
+    /// machine is.
     #[cfg(any(test, feature = "sim"))]
     #[staticmethod]
     #[pyo3(signature = (
@@ -394,7 +397,7 @@ class Host:
     sheet's first dot; moves are the walk's, made by setting x, y as m283.ngc's G0 does."""
 
     def __init__(self):
-        self.x, self.y = -2.5, -4.0
+        self.x, self.y, self.z = -2.5, -4.0, 0.0
         self.tools = {TOOL: tuple(setup["camera_table_offset"])}
         self.pounds = {5220: 1.0, 5221: setup["work_offset"][0], 5222: setup["work_offset"][1]}
         self.messages = []
@@ -404,7 +407,7 @@ class Host:
 
     def machine_position(self):
         (wx, wy), (tx, ty) = setup["work_offset"], self.tools[TOOL]
-        return (wx + self.x + tx, wy + self.y + ty)
+        return (wx + self.x + tx, wy + self.y + ty, self.z)
 
     def xy_rotation_deg(self):
         return 0.0
@@ -454,7 +457,7 @@ def calibrate(session):
         point = session.walk_next(host)
         if point is None:
             break
-        host.x, host.y = point
+        host.x, host.y, host.z = point
         session.walk_capture(host)
     session.walk_finish(host)
     assert any("calibration done and saved" in m for m in host.messages), host.messages

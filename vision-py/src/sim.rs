@@ -86,11 +86,18 @@ impl Simulated {
     }
 
     /// Parks the simulated head where `host.machine_position()` says the machine is (machine
-    /// X, Y in the program's units, converted to the world's).
+    /// X, Y and, when it gives one, Z, in the program's units, converted to the world's; without
+    /// a Z the head keeps its height). The camera's working distance follows that Z.
     pub(crate) fn place_head(&self, host: &PyHost<'_>) -> Result<(), HostError> {
-        let (x, y): (f64, f64) = host.value("machine_position", (), "an (x, y) pair of numbers")?;
+        let (x, y, z): (f64, f64, Option<f64>) = match host.value::<(f64, f64, f64)>("machine_position", (), "") {
+            Ok((x, y, z)) => (x, y, Some(z)),
+            Err(_) => {
+                let (x, y) = host.value("machine_position", (), "an (x, y) or (x, y, z) tuple of numbers")?;
+                (x, y, None)
+            }
+        };
         let (from, to) = (host.units()?, self.rig.sim.unit());
-        let z = self.rig.sim.spindle().z;
+        let z = z.map_or(self.rig.sim.spindle().z, |z| from.convert(z, to));
         self.rig.sim.place_head(Point3::new(from.convert(x, to), from.convert(y, to), z));
         Ok(())
     }

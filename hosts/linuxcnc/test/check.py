@@ -306,6 +306,10 @@ def calibrations(check, rig, module):
     report = next((i for i, (n, a) in enumerate(calls) if n == "MESSAGE" and "M283:" in a), 0)
     walk = [p for i, p, _ in motions(calls) if calls[i][0] == "STRAIGHT_TRAVERSE" and i < report][1:]
     check.that(case, len(set(walk)) >= 5, "the walk moved to %d points (%d distinct)" % (len(walk), len(set(walk))))
+    # The calibration lift (VisionCalibrationLift, 0.25 in): m283.ngc rose and came back down.
+    zs = [numbers(calls[i][1])[2] for i, _, _ in motions(calls) if calls[i][0] == "STRAIGHT_TRAVERSE" and i < report]
+    rose = max(zs) - min(zs) if zs else 0.0
+    check.that(case, abs(rose - 0.25) < 1e-6 and abs(zs[-1] - zs[0]) < 1e-9, "the lift rose %.6f in and came back to Z %s" % (rose, zs[-1:]))
     worst = lands(check, case, calls, simulated(module, sim), TOLERANCE_IN)
     print("     landing error after calibrating: %.6f in" % worst)
 

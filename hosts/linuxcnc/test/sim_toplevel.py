@@ -20,16 +20,18 @@ class SimHost(remap.Host):
     """remap.Host plus machine_position(), which only the simulated camera asks for."""
 
     def machine_position(self):
-        """Machine X, Y (program units) by LinuxCNC's canon; current_x follows self.execute()
-        within a handler, where #5420 lags."""
+        """Machine X, Y, Z (program units) by LinuxCNC's canon; current_x follows
+        self.execute() within a handler, where #5420 lags. Z (no rotation acts on it) is what
+        the simulated camera's working distance follows."""
         i = self._interp
-        return machine_xy(
+        x, y = machine_xy(
             (i.origin_offset_x, i.origin_offset_y),
             i.rotation_xy,
             (i.current_x, i.current_y),
             (i.axis_offset_x, i.axis_offset_y),
             (i.tool_offset.x, i.tool_offset.y),
         )
+        return (x, y, i.origin_offset_z + i.current_z + i.axis_offset_z + i.tool_offset.z)
 
 
 def simulated(config):

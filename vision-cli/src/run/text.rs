@@ -8,6 +8,17 @@ use vision_math::{Matrix2, Remap};
 use super::report::{ProgramReport, Report, Step};
 
 /// Lengths: 5 decimals (0.01 thou in inches, 10 nm in millimetres).
+/// The working-distance change a calibration's K implies against the previous one's.
+fn k_change(s: &mut String, change: Option<&vision_core::KChange>, unit: &str) {
+    if let Some(c) = change {
+        let _ = writeln!(
+            s,
+            "              working distance {:+.3} % ({:+.4} {unit}) from the previous calibration's K",
+            c.change_pct, c.change
+        );
+    }
+}
+
 fn l(v: f64) -> String {
     vision_math::chain::fixed(v, 5)
 }
@@ -246,6 +257,30 @@ fn step(s: &mut String, step: &Step, world_unit: &str) {
             );
             let (b, w) = (r.offset_before, r.offset_written);
             let _ = writeln!(s, "              T{} offset {} -> {} {unit}", r.tool, xy(b.x, b.y), xy(w.x, w.y));
+            k_change(s, r.k_change.as_ref(), unit);
+            let c = &r.centre;
+            if c.measured {
+                let _ = writeln!(
+                    s,
+                    "              optical centre: offset ({:.2}, {:.2}) px ± {:.2} px from a {} {unit} lift ({} pairs, \
+                     working distance {} {unit})",
+                    c.offset_px.x,
+                    c.offset_px.y,
+                    c.sigma_px,
+                    l(c.lift),
+                    c.pairs,
+                    l(c.working_distance)
+                );
+            } else {
+                let sigma = if c.sigma_px > 0.0 { format!(" ± {:.2} px", c.sigma_px) } else { String::new() };
+                let _ = writeln!(
+                    s,
+                    "              optical centre not measured, offset ({:.2}, {:.2}) px{sigma} kept: {}",
+                    c.offset_px.x,
+                    c.offset_px.y,
+                    c.note.as_deref().unwrap_or("no lift")
+                );
+            }
             for v in &r.verify {
                 let _ = writeln!(
                     s,
@@ -275,6 +310,7 @@ fn step(s: &mut String, step: &Step, world_unit: &str) {
                 l(q.size_error),
                 l(q.bump_error)
             );
+            k_change(s, q.k_change.as_ref(), unit);
             warning(s, q.warning.as_deref());
         }
         Step::Job { line, report } => {

@@ -190,9 +190,10 @@ impl VisionModule {
         // What of the scale the captures still carry: its 1σ once corrected, else all of it.
         let scale_sigma = scale.map_or(0.0, |e| if correct { e.sigma } else { e.error.hypot(e.sigma) });
         // And the shift a misplaced optical centre makes at this height (unmeasurable: it moves
-        // every capture alike, as the part's own shift would): ε × the centre's uncertainty.
-        let shift_sigma =
-            scale.map_or(0.0, |e| e.error.hypot(e.sigma) * self.params.center_uncertainty_px() * self.k_largest(unit));
+        // every capture alike, as the part's own shift would): ε × the centre's uncertainty,
+        // the calibration lift's 1σ when it measured the centre, else the allowance.
+        let centre_px = self.params.calibration.center_sigma().unwrap_or(self.params.center_uncertainty_px());
+        let shift_sigma = scale.map_or(0.0, |e| e.error.hypot(e.sigma) * centre_px * self.k_largest(unit));
         let model = match mode {
             RunMode::Rectangle => Model::Rectangle,
             RunMode::Similarity => Model::Similarity,

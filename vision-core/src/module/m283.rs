@@ -5,7 +5,7 @@ use vision_math::{AlignmentChain, LengthUnit, Point2, Vector2};
 
 use super::capture::pixel_chain;
 use super::{Reply, VisionModule};
-use crate::calibrate::{absolute_move, quick, sheet_walk, CalReport, Calibrate, Solution, Walker};
+use crate::calibrate::{absolute_move, quick, sheet_walk, CalReport, Calibrate, Solution, WalkTarget, Walker};
 use crate::controller;
 use crate::driver::Reading;
 use crate::error::VisionError;
@@ -36,8 +36,8 @@ pub struct StepwiseWalk {
     tool: u32,
     start: Point2<f64>,
     taken: Vec<(Point2<f64>, Reading)>,
-    /// The point [`VisionModule::m283_next`] last gave, until it is captured.
-    pending: Option<Point2<f64>>,
+    /// The target [`VisionModule::m283_next`] last gave, until it is captured.
+    pending: Option<WalkTarget>,
 }
 
 impl StepwiseWalk {
@@ -56,8 +56,8 @@ impl StepwiseWalk {
 
 /// What a replay of a stepwise walk came to.
 enum Replayed {
-    /// It needs a capture at this point (program frame).
-    Needs(Point2<f64>),
+    /// It needs a capture at this target.
+    Needs(WalkTarget),
     /// It has every reading: the solution to commit, and the last reading.
     Done { solution: Box<Solution>, last: Option<Reading> },
     /// It failed on the readings so far.
@@ -71,15 +71,16 @@ impl VisionModule {
     ///
     /// * [`Calibrate::Quick`]: K = diag(d/width_px, d/height_px) (width and height along the
     ///   remapped axes), then re-triggers to confirm; no tool offset is written.
-    /// * [`Calibrate::Sheet`]: walks the sheet, solves the full K, the sheet pose and the camera
-    ///   tool's X/Y offset by least squares, re-walks every dot in G90 and reports (see
-    ///   [`crate::calibrate`]). The offset goes to `VisionCameraToolNumber`, or to the active
+    /// * [`Calibrate::Sheet`]: walks the sheet, solves the full K, measures the optical centre
+    ///   by the calibration lift (`VisionCalibrationLift`; Z comes back before the verify),
+    ///   solves the sheet pose and the camera tool's X/Y offset at it by least squares, re-walks
+    ///   every dot in G90 and reports (see [`crate::calibrate`]). The offset goes to `VisionCameraToolNumber`, or to the active
     ///   tool when that is 0.
     ///
     /// The walk writes nothing; its solution is applied here, in one place, or not at all:
     /// 1. the new [`crate::Calibration`] (K11..K22, the remap flags, `Cal_Date` from the machine
-    ///    clock, `Cal_Units` = the machine's unit; the pixel centre offset is kept) is built and
-    ///    validated;
+    ///    clock, `Cal_Units` = the machine's unit; the pixel centre offset and its σ as the
+    ///    calibration lift measured them, or kept) is built and validated;
     /// 2. the camera tool's offset is written to the machine's tool table (sheet walk only);
     /// 3. the profile is saved atomically, and only then the module takes the new calibration.
     ///
@@ -232,8 +233,9 @@ impl VisionModule {
         Ok(StepwiseWalk { mode, tool, start, taken: Vec::new(), pending: None })
     }
 
-    /// The next point the stepwise walk must capture at (program frame, current units), or
-    /// `None` when it has every reading it needs.
+    /// The next target the stepwise walk must capture at (program frame X/Y and the height
+    /// above the walk's start Z, current units), or `None` when it has every reading it needs.
+    /// The host moves Z first, then X/Y: the lift rises and comes down over the last dot.
     ///
     /// # Errors
     /// The walk failed on the readings so far (as [`VisionModule::m283`] would: e.g. the axis
@@ -242,7 +244,7 @@ impl VisionModule {
         &mut self,
         machine: &mut dyn Machine,
         walk: &mut StepwiseWalk,
-    ) -> Result<Option<Point2<f64>>, VisionError> {
+    ) -> Result<Option<WalkTarget>, VisionError> {
         walk.pending = match self.replay(machine, walk) {
             Replayed::Needs(at) => Some(at),
             Replayed::Done { .. } => None,
@@ -332,8 +334,11 @@ impl VisionModule {
 
     /// Applies a calibration solution: all of it, or nothing (see [`VisionModule::m283`]).
     fn apply_calibration(&mut self, machine: &mut dyn Machine, solution: Solution) -> Result<CalReport, VisionError> {
-        let calibration =
+        let mut calibration =
             self.params.calibration.solved(solution.k, solution.remap, machine.units()?, solution.report.date())?;
+        if let Some((offset, sigma)) = solution.centre {
+            calibration = calibration.with_centre(offset, sigma)?;
+        }
         let next = Params { calibration, ..self.params.clone() };
         let restore = match solution.tool_offset {
             Some((tool, offset)) => {

@@ -3,7 +3,7 @@
 
 use vision_math::{LengthUnit, Matrix2, Remap, Vector2};
 
-use super::checks::{any, finite, pixel_offset, short_text};
+use super::checks::{any, finite, noise_px_wide, pixel_offset, short_text};
 use super::ParamValue;
 use crate::error::VisionError;
 
@@ -12,9 +12,11 @@ profile_part! {
     /// offset. M283 replaces it as a whole (see [`crate::calibrate`]).
     ///
     /// Decision: `VisionPxCenterOffsetX/Y` belong here, as the manual lists them: they describe
-    /// the camera's optics like K does, and are persisted with it. M283 does not solve them
-    /// (the sheet walk absorbs a centre bias into the camera tool offset), so a calibration
-    /// keeps the offset it had.
+    /// the camera's optics like K does, and are persisted with it. The sheet walk with
+    /// `VisionCalibrationLift` > 0 measures them (the pixel that sees the same table point at
+    /// two heights) with their 1σ (`VisionPxCenterSigmaPx`); a calibration that does not measure
+    /// them keeps both: the walk solves the camera offset at whatever reference pixel the
+    /// profile holds, so a centre measured before stays as good as it was.
     Calibration in calibration {
         /// `VisionCameraSwapXY`: swap the centred pixel x and y (set by M283's axis detect).
         (Calibration) camera_swap_xy: bool => bool = false, "VisionCameraSwapXY", any;
@@ -39,6 +41,10 @@ profile_part! {
         (Calibration) px_center_offset_x: f64 => f64 = 0.0, "VisionPxCenterOffsetX", pixel_offset;
         /// `VisionPxCenterOffsetY`: same, Y, pixels.
         (Calibration) px_center_offset_y: f64 => f64 = 0.0, "VisionPxCenterOffsetY", pixel_offset;
+        /// `VisionPxCenterSigmaPx`: the 1σ per pixel axis of the optical centre M283's lift
+        /// measured (the larger axis's), pixels; 0 = not measured (the offset was set by hand or
+        /// set by hand), and M282 assumes `VisionCenterUncertaintyPx` instead.
+        (Calibration) px_center_sigma_px: f64 => f64 = 0.0, "VisionPxCenterSigmaPx", noise_px_wide;
     }
 }
 
@@ -136,6 +142,26 @@ impl Calibration {
     #[must_use]
     pub fn center_offset(&self) -> Vector2<f64> {
         Vector2::new(self.px_center_offset_x, self.px_center_offset_y)
+    }
+
+    /// The measured optical centre's 1σ per pixel axis, pixels, or `None` when it was not
+    /// measured (`VisionPxCenterSigmaPx` = 0).
+    #[must_use]
+    pub fn center_sigma(&self) -> Option<f64> {
+        (self.px_center_sigma_px > 0.0).then_some(self.px_center_sigma_px)
+    }
+
+    /// This calibration with the optical centre a lift measured: `offset` =
+    /// `VisionPxCenterOffsetX/Y` (pixels) and `sigma` its 1σ per axis (pixels, > 0).
+    ///
+    /// # Errors
+    /// [`VisionError::InvalidParam`] for an offset or σ out of range; `self` is unchanged.
+    pub fn with_centre(&self, offset: Vector2<f64>, sigma: f64) -> Result<Calibration, VisionError> {
+        let mut next = self.clone();
+        next.set_raw("VisionPxCenterOffsetX", &ParamValue::from(offset.x))?;
+        next.set_raw("VisionPxCenterOffsetY", &ParamValue::from(offset.y))?;
+        next.set_raw("VisionPxCenterSigmaPx", &ParamValue::from(sigma))?;
+        Ok(next)
     }
 
     /// This calibration with a new K, remap, unit and date (the pixel centre offset is kept).

@@ -50,6 +50,13 @@ pub(super) fn noise_px_wide(v: &f64) -> Result<(), String> {
         Err("must be between 0 and 1000 pixels".into())
     }
 }
+pub(super) fn lift_in(v: &f64) -> Result<(), String> {
+    if v.is_finite() && (0.0..=2.0).contains(v) {
+        Ok(())
+    } else {
+        Err("must be between 0 and 2 inches (0 = calibrate at one height)".into())
+    }
+}
 pub(super) fn passes(v: &i64) -> Result<(), String> {
     if (0..=10).contains(v) {
         Ok(())

@@ -1,7 +1,8 @@
 //! [`Config`]: the operator's settings.
 
 use super::checks::{
-    any, driver_name, job, noise_px, noise_px_wide, non_negative, passes, pound_base, resolution, seconds_60, tool,
+    any, driver_name, job, lift_in, noise_px, noise_px_wide, non_negative, passes, pound_base, resolution, seconds_60,
+    tool,
 };
 
 profile_part! {
@@ -71,11 +72,22 @@ profile_part! {
         /// pixels. The sheet walk cannot see that error at its own height — it is absorbed into
         /// the camera offset exactly — but at a height `ε` away it shifts every capture by
         /// `ε` × it × K, a shift no camera move can measure (it looks like the part's own).
-        /// M282 widens its prediction by it whenever the run measured a height change.
+        /// M282 widens its prediction by it whenever the run measured a height change, unless
+        /// the calibration measured the centre (`VisionPxCenterSigmaPx` > 0): then by that.
         /// Default 3 px: the simulator's cameras are off by up to ±5 px per axis (σ 2.9 px); a
         /// real lens can be off by tens of pixels — a camera calibrated at the part's height
         /// (the manual's advice) carries none of it.
         (Connection) center_uncertainty_px: f64 => f64 = 3.0, "VisionCenterUncertaintyPx", noise_px_wide;
+        /// `VisionCalibrationLift`: how far M283's sheet walk raises the camera (machine +Z) to
+        /// measure the optical centre, inches (25.4 mm per inch under G21); 0 = the manual's
+        /// walk at one height, which leaves the centre where `VisionPxCenterOffset` says. The
+        /// image shrinks about the pixel that sees the same table point at both heights; the
+        /// walk writes that pixel to `VisionPxCenterOffsetX/Y`, its 1σ to
+        /// `VisionPxCenterSigmaPx`, and solves the camera offset at it. Default 0.25 in: ~4 %
+        /// of a 6 in working distance, which with 25 pairs of readings at 0.1 px finds the
+        /// centre to ~0.7 px (without it a ±4 % height change cuts at up to 1.7× the floor); the
+        /// camera rises, away from the part, and comes back before the verify walk.
+        (Connection) calibration_lift_in: f64 => f64 = 0.25, "VisionCalibrationLift", lift_in;
         /// `VisionWorkingDistance`: the lens-to-part distance at which K was calibrated, inches
         /// (25.4 mm per inch); it turns the measured relative change into a length in the
         /// reports (0 = report the percentage only). Default 6 in: the manual's "typical 6″

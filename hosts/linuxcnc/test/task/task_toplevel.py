@@ -39,7 +39,7 @@ class TaskHost(sim_toplevel.SimHost):
     """SimHost that logs each synced machine_position() (a capture) with stat's position."""
 
     def machine_position(self):
-        x, y = sim_toplevel.SimHost.machine_position(self)
+        x, y, z = sim_toplevel.SimHost.machine_position(self)
         if self._synced:
             _STAT.poll()
             record = {
@@ -52,7 +52,7 @@ class TaskHost(sim_toplevel.SimHost):
             }
             with open(os.path.join(DIR, "captures.jsonl"), "a") as f:
                 f.write(json.dumps(record) + "\n")
-        return (x, y)
+        return (x, y, z)
 
 
 def session():

@@ -374,7 +374,13 @@ fn pixel_noise_averages_out_in_the_least_squares_solves() {
     let k = rig.module.params().cal_k();
     // ±0.5 px on 355 px probes: K within 0.2 %, offset and verify within a few thousandths.
     assert!((k - true_k(tilted(1, true))).amax() < 2e-3 * 0.00203, "{k}");
-    assert!((rig.machine.tool_offset(98).expect("tool") - CAMERA).amax() < 0.003);
+    // The lift found the optical centre (the image centre here) to within its stated noise, and
+    // the offset is solved at the pixel it found: less what that pixel sees, the true one.
+    let p = rig.module.params();
+    let (delta, sigma) = (p.calibration.center_offset(), p.px_center_sigma_px());
+    assert!(rep.centre.measured && sigma > 0.5 && delta.amax() < 4.0 * sigma, "{:?}", rep.centre);
+    let kr = k * p.remap().matrix();
+    assert!((rig.machine.tool_offset(98).expect("tool") - kr * delta - CAMERA).amax() < 0.003);
     assert!(rep.verify_rms < 0.005 && rep.verify_rms > 0.0, "{}", rep.verify_rms);
     assert!(rep.k_rms > 0.0);
 }
@@ -482,9 +488,17 @@ fn every_calibration_trigger_reaches_the_dro_as_it_happens() {
         assert!(t.last_offset_px_x().hypot(t.last_offset_px_y()) > 50.0, "dot 1 sits off centre: {t:?}");
     }
     let offset = |t: &crate::params::Telemetry| t.last_offset_x().hypot(t.last_offset_y());
-    let largest = at[3..].iter().map(|t| offset(t)).fold(0.0, f64::max);
+    // The walk's shots, 5 per dot on sheet 1's five (the lift's 5 × 5 grid after them reaches
+    // the diagonals).
+    let walk_end = 3 + 5 * 5;
+    let largest = at[3..walk_end].iter().map(|t| offset(t)).fold(0.0, f64::max);
     assert!((0.71..0.78).contains(&largest), "a probe shot is one probe move off: {largest}");
-    assert!(at[3..].iter().all(|t| (t.last_width() - 0.5).abs() < 0.01), "the 0.5 in dots through K");
+    // At the calibration height the dots measure their 0.5 in through K; lifted 0.25 in (over
+    // a 6 in working distance) they look 4 % smaller.
+    let lift = walk_end..walk_end + 50;
+    let size = |range: std::ops::Range<usize>, d: f64| at[range].iter().all(|t| (t.last_width() - d).abs() < 0.01);
+    assert!(size(3..walk_end, 0.5) && size(lift.end..at.len(), 0.5), "the 0.5 in dots through K");
+    assert!(at[lift].iter().filter(|t| (t.last_width() - 0.5 * 6.0 / 6.25).abs() < 0.005).count() == 25, "lifted");
     let end = rig.module.telemetry();
     assert!(offset(end) < 1e-3 && end.last_status() == "OK", "{end:?}");
 }
@@ -514,4 +528,105 @@ fn a_lost_mark_and_a_refusal_reach_the_dro() {
     let e = rig.module.m283(&mut rig.machine, Calibrate::Quick { diameter: 0.5 }).expect_err("disabled");
     assert_eq!(rig.module.telemetry().last_status(), e.to_string());
     assert_eq!(rig.shared.lock().expect("world").triggers, triggers, "nothing triggered");
+}
+
+/// The calibration lift measures the optical centre where the camera really has it, and the
+/// camera offset is solved at that pixel: the pair sees the truth at the calibration height.
+#[test]
+fn the_lift_measures_the_optical_centre_and_the_offset_refers_to_it() {
+    let mut optics = tilted(1, false);
+    optics.centre_px = Vector2::new(891.5, 884.0);
+    let mut rig =
+        sheet_rig(optics, LengthUnit::Inch, Vector2::new(3.0, -1.5), sheet_marks(0.3, Vector2::new(1.0, 1.0)));
+    let rep = sheet_report(rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("calibrates").report);
+    let p = rig.module.params();
+    assert!(rep.centre.measured && rep.centre.pairs == 25, "{:?}", rep.centre);
+    assert!((p.calibration.center_offset() - Vector2::new(3.5, -4.0)).norm() < 1e-6, "{:?}", rep.centre);
+    assert!((rep.centre.working_distance - 6.0).abs() < 1e-6, "{:?}", rep.centre);
+    // No noise: the σ floor is the camera's 0.1 px, over 25 pairs and a 4 % change.
+    assert!(p.px_center_sigma_px() > 0.3 && p.px_center_sigma_px() < 1.5, "{}", p.px_center_sigma_px());
+    assert!((rig.machine.tool_offset(98).expect("tool") - CAMERA).amax() < 1e-6);
+    assert!(rep.verify_max < 1e-6 && rep.warning.is_none(), "{rep:?}");
+    let w = rig.world();
+    assert!(w.z.abs() < 1e-12 && w.absolute && w.saved_modal.is_empty(), "Z back, G90, modal state restored");
+}
+
+/// A lift that cannot measure costs the calibration nothing: refused before it rose, or blind
+/// up there, the walk commits with the centre kept and a warning, Z back where it was and the
+/// modal state restored. A head that cannot come back down fails the walk, and says by how much.
+#[test]
+fn a_failed_lift_keeps_the_calibration_and_restores_z_and_the_modal_state() {
+    for (refuse, blind, what) in [(Some(0), false, "refused"), (None, true, "lifted height failed")] {
+        let mut rig = standard_rig();
+        rig.module.params.set("VisionPxCenterOffsetX", 2.0).expect("set");
+        rig.world().refuse_z_after = refuse;
+        rig.world().blind_above = blind;
+        let r = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("calibrates anyway");
+        let rep = sheet_report(r.report);
+        let warning = rep.warning.clone().unwrap_or_default();
+        assert!(!rep.centre.measured && warning.contains(what) && warning.contains("kept"), "{warning}");
+        assert_eq!(rep.centre.lift, if blind { 0.25 } else { 0.0 }, "how far it rose");
+        let p = rig.module.params();
+        assert!(p.cal_k() != Matrix2::zeros() && p.px_center_offset_x() == 2.0 && p.px_center_sigma_px() == 0.0);
+        assert!(rig.module.telemetry().last_status().contains("warning"), "{:?}", rig.module.telemetry());
+        let w = rig.world();
+        assert!(w.z.abs() < 1e-12 && w.absolute && w.saved_modal.is_empty(), "{what}: z {}", w.z);
+    }
+    let mut rig = standard_rig();
+    let start = rig.machine.program_position().expect("a position");
+    rig.world().refuse_z_after = Some(1);
+    let e = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect_err("stuck up");
+    assert!(e.to_string().contains("0.25 in above"), "{e}");
+    assert_untouched(&rig, start);
+    let w = rig.world();
+    assert!(w.absolute && w.saved_modal.is_empty(), "the modal state is restored on failure too");
+}
+
+/// `VisionCalibrationLift` 0 is the manual's walk at one height: no Z move, the centre kept
+/// without a warning.
+#[test]
+fn no_lift_is_the_manuals_walk() {
+    let mut rig = standard_rig();
+    rig.module.params.set("VisionCalibrationLift", 0.0).expect("set");
+    let r = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("calibrates");
+    assert!(r.gcode.iter().all(|l| !l.contains('Z')), "{:?}", r.gcode);
+    let rep = sheet_report(r.report);
+    assert!(!rep.centre.measured && rep.warning.is_none() && rep.triggers == 3 + 25 + 5, "{rep:?}");
+    assert!(rig.module.params.set("VisionCalibrationLift", 2.5).is_err());
+    assert!(rig.module.params.set("VisionCalibrationLift", f64::NAN).is_err());
+    assert!(rig.module.params.set("VisionPxCenterSigmaPx", -1.0).is_err());
+}
+
+/// Each walk measures K at its own height: against the previous calibration's K the report
+/// states the working-distance change it implies (none before the first).
+#[test]
+fn a_walk_reports_the_working_distance_change_against_the_previous_k() {
+    let mut rig = standard_rig();
+    let first = sheet_report(rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("first").report);
+    assert_eq!(first.k_change, None, "K was zero before");
+    // Each walk starts over dot 1 (the manual's setup step 3).
+    rig.go(-2.2, -4.2);
+    let again = sheet_report(rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("again").report);
+    let c = again.k_change.expect("a previous K");
+    assert!(c.change_pct.abs() < 1e-6 && c.change.abs() < 1e-6, "{c:?}");
+    // The head 0.06 in higher (1 % of the 6 in working distance): K 1 % larger.
+    rig.world().z = 0.06;
+    rig.go(-2.2, -4.2);
+    let higher = sheet_report(rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("higher").report);
+    let c = higher.k_change.expect("a previous K");
+    assert!((c.change_pct - 1.0).abs() < 1e-6 && (c.change - 0.06).abs() < 1e-6, "{c:?}");
+    assert!((rig.world().z - 0.06).abs() < 1e-12, "the lift came back to where the walk started");
+}
+
+/// A camera that does not ride the Z axis (its image does not change as the head rises) gives
+/// no centre: the walk says so and keeps the calibration.
+#[test]
+fn a_lift_that_changes_nothing_measures_nothing() {
+    let mut rig = standard_rig();
+    rig.world().working_distance_in = 1e9;
+    let rep = sheet_report(rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("calibrates").report);
+    let warning = rep.warning.unwrap_or_default();
+    assert!(!rep.centre.measured && warning.contains("did not change measurably"), "{warning}");
+    assert_eq!(rig.module.params().px_center_sigma_px(), 0.0);
+    assert!(rig.world().z.abs() < 1e-12);
 }

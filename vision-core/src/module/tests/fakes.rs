@@ -87,6 +87,14 @@ pub(crate) struct World {
     pub pounds: BTreeMap<u32, f64>,
     /// Physical spindle position, updated on every move.
     pub spindle: Point2<f64>,
+    /// Head Z, inches: the camera's working distance is `working_distance_in + z`.
+    pub z: f64,
+    /// The working distance at Z 0, inches (the optics' pitch holds there).
+    pub working_distance_in: f64,
+    /// Z moves fail after this many more accepted ones (the controller refuses the line).
+    pub refuse_z_after: Option<usize>,
+    /// The camera finds nothing while the head is above Z 0 (out of focus).
+    pub blind_above: bool,
     pub now_s: u64,
     pub log: Vec<String>,
     pub dwell_s: f64,
@@ -133,6 +141,10 @@ impl Default for World {
             offsets: BTreeMap::from([(1, Vector2::zeros()), (98, Vector2::zeros())]),
             pounds: BTreeMap::new(),
             spindle: Point2::origin(),
+            z: 0.0,
+            working_distance_in: 6.0,
+            refuse_z_after: None,
+            blind_above: false,
             now_s: 1_700_000_000,
             log: Vec::new(),
             dwell_s: 0.0,
@@ -193,11 +205,16 @@ impl World {
         r
     }
     fn see_exact(&self) -> Reading {
+        if self.blind_above && self.z > 1e-9 {
+            return Reading { judgment: Judgment::Ng, count: Some(0), ..Reading::position(0.0, 0.0) };
+        }
         let axis = self.camera_axis();
+        // The image scales with the working distance, about the optical axis's pixel.
+        let grow = (self.working_distance_in + self.z) / self.working_distance_in;
         let best = self
             .marks
             .iter()
-            .map(|m| self.optics.pixel(m - axis))
+            .map(|m| self.optics.pixel((m - axis) / grow))
             .filter(|p| p.x >= 0.0 && p.y >= 0.0 && p.x < self.res.x && p.y < self.res.y)
             .min_by(|a, b| {
                 let c = Point2::from(self.res * 0.5);
@@ -210,8 +227,8 @@ impl World {
                 count: Some(1),
                 x_px: p.x,
                 y_px: p.y,
-                width_px: self.mark_size / self.optics.pitch_in.x,
-                height_px: self.mark_size / self.optics.pitch_in.y,
+                width_px: self.mark_size / self.optics.pitch_in.x / grow,
+                height_px: self.mark_size / self.optics.pitch_in.y / grow,
                 angle_deg: 1.5,
                 score: 0.97,
             },
@@ -279,7 +296,7 @@ impl Machine for FakeMachine {
                 w.alignment = Some(chain);
                 continue;
             }
-            let (mut x, mut y) = (None, None);
+            let (mut x, mut y, mut z) = (None, None, None);
             for word in line.split_whitespace() {
                 let (letter, num) = word.split_at(1);
                 let bad = || MachineError::new(MachineErrorKind::RefusedGcode, format!("bad word {word}"));
@@ -291,6 +308,7 @@ impl Machine for FakeMachine {
                     ("G", "21") => w.units = LengthUnit::Millimetre,
                     ("X", v) => x = Some(w.to_inch(v.parse().map_err(|_| bad())?)),
                     ("Y", v) => y = Some(w.to_inch(v.parse().map_err(|_| bad())?)),
+                    ("Z", v) => z = Some(w.to_inch(v.parse().map_err(|_| bad())?)),
                     _ => {
                         return Err(MachineError::new(
                             MachineErrorKind::RefusedGcode,
@@ -298,6 +316,15 @@ impl Machine for FakeMachine {
                         ))
                     }
                 }
+            }
+            if let Some(z) = z {
+                if let Some(n) = w.refuse_z_after {
+                    if n == 0 {
+                        return Err(MachineError::new(MachineErrorKind::RefusedGcode, "Z is locked"));
+                    }
+                    w.refuse_z_after = Some(n - 1);
+                }
+                w.z = if w.absolute { z } else { w.z + z };
             }
             if x.is_some() || y.is_some() {
                 let p = w.program;
