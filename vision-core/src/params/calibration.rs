@@ -42,8 +42,8 @@ profile_part! {
         /// `VisionPxCenterOffsetY`: same, Y, pixels.
         (Calibration) px_center_offset_y: f64 => f64 = 0.0, "VisionPxCenterOffsetY", pixel_offset;
         /// `VisionPxCenterSigmaPx`: the 1σ per pixel axis of the optical centre M283's lift
-        /// measured (the larger axis's), pixels; 0 = not measured (the offset was set by hand or
-        /// set by hand), and M282 assumes `VisionCenterUncertaintyPx` instead.
+        /// measured (the larger axis's), pixels; 0 = not measured (the offset was set by hand, or
+        /// never measured), and M282 assumes `VisionCenterUncertaintyPx` instead.
         (Calibration) px_center_sigma_px: f64 => f64 = 0.0, "VisionPxCenterSigmaPx", noise_px_wide;
     }
 }
