@@ -95,9 +95,10 @@ fn main() {
             let t0 = Instant::now();
             let res = locate(&view, &spec).unwrap();
             time += t0.elapsed().as_secs_f64();
-            // CRB of the rendered noise for this frame: edge σ = blur ⊕ the pixel's box (1/12).
+            // CRB of the rendered noise for this frame (the renderer's blur; the pixel's square is
+            // in the model).
             let contrast = 0.95 * 255.0 * (0.1 - 0.8);
-            let (cx, _) = dot_crb(d, (blur * blur + 1.0 / 12.0).sqrt(), 0.8 * 0.95 * 255.0, contrast, NOISE).unwrap();
+            let (cx, _) = dot_crb(d, blur, 0.8 * 0.95 * 255.0, contrast, NOISE).unwrap();
             crb2 += cx * cx;
             match res {
                 Located::Found(mk) => {
