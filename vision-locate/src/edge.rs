@@ -29,8 +29,8 @@ pub(crate) const S_SMOOTH: f64 = 0.5;
 /// axis. Its effect, b²/24 of the profile's curvature, is below 1e-7.
 const THIN: f64 = 1e-3;
 
-/// Beyond this many σ from 0, Φ is 0 or 1 to double precision (for what these sums need).
-const FAR: f64 = 7.5;
+/// Beyond this many σ from 0, Φ is taken as 0 or 1 (it is within 1e-9 of it).
+const FAR: f64 = 6.0;
 
 /// The covered fraction of a pixel and its derivatives.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -47,12 +47,106 @@ pub(crate) struct Edge {
 
 /// The pixel at depth `t` px inside an edge whose unit normal is (`nx`, `ny`), blur σ = `s` px
 /// (at least [`S_MIN`]).
-#[inline]
+#[cfg(test)]
 pub(crate) fn edge(t: f64, nx: f64, ny: f64, s: f64) -> Edge {
-    if s >= S_SMOOTH {
-        edgeworth(t, nx, ny, s)
-    } else {
-        exact(t, nx, ny, s)
+    Blur::new(s).profile(nx, ny).at(t)
+}
+
+/// What the profile needs of the blur alone, worked out once per pass.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Blur {
+    s: f64,
+    /// 1/s for the closed form; 1/σₑ for the Edgeworth form.
+    inv: f64,
+    /// σₑ² = s² + 1/12 and 1/(24·σₑ⁴) for the Edgeworth form.
+    var: f64,
+    scale: f64,
+    /// The Edgeworth form's reach, FAR·σₑ px.
+    far: f64,
+    smooth: bool,
+}
+
+impl Blur {
+    /// Blur σ = `s` px (at least [`S_MIN`]).
+    pub(crate) fn new(s: f64) -> Blur {
+        let smooth = s >= S_SMOOTH;
+        let var = s * s + 1.0 / 12.0;
+        let inv = if smooth { 1.0 / var.sqrt() } else { 1.0 / s };
+        Blur { s, inv, var, scale: 1.0 / (24.0 * var * var), far: FAR * var.sqrt(), smooth }
+    }
+
+    /// The profile of edges of unit normal (`nx`, `ny`).
+    #[inline]
+    pub(crate) fn profile(&self, nx: f64, ny: f64) -> Profile {
+        if self.smooth {
+            self.smooth(nx, ny)
+        } else {
+            self.closed(nx, ny)
+        }
+    }
+
+    #[inline]
+    fn smooth(&self, nx: f64, ny: f64) -> Profile {
+        let (a2, b2) = (nx * nx, ny * ny);
+        // κ₄ and its slope in φ (a²·b² turns at 2·nx·ny·(nx² − ny²) per radian).
+        let k4 = -(a2 * a2 + b2 * b2) / 120.0;
+        let d_k4 = nx * ny * (a2 - b2) / 30.0;
+        let (lam, d_lam) = (k4 * self.scale, d_k4 * self.scale);
+        Profile { far: self.far, kind: Kind::Smooth { var: self.var, inv_se: self.inv, lam, s: self.s, d_lam } }
+    }
+
+    #[inline]
+    fn closed(&self, nx: f64, ny: f64) -> Profile {
+        let (a, b, s, inv) = (nx.abs(), ny.abs(), self.s, self.inv);
+        let c1 = 0.5 * (a + b);
+        let far = c1 + FAR * s;
+        if a.min(b) < THIN {
+            return Profile { far, kind: Kind::OneBox { s, inv, w: a.max(b) } };
+        }
+        let sign = if nx * ny < 0.0 { -1.0 } else { 1.0 };
+        Profile { far, kind: Kind::Exact { s, inv, c1, c2: 0.5 * (a - b), k: 1.0 / (a * b), a, b, sign } }
+    }
+}
+
+/// The profile of the edges with one normal direction and blur, for any depth: what does not
+/// depend on the depth worked out once (a cross has one such for all its edges).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Profile {
+    /// Depth (px) beyond which the pixel is wholly inside (or, negated, outside).
+    far: f64,
+    kind: Kind,
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Kind {
+    /// The closed form: blur s, 1/s, the trapezoid's c₁ and c₂, 1/(a·b), a, b, sign(nx·ny).
+    Exact { s: f64, inv: f64, c1: f64, c2: f64, k: f64, a: f64, b: f64, sign: f64 },
+    /// An edge along a pixel axis: blur s, 1/s, the box width w.
+    OneBox { s: f64, inv: f64, w: f64 },
+    /// The Edgeworth form: σₑ², 1/σₑ, λ, the blur s and ∂λ/∂φ.
+    Smooth { var: f64, inv_se: f64, lam: f64, s: f64, d_lam: f64 },
+}
+
+impl Profile {
+    /// The pixel at depth `t` px inside the edge.
+    #[inline(always)]
+    pub(crate) fn at(&self, t: f64) -> Edge {
+        // Wholly in or out (past the trapezoid and the blur's reach): the common case.
+        if t > self.far {
+            return INSIDE;
+        }
+        if t < -self.far {
+            return OUTSIDE;
+        }
+        match self.kind {
+            Kind::Exact { s, inv, c1, c2, k, a, b, sign } => exact(t, s, inv, c1, c2, k, a, b, sign),
+            Kind::OneBox { s, inv, w } => {
+                let [pp, cp, fp, _] = antiderivatives((t + 0.5 * w) * inv);
+                let [pm, cm, fm, _] = antiderivatives((t - 0.5 * w) * inv);
+                Edge { m: s / w * (fp - fm), dt: (cp - cm) / w, ds: (pp - pm) / w, dphi: 0.0 }
+            }
+            Kind::Smooth { var, inv_se, lam, s, d_lam } => edgeworth(t * inv_se, var, inv_se, lam, s, d_lam),
+        }
     }
 }
 
@@ -72,25 +166,9 @@ fn antiderivatives(u: f64) -> [f64; 4] {
 const INSIDE: Edge = Edge { m: 1.0, dt: 0.0, ds: 0.0, dphi: 0.0 };
 const OUTSIDE: Edge = Edge { m: 0.0, dt: 0.0, ds: 0.0, dphi: 0.0 };
 
-fn exact(t: f64, nx: f64, ny: f64, s: f64) -> Edge {
-    let (a, b) = (nx.abs(), ny.abs());
-    let inv = 1.0 / s;
-    let c1 = 0.5 * (a + b);
-    // Wholly in or out (past the trapezoid and the blur's reach): the common case.
-    if (t - c1) * inv > FAR {
-        return INSIDE;
-    }
-    if (t + c1) * inv < -FAR {
-        return OUTSIDE;
-    }
-    if a.min(b) < THIN {
-        let w = a.max(b);
-        let [pp, cp, fp, _] = antiderivatives((t + 0.5 * w) * inv);
-        let [pm, cm, fm, _] = antiderivatives((t - 0.5 * w) * inv);
-        return Edge { m: s / w * (fp - fm), dt: (cp - cm) / w, ds: (pp - pm) / w, dphi: 0.0 };
-    }
-    let c2 = 0.5 * (a - b);
-    let k = 1.0 / (a * b);
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn exact(t: f64, s: f64, inv: f64, c1: f64, c2: f64, k: f64, a: f64, b: f64, sign: f64) -> Edge {
     let p1 = antiderivatives((t + c1) * inv);
     let p2 = antiderivatives((t + c2) * inv);
     let q2 = antiderivatives((t - c2) * inv);
@@ -104,19 +182,13 @@ fn exact(t: f64, nx: f64, ny: f64, s: f64) -> Edge {
     let d_c2 = (q2[2] - p2[2]) * inv;
     let (d_a, d_b) = (0.5 * (d_c1 + d_c2), 0.5 * (d_c1 - d_c2));
     let turn = m * (b / a - a / b) + s * s * k * (a * d_b - b * d_a);
-    let dphi = if nx * ny < 0.0 { -turn } else { turn };
-    Edge { m, dt, ds, dphi }
+    Edge { m, dt, ds, dphi: sign * turn }
 }
 
-/// Φ(z) − λ·He₃(z)·φ(z), z = t/σₑ, σₑ² = s² + 1/12, λ = κ₄/(24·σₑ⁴), κ₄ = −(a⁴ + b⁴)/120 the
+/// Φ(z) − λ·He₃(z)·φ(z) at z = t/σₑ, σₑ² = s² + 1/12, λ = κ₄/(24·σₑ⁴), κ₄ = −(a⁴ + b⁴)/120 the
 /// trapezoid's fourth cumulant.
-fn edgeworth(t: f64, nx: f64, ny: f64, s: f64) -> Edge {
-    let (a2, b2) = (nx * nx, ny * ny);
-    let var = s * s + (a2 + b2) / 12.0;
-    let se = var.sqrt();
-    let z = t / se;
-    let k4 = -(a2 * a2 + b2 * b2) / 120.0;
-    let lam = k4 / (24.0 * var * var);
+#[inline]
+fn edgeworth(z: f64, var: f64, inv_se: f64, lam: f64, s: f64, d_lam: f64) -> Edge {
     let (c, p) = cdf_pdf(z);
     let z2 = z * z;
     let he3 = z * (z2 - 3.0);
@@ -124,13 +196,7 @@ fn edgeworth(t: f64, nx: f64, ny: f64, s: f64) -> Edge {
     let he5 = z * (z2 * z2 - 10.0 * z2 + 15.0);
     // ∂m/∂(s²) = ½·∂²m/∂t², exactly for this form too.
     let d_var = -0.5 * p * (z + lam * he5) / var;
-    let d_k4 = nx * ny * (a2 - b2) / 30.0;
-    Edge {
-        m: c - lam * he3 * p,
-        dt: p * (1.0 + lam * he4) / se,
-        ds: 2.0 * s * d_var,
-        dphi: -d_k4 / (24.0 * var * var) * he3 * p,
-    }
+    Edge { m: c - lam * he3 * p, dt: p * (1.0 + lam * he4) * inv_se, ds: 2.0 * s * d_var, dphi: -d_lam * he3 * p }
 }
 
 #[cfg(test)]
@@ -165,13 +231,18 @@ mod tests {
         }
     }
 
+    /// The closed form's constants at any blur.
+    fn closed(s: f64) -> Blur {
+        Blur { inv: 1.0 / s, smooth: false, ..Blur::new(s) }
+    }
+
     #[test]
     fn the_two_forms_agree_where_they_meet() {
         for phi in [0.0, 0.4, std::f64::consts::FRAC_PI_4] {
             let (ny, nx) = f64::sin_cos(phi);
             for s in [S_SMOOTH, 0.8, 2.0] {
                 for t in [-1.5, -0.7, -0.2, 0.0, 0.3, 0.9, 2.0] {
-                    let (e, x) = (edgeworth(t, nx, ny, s), exact(t, nx, ny, s));
+                    let (e, x) = (Blur::new(s).smooth(nx, ny).at(t), closed(s).closed(nx, ny).at(t));
                     let tol = if s == S_SMOOTH { 1e-3 } else { 2e-4 };
                     assert!((e.m - x.m).abs() < tol, "φ {phi} s {s} t {t}: {} vs {}", e.m, x.m);
                     assert!((e.dt - x.dt).abs() < 5.0 * tol, "φ {phi} s {s} t {t}: {} vs {}", e.dt, x.dt);

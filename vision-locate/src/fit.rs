@@ -11,13 +11,13 @@
 //! but at the corners). Least squares on this model is the maximum-likelihood estimate under
 //! Gaussian noise, so the centre's spread sits near the Cramér–Rao bound.
 //!
-//! The blur enters the normal equations as its variance s² (the model is smooth in s² down to
-//! a sharp edge, where its slope in s vanishes), kept at least [`S_MIN`]².
+//! The blur enters the normal equations as the edge width √(s² + 1/12) (see `edge_width`), s
+//! kept at least [`S_MIN`].
 
 // Index loops read like the matrix algebra they implement.
 #![allow(clippy::needless_range_loop)]
 
-use crate::edge::{edge, Edge, S_MIN};
+use crate::edge::{Blur, Edge, Profile, S_MIN};
 
 /// Most parameters: 6 geometric + 6 linear.
 pub(crate) const MAXP: usize = 12;
@@ -41,14 +41,15 @@ impl<T: Copy + Into<f64>> Img<'_, T> {
 pub(crate) trait Model {
     /// Number of geometric parameters.
     const G: usize;
-    /// What `eval` needs of `g` and `sup` that does not change from pixel to pixel (a cross's
-    /// sines and cosines, the band's width), worked out once per pass.
-    fn prepare(&self, g: &[f64], sup: &[f64]) -> [f64; 6];
+    /// What `eval` needs of `g` and `sup` that does not change from pixel to pixel.
+    type Pre;
+    /// `Pre`, worked out once per pass.
+    fn prepare(&self, g: &[f64], sup: &[f64]) -> Self::Pre;
     /// M at (x, y) px and its gradient with respect to `g` written into `grad`; `None` outside
     /// the pixels fitted on, which are chosen by the geometry `sup` (held fixed over several
     /// steps: a pixel set that followed every step made the fit flip between two states).
     /// `pre` is `prepare(g, sup)`.
-    fn eval(&self, pre: &[f64; 6], g: &[f64], sup: &[f64], x: f64, y: f64, grad: &mut [f64]) -> Option<f64>;
+    fn eval(&self, pre: &Self::Pre, g: &[f64], sup: &[f64], x: f64, y: f64, grad: &mut [f64]) -> Option<f64>;
     /// Radius (px) around the centre holding every fitted pixel.
     fn reach(&self, g: &[f64]) -> f64;
     /// Radius (px) around the centre holding the mark itself and its blurred edge: the mark is
@@ -66,8 +67,15 @@ pub(crate) trait Model {
 }
 
 /// The σ (px) of an edge with blur `s` px seen through the pixel's square (variance 1/12).
+/// The fit steps in it rather than in s: the model is smooth in σₑ down to a sharp edge (where
+/// its slope in s vanishes) and close to linear in it above.
 fn edge_width(s: f64) -> f64 {
     (s * s + 1.0 / 12.0).sqrt()
+}
+
+/// The blur s (px, at least [`S_MIN`]) of an edge of width `width` px.
+fn blur_of(width: f64) -> f64 {
+    (width * width - 1.0 / 12.0).max(S_MIN * S_MIN).sqrt()
 }
 
 /// Width (px) of the band on each side of an edge that is fitted, for blur `s` px.
@@ -92,21 +100,23 @@ pub(crate) struct Disc;
 
 impl Model for Disc {
     const G: usize = 4;
-    fn prepare(&self, _g: &[f64], sup: &[f64]) -> [f64; 6] {
-        [band(sup[3]), 0.0, 0.0, 0.0, 0.0, 0.0]
+    /// The band's width (px) and the blur.
+    type Pre = (f64, Blur);
+    fn prepare(&self, g: &[f64], sup: &[f64]) -> (f64, Blur) {
+        (band(sup[3]), Blur::new(g[3]))
     }
-    #[inline]
-    fn eval(&self, pre: &[f64; 6], g: &[f64], sup: &[f64], x: f64, y: f64, grad: &mut [f64]) -> Option<f64> {
+    #[inline(always)]
+    fn eval(&self, pre: &(f64, Blur), g: &[f64], sup: &[f64], x: f64, y: f64, grad: &mut [f64]) -> Option<f64> {
         // sqrt of the squares, not hypot: this runs per pixel and libm's hypot is slow.
         let (ex, ey) = (x - sup[0], y - sup[1]);
-        if ((ex * ex + ey * ey).sqrt() - sup[2]).abs() > pre[0] {
+        if ((ex * ex + ey * ey).sqrt() - sup[2]).abs() > pre.0 {
             return None;
         }
         let (dx, dy) = (x - g[0], y - g[1]);
         let rho = (dx * dx + dy * dy).sqrt();
         let (ux, uy, ir) = radial(dx, dy, rho);
         // The normal turns by 1/ρ rad per px the centre moves across it.
-        let e = edge(g[2] - rho, ux, uy, g[3]);
+        let e = pre.1.profile(ux, uy).at(g[2] - rho);
         grad[0] = e.dt * ux + e.dphi * uy * ir;
         grad[1] = e.dt * uy - e.dphi * ux * ir;
         grad[2] = e.dt;
@@ -136,20 +146,23 @@ pub(crate) struct Annulus;
 
 impl Model for Annulus {
     const G: usize = 5;
-    fn prepare(&self, _g: &[f64], sup: &[f64]) -> [f64; 6] {
-        [band(sup[4]), 0.0, 0.0, 0.0, 0.0, 0.0]
+    /// The band's width (px) and the blur.
+    type Pre = (f64, Blur);
+    fn prepare(&self, g: &[f64], sup: &[f64]) -> (f64, Blur) {
+        (band(sup[4]), Blur::new(g[4]))
     }
-    #[inline]
-    fn eval(&self, pre: &[f64; 6], g: &[f64], sup: &[f64], x: f64, y: f64, grad: &mut [f64]) -> Option<f64> {
+    #[inline(always)]
+    fn eval(&self, pre: &(f64, Blur), g: &[f64], sup: &[f64], x: f64, y: f64, grad: &mut [f64]) -> Option<f64> {
         let (ex, ey) = (x - sup[0], y - sup[1]);
         let rs = (ex * ex + ey * ey).sqrt();
-        if rs > sup[2] + pre[0] || rs < sup[3] - pre[0] {
+        if rs > sup[2] + pre.0 || rs < sup[3] - pre.0 {
             return None;
         }
         let (dx, dy) = (x - g[0], y - g[1]);
         let rho = (dx * dx + dy * dy).sqrt();
         let (ux, uy, ir) = radial(dx, dy, rho);
-        let (o, i) = (edge(g[2] - rho, ux, uy, g[4]), edge(g[3] - rho, ux, uy, g[4]));
+        let profile = pre.1.profile(ux, uy);
+        let (o, i) = (profile.at(g[2] - rho), profile.at(g[3] - rho));
         let (dt, dphi) = (o.dt - i.dt, o.dphi - i.dphi);
         grad[0] = dt * ux + dphi * uy * ir;
         grad[1] = dt * uy - dphi * ux * ir;
@@ -182,23 +195,40 @@ impl Model for Annulus {
 /// Cross: g = [cx, cy, θ, a, w, s] — bar half-length a, half-width w (px), first bar at θ rad.
 pub(crate) struct Cross;
 
-/// A blurred 1-D box |t| ≤ h seen by the pixel whose square projects as for the normal
-/// (`nx`, `ny`): value and derivatives by t, h, s and the normal's direction.
-#[inline]
-fn box1(t: f64, h: f64, nx: f64, ny: f64, s: f64) -> [f64; 5] {
-    let (p, q): (Edge, Edge) = (edge(h - t, nx, ny, s), edge(h + t, nx, ny, s));
+/// A blurred 1-D box |t| ≤ h seen through the pixel (the edges' `profile`): value and
+/// derivatives by t, h, s and the edges' direction.
+#[inline(always)]
+fn box1(t: f64, h: f64, profile: &Profile) -> [f64; 5] {
+    let (p, q): (Edge, Edge) = (profile.at(h - t), profile.at(h + t));
     [p.m + q.m - 1.0, q.dt - p.dt, p.dt + q.dt, p.ds + q.ds, p.dphi + q.dphi]
+}
+
+/// What a cross's `eval` needs per pass.
+pub(crate) struct CrossPre {
+    /// sin θ, cos θ of the geometry; of the support.
+    sin_cos: (f64, f64),
+    sup_sin_cos: (f64, f64),
+    /// The band's width, px.
+    band: f64,
+    /// All four edges' profile: they run at θ or θ + 90°, one trapezoid for all.
+    profile: Profile,
 }
 
 impl Model for Cross {
     const G: usize = 6;
-    fn prepare(&self, g: &[f64], sup: &[f64]) -> [f64; 6] {
-        let ((sn, c), (ss, sc)) = (g[2].sin_cos(), sup[2].sin_cos());
-        [sn, c, ss, sc, band(sup[5]), 0.0]
+    type Pre = CrossPre;
+    fn prepare(&self, g: &[f64], sup: &[f64]) -> CrossPre {
+        let (sn, c) = g[2].sin_cos();
+        CrossPre {
+            sin_cos: (sn, c),
+            sup_sin_cos: sup[2].sin_cos(),
+            band: band(sup[5]),
+            profile: Blur::new(g[5]).profile(c, sn),
+        }
     }
     #[inline]
-    fn eval(&self, pre: &[f64; 6], g: &[f64], sup: &[f64], x: f64, y: f64, grad: &mut [f64]) -> Option<f64> {
-        let [sn, c, ss, sc, b, _] = *pre;
+    fn eval(&self, pre: &CrossPre, g: &[f64], sup: &[f64], x: f64, y: f64, grad: &mut [f64]) -> Option<f64> {
+        let ((sn, c), (ss, sc), b) = (pre.sin_cos, pre.sup_sin_cos, pre.band);
         {
             let (ex, ey) = (x - sup[0], y - sup[1]);
             let (au, av) = ((ex * sc + ey * ss).abs(), (-ex * ss + ey * sc).abs());
@@ -211,12 +241,12 @@ impl Model for Cross {
         let (dx, dy) = (x - g[0], y - g[1]);
         let u = dx * c + dy * sn;
         let v = -dx * sn + dy * c;
-        let (a, w, s) = (g[3], g[4], g[5]);
-        // Both bars' edges run along the pixel grid at θ or θ + 90°: one trapezoid for all.
-        let [ua, ua_t, ua_h, ua_s, ua_p] = box1(u, a, c, sn, s);
-        let [uw, uw_t, uw_h, uw_s, uw_p] = box1(u, w, c, sn, s);
-        let [va, va_t, va_h, va_s, va_p] = box1(v, a, c, sn, s);
-        let [vw, vw_t, vw_h, vw_s, vw_p] = box1(v, w, c, sn, s);
+        let (a, w) = (g[3], g[4]);
+        let p = &pre.profile;
+        let [ua, ua_t, ua_h, ua_s, ua_p] = box1(u, a, p);
+        let [uw, uw_t, uw_h, uw_s, uw_p] = box1(u, w, p);
+        let [va, va_t, va_h, va_s, va_p] = box1(v, a, p);
+        let [vw, vw_t, vw_h, vw_s, vw_p] = box1(v, w, p);
         let m = ua * vw + uw * va - uw * vw;
         let m_u = ua_t * vw + uw_t * va - uw_t * vw;
         let m_v = ua * vw_t + uw * va_t - uw * vw_t;
@@ -314,8 +344,8 @@ pub(crate) fn fit<M: Model, T: Copy + Into<f64>, const N: usize>(
     // Coarse to fine: while the edge is wide, every 4th (2nd) pixel each way carries the same
     // information at 1/16 (1/4) of the cost, with the edge width held above what that spacing
     // resolves; the last stage uses every pixel and frees the edge width.
-    const STAGES: [(usize, f64, f64, usize); 3] = [(4, 3.0, 0.05, 4), (2, 1.5, 0.02, 3), (1, 0.0, 1e-4, MAX_ITER)];
-    let first = STAGES.iter().position(|&(st, ..)| g0[ng - 1] >= 1.5 * st as f64).unwrap_or(2);
+    const STAGES: [(usize, f64, f64, usize); 3] = [(4, 3.0, 0.05, 4), (2, 1.5, 0.02, 3), (1, 0.0, 5e-4, MAX_ITER)];
+    let first = STAGES.iter().position(|&(st, ..)| g0[ng - 1] >= 1.0 * st as f64).unwrap_or(2);
     let mut iter = 0;
     let si = ng - 1;
     for (stage, &(stride, s_floor, tol, max_iter)) in STAGES.iter().enumerate().skip(first) {
@@ -331,31 +361,40 @@ pub(crate) fn fit<M: Model, T: Copy + Into<f64>, const N: usize>(
             // The last stage also scores the fit (R² overall and by sector): at convergence the
             // residuals before the final, tiny step are the answer's.
             let acc = accumulate::<M, T, N>(img, model, &g, &sup, &lin, xr, yr, inv, stride, last)?;
-            // First step: only the planes (the geometry guess is coarse, the planes unknown).
-            let free: Vec<usize> = if iter == 0 { (ng..n).collect() } else { (0..n).collect() };
+            if std::env::var_os("FITDBG").is_some() {
+                eprintln!("stride {stride} iter {iter} n {} g {:?}", acc.count, &g[..ng]);
+            }
+            // First step: only the planes (the geometry guess is coarse, the planes unknown);
+            // second: the geometry at the starting blur (a blur freed from a coarse guess grows
+            // to cover the misfit, and the next step overshoots).
+            let free: Vec<usize> = match iter {
+                0 => (ng..n).collect(),
+                1 => (0..n).filter(|&k| k != si).collect(),
+                _ => (0..n).collect(),
+            };
             let mut step = solve(&acc.h, &acc.b, &free).ok_or(FitFailure::Diverged)?;
-            // The step is in the blur's variance s². The blur may fall to the stage's floor in one
-            // step and grows at most to twice (or 0.5 px); when it hits a bound it is held there
-            // and the others solved for given it, so the step stays consistent (clamping it
-            // alone made the centre overshoot and oscillate).
-            let var = g[si] * g[si];
-            let (v_lo, v_hi) = (s_floor.max(S_MIN).powi(2), (2.0 * g[si]).max(0.5).powi(2));
-            let v_new = var + step[si];
-            if iter > 0 && !(v_lo..=v_hi).contains(&v_new) {
-                let dv = v_new.clamp(v_lo, v_hi) - var;
+            // The step is in the edge width σₑ = √(s² + 1/12) (see `edge_width`). It may fall to
+            // the stage's floor in one step and at most doubles; when it hits a bound it is held
+            // there and the others solved for given it, so the step stays consistent (clamping
+            // it alone made the centre overshoot and oscillate).
+            let width = edge_width(g[si]);
+            let (w_lo, w_hi) = (edge_width(s_floor.max(S_MIN)).max(0.25 * width), 2.0 * width);
+            let w_new = width + step[si];
+            if iter > 1 && !(w_lo..=w_hi).contains(&w_new) {
+                let dw = w_new.clamp(w_lo, w_hi) - width;
                 let mut b = acc.b;
                 for (k, bk) in b.iter_mut().enumerate().take(n) {
-                    *bk -= acc.h[k][si] * dv;
+                    *bk -= acc.h[k][si] * dw;
                 }
                 let rest: Vec<usize> = free.iter().copied().filter(|&k| k != si).collect();
                 step = solve(&acc.h, &b, &rest).ok_or(FitFailure::Diverged)?;
-                step[si] = dv;
+                step[si] = dw;
             }
             let before = g;
             for k in 0..si {
                 g[k] += step[k];
             }
-            g[si] = (var + step[si]).max(v_lo).sqrt();
+            g[si] = blur_of((width + step[si]).max(w_lo));
             for k in 0..6 {
                 lin[k] += step[ng + k];
             }
@@ -364,7 +403,9 @@ pub(crate) fn fit<M: Model, T: Copy + Into<f64>, const N: usize>(
             }
             g[si] = g[si].max(s_floor);
             let moved = (g[0] - before[0]).hypot(g[1] - before[1]);
-            let sized = (0..ng).skip(2).map(|k| (g[k] - before[k]).abs()).fold(0.0, f64::max);
+            let sized = (2..si)
+                .map(|k| (g[k] - before[k]).abs())
+                .fold((edge_width(g[si]) - edge_width(before[si])).abs(), f64::max);
             iter += 1;
             if iter > 1 && moved < tol && sized < 100.0 * tol.max(1e-5) {
                 if last {
@@ -457,9 +498,9 @@ fn accumulate<M: Model, T: Copy + Into<f64>, const N: usize>(
     let (mut hr, mut br) = ([[0.0; MAXP]; MAXP], [0.0; MAXP]);
     let mut grad = [0.0; 6];
     let pre = model.prepare(&g[..ng], &sup[..ng]);
-    // The blur's column is by its variance: ∂/∂s² = ∂/∂s / (2s).
-    let to_var = 0.5 / g[ng - 1];
-    let (sa, ca) = if ng == 6 { (pre[0], pre[1]) } else { (0.0, 1.0) };
+    // The blur's column is by the edge width: ∂/∂σₑ = ∂/∂s · σₑ/s.
+    let to_width = edge_width(g[ng - 1]) / g[ng - 1];
+    let (sa, ca) = if ng == 6 { g[2].sin_cos() } else { (0.0, 1.0) };
     // A grid fixed in the image (not following the estimate), so the sampled pixels do not
     // change under the fit from one iteration to the next.
     let on_grid = |v: f64| (v.ceil() as usize).div_ceil(stride) * stride;
@@ -478,7 +519,7 @@ fn accumulate<M: Model, T: Copy + Into<f64>, const N: usize>(
             for xi in (on_grid(xa)..=xb.floor() as usize).step_by(stride) {
                 let x = xi as f64;
                 let Some(m) = model.eval(&pre, &g[..ng], &sup[..ng], x, y, &mut grad) else { continue };
-                grad[ng - 1] *= to_var;
+                grad[ng - 1] *= to_width;
                 let u = (x - xr) * inv;
                 let q = lin[3] + lin[4] * u + lin[5] * v;
                 let pred = lin[0] + lin[1] * u + lin[2] * v + q * m;
@@ -614,9 +655,9 @@ pub(crate) fn crb<M: Model>(model: &M, g: &[f64], lin: &[f64; 6], scale: f64, si
         for xi in cx - reach..=cx + reach {
             let (x, y) = (xi as f64, yi as f64);
             let Some(m) = model.eval(&pre, g, g, x, y, &mut grad) else { continue };
-            // As in the fit, the blur by its variance: the same bound on the centre for any
+            // As in the fit, the blur by the edge width: the same bound on the centre for any
             // s > 0, and a regular matrix as s → 0 (where ∂M/∂s vanishes).
-            grad[ng - 1] *= 0.5 / g[ng - 1];
+            grad[ng - 1] *= edge_width(g[ng - 1]) / g[ng - 1];
             let (u, v) = ((x - g[0]) / scale, (y - g[1]) / scale);
             let q = lin[3] + lin[4] * u + lin[5] * v;
             for k in 0..ng {
