@@ -361,9 +361,6 @@ pub(crate) fn fit<M: Model, T: Copy + Into<f64>, const N: usize>(
             // The last stage also scores the fit (R² overall and by sector): at convergence the
             // residuals before the final, tiny step are the answer's.
             let acc = accumulate::<M, T, N>(img, model, &g, &sup, &lin, xr, yr, inv, stride, last)?;
-            if std::env::var_os("FITDBG").is_some() {
-                eprintln!("stride {stride} iter {iter} n {} g {:?}", acc.count, &g[..ng]);
-            }
             // First step: only the planes (the geometry guess is coarse, the planes unknown);
             // second: the geometry at the starting blur (a blur freed from a coarse guess grows
             // to cover the misfit, and the next step overshoots).

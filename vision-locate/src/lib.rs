@@ -286,7 +286,41 @@ pub fn dot_crb(diameter: f64, blur_sigma: f64, background: f64, contrast: f64, n
 mod tests {
     use super::*;
     use crate::fit::{band, solve, MAXP};
-    use crate::render::{radiance, Depth, PlacedMark, Scene, Shape};
+    use crate::render::{radiance, Clutter, Depth, PlacedMark, Scene, Shape};
+
+    /// The finder's edge model is what the renderer draws: a straight edge rendered at several
+    /// angles agrees with the model pixel by pixel — exactly when sharp; when blurred, as
+    /// closely as the renderer's blur, a Gaussian sampled at whole pixels and applied to the
+    /// pixels' coverage (a Riemann sum of the continuous blur the model has), allows: along an
+    /// axis it is off by up to 0.6 % of the contrast at σ = 1 px, 0.04 % at 2.5 px.
+    #[test]
+    fn the_edge_model_is_the_rendered_edge() {
+        let (bg, ink, level) = (0.8, 0.1, 0.95);
+        let (b0, a0) = (255.0 * level * bg, 255.0 * level * (ink - bg));
+        for (blur, tol) in [(0.0, 1e-4), (1.0, 7e-3), (1.5, 2.5e-3), (2.5, 5e-4)] {
+            for phi in [0.0, 0.3, std::f64::consts::FRAC_PI_4, 1.1, 2.5, -2.0] {
+                let (x0, y0) = (31.7, 32.2);
+                let image = radiance(&Scene {
+                    clutter: vec![Clutter::Edge { x: x0, y: y0, angle: phi, reflectance: ink }],
+                    blur_sigma: blur,
+                    background: bg,
+                    ..Scene::blank(64, 64, Depth::Eight)
+                })
+                .unwrap();
+                let (ny, nx) = phi.sin_cos();
+                let profile = edge::Blur::new(blur.max(edge::S_MIN));
+                let mut worst: f64 = 0.0;
+                for yi in 12..52 {
+                    for xi in 12..52 {
+                        let t = (xi as f64 - x0) * nx + (yi as f64 - y0) * ny;
+                        let m = profile.profile(nx, ny).at(t).m;
+                        worst = worst.max(((image[yi * 64 + xi] - b0) / a0 - m).abs());
+                    }
+                }
+                assert!(worst < tol, "blur {blur} φ {phi}: {worst} of the contrast");
+            }
+        }
+    }
 
     /// The bound `dot_crb` computes is the rendered images' own: the Fisher information of the
     /// renderer's pixels (exact coverage, blur, light), differentiated numerically in the centre,
