@@ -387,9 +387,12 @@ pub(crate) fn fit<M: Model, T: Copy + Into<f64>, const N: usize>(
                 step = solve(&acc.h, &b, &rest).ok_or(FitFailure::Diverged)?;
                 step[si] = dw;
             }
+            // A model held blurrier than the image (a coarse stage's floor) sees an edge's shift
+            // spread over its own width and overshoots it by up to √2: the geometry steps by 1/√2.
+            let gain = if s_floor > 0.0 && iter > 1 && w_new < w_lo { std::f64::consts::FRAC_1_SQRT_2 } else { 1.0 };
             let before = g;
             for k in 0..si {
-                g[k] += step[k];
+                g[k] += gain * step[k];
             }
             g[si] = blur_of((width + step[si]).max(w_lo));
             for k in 0..6 {
