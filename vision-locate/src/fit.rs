@@ -348,8 +348,14 @@ pub(crate) fn fit<M: Model, T: Copy + Into<f64>, const N: usize>(
     let first = STAGES.iter().position(|&(st, ..)| g0[ng - 1] >= 1.0 * st as f64).unwrap_or(2);
     let mut iter = 0;
     let si = ng - 1;
+    // Whether the last step held the blur at a coarse stage's floor (the image is sharper).
+    let mut pinned = false;
     for (stage, &(stride, s_floor, tol, max_iter)) in STAGES.iter().enumerate().skip(first) {
         let last = stage == STAGES.len() - 1;
+        // An image sharper than the last stage's floor: start this one halfway down.
+        if pinned {
+            g[si] *= 0.5;
+        }
         g[si] = g[si].max(s_floor);
         let mut sup = g;
         for _ in 0..max_iter {
@@ -389,7 +395,8 @@ pub(crate) fn fit<M: Model, T: Copy + Into<f64>, const N: usize>(
             }
             // A model held blurrier than the image (a coarse stage's floor) sees an edge's shift
             // spread over its own width and overshoots it by up to √2: the geometry steps by 1/√2.
-            let gain = if s_floor > 0.0 && iter > 1 && w_new < w_lo { std::f64::consts::FRAC_1_SQRT_2 } else { 1.0 };
+            pinned = s_floor > 0.0 && iter > 1 && w_new < w_lo;
+            let gain = if pinned { std::f64::consts::FRAC_1_SQRT_2 } else { 1.0 };
             let before = g;
             for k in 0..si {
                 g[k] += gain * step[k];
