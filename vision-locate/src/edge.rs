@@ -26,7 +26,7 @@ pub(crate) const S_MIN: f64 = 0.005;
 pub(crate) const S_SMOOTH: f64 = 0.5;
 
 /// Below this width (a fraction of the pixel) a box counts as absent: an edge along a pixel
-/// axis. Its effect, b²/24 of the profile's curvature, is below 1e-7.
+/// axis. Its effect, b²/24 times the profile's curvature, stays below 1e-5 of the contrast.
 const THIN: f64 = 1e-3;
 
 /// Beyond this many σ from 0, Φ is taken as 0 or 1 (it is within 1e-9 of it).

@@ -342,17 +342,18 @@ pub(crate) fn fit<M: Model, T: Copy + Into<f64>, const N: usize>(
     let inv = 1.0 / scale;
     let mut lin = [0.0; 6];
     // Coarse to fine: while the edge is wide, every 4th (2nd) pixel each way carries the same
-    // information at 1/16 (1/4) of the cost, with the edge width held above what that spacing
-    // resolves; the last stage uses every pixel and frees the edge width.
+    // information at 1/16 (1/4) of the cost, with the blur held above what that spacing
+    // resolves; the last stage uses every pixel and frees the blur. The first stage is the
+    // coarsest whose spacing the starting blur reaches.
     const STAGES: [(usize, f64, f64, usize); 3] = [(4, 3.0, 0.05, 4), (2, 1.5, 0.02, 3), (1, 0.0, 5e-4, MAX_ITER)];
-    let first = STAGES.iter().position(|&(st, ..)| g0[ng - 1] >= 1.0 * st as f64).unwrap_or(2);
+    let first = STAGES.iter().position(|&(st, ..)| g0[ng - 1] >= st as f64).unwrap_or(2);
     let mut iter = 0;
     let si = ng - 1;
-    // Whether the last step held the blur at a coarse stage's floor (the image is sharper).
+    // Whether the last step held a coarse stage's blur above what the image asked for.
     let mut pinned = false;
     for (stage, &(stride, s_floor, tol, max_iter)) in STAGES.iter().enumerate().skip(first) {
         let last = stage == STAGES.len() - 1;
-        // An image sharper than the last stage's floor: start this one halfway down.
+        // An image sharper than the last stage allowed: start this one halfway down.
         if pinned {
             g[si] *= 0.5;
         }
@@ -376,8 +377,8 @@ pub(crate) fn fit<M: Model, T: Copy + Into<f64>, const N: usize>(
                 _ => (0..n).collect(),
             };
             let mut step = solve(&acc.h, &acc.b, &free).ok_or(FitFailure::Diverged)?;
-            // The step is in the edge width σₑ = √(s² + 1/12) (see `edge_width`). It may fall to
-            // the stage's floor in one step and at most doubles; when it hits a bound it is held
+            // The step is in the edge width σₑ = √(s² + 1/12) (see `edge_width`). It moves at most
+            // ×4 down, not below the stage's floor, or ×2 up; when it hits a bound it is held
             // there and the others solved for given it, so the step stays consistent (clamping
             // it alone made the centre overshoot and oscillate).
             let width = edge_width(g[si]);
@@ -393,8 +394,8 @@ pub(crate) fn fit<M: Model, T: Copy + Into<f64>, const N: usize>(
                 step = solve(&acc.h, &b, &rest).ok_or(FitFailure::Diverged)?;
                 step[si] = dw;
             }
-            // A model held blurrier than the image (a coarse stage's floor) sees an edge's shift
-            // spread over its own width and overshoots it by up to √2: the geometry steps by 1/√2.
+            // A model held blurrier than the image (in a coarse stage) sees an edge's shift spread
+            // over its own width and overshoots it by up to √2: the geometry steps by 1/√2.
             pinned = s_floor > 0.0 && iter > 1 && w_new < w_lo;
             let gain = if pinned { std::f64::consts::FRAC_1_SQRT_2 } else { 1.0 };
             let before = g;
