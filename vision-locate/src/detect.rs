@@ -73,12 +73,13 @@ pub(crate) fn search<T: Copy + Into<f64> + Into<u32>>(img: &Img<'_, T>, spec: &M
     let mut labels = vec![0u32; w * h];
     let mut stack = Vec::new();
     let mut pixels = Vec::new();
+    // Labels count on across the levels: one above `base` is this level's (no clearing).
+    let mut next = 0u32;
     for &t in &levels {
         let t = t as f32;
-        labels.iter_mut().for_each(|l| *l = 0);
-        let mut next = 0u32;
+        let base = next;
         for start in 0..w * h {
-            if labels[start] != 0 || contrast[start] < t {
+            if labels[start] > base || contrast[start] < t {
                 continue;
             }
             next += 1;
@@ -89,7 +90,7 @@ pub(crate) fn search<T: Copy + Into<f64> + Into<u32>>(img: &Img<'_, T>, spec: &M
                 pixels.push(p);
                 let (px, py) = (p % w, p / w);
                 let mut visit = |q: usize| {
-                    if labels[q] == 0 && contrast[q] >= t {
+                    if labels[q] <= base && contrast[q] >= t {
                         labels[q] = next;
                         stack.push(q);
                     }
@@ -210,12 +211,17 @@ fn downsample<T: Copy + Into<u32>>(img: &Img<'_, T>, f: usize, w: usize, h: usiz
     let mut cols = vec![0u32; w * f];
     let norm = 1.0 / (f * f) as f32;
     for j in 0..h {
-        cols.iter_mut().for_each(|v| *v = 0);
         for y in j * f..(j + 1) * f {
             let line = &img.data[y * img.w..y * img.w + w * f];
             let cols = &mut cols[..line.len()];
-            for i in 0..line.len() {
-                cols[i] += line[i].into();
+            if y == j * f {
+                for i in 0..line.len() {
+                    cols[i] = line[i].into();
+                }
+            } else {
+                for i in 0..line.len() {
+                    cols[i] += line[i].into();
+                }
             }
         }
         for (o, chunk) in out[j * w..(j + 1) * w].iter_mut().zip(cols.chunks_exact(f)) {
@@ -225,52 +231,43 @@ fn downsample<T: Copy + Into<u32>>(img: &Img<'_, T>, f: usize, w: usize, h: usiz
     out
 }
 
-/// Mean over a (2r + 1)² window, clipped at the borders: running sums along rows, then along
-/// columns; the clipped window's pixel count is a product of its row and column extents.
+/// Mean over a (2r + 1)² window, clipped at the borders: along rows as differences of prefix
+/// sums, then along columns as a running sum of whole rows (both loops run along memory and
+/// vectorise); the clipped window's pixel count is a product of its row and column extents.
+/// Sums in f64 keep long sums exact enough.
 fn box_mean(img: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
-    let mut tmp = vec![0.0f32; w * h];
-    for (src, dst) in img.chunks_exact(w).zip(tmp.chunks_exact_mut(w)) {
-        running_sum(src, dst, r);
+    let mut rows = vec![0.0f64; w * h];
+    let mut prefix = vec![0.0f64; w + 1];
+    for (src, dst) in img.chunks_exact(w).zip(rows.chunks_exact_mut(w)) {
+        let mut acc = 0.0;
+        for (p, v) in prefix[1..].iter_mut().zip(src) {
+            acc += *v as f64;
+            *p = acc;
+        }
+        for (x, d) in dst.iter_mut().enumerate() {
+            *d = prefix[(x + r + 1).min(w)] - prefix[x.saturating_sub(r)];
+        }
+    }
+    let extent = |i: usize, n: usize| ((i + r + 1).min(n) - i.saturating_sub(r)) as f64;
+    let inv_x: Vec<f64> = (0..w).map(|x| 1.0 / extent(x, w)).collect();
+    let mut acc = vec![0.0f64; w];
+    for row in rows.chunks_exact(w).take(r.min(h)) {
+        acc.iter_mut().zip(row).for_each(|(a, v)| *a += v);
     }
     let mut out = vec![0.0f32; w * h];
-    let mut col = vec![0.0f32; h];
-    let mut sums = vec![0.0f32; h];
-    for x in 0..w {
-        for y in 0..h {
-            col[y] = tmp[y * w + x];
+    for (y, line) in out.chunks_exact_mut(w).enumerate() {
+        if y + r < h {
+            acc.iter_mut().zip(&rows[(y + r) * w..(y + r + 1) * w]).for_each(|(a, v)| *a += v);
         }
-        running_sum(&col, &mut sums, r);
-        for y in 0..h {
-            out[y * w + x] = sums[y];
+        if y > r {
+            acc.iter_mut().zip(&rows[(y - r - 1) * w..(y - r) * w]).for_each(|(a, v)| *a -= v);
         }
-    }
-    let extent = |i: usize, n: usize| ((i + r + 1).min(n) - i.saturating_sub(r)) as f32;
-    let inv_x: Vec<f32> = (0..w).map(|x| 1.0 / extent(x, w)).collect();
-    for y in 0..h {
         let iy = 1.0 / extent(y, h);
-        for (o, ix) in out[y * w..(y + 1) * w].iter_mut().zip(&inv_x) {
-            *o *= iy * ix;
+        for ((o, a), ix) in line.iter_mut().zip(&acc).zip(&inv_x) {
+            *o = (a * iy * ix) as f32;
         }
     }
     out
-}
-
-/// `dst[i]` = Σ `src[i − r ..= i + r]` (clipped), in f64 to keep long sums exact enough.
-fn running_sum(src: &[f32], dst: &mut [f32], r: usize) {
-    let n = src.len();
-    let mut acc = 0.0f64;
-    for v in src.iter().take(r.min(n)) {
-        acc += *v as f64;
-    }
-    for i in 0..n {
-        if i + r < n {
-            acc += src[i + r] as f64;
-        }
-        if i > r {
-            acc -= src[i - r - 1] as f64;
-        }
-        dst[i] = acc as f32;
-    }
 }
 
 /// Noise standard deviation (grey levels) from the median absolute difference of horizontal

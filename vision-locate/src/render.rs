@@ -283,6 +283,33 @@ impl SplitMix64 {
 /// Renders `scene` (see the module docs for the steps).
 pub fn render(scene: &Scene) -> Result<OwnedImage, RenderError> {
     let (w, h) = (scene.width, scene.height);
+    let mut out = radiance(scene)?;
+    let full = full_scale(scene.depth);
+    let mut rng = SplitMix64::new(scene.seed ^ 0x05EE_D0F5_015E);
+    for v in &mut out {
+        if scene.noise_sigma > 0.0 {
+            *v += scene.noise_sigma * rng.gaussian();
+        }
+        *v = v.round().clamp(0.0, full);
+    }
+    let pixels = match scene.depth {
+        Depth::Eight => OwnedPixels::Gray8(out.iter().map(|&v| v as u8).collect()),
+        Depth::Sixteen => OwnedPixels::Gray16(out.iter().map(|&v| v as u16).collect()),
+    };
+    Ok(OwnedImage::new(w, h, pixels).expect("the buffer has width × height samples"))
+}
+
+fn full_scale(depth: Depth) -> f64 {
+    match depth {
+        Depth::Eight => 255.0,
+        Depth::Sixteen => 65535.0,
+    }
+}
+
+/// Steps 1–3 of [`render`]: the noise-free image in grey levels of the output depth, unrounded,
+/// row-major.
+pub(crate) fn radiance(scene: &Scene) -> Result<Vec<f64>, RenderError> {
+    let (w, h) = (scene.width, scene.height);
     if w == 0 || h == 0 || w.checked_mul(h).is_none_or(|n| n > 1 << 28) {
         return Err(RenderError::Size { width: w, height: h });
     }
@@ -307,33 +334,20 @@ pub fn render(scene: &Scene) -> Result<OwnedImage, RenderError> {
     if scene.blur_sigma > 0.0 {
         gaussian_blur(&mut refl, w, h, scene.blur_sigma);
     }
-    let full = match scene.depth {
-        Depth::Eight => 255.0,
-        Depth::Sixteen => 65535.0,
-    };
+    let full = full_scale(scene.depth);
     let l = &scene.lighting;
     let (gc, gs) = (l.angle.cos(), l.angle.sin());
     let (mx, my) = ((w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0);
     // The gradient spans the image's extent along `angle`.
     let span = (w as f64 * gc.abs() + h as f64 * gs.abs()).max(1.0);
-    let mut rng = SplitMix64::new(scene.seed ^ 0x05EE_D0F5_015E);
-    let mut out = Vec::with_capacity(w * h);
     for y in 0..h {
         for x in 0..w {
             let t = ((x as f64 - mx) * gc + (y as f64 - my) * gs) / span;
             let light = l.level * (1.0 + l.gradient * t);
-            let mut v = full * light * refl[y * w + x];
-            if scene.noise_sigma > 0.0 {
-                v += scene.noise_sigma * rng.gaussian();
-            }
-            out.push(v.round().clamp(0.0, full));
+            refl[y * w + x] *= full * light;
         }
     }
-    let pixels = match scene.depth {
-        Depth::Eight => OwnedPixels::Gray8(out.iter().map(|&v| v as u8).collect()),
-        Depth::Sixteen => OwnedPixels::Gray16(out.iter().map(|&v| v as u16).collect()),
-    };
-    Ok(OwnedImage::new(w, h, pixels).expect("the buffer has width × height samples"))
+    Ok(refl)
 }
 
 fn check(scene: &Scene) -> Result<(), RenderError> {

@@ -1,4 +1,4 @@
-//! The normal distribution's CDF and density (the blurred-edge profile).
+//! The normal distribution's CDF and density (what the edge profiles are made of).
 
 const FRAC_1_SQRT_2PI: f64 = 0.398_942_280_401_432_7;
 

@@ -302,15 +302,19 @@ fn bad_input_is_a_typed_error() {
 
 #[test]
 fn the_cramer_rao_bound_agrees_with_its_closed_form() {
-    // With everything but the centre known, a disc edge of contrast A and width s over the
-    // perimeter 2πR gives cx the Fisher information A²·πR/(2√π·s)/σ². Unknown nuisance
-    // parameters (radius, width, background and contrast planes) can only raise the bound —
-    // the light planes’ slopes correlate with the centre (1.3–1.5 × here) — and it scales as
-    // σ/|A| exactly.
-    for (d, s, a, sigma) in [(100.0, 1.0, 150.0, 2.0), (40.0, 0.6, -80.0, 1.0), (200.0, 3.0, 100.0, 4.0)] {
+    // With everything but the centre known, a disc edge of contrast A and width σₑ over the
+    // perimeter 2πR gives cx the Fisher information A²·πR/(2√π·σₑ)/σ², for a Gaussian edge
+    // profile; the pixel's square makes the blurred edge's width σₑ = √(s² + 1/12) and its
+    // profile nearly Gaussian. Unknown nuisance parameters (radius, blur, background and
+    // contrast planes) can only raise the bound — the light planes’ slopes correlate with the
+    // centre (1.3–1.5 × here) — and it scales as σ/|A| exactly.
+    for (d, s, a, sigma) in
+        [(100.0, 1.0, 150.0, 2.0), (40.0, 0.6, -80.0, 1.0), (200.0, 3.0, 100.0, 4.0), (60.0, 0.0, 170.0, 2.0)]
+    {
         let (cx, cy) = vision_locate::dot_crb(d, s, 190.0, a, sigma).expect("regular");
+        let width = (s * s + 1.0 / 12.0f64).sqrt();
         let closed =
-            sigma / a.abs() * (2.0 * std::f64::consts::PI.sqrt() * s / (std::f64::consts::PI * d / 2.0)).sqrt();
+            sigma / a.abs() * (2.0 * std::f64::consts::PI.sqrt() * width / (std::f64::consts::PI * d / 2.0)).sqrt();
         for v in [cx, cy] {
             assert!(v / closed > 1.0 && v / closed < 1.6, "d {d}: {v} vs {closed}");
         }
