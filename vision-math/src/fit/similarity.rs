@@ -33,8 +33,7 @@ pub(super) fn solve(m: &Moments) -> Result<LinearPart, MathError> {
     if !LinearPart::scale_in_range(s) {
         return Err(refusal(re, im, d, s, Matrix2::new(a, -b, b, a)));
     }
-    let inv_h = 1.0 / h;
-    let rotation = UnitComplex::new_unchecked(Complex::new(re * inv_h, im * inv_h));
+    let rotation = UnitComplex::new_unchecked(Complex::new(re / h, im / h));
     Ok(LinearPart { rotation, scale: Vector2::new(s, s), shear: 0.0, linear: Matrix2::new(a, -b, b, a) })
 }
 
