@@ -392,7 +392,9 @@ impl Moments {
             return Err(MathError::TooFewPoints { model: model.name(), needed, got: len });
         }
         if let (Ok(n), Ok(o)) = (<&[Point2<f64>; 4]>::try_from(commanded), <&[Point2<f64>; 4]>::try_from(observed)) {
-            return Self::of_four(n, o);
+            if let Some(m) = Self::of_four(n, o) {
+                return m.spread_checked();
+            }
         }
         // One pass over the points, with sums taken relative to the first pair: as exact as a
         // two-pass centring (the reference lies inside the cloud, so nothing cancels beyond the
@@ -448,21 +450,22 @@ impl Moments {
         Moments { len, inv_len: inv, cn, co, sxx, sxy, syy, pxx, pxy, pyx, pyy }.spread_checked()
     }
 
-    /// [`Moments::new`] for exactly four pairs, the usual alignment (four marks): straight-line
-    /// code, no loop and no division by the count.
+    /// The moments of exactly four pairs, the usual alignment (four marks), in straight-line
+    /// code: no loop and no division by the count. `None` when the points are not cleared by
+    /// its quick input test; [`Moments::new`] then takes the general pass, whose exact checks
+    /// pick the error (or accept the points). The spread check is left to the caller.
     ///
     /// The centring is the exact two-pass one (the centroids first, then the sums of the
     /// centred products), which a fixed count makes as cheap as the general path's one pass.
     /// The input test uses those sums instead of a per-coordinate maximum: every coordinate is
     /// its centroid plus its deviation, the centroid's is at most `|n̄ₓ| + |n̄_y| + |ōₓ| + |ō_y|`
     /// and the deviation at most the root of the sum of all squared deviations, commanded and
-    /// observed; when both are at most `MAX_COORDINATE / 2` (less 1 % for rounding), no
-    /// coordinate is beyond the bound. A NaN or infinite coordinate makes a centroid NaN or
-    /// infinite, which fails the test too. Points the test does not clear (any bad input, and
-    /// coordinates within a factor of about two of the bound) go to the exact checks of the
-    /// cold path, which pick the error or let them through.
+    /// observed; when both are at most `MAX_COORDINATE / 2` (the second less 1 % for
+    /// rounding), no coordinate is beyond the bound. A NaN or infinite coordinate makes a
+    /// centroid NaN or infinite, which fails the test too. So the points it does not clear are
+    /// the bad ones and those within about a factor of two of the bound.
     #[inline(always)]
-    fn of_four(n: &[Point2<f64>; 4], o: &[Point2<f64>; 4]) -> Result<Self, MathError> {
+    fn of_four(n: &[Point2<f64>; 4], o: &[Point2<f64>; 4]) -> Option<Self> {
         /// The bound on the centroids' magnitudes, and on the root of the squared deviations.
         const HALF: f64 = 0.5 * MAX_COORDINATE;
         const SPREAD: f64 = 0.99 * HALF;
@@ -488,11 +491,9 @@ impl Moments {
         let centroids = (cn.x.abs() + cn.y.abs()) + (co.x.abs() + co.y.abs());
         let deviations = (sxx + syy) + (qxx + qyy);
         if !(centroids <= HALF && deviations <= SPREAD * SPREAD) {
-            if let Some(e) = refuse_input(n, o) {
-                return Err(e);
-            }
+            return None;
         }
-        Moments { len: 4, inv_len: inv, cn, co, sxx, sxy, syy, pxx, pxy, pyx, pyy }.spread_checked()
+        Some(Moments { len: 4, inv_len: inv, cn, co, sxx, sxy, syy, pxx, pxy, pyx, pyy })
     }
 
     /// Refuses coincident commanded points: an RMS spread below [`MIN_SPREAD`] or below
