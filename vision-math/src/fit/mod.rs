@@ -81,20 +81,34 @@ impl Model {
     ///
     /// # Errors
     /// As the model's own fit function ([`fit_rectangle`], …).
+    #[inline]
     pub fn fit(self, commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Result<Fit, MathError> {
-        // One arm per model, each with a constant model, so that every arm keeps only the
-        // moments its closed form reads.
+        // One function per model, each with a constant model, so that each keeps only the
+        // moments its closed form reads. This dispatch is `#[inline]` so that a caller naming
+        // the model (`fit_similarity`, `Model::Similarity.fit`) calls its function directly.
         #[inline(always)]
         fn fit_as(model: Model, commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Result<Fit, MathError> {
             let m = Moments::new(model, commanded, observed)?;
             let p = model.solve(&m)?;
             m.finish(model, p, commanded, observed)
         }
+        fn rigid(c: &[Point2<f64>], o: &[Point2<f64>]) -> Result<Fit, MathError> {
+            fit_as(Model::Rigid, c, o)
+        }
+        fn similarity(c: &[Point2<f64>], o: &[Point2<f64>]) -> Result<Fit, MathError> {
+            fit_as(Model::Similarity, c, o)
+        }
+        fn rectangle(c: &[Point2<f64>], o: &[Point2<f64>]) -> Result<Fit, MathError> {
+            fit_as(Model::Rectangle, c, o)
+        }
+        fn affine(c: &[Point2<f64>], o: &[Point2<f64>]) -> Result<Fit, MathError> {
+            fit_as(Model::Affine, c, o)
+        }
         match self {
-            Model::Rigid => fit_as(Model::Rigid, commanded, observed),
-            Model::Similarity => fit_as(Model::Similarity, commanded, observed),
-            Model::Rectangle => fit_as(Model::Rectangle, commanded, observed),
-            Model::Affine => fit_as(Model::Affine, commanded, observed),
+            Model::Rigid => rigid(commanded, observed),
+            Model::Similarity => similarity(commanded, observed),
+            Model::Rectangle => rectangle(commanded, observed),
+            Model::Affine => affine(commanded, observed),
         }
     }
 
@@ -103,7 +117,9 @@ impl Model {
     ///
     /// # Errors
     /// As [`Model::fit`].
+    #[inline]
     pub fn transform(self, commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Result<Transform, MathError> {
+        // Dispatched as in `fit`.
         #[inline(always)]
         fn transform_as(
             model: Model,
@@ -122,11 +138,23 @@ impl Model {
                 observed_centroid: Point2::from(m.co),
             })
         }
+        fn rigid(c: &[Point2<f64>], o: &[Point2<f64>]) -> Result<Transform, MathError> {
+            transform_as(Model::Rigid, c, o)
+        }
+        fn similarity(c: &[Point2<f64>], o: &[Point2<f64>]) -> Result<Transform, MathError> {
+            transform_as(Model::Similarity, c, o)
+        }
+        fn rectangle(c: &[Point2<f64>], o: &[Point2<f64>]) -> Result<Transform, MathError> {
+            transform_as(Model::Rectangle, c, o)
+        }
+        fn affine(c: &[Point2<f64>], o: &[Point2<f64>]) -> Result<Transform, MathError> {
+            transform_as(Model::Affine, c, o)
+        }
         match self {
-            Model::Rigid => transform_as(Model::Rigid, commanded, observed),
-            Model::Similarity => transform_as(Model::Similarity, commanded, observed),
-            Model::Rectangle => transform_as(Model::Rectangle, commanded, observed),
-            Model::Affine => transform_as(Model::Affine, commanded, observed),
+            Model::Rigid => rigid(commanded, observed),
+            Model::Similarity => similarity(commanded, observed),
+            Model::Rectangle => rectangle(commanded, observed),
+            Model::Affine => affine(commanded, observed),
         }
     }
 
@@ -196,13 +224,18 @@ impl LinearPart {
     /// full finiteness test runs for the affine model and, to pick the error, on failure.
     #[inline(always)]
     fn check(&self, model: Model) -> Result<(), MathError> {
-        let max = 1.0 / MIN_SCALE;
-        let in_range = |s: f64| (MIN_SCALE..=max).contains(&s.abs());
+        let in_range = LinearPart::scale_in_range;
         if in_range(self.scale.x) && in_range(self.scale.y) && (model != Model::Affine || self.is_finite()) {
             Ok(())
         } else {
             Err(self.refusal())
         }
+    }
+
+    /// Whether a scale's magnitude is within `MIN_SCALE..=1/MIN_SCALE` (so also finite).
+    #[inline(always)]
+    fn scale_in_range(s: f64) -> bool {
+        (MIN_SCALE..=1.0 / MIN_SCALE).contains(&s.abs())
     }
 
     /// The error for parameters [`LinearPart::check`] refuses. By value, so that the common
@@ -358,6 +391,11 @@ impl Moments {
         if len < needed {
             return Err(MathError::TooFewPoints { model: model.name(), needed, got: len });
         }
+        if let (Ok(n), Ok(o)) = (<&[Point2<f64>; 4]>::try_from(commanded), <&[Point2<f64>; 4]>::try_from(observed)) {
+            if let Some(m) = Self::of_four(n, o) {
+                return m.spread_checked();
+            }
+        }
         // One pass over the points, with sums taken relative to the first pair: as exact as a
         // two-pass centring (the reference lies inside the cloud, so nothing cancels beyond the
         // spread itself) but half the memory traffic.
@@ -409,15 +447,71 @@ impl Moments {
                 return Err(e);
             }
         }
-        let spread2 = (sxx + syy) * inv;
+        Moments { len, inv_len: inv, cn, co, sxx, sxy, syy, pxx, pxy, pyx, pyy }.spread_checked()
+    }
+
+    /// The moments of exactly four pairs, the usual alignment (four marks), in straight-line
+    /// code: no loop and no division by the count. `None` when the points are not cleared by
+    /// its quick input test; [`Moments::new`] then takes the general pass, whose exact checks
+    /// pick the error (or accept the points). The spread check is left to the caller.
+    ///
+    /// The centring is the exact two-pass one (the centroids first, then the sums of the
+    /// centred products), which a fixed count makes as cheap as the general path's one pass.
+    /// The input test uses those sums instead of a per-coordinate maximum: every coordinate is
+    /// its centroid plus its deviation, the centroid's is at most `|n̄ₓ| + |n̄_y| + |ōₓ| + |ō_y|`
+    /// and the deviation at most the root of the sum of all squared deviations, commanded and
+    /// observed; when both are at most `MAX_COORDINATE / 2` (the second less 1 % for
+    /// rounding), no coordinate is beyond the bound. A NaN or infinite coordinate makes a
+    /// centroid NaN or infinite, which fails the test too. So the points it does not clear are
+    /// the bad ones and those within about a factor of two of the bound.
+    #[inline(always)]
+    fn of_four(n: &[Point2<f64>; 4], o: &[Point2<f64>; 4]) -> Option<Self> {
+        /// The bound on the centroids' magnitudes, and on the root of the squared deviations.
+        const HALF: f64 = 0.5 * MAX_COORDINATE;
+        const SPREAD: f64 = 0.99 * HALF;
+        let inv = 0.25;
+        let cn = sum_of_four(n.map(|p| p.coords)) * inv;
+        let co = sum_of_four(o.map(|p| p.coords)) * inv;
+        let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+        let (mut pxx, mut pxy, mut pyx, mut pyy) = (0.0, 0.0, 0.0, 0.0);
+        let (mut qxx, mut qyy) = (0.0, 0.0);
+        // A loop over arrays, which the compiler unrolls and pairs into SSE2 products; written
+        // as `Vector2` products instead, it paired lanes across points and came out longer.
+        for (n, o) in n.iter().zip(o) {
+            let (ax, ay) = (n.x - cn.x, n.y - cn.y);
+            let (qx, qy) = (o.x - co.x, o.y - co.y);
+            sxx += ax * ax;
+            syy += ay * ay;
+            sxy += ax * ay;
+            pxx += ax * qx;
+            pyy += ay * qy;
+            pxy += ax * qy;
+            pyx += ay * qx;
+            qxx += qx * qx;
+            qyy += qy * qy;
+        }
+        let centroids = (cn.x.abs() + cn.y.abs()) + (co.x.abs() + co.y.abs());
+        let deviations = (sxx + syy) + (qxx + qyy);
+        if !(centroids <= HALF && deviations <= SPREAD * SPREAD) {
+            return None;
+        }
+        Some(Moments { len: 4, inv_len: inv, cn, co, sxx, sxy, syy, pxx, pxy, pyx, pyy })
+    }
+
+    /// Refuses coincident commanded points: an RMS spread below [`MIN_SPREAD`] or below
+    /// [`COINCIDENT`] times the centroid's magnitude. The input checks have passed, so the
+    /// centroid is finite.
+    #[inline(always)]
+    fn spread_checked(self) -> Result<Self, MathError> {
+        let spread2 = (self.sxx + self.syy) * self.inv_len;
         // The centroid is finite here, so `fast_max` needs no NaN test; `floor` ≥ MIN_SPREAD > 0,
         // so a zero spread is refused too.
-        let magnitude = fast_max(cn.x.abs(), cn.y.abs());
+        let magnitude = fast_max(self.cn.x.abs(), self.cn.y.abs());
         let floor = fast_max(COINCIDENT * magnitude, MIN_SPREAD);
         if spread2 <= floor * floor {
             return Err(MathError::CoincidentPoints);
         }
-        Ok(Moments { len, inv_len: inv, cn, co, sxx, sxy, syy, pxx, pxy, pyx, pyy })
+        Ok(self)
     }
 
     /// Refuses (nearly) collinear commanded points: the 2×2 second-moment matrix must have rank 2.
@@ -477,6 +571,12 @@ impl Moments {
             max_residual: max2.sqrt(),
         })
     }
+}
+
+/// `(v₀ + v₁) + (v₂ + v₃)`.
+#[inline(always)]
+fn sum_of_four<T: std::ops::Add<Output = T> + Copy>(v: [T; 4]) -> T {
+    (v[0] + v[1]) + (v[2] + v[3])
 }
 
 /// `a` if `a > b`, else `b`: one `maxsd` (no NaN handling, unlike `f64::max`).

@@ -420,3 +420,68 @@ proptest! {
         }
     }
 }
+
+proptest! {
+    /// Four pairs take their own straight-line moments pass; the same four pairs twice over (eight,
+    /// the general pass) have the same fit, every model, up to rounding — also for coordinates
+    /// near `MAX_COORDINATE`, which the four-pair pass leaves to the exact checks.
+    #[test]
+    fn four_pairs_fit_as_the_general_pass_does(
+        (theta, sx, sy, shift, log_spread, centre, turn, _) in case(),
+        fourth in (-1.0f64..1.0, -1.0f64..1.0),
+        near_bound in prop::bool::ANY,
+    ) {
+        let (spread, centre) = if near_bound {
+            (10f64.powf(log_spread + 4.0), Vector2::new(0.9 * MAX_COORDINATE, -0.7 * MAX_COORDINATE))
+        } else {
+            (10f64.powf(log_spread), centre)
+        };
+        let n = points(spread, centre, turn, &[fourth]);
+        prop_assert_eq!(n.len(), 4);
+        for model in Model::ALL {
+            let map = truth_map(theta, sx, if model == Model::Similarity { sx } else { sy }, shift);
+            // Turned about the centre, so that the observed points stay as near the bound.
+            let o: Vec<_> = n.iter().map(|p| map(&(p - centre)) + centre).collect();
+            let twice = |p: &[Point2<f64>]| p.iter().chain(p).copied().collect::<Vec<_>>();
+            let (four, eight) = match (model.fit(&n, &o), model.fit(&twice(&n), &twice(&o))) {
+                (Ok(four), Ok(eight)) => (four.transform, eight.transform),
+                (four, eight) => {
+                    prop_assert_eq!(four.err(), eight.err(), "{}", model);
+                    continue;
+                }
+            };
+            prop_assert_eq!(model.transform(&n, &o), Ok(four), "{}", model);
+            let near = |a: Point2<f64>, b: Point2<f64>| (a - b).norm() <= 1e-15 * (a.coords.norm() + spread);
+            prop_assert!(near(four.commanded_centroid, eight.commanded_centroid), "{}", model);
+            prop_assert!(near(four.observed_centroid, eight.observed_centroid), "{}", model);
+            // Centring against the centroid or against the first point leaves errors of the
+            // order of ε·|centroid|/spread in the parameters.
+            let tol = 1e-13 * (1.0 + centre.norm() / spread);
+            prop_assert!(angle_diff(four.theta_rad(), eight.theta_rad()) <= tol, "{}: θ {} vs {}", model, four.theta_rad(), eight.theta_rad());
+            prop_assert!((four.scale - eight.scale).norm() <= tol, "{}: scale {} vs {}", model, four.scale, eight.scale);
+            prop_assert!((four.shear - eight.shear).abs() <= tol, "{}: shear {} vs {}", model, four.shear, eight.shear);
+        }
+    }
+}
+
+#[test]
+fn four_pairs_at_the_coordinate_bound() {
+    let p = |v: &[(f64, f64)]| v.iter().map(|(x, y)| Point2::new(*x, *y)).collect::<Vec<_>>();
+    let m = MAX_COORDINATE;
+    // Every coordinate at ±MAX_COORDINATE: beyond the four-pair pass's quick bound, accepted by
+    // the exact check.
+    let corners = p(&[(-m, -m), (m, -m), (m, m), (-m, m)]);
+    let half = p(&[(-0.5 * m, -0.5 * m), (0.5 * m, -0.5 * m), (0.5 * m, 0.5 * m), (-0.5 * m, 0.5 * m)]);
+    let t = Model::Similarity.transform(&corners, &half).expect("at the bound");
+    assert!((t.scale.x - 0.5).abs() < 1e-15 && t.theta_rad().abs() < 1e-15, "{t:?}");
+    assert_eq!(Model::Similarity.transform(&half, &corners).map(|t| t.scale.x), Ok(2.0));
+    // One coordinate past it, commanded then observed.
+    let mut over = corners.clone();
+    over[2].y = m * (1.0 + f64::EPSILON);
+    for model in Model::ALL {
+        let e = model.transform(&over, &half).expect_err("commanded too large");
+        assert!(matches!(e, MathError::CoordinateTooLarge { what: "a commanded point", .. }), "{model}: {e:?}");
+        let e = model.fit(&half, &over).expect_err("observed too large");
+        assert!(matches!(e, MathError::CoordinateTooLarge { what: "an observed point", .. }), "{model}: {e:?}");
+    }
+}
