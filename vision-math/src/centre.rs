@@ -94,20 +94,7 @@ pub fn fit_centre(before: &[Point2<f64>], after: &[Point2<f64>], noise_px: f64) 
 mod tests {
     use super::*;
 
-    /// Deterministic normal draws (Box–Muller over a 64-bit LCG).
-    struct Normal(u64);
-    impl Normal {
-        fn unit(&mut self) -> f64 {
-            self.0 = self.0.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
-            #[allow(clippy::cast_precision_loss)]
-            let u = ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64;
-            u
-        }
-        fn next(&mut self) -> f64 {
-            let (u, v) = (self.unit(), self.unit());
-            (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
-        }
-    }
+    use crate::normal::Normal;
 
     /// A 4 × 4 grid of readings ±350 px about `centre`'s neighbourhood, and the same marks
     /// after a lift that scales the image by `r` about `c`.
@@ -136,11 +123,11 @@ mod tests {
         let mut g = Normal(7);
         let (mut sum2, mut n) = (0.0, 0.0);
         for trial in 0..2000 {
-            let c = Point2::new(888.0 + 5.0 * g.next(), 888.0 + 5.0 * g.next());
+            let c = Point2::new(888.0 + 5.0 * g.draw(), 888.0 + 5.0 * g.draw());
             let (mut before, mut after) = pairs(c, 6.0 / 6.25);
             let noise = 0.05 + 0.1 * f64::from(trial % 3);
             for p in before.iter_mut().chain(after.iter_mut()) {
-                *p += Vector2::new(g.next(), g.next()) * noise;
+                *p += Vector2::new(g.draw(), g.draw()) * noise;
             }
             let fit = fit_centre(&before, &after, noise).expect("fit");
             let z = (fit.centre - c).component_div(&fit.sigma);
@@ -158,7 +145,7 @@ mod tests {
         let c = Point2::new(888.0, 888.0);
         let (before, _) = pairs(c, 1.0);
         let mut g = Normal(3);
-        let same: Vec<Point2<f64>> = before.iter().map(|p| p + Vector2::new(g.next(), g.next()) * 0.1).collect();
+        let same: Vec<Point2<f64>> = before.iter().map(|p| p + Vector2::new(g.draw(), g.draw()) * 0.1).collect();
         assert!(matches!(fit_centre(&before, &same, 0.1), Err(MathError::NoScaleChange { .. })));
         assert!(matches!(fit_centre(&before[..2], &same[..2], 0.1), Err(MathError::TooFewPoints { .. })));
         assert!(matches!(fit_centre(&before, &same[..3], 0.1), Err(MathError::LengthMismatch { .. })));

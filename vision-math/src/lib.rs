@@ -33,6 +33,8 @@ pub mod chain;
 mod error;
 pub mod fit;
 pub mod linuxcnc;
+#[cfg(test)]
+mod normal;
 pub mod pixel;
 pub mod scale;
 pub mod show;

@@ -129,20 +129,7 @@ impl ScaleEvidence {
 mod tests {
     use super::*;
 
-    /// Deterministic normal draws (Box–Muller over an LCG).
-    struct Normal(u64);
-    impl Normal {
-        fn unit(&mut self) -> f64 {
-            self.0 = self.0.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
-            #[allow(clippy::cast_precision_loss)]
-            let u = ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64;
-            u
-        }
-        fn draw(&mut self) -> f64 {
-            let (u, v) = (self.unit(), self.unit());
-            (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
-        }
-    }
+    use crate::normal::Normal;
 
     /// One mark read at its first position and after moves; `s` the true scale.
     fn readings(
