@@ -144,11 +144,42 @@ proptest! {
 }
 
 /// Sharp, nearly noise-free marks that `examples/locate_stress.rs` found missed (400 × 400 px,
-/// cross bar 0.2 × the size): crosses along the pixel axes, whose fit could not settle the blur
-/// below a pixel (a singular system, or a blur jumping on and off its bound).
+/// ring line and cross bar 0.2 × the size): rings whose line fell apart into an arc in the coarse
+/// search's upper contrast level, and crosses along the pixel axes, whose fit could not settle
+/// the blur below a pixel (a singular system, or a blur jumping on and off its bound).
 #[test]
 fn sharp_marks_the_stress_missed_are_found() {
     let cases = [
+        (
+            MarkKind::Ring,
+            Polarity::DarkOnLight,
+            286.6834232910234,
+            54.76054302604002,
+            48.844841176358,
+            0.0,
+            14166473869716118006,
+            0.0,
+        ),
+        (
+            MarkKind::Ring,
+            Polarity::DarkOnLight,
+            269.01457058429685,
+            235.1127443678913,
+            49.04056834824942,
+            0.0,
+            7483854707913251939,
+            0.0,
+        ),
+        (
+            MarkKind::Ring,
+            Polarity::LightOnDark,
+            307.40747953579273,
+            108.71404405734538,
+            33.94810681454,
+            0.0,
+            12917395730094274147,
+            0.5,
+        ),
         (
             MarkKind::Cross,
             Polarity::DarkOnLight,
