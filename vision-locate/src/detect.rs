@@ -26,6 +26,11 @@ pub(crate) struct Candidate {
     pub(crate) at_border: bool,
     /// Sum of the blob's contrast (ranks candidates).
     pub(crate) mass: f64,
+    /// The same mark's blobs at lower contrast levels whose centroid moved by more than half a
+    /// block from this one's: this blob may be only part of the mark (a thin ring's line,
+    /// sharp, can fall apart into an arc at the upper level), so they are refined in turn when
+    /// this one gives no mark.
+    pub(crate) alternates: Vec<Candidate>,
 }
 
 /// The coarse search's findings.
@@ -109,8 +114,16 @@ pub(crate) fn search<T: Copy + Into<f64> + Into<u32>>(img: &Img<'_, T>, spec: &M
                 }
             }
             if let Some(c) = describe(&pixels, &contrast, w, h, f, spec) {
-                if !out.candidates.iter().any(|o| (o.x - c.x).hypot(o.y - c.y) < 0.25 * dmin) {
-                    out.candidates.push(c);
+                match out.candidates.iter_mut().find(|o| (o.x - c.x).hypot(o.y - c.y) < 0.25 * dmin) {
+                    None => out.candidates.push(c),
+                    Some(o) => {
+                        // A lower level's blob contains the upper one's: a centroid that moved
+                        // means the upper blob missed part of the mark.
+                        let moved = |a: &Candidate| (a.x - c.x).hypot(a.y - c.y) > 0.5 * f as f64;
+                        if moved(o) && o.alternates.iter().all(moved) {
+                            o.alternates.push(c);
+                        }
+                    }
                 }
             }
         }
@@ -201,6 +214,7 @@ fn describe(pixels: &[usize], contrast: &[f32], w: usize, h: usize, f: usize, sp
         half_length,
         at_border,
         mass,
+        alternates: Vec::new(),
     })
 }
 

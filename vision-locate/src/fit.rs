@@ -359,6 +359,8 @@ pub(crate) fn fit<M: Model, T: Copy + Into<f64>, const N: usize>(
         }
         g[si] = g[si].max(s_floor);
         let mut sup = g;
+        // Arrivals of the blur at its bound in this stage (see the step below).
+        let (mut floor_visits, mut was_at_floor) = (0usize, false);
         for _ in 0..max_iter {
             // Re-choose the fitted pixels only when the estimate has really moved.
             let drift = (0..si).map(|k| (g[k] - sup[k]).abs()).fold(0.0, f64::max);
@@ -376,7 +378,25 @@ pub(crate) fn fit<M: Model, T: Copy + Into<f64>, const N: usize>(
                 1 => (0..n).filter(|&k| k != si).collect(),
                 _ => (0..n).collect(),
             };
-            let mut step = solve(&acc.h, &acc.b, &free).ok_or(FitFailure::Diverged)?;
+            // Below a pixel the model is not smooth in the blur: a sharp edge along a pixel axis
+            // is the pixel's ramp, whose corners round off in proportion to s, so the blur's
+            // column is near zero but for spikes at the corners. On a sharp image whose edges
+            // run along the axes (a cross at 0°) the system is then singular at the bound (as
+            // sharp as can be), or the freed blur jumps off the bound and back on, round and
+            // round, without converging. So the blur is held when the system with it is
+            // singular, and once it has come back to the bound.
+            let at_floor = free.contains(&si) && g[si] <= S_MIN;
+            floor_visits += usize::from(at_floor && !was_at_floor);
+            was_at_floor = at_floor;
+            let full = if at_floor && floor_visits > 1 { None } else { solve(&acc.h, &acc.b, &free) };
+            let mut step = match full {
+                Some(step) => step,
+                None if free.contains(&si) => {
+                    let rest: Vec<usize> = free.iter().copied().filter(|&k| k != si).collect();
+                    solve(&acc.h, &acc.b, &rest).ok_or(FitFailure::Diverged)?
+                }
+                None => return Err(FitFailure::Diverged),
+            };
             // The step is in the edge width σₑ = √(s² + 1/12) (see `edge_width`). It moves at most
             // ×4 down, not below the stage's floor, or ×2 up; when it hits a bound it is held
             // there and the others solved for given it, so the step stays consistent (clamping

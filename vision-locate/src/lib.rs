@@ -168,7 +168,15 @@ fn locate_in<T: Copy + Into<f64> + Into<u32>>(img: &Img<'_, T>, spec: &MarkSpec,
     let mut marks: Vec<Verified> = Vec::new();
     let mut clipped = false;
     for c in &found.candidates {
-        match refine(img, spec, c, found.noise, found.factor, full_scale) {
+        // A blob that may be part of the mark falls back on the same mark's fuller blobs.
+        let mut rr = refine(img, spec, c, found.noise, found.factor, full_scale);
+        for alt in &c.alternates {
+            if !matches!(rr, Ok(None) | Err(FitFailure::Diverged)) {
+                break;
+            }
+            rr = refine(img, spec, alt, found.noise, found.factor, full_scale);
+        }
+        match rr {
             Ok(Some(v)) => {
                 // The same mark reached from two blobs counts once.
                 let r = v.mark.diameter / 4.0;

@@ -143,6 +143,90 @@ proptest! {
     }
 }
 
+/// Sharp, nearly noise-free marks that `examples/locate_stress.rs` found missed (400 × 400 px,
+/// ring line and cross bar 0.2 × the size): rings whose line fell apart into an arc in the coarse
+/// search's upper contrast level, and crosses along the pixel axes, whose fit could not settle
+/// the blur below a pixel (a singular system, or a blur jumping on and off its bound).
+#[test]
+fn sharp_marks_the_stress_missed_are_found() {
+    let cases = [
+        (
+            MarkKind::Ring,
+            Polarity::DarkOnLight,
+            286.6834232910234,
+            54.76054302604002,
+            48.844841176358,
+            0.0,
+            14166473869716118006,
+            0.0,
+        ),
+        (
+            MarkKind::Ring,
+            Polarity::DarkOnLight,
+            269.01457058429685,
+            235.1127443678913,
+            49.04056834824942,
+            0.0,
+            7483854707913251939,
+            0.0,
+        ),
+        (
+            MarkKind::Ring,
+            Polarity::LightOnDark,
+            307.40747953579273,
+            108.71404405734538,
+            33.94810681454,
+            0.0,
+            12917395730094274147,
+            0.5,
+        ),
+        (
+            MarkKind::Cross,
+            Polarity::DarkOnLight,
+            166.17919564185684,
+            191.51665166826308,
+            68.90889522868076,
+            0.0003450923602773548,
+            6739880452500824026,
+            0.0,
+        ),
+        (
+            MarkKind::Cross,
+            Polarity::DarkOnLight,
+            245.07508385832796,
+            252.18208629059507,
+            122.94890092347813,
+            2.5856001927171413e-5,
+            16866257477905049738,
+            0.0,
+        ),
+        (
+            MarkKind::Cross,
+            Polarity::LightOnDark,
+            208.96796374064067,
+            330.2427159190217,
+            55.05025928189086,
+            -0.0016934827623441562,
+            12269804755735283513,
+            0.0,
+        ),
+    ];
+    for (kind, polarity, x, y, d, angle, seed, noise) in cases {
+        let (bg, ink) = levels(polarity);
+        let scene = Scene {
+            background: bg,
+            marks: vec![PlacedMark { shape: shape(kind, d, angle), x, y, reflectance: ink }],
+            noise_sigma: noise,
+            seed,
+            ..Scene::blank(400, 400, Depth::Eight)
+        };
+        let spec = MarkSpec::new(kind, d, 0.2, polarity).unwrap();
+        let mark = found(run(&scene, &spec, None));
+        let err = (mark.x - x).hypot(mark.y - y);
+        assert!(err < 0.02, "{kind:?} d {d}: centre off by {err} px: {mark:?} vs ({x}, {y})");
+    }
+}
+
 #[test]
 fn sixteen_bit_images_work_alike() {
     let mut scene =
