@@ -132,6 +132,30 @@ proptest! {
         prop_assert!(g_b.norm() <= 1e-9 * rn * root_n + 1e-12 * spread, "dF/db = {g_b:?}");
     }
 
+    /// The RMS and the largest residual, whichever loop computed them (a plain one below eight
+    /// points, a paired one from eight, odd counts with a last single pair), are those of
+    /// `Fit::residuals`, up to rounding.
+    #[test]
+    fn rms_and_largest_residual_match_the_residuals(
+        (theta, sx, sy, shift, _log_spread, centre, turn, extra) in case(),
+        noise in prop::collection::vec((-1.0f64..1.0, -1.0f64..1.0), 64),
+        sigma in 1e-4f64..1e-1,
+    ) {
+        let n = points(10.0, centre * 0.1, turn, &extra);
+        let map = truth_map(theta, sx, sy, shift);
+        let o: Vec<_> = n.iter().zip(&noise).map(|(p, e)| map(p) + Vector2::new(e.0, e.1) * sigma).collect();
+        for model in Model::ALL {
+            let fit = model.fit(&n, &o).expect("well-posed");
+            let r: Vec<f64> = fit.residuals(&n, &o).iter().map(|r| r.norm()).collect();
+            #[allow(clippy::cast_precision_loss)]
+            let rms = (r.iter().map(|r| r * r).sum::<f64>() / r.len() as f64).sqrt();
+            let largest = r.iter().fold(0.0, |m: f64, &r| m.max(r));
+            let tol = 1e-9 * (sigma + 1e-9);
+            prop_assert!((fit.rms - rms).abs() <= tol, "{model}, {} points: rms {} vs {rms}", n.len(), fit.rms);
+            prop_assert!((fit.max_residual - largest).abs() <= tol, "{model}, {} points: largest {} vs {largest}", n.len(), fit.max_residual);
+        }
+    }
+
     #[test]
     fn linear_solve_recovers_any_well_conditioned_matrix(
         m in prop::array::uniform4(-2.0f64..2.0),
