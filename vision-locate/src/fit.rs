@@ -326,6 +326,10 @@ pub(crate) enum FitFailure {
 
 const MAX_ITER: usize = 15;
 
+/// An accepted estimate of a stage's fit: geometry, planes, the geometry that chose the fitted
+/// pixels, and the sums there.
+type Accepted = ([f64; 6], [f64; 6], [f64; 6], Acc);
+
 /// Fits `model` starting from geometry `g0`; `scale` px normalises the plane slopes.
 pub(crate) fn fit<M: Model, T: Copy + Into<f64>, const N: usize>(
     img: &Img<'_, T>,
@@ -361,6 +365,16 @@ pub(crate) fn fit<M: Model, T: Copy + Into<f64>, const N: usize>(
         let mut sup = g;
         // Arrivals of the blur at its bound in this stage (see the step below).
         let (mut floor_visits, mut was_at_floor) = (0usize, false);
+        // In the coarse stages, Levenberg–Marquardt damping, and the last accepted estimate with
+        // its sums: a step that raised the sum of squared residuals is rolled back and retried
+        // damped harder (λ ×10), an accepted one lowers λ (÷10, to 0 below 10⁻³). Across
+        // re-chosen pixels the sums do not compare: there a step is rolled back when it doubled
+        // the mean square. Undamped Gauss–Newton swung a sharp ring's radii and blur back and
+        // forth with growing amplitude over the stages until it diverged. Not in the last stage:
+        // there a sharp cross along the pixel axes, its blur at the bound (see below), raises the
+        // cost on the way to the minimum, and rolling back left it stuck 0.08 px off.
+        let mut lambda: f64 = 0.0;
+        let mut prev: Option<Accepted> = None;
         for _ in 0..max_iter {
             // Re-choose the fitted pixels only when the estimate has really moved.
             let drift = (0..si).map(|k| (g[k] - sup[k]).abs()).fold(0.0, f64::max);
@@ -369,7 +383,23 @@ pub(crate) fn fit<M: Model, T: Copy + Into<f64>, const N: usize>(
             }
             // The last stage also scores the fit (R² overall and by sector): at convergence the
             // residuals before the final, tiny step are the answer's.
-            let acc = accumulate::<M, T, N>(img, model, &g, &sup, &lin, xr, yr, inv, stride, last)?;
+            let mut acc = accumulate::<M, T, N>(img, model, &g, &sup, &lin, xr, yr, inv, stride, last)?;
+            // The sums at the new estimate are its cost: no extra pass for an accepted step.
+            let worse = |(_, _, psup, pacc): &Accepted| {
+                if *psup == sup {
+                    acc.sse > pacc.sse
+                } else {
+                    acc.sse * pacc.count as f64 > 2.0 * pacc.sse * acc.count as f64
+                }
+            };
+            match prev.take() {
+                Some(p) if !last && worse(&p) => {
+                    (g, lin, sup, acc) = p;
+                    lambda = (10.0 * lambda).max(1e-3);
+                }
+                _ => lambda = if lambda > 1e-3 { 0.1 * lambda } else { 0.0 },
+            }
+            prev = Some((g, lin, sup, acc.clone()));
             // First step: only the planes (the geometry guess is coarse, the planes unknown);
             // second: the geometry at the starting blur (a blur freed from a coarse guess grows
             // to cover the misfit, and the next step overshoots).
@@ -388,12 +418,12 @@ pub(crate) fn fit<M: Model, T: Copy + Into<f64>, const N: usize>(
             let at_floor = free.contains(&si) && g[si] <= S_MIN;
             floor_visits += usize::from(at_floor && !was_at_floor);
             was_at_floor = at_floor;
-            let full = if at_floor && floor_visits > 1 { None } else { solve(&acc.h, &acc.b, &free) };
+            let full = if at_floor && floor_visits > 1 { None } else { solve_damped(&acc.h, &acc.b, &free, lambda) };
             let mut step = match full {
                 Some(step) => step,
                 None if free.contains(&si) => {
                     let rest: Vec<usize> = free.iter().copied().filter(|&k| k != si).collect();
-                    solve(&acc.h, &acc.b, &rest).ok_or(FitFailure::Diverged)?
+                    solve_damped(&acc.h, &acc.b, &rest, lambda).ok_or(FitFailure::Diverged)?
                 }
                 None => return Err(FitFailure::Diverged),
             };
@@ -411,7 +441,7 @@ pub(crate) fn fit<M: Model, T: Copy + Into<f64>, const N: usize>(
                     *bk -= acc.h[k][si] * dw;
                 }
                 let rest: Vec<usize> = free.iter().copied().filter(|&k| k != si).collect();
-                step = solve(&acc.h, &b, &rest).ok_or(FitFailure::Diverged)?;
+                step = solve_damped(&acc.h, &b, &rest, lambda).ok_or(FitFailure::Diverged)?;
                 step[si] = dw;
             }
             // A model held blurrier than the image (in a coarse stage) sees an edge's shift spread
@@ -452,10 +482,13 @@ pub(crate) fn fit<M: Model, T: Copy + Into<f64>, const N: usize>(
     Err(FitFailure::Diverged)
 }
 
+#[derive(Clone)]
 struct Acc {
     h: [[f64; MAXP]; MAXP],
     b: [f64; MAXP],
     count: usize,
+    /// Σ residual² over the fitted pixels.
+    sse: f64,
     /// Per sector: count, Σ I, Σ I², Σ residual².
     sectors: [[f64; 4]; 8],
 }
@@ -521,7 +554,7 @@ fn accumulate<M: Model, T: Copy + Into<f64>, const N: usize>(
     // itself is cut is judged on the final estimate).
     let (x0, x1) = ((sup[0] - reach).max(0.0), (sup[0] + reach).min(xmax));
     let (y0, y1) = ((sup[1] - reach).max(0.0), (sup[1] + reach).min(ymax));
-    let mut acc = Acc { h: [[0.0; MAXP]; MAXP], b: [0.0; MAXP], count: 0, sectors: [[0.0; 4]; 8] };
+    let mut acc = Acc { h: [[0.0; MAXP]; MAXP], b: [0.0; MAXP], count: 0, sse: 0.0, sectors: [[0.0; 4]; 8] };
     let mut j = [0.0; MAXP];
     let (mut hr, mut br) = ([[0.0; MAXP]; MAXP], [0.0; MAXP]);
     let mut grad = [0.0; 6];
@@ -567,6 +600,7 @@ fn accumulate<M: Model, T: Copy + Into<f64>, const N: usize>(
                     }
                 }
                 acc.count += 1;
+                acc.sse += r * r;
                 if !sectors {
                     continue;
                 }
@@ -621,15 +655,21 @@ fn sector_of(x: f64, y: f64) -> usize {
     q + half
 }
 
-/// Solves (H + λ·diag H) δ = b over the parameters `idx` by Cholesky; the rest stay 0.
+/// Solves H δ = b over the parameters `idx` by Cholesky (a hair of damping, 10⁻⁶·diag H); the
+/// rest stay 0.
 pub(crate) fn solve(h: &[[f64; MAXP]; MAXP], b: &[f64; MAXP], idx: &[usize]) -> Option<[f64; MAXP]> {
+    solve_damped(h, b, idx, 0.0)
+}
+
+/// Solves (H + (λ + 10⁻⁶)·diag H) δ = b over the parameters `idx` by Cholesky; the rest stay 0.
+fn solve_damped(h: &[[f64; MAXP]; MAXP], b: &[f64; MAXP], idx: &[usize], lambda: f64) -> Option<[f64; MAXP]> {
     let m = idx.len();
     let mut l = [[0.0; MAXP]; MAXP];
     for i in 0..m {
         for jj in 0..=i {
             let mut sum = h[idx[i]][idx[jj]];
             if i == jj {
-                sum *= 1.0 + 1e-6;
+                sum *= 1.0 + 1e-6 + lambda;
             }
             for k in 0..jj {
                 sum -= l[i][k] * l[jj][k];

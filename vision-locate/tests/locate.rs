@@ -210,6 +210,16 @@ fn sharp_marks_the_stress_missed_are_found() {
             12269804755735283513,
             0.0,
         ),
+        (
+            MarkKind::Ring,
+            Polarity::LightOnDark,
+            269.58779562882006,
+            257.5885340496342,
+            88.18104483925802,
+            0.0,
+            13542541454447140766,
+            0.0,
+        ),
     ];
     for (kind, polarity, x, y, d, angle, seed, noise) in cases {
         let (bg, ink) = levels(polarity);
