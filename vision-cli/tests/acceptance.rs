@@ -463,7 +463,11 @@ fn the_gates_refuse_what_cannot_cut_and_accept_the_manuals_workflow() {
 /// A random world calibrated (perfectly) at the reference working distance, the camera now at
 /// `height` × it (a thicker part, a resurfaced spoilboard), only `present` on the table.
 fn rig_at_height(case: u64, height: f64, present: &str) -> Rig {
-    let mut w = random_world(case, 0.1, 1.0);
+    rig_at(random_world(case, 0.1, 1.0), height, present)
+}
+
+/// [`rig_at_height`] for any world `w`.
+fn rig_at(mut w: World, height: f64, present: &str) -> Rig {
     w.machine.camera_table_offset = None;
     w.camera.reference_working_distance = Some(w.camera.working_distance);
     let params = Rig::new(w.clone(), true).handler.session().module().params().clone();
@@ -870,16 +874,7 @@ fn the_measured_height_change_is_unbiased_and_its_sigma_honest() {
         let height = 1.0 + rng.within(0.06);
         let noise = 0.05 + 0.25 * rng.unit();
         for (fixture, program) in [("rectangle part", EX4), ("similarity part", EX5)] {
-            let mut w = random_world(case, noise, 1.0);
-            w.machine.camera_table_offset = None;
-            w.camera.reference_working_distance = Some(w.camera.working_distance);
-            let params = Rig::new(w.clone(), true).handler.session().module().params().clone();
-            w.camera.working_distance *= height;
-            w.fixtures.iter_mut().for_each(|f| f.present = f.name == fixture);
-            let mut rig = Rig::new(w, false);
-            for (name, value) in params.config_values() {
-                rig.handler.session_mut().module_mut().set_param(name, value).expect("calibration");
-            }
+            let mut rig = rig_at(random_world(case, noise, 1.0), height, fixture);
             rig.handler.session_mut().module_mut().set_param("VisionCameraNoisePx", noise).expect("set");
             let h = last_fit(&rig.run(program)).expect("accepted").height.expect("measured");
             let z = (h.change_pct - (height - 1.0) * 100.0) / h.sigma_pct;
