@@ -399,7 +399,9 @@ pub(crate) fn fit<M: Model, T: Copy + Into<f64>, const N: usize>(
                 }
                 _ => lambda = if lambda > 1e-3 { 0.1 * lambda } else { 0.0 },
             }
-            prev = Some((g, lin, sup, acc.clone()));
+            if !last {
+                prev = Some((g, lin, sup, acc.clone()));
+            }
             // First step: only the planes (the geometry guess is coarse, the planes unknown);
             // second: the geometry at the starting blur (a blur freed from a coarse guess grows
             // to cover the misfit, and the next step overshoots).
