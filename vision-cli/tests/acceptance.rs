@@ -545,16 +545,14 @@ fn the_mark_size_tells_a_height_change() {
     }
 }
 
-/// The resolution check in calibration: the built-in world with a 4096 × 3072 camera of
-/// 0.001 in/px, the demo target's fiducials taken off so that only one sheet dot is in view at
-/// a time. With the
-/// profile's default 1776 × 1776 the walk still calibrates (exactly, at the sheet's height: the
-/// optical centre is not visible to it), but the operator's dot 1, read near the camera's own
-/// centre, lies outside the profile's image, and the report, `VisionLastStatus` and the
-/// calibration's warning say the resolution is wrong; with the profile set right, no warning.
+/// A camera that reports its frame size (the simulator's) is calibrated at its own resolution
+/// (issue 33): with the profile's default 1776 × 1776 and a 4096 × 3072 camera, M283 takes the
+/// camera's size as `VisionCameraResX/Y`, records it with K, and calibrates exactly, with no
+/// warning; set right by hand, the same. (A camera that reports only positions, a Keyence, is
+/// still warned about a reading outside the image: `outside_image_note`.)
 #[test]
-fn a_calibration_that_reads_outside_the_image_warns_about_the_resolution() {
-    for (profile_res, warns) in [(None, true), (Some([4096, 3072]), false)] {
+fn a_camera_that_reports_its_frames_is_calibrated_at_its_own_resolution() {
+    for profile_res in [None, Some([4096, 3072])] {
         let mut w = World::default_world();
         w.camera.resolution = [4096, 3072];
         w.camera.units_per_pixel = 0.001;
@@ -565,16 +563,14 @@ fn a_calibration_that_reads_outside_the_image_warns_about_the_resolution() {
             rig.handler.session_mut().module_mut().set_param("VisionCameraResY", y).expect("set");
         }
         let s = sheet_report(&rig.run(EX1));
-        let status = rig.handler.session().module().telemetry().last_status().to_string();
+        let module = rig.handler.session().module();
+        let status = module.telemetry().last_status().to_string();
         let e = rig.calibration_error();
         assert!(e.k_relative < 2e-3 && e.remap_matches, "{profile_res:?}: {e:?}");
-        if warns {
-            let w = s.warning.expect("a warning");
-            assert!(w.contains("outside the 1776 x 1776 image") && w.contains("VisionCameraResX"), "{w}");
-            assert_eq!(status, format!("OK (warning: {w})"));
-        } else {
-            assert_eq!((s.warning, status.as_str()), (None, "OK"), "{profile_res:?}");
-        }
+        assert_eq!((s.warning, status.as_str()), (None, "OK"), "{profile_res:?}");
+        let p = module.params();
+        assert_eq!((p.camera_res_x(), p.camera_res_y()), (4096, 3072));
+        assert_eq!(p.calibration.recorded_resolution(), Some((4096, 3072)));
     }
 }
 

@@ -250,6 +250,15 @@ pub trait CameraDriver: Send {
         Err(DriverError::new(DriverErrorKind::Unsupported, format!("camera driver {} cannot keep images", self.name())))
     }
 
+    /// The size of the frames the camera delivers, `(width, height)` in pixels, when the camera
+    /// reports one (a camera whose images the driver decodes; the simulator). A driver that
+    /// has not seen a frame yet may take one to find out; a failure to take it is `None` (the
+    /// next trigger reports it). The default, for a camera that reports only positions
+    /// (Keyence), is `None`: then `VisionCameraResX/Y` are the operator's word.
+    fn frame_size(&mut self) -> Option<(u32, u32)> {
+        None
+    }
+
     /// The I/O timeout the driver applies to one exchange (for diagnostics).
     fn timeout(&self) -> Duration {
         Duration::from_secs(3)

@@ -194,6 +194,18 @@ pub enum VisionError {
         known: String,
     },
 
+    /// What M283 calibrated with has changed since (the camera's resolution, its driver, the
+    /// camera tool's offset): every capture would be read off, so M280–M282 refuse.
+    #[error("{what} changed since M283 calibrated K: {detail} — {fix}")]
+    CalibrationChanged {
+        /// What changed (`the camera's resolution`, …).
+        what: &'static str,
+        /// The value now and the value M283 recorded.
+        detail: String,
+        /// What to do: restore it, or calibrate again (the controller's sheet word).
+        fix: String,
+    },
+
     /// Calibration could not complete.
     #[error("calibration failed: {reason}; K, the axis flags and the tool offsets were left unchanged")]
     Calibration {

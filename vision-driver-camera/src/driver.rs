@@ -39,6 +39,8 @@ pub struct FrameDriver<S: FrameSource = Box<dyn FrameSource>> {
     source: S,
     last_frame: Option<Frame>,
     last_miss: Option<Miss>,
+    /// The size of the last frame the source gave, pixels (a trigger's or a size probe's).
+    frame_size: Option<(u32, u32)>,
 }
 
 impl<S: FrameSource> std::fmt::Debug for FrameDriver<S> {
@@ -93,7 +95,7 @@ impl<S: FrameSource> FrameDriver<S> {
     /// [`CameraError::Config`] when the configuration is unusable.
     pub fn new(config: CameraConfig, source: S) -> Result<FrameDriver<S>, CameraError> {
         config.validate()?;
-        Ok(FrameDriver { config, source, last_frame: None, last_miss: None })
+        Ok(FrameDriver { config, source, last_frame: None, last_miss: None, frame_size: None })
     }
 
     /// The configuration.
@@ -162,6 +164,7 @@ impl<S: FrameSource> FrameDriver<S> {
             }),
             None => search(&frame, &spec, &mut self.last_miss),
         };
+        self.frame_size = Some((frame.width(), frame.height()));
         self.last_frame = Some(frame);
         reading
     }
@@ -222,6 +225,15 @@ impl<S: FrameSource> CameraDriver for FrameDriver<S> {
         self.source.select_job(job).map_err(DriverError::from)
     }
 
+    /// The last frame's size; before the first trigger, one frame is taken to find it out.
+    fn frame_size(&mut self) -> Option<(u32, u32)> {
+        if self.frame_size.is_none() {
+            let frame = self.source.frame().ok()?;
+            self.frame_size = Some((frame.width(), frame.height()));
+        }
+        self.frame_size
+    }
+
     fn miss_reason(&self) -> Option<String> {
         self.last_miss.as_ref().map(|m| format!("the finder: {}", m.reason))
     }
@@ -229,6 +241,7 @@ impl<S: FrameSource> CameraDriver for FrameDriver<S> {
     fn test_connection(&mut self) -> Result<String, DriverError> {
         let frame = self.source.frame().map_err(DriverError::from)?;
         let text = format!("{}: {}×{} frame", self.source.describe(), frame.width(), frame.height());
+        self.frame_size = Some((frame.width(), frame.height()));
         self.last_frame = Some(frame);
         Ok(text)
     }

@@ -77,6 +77,12 @@ impl CameraDriver for SimCamera {
         })
     }
 
+    /// The world camera's resolution (the image every reading is counted in).
+    fn frame_size(&mut self) -> Option<(u32, u32)> {
+        let [w, h] = self.sim.lock().world.camera.resolution;
+        Some((w, h))
+    }
+
     fn select_job(&mut self, job: u32) -> Result<(), DriverError> {
         if job > MAX_JOB {
             return Err(DriverError::new(

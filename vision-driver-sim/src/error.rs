@@ -26,6 +26,12 @@ pub enum SimError {
         /// The fixture names, comma-separated.
         known: String,
     },
+    /// The kept machine state (tool table and offsets kept beside a profile) is unusable.
+    #[error("kept machine state: {reason}")]
+    Kept {
+        /// What is wrong, with the parser's line and column where it has them.
+        reason: String,
+    },
     /// The simulated machine refused a request (a G-code error, in its words).
     #[error("simulated machine: {reason}")]
     Machine {

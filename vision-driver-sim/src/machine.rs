@@ -100,6 +100,11 @@ impl SimMachine {
         &self.interp
     }
 
+    /// The interpreter, to change the machine's state outside a program.
+    pub(crate) fn interpreter_mut(&mut self) -> &mut Interpreter {
+        &mut self.interp
+    }
+
     /// Host access to the machine outside a program: G-code, dwells, parameters, tool offsets
     /// (events go to `sink`). `vision_mcode::ContextMachine::new(&mut machine.context(sink),
     /// &clock)` makes it a [`vision_core::Machine`].

@@ -49,5 +49,5 @@ pub use fit::{
 };
 pub use nalgebra::{Matrix2, Point2, UnitComplex, Vector2};
 pub use pixel::{PixelChain, Remap};
-pub use scale::{ScaleEstimate, ScaleEvidence};
+pub use scale::{image_turn, ImageTurn, ScaleEstimate, ScaleEvidence};
 pub use units::{inch_to_mm, mm_to_inch, LengthUnit, MM_PER_INCH};

@@ -125,6 +125,48 @@ impl ScaleEvidence {
     }
 }
 
+/// How far the image turned against K, measured by one mark read from several camera
+/// positions: a camera turned on its mount since calibration reads the mark moving the wrong
+/// way round as the camera moves.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImageTurn {
+    /// The angle from where K says the mark should have moved to where it was read, radians
+    /// counter-clockwise.
+    pub angle: f64,
+    /// Its 1σ, radians (the readings' noise over the camera's travel).
+    pub sigma: f64,
+}
+
+/// The turn of the image the readings `(Cⱼ, dⱼ)` of one mark show (as [`ScaleEvidence::add_mark`]
+/// takes them, noise `sigma` per coordinate): the least-squares `z = s·e^{iφ}` of
+/// `dⱼ − d̄ = −z·(Cⱼ − C̄)`, and φ with `σ(φ) = σ / (|z|·√Σ‖Cⱼ − C̄‖²)`. `None` for fewer than two
+/// readings, readings from one position, a non-finite input or readings that do not move with
+/// the camera at all (`z = 0`).
+#[must_use]
+pub fn image_turn(readings: &[(Point2<f64>, Vector2<f64>)], sigma: f64) -> Option<ImageTurn> {
+    if readings.len() < 2 || !(sigma.is_finite() && sigma > 0.0) {
+        return None;
+    }
+    #[allow(clippy::cast_precision_loss)] // a handful of readings
+    let n = readings.len() as f64;
+    let c_mean = readings.iter().fold(Vector2::zeros(), |a, (c, _)| a + c.coords) / n;
+    let d_mean = readings.iter().fold(Vector2::zeros(), |a, (_, d)| a + d) / n;
+    // z = −Σ conj(ΔC)·Δd / Σ|ΔC|², as complex numbers.
+    let (mut re, mut im, mut spread) = (0.0, 0.0, 0.0);
+    for (c, d) in readings {
+        let dc = c.coords - c_mean;
+        let dd = d - d_mean;
+        re -= dc.x * dd.x + dc.y * dd.y;
+        im -= dc.x * dd.y - dc.y * dd.x;
+        spread += dc.norm_squared();
+    }
+    let size = re.hypot(im);
+    if !(spread > 0.0 && size > 0.0 && size.is_finite() && spread.is_finite()) {
+        return None;
+    }
+    Some(ImageTurn { angle: im.atan2(re), sigma: sigma * spread.sqrt() / size })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -194,5 +236,23 @@ mod tests {
         // 4000 draws: the mean's own 1σ is 0.016, the spread's about 0.011.
         assert!(mean.abs() < 0.06, "bias {mean} σ");
         assert!((spread - 1.0).abs() < 0.05, "z spread {spread}");
+    }
+
+    #[test]
+    fn image_turn_finds_a_turned_camera_and_nothing_on_a_straight_one() {
+        let mark = Point2::new(2.0, 1.0);
+        let cams = [Point2::new(2.0, 1.0), Point2::new(2.3, 0.9), Point2::new(1.8, 1.2)];
+        for deg in [0.0_f64, 3.0, -90.0, 179.0] {
+            let r = nalgebra::Rotation2::new(deg.to_radians());
+            let readings: Vec<_> = cams.iter().map(|c| (*c, 1.01 * (r * (mark - c)))).collect();
+            let turn = image_turn(&readings, 0.001).expect("turn");
+            assert!((turn.angle.to_degrees() - deg).abs() < 1e-9, "{deg}: {turn:?}");
+            assert!(turn.sigma > 0.0 && turn.sigma < 0.01, "{turn:?}");
+        }
+        assert_eq!(image_turn(&[(mark, Vector2::zeros())], 0.001), None);
+        assert_eq!(image_turn(&[(mark, Vector2::zeros()), (mark, Vector2::x())], 0.001), None);
+        let still = [(cams[0], Vector2::x()), (cams[1], Vector2::x())];
+        assert_eq!(image_turn(&still, 0.001), None);
+        assert_eq!(image_turn(&[(cams[0], Vector2::x()), (cams[1], Vector2::zeros())], f64::NAN), None);
     }
 }

@@ -2,6 +2,7 @@
 //! M280–M284 handler, and a report of everything it did — and, because the simulator knows the
 //! truth, how far the result is from it.
 
+mod kept;
 mod pictures;
 mod report;
 mod text;
@@ -191,7 +192,10 @@ impl Runner {
             store.check_writable().map_err(|e| Failure::Input(e.to_string()))?;
             module = module.with_profile(store);
         }
-        let machine = SimMachine::new(&sim).map_err(|e| Failure::Input(e.to_string()))?;
+        let mut machine = SimMachine::new(&sim).map_err(|e| Failure::Input(e.to_string()))?;
+        if let Some(path) = &args.profile {
+            kept::restore(path, &mut machine)?;
+        }
         let clock = args.clock.map_or_else(system_clock, |s| fixed_clock(vision_core::Timestamp::from_unix(s, 0)));
         let handler = ProgramHandler::new(Session::new(module), sim.world().machine.controller(), clock);
         Ok(Runner { sim, machine, handler, camera, _emulator: emulator, _snapshots: snapshots })
@@ -444,6 +448,9 @@ pub(crate) fn run(args: &RunArgs) -> Result<String, Failure> {
         if failure.is_some() {
             break;
         }
+    }
+    if let Some(path) = &args.profile {
+        kept::save(path, &session.machine)?;
     }
     let params = session.module().params();
     let report = Report {

@@ -60,6 +60,7 @@ impl VisionModule {
     pub fn m280(&mut self, machine: &mut dyn Machine, mode: RunMode) -> Result<Reply<RunMode>, VisionError> {
         self.check_enabled()?;
         self.check_tool(machine)?;
+        self.check_calibration_record(machine)?;
         PoundBlock::on_machine(self.params.pound_var_base(), machine)?;
         let gcode = machine.controller().cancel_alignment(machine)?;
         self.alignment = None;

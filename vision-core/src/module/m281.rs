@@ -126,6 +126,7 @@ impl VisionModule {
     /// As [`VisionModule::m281`].
     pub fn m281_begin(&mut self, machine: &mut dyn Machine, keep_image: bool) -> Result<CaptureStep, VisionError> {
         let ready = self.check_enabled().and_then(|()| self.check_tool(machine)).and_then(|()| {
+            self.check_calibration_record(machine)?;
             let block = PoundBlock::on_machine(self.params.pound_var_base(), machine)?;
             let unit = machine.units()?;
             Ok((block, pixel_chain(&self.params, unit)?, unit, self.refresh_alignment(machine)?))
@@ -139,7 +140,7 @@ impl VisionModule {
             }
         };
         let trigger_time = machine.now();
-        let reading = self.trigger_mark()?;
+        let reading = self.trigger_mark(machine.controller().sheet_calibration())?;
         let native = Point2::new(reading.x_px, reading.y_px);
         let (commanded, observed) = self.observe(machine, alignment, chain.delta(native))?;
         let noise = height::noise_px(&self.params) * chain.k().singular_values().max();
@@ -178,7 +179,7 @@ impl VisionModule {
         let pass = machine.dwell(self.params.trigger_settle_s()).map_err(VisionError::from).and_then(|()| {
             // M281 D1 keeps the image of the reading reported.
             let time = machine.now();
-            let reading = self.trigger_mark()?;
+            let reading = self.trigger_mark(machine.controller().sheet_calibration())?;
             let native = Point2::new(reading.x_px, reading.y_px);
             let (camera, observed) = observe(machine, capture.alignment, capture.chain.delta(native))?;
             Ok(Kept { time, reading, native, observed, camera })
@@ -302,8 +303,17 @@ impl VisionModule {
             probed,
             gcode,
             passes,
+            readings,
+            noise,
             ..
         } = capture;
+        let turn_note = match turn_check(&readings, noise, machine.controller().sheet_calibration()) {
+            Ok(note) => note,
+            Err(e) => {
+                self.publish_failure(None, &e);
+                return Err(e);
+            }
+        };
         let offset = chain.delta(native);
         let (width, height) = mark_size(&chain, &reading);
         let values = SlotValues {
@@ -352,6 +362,7 @@ impl VisionModule {
             self.driver.as_deref().and_then(|d| d.reading_warning(&reading)),
             outside_image_note(&self.params, native),
             self.height_note(width, height, unit),
+            turn_note,
         ];
         for note in notes.into_iter().flatten() {
             warning = Some(warning.map_or_else(|| note.clone(), |w| format!("{note}; {w}")));
@@ -382,8 +393,9 @@ impl VisionModule {
     }
 
     /// Triggers; a failed trigger or no mark is recorded in `LastJudgment` / `LastStatus`, and
-    /// no driver in `LastStatus`.
-    fn trigger_mark(&mut self) -> Result<crate::driver::Reading, VisionError> {
+    /// no driver in `LastStatus`. The frame's size is checked against the calibration's
+    /// ([`VisionModule::check_resolution`]; `sheet` names the controller's sheet calibration).
+    fn trigger_mark(&mut self, sheet: &str) -> Result<crate::driver::Reading, VisionError> {
         let driver = match self.driver_mut() {
             Ok(d) => d,
             Err(e) => {
@@ -401,6 +413,10 @@ impl VisionModule {
         };
         if let Err(e) = require_mark(&reading, &*driver) {
             self.publish_failure(Some(i64::from(reading.judgment.code())), &e);
+            return Err(e);
+        }
+        if let Err(e) = self.check_resolution(sheet) {
+            self.publish_failure(None, &e);
             return Err(e);
         }
         Ok(reading)
@@ -452,6 +468,46 @@ struct Kept {
     native: Point2<f64>,
     observed: Point2<f64>,
     camera: Point2<f64>,
+}
+
+/// The largest turn of the image against K that M281 accepts with a warning, degrees: beyond
+/// it the camera is turned on its mount (or another camera) and every capture off the image
+/// centre is read in the wrong direction, so M281 refuses.
+pub(crate) const TURN_REFUSE_DEG: f64 = 5.0;
+
+/// The smallest turn M281 warns of, degrees (K's own rotation is known to a few hundredths).
+pub(crate) const TURN_WARN_DEG: f64 = 0.5;
+
+/// Checks the way the mark moved in the image as the camera moved against K
+/// ([`vision_math::image_turn`]): a turn beyond 4σ and [`TURN_REFUSE_DEG`] refuses, beyond 4σ
+/// and [`TURN_WARN_DEG`] is a warning; one reading says nothing. `sheet` names the controller's
+/// sheet calibration for the advice.
+fn turn_check(
+    readings: &[(Point2<f64>, Vector2<f64>)],
+    noise: f64,
+    sheet: &str,
+) -> Result<Option<String>, VisionError> {
+    let Some(turn) = vision_math::image_turn(readings, noise) else { return Ok(None) };
+    let (deg, sigma_deg) = (turn.angle.to_degrees(), turn.sigma.to_degrees());
+    if deg.abs() <= 4.0 * sigma_deg || deg.abs() <= TURN_WARN_DEG {
+        return Ok(None);
+    }
+    let seen = format!(
+        "as the camera moved, the mark moved {deg:+.1}° (± {sigma_deg:.1}°) off the way K says it should (the camera \
+         turned or mirrored on its mount)"
+    );
+    if deg.abs() > TURN_REFUSE_DEG {
+        Err(VisionError::CalibrationChanged {
+            what: "the camera's orientation",
+            detail: seen,
+            fix: format!("check the camera's mount, or run {sheet} to calibrate it as it is"),
+        })
+    } else {
+        Ok(Some(format!(
+            "{seen} since M283 calibrated K; captures off the image centre carry that turn — check the mount or \
+             run {sheet}"
+        )))
+    }
 }
 
 /// Writes `(address, value)` pairs; on failure restores the ones already written.

@@ -170,6 +170,7 @@ impl VisionModule {
     pub fn m282(&mut self, machine: &mut dyn Machine, pieces: Pieces) -> Result<Reply<AlignReport>, VisionError> {
         self.check_enabled()?;
         self.check_tool(machine)?;
+        self.check_calibration_record(machine)?;
         let mode = self.run.mode;
         let needed = mode.min_marks();
         if self.run.dots.len() < needed {

@@ -143,6 +143,8 @@ impl VisionModule {
             return Err(VisionError::AlignmentActive);
         }
         self.driver_mut()?;
+        // The new calibration is made at the size of the frames the camera delivers.
+        self.adopt_frame_size()?;
         // A profile that cannot be saved is found before the walk moves the machine.
         if let Some(store) = &self.profile {
             store.check_writable()?;
@@ -339,7 +341,6 @@ impl VisionModule {
         if let Some((offset, sigma)) = solution.centre {
             calibration = calibration.with_centre(offset, sigma)?;
         }
-        let next = Params { calibration, ..self.params.clone() };
         let restore = match solution.tool_offset {
             Some((tool, offset)) => {
                 let before = controller::tool_offset(machine, tool)?;
@@ -348,7 +349,20 @@ impl VisionModule {
             }
             None => None,
         };
-        if let Err(save) = self.commit_params(next) {
+        // The record: what the tool table holds now (as the table rounds it), for the tool the
+        // walk wrote, or the camera tool whose offset a quick calibration is used with.
+        let recorded_tool = match restore {
+            Some((tool, _)) => Some(tool),
+            None => match self.params.camera_tool() {
+                Some(tool) => Some(tool),
+                None => Some(machine.active_tool()?).filter(|t| *t != 0),
+            },
+        };
+        // `solved` made `Cal_Units` the machine's units, which the offset is read in.
+        let record = self.with_record(machine, recorded_tool, &calibration);
+        let committed =
+            record.and_then(|calibration| self.commit_params(Params { calibration, ..self.params.clone() }));
+        if let Err(save) = committed {
             let Some((tool, before)) = restore else { return Err(save) };
             if let Err(e) = controller::set_tool_offset(machine, tool, before) {
                 return Err(VisionError::Machine(MachineError::new(

@@ -12,7 +12,9 @@
 //! triggers), and it lets M280/M282 commit their state only after the machine took the lines.
 //!
 //! Common checks, in order, for every entry point: `VisionEnabled` ("Vision is not enabled");
-//! for M280–M283 the camera-tool check (`VisionCameraToolNumber` ≠ 0 and another tool active).
+//! for M280–M283 the camera-tool check (`VisionCameraToolNumber` ≠ 0 and another tool active);
+//! for M280–M282 the calibration's record (the camera's resolution, driver and tool offset
+//! M283 calibrated with, see `record.rs`).
 
 pub(crate) mod capture;
 pub(crate) mod dro;
@@ -22,6 +24,7 @@ mod m281;
 mod m282;
 mod m283;
 mod m284;
+mod record;
 
 #[cfg(test)]
 #[allow(clippy::float_cmp)]

@@ -3,7 +3,7 @@
 
 use vision_math::{LengthUnit, Matrix2, Remap, Vector2};
 
-use super::checks::{any, finite, noise_px_wide, pixel_offset, short_text};
+use super::checks::{any, driver_record, finite, noise_px_wide, pixel_offset, resolution_record, short_text, tool};
 use super::ParamValue;
 use crate::error::VisionError;
 
@@ -45,6 +45,24 @@ profile_part! {
         /// measured (the larger axis's), pixels; 0 = not measured (the offset was set by hand, or
         /// never measured), and M282 assumes `VisionCenterUncertaintyPx` instead.
         (Calibration) px_center_sigma_px: f64 => f64 = 0.0, "VisionPxCenterSigmaPx", noise_px_wide;
+        /// `VisionCal_ResX`: the image width M283 calibrated at, pixels (0 = not recorded: a
+        /// calibration made before the record existed). M280–M282 refuse while
+        /// `VisionCameraResX` or the camera's frames differ.
+        (Calibration) cal_res_x: i64 => i64 = 0, "VisionCal_ResX", resolution_record;
+        /// `VisionCal_ResY`: the image height M283 calibrated at, pixels (0 = not recorded).
+        (Calibration) cal_res_y: i64 => i64 = 0, "VisionCal_ResY", resolution_record;
+        /// `VisionCal_Driver`: the camera driver M283 calibrated with, as the driver names itself
+        /// (`Keyence`, `Camera`, `Sim`; empty = not recorded). M280–M282 refuse under another.
+        (Calibration) cal_driver: String => &str = String::new(), "VisionCal_Driver", driver_record;
+        /// `VisionCal_ToolNumber`: the camera tool whose X/Y offset the sheet walk (M283 C/P)
+        /// wrote (0 = none recorded: M283 Q writes no offset).
+        (Calibration) cal_tool_number: i64 => i64 = 0, "VisionCal_ToolNumber", tool;
+        /// `VisionCal_ToolOffsetX`: the X offset the sheet walk wrote to that tool, `Cal_Units`.
+        /// M280–M282 refuse while the tool table holds another: every mark would be read off by
+        /// the difference.
+        (Calibration) cal_tool_offset_x: f64 => f64 = 0.0, "VisionCal_ToolOffsetX", finite;
+        /// `VisionCal_ToolOffsetY`: the Y offset the sheet walk wrote, `Cal_Units`.
+        (Calibration) cal_tool_offset_y: f64 => f64 = 0.0, "VisionCal_ToolOffsetY", finite;
     }
 }
 
@@ -161,6 +179,48 @@ impl Calibration {
         next.set_raw("VisionPxCenterOffsetX", &ParamValue::from(offset.x))?;
         next.set_raw("VisionPxCenterOffsetY", &ParamValue::from(offset.y))?;
         next.set_raw("VisionPxCenterSigmaPx", &ParamValue::from(sigma))?;
+        Ok(next)
+    }
+
+    /// The image size this calibration was made at, pixels; `None` when not recorded.
+    #[must_use]
+    pub fn recorded_resolution(&self) -> Option<(i64, i64)> {
+        (self.cal_res_x > 0 && self.cal_res_y > 0).then_some((self.cal_res_x, self.cal_res_y))
+    }
+
+    /// The driver this calibration was made with; `None` when not recorded.
+    #[must_use]
+    pub fn recorded_driver(&self) -> Option<&str> {
+        (!self.cal_driver.is_empty()).then_some(self.cal_driver.as_str())
+    }
+
+    /// The camera tool and its X/Y offset (`Cal_Units`) this calibration was made with; `None`
+    /// when not recorded.
+    #[must_use]
+    pub fn recorded_tool(&self) -> Option<(u32, Vector2<f64>)> {
+        let tool = u32::try_from(self.cal_tool_number).ok().filter(|t| *t != 0)?;
+        Some((tool, Vector2::new(self.cal_tool_offset_x, self.cal_tool_offset_y)))
+    }
+
+    /// This calibration with its record: the image size (pixels), the driver's name and the
+    /// camera tool with its X/Y offset in `Cal_Units` it was made with (`None`: no tool).
+    ///
+    /// # Errors
+    /// [`VisionError::InvalidParam`] for a value out of its range; `self` is unchanged.
+    pub fn recorded(
+        &self,
+        resolution: (i64, i64),
+        driver: &str,
+        tool: Option<(u32, Vector2<f64>)>,
+    ) -> Result<Calibration, VisionError> {
+        let mut next = self.clone();
+        next.set_raw("VisionCal_ResX", &ParamValue::from(resolution.0))?;
+        next.set_raw("VisionCal_ResY", &ParamValue::from(resolution.1))?;
+        next.set_raw("VisionCal_Driver", &ParamValue::from(driver))?;
+        let (number, offset) = tool.map_or((0, Vector2::zeros()), |(t, o)| (i64::from(t), o));
+        next.set_raw("VisionCal_ToolNumber", &ParamValue::from(number))?;
+        next.set_raw("VisionCal_ToolOffsetX", &ParamValue::from(offset.x))?;
+        next.set_raw("VisionCal_ToolOffsetY", &ParamValue::from(offset.y))?;
         Ok(next)
     }
 

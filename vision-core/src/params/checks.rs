@@ -78,6 +78,13 @@ pub(super) fn resolution(v: &i64) -> Result<(), String> {
         Err("must be an image size of 2..100000 pixels".into())
     }
 }
+pub(super) fn resolution_record(v: &i64) -> Result<(), String> {
+    if *v == 0 || (2..=100_000).contains(v) {
+        Ok(())
+    } else {
+        Err("must be an image size of 2..100000 pixels (0 = not recorded)".into())
+    }
+}
 pub(super) fn tool(v: &i64) -> Result<(), String> {
     if (0..=i64::from(u32::MAX)).contains(v) {
         Ok(())
@@ -94,6 +101,14 @@ pub(super) fn driver_name(v: &String) -> Result<(), String> {
         Ok(())
     } else {
         Err("must be a driver name (letters, digits, _ or -), e.g. Keyence".into())
+    }
+}
+#[allow(clippy::ptr_arg)]
+pub(super) fn driver_record(v: &String) -> Result<(), String> {
+    if v.is_empty() || driver_name(v).is_ok() {
+        Ok(())
+    } else {
+        Err("must be a driver name (letters, digits, _ or -), or empty (not recorded)".into())
     }
 }
 #[allow(clippy::ptr_arg)]

@@ -115,6 +115,8 @@ pub(crate) struct World {
     pub optics: Optics,
     /// Image size, pixels (marks outside are not seen).
     pub res: Vector2<f64>,
+    /// The frame size the camera reports (`CameraDriver::frame_size`); `None`: it reports none.
+    pub frame: Option<(u32, u32)>,
     /// Optical axis minus spindle, inches.
     pub cam_offset: Vector2<f64>,
     pub script: VecDeque<Result<Reading, DriverError>>,
@@ -157,6 +159,7 @@ impl Default for World {
             mark_size: 0.5,
             optics: Optics::square(0.0, true),
             res: Vector2::new(1776.0, 1776.0),
+            frame: None,
             cam_offset: Vector2::zeros(),
             script: VecDeque::new(),
             select_job: true,
@@ -451,6 +454,9 @@ impl CameraDriver for FakeCamera {
     }
     fn test_connection(&mut self) -> Result<String, DriverError> {
         Ok("FVR,fake".into())
+    }
+    fn frame_size(&mut self) -> Option<(u32, u32)> {
+        lock(&self.0).frame
     }
     fn grab_image(&mut self, request: &ImageRequest<'_>) -> Result<std::path::PathBuf, DriverError> {
         let mut w = lock(&self.0);

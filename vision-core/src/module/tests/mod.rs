@@ -5,3 +5,4 @@ mod calibration;
 mod fakes;
 mod guards;
 mod persistence;
+mod record;
