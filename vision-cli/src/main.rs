@@ -9,6 +9,7 @@ mod locate;
 mod picture;
 mod plan;
 mod run;
+mod sheet;
 mod trace;
 mod trigger;
 mod world;
@@ -43,6 +44,8 @@ enum Command {
     Trigger(trigger::TriggerArgs),
     /// Find the fiducial mark (dot, ring or cross) in image files: its centre in pixels.
     Locate(locate::LocateArgs),
+    /// Draw the calibration sheet M283 walks, to print (SVG or PDF, true size).
+    Sheet(sheet::SheetArgs),
 }
 
 /// The text of file `path`; `what` names it in the error ("program", "world").
@@ -76,6 +79,7 @@ fn main() -> ExitCode {
         Command::Emulate(args) => emulate::run(&args),
         Command::Trigger(args) => trigger::run(&args),
         Command::Locate(args) => locate::run(&args),
+        Command::Sheet(args) => sheet::run(&args),
     };
     // Every text a person reads goes through `vision_core::text`: reports and messages quote
     // program comments, file contents and camera replies, which may hold escape sequences or
