@@ -421,8 +421,25 @@ fn run_report_writes_a_picture_per_fit_and_calibration() {
     let class = |c: &str| doc.descendants().filter(|n| n.attribute("class") == Some(c)).count();
     assert_eq!((class("commanded"), class("observed"), class("residual"), class("band")), (4, 4, 4, 1));
     let text: String = doc.descendants().filter(|n| n.is_text()).map(|n| n.text().unwrap_or("")).collect();
-    assert!(text.contains("M282 rectangle fit, line 20"), "{text}");
+    assert!(text.contains("04-rectangle-fit.nc: M282 rectangle fit, line 20"), "the title names the program: {text}");
     assert!(text.contains("predicted 99 % bound") && text.contains("true error (simulator)"), "{text}");
+    // Issue 34: the arrows are visible (the largest about an eighth of the drawing), the
+    // misplacement is exaggerated by a stated factor, and there are axes and a scale bar.
+    assert!(text.contains("its offset from ○ ×") && text.contains("every error length below, ×"), "{text}");
+    assert_eq!((class("axis"), class("scale-bar")), (2, 1));
+    let num = |n: roxmltree::Node<'_, '_>, a: &str| n.attribute(a).and_then(|v| v.parse::<f64>().ok()).expect("number");
+    let longest = doc
+        .descendants()
+        .filter(|n| n.attribute("class") == Some("residual"))
+        .map(|a| (num(a, "x2") - num(a, "x1")).hypot(num(a, "y2") - num(a, "y1")))
+        .fold(0.0, f64::max);
+    // The drawing: the 6 in part in 560 / 1.3 px.
+    assert!(longest > 430.0 / 16.0 && longest < 430.0 / 4.0, "the largest arrow is {longest} px");
+    // Standard error names the files written.
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    for name in &names {
+        assert!(stderr.contains(&format!("mach-vision: wrote {}", dir.join(name).display())), "{stderr}");
+    }
     let cal = std::fs::read_to_string(dir.join(&names[0])).expect("svg");
     let doc = roxmltree::Document::parse(&cal).expect("the SVG parses");
     assert_eq!(doc.descendants().filter(|n| n.attribute("class") == Some("commanded")).count(), 5);

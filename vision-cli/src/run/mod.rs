@@ -463,7 +463,14 @@ pub(crate) fn run(args: &RunArgs) -> Result<String, Failure> {
         telemetry: session.module().telemetry().clone(),
     };
     if let Some(dir) = &args.report {
-        pictures::write(&report, dir)?;
+        // On standard error: standard output stays the report (and `--json` one object).
+        let written = pictures::write(&report, dir)?;
+        if written.is_empty() {
+            eprintln!("mach-vision: --report {}: the run made no fit or sheet calibration to draw", dir.display());
+        }
+        for path in written {
+            eprintln!("mach-vision: wrote {}", vision_core::text::printable_line(&path.display().to_string(), 400));
+        }
     }
     let output = if args.json {
         let mut s = serde_json::to_string_pretty(&report).map_err(|e| Failure::Input(e.to_string()))?;

@@ -16,12 +16,14 @@ pub(crate) fn sheets(report: &Report) -> Vec<(String, Sheet)> {
     for p in &report.programs {
         let stem =
             Path::new(&p.program).file_stem().map_or_else(|| "program".into(), |s| s.to_string_lossy().into_owned());
-        program(&mut out, &stem, p, report.world_unit);
+        let name =
+            Path::new(&p.program).file_name().map_or_else(|| "program".into(), |s| s.to_string_lossy().into_owned());
+        program(&mut out, &stem, &name, p, report.world_unit);
     }
     out
 }
 
-fn program(out: &mut Vec<(String, Sheet)>, stem: &str, p: &ProgramReport, world_unit: &str) {
+fn program(out: &mut Vec<(String, Sheet)>, stem: &str, name: &str, p: &ProgramReport, world_unit: &str) {
     // The run's captures so far: (commanded, observed), in dot order.
     let mut captures: Vec<([f64; 2], [f64; 2])> = Vec::new();
     for step in &p.steps {
@@ -67,7 +69,7 @@ fn program(out: &mut Vec<(String, Sheet)>, stem: &str, p: &ProgramReport, world_
                 out.push((
                     format!("{stem}-line{line}-fit.svg"),
                     Sheet {
-                        title: format!("M282 {} fit, line {line}", a.mode.name()),
+                        title: format!("{name}: M282 {} fit, line {line}", a.mode.name()),
                         lines,
                         unit,
                         marks,
@@ -107,7 +109,7 @@ fn program(out: &mut Vec<(String, Sheet)>, stem: &str, p: &ProgramReport, world_
                 out.push((
                     format!("{stem}-line{line}-calibration.svg"),
                     Sheet {
-                        title: format!("M283 calibration on sheet {}, line {line}: verify re-walk", r.sheet),
+                        title: format!("{name}: M283 calibration on sheet {}, line {line}: verify re-walk", r.sheet),
                         lines,
                         unit,
                         marks,
@@ -122,15 +124,16 @@ fn program(out: &mut Vec<(String, Sheet)>, stem: &str, p: &ProgramReport, world_
     }
 }
 
-/// Writes the pictures of `report` into `dir` (created if missing); returns how many.
-pub(crate) fn write(report: &Report, dir: &Path) -> Result<usize, Failure> {
+/// Writes the pictures of `report` into `dir` (created if missing); returns their paths.
+pub(crate) fn write(report: &Report, dir: &Path) -> Result<Vec<std::path::PathBuf>, Failure> {
     std::fs::create_dir_all(dir)
         .map_err(|e| Failure::Input(format!("cannot create the report folder {}: {e}", dir.display())))?;
-    let sheets = sheets(report);
-    for (name, sheet) in &sheets {
+    let mut written = Vec::new();
+    for (name, sheet) in &sheets(report) {
         let path = dir.join(name);
         std::fs::write(&path, svg(sheet))
             .map_err(|e| Failure::Input(format!("cannot write {}: {e}", path.display())))?;
+        written.push(path);
     }
-    Ok(sheets.len())
+    Ok(written)
 }
