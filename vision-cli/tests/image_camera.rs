@@ -184,3 +184,25 @@ fn the_loopback_cameras_settings_are_not_saved_into_the_profile() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Issue 33: a V4L2 device path that names no device is reported as a missing device, with
+/// its path, not as "connection refused" (there is no connection to a local device).
+#[test]
+fn a_missing_video_device_is_named_as_missing() {
+    let example = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/programs/04-rectangle-fit.nc");
+    for device in ["/dev/video-mach-vision-none", "v4l2:/dev/v4l/by-id/mach-vision-none"] {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_mach-vision"))
+            .args(["run", "--camera", "camera", "--source", device])
+            .arg(&example)
+            .output()
+            .expect("spawn");
+        assert!(!out.status.success());
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let path = device.trim_start_matches("v4l2:");
+        assert!(
+            stderr.contains(&format!("the video device {path} does not exist — check the camera is plugged in")),
+            "{stderr}"
+        );
+        assert!(!stderr.contains("connection refused"), "{stderr}");
+    }
+}
