@@ -124,6 +124,17 @@ class Host:
         """Writes the tool-table X, Y offset of `tool` (G10 L1)."""
         self.execute("G10 L1 P%d X%.7f Y%.7f" % (tool, x, y))
 
+    def applied_tool_offset(self):
+        """The X, Y tool offset G43 applies now (the active offset's tool-table values; zero
+        under G49), program units: the session refuses a capture when it is not the camera
+        tool's."""
+        offset = self._interp.tool_offset
+        try:
+            return (offset.x, offset.y)
+        except AttributeError:
+            # A binding without the pose's x/y: the session then cannot tell, and checks nothing.
+            return None
+
     def pound(self, number):
         """#number."""
         return self._interp.params[number]

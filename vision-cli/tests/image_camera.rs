@@ -120,3 +120,90 @@ fn run_goes_through_http_end_to_end() {
     // Stopped: nothing listens any more.
     assert!(std::net::TcpStream::connect_timeout(&addr, std::time::Duration::from_millis(200)).is_err());
 }
+
+/// The camera settings `run --camera camera` without `--source` sets for its own loopback
+/// snapshot server (issue 33): its URL, timeout, flush count and the simulated operator's mark
+/// settings.
+const LOOPBACK_SETTINGS: [&str; 7] = [
+    "VisionCameraSource",
+    "VisionCameraTimeout",
+    "VisionCameraSearchRadius",
+    "VisionCameraFlushFrames",
+    "VisionCameraMarkDiameterPx",
+    "VisionCameraMark",
+    "VisionCameraPolarity",
+];
+
+/// Runs example 3 (a quick calibration, which saves the profile) with `run --camera camera`
+/// and no `--source` into `profile`, and reads the profile back.
+fn calibrate_into(profile: &std::path::Path) -> Params {
+    let example =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/programs/03-quick-diameter-cal.nc");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_mach-vision"))
+        .args(["run", "--camera", "camera", "--profile"])
+        .arg(profile)
+        .arg(example)
+        .output()
+        .expect("spawn");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let registry = vision_host::cameras(None);
+    let saved = vision_core::ProfileStore::new(profile).with_defaults(registry.params()).load().expect("saved");
+    assert!(saved.get("VisionCal_K11").expect("K11").as_f64().is_some_and(|k| k > 0.0), "M283 saved K");
+    saved
+}
+
+/// Issue 33: the CLI's own loopback server settings (a `127.0.0.1` URL that dies with the run,
+/// a 60 s timeout, a search radius for the simulated camera) are this session's, never saved:
+/// a new profile gets the defaults, an existing one keeps what the user wrote.
+#[test]
+fn the_loopback_cameras_settings_are_not_saved_into_the_profile() {
+    let dir = std::env::temp_dir().join(format!("mach-vision-loopback-profile-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch");
+    let defaults = vision_host::cameras(None).params();
+
+    let fresh = calibrate_into(&dir.join("new.toml"));
+    for name in LOOPBACK_SETTINGS {
+        assert_eq!(fresh.get(name).expect(name), defaults.get(name).expect(name), "{name} in a new profile");
+    }
+    let text = std::fs::read_to_string(dir.join("new.toml")).expect("read");
+    assert!(!text.contains("127.0.0.1"), "{text}");
+
+    let user = dir.join("user.toml");
+    std::fs::write(
+        &user,
+        "[vision]\nVisionEnabled = true\nVisionCameraToolNumber = 98\n\n[camera]\n\
+         VisionCameraSource = \"/dev/video0\"\nVisionCameraTimeout = 7.5\nVisionCameraSearchRadius = 40.0\n",
+    )
+    .expect("write");
+    let kept = calibrate_into(&user);
+    assert_eq!(kept.get("VisionCameraSource").expect("source"), vision_core::ParamValue::Text("/dev/video0".into()));
+    assert_eq!(kept.get("VisionCameraTimeout").expect("timeout").as_f64(), Some(7.5));
+    assert_eq!(kept.get("VisionCameraSearchRadius").expect("radius").as_f64(), Some(40.0));
+    for name in &LOOPBACK_SETTINGS[3..] {
+        assert_eq!(kept.get(name).expect(name), defaults.get(name).expect(name), "{name} the user never set");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Issue 33: a V4L2 device path that names no device is reported as a missing device, with
+/// its path, not as "connection refused" (there is no connection to a local device).
+#[test]
+fn a_missing_video_device_is_named_as_missing() {
+    let example = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/programs/04-rectangle-fit.nc");
+    for device in ["/dev/video-mach-vision-none", "v4l2:/dev/v4l/by-id/mach-vision-none"] {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_mach-vision"))
+            .args(["run", "--camera", "camera", "--source", device])
+            .arg(&example)
+            .output()
+            .expect("spawn");
+        assert!(!out.status.success());
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let path = device.trim_start_matches("v4l2:");
+        assert!(
+            stderr.contains(&format!("the video device {path} does not exist — check the camera is plugged in")),
+            "{stderr}"
+        );
+        assert!(!stderr.contains("connection refused"), "{stderr}");
+    }
+}

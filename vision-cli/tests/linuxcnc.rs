@@ -162,12 +162,31 @@ fn example_7_switches_jobs_and_measures_in_the_aligned_frame() {
 
 /// The manual's example as printed selects the camera with `T98 M6` alone; LinuxCNC applies a
 /// tool's offsets with G43 only, so the camera is not over the mark: the simulated machine
-/// shows what the real one would.
+/// shows what the real one would, and the first M281 says so (issue 33: it said "no mark
+/// found") instead of capturing with the camera elsewhere.
 #[test]
 fn the_printed_example_without_g43_is_not_over_its_marks_on_linuxcnc() {
     let printed = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/programs/04-rectangle-fit.nc");
     let (ok, out, _) = run(&[], &printed);
     assert!(!ok);
     assert!(out.contains("line   11  M280  begin a rectangle run"), "M280 is no longer refused: {out}");
-    assert!(out.contains("M281  refused: NG / no mark found"), "{out}");
+    assert!(out.contains("line   13  M281  refused: camera tool T98's X/Y offset is not applied"), "{out}");
+}
+
+/// Issue 33: a LinuxCNC program whose camera tool has no G43 fails at its first mark naming
+/// the cause and the fix (`G43 H98`), as the operator reads it on standard error.
+#[test]
+fn a_capture_without_the_camera_tools_offset_applied_names_g43() {
+    let dir = scratch("no-g43");
+    let program = dir.join("no-g43.ngc");
+    std::fs::write(&program, "G90 G20 G17\nG54\nT98 M6\nM280 P4\nG0 X0 Y0\nM281\nM2\n").expect("write");
+    let (ok, _, err) = run(&[], &program);
+    assert!(!ok);
+    assert!(err.contains("line 6: M281 failed: camera tool T98's X/Y offset is not applied"), "{err}");
+    assert!(err.contains("program G43 H98 after T98 M6"), "{err}");
+    assert!(!err.contains("no mark found"), "{err}");
+    // With G43 the same capture is taken.
+    std::fs::write(&program, "G90 G20 G17\nG54\nT98 M6 G43\nM280 P4\nG0 X0 Y0\nM281\nM2\n").expect("write");
+    let (ok, out, err) = run(&[], &program);
+    assert!(ok, "{out}{err}");
 }

@@ -282,6 +282,35 @@ fn trigger_names_its_timeout_option_when_refusing_it() {
     }
 }
 
+/// Issue 33: `trigger` at a web server on the camera's port says the device does not speak
+/// the protocol and what it answered, not Keyence advice about Data Output tools.
+#[test]
+fn trigger_at_a_device_that_is_no_keyence_camera_says_what_it_answered() {
+    use std::io::{Read as _, Write as _};
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").expect("port");
+    let port = listener.local_addr().expect("addr").port();
+    let server = std::thread::spawn(move || {
+        for stream in listener.incoming().take(2) {
+            let Ok(mut s) = stream else { continue };
+            let mut buf = [0u8; 64];
+            let _ = s.read(&mut buf);
+            let _ = s.write_all(b"HTTP/1.1 400 Bad Request\r\nConnection: close\r\n\r\n");
+        }
+    });
+    let out = bin().args(["trigger", "--ip", "127.0.0.1", "--port", &port.to_string()]).output().expect("trigger");
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains(&format!(
+            "the device at 127.0.0.1:{port} does not speak the Keyence Non-Procedural protocol: to TRG it answered \
+             \"HTTP/1.1 400 Bad Request\\x0d\\x0aConnection: close\\x0d\\x0a\\x0d\\x0a\" — check VisionIP and VisionPort"
+        )),
+        "{err}"
+    );
+    assert!(!err.contains("Data Output"), "{err}");
+    drop(server);
+}
+
 /// The field names the README's "JSON output of `run --json`" section documents (the backticked
 /// names in the first column of its tables).
 fn documented_fields() -> std::collections::BTreeSet<String> {

@@ -1,6 +1,7 @@
 //! The one error type of `vision-core`: every failure of M280–M284, the parameters and the
 //! profile, worded like the manual's error table — what went wrong, then what to do.
 
+use vision_math::show::number;
 use vision_math::MathError;
 
 use crate::driver::{DriverError, DriverErrorKind};
@@ -26,6 +27,24 @@ pub enum VisionError {
         camera: u32,
         /// The tool the machine reports as active.
         active: u32,
+    },
+
+    /// The camera tool is active but its X/Y offset is not the one the machine applies
+    /// (LinuxCNC applies a tool's offsets only under `G43`): the camera is not over the
+    /// commanded point.
+    #[error(
+        "camera tool T{camera}'s X/Y offset is not applied (the tool table holds X{} Y{}, the machine applies \
+         X{} Y{}): the camera is not over the commanded point — program G43 H{camera} after T{camera} M6 \
+         (LinuxCNC applies a tool's offsets only under G43; again after M283 writes the offset)",
+        number(.table[0]), number(.table[1]), number(.applied[0]), number(.applied[1])
+    )]
+    ToolOffsetNotApplied {
+        /// `VisionCameraToolNumber`.
+        camera: u32,
+        /// Its X/Y table entry, current units.
+        table: [f64; 2],
+        /// The X/Y offset the machine applies, in the table's form, current units.
+        applied: [f64; 2],
     },
 
     /// K11..K22 are all zero.

@@ -300,6 +300,18 @@ pub trait Machine {
         Ok(Vector2::zeros())
     }
 
+    /// The X/Y tool offset the controller applies to moves now, in its tool table's form
+    /// (the table entry of the tool whose offset is active: LinuxCNC's `G43 Hn`; zero under
+    /// `G49`), current units; `None` (the default) when the controller cannot tell. The module
+    /// compares it with the camera tool's table entry before a capture: a camera whose offset is
+    /// not applied is not over the commanded point.
+    ///
+    /// # Errors
+    /// The controller refused the read.
+    fn applied_tool_offset(&self) -> Result<Option<Vector2<f64>>, MachineError> {
+        Ok(None)
+    }
+
     /// Shows `text` to the operator (a status line, not an alarm). Default: nowhere.
     fn message(&mut self, text: &str) {
         let _ = text;

@@ -72,8 +72,9 @@ impl FrameDriver {
     /// nothing until the first frame.
     ///
     /// # Errors
-    /// As [`CameraConfig::from_params`]; [`CameraError::DeviceOpen`] for a V4L2 device in a
-    /// build without the `v4l2` feature or a device that cannot be opened.
+    /// As [`CameraConfig::from_params`]; [`CameraError::NoDevice`] for a V4L2 device path that
+    /// names nothing, [`CameraError::DeviceOpen`] for a V4L2 device in a build without the
+    /// `v4l2` feature or a device that cannot be opened.
     pub fn from_params(params: &Params) -> Result<FrameDriver, CameraError> {
         let config = CameraConfig::from_params(params)?;
         let source: Box<dyn FrameSource> = match &config.source {

@@ -3,7 +3,8 @@
 //!
 //! As with the Keyence driver, the messages for the manual's troubleshooting symptoms start
 //! with its words (`timeout: `, `connection refused: `, `Malformed response: `) so an operator
-//! searching the manual finds them.
+//! searching the manual finds them. A local video device is no connection: a missing or
+//! unopenable one is named as such, with its path.
 
 use std::fmt;
 use std::time::Duration;
@@ -139,7 +140,13 @@ pub enum CameraError {
         reason: String,
     },
 
-    /// The V4L2 device could not be opened.
+    /// The V4L2 device path names nothing (an unplugged camera, a typo).
+    NoDevice {
+        /// The device path.
+        device: String,
+    },
+
+    /// The V4L2 device exists but could not be opened, or is no capture device.
     DeviceOpen {
         /// The device path.
         device: String,
@@ -215,6 +222,7 @@ impl CameraError {
             CameraError::File { .. }
             | CameraError::EmptyFolder { .. }
             | CameraError::ReplayEnded { .. }
+            | CameraError::NoDevice { .. }
             | CameraError::Resolve { .. }
             | CameraError::Io { .. } => DriverErrorKind::Other,
         }
@@ -257,9 +265,8 @@ impl CameraError {
                 format!("Malformed response: {url} serves a continuous MJPEG stream, not a snapshot")
             }
             CameraError::Io { from, reason } => format!("I/O error reading {from}: {reason}"),
-            CameraError::DeviceOpen { device, reason } => {
-                format!("connection refused: cannot open the video device {device} ({reason})")
-            }
+            CameraError::NoDevice { device } => format!("the video device {device} does not exist"),
+            CameraError::DeviceOpen { device, reason } => format!("cannot open the video device {device} ({reason})"),
             CameraError::Format { device, wanted, offered } => {
                 format!("{device} does not offer {wanted}; it offers {offered}")
             }
@@ -309,6 +316,11 @@ impl CameraError {
                 "use the snapshot URL instead: mjpg-streamer /?action=snapshot, ustreamer /snapshot".into()
             }
             CameraError::Io { .. } => "check the link to the camera; the next trigger tries again".into(),
+            CameraError::NoDevice { .. } => {
+                "check the camera is plugged in and the path: ls /dev/video* lists the devices, and \
+                 /dev/v4l/by-id/ names each camera by a path that survives re-plugging"
+                    .into()
+            }
             CameraError::DeviceOpen { .. } => {
                 "check the device exists (ls /dev/video*), that you are in the video group, and that no other \
                  program (a browser, OpenPnP, mjpg-streamer) holds it"

@@ -2,6 +2,11 @@
 //! ustreamer `/snapshot`, an IP camera's JPEG URL): one request per connection, the whole
 //! exchange under one deadline, bounded headers and body.
 //!
+//! Every byte read counts against [`MAX_RESPONSE_BYTES`] (headers, body, chunk-size lines with
+//! their extensions): a server that pads a chunked body with framing cannot make the client
+//! read, or keep, more than that, whatever the decoded body's size. A chunk-size line is at
+//! most [`MAX_CHUNK_LINE_BYTES`], and the framing already decoded is not kept.
+//!
 //! [`read_response`] is the pure part, over any [`Read`], so it is tested on scripted and
 //! arbitrary bytes; [`get`] is the thin socket edge around it.
 
@@ -16,6 +21,14 @@ use crate::error::{printable, CameraError};
 pub const MAX_HEADER_BYTES: usize = 16 * 1024;
 /// Largest body, bytes (a 16-megapixel PNG fits).
 pub const MAX_BODY_BYTES: usize = 64 * 1024 * 1024;
+/// Longest chunk-size line of a chunked body (the size in hex and any chunk extensions, without
+/// its CRLF), bytes. A camera sends a few hex digits and no extension.
+pub const MAX_CHUNK_LINE_BYTES: usize = 256;
+/// Most bytes of chunked framing (chunk-size lines, CRLFs) read with a body, bytes.
+pub const MAX_FRAMING_BYTES: usize = 1024 * 1024;
+/// Most bytes read for one response, everything the server sent counted: the header block,
+/// the body and its framing.
+pub const MAX_RESPONSE_BYTES: usize = MAX_HEADER_BYTES + MAX_BODY_BYTES + MAX_FRAMING_BYTES;
 
 /// An `http://host[:port]/path` URL.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -110,6 +123,8 @@ pub(crate) enum ReadError {
     TimedOut(&'static str),
     /// The body is larger than the bound.
     TooLarge,
+    /// The response, framing and all, is longer than [`MAX_RESPONSE_BYTES`].
+    TooLong,
     /// A `multipart/x-mixed-replace` stream.
     Stream,
     /// Another socket error.
@@ -119,6 +134,7 @@ pub(crate) enum ReadError {
 /// Reads one response from `r`: status line, headers, then a body framed by `Content-Length`,
 /// chunked encoding, or the end of the stream.
 pub(crate) fn read_response(r: &mut impl Read) -> Result<Response, ReadError> {
+    let r = &mut Limited { r, left: MAX_RESPONSE_BYTES };
     let mut buf = Vec::with_capacity(1024);
     let header_end = loop {
         if let Some(i) = find(&buf, b"\r\n\r\n") {
@@ -128,7 +144,7 @@ pub(crate) fn read_response(r: &mut impl Read) -> Result<Response, ReadError> {
             return Err(ReadError::Malformed(format!("a header block longer than {MAX_HEADER_BYTES} bytes")));
         }
         let waiting = if find(&buf, b"\r\n").is_some() { "the headers" } else { "the status line" };
-        if fill(r, &mut buf, waiting)? == 0 {
+        if r.fill(&mut buf, waiting)? == 0 {
             return Err(ReadError::Closed(waiting));
         }
     };
@@ -169,7 +185,7 @@ pub(crate) fn read_response(r: &mut impl Read) -> Result<Response, ReadError> {
         }
         rest.truncate(n);
         while rest.len() < n {
-            if fill(r, &mut rest, "the body")? == 0 {
+            if r.fill(&mut rest, "the body")? == 0 {
                 return Err(ReadError::Closed("the body"));
             }
         }
@@ -177,7 +193,7 @@ pub(crate) fn read_response(r: &mut impl Read) -> Result<Response, ReadError> {
         rest
     } else {
         // No length: the body runs to the end of the stream (HTTP/1.0 style).
-        while fill(r, &mut rest, "the body")? > 0 {
+        while r.fill(&mut rest, "the body")? > 0 {
             if rest.len() > MAX_BODY_BYTES {
                 return Err(ReadError::TooLarge);
             }
@@ -201,27 +217,32 @@ fn status(line: &str) -> Result<(u16, String), ReadError> {
     Ok((code, printable(parts.next().unwrap_or_default(), 60)))
 }
 
-/// The body of a chunked response; `rest` holds what arrived after the headers.
-fn dechunk(r: &mut impl Read, mut rest: Vec<u8>) -> Result<Vec<u8>, ReadError> {
+/// The body of a chunked response; `rest` holds what arrived after the headers. The framing
+/// decoded is dropped as it goes, so memory holds the body and at most one chunk besides.
+fn dechunk<R: Read>(r: &mut Limited<'_, R>, mut rest: Vec<u8>) -> Result<Vec<u8>, ReadError> {
     let mut body = Vec::new();
-    let mut at = 0;
+    let too_long = || ReadError::Malformed(format!("a chunk size line longer than {MAX_CHUNK_LINE_BYTES} bytes"));
     loop {
         let line_end = loop {
-            if let Some(i) = find(&rest[at..], b"\r\n") {
-                break at + i;
+            if let Some(i) = find(&rest, b"\r\n") {
+                break i;
             }
-            if rest.len() - at > 1024 {
-                return Err(ReadError::Malformed("a chunk size line longer than 1024 bytes".into()));
+            // The line and its CR may have arrived without the LF.
+            if rest.len() > MAX_CHUNK_LINE_BYTES + 1 {
+                return Err(too_long());
             }
-            if fill(r, &mut rest, "the body")? == 0 {
+            if r.fill(&mut rest, "the body")? == 0 {
                 return Err(ReadError::Closed("the body"));
             }
         };
-        let line = std::str::from_utf8(&rest[at..line_end]).unwrap_or("?");
+        if line_end > MAX_CHUNK_LINE_BYTES {
+            return Err(too_long());
+        }
+        let line = std::str::from_utf8(&rest[..line_end]).unwrap_or("?");
         let hex = line.split(';').next().unwrap_or_default().trim();
         let size = usize::from_str_radix(hex, 16)
             .map_err(|_| ReadError::Malformed(format!("a chunk size {:?}", printable(line, 20))))?;
-        at = line_end + 2;
+        let at = line_end + 2;
         if size == 0 {
             return Ok(body);
         }
@@ -229,7 +250,7 @@ fn dechunk(r: &mut impl Read, mut rest: Vec<u8>) -> Result<Vec<u8>, ReadError> {
             return Err(ReadError::TooLarge);
         }
         while rest.len() < at + size + 2 {
-            if fill(r, &mut rest, "the body")? == 0 {
+            if r.fill(&mut rest, "the body")? == 0 {
                 return Err(ReadError::Closed("the body"));
             }
         }
@@ -237,27 +258,40 @@ fn dechunk(r: &mut impl Read, mut rest: Vec<u8>) -> Result<Vec<u8>, ReadError> {
         if &rest[at + size..at + size + 2] != b"\r\n" {
             return Err(ReadError::Malformed("a chunk not ended by CRLF".into()));
         }
-        at += size + 2;
+        rest.drain(..at + size + 2);
     }
 }
 
-/// Reads what is available into `buf`; 0 at the end of the stream.
-fn fill(r: &mut impl Read, buf: &mut Vec<u8>, waiting: &'static str) -> Result<usize, ReadError> {
-    let mut chunk = [0u8; 16 * 1024];
-    loop {
-        match r.read(&mut chunk) {
-            Ok(n) => {
-                buf.extend_from_slice(&chunk[..n]);
-                return Ok(n);
+/// A reader that may still give `left` bytes of the response.
+struct Limited<'a, R> {
+    r: &'a mut R,
+    left: usize,
+}
+
+impl<R: Read> Limited<'_, R> {
+    /// Reads what is available into `buf`, within the bytes left; 0 at the end of the stream.
+    fn fill(&mut self, buf: &mut Vec<u8>, waiting: &'static str) -> Result<usize, ReadError> {
+        if self.left == 0 {
+            return Err(ReadError::TooLong);
+        }
+        let mut chunk = [0u8; 16 * 1024];
+        let want = chunk.len().min(self.left);
+        loop {
+            match self.r.read(&mut chunk[..want]) {
+                Ok(n) => {
+                    buf.extend_from_slice(&chunk[..n]);
+                    self.left -= n;
+                    return Ok(n);
+                }
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                Err(e) if matches!(e.kind(), io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut) => {
+                    return Err(ReadError::TimedOut(waiting))
+                }
+                Err(e) if matches!(e.kind(), io::ErrorKind::ConnectionReset | io::ErrorKind::ConnectionAborted) => {
+                    return Err(ReadError::Closed(waiting))
+                }
+                Err(e) => return Err(ReadError::Io(e)),
             }
-            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-            Err(e) if matches!(e.kind(), io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut) => {
-                return Err(ReadError::TimedOut(waiting))
-            }
-            Err(e) if matches!(e.kind(), io::ErrorKind::ConnectionReset | io::ErrorKind::ConnectionAborted) => {
-                return Err(ReadError::Closed(waiting))
-            }
-            Err(e) => return Err(ReadError::Io(e)),
         }
     }
 }
@@ -341,6 +375,11 @@ pub fn get(url: &HttpUrl, timeout: Duration) -> Result<Vec<u8>, CameraError> {
         ReadError::Closed(waiting_for) => CameraError::Closed { url: url.to_string(), waiting_for },
         ReadError::TimedOut(waiting_for) => CameraError::Timeout { from: url.to_string(), timeout, waiting_for },
         ReadError::TooLarge => CameraError::TooLarge { from: url.to_string(), limit: MAX_BODY_BYTES, what: "bytes" },
+        ReadError::TooLong => CameraError::TooLarge {
+            from: url.to_string(),
+            limit: MAX_RESPONSE_BYTES,
+            what: "bytes with its HTTP headers and framing",
+        },
         ReadError::Stream => CameraError::Stream { url: url.to_string() },
         ReadError::Io(e) => CameraError::Io { from: url.to_string(), reason: e.to_string() },
     })?;
@@ -407,6 +446,42 @@ mod tests {
         ));
         let long = [b"HTTP/1.1 200 OK\r\nX: ".as_slice(), &vec![b'a'; MAX_HEADER_BYTES + 10]].concat();
         assert!(matches!(read(&long), Err(ReadError::Malformed(_))));
+    }
+
+    /// A chunked body of one-byte chunks behind chunk extensions, `total` bytes in all, that
+    /// counts the bytes read from it.
+    struct Padded {
+        sent: usize,
+        total: usize,
+        unit: Vec<u8>,
+    }
+
+    impl Read for Padded {
+        fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+            let head: &[u8] = b"HTTP/1.1 200 OK\r\nTransfer-Encoding: chunked\r\n\r\n";
+            let n = buf.len().min(self.total - self.sent);
+            for (i, b) in buf[..n].iter_mut().enumerate() {
+                let at = self.sent + i;
+                *b = head.get(at).copied().unwrap_or_else(|| self.unit[(at - head.len()) % self.unit.len()]);
+            }
+            self.sent += n;
+            Ok(n)
+        }
+    }
+
+    #[test]
+    fn the_raw_bytes_read_are_bounded_not_only_the_body() {
+        let unit = [format!("1;{}\r\n", "e".repeat(MAX_CHUNK_LINE_BYTES - 2)).as_bytes(), b"A\r\n"].concat();
+        let mut padded = Padded { sent: 0, total: MAX_RESPONSE_BYTES + (8 << 20), unit };
+        let r = read_response(&mut padded);
+        assert!(matches!(r, Err(ReadError::TooLong)), "{r:?}");
+        assert_eq!(padded.sent, MAX_RESPONSE_BYTES, "not one byte past the bound is read");
+        // One byte over the line limit is refused as soon as it is read.
+        let unit = [format!("1;{}\r\n", "e".repeat(MAX_CHUNK_LINE_BYTES - 1)).as_bytes(), b"A\r\n"].concat();
+        let mut padded = Padded { sent: 0, total: MAX_RESPONSE_BYTES, unit };
+        let Err(ReadError::Malformed(reason)) = read_response(&mut padded) else { panic!("accepted") };
+        assert_eq!(reason, format!("a chunk size line longer than {MAX_CHUNK_LINE_BYTES} bytes"));
+        assert!(padded.sent <= 32 * 1024, "{} bytes read", padded.sent);
     }
 
     proptest! {

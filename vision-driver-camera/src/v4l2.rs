@@ -172,21 +172,21 @@ impl<D: Device> FrameSource for V4l2Source<D> {
 }
 
 /// Opens a V4L2 device node. A build without the `v4l2` cargo feature (or not on 64-bit
-/// Linux) has no kernel backend and answers [`CameraError::DeviceOpen`] saying so; an
-/// existing device is named as such.
+/// Linux) has no kernel backend and answers [`CameraError::DeviceOpen`] saying so for a path
+/// that exists, [`CameraError::NoDevice`] for one that does not, as the backend does.
 ///
 /// # Errors
-/// [`CameraError::DeviceOpen`].
+/// [`CameraError::NoDevice`], [`CameraError::DeviceOpen`].
 #[cfg(not(all(feature = "v4l2", target_os = "linux", target_pointer_width = "64")))]
 pub fn open(path: &std::path::Path) -> Result<Box<dyn Device>, CameraError> {
-    let reason = if path.exists() {
-        "this build of mach-vision has no V4L2 capture backend (build vision-driver-camera with the `v4l2` \
-         feature), or serve the camera with mjpg-streamer or ustreamer and set VisionCameraSource to its \
-         http:// snapshot URL"
-    } else {
-        "no such device"
-    };
-    Err(CameraError::DeviceOpen { device: path.display().to_string(), reason: reason.into() })
+    let device = path.display().to_string();
+    if !path.exists() {
+        return Err(CameraError::NoDevice { device });
+    }
+    let reason = "this build of mach-vision has no V4L2 capture backend (build vision-driver-camera with the `v4l2` \
+                  feature), or serve the camera with mjpg-streamer or ustreamer and set VisionCameraSource to its \
+                  http:// snapshot URL";
+    Err(CameraError::DeviceOpen { device, reason: reason.into() })
 }
 
 #[cfg(all(feature = "v4l2", target_os = "linux", target_pointer_width = "64"))]
@@ -327,10 +327,10 @@ mod tests {
     #[test]
     fn opening_says_what_to_do_instead() {
         let Err(e) = open(std::path::Path::new("/dev/video-none")) else { panic!("opened a missing device") };
-        assert!(
-            e.to_string()
-                .starts_with("connection refused: cannot open the video device /dev/video-none (no such device)"),
-            "{e}"
-        );
+        assert_eq!(e, CameraError::NoDevice { device: "/dev/video-none".into() });
+        assert!(e.to_string().starts_with("the video device /dev/video-none does not exist — check"), "{e}");
+        // An existing path: no backend in this build, and what to do instead.
+        let Err(e) = open(std::path::Path::new("/dev/null")) else { panic!("opened /dev/null") };
+        assert!(e.to_string().starts_with("cannot open the video device /dev/null (this build"), "{e}");
     }
 }

@@ -212,8 +212,8 @@ impl Device for LinuxDevice {
 /// Opens the V4L2 device node `path` and checks it captures video by streaming.
 ///
 /// # Errors
-/// [`CameraError::DeviceOpen`] with the operating system's words, or when the device cannot
-/// capture video by streaming.
+/// [`CameraError::NoDevice`] for a path that names nothing; [`CameraError::DeviceOpen`] with
+/// the operating system's words, or when the device cannot capture video by streaming.
 pub fn open(path: &Path) -> Result<Box<dyn Device>, CameraError> {
     let device = path.display().to_string();
     let refuse = |reason: String| CameraError::DeviceOpen { device: device.clone(), reason };
@@ -221,7 +221,11 @@ pub fn open(path: &Path) -> Result<Box<dyn Device>, CameraError> {
     // SAFETY: a valid C string; the descriptor is owned at once.
     let fd = unsafe { libc::open(c.as_ptr(), libc::O_RDWR | libc::O_NONBLOCK | libc::O_CLOEXEC) };
     if fd < 0 {
-        return Err(refuse(io::Error::last_os_error().to_string()));
+        let e = io::Error::last_os_error();
+        if e.kind() == io::ErrorKind::NotFound {
+            return Err(CameraError::NoDevice { device });
+        }
+        return Err(refuse(e.to_string()));
     }
     // SAFETY: `fd` was just opened and is owned by nothing else.
     let dev = LinuxDevice { path: device.clone(), fd: unsafe { OwnedFd::from_raw_fd(fd) }, maps: Vec::new() };
@@ -254,7 +258,7 @@ mod tests {
     #[test]
     fn a_missing_device_and_a_file_that_is_no_device_are_refused() {
         let Err(e) = open(Path::new("/dev/video-none")) else { panic!("opened a missing device") };
-        assert!(e.to_string().contains("No such file"), "{e}");
+        assert_eq!(e, CameraError::NoDevice { device: "/dev/video-none".into() });
         let Err(e) = open(Path::new("/dev/null")) else { panic!("/dev/null is no camera") };
         assert!(e.to_string().contains("not a V4L2 device"), "{e}");
     }

@@ -112,3 +112,82 @@ fn each_server_fault_is_named_in_the_manuals_words() {
     assert_eq!(e.kind(), DriverErrorKind::Refused);
     assert!(e.to_string().starts_with(&format!("connection refused: camera at {free} refused the connection")), "{e}");
 }
+
+/// The most bytes the kernel may hold between the two ends of a loopback connection (the
+/// sender's send buffer and the receiver's receive buffer at their largest): a server counts
+/// them as sent although the client never read them. Linux's limits when it tells them, else
+/// 64 MiB.
+fn socket_buffers_max() -> usize {
+    let max_of =
+        |path: &str| -> Option<usize> { std::fs::read_to_string(path).ok()?.split_whitespace().last()?.parse().ok() };
+    match (max_of("/proc/sys/net/ipv4/tcp_rmem"), max_of("/proc/sys/net/ipv4/tcp_wmem")) {
+        (Some(r), Some(w)) => r + w,
+        _ => 64 << 20,
+    }
+}
+
+/// A loopback server that answers one GET with a chunked body whose every chunk carries one
+/// byte behind a chunk extension of `extension` bytes, up to `cap` bytes in all or until the
+/// client hangs up; returns its URL and the bytes it managed to send.
+fn chunk_extensions(extension: usize, cap: usize) -> (String, std::thread::JoinHandle<usize>) {
+    let listener = TcpListener::bind("127.0.0.1:0").expect("port");
+    let addr = listener.local_addr().expect("addr");
+    let server = std::thread::spawn(move || {
+        let Ok((mut s, _)) = listener.accept() else { return 0 };
+        let mut buf = [0u8; 1024];
+        let _ = s.read(&mut buf);
+        let head = b"HTTP/1.1 200 OK\r\nContent-Type: image/png\r\nTransfer-Encoding: chunked\r\n\r\n";
+        let mut sent = match s.write_all(head) {
+            Ok(()) => head.len(),
+            Err(_) => return 0,
+        };
+        let unit = [format!("1;{}\r\n", "x".repeat(extension)).as_bytes(), b"A\r\n"].concat();
+        let block: Vec<u8> = unit.iter().copied().cycle().take(unit.len() * (64 * 1024 / unit.len())).collect();
+        while sent < cap {
+            match s.write(&block) {
+                Ok(0) | Err(_) => break,
+                Ok(n) => sent += n,
+            }
+        }
+        sent
+    });
+    (format!("http://{addr}/snapshot"), server)
+}
+
+/// Issue 33: a chunked body whose chunks carry one byte each behind long chunk extensions kept
+/// every raw byte (2 GB within a 3 s timeout): the raw bytes read are bounded, not only the
+/// decoded body, and the client hangs up at the bound. Asserted on the bytes the server could
+/// send, never on time.
+#[test]
+fn chunk_extensions_cannot_make_the_client_read_without_bound() {
+    use vision_driver_camera::http::{get, MAX_RESPONSE_BYTES};
+    use vision_driver_camera::CameraError;
+    let slack = socket_buffers_max();
+    // Well past the bound and the kernel's buffers: a client without the bound reads it all.
+    let cap = MAX_RESPONSE_BYTES + slack + (32 << 20);
+    let (url, server) = chunk_extensions(200, cap);
+    let e = get(&HttpUrl::parse(&url).expect("url"), Duration::from_secs(120)).expect_err("refused");
+    let sent = server.join().expect("server");
+    println!("the server sent {sent} bytes (bound {MAX_RESPONSE_BYTES}, socket buffers up to {slack})");
+    assert!(matches!(e, CameraError::TooLarge { limit, .. } if limit == MAX_RESPONSE_BYTES), "{e}");
+    assert!(e.to_string().contains(&format!("larger than {MAX_RESPONSE_BYTES} bytes")), "{e}");
+    assert!(
+        sent <= MAX_RESPONSE_BYTES + slack,
+        "the server sent {sent} bytes: more than the bound {MAX_RESPONSE_BYTES} and the socket buffers {slack}"
+    );
+}
+
+/// A chunk-size line longer than [`MAX_CHUNK_LINE_BYTES`] (the size and its extensions) is
+/// refused at once as a broken response, naming the limit.
+#[test]
+fn a_chunk_size_line_over_its_limit_is_refused() {
+    use vision_driver_camera::http::{get, MAX_CHUNK_LINE_BYTES};
+    use vision_driver_camera::CameraError;
+    let slack = socket_buffers_max();
+    let (url, server) = chunk_extensions(MAX_CHUNK_LINE_BYTES, 64 << 20);
+    let e = get(&HttpUrl::parse(&url).expect("url"), Duration::from_secs(120)).expect_err("refused");
+    let sent = server.join().expect("server");
+    let CameraError::Http { reason, .. } = &e else { panic!("{e}") };
+    assert!(reason.contains(&format!("a chunk size line longer than {MAX_CHUNK_LINE_BYTES} bytes")), "{e}");
+    assert!(sent <= 64 * 1024 + slack, "the server sent {sent} bytes before the client hung up");
+}

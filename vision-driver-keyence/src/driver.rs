@@ -134,7 +134,9 @@ impl KeyenceDriver {
             Some(s) => s,
             None => {
                 let link = TcpLink::connect(&self.config, deadline)?;
-                self.exchange.insert(Exchange::new(link, self.config.limits, self.config.timeout))
+                let mut exchange = Exchange::new(link, self.config.limits, self.config.timeout);
+                exchange.set_peer(self.config.address());
+                self.exchange.insert(exchange)
             }
         };
         exchange.get_mut().set_deadline(deadline);

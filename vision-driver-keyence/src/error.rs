@@ -100,6 +100,17 @@ pub enum KeyenceError {
         reason: String,
     },
 
+    /// The device at the camera's address answered, but not in the Non-Procedural protocol
+    /// (a web server, an SSH server, another device on that port).
+    NotKeyence {
+        /// `VisionIP:VisionPort`.
+        addr: String,
+        /// The command sent.
+        command: String,
+        /// The first bytes it sent, escaped (at most [`FIRST_BYTES_SHOWN`] of them).
+        answered: String,
+    },
+
     /// The camera refused the command with `ER,<cmd>,<nn>`.
     Rejected {
         /// The command the camera refused.
@@ -169,9 +180,10 @@ impl KeyenceError {
             | KeyenceError::Timeout { .. }
             | KeyenceError::NoImage { .. } => DriverErrorKind::Timeout,
             KeyenceError::Refused { .. } | KeyenceError::Closed { .. } => DriverErrorKind::Refused,
-            KeyenceError::Malformed { .. } | KeyenceError::LineTooLong { .. } | KeyenceError::TooManyLines { .. } => {
-                DriverErrorKind::Malformed
-            }
+            KeyenceError::Malformed { .. }
+            | KeyenceError::NotKeyence { .. }
+            | KeyenceError::LineTooLong { .. }
+            | KeyenceError::TooManyLines { .. } => DriverErrorKind::Malformed,
             KeyenceError::Rejected { .. } => DriverErrorKind::Rejected,
         }
     }
@@ -215,6 +227,10 @@ impl KeyenceError {
             KeyenceError::Malformed { command, line, reason } => {
                 format!("Malformed response: reply to {command} not understood ({reason}): {line}")
             }
+            KeyenceError::NotKeyence { addr, command, answered } => format!(
+                "Malformed response: the device at {addr} does not speak the Keyence Non-Procedural protocol: to \
+                 {command} it answered \"{answered}\""
+            ),
             KeyenceError::Rejected { command, reply, previous, .. } => {
                 let mut s = String::from("camera replied ");
                 for p in previous {
@@ -277,6 +293,11 @@ impl KeyenceError {
             KeyenceError::Malformed { command, .. }
             | KeyenceError::LineTooLong { command, .. }
             | KeyenceError::TooManyLines { command, .. } => reply_advice(command).into(),
+            KeyenceError::NotKeyence { .. } => {
+                "check VisionIP and VisionPort: they must address a Keyence VS camera's Non-Procedural command \
+                 port (8500 by default), not a web server, an SSH server or another device"
+                    .into()
+            }
             KeyenceError::Rejected { command, code, .. } => rejection_advice(command, code),
             KeyenceError::InvalidJob { .. } => "use a camera job number 0–999".into(),
             KeyenceError::NoImageFolder => {
@@ -298,6 +319,9 @@ impl KeyenceError {
         }
     }
 }
+
+/// The most bytes of a foreign device's answer [`KeyenceError::NotKeyence`] shows.
+pub const FIRST_BYTES_SHOWN: usize = 64;
 
 impl fmt::Display for KeyenceError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {

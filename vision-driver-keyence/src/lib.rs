@@ -48,5 +48,5 @@ mod transport;
 
 pub use config::{ImageWatch, KeyenceConfig, DEFAULT_PORT, DEFAULT_TIMEOUT, MAX_TIMEOUT};
 pub use driver::{register, KeyenceDriver, DRIVER_NAME};
-pub use error::{er_meaning, KeyenceError};
+pub use error::{er_meaning, KeyenceError, FIRST_BYTES_SHOWN};
 pub use protocol::{parse_data_line, Exchange, JobCommand, Limits, Program};

@@ -444,3 +444,57 @@ fn unresolvable_host_is_a_clear_error() {
     assert!(matches!(e, KeyenceError::Resolve { .. } | KeyenceError::ConnectTimeout { .. }), "{e}");
     assert!(!d.is_connected());
 }
+
+/// A loopback server that is no Keyence camera: it sends `greeting` on connect (an SSH
+/// server's banner), or `reply` once it has read a command (a web server's 400), then closes.
+fn foreign_device(greeting: &'static [u8], reply: &'static [u8]) -> u16 {
+    use std::io::{Read, Write};
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").expect("port");
+    let port = listener.local_addr().expect("addr").port();
+    std::thread::spawn(move || {
+        for stream in listener.incoming().take(4) {
+            let Ok(mut s) = stream else { continue };
+            let _ = s.write_all(greeting);
+            let mut buf = [0u8; 64];
+            let _ = s.set_read_timeout(Some(Duration::from_millis(200)));
+            let _ = s.read(&mut buf);
+            let _ = s.write_all(reply);
+        }
+    });
+    port
+}
+
+/// Issue 33: a device that answers on the camera's port but does not speak the protocol (a web
+/// server, an SSH server) is named as such, with what it answered (escaped, bounded), not given
+/// advice about the camera's Data Output tool.
+#[test]
+fn a_device_that_does_not_speak_the_protocol_is_named_with_what_it_answered() {
+    let cases: [(&[u8], &[u8], &str); 3] = [
+        (
+            b"",
+            b"HTTP/1.1 400 Bad Request\r\nContent-Type: text/html\r\nContent-Length: 11\r\nConnection: close\r\n\r\nBad Request",
+            // The first FIRST_BYTES_SHOWN (64) bytes, and a mark that more came.
+            "to TRG it answered \"HTTP/1.1 400 Bad Request\\x0d\\x0aContent-Type: text/html\\x0d\\x0aContent-Lengt…\"",
+        ),
+        (b"SSH-2.0-OpenSSH_9.2p1 Debian-2\r\n", b"", "to TRG it answered \"SSH-2.0-OpenSSH_9.2p1 Debian-2\\x0d\\x0a\""),
+        (b"\x00\xff\xfe binary\n", b"", "to TRG it answered \"\\x00\\xff\\xfe binary\\x0a\""),
+    ];
+    for (greeting, reply, answered) in cases {
+        let port = foreign_device(greeting, reply);
+        let mut d = KeyenceDriver::new(KeyenceConfig::new("127.0.0.1", port).with_timeout(T)).expect("config");
+        let e = d.measure().expect_err("no camera");
+        let user = VisionError::Driver(e.clone().into()).to_string();
+        assert!(matches!(e, KeyenceError::NotKeyence { .. }), "{e:?}");
+        assert_eq!(e.kind(), DriverErrorKind::Malformed);
+        assert!(
+            user.starts_with(&format!(
+                "Malformed response: the device at 127.0.0.1:{port} does not speak the Keyence Non-Procedural protocol"
+            )),
+            "{user}"
+        );
+        assert!(user.contains(answered), "{user}");
+        assert!(user.contains("check VisionIP and VisionPort"), "{user}");
+        assert!(!user.contains("Data Output"), "{user}");
+        assert!(user.len() < 600, "{user}");
+    }
+}

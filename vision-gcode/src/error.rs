@@ -1,7 +1,9 @@
 //! The one error type of `vision-gcode` and the problems it names.
 //!
 //! Every message says what went wrong and what to do about it. A syntax error carries the line
-//! and the (1-based, character) column; a run-time error carries the line.
+//! and the (1-based, character) column; a run-time error carries the line. Every number a
+//! message quotes is shown by [`vision_math::show::number`] (`L1e15`, `0.3`), the one format of
+//! numbers in messages.
 
 use std::fmt;
 
@@ -426,7 +428,7 @@ pub enum RunProblem {
     #[error("arc radius too small: the radius to the start or the end is below 0.00005 in (0.00127 mm); check the centre words, R and G90.1/G91.1")]
     ArcZeroRadius,
     /// Start and end radii differ beyond tolerance.
-    #[error("radius to the arc end ({end_radius:.6}) differs from the radius to its start ({start_radius:.6}) by more than the tolerance: check the centre words, the end point and G90.1/G91.1")]
+    #[error("radius to the arc end ({}) differs from the radius to its start ({}) by more than the tolerance: check the centre words, the end point and G90.1/G91.1", number(*end_radius), number(*start_radius))]
     ArcRadiusMismatch {
         /// Radius at the start, current units.
         start_radius: f64,
@@ -463,7 +465,7 @@ pub enum RunProblem {
         code: &'static str,
     },
     /// R smaller than half the chord.
-    #[error("arc radius R{radius} is too small to reach the end point {half_chord:.6} away (half the chord): use a larger R")]
+    #[error("arc radius R{} is too small to reach the end point {} away (half the chord): use a larger R", number(*radius), number(*half_chord))]
     ArcRadiusTooSmall {
         /// |R|, current units.
         radius: f64,
@@ -498,7 +500,7 @@ pub enum RunProblem {
         code: &'static str,
     },
     /// A parameter number out of the dialect's range or not whole.
-    #[error("#{index} is not a parameter: use a whole number from 1 to {last} (the {dialect} range)")]
+    #[error("#{} is not a parameter: use a whole number from 1 to {last} (the {dialect} range)", number(*index))]
     BadParameter {
         /// The index as computed.
         index: f64,
@@ -594,7 +596,7 @@ pub enum RunProblem {
     #[error("division by zero in an expression")]
     DivisionByZero,
     /// A function outside its domain.
-    #[error("{function}[{argument}] is undefined: {hint}")]
+    #[error("{function}[{}] is undefined: {hint}", number(*argument))]
     Domain {
         /// The function or operator.
         function: &'static str,
@@ -626,7 +628,7 @@ pub enum RunProblem {
         value: f64,
     },
     /// A G10 form other than L2 / L20.
-    #[error("G10 L{l} is not supported: use G10 L2 (set offset) or G10 L20 (set offset from the current position)")]
+    #[error("G10 L{} is not supported: use G10 L2 (set offset) or G10 L20 (set offset from the current position)", number(*l))]
     G10Form {
         /// The L value.
         l: f64,
@@ -656,8 +658,8 @@ pub enum RunProblem {
 /// A repeat count as written: `L10000000`, or `[200000]` for an o-word `repeat`.
 fn repeat_word(letter: Option<char>, value: f64) -> String {
     match letter {
-        Some(l) => format!("{l}{value}"),
-        None => format!("[{value}]"),
+        Some(l) => format!("{l}{}", number(value)),
+        None => format!("[{}]", number(value)),
     }
 }
 
@@ -668,5 +670,37 @@ fn repeat_advice(code: &str) -> &'static str {
         "repeat" => "nest two repeats, or use a while loop",
         "G2" | "G3" => "program the turns over several lines",
         _ => "split the holes over several lines",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 33: every number a message quotes goes through the one formatter
+    /// ([`vision_math::show::number`]): `L1e15`, never `L1000000000000000`, and no message
+    /// grows with a number's digits.
+    #[test]
+    fn every_number_in_a_message_is_shown_by_the_one_formatter() {
+        let cases: Vec<(RunProblem, &str)> = vec![
+            (RunProblem::RepeatBound { code: "M98", letter: Some('L'), value: 1e15, limit: 100_000 }, "`L1e15`"),
+            (RunProblem::RepeatBound { code: "repeat", letter: None, value: 1e15, limit: 100_000 }, "`[1e15]`"),
+            (RunProblem::RepeatBound { code: "G81", letter: Some('L'), value: 100_001.0, limit: 100_000 }, "`L100001`"),
+            (RunProblem::G10Form { l: 1e300 }, "G10 L1e300 is not"),
+            (RunProblem::G10Form { l: 3.0 }, "G10 L3 is not"),
+            (RunProblem::BadParameter { index: 1e300, last: 5601, dialect: "LinuxCNC" }, "#1e300 is not"),
+            (RunProblem::BadParameter { index: 0.5, last: 5601, dialect: "LinuxCNC" }, "#0.5 is not"),
+            (RunProblem::Domain { function: "SQRT", argument: -1e300, hint: "h" }, "SQRT[-1e300]"),
+            (RunProblem::ArcRadiusTooSmall { radius: 1e300, half_chord: 2e300 }, "R1e300 is too small"),
+            (RunProblem::ArcRadiusTooSmall { radius: 0.1, half_chord: 0.1 + 0.2 }, "0.3 away"),
+            (RunProblem::ArcRadiusMismatch { start_radius: 1e300, end_radius: 0.1 + 0.2 }, "end (0.3) differs"),
+            (RunProblem::ArcRadiusMismatch { start_radius: 1e300, end_radius: 1.0 }, "its start (1e300)"),
+        ];
+        for (problem, shown) in cases {
+            let text = problem.to_string();
+            assert!(text.contains(shown), "{shown:?} not in {text}");
+            assert!(!text.contains("00000000000"), "{text}");
+            assert!(text.len() < 300, "{} bytes: {text}", text.len());
+        }
     }
 }

@@ -78,6 +78,9 @@ fn repeat_counts_over_the_bound_are_refused_with_their_own_message() {
         ),
         (format!("G20 G90 F10\nG2 X0 Y0 I1 J0 P{over}\nM2"), "G2: `P100001` exceeds the 100000 repeat bound: program"),
         (format!("G20 G90 F10\no1 repeat [{over}]\no1 endrepeat\nM2"), "repeat: `[100001]` exceeds the 100000 repeat"),
+        // Issue 33: a huge count is shown as every message shows numbers.
+        ("G20 G90 F10\nM98 P100 L[10**15]\nM2\nO100\nM99".to_string(), "M98: `L1e15` exceeds the 100000 repeat bound"),
+        ("G20 G90 F10\no1 repeat [10**15]\no1 endrepeat\nM2".to_string(), "repeat: `[1e15]` exceeds the 100000 repeat"),
     ] {
         let (result, _, _) = run_counting(&text);
         let problem = problem(result);

@@ -4,7 +4,7 @@ use std::sync::Arc;
 use std::time::SystemTime;
 
 use vision_core::{Controller, Machine, MachineError, MachineErrorKind, Timestamp};
-use vision_gcode::params::{WORK_OFFSET_STRIDE, WORK_ROTATION};
+use vision_gcode::params::{TOOL_OFFSET, WORK_OFFSET_STRIDE, WORK_ROTATION};
 use vision_gcode::{Context, GcodeError};
 use vision_math::{LengthUnit, Point2, Vector2};
 
@@ -105,6 +105,13 @@ impl Machine for ContextMachine<'_, '_> {
 
     fn set_tool_offset(&mut self, tool: u32, offset: Vector2<f64>) -> Result<(), MachineError> {
         self.ctx.set_tool_offset(tool, offset.x, offset.y).map_err(host(MachineErrorKind::UnknownTool))
+    }
+
+    /// `#5401`/`#5402`: the interpreter mirrors there the X/Y offset it applies, in the
+    /// table's form and current units (under LinuxCNC's rules zero until `G43`).
+    fn applied_tool_offset(&self) -> Result<Option<Vector2<f64>>, MachineError> {
+        let read = |n| self.ctx.pound(n).map_err(host(MachineErrorKind::OutOfRange));
+        Ok(Some(Vector2::new(read(TOOL_OFFSET)?, read(TOOL_OFFSET + 1)?)))
     }
 
     fn units(&self) -> Result<LengthUnit, MachineError> {

@@ -137,6 +137,16 @@ impl Machine for PyHost<'_> {
         self.call("set_tool_offset", (tool, offset.x, offset.y)).map(|_| ())
     }
 
+    /// `Host.applied_tool_offset()`, when the host has it (LinuxCNC's remap: the offset `G43`
+    /// applied); `None` for a host without it, or whose method returns `None` (cannot tell).
+    fn applied_tool_offset(&self) -> Result<Option<Vector2<f64>>, MachineError> {
+        if !self.object.hasattr("applied_tool_offset").unwrap_or(false) {
+            return Ok(None);
+        }
+        let pair: Option<(f64, f64)> = self.value("applied_tool_offset", (), "an (x, y) pair of numbers or None")?;
+        Ok(pair.map(|(x, y)| Vector2::new(x, y)))
+    }
+
     fn program_position(&self) -> Result<Point2<f64>, MachineError> {
         let (x, y) = self.pair("program_position", ())?;
         Ok(Point2::new(x, y))

@@ -66,8 +66,8 @@ pub(crate) struct RunArgs {
     #[arg(long, default_value_t = 8500)]
     port: u16,
     /// Frame source for `--camera camera`: a V4L2 device, an `http://` snapshot URL, or an
-    /// image file or folder (the profile's `VisionCameraSource` when absent is replaced by the
-    /// loopback snapshots of the simulated camera).
+    /// image file or folder (the profile's `VisionCameraSource` when absent is replaced, for
+    /// the session only, by the loopback snapshots of the simulated camera).
     #[arg(long, value_name = "DEVICE|URL|PATH")]
     source: Option<String>,
     /// Print the report as one JSON object.
@@ -131,9 +131,17 @@ impl Runner {
             None => sim.calibrated_params(&registry.params()).map_err(|e| Failure::Input(e.to_string()))?,
         };
 
-        // The camera choices below are for this session: the profile keeps the file's.
-        let file_connection = ["VisionDriver", "VisionIP", "VisionPort"]
-            .map(|name| params.get(name).map(|v| (name, v)).map_err(|e| Failure::Input(e.to_string())));
+        // The camera choices below are for this session: the profile keeps the file's (or,
+        // for a new profile, the defaults), as do the settings of the CLI's own loopback
+        // snapshot server.
+        let mut session_only = vec!["VisionDriver", "VisionIP", "VisionPort"];
+        if driver == CAMERA && args.source.is_none() {
+            session_only.extend(LOOPBACK_CAMERA_SETTINGS);
+        }
+        let file_values = session_only
+            .into_iter()
+            .map(|name| params.get(name).map(|v| (name, v)).map_err(|e| Failure::Input(e.to_string())))
+            .collect::<Result<Vec<_>, _>>()?;
         let mut snapshots = None;
         let (camera, emulator) = match (driver.as_str(), &args.ip) {
             ("Sim", _) => {
@@ -184,8 +192,7 @@ impl Runner {
         let mut module = VisionModule::from_registry(params, &registry).map_err(|e| Failure::Input(e.to_string()))?;
         if let Some(path) = &args.profile {
             let mut store = ProfileStore::new(path).with_defaults(registry.params());
-            for kept in file_connection {
-                let (name, value) = kept?;
+            for (name, value) in file_values {
                 store = store.keep(name, value);
             }
             // Found before any motion, not when M283/M284 saves after it.
@@ -382,6 +389,20 @@ impl StreamedPlan {
     }
 }
 
+/// The camera driver's settings [`serve_frames`] sets for the loopback snapshot server: its
+/// URL (which dies with the run), timeout and flush count, and the mark settings the simulated
+/// operator would set. They are the session's: a profile saved by the run keeps the file's
+/// values (the defaults for a new profile).
+const LOOPBACK_CAMERA_SETTINGS: [&str; 7] = [
+    "VisionCameraSource",
+    "VisionCameraTimeout",
+    "VisionCameraFlushFrames",
+    "VisionCameraSearchRadius",
+    "VisionCameraMarkDiameterPx",
+    "VisionCameraMark",
+    "VisionCameraPolarity",
+];
+
 /// Serves the simulated camera's rendered frames as PNG snapshots on a loopback port, and
 /// points the camera driver's settings at it with the mark settings the simulated operator
 /// would set ([`vision_host::sim_image_config`]); no frame is flushed (each is rendered at the
@@ -519,6 +540,25 @@ mod tests {
         assert_eq!(kept.through(2).map(|v| v.len()), Some(1001));
         assert!(kept.through(3).is_none());
         assert!(kept.through(last_kept_line).is_none());
+    }
+
+    #[test]
+    fn the_loopback_server_sets_only_the_settings_kept_out_of_the_profile() {
+        let sim = Sim::new(vision_driver_sim::World::default_world()).expect("world");
+        let registry = vision_host::cameras(Some(&sim));
+        let before = registry.params();
+        let mut after = before.clone();
+        let _server = serve_frames(&sim, &mut after).expect("served");
+        let changed: Vec<&str> = after
+            .config_values()
+            .into_iter()
+            .filter(|(name, value)| before.get(name).ok().as_ref() != Some(value))
+            .map(|(name, _)| name)
+            .collect();
+        assert!(changed.contains(&"VisionCameraSource"), "{changed:?}");
+        for name in changed {
+            assert!(LOOPBACK_CAMERA_SETTINGS.contains(&name), "{name} is set for the loopback server but saved");
+        }
     }
 
     #[test]

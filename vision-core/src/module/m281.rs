@@ -99,7 +99,7 @@ impl VisionModule {
     /// capture.
     ///
     /// # Errors
-    /// [`VisionError::NotEnabled`], [`VisionError::WrongTool`],
+    /// [`VisionError::NotEnabled`], [`VisionError::WrongTool`], [`VisionError::ToolOffsetNotApplied`],
     /// [`VisionError::PoundBaseReserved`], [`VisionError::PoundBlockMissing`],
     /// [`VisionError::NotCalibrated`] (all before the trigger: only `LastStatus` changes);
     /// [`VisionError::NoDriver`]; after a trigger [`VisionError::Driver`] or
@@ -127,6 +127,7 @@ impl VisionModule {
     pub fn m281_begin(&mut self, machine: &mut dyn Machine, keep_image: bool) -> Result<CaptureStep, VisionError> {
         let ready = self.check_enabled().and_then(|()| self.check_tool(machine)).and_then(|()| {
             self.check_calibration_record(machine)?;
+            self.check_camera_offset(machine)?;
             let block = PoundBlock::on_machine(self.params.pound_var_base(), machine)?;
             let unit = machine.units()?;
             Ok((block, pixel_chain(&self.params, unit)?, unit, self.refresh_alignment(machine)?))

@@ -326,6 +326,22 @@ impl VisionModule {
         }
     }
 
+    /// Refuses when the machine tells which X/Y tool offset it applies and that is not the
+    /// camera tool's table entry (a LinuxCNC program without `G43`): a capture would measure
+    /// from where the camera is not.
+    pub(crate) fn check_camera_offset(&self, machine: &dyn Machine) -> Result<(), VisionError> {
+        let Some(camera) = self.params.camera_tool() else { return Ok(()) };
+        let Some(applied) = machine.applied_tool_offset()? else { return Ok(()) };
+        let table = machine.tool_offset(camera)?;
+        // Both come from the same table entry when the offset is applied: a difference beyond
+        // rounding is another offset.
+        let tolerance = 1e-6 * table.norm().max(1.0);
+        if (table - applied).norm() <= tolerance {
+            return Ok(());
+        }
+        Err(VisionError::ToolOffsetNotApplied { camera, table: [table.x, table.y], applied: [applied.x, applied.y] })
+    }
+
     /// The loaded driver, or [`VisionError::NoDriver`].
     pub(crate) fn driver_mut(&mut self) -> Result<&mut (dyn CameraDriver + 'static), VisionError> {
         let name = self.params.driver().to_string();

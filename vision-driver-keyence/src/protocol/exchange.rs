@@ -9,6 +9,11 @@
 //! * for other commands the answer is the first line whose first field is the command's name;
 //! * at most [`Limits::max_lines`] lines are read, each at most [`Limits::max_line_len`] bytes.
 //!
+//! A device that answers in another protocol (a web server's `HTTP/1.1 400`, an SSH banner,
+//! binary) is told from a camera by the first line it sent: when the exchange fails and that
+//! line is none a camera sends (the echo, `ER,…`, a reply to a command, a data line), the
+//! failure is [`KeyenceError::NotKeyence`] with the first bytes it sent, escaped.
+//!
 //! Time is the stream's business: a read or write that fails with `TimedOut` or `WouldBlock`
 //! becomes [`KeyenceError::Timeout`] (the socket transport turns its per-exchange deadline into
 //! exactly that). After any error other than [`KeyenceError::Rejected`] the exchange's stream is
@@ -21,7 +26,7 @@ use vision_core::Reading;
 
 use super::framing::{FrameError, Limits, LineReader, CR};
 use super::reply::{parse_data_line, parse_error_reply, parse_program, parse_version, quote, quote_bytes};
-use crate::error::KeyenceError;
+use crate::error::{KeyenceError, FIRST_BYTES_SHOWN};
 
 /// Longest command the camera accepts, bytes, delimiter included (SPEC §7).
 pub(crate) const MAX_COMMAND_LEN: usize = 500;
@@ -98,6 +103,30 @@ pub struct Exchange<S> {
     limits: Limits,
     timeout: Duration,
     written: usize,
+    /// The peer's address, for messages.
+    peer: String,
+    /// The first bytes received since the last command was sent, and whether more came.
+    heard: Vec<u8>,
+    heard_more: bool,
+    /// Whether a line a camera may send ([`camera_line`]) came since the last command.
+    heard_camera: bool,
+}
+
+/// The stream, keeping the first [`FIRST_BYTES_SHOWN`] bytes read in `heard`.
+struct Heard<'a, S> {
+    stream: &'a mut S,
+    heard: &'a mut Vec<u8>,
+    more: &'a mut bool,
+}
+
+impl<S: Read> Read for Heard<'_, S> {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        let n = self.stream.read(buf)?;
+        let room = FIRST_BYTES_SHOWN.saturating_sub(self.heard.len());
+        self.heard.extend_from_slice(&buf[..n.min(room)]);
+        *self.more |= n > room;
+        Ok(n)
+    }
 }
 
 impl<S: Read + Write> Exchange<S> {
@@ -106,7 +135,22 @@ impl<S: Read + Write> Exchange<S> {
     #[must_use]
     pub fn new(stream: S, limits: Limits, timeout: Duration) -> Exchange<S> {
         let limits = limits.clamped();
-        Exchange { stream, reader: LineReader::new(limits.max_line_len), limits, timeout, written: 0 }
+        Exchange {
+            stream,
+            reader: LineReader::new(limits.max_line_len),
+            limits,
+            timeout,
+            written: 0,
+            peer: "the camera's address".into(),
+            heard: Vec::new(),
+            heard_more: false,
+            heard_camera: false,
+        }
+    }
+
+    /// Names the peer (`host:port`) in messages.
+    pub fn set_peer(&mut self, addr: String) {
+        self.peer = addr;
     }
 
     /// The stream.
@@ -212,26 +256,56 @@ impl<S: Read + Write> Exchange<S> {
         }
     }
 
+    /// Sends `command` and reads lines until its answer; a failure after a first line no
+    /// camera sends is [`KeyenceError::NotKeyence`].
     fn exchange<T>(
         &mut self,
         command: &str,
         want: Want,
-        mut accept: impl FnMut(&str) -> Result<T, String>,
+        accept: impl FnMut(&str) -> Result<T, String>,
     ) -> Result<T, KeyenceError> {
         let name = command.split(',').next().unwrap_or(command);
+        self.exchange_lines(command, name, want, accept).map_err(|e| match e {
+            // Not `TooManyLines`: a camera's stray lines may fill the bound before its echo.
+            KeyenceError::Malformed { .. }
+            | KeyenceError::Closed { .. }
+            | KeyenceError::Timeout { .. }
+            | KeyenceError::LineTooLong { .. }
+                if !self.heard_camera && is_foreign(&self.heard) =>
+            {
+                let mut answered = quote_bytes(&self.heard);
+                if self.heard_more {
+                    answered.push('…');
+                }
+                KeyenceError::NotKeyence { addr: self.peer.clone(), command: name.to_string(), answered }
+            }
+            e => e,
+        })
+    }
+
+    fn exchange_lines<T>(
+        &mut self,
+        command: &str,
+        name: &str,
+        want: Want,
+        mut accept: impl FnMut(&str) -> Result<T, String>,
+    ) -> Result<T, KeyenceError> {
         self.send(command, name)?;
         let mut echoed = false;
         let mut ignored: Option<String> = None;
         for _ in 0..self.limits.max_lines {
             let waiting = Waiting { name, want, echoed };
-            let line = match self.reader.next_line(&mut self.stream) {
+            let mut heard = Heard { stream: &mut self.stream, heard: &mut self.heard, more: &mut self.heard_more };
+            let line = match self.reader.next_line(&mut heard) {
                 Ok(l) => l,
                 Err(e) => return Err(frame_error(e, waiting, self.timeout, self.limits, ignored)),
             };
             if line.is_empty() {
                 continue;
             }
-            let Ok(text) = std::str::from_utf8(line) else {
+            let text = std::str::from_utf8(line);
+            self.heard_camera |= text.is_ok_and(camera_line);
+            let Ok(text) = text else {
                 if want == Want::EchoThenData && echoed {
                     return Err(malformed(name, quote_bytes(line), "not text".into()));
                 }
@@ -278,6 +352,9 @@ impl<S: Read + Write> Exchange<S> {
     /// not yet read as lines are forgotten first: they answer no command of ours.
     fn send(&mut self, command: &str, name: &str) -> Result<(), KeyenceError> {
         self.reader.discard();
+        self.heard.clear();
+        self.heard_more = false;
+        self.heard_camera = false;
         let mut buf = [0u8; MAX_COMMAND_LEN];
         let len = command.len() + 1;
         if len > MAX_COMMAND_LEN {
@@ -305,6 +382,22 @@ impl<S: Read + Write> Exchange<S> {
         }
         self.stream.flush().map_err(|e| io_error(e, name, sending.into(), false, self.timeout, None))
     }
+}
+
+/// True for a line a camera may send: its echo of a command, an `ER,…` refusal, a reply or a
+/// data output (comma-separated fields, or one number).
+fn camera_line(text: &str) -> bool {
+    let commands = ["TRG", "FVR", "PR", "PL", "PW", "ER"];
+    let field = text.split(',').next().unwrap_or_default();
+    commands.contains(&field) || text.contains(',') || text.trim().parse::<f64>().is_ok()
+}
+
+/// True when the first line in `heard` (complete or not) is none a camera sends. Nothing heard
+/// is not foreign: a silent peer may be a camera.
+fn is_foreign(heard: &[u8]) -> bool {
+    let first = heard.split(|&b| b == CR || b == b'\n').find(|line| !line.is_empty());
+    let Some(first) = first else { return false };
+    std::str::from_utf8(first).map_or(true, |text| !camera_line(text))
 }
 
 /// Where an exchange stood, for messages.
