@@ -130,7 +130,15 @@ pub(crate) fn run(args: &LocateArgs) -> Result<String, Failure> {
                         json!({"file": name, "found": false, "reason": reason_code(&why), "message": why.to_string()});
                     match why {
                         NotFoundReason::SeveralCandidates { count } => o["count"] = json!(count),
-                        NotFoundReason::SizeOutOfRange { diameter } => o["diameter"] = json!(diameter),
+                        NotFoundReason::SizeOutOfRange { diameter, min, max } => {
+                            o["diameter"] = json!(diameter);
+                            (o["min"], o["max"]) = (json!(min), json!(max));
+                        }
+                        NotFoundReason::OtherSize { about, min, max } => {
+                            o["about"] = json!(about);
+                            (o["min"], o["max"]) = (json!(min), json!(max));
+                        }
+                        NotFoundReason::Cluttered { limit } => o["limit"] = json!(limit),
                         _ => {}
                     }
                     writeln!(out, "{o}").expect("writing to a String");
@@ -157,5 +165,7 @@ fn reason_code(why: &NotFoundReason) -> &'static str {
         NotFoundReason::SeveralCandidates { .. } => "several_candidates",
         NotFoundReason::Clipped => "clipped",
         NotFoundReason::SizeOutOfRange { .. } => "size_out_of_range",
+        NotFoundReason::OtherSize { .. } => "other_size",
+        NotFoundReason::Cluttered { .. } => "cluttered",
     }
 }
