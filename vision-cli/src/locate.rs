@@ -4,6 +4,11 @@
 //! line: the mark's centre in native pixels ((0, 0) = centre of the top-left pixel, y down),
 //! its size and score, or why there is none. Exit 0 when every image has its mark, 1 when one
 //! has none, 2 on bad input.
+//!
+//! Bounds: every file's header is read first, and an image over 100 megapixels, or one whose
+//! search would take more than the finder's 1 GiB ([`vision_locate::MAX_SEARCH_BYTES`]: a
+//! small `--diameter` on a large image searches it in small blocks), is refused before any is
+//! decoded (exit 2). The images are then decoded, searched and dropped one at a time.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -12,7 +17,7 @@ use clap::{Args, ValueEnum};
 use serde_json::json;
 use vision_locate::{locate, GrayImage, Located, MarkKind, MarkSpec, NotFoundReason, Pixels, Polarity};
 
-use crate::Failure;
+use crate::{image_size, Failure};
 
 /// Arguments of `mach-vision locate`.
 #[derive(Debug, Args)]
@@ -92,17 +97,22 @@ pub(crate) fn run(args: &LocateArgs) -> Result<String, Failure> {
     };
     let spec = MarkSpec::new(kind, args.diameter, args.tolerance / 100.0, polarity)
         .map_err(|e| Failure::Input(format!("--diameter {} --tolerance {}: {e}", args.diameter, args.tolerance)))?;
-    // Every file is read before any is searched: a bad path fails the whole call (exit 2).
-    let images = args.images.iter().map(|p| read_image(p).map(|i| (p, i))).collect::<Result<Vec<_>, _>>()?;
+    // Every file's header is read and sized first: a bad path or an image too large to search
+    // fails the whole call (exit 2) before any work. Then one image at a time is decoded,
+    // searched and dropped: memory holds one image, not all of them.
+    for path in &args.images {
+        image_size::check_image_size(path, &spec)?;
+    }
     let mut out = String::new();
     let mut missing = Vec::new();
-    for (path, (w, h, samples)) in &images {
-        let pixels = match samples {
+    for path in &args.images {
+        let (w, h, samples) = read_image(path)?;
+        let pixels = match &samples {
             Samples::Eight(p) => Pixels::Gray8(p),
             Samples::Sixteen(p) => Pixels::Gray16(p),
         };
         let view =
-            GrayImage::new(*w, *h, pixels).map_err(|e| Failure::Input(format!("image {}: {e}", path.display())))?;
+            GrayImage::new(w, h, pixels).map_err(|e| Failure::Input(format!("image {}: {e}", path.display())))?;
         let located = locate(&view, &spec).map_err(|e| Failure::Input(e.to_string()))?;
         let name = path.display().to_string();
         match located {
@@ -130,7 +140,15 @@ pub(crate) fn run(args: &LocateArgs) -> Result<String, Failure> {
                         json!({"file": name, "found": false, "reason": reason_code(&why), "message": why.to_string()});
                     match why {
                         NotFoundReason::SeveralCandidates { count } => o["count"] = json!(count),
-                        NotFoundReason::SizeOutOfRange { diameter } => o["diameter"] = json!(diameter),
+                        NotFoundReason::SizeOutOfRange { diameter, min, max } => {
+                            o["diameter"] = json!(diameter);
+                            (o["min"], o["max"]) = (json!(min), json!(max));
+                        }
+                        NotFoundReason::OtherSize { about, min, max } => {
+                            o["about"] = json!(about);
+                            (o["min"], o["max"]) = (json!(min), json!(max));
+                        }
+                        NotFoundReason::Cluttered { limit } => o["limit"] = json!(limit),
                         _ => {}
                     }
                     writeln!(out, "{o}").expect("writing to a String");
@@ -145,7 +163,7 @@ pub(crate) fn run(args: &LocateArgs) -> Result<String, Failure> {
     } else {
         Err(Failure::RunWithReport {
             output: out,
-            message: format!("no mark in {} of {} images: {}", missing.len(), images.len(), missing.join(", ")),
+            message: format!("no mark in {} of {} images: {}", missing.len(), args.images.len(), missing.join(", ")),
         })
     }
 }
@@ -157,5 +175,7 @@ fn reason_code(why: &NotFoundReason) -> &'static str {
         NotFoundReason::SeveralCandidates { .. } => "several_candidates",
         NotFoundReason::Clipped => "clipped",
         NotFoundReason::SizeOutOfRange { .. } => "size_out_of_range",
+        NotFoundReason::OtherSize { .. } => "other_size",
+        NotFoundReason::Cluttered { .. } => "cluttered",
     }
 }

@@ -5,6 +5,7 @@
 
 mod emulate;
 mod fit;
+mod image_size;
 mod locate;
 mod picture;
 mod plan;

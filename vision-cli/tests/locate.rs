@@ -129,3 +129,72 @@ fn bad_input_exits_2() {
         assert!(out.stdout.is_empty(), "{args:?}");
     }
 }
+
+#[test]
+fn a_wrong_diameter_names_the_size_seen_and_the_size_expected() {
+    // Issue 33: `--diameter 10` on a 40 px dot said "no mark in view — check the position, focus
+    // and lighting"; a fitted mark of the wrong size did not say which size was expected.
+    let good = save("wrong-size.png", Some((100.0, 75.0)), Depth::Eight, false);
+    let g = good.to_str().unwrap();
+    let text = |args: &[&str]| {
+        let out = run(args);
+        assert_eq!(out.status.code(), Some(1), "{args:?}");
+        String::from_utf8(out.stdout).expect("utf-8")
+    };
+    assert_eq!(
+        text(&["--diameter", "10", g]),
+        format!(
+            "{g}: not found: no mark of 7.5–12.5 px in view, but a blob about 39 px across is — check the diameter setting (or the position, focus and lighting)\n"
+        )
+    );
+    assert_eq!(
+        text(&["--diameter", "25", "--tolerance", "10", g]),
+        format!("{g}: not found: a mark of 39.9 px is in view, but 22.5–27.5 px was expected — check the diameter setting\n")
+    );
+    let out = run(&["--diameter", "10", "--json", g]);
+    let o = &json_lines(&out)[0];
+    assert_eq!(
+        (o["reason"].as_str(), o["min"].as_f64(), o["max"].as_f64()),
+        (Some("other_size"), Some(7.5), Some(12.5))
+    );
+    assert!((o["about"].as_f64().unwrap() - 40.0).abs() <= 2.0, "{o}");
+    // Nothing at all in view keeps its advice.
+    let blank = save("wrong-size-blank.png", None, Depth::Eight, false);
+    let b = blank.to_str().unwrap();
+    assert_eq!(
+        text(&["--diameter", "10", b]),
+        format!("{b}: not found: no mark in view — check the position, focus and lighting\n")
+    );
+}
+
+#[test]
+fn m281_with_a_wrong_camera_diameter_names_the_size_seen_and_the_settings() {
+    // Issue 33: the Camera driver's NG said "no mark in view — check the position, focus and
+    // lighting" when VisionCameraMarkDiameterPx was wrong. Calibrate a profile on the simulated
+    // camera's rendered frames (the quick M283 Q: K is all M281 needs), then set the diameter to
+    // a quarter of the marks' 246 px.
+    let profile = dir().join("wrong-diameter.toml");
+    let _ = std::fs::remove_file(&profile);
+    let p = profile.to_str().unwrap();
+    let programs = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/programs/");
+    let run_program = |name: &str| {
+        bin().args(["run", "--camera", "simimage", "--profile", p, &format!("{programs}{name}")]).output().expect("run")
+    };
+    let out = run_program("03-quick-diameter-cal.nc");
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = std::fs::read_to_string(&profile).expect("profile");
+    assert!(text.contains("VisionCameraMarkDiameterPx = 0.0\n"), "{text}");
+    std::fs::write(&profile, text.replace("VisionCameraMarkDiameterPx = 0.0\n", "VisionCameraMarkDiameterPx = 60.0\n"))
+        .expect("write");
+    let out = run_program("04-rectangle-fit.nc");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(
+            "M281 failed: NG / no mark found — the camera job did not find a fiducial in the field of view (the finder: \
+             no mark of 45.0–75.0 px in view, but a blob about 248 px across is — check VisionCameraMarkDiameterPx (60 \
+             px) and VisionCameraMarkTolerance (25 %) (or the position, focus and lighting)); re-jog"
+        ),
+        "{err}"
+    );
+}

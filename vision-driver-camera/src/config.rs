@@ -164,7 +164,7 @@ pub struct CameraConfig {
     pub format: Option<PixelFormat>,
     /// The mark.
     pub mark: MarkSettings,
-    /// Time allowed for one frame.
+    /// Time allowed for one frame, and again for the mark search in it (cut off after it).
     pub timeout: Duration,
     /// Frames thrown away before the one searched.
     pub flush_frames: u32,

@@ -1,10 +1,10 @@
 //! [`FrameDriver`]: a frame source plus `vision-locate`, as a [`CameraDriver`].
 
 use std::path::PathBuf;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use vision_core::{CameraDriver, Capabilities, DriverError, DriverRegistry, ImageRequest, Judgment, Params, Reading};
-use vision_locate::{GrayImage, Located, NotFoundReason, Pixels};
+use vision_locate::{Budget, GrayImage, LocateError, Located, NotFoundReason, Pixels};
 
 use crate::config::{CameraConfig, MarkKind, Polarity, Source};
 use crate::error::CameraError;
@@ -34,6 +34,10 @@ pub struct Miss {
 /// top-left corner of the image, as the Keyence camera and the simulator count), width and
 /// height its diameter in pixels, angle in degrees, score 0–1. No mark, or several, is `NG`
 /// ([`FrameDriver::last_miss`] says why), as the Keyence camera judges a failed inspection.
+///
+/// The search gets `VisionCameraTimeout` of its own, counted from the frame's arrival: one
+/// that runs longer (a huge or hostile frame) is cut off, [`CameraError::SearchCutOff`], never
+/// a guess.
 pub struct FrameDriver<S: FrameSource = Box<dyn FrameSource>> {
     config: CameraConfig,
     source: S,
@@ -155,15 +159,17 @@ impl<S: FrameSource> FrameDriver<S> {
             }
         }
         let frame = self.source.frame()?;
+        let budget = Budget::until(Instant::now() + self.config.timeout);
+        let search = |frame: &Frame, miss: &mut Option<Miss>| search(frame, &spec, &budget, self.config.timeout, miss);
         let reading = match window(&frame, self.config.mark.search_radius_pct) {
-            Some((part, x0, y0)) => search(&part, &spec, &mut self.last_miss).map(|r| {
+            Some((part, x0, y0)) => search(&part, &mut self.last_miss).map(|r| {
                 if r.found() {
                     Reading { x_px: r.x_px + f64::from(x0), y_px: r.y_px + f64::from(y0), ..r }
                 } else {
                     r
                 }
             }),
-            None => search(&frame, &spec, &mut self.last_miss),
+            None => search(&frame, &mut self.last_miss),
         };
         self.frame_size = Some((frame.width(), frame.height()));
         self.last_frame = Some(frame);
@@ -171,12 +177,21 @@ impl<S: FrameSource> FrameDriver<S> {
     }
 }
 
-/// Searches `frame`; a miss is recorded in `miss`.
-fn search(frame: &Frame, spec: &vision_locate::MarkSpec, miss: &mut Option<Miss>) -> Result<Reading, CameraError> {
+/// Searches `frame` within `budget` (`timeout` is what it allows, for the message); a miss is
+/// recorded in `miss`.
+fn search(
+    frame: &Frame,
+    spec: &vision_locate::MarkSpec,
+    budget: &Budget,
+    timeout: Duration,
+    miss: &mut Option<Miss>,
+) -> Result<Reading, CameraError> {
     let image = GrayImage::new(frame.width() as usize, frame.height() as usize, Pixels::Gray8(frame.pixels()))
         .map_err(|e| CameraError::Decode { from: "the frame".into(), reason: e.to_string() })?;
-    let located = vision_locate::locate(&image, spec)
-        .map_err(|e| CameraError::Config { setting: "VisionCameraMarkDiameterPx", reason: e.to_string() })?;
+    let located = vision_locate::locate_within(&image, spec, budget).map_err(|e| match e {
+        LocateError::Deadline => CameraError::SearchCutOff { width: frame.width(), height: frame.height(), timeout },
+        e => CameraError::Config { setting: "VisionCameraMarkDiameterPx", reason: e.to_string() },
+    })?;
     let ng = |count| Reading { judgment: Judgment::Ng, count: Some(count), ..Reading::position(0.0, 0.0) };
     match located {
         Located::Found(m) if [m.x, m.y, m.diameter, m.score, m.angle.unwrap_or(0.0)].iter().all(|v| v.is_finite()) => {
@@ -203,10 +218,22 @@ fn search(frame: &Frame, spec: &vision_locate::MarkSpec, miss: &mut Option<Miss>
                 NotFoundReason::SeveralCandidates { count } => Some(u32::try_from(count).unwrap_or(u32::MAX)),
                 _ => None,
             };
-            *miss = Some(Miss { reason: reason.to_string(), candidates });
+            // The finder's advice says "the diameter setting": here that is two, with their values.
+            let settings = format!(
+                "VisionCameraMarkDiameterPx ({} px) and VisionCameraMarkTolerance ({} %)",
+                tenths(spec.diameter_px),
+                tenths(spec.tolerance * 100.0)
+            );
+            let reason = reason.to_string().replacen("the diameter setting", &settings, 1);
+            *miss = Some(Miss { reason, candidates });
             Ok(ng(candidates.unwrap_or(0)))
         }
     }
+}
+
+/// `v` to a tenth, without trailing zeros (`40`, `12.5`).
+fn tenths(v: f64) -> f64 {
+    (v * 10.0).round() / 10.0
 }
 
 impl<S: FrameSource> CameraDriver for FrameDriver<S> {
@@ -369,6 +396,56 @@ mod tests {
         let r = d.trigger().expect("reading");
         assert_eq!((r.judgment, r.count), (Judgment::Ng, Some(0)));
         assert!(d.last_miss().expect("a reason").reason.starts_with("no mark in view"));
+    }
+
+    #[test]
+    fn a_search_past_the_timeout_is_cut_off_never_a_mark() {
+        // Issue 33: one M281 searched for 25.6 s under VisionCameraTimeout = 3. The search now
+        // has the timeout as its deadline: 1 ns has passed before the search's first stage ends.
+        let mut d = driver(vec![(150.3, 110.7)]);
+        d.config.timeout = Duration::from_nanos(1);
+        let e = d.trigger().expect_err("cut off");
+        assert_eq!(e.kind(), vision_core::DriverErrorKind::Timeout);
+        assert!(
+            e.to_string().starts_with("timeout: the mark search in a 320×240 frame was cut off after 0.000 s (VisionCameraTimeout); nothing is known of the mark — narrow VisionCameraSearchRadius"),
+            "{e}"
+        );
+        assert!(d.last_miss().is_none());
+        // A deadline already passed is honoured however small the frame.
+        let frame = d.last_frame().cloned().expect("the searched frame is kept");
+        let spec = d.spec().expect("spec");
+        let passed = Budget::until(Instant::now());
+        let e = search(&frame, &spec, &passed, Duration::from_secs(3), &mut None).expect_err("cut off");
+        assert_eq!(e, CameraError::SearchCutOff { width: 320, height: 240, timeout: Duration::from_secs(3) });
+        // With the default 3 s the same frames are read.
+        d.config.timeout = Duration::from_secs(3);
+        assert!(d.trigger().expect("reading").found());
+    }
+
+    #[test]
+    fn a_mark_of_another_size_is_ng_naming_both_sizes_and_the_setting() {
+        // Issue 33: the NG message said "check position, focus and lighting" for a wrong diameter.
+        let mut d = driver(vec![(160.0, 120.0)]);
+        d.config.mark.diameter_px = Some(25.0);
+        let r = d.trigger().expect("reading");
+        assert_eq!((r.judgment, r.count), (Judgment::Ng, Some(0)));
+        let ng = vision_core::VisionError::NoMark { reason: d.miss_reason() }.to_string();
+        assert!(
+            ng.contains("(the finder: a mark of 39.9 px is in view, but 18.8–31.2 px was expected — check VisionCameraMarkDiameterPx (25 px) and VisionCameraMarkTolerance (25 %)); re-jog"),
+            "{ng}"
+        );
+        // Far too small a diameter: the coarse search passes the dot over, and says its size.
+        d.config.mark.diameter_px = Some(8.0);
+        d.trigger().expect("reading");
+        let miss = &d.last_miss().expect("a miss").reason;
+        assert!(miss.starts_with("no mark of 6.0–10.0 px in view, but a blob about "), "{miss}");
+        assert!(
+            miss.ends_with(
+                " px across is — check VisionCameraMarkDiameterPx (8 px) and VisionCameraMarkTolerance (25 %) (or the \
+                 position, focus and lighting)"
+            ),
+            "{miss}"
+        );
     }
 
     #[test]

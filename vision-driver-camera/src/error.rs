@@ -197,6 +197,17 @@ pub enum CameraError {
         /// What was asked.
         what: &'static str,
     },
+
+    /// The mark search of a frame ran past `VisionCameraTimeout` and was cut off: nothing is
+    /// known of the mark.
+    SearchCutOff {
+        /// The searched frame's (or search window's) width, px.
+        width: u32,
+        /// Its height, px.
+        height: u32,
+        /// The time allowed for the search.
+        timeout: Duration,
+    },
 }
 
 impl CameraError {
@@ -205,7 +216,9 @@ impl CameraError {
     pub fn kind(&self) -> DriverErrorKind {
         match self {
             CameraError::Config { .. } => DriverErrorKind::InvalidArgument,
-            CameraError::ConnectTimeout { .. } | CameraError::Timeout { .. } => DriverErrorKind::Timeout,
+            CameraError::ConnectTimeout { .. } | CameraError::Timeout { .. } | CameraError::SearchCutOff { .. } => {
+                DriverErrorKind::Timeout
+            }
             CameraError::Refused { .. } | CameraError::Closed { .. } | CameraError::DeviceOpen { .. } => {
                 DriverErrorKind::Refused
             }
@@ -278,6 +291,11 @@ impl CameraError {
             }
             CameraError::Job { job, reason } => format!("the camera refused job {job}: {reason}"),
             CameraError::Unsupported { what } => format!("the camera driver cannot {what}"),
+            CameraError::SearchCutOff { width, height, timeout } => format!(
+                "timeout: the mark search in a {width}×{height} frame was cut off after {} (VisionCameraTimeout); \
+                 nothing is known of the mark",
+                secs(*timeout)
+            ),
         }
     }
 
@@ -332,6 +350,11 @@ impl CameraError {
             CameraError::ShortFrame { .. } => "check the USB link (a hub or a long cable drops data) and retry".into(),
             CameraError::Job { .. } => "use a job the camera has (M284 P), or P0 to leave its job alone".into(),
             CameraError::Unsupported { .. } => "leave the camera's job alone (M284 P0)".into(),
+            CameraError::SearchCutOff { .. } => {
+                "narrow VisionCameraSearchRadius to the mark, lower the camera's resolution, check \
+                 VisionCameraMarkDiameterPx (a small diameter searches finely), or raise VisionCameraTimeout"
+                    .into()
+            }
         }
     }
 }

@@ -124,7 +124,7 @@ pub static SETTINGS: SettingsTable = SettingsTable {
                 "VisionCameraTimeout",
                 ParamKind::Float,
                 "`VisionCameraTimeout`: time allowed for one frame (connect, request, whole image; or one \
-                 device capture), seconds, more than 0 and at most 300.",
+                 device capture), and again for the mark search in it, seconds, more than 0 and at most 300.",
             ),
             default: || ParamValue::Float(3.0),
             check: timeout,

@@ -40,64 +40,146 @@ pub(crate) struct Search {
     pub(crate) noise: f64,
     /// Block size of the coarse image, px.
     pub(crate) factor: usize,
+    /// The size, px (to a block), of the most contrasted blob passed over for its size alone: what
+    /// the view shows when nothing fits the spec.
+    pub(crate) other_size: Option<f64>,
+    /// Kept blobs a new blob was compared with (work units, for the tests).
+    pub(crate) comparisons: usize,
+}
+
+/// Why the coarse search stopped before its end.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Cut {
+    /// The budget's deadline passed.
+    Deadline,
+    /// More than [`MAX_BLOBS`] blobs of about the mark's size.
+    Cluttered,
 }
 
 /// Most candidates refined per image: a cluttered view is refused rather than slow.
 pub(crate) const MAX_CANDIDATES: usize = 12;
 
-pub(crate) fn search<T: Copy + Into<f64> + Into<u32>>(img: &Img<'_, T>, spec: &MarkSpec, full_scale: f64) -> Search {
+/// Most blobs of about the mark's size one search keeps (the candidates and their blobs at lower
+/// contrast levels). A view with more is refused as cluttered
+/// ([`crate::NotFoundReason::Cluttered`]): it cannot show exactly one mark, and keeping them
+/// all would give a hostile frame memory and time without bound.
+pub const MAX_BLOBS: usize = 10_000;
+
+/// Pixels the labelling scans between two looks at the deadline.
+const DEADLINE_STRIDE: usize = 1 << 16;
+
+/// Bytes of the noise histogram (4096 bins of u32).
+const NOISE_HIST_BYTES: u64 = 4096 * 4;
+
+/// The block size, px, for `spec`: about a sixth of the smallest diameter keeps the mark ≥ 6
+/// blocks wide.
+pub(crate) fn block_factor(spec: &MarkSpec) -> usize {
+    ((spec.min_diameter() / 6.0).round() as usize).max(1)
+}
+
+/// The most heap the search of a `width` × `height` image for `spec` takes at once, bytes (not
+/// counting the image): see [`crate::search_bytes`].
+pub(crate) fn search_bytes(width: usize, height: usize, spec: &MarkSpec) -> u64 {
+    let f = block_factor(spec);
+    let (w, h) = ((width / f) as u64, (height / f) as u64);
+    if w < 3 || h < 3 {
+        return NOISE_HIST_BYTES;
+    }
+    let blocks = w.saturating_mul(h);
+    // Downsampling: the blocks (f32) and a block row of column sums (u32). The local mean: the
+    // blocks, their row sums (f64), the mean (f32) and three rows of f64. The labelling: the
+    // contrast in the mean's place, the labels, the flood fill's stack and the blob's pixels
+    // (4 bytes each, the last two reserved whole).
+    let downsample = blocks.saturating_mul(4).saturating_add(4 * w * f as u64);
+    let mean = blocks.saturating_mul(16).saturating_add(24 * (w + 1));
+    let labelling = blocks.saturating_mul(16);
+    // The kept blobs: the candidates' vector and each one's alternates (up to 4 × a blob each,
+    // as vectors grow), the stable sort's scratch, and the cells that index them.
+    let kept = (MAX_BLOBS as u64) * (8 * std::mem::size_of::<Candidate>() as u64 + 256);
+    downsample.max(mean).max(labelling).saturating_add(kept + NOISE_HIST_BYTES)
+}
+
+pub(crate) fn search<T: Copy + Into<f64> + Into<u32>>(
+    img: &Img<'_, T>,
+    spec: &MarkSpec,
+    full_scale: f64,
+    budget: &crate::Budget,
+) -> Result<Search, Cut> {
+    let deadline = || if budget.passed() { Err(Cut::Deadline) } else { Ok(()) };
+    deadline()?;
     let dmin = spec.min_diameter();
     let dmax = spec.max_diameter();
-    // Blocks of about a sixth of the smallest diameter keep the mark ≥ 6 blocks wide.
-    let f = ((dmin / 6.0).round() as usize).max(1);
+    let f = block_factor(spec);
     let (w, h) = (img.w / f, img.h / f);
     let noise = noise_sigma(img, full_scale).max(0.3 * full_scale / 255.0);
-    let mut out = Search { candidates: Vec::new(), noise, factor: f };
-    if w < 3 || h < 3 {
-        return out;
+    let mut out = Search { candidates: Vec::new(), noise, factor: f, other_size: None, comparisons: 0 };
+    // Block indices are u32: the memory bound (`crate::check_size`) keeps far below 2³² blocks.
+    if w < 3 || h < 3 || u32::try_from(w * h).is_err() {
+        return Ok(out);
     }
+    let n = w * h;
     let ds = downsample(img, f, w, h);
+    deadline()?;
     // Local mean over a window of 2.5 × the largest diameter: the mark is a minority in it.
     let win = (((2.5 * dmax / f as f64).round() as usize) | 1).max(5);
-    let mean = box_mean(&ds, w, h, win / 2);
+    let mut contrast = box_mean(&ds, w, h, win / 2);
     let sign = match spec.polarity {
         Polarity::DarkOnLight => -1.0,
         Polarity::LightOnDark => 1.0,
     };
-    let contrast: Vec<f32> = ds.iter().zip(&mean).map(|(v, m)| sign * (v - m)).collect();
+    // The contrast takes the mean's place: one buffer fewer at the peak.
+    for (c, v) in contrast.iter_mut().zip(&ds) {
+        *c = sign * (v - *c);
+    }
+    drop(ds);
+    deadline()?;
     let cmax = contrast.iter().copied().fold(0.0f32, f32::max) as f64;
     let noise_ds = noise / f as f64;
     let floor = 5.0 * noise_ds + 2.0 * full_scale / 255.0;
     if cmax < 2.0 * floor {
-        return out;
+        return Ok(out);
     }
     let mut levels: Vec<f64> = [0.5, 0.3, 0.15].iter().map(|k| k * cmax).filter(|&t| t >= floor).collect();
     if levels.is_empty() {
         levels.push(floor);
     }
-    let mut labels = vec![0u32; w * h];
-    let mut stack = Vec::new();
-    let mut pixels = Vec::new();
+    let mut labels = vec![0u32; n];
+    // Each block is on the stack at most once per level and in at most one blob: reserved
+    // whole, neither grows (the memory bound counts them so).
+    let mut stack: Vec<u32> = Vec::with_capacity(n);
+    let mut pixels: Vec<u32> = Vec::with_capacity(n);
+    // Blobs of the same mark merge within a quarter of the smallest diameter. The kept ones are
+    // indexed by cells of that size, so a new blob is compared only with those in the 3 × 3
+    // cells around it, not with every kept one (a field of small dots made that quadratic).
+    let merge = 0.25 * dmin;
+    let cell = |x: f64, y: f64| ((x / merge).floor() as i64, (y / merge).floor() as i64);
+    let mut cells: std::collections::HashMap<(i64, i64), Vec<usize>> = std::collections::HashMap::new();
+    let mut kept = 0usize;
+    let mut other: Option<(f64, f64)> = None;
     // Labels count on across the levels: one above `base` is this level's (no clearing).
     let mut next = 0u32;
     for &t in &levels {
         let t = t as f32;
         let base = next;
-        for start in 0..w * h {
+        for start in 0..n {
+            if start % DEADLINE_STRIDE == 0 {
+                deadline()?;
+            }
             if labels[start] > base || contrast[start] < t {
                 continue;
             }
             next += 1;
             labels[start] = next;
-            stack.push(start);
+            stack.push(start as u32);
             pixels.clear();
             while let Some(p) = stack.pop() {
                 pixels.push(p);
+                let p = p as usize;
                 let (px, py) = (p % w, p / w);
                 let mut visit = |q: usize| {
                     if labels[q] <= base && contrast[q] >= t {
                         labels[q] = next;
-                        stack.push(q);
+                        stack.push(q as u32);
                     }
                 };
                 if px > 0 {
@@ -113,16 +195,48 @@ pub(crate) fn search<T: Copy + Into<f64> + Into<u32>>(img: &Img<'_, T>, spec: &M
                     visit(p + w);
                 }
             }
-            if let Some(c) = describe(&pixels, &contrast, w, h, f, spec) {
-                match out.candidates.iter_mut().find(|o| (o.x - c.x).hypot(o.y - c.y) < 0.25 * dmin) {
-                    None => out.candidates.push(c),
-                    Some(o) => {
-                        // A lower level's blob contains the upper one's: a centroid that moved
-                        // means the upper blob missed part of the mark.
-                        let moved = |a: &Candidate| (a.x - c.x).hypot(a.y - c.y) > 0.5 * f as f64;
-                        if moved(o) && o.alternates.iter().all(moved) {
-                            o.alternates.push(c);
+            let c = match describe(&pixels, &contrast, w, h, f, spec) {
+                Blob::Candidate(c) => c,
+                Blob::OtherSize { size, mass } => {
+                    if other.is_none_or(|(_, m)| mass > m) {
+                        other = Some((size, mass));
+                    }
+                    continue;
+                }
+                Blob::Rejected => continue,
+            };
+            // The first kept blob within the merge radius, as a scan in keeping order finds it.
+            let (gx, gy) = cell(c.x, c.y);
+            let mut near: Option<usize> = None;
+            for key in (gx - 1..=gx + 1).flat_map(|x| (gy - 1..=gy + 1).map(move |y| (x, y))) {
+                for &i in cells.get(&key).map_or(&[][..], Vec::as_slice) {
+                    out.comparisons += 1;
+                    let o = &out.candidates[i];
+                    if (o.x - c.x).hypot(o.y - c.y) < merge && near.is_none_or(|k| i < k) {
+                        near = Some(i);
+                    }
+                }
+            }
+            match near {
+                None => {
+                    kept += 1;
+                    if kept > MAX_BLOBS {
+                        return Err(Cut::Cluttered);
+                    }
+                    cells.entry((gx, gy)).or_default().push(out.candidates.len());
+                    out.candidates.push(c);
+                }
+                Some(i) => {
+                    // A lower level's blob contains the upper one's: a centroid that moved
+                    // means the upper blob missed part of the mark.
+                    let o = &mut out.candidates[i];
+                    let moved = |a: &Candidate| (a.x - c.x).hypot(a.y - c.y) > 0.5 * f as f64;
+                    if moved(o) && o.alternates.iter().all(moved) {
+                        kept += 1;
+                        if kept > MAX_BLOBS {
+                            return Err(Cut::Cluttered);
                         }
+                        o.alternates.push(c);
                     }
                 }
             }
@@ -130,15 +244,28 @@ pub(crate) fn search<T: Copy + Into<f64> + Into<u32>>(img: &Img<'_, T>, spec: &M
     }
     out.candidates.sort_by(|a, b| b.mass.total_cmp(&a.mass));
     out.candidates.truncate(MAX_CANDIDATES);
-    out
+    out.other_size = other.map(|(size, _)| size);
+    Ok(out)
+}
+
+/// What a blob is to the search.
+enum Blob {
+    /// It may be the mark.
+    Candidate(Candidate),
+    /// Shaped like a mark, wholly in view, but too small or too large for the spec: `size` px
+    /// across (its bounding box's longer side), `mass` its summed contrast.
+    OtherSize { size: f64, mass: f64 },
+    /// Anything else.
+    Rejected,
 }
 
 /// Measures a blob and keeps it when its size fits the spec loosely (the fit judges finely).
-fn describe(pixels: &[usize], contrast: &[f32], w: usize, h: usize, f: usize, spec: &MarkSpec) -> Option<Candidate> {
+fn describe(pixels: &[u32], contrast: &[f32], w: usize, h: usize, f: usize, spec: &MarkSpec) -> Blob {
     let ff = f as f64;
     let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0, 0);
     let (mut sx, mut sy, mut mass) = (0.0, 0.0, 0.0);
     for &p in pixels {
+        let p = p as usize;
         let (x, y) = (p % w, p / w);
         x0 = x0.min(x);
         y0 = y0.min(y);
@@ -159,7 +286,10 @@ fn describe(pixels: &[usize], contrast: &[f32], w: usize, h: usize, f: usize, sp
     // A block's own extent adds f²/6 to the mean squared distance of the pixels inside it.
     let mean_r2 = pixels
         .iter()
-        .map(|&p| (to_full((p % w) as f64) - cx).powi(2) + (to_full((p / w) as f64) - cy).powi(2))
+        .map(|&p| {
+            let p = p as usize;
+            (to_full((p % w) as f64) - cx).powi(2) + (to_full((p / w) as f64) - cy).powi(2)
+        })
         .sum::<f64>()
         / n
         + ff * ff / 6.0;
@@ -176,20 +306,23 @@ fn describe(pixels: &[usize], contrast: &[f32], w: usize, h: usize, f: usize, sp
         // A blob cut by the border: only one that could be a mark (not longer than one, not a
         // speck) is tried; the fit tells a whole mark near the edge from a cut one.
         if !(big <= hi && big >= 0.3 * dmin && small <= hi) {
-            return None;
+            return Blob::Rejected;
         }
-    } else if big < lo || big > hi || small < 0.5 * big {
-        return None;
+    } else if small < 0.5 * big {
+        return Blob::Rejected;
+    } else if big < lo || big > hi {
+        return Blob::OtherSize { size: big, mass };
     }
     let fill = area / (bw * bh);
     if !at_border && spec.kind == MarkKind::Dot && fill < 0.45 {
-        return None;
+        return Blob::Rejected;
     }
     let (mut angle, mut half_length) = (0.0, 0.0);
     if spec.kind == MarkKind::Cross {
         // The bars put the far pixels at θ + k·90°: the phase of Σ r²·e^{4iφ} is 4θ.
         let (mut re, mut im) = (0.0, 0.0);
         for &p in pixels {
+            let p = p as usize;
             let (dx, dy) = (to_full((p % w) as f64) - cx, to_full((p / w) as f64) - cy);
             let r2 = dx * dx + dy * dy;
             let phi = dy.atan2(dx);
@@ -199,12 +332,13 @@ fn describe(pixels: &[usize], contrast: &[f32], w: usize, h: usize, f: usize, sp
         angle = im.atan2(re) / 4.0;
         let (s, c) = angle.sin_cos();
         for &p in pixels {
+            let p = p as usize;
             let (dx, dy) = (to_full((p % w) as f64) - cx, to_full((p / w) as f64) - cy);
             let far = (dx * c + dy * s).abs().max((-dx * s + dy * c).abs());
             half_length = f64::max(half_length, far + ff / 2.0);
         }
     }
-    Some(Candidate {
+    Blob::Candidate(Candidate {
         x: cx,
         y: cy,
         bbox: [x0 as f64 * ff - 0.5, y0 as f64 * ff - 0.5, (x1 + 1) as f64 * ff - 0.5, (y1 + 1) as f64 * ff - 0.5],
@@ -317,4 +451,41 @@ fn noise_sigma<T: Copy + Into<u32>>(img: &Img<'_, T>, full_scale: f64) -> f64 {
     }
     // MAD of a difference of two samples: σ·√2·0.6745.
     median / (std::f64::consts::SQRT_2 * 0.6745)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::{render, Depth, PlacedMark, Scene, Shape};
+
+    /// A `size` × `size` frame tiled with dark dots of `d` px every `pitch` px.
+    fn field(size: usize, d: f64, pitch: f64) -> (Vec<u8>, usize) {
+        let n = ((size as f64 - pitch) / pitch).floor() as usize;
+        let marks = (0..n * n)
+            .map(|k| PlacedMark {
+                shape: Shape::Dot { diameter: d },
+                x: pitch * (1 + k % n) as f64,
+                y: pitch * (1 + k / n) as f64,
+                reflectance: 0.1,
+            })
+            .collect();
+        let scene =
+            Scene { marks, blur_sigma: 0.8, noise_sigma: 1.0, seed: 3, ..Scene::blank(size, size, Depth::Eight) };
+        let crate::OwnedPixels::Gray8(px) = render(&scene).expect("scene").into_pixels() else { unreachable!() };
+        (px, n * n)
+    }
+
+    /// Issue 33: a 9 MP field of 6 px dots took 46 s, each blob compared with every kept one
+    /// (8.6 million comparisons for this field's 2401 dots). Each blob is now compared only with
+    /// the kept blobs near it: the work grows with the number of blobs, not with its square.
+    #[test]
+    fn merging_blobs_costs_a_few_comparisons_each() {
+        let (px, dots) = field(600, 6.0, 12.0);
+        let spec = MarkSpec::new(MarkKind::Dot, 6.0, 0.25, Polarity::DarkOnLight).expect("spec");
+        let img = Img { w: 600, h: 600, data: &px };
+        let found = search(&img, &spec, 255.0, &crate::Budget::default()).expect("not cut off");
+        assert!(found.candidates.len() <= MAX_CANDIDATES);
+        // Three contrast levels, each blob near at most a few kept ones.
+        assert!(found.comparisons <= 3 * 4 * dots, "{} comparisons for {dots} dots", found.comparisons);
+    }
 }

@@ -17,6 +17,13 @@
 //! its polarity, its agreement with the pixels overall *and in each of eight sectors around it*
 //! hold up; its size then decides between found and out of range.
 //!
+//! **Bounds.** The work grows with the pixels and the blobs, never with their square; the
+//! memory is [`search_bytes`] (about 16 bytes per block of the coarse search), checked before
+//! anything is allocated against [`MAX_SEARCH_BYTES`] ([`check_size`] lets a caller check an
+//! image's size before decoding it); more than [`MAX_BLOBS`] mark-sized blobs are refused as
+//! [`NotFoundReason::Cluttered`]; and [`locate_within`] stops at a [`Budget`]'s deadline
+//! ([`LocateError::Deadline`]). None of them ever turns into a reported mark.
+//!
 //! [`render`] draws such marks with known truth (anti-aliased, blurred, lit, noisy) for tests,
 //! benchmarks and the simulator.
 //!
@@ -48,11 +55,13 @@ mod spec;
 mod special;
 
 use std::fmt;
+use std::time::Instant;
 
+pub use detect::MAX_BLOBS;
 pub use image::{GrayImage, ImageError, OwnedImage, OwnedPixels, Pixels};
 pub use spec::{MarkKind, MarkSpec, Polarity, SpecError, MIN_DIAMETER_PX};
 
-use detect::search;
+use detect::{block_factor, search, Cut};
 use fit::{fit, Annulus, Cross, Disc, FitFailure, FitResult, Img};
 
 /// A mark found in the image.
@@ -77,6 +86,16 @@ pub struct Mark {
 pub enum NotFoundReason {
     /// Nothing in view looks like the mark.
     NoCandidate,
+    /// Nothing of the expected size looks like the mark, but a blob shaped like one, `about` px
+    /// across (to the coarse search's block), is in view: the diameter given is likely wrong.
+    OtherSize {
+        /// The blob's size, px, to a block of the coarse search.
+        about: f64,
+        /// The smallest size accepted, px.
+        min: f64,
+        /// The largest size accepted, px.
+        max: f64,
+    },
     /// More than one mark in view (`count` of them); none is picked.
     SeveralCandidates {
         /// How many marks were found.
@@ -85,10 +104,20 @@ pub enum NotFoundReason {
     /// A mark-like blob is cut by the image border.
     Clipped,
     /// A mark of the right kind is in view but its size, `diameter` px, is outside the spec's
-    /// tolerance.
+    /// tolerance, `min` … `max` px.
     SizeOutOfRange {
         /// The measured size, px.
         diameter: f64,
+        /// The smallest size accepted, px.
+        min: f64,
+        /// The largest size accepted, px.
+        max: f64,
+    },
+    /// The search was cut off: more than `limit` ([`MAX_BLOBS`]) blobs of about the mark's size
+    /// are in view, so it cannot show exactly one mark.
+    Cluttered {
+        /// The most blobs one search keeps.
+        limit: usize,
     },
 }
 
@@ -96,16 +125,25 @@ impl fmt::Display for NotFoundReason {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             NotFoundReason::NoCandidate => write!(f, "no mark in view — check the position, focus and lighting"),
+            NotFoundReason::OtherSize { about, min, max } => write!(
+                f,
+                "no mark of {min:.1}–{max:.1} px in view, but a blob about {about:.0} px across is — check the \
+                 diameter setting (or the position, focus and lighting)"
+            ),
             NotFoundReason::SeveralCandidates { count } => {
                 write!(f, "{count} marks in view — move closer or mask the others; none was picked")
             }
             NotFoundReason::Clipped => write!(f, "the mark is cut by the image border — centre it in the view"),
-            NotFoundReason::SizeOutOfRange { diameter } => {
-                write!(
-                    f,
-                    "a mark of {diameter:.1} px is in view but outside the size tolerance — check the diameter setting"
-                )
-            }
+            NotFoundReason::SizeOutOfRange { diameter, min, max } => write!(
+                f,
+                "a mark of {diameter:.1} px is in view, but {min:.1}–{max:.1} px was expected — check the diameter \
+                 setting"
+            ),
+            NotFoundReason::Cluttered { limit } => write!(
+                f,
+                "the search was cut off: more than {limit} mark-sized blobs in view — check the diameter setting, \
+                 or narrow the search to the mark"
+            ),
         }
     }
 }
@@ -125,12 +163,45 @@ pub enum Located {
 pub enum LocateError {
     /// The mark description is invalid.
     Spec(SpecError),
+    /// Searching the image would take more memory than [`MAX_SEARCH_BYTES`] (see
+    /// [`search_bytes`]); nothing was allocated.
+    TooLarge {
+        /// Image width, px.
+        width: usize,
+        /// Image height, px.
+        height: usize,
+        /// The coarse search's block size the spec implies, px.
+        factor: usize,
+        /// The memory the search would take, bytes.
+        needed: u64,
+        /// The limit, bytes.
+        limit: u64,
+        /// The smallest mark diameter, px, at the same tolerance, whose larger blocks bring the
+        /// search under the limit.
+        diameter_within: f64,
+    },
+    /// The search ran past [`Budget::deadline`] and was cut off; nothing is known of the mark.
+    Deadline,
 }
 
 impl fmt::Display for LocateError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             LocateError::Spec(e) => e.fmt(f),
+            LocateError::TooLarge { width, height, factor, needed, limit, diameter_within } => {
+                let mb = |b: u64| b.div_ceil(1 << 20);
+                write!(
+                    f,
+                    "searching a {width} × {height} image at blocks of {factor} px needs {} MiB, over the finder's {} \
+                     MiB limit — crop the image around the mark, or give a mark diameter of at least {diameter_within:.0} \
+                     px",
+                    mb(*needed),
+                    mb(*limit)
+                )
+            }
+            LocateError::Deadline => {
+                write!(f, "the search was cut off at its deadline before it finished; nothing is known of the mark")
+            }
         }
     }
 }
@@ -139,6 +210,7 @@ impl std::error::Error for LocateError {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match self {
             LocateError::Spec(e) => Some(e),
+            LocateError::TooLarge { .. } | LocateError::Deadline => None,
         }
     }
 }
@@ -149,13 +221,93 @@ impl From<SpecError> for LocateError {
     }
 }
 
-/// Finds the one mark described by `spec` in `image` (see the crate docs for the method).
-pub fn locate(image: &GrayImage<'_>, spec: &MarkSpec) -> Result<Located, LocateError> {
+/// The most memory one search may take, bytes ([`search_bytes`]): 1 GiB. A larger search is
+/// refused before anything is allocated ([`LocateError::TooLarge`]).
+pub const MAX_SEARCH_BYTES: u64 = 1 << 30;
+
+/// The most heap memory, bytes, the search of a `width` × `height` image for `spec` takes at
+/// once, beyond the image itself: about 16 bytes per block of the coarse search (a block is
+/// [`MarkSpec::min_diameter`]` / 6` px square, at least 1 px: a small diameter on a large image
+/// is what costs) and a few MiB for the kept blobs ([`MAX_BLOBS`]).
+pub fn search_bytes(width: usize, height: usize, spec: &MarkSpec) -> u64 {
+    detect::search_bytes(width, height, spec)
+}
+
+/// Checks that searching a `width` × `height` image for `spec` stays within
+/// [`MAX_SEARCH_BYTES`], before any pixel is decoded or searched: a caller that reads an
+/// image's size from its header can refuse it unread.
+///
+/// # Errors
+/// [`LocateError::Spec`] for an invalid spec, [`LocateError::TooLarge`] over the limit.
+pub fn check_size(width: usize, height: usize, spec: &MarkSpec) -> Result<(), LocateError> {
     spec.validate()?;
-    Ok(match image.pixels() {
-        Pixels::Gray8(d) => locate_in(&Img { w: image.width(), h: image.height(), data: d }, spec, 255.0),
-        Pixels::Gray16(d) => locate_in(&Img { w: image.width(), h: image.height(), data: d }, spec, 65535.0),
+    let needed = search_bytes(width, height, spec);
+    if needed <= MAX_SEARCH_BYTES {
+        return Ok(());
+    }
+    // Blocks of k px need a smallest diameter of at least 6k − 3 px (the block size rounds); at
+    // blocks as large as the image the search is tiny, so one k always fits.
+    let diameter = |k: usize| ((6 * k - 3) as f64 / (1.0 - spec.tolerance)).ceil();
+    let largest = width.max(height);
+    let diameter_within = (block_factor(spec) + 1..=largest)
+        .map(diameter)
+        .find(|&d| search_bytes(width, height, &spec.with_diameter(d)) <= MAX_SEARCH_BYTES)
+        .unwrap_or_else(|| diameter(largest));
+    Err(LocateError::TooLarge {
+        width,
+        height,
+        factor: block_factor(spec),
+        needed,
+        limit: MAX_SEARCH_BYTES,
+        diameter_within,
     })
+}
+
+/// Bounds on one search beyond the fixed ones ([`MAX_BLOBS`], [`MAX_SEARCH_BYTES`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Budget {
+    /// Once this instant has passed, the search stops and answers [`LocateError::Deadline`]
+    /// (it looks at the clock between its stages, every 65 536 pixels of its labelling and
+    /// before each candidate's fit); `None`: no deadline.
+    pub deadline: Option<Instant>,
+}
+
+impl Budget {
+    /// A budget that ends at `deadline`.
+    pub fn until(deadline: Instant) -> Budget {
+        Budget { deadline: Some(deadline) }
+    }
+
+    /// Whether the deadline has passed.
+    pub(crate) fn passed(&self) -> bool {
+        self.deadline.is_some_and(|d| Instant::now() >= d)
+    }
+}
+
+/// Finds the one mark described by `spec` in `image` (see the crate docs for the method), with
+/// no deadline: [`locate_within`] with the default [`Budget`].
+///
+/// # Errors
+/// As [`locate_within`].
+pub fn locate(image: &GrayImage<'_>, spec: &MarkSpec) -> Result<Located, LocateError> {
+    locate_within(image, spec, &Budget::default())
+}
+
+/// Finds the one mark described by `spec` in `image` within `budget`. Its work grows with the
+/// image's pixels and blobs (never with their square), its memory is [`search_bytes`], at
+/// most [`MAX_SEARCH_BYTES`], and it keeps at most [`MAX_BLOBS`] mark-sized blobs
+/// ([`NotFoundReason::Cluttered`] beyond).
+///
+/// # Errors
+/// [`LocateError::Spec`] for an invalid spec, [`LocateError::TooLarge`] for an image whose
+/// search would take more than [`MAX_SEARCH_BYTES`], [`LocateError::Deadline`] when the budget's
+/// deadline passed before the search ended.
+pub fn locate_within(image: &GrayImage<'_>, spec: &MarkSpec, budget: &Budget) -> Result<Located, LocateError> {
+    check_size(image.width(), image.height(), spec)?;
+    match image.pixels() {
+        Pixels::Gray8(d) => locate_in(&Img { w: image.width(), h: image.height(), data: d }, spec, 255.0, budget),
+        Pixels::Gray16(d) => locate_in(&Img { w: image.width(), h: image.height(), data: d }, spec, 65535.0, budget),
+    }
 }
 
 /// A verified fit: the mark and its size judgement.
@@ -163,17 +315,29 @@ struct Verified {
     mark: Mark,
 }
 
-fn locate_in<T: Copy + Into<f64> + Into<u32>>(img: &Img<'_, T>, spec: &MarkSpec, full_scale: f64) -> Located {
-    let found = search(img, spec, full_scale);
+fn locate_in<T: Copy + Into<f64> + Into<u32>>(
+    img: &Img<'_, T>,
+    spec: &MarkSpec,
+    full_scale: f64,
+    budget: &Budget,
+) -> Result<Located, LocateError> {
+    let found = match search(img, spec, full_scale, budget) {
+        Ok(found) => found,
+        Err(Cut::Deadline) => return Err(LocateError::Deadline),
+        Err(Cut::Cluttered) => return Ok(Located::NotFound(NotFoundReason::Cluttered { limit: MAX_BLOBS })),
+    };
+    let deadline = || if budget.passed() { Err(LocateError::Deadline) } else { Ok(()) };
     let mut marks: Vec<Verified> = Vec::new();
     let mut clipped = false;
     for c in &found.candidates {
         // A blob that may be part of the mark falls back on the same mark's fuller blobs.
+        deadline()?;
         let mut rr = refine(img, spec, c, found.noise, found.factor, full_scale);
         for alt in &c.alternates {
             if !matches!(rr, Ok(None) | Err(FitFailure::Diverged)) {
                 break;
             }
+            deadline()?;
             rr = refine(img, spec, alt, found.noise, found.factor, full_scale);
         }
         match rr {
@@ -192,15 +356,16 @@ fn locate_in<T: Copy + Into<f64> + Into<u32>>(img: &Img<'_, T>, spec: &MarkSpec,
     let (dmin, dmax) = (spec.min_diameter(), spec.max_diameter());
     let (good, wrong): (Vec<&Verified>, Vec<&Verified>) =
         marks.iter().partition(|v| (dmin..=dmax).contains(&v.mark.diameter));
-    match good.len() {
+    Ok(match good.len() {
         1 => Located::Found(good[0].mark),
-        0 => Located::NotFound(match wrong.first() {
-            Some(v) => NotFoundReason::SizeOutOfRange { diameter: v.mark.diameter },
-            None if clipped => NotFoundReason::Clipped,
-            None => NotFoundReason::NoCandidate,
+        0 => Located::NotFound(match (wrong.first(), found.other_size) {
+            (Some(v), _) => NotFoundReason::SizeOutOfRange { diameter: v.mark.diameter, min: dmin, max: dmax },
+            (None, _) if clipped => NotFoundReason::Clipped,
+            (None, Some(about)) => NotFoundReason::OtherSize { about, min: dmin, max: dmax },
+            (None, None) => NotFoundReason::NoCandidate,
         }),
         count => Located::NotFound(NotFoundReason::SeveralCandidates { count }),
-    }
+    })
 }
 
 /// Least score (R² over all fitted pixels) of a reported mark.

@@ -91,6 +91,11 @@ impl MarkSpec {
         Ok(())
     }
 
+    /// The same spec for another diameter, px (unchecked: for sizing, not searching).
+    pub(crate) fn with_diameter(&self, diameter_px: f64) -> MarkSpec {
+        MarkSpec { diameter_px, ..*self }
+    }
+
     /// Smallest accepted size in pixels.
     pub fn min_diameter(&self) -> f64 {
         self.diameter_px * (1.0 - self.tolerance)

@@ -293,7 +293,9 @@ fn a_mark_of_the_wrong_size_is_reported_as_such() {
     // Expecting 45 ± 20 % (36 … 54 px): the 60 px dot is seen but refused.
     let spec = MarkSpec::new(MarkKind::Dot, 45.0, 0.2, Polarity::DarkOnLight).unwrap();
     match run(&scene, &spec, None) {
-        Located::NotFound(NotFoundReason::SizeOutOfRange { diameter }) => assert!((diameter - 60.0).abs() < 0.5),
+        Located::NotFound(NotFoundReason::SizeOutOfRange { diameter, min, max }) => {
+            assert!((diameter - 60.0).abs() < 0.5 && (min, max) == (36.0, 54.0), "{diameter} {min} {max}");
+        }
         other => panic!("{other:?}"),
     }
 }
