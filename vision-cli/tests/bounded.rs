@@ -2,8 +2,6 @@
 //! message, in little memory and time.
 
 use std::path::PathBuf;
-use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
 
 fn scratch(name: &str, text: &str) -> PathBuf {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("bounded");
@@ -13,30 +11,9 @@ fn scratch(name: &str, text: &str) -> PathBuf {
     path
 }
 
-/// Runs the binary with `args` under an address-space limit of `megabytes`, killed after
-/// `seconds`: its output, or `None` when it ran out of time.
-fn bounded(args: &[&str], megabytes: u64, seconds: u64) -> Option<Output> {
-    let script = format!("ulimit -v {} && exec \"$0\" \"$@\"", megabytes * 1024);
-    let mut child = Command::new("sh")
-        .arg("-c")
-        .arg(script)
-        .arg(env!("CARGO_BIN_EXE_mach-vision"))
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("sh");
-    let deadline = Instant::now() + Duration::from_secs(seconds);
-    while Instant::now() < deadline {
-        if child.try_wait().expect("wait").is_some() {
-            return Some(child.wait_with_output().expect("output"));
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let _ = child.kill();
-    let _ = child.wait();
-    None
-}
+mod common;
+
+use common::bounded;
 
 #[test]
 fn a_canned_cycle_past_the_repeat_bound_is_refused_in_little_memory() {

@@ -4,8 +4,7 @@
 
 use std::io::Write as _;
 use std::path::PathBuf;
-use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Output;
 
 fn dir() -> PathBuf {
     let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("locate_bounds");
@@ -47,30 +46,13 @@ fn png(name: &str, side: u32, dot: f64) -> PathBuf {
     path
 }
 
+mod common;
+
 /// Runs `mach-vision locate ARGS` under an address-space limit of `megabytes`, killed after
-/// `seconds`: its output, or `None` when it ran out of time.
+/// `seconds` ([`common::bounded`]).
 fn bounded(args: &[&str], megabytes: u64, seconds: u64) -> Option<Output> {
-    let script = format!("ulimit -v {} && exec \"$0\" \"$@\"", megabytes * 1024);
-    let mut child = Command::new("sh")
-        .arg("-c")
-        .arg(script)
-        .arg(env!("CARGO_BIN_EXE_mach-vision"))
-        .arg("locate")
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("sh");
-    let deadline = Instant::now() + Duration::from_secs(seconds);
-    while Instant::now() < deadline {
-        if child.try_wait().expect("wait").is_some() {
-            return Some(child.wait_with_output().expect("output"));
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let _ = child.kill();
-    let _ = child.wait();
-    None
+    let all: Vec<&str> = std::iter::once("locate").chain(args.iter().copied()).collect();
+    common::bounded(&all, megabytes, seconds)
 }
 
 #[test]

@@ -10,7 +10,7 @@
 
 use std::time::Instant;
 
-use vision_locate::render::{render, Depth, PlacedMark, Scene, Shape};
+use vision_locate::render::{render, Scene};
 use vision_locate::{locate, MarkKind, MarkSpec, Polarity};
 
 fn main() {
@@ -18,19 +18,11 @@ fn main() {
     let size: usize = args.get(1).and_then(|a| a.parse().ok()).unwrap_or(3000);
     let d: f64 = args.get(2).and_then(|a| a.parse().ok()).unwrap_or(6.0);
     let pitch: f64 = args.get(3).and_then(|a| a.parse().ok()).unwrap_or(12.0);
-    let n = ((size as f64 - pitch) / pitch).floor() as usize;
-    let marks = (0..n * n)
-        .map(|k| PlacedMark {
-            shape: Shape::Dot { diameter: d },
-            x: pitch * (1 + k % n) as f64,
-            y: pitch * (1 + k / n) as f64,
-            reflectance: 0.1,
-        })
-        .collect();
-    let scene = Scene { marks, blur_sigma: 0.8, noise_sigma: 1.0, seed: 3, ..Scene::blank(size, size, Depth::Eight) };
+    let scene = Scene::dot_field(size, d, pitch);
+    let n2 = scene.marks.len();
     let t = Instant::now();
     let image = render(&scene).expect("valid scene");
-    println!("{size} × {size} px, {} dots of {d} px every {pitch} px, rendered in {:.2?}", n * n, t.elapsed());
+    println!("{size} × {size} px, {n2} dots of {d} px every {pitch} px, rendered in {:.2?}", t.elapsed());
     let spec = MarkSpec::new(MarkKind::Dot, d, 0.25, Polarity::DarkOnLight).expect("valid spec");
     let t = Instant::now();
     let answer = locate(&image.view(), &spec);

@@ -456,23 +456,14 @@ fn noise_sigma<T: Copy + Into<u32>>(img: &Img<'_, T>, full_scale: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::{render, Depth, PlacedMark, Scene, Shape};
+    use crate::render::{render, Scene};
 
-    /// A `size` × `size` frame tiled with dark dots of `d` px every `pitch` px.
+    /// A `size` × `size` frame tiled with dark dots of `d` px every `pitch` px, and how many.
     fn field(size: usize, d: f64, pitch: f64) -> (Vec<u8>, usize) {
-        let n = ((size as f64 - pitch) / pitch).floor() as usize;
-        let marks = (0..n * n)
-            .map(|k| PlacedMark {
-                shape: Shape::Dot { diameter: d },
-                x: pitch * (1 + k % n) as f64,
-                y: pitch * (1 + k / n) as f64,
-                reflectance: 0.1,
-            })
-            .collect();
-        let scene =
-            Scene { marks, blur_sigma: 0.8, noise_sigma: 1.0, seed: 3, ..Scene::blank(size, size, Depth::Eight) };
+        let scene = Scene::dot_field(size, d, pitch);
+        let count = scene.marks.len();
         let crate::OwnedPixels::Gray8(px) = render(&scene).expect("scene").into_pixels() else { unreachable!() };
-        (px, n * n)
+        (px, count)
     }
 
     /// Issue 33: a 9 MP field of 6 px dots took 46 s, each blob compared with every kept one

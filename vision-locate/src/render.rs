@@ -182,6 +182,25 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// A `size` × `size` 8-bit frame tiled with dark dots of `diameter` px every `pitch` px
+    /// (blur 0.8 px, noise 1 grey level, seed 3): the hostile field the search bounds are
+    /// measured on.
+    #[must_use]
+    pub fn dot_field(size: usize, diameter: f64, pitch: f64) -> Scene {
+        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss, clippy::cast_precision_loss)]
+        let n = ((size as f64 - pitch) / pitch).floor().max(0.0) as usize;
+        #[allow(clippy::cast_precision_loss)]
+        let marks = (0..n * n)
+            .map(|k| PlacedMark {
+                shape: Shape::Dot { diameter },
+                x: pitch * (1 + k % n) as f64,
+                y: pitch * (1 + k / n) as f64,
+                reflectance: 0.1,
+            })
+            .collect();
+        Scene { marks, blur_sigma: 0.8, noise_sigma: 1.0, seed: 3, ..Scene::blank(size, size, Depth::Eight) }
+    }
+
     /// A blank, sharp, noise-free scene: background 0.8, even light at 0.95 of full scale.
     pub fn blank(width: usize, height: usize, depth: Depth) -> Scene {
         Scene {

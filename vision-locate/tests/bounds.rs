@@ -21,17 +21,9 @@ fn dot(d: f64) -> MarkSpec {
 
 /// A `size` × `size` frame tiled with dark dots of `d` px every `pitch` px, and how many.
 fn field(size: usize, d: f64, pitch: f64) -> (OwnedImage, usize) {
-    let n = ((size as f64 - pitch) / pitch).floor() as usize;
-    let marks = (0..n * n)
-        .map(|k| PlacedMark {
-            shape: Shape::Dot { diameter: d },
-            x: pitch * (1 + k % n) as f64,
-            y: pitch * (1 + k / n) as f64,
-            reflectance: 0.1,
-        })
-        .collect();
-    let scene = Scene { marks, blur_sigma: 0.8, noise_sigma: 1.0, seed: 3, ..Scene::blank(size, size, Depth::Eight) };
-    (render(&scene).expect("scene"), n * n)
+    let scene = Scene::dot_field(size, d, pitch);
+    let count = scene.marks.len();
+    (render(&scene).expect("scene"), count)
 }
 
 /// One dark dot of `d` px at (`x`, `y`) in a `w` × `h` frame.
