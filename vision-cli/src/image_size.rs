@@ -16,9 +16,17 @@ pub(crate) const MAX_PIXELS: u64 = vision_driver_camera::MAX_PIXELS;
 /// # Errors
 /// [`Failure::Input`] when the file cannot be opened or is no image this tool reads.
 pub(crate) fn image_dimensions(path: &Path) -> Result<(u32, u32), Failure> {
-    image::ImageReader::open(path)
-        .and_then(|r| r.with_guessed_format())
-        .map_err(|e| Failure::Input(format!("cannot read image {}: {e}", path.display())))?
+    // A FIFO or a device is refused unread, never opened for a blocking read; the header's
+    // metadata (a PNG's ICC profile) is held to the decoder's bound.
+    let file = vision_driver_camera::file::open_regular(path)
+        .map_err(|e| Failure::Input(format!("cannot read image {}: {e}", path.display())))?;
+    let mut limits = image::Limits::default();
+    limits.max_alloc = Some(vision_driver_camera::decode::MAX_METADATA_BYTES);
+    let mut reader = image::ImageReader::new(std::io::BufReader::new(file))
+        .with_guessed_format()
+        .map_err(|e| Failure::Input(format!("cannot read image {}: {e}", path.display())))?;
+    reader.limits(limits);
+    reader
         .into_dimensions()
         .map_err(|e| Failure::Input(format!("cannot decode image {}: {e} — use PNG, JPEG, PGM or BMP", path.display())))
 }

@@ -3,7 +3,8 @@
 //! Each image (PNG, JPEG, PGM/PPM, BMP; 8- or 16-bit gray, colour converted to luma) gets one
 //! line: the mark's centre in native pixels ((0, 0) = centre of the top-left pixel, y down),
 //! its size and score, or why there is none. Exit 0 when every image has its mark, 1 when one
-//! has none, 2 on bad input.
+//! has none, 2 on bad input (also a path that is not a regular file, and a damaged image).
+//! A name that could be mistaken for output is quoted in the text lines ([`shown`]).
 //!
 //! Bounds: every file's header is read first, and an image over 100 megapixels, or one whose
 //! search would take more than the finder's 1 GiB ([`vision_locate::MAX_SEARCH_BYTES`]: a
@@ -15,7 +16,12 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 use serde_json::json;
-use vision_locate::{locate, GrayImage, Located, MarkKind, MarkSpec, NotFoundReason, Pixels, Polarity};
+use vision_driver_camera::decode::{decode_grey, DecodeError, GreySamples};
+use vision_driver_camera::file::open_regular;
+use vision_locate::{
+    locate, GrayImage, Located, MarkKind, MarkSpec, NotFoundReason, Pixels, Polarity, SpecError, MIN_DIAMETER_PX,
+};
+use vision_math::show::number;
 
 use crate::{image_size, Failure};
 
@@ -66,23 +72,65 @@ enum Samples {
     Sixteen(Vec<u16>),
 }
 
+/// Reads and decodes `path` with the camera driver's bounded decoder
+/// ([`vision_driver_camera::decode`]): only a regular file is opened (a FIFO or a device is
+/// refused unread, without blocking), the size is checked from the header first, a cut-short
+/// JPEG is refused as damaged, 16-bit samples are scaled by their range.
 fn read_image(path: &std::path::Path) -> Result<(usize, usize, Samples), Failure> {
-    let img = image::ImageReader::open(path)
-        .and_then(|r| r.with_guessed_format())
-        .map_err(|e| Failure::Input(format!("cannot read image {}: {e}", path.display())))?
-        .decode()
-        .map_err(|e| {
-            Failure::Input(format!("cannot decode image {}: {e} — use PNG, JPEG, PGM or BMP", path.display()))
-        })?;
-    let (w, h) = (img.width() as usize, img.height() as usize);
-    // 16-bit sources keep their depth; everything else is 8-bit luma (colour → Rec. 709 luma).
-    let samples = match img.color() {
-        image::ColorType::L16 | image::ColorType::La16 | image::ColorType::Rgb16 | image::ColorType::Rgba16 => {
-            Samples::Sixteen(img.into_luma16().into_raw())
-        }
-        _ => Samples::Eight(img.into_luma8().into_raw()),
+    let name = shown(path);
+    let file = open_regular(path).map_err(|e| Failure::Input(format!("cannot read image {name}: {e}")))?;
+    let grey = decode_grey(std::io::BufReader::new(file), u32::MAX).map_err(|e| {
+        Failure::Input(match e {
+            DecodeError::Damaged(why) => format!("image {name} is damaged: {why} — copy or save it again, whole"),
+            DecodeError::TooLarge { .. } => format!("image {name}: {e} — crop or scale it down"),
+            _ => format!("cannot decode image {name}: {e} — use PNG, JPEG, PGM or BMP"),
+        })
+    })?;
+    let (w, h) = (grey.width() as usize, grey.height() as usize);
+    let samples = match grey.into_samples() {
+        GreySamples::Eight(p) => Samples::Eight(p),
+        GreySamples::Sixteen(p) => Samples::Sixteen(p),
     };
     Ok((w, h, samples))
+}
+
+/// A file name as the text output prints it: as it is, unless it could be mistaken for output
+/// (a control character such as a newline, a `"`, a `: `, leading or trailing white space, or
+/// nothing at all); then quoted and escaped as a Rust string literal (`"a.png\nb"`).
+fn shown(path: &std::path::Path) -> String {
+    let name = path.display().to_string();
+    let ambiguous = name.is_empty()
+        || name.chars().any(|c| c.is_control() || c == '"')
+        || name.contains(": ")
+        || name.starts_with(char::is_whitespace)
+        || name.ends_with(char::is_whitespace);
+    if ambiguous {
+        format!("{name:?}")
+    } else {
+        name
+    }
+}
+
+/// The checked mark spec, or the option's fault in the option's own units (the tolerance is a
+/// percentage here, a fraction in [`MarkSpec`]); numbers through the one formatter.
+fn spec_of(args: &LocateArgs, kind: MarkKind, polarity: Polarity) -> Result<MarkSpec, Failure> {
+    MarkSpec::new(kind, args.diameter, args.tolerance / 100.0, polarity).map_err(|e| {
+        let diameter = number(args.diameter);
+        Failure::Input(match e {
+            SpecError::Diameter(_) => {
+                format!("--diameter {diameter}: not a positive number — give the mark's size in image pixels")
+            }
+            SpecError::DiameterTooSmall(_) => format!(
+                "--diameter {diameter}: below the {} px the finder can measure — zoom in or print a larger mark",
+                number(MIN_DIAMETER_PX)
+            ),
+            SpecError::Tolerance(_) => format!(
+                "--tolerance {}: not a percentage between 0 and 100 (exclusive) — e.g. 25 for ±25 %",
+                number(args.tolerance)
+            ),
+            other => format!("--diameter {diameter} --tolerance {}: {other}", number(args.tolerance)),
+        })
+    })
 }
 
 pub(crate) fn run(args: &LocateArgs) -> Result<String, Failure> {
@@ -95,8 +143,7 @@ pub(crate) fn run(args: &LocateArgs) -> Result<String, Failure> {
         PolarityArg::Dark => Polarity::DarkOnLight,
         PolarityArg::Light => Polarity::LightOnDark,
     };
-    let spec = MarkSpec::new(kind, args.diameter, args.tolerance / 100.0, polarity)
-        .map_err(|e| Failure::Input(format!("--diameter {} --tolerance {}: {e}", args.diameter, args.tolerance)))?;
+    let spec = spec_of(args, kind, polarity)?;
     // Every file's header is read and sized first: a bad path or an image too large to search
     // fails the whole call (exit 2) before any work. Then one image at a time is decoded,
     // searched and dropped: memory holds one image, not all of them.
@@ -111,10 +158,11 @@ pub(crate) fn run(args: &LocateArgs) -> Result<String, Failure> {
             Samples::Eight(p) => Pixels::Gray8(p),
             Samples::Sixteen(p) => Pixels::Gray16(p),
         };
-        let view =
-            GrayImage::new(w, h, pixels).map_err(|e| Failure::Input(format!("image {}: {e}", path.display())))?;
+        let view = GrayImage::new(w, h, pixels).map_err(|e| Failure::Input(format!("image {}: {e}", shown(path))))?;
         let located = locate(&view, &spec).map_err(|e| Failure::Input(e.to_string()))?;
+        // JSON escapes the name itself; the text lines quote it when it could be mistaken.
         let name = path.display().to_string();
+        let text_name = shown(path);
         match located {
             Located::Found(m) => {
                 if args.json {
@@ -127,14 +175,14 @@ pub(crate) fn run(args: &LocateArgs) -> Result<String, Failure> {
                     let angle = m.angle.map(|a| format!(" angle={:.3}°", a.to_degrees())).unwrap_or_default();
                     writeln!(
                         out,
-                        "{name}: found x={:.4} y={:.4} diameter={:.3}{angle} score={:.4}",
+                        "{text_name}: found x={:.4} y={:.4} diameter={:.3}{angle} score={:.4}",
                         m.x, m.y, m.diameter, m.score
                     )
                     .expect("writing to a String");
                 }
             }
             Located::NotFound(why) => {
-                missing.push(name.clone());
+                missing.push(text_name.clone());
                 if args.json {
                     let mut o =
                         json!({"file": name, "found": false, "reason": reason_code(&why), "message": why.to_string()});
@@ -153,7 +201,7 @@ pub(crate) fn run(args: &LocateArgs) -> Result<String, Failure> {
                     }
                     writeln!(out, "{o}").expect("writing to a String");
                 } else {
-                    writeln!(out, "{name}: not found: {why}").expect("writing to a String");
+                    writeln!(out, "{text_name}: not found: {why}").expect("writing to a String");
                 }
             }
         }

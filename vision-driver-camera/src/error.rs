@@ -34,6 +34,24 @@ pub enum CameraError {
         reason: String,
     },
 
+    /// The path exists but is not a regular file or folder (a FIFO, a device, a socket): it is
+    /// not read.
+    NotAFile {
+        /// The path.
+        path: String,
+        /// What it is (`FIFO`, `character device`, …).
+        kind: &'static str,
+    },
+
+    /// A frame ends before its image does (a cut-short file or transfer): refused, not
+    /// searched, since its missing part would read as background.
+    Damaged {
+        /// Where the frame came from.
+        from: String,
+        /// What is missing.
+        reason: String,
+    },
+
     /// The replay folder holds no image file (`.jpg`, `.jpeg`, `.png`, `.pgm`, `.pnm`).
     EmptyFolder {
         /// The folder.
@@ -64,6 +82,18 @@ pub enum CameraError {
         limit: usize,
         /// `bytes` or `pixels`.
         what: &'static str,
+    },
+
+    /// A frame's header declares more pixels than the driver decodes (checked before decoding).
+    TooManyPixels {
+        /// Where the frame came from.
+        from: String,
+        /// Declared width, pixels.
+        width: u32,
+        /// Declared height, pixels.
+        height: u32,
+        /// The bound exceeded, in words (`100000000 pixels`, `16384 pixels a side`).
+        limit: String,
     },
 
     /// The snapshot host name does not resolve.
@@ -223,7 +253,9 @@ impl CameraError {
                 DriverErrorKind::Refused
             }
             CameraError::Decode { .. }
+            | CameraError::Damaged { .. }
             | CameraError::TooLarge { .. }
+            | CameraError::TooManyPixels { .. }
             | CameraError::Http { .. }
             | CameraError::Stream { .. }
             | CameraError::ShortFrame { .. } => DriverErrorKind::Malformed,
@@ -233,6 +265,7 @@ impl CameraError {
             | CameraError::Job { .. } => DriverErrorKind::Rejected,
             CameraError::Unsupported { .. } => DriverErrorKind::Unsupported,
             CameraError::File { .. }
+            | CameraError::NotAFile { .. }
             | CameraError::EmptyFolder { .. }
             | CameraError::ReplayEnded { .. }
             | CameraError::NoDevice { .. }
@@ -247,6 +280,10 @@ impl CameraError {
         match self {
             CameraError::Config { setting, reason } => format!("invalid camera setting {setting}: {reason}"),
             CameraError::File { path, reason } => format!("cannot read {path}: {reason}"),
+            CameraError::NotAFile { path, kind } => format!("{path} is a {kind}, not a regular file: not read"),
+            CameraError::Damaged { from, reason } => {
+                format!("Malformed response: the frame from {from} is damaged: {reason}")
+            }
             CameraError::EmptyFolder { dir } => format!("the replay folder {dir} holds no image file"),
             CameraError::ReplayEnded { dir, count } => {
                 format!("the replay folder {dir} is used up: all {count} images were taken")
@@ -256,6 +293,9 @@ impl CameraError {
             }
             CameraError::TooLarge { from, limit, what } => {
                 format!("Malformed response: the frame from {from} is larger than {limit} {what}")
+            }
+            CameraError::TooManyPixels { from, width, height, limit } => {
+                format!("Malformed response: the frame from {from} declares {width}×{height} pixels, more than {limit}")
             }
             CameraError::Resolve { addr, reason } => format!("camera address {addr} does not resolve ({reason})"),
             CameraError::ConnectTimeout { addr, timeout } => {
@@ -305,6 +345,12 @@ impl CameraError {
         match self {
             CameraError::Config { .. } => "correct the setting in the profile's [camera] table".into(),
             CameraError::File { .. } => "check VisionCameraSource names an existing, readable file or folder".into(),
+            CameraError::NotAFile { .. } => {
+                "VisionCameraSource takes an image file or a folder of them; a V4L2 camera is written /dev/videoN or v4l2:PATH".into()
+            }
+            CameraError::Damaged { .. } => {
+                "the frame was cut short: check the camera's link, or that the file was written completely".into()
+            }
             CameraError::EmptyFolder { .. } => "put .jpg, .png or .pgm frames in the folder, or point VisionCameraSource at another".into(),
             CameraError::ReplayEnded { .. } => {
                 "a replay folder holds one image per trigger, in name order: add images or restart the run".into()
@@ -312,7 +358,9 @@ impl CameraError {
             CameraError::Decode { .. } => {
                 "the driver reads JPEG, PNG and PGM images: check VisionCameraSource points at a still image".into()
             }
-            CameraError::TooLarge { .. } => "check VisionCameraSource; frames above 100 megapixels are refused".into(),
+            CameraError::TooLarge { .. } | CameraError::TooManyPixels { .. } => {
+                "check VisionCameraSource; frames above 100 megapixels or 16384 pixels a side are refused".into()
+            }
             CameraError::Resolve { .. } => "check the host name in VisionCameraSource, or use the camera's IP address".into(),
             CameraError::ConnectTimeout { .. } => {
                 "check the camera is powered and on this network, and the address and port in VisionCameraSource".into()

@@ -4,6 +4,7 @@
 use std::io::Cursor;
 
 use crate::config::PixelFormat;
+use crate::decode::{decode_grey, DecodeError, GreySamples, MAX_METADATA_BYTES};
 use crate::error::CameraError;
 
 /// Most pixels in one frame (100 megapixels): a bound on what a hostile source can make us
@@ -56,32 +57,43 @@ impl Frame {
     }
 }
 
-/// Decodes an encoded image (JPEG, PNG, PGM/PNM, by its content) to grey: colour becomes luma
-/// (ITU-R BT.709 weights, the `image` crate's), 16-bit samples keep their top 8 bits.
+/// Decodes an encoded image (JPEG, PNG, PGM/PNM, by its content) to grey with the bounds of
+/// [`crate::decode`]: the size is checked from the header first (at most [`MAX_PIXELS`] and
+/// [`crate::settings::MAX_SIDE_PX`] a side), a cut-short JPEG is refused as damaged, colour
+/// becomes luma (ITU-R BT.709 weights, the `image` crate's), 16-bit samples are scaled by their
+/// range and rounded to 8 bits.
 ///
 /// # Errors
-/// [`CameraError::Decode`] naming `from`, or [`CameraError::TooLarge`].
+/// [`CameraError::Decode`] naming `from`, [`CameraError::Damaged`],
+/// [`CameraError::TooManyPixels`] or [`CameraError::TooLarge`] (metadata).
 pub fn decode_image(bytes: &[u8], from: &str) -> Result<Frame, CameraError> {
-    let decode = |reason: String| CameraError::Decode { from: from.to_string(), reason };
-    let mut reader =
-        image::ImageReader::new(Cursor::new(bytes)).with_guessed_format().map_err(|e| decode(e.to_string()))?;
-    if reader.format().is_none() {
-        return Err(decode("neither JPEG, PNG nor PGM".into()));
-    }
-    let mut limits = image::Limits::default();
-    limits.max_image_width = Some(crate::settings::MAX_SIDE_PX.unsigned_abs().try_into().unwrap_or(u32::MAX));
-    limits.max_image_height = limits.max_image_width;
-    limits.max_alloc = Some(MAX_PIXELS * 8);
-    reader.limits(limits);
-    let image = reader.decode().map_err(|e| match e {
-        image::ImageError::Limits(_) => {
-            CameraError::TooLarge { from: from.to_string(), limit: 16_384, what: "pixels a side" }
+    let max_side = u32::try_from(crate::settings::MAX_SIDE_PX).unwrap_or(u32::MAX);
+    let grey = decode_grey(Cursor::new(bytes), max_side).map_err(|e| camera_error(e, from))?;
+    let (w, h) = (grey.width(), grey.height());
+    let pixels = match grey.into_samples() {
+        GreySamples::Eight(p) => p,
+        // Rounded as the `image` crate converts 16 to 8 bits.
+        GreySamples::Sixteen(p) => {
+            p.iter().map(|&v| u8::try_from((u32::from(v) + 128) / 257).unwrap_or(u8::MAX)).collect()
         }
-        other => decode(other.to_string()),
-    })?;
-    let grey = image.into_luma8();
-    let (w, h) = grey.dimensions();
-    Frame::new(w, h, grey.into_raw()).ok_or_else(|| decode(format!("an image of {w}×{h} pixels")))
+    };
+    Frame::new(w, h, pixels)
+        .ok_or_else(|| CameraError::Decode { from: from.to_string(), reason: format!("an image of {w}×{h} pixels") })
+}
+
+/// A [`DecodeError`] as the driver reports it, naming where the frame came from.
+fn camera_error(e: DecodeError, from: &str) -> CameraError {
+    let from = from.to_string();
+    match e {
+        DecodeError::Damaged(reason) => CameraError::Damaged { from, reason },
+        DecodeError::TooLarge { width, height, limit } => CameraError::TooManyPixels { from, width, height, limit },
+        DecodeError::Metadata => CameraError::TooLarge {
+            from,
+            limit: usize::try_from(MAX_METADATA_BYTES).unwrap_or(usize::MAX),
+            what: "bytes of metadata",
+        },
+        other => CameraError::Decode { from, reason: other.to_string() },
+    }
 }
 
 /// Decodes one raw V4L2 buffer of `format`, `width × height`, rows `stride` bytes apart (the

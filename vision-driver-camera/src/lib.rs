@@ -37,8 +37,10 @@
 //! ```
 
 mod config;
+pub mod decode;
 mod driver;
 mod error;
+pub mod file;
 mod frame;
 pub mod http;
 #[cfg(feature = "server")]

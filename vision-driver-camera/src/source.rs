@@ -2,10 +2,12 @@
 //! (and its tests, and the simulator) need not know whether a frame came from a USB camera, a
 //! snapshot URL, a file, or a renderer.
 
+use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use crate::error::CameraError;
+use crate::file::{open_regular, OpenError};
 use crate::frame::{decode_image, Frame};
 use crate::http::{self, HttpUrl, MAX_BODY_BYTES};
 
@@ -75,14 +77,26 @@ fn is_image(p: &Path) -> bool {
         .is_some_and(|e| ["jpg", "jpeg", "png", "pgm", "pnm"].iter().any(|x| x.eq_ignore_ascii_case(e)))
 }
 
-/// Reads at most [`MAX_BODY_BYTES`] of `path`.
+/// Reads `path`, a regular file of at most [`MAX_BODY_BYTES`]: a FIFO or a device is refused
+/// unread and without blocking ([`crate::file::open_regular`]), and the read stops at the bound
+/// even if the file grows meanwhile.
 fn read_file(path: &Path) -> Result<Vec<u8>, CameraError> {
-    let file_err = |e: std::io::Error| CameraError::File { path: path.display().to_string(), reason: e.to_string() };
-    let len = std::fs::metadata(path).map_err(file_err)?.len();
-    if len > MAX_BODY_BYTES as u64 {
-        return Err(CameraError::TooLarge { from: path.display().to_string(), limit: MAX_BODY_BYTES, what: "bytes" });
+    let shown = || path.display().to_string();
+    let file_err = |e: std::io::Error| CameraError::File { path: shown(), reason: e.to_string() };
+    let file = open_regular(path).map_err(|e| match e {
+        OpenError::NotRegular { kind } => CameraError::NotAFile { path: shown(), kind },
+        OpenError::Io(e) => file_err(e),
+    })?;
+    let too_large = || CameraError::TooLarge { from: shown(), limit: MAX_BODY_BYTES, what: "bytes" };
+    if file.metadata().map_err(file_err)?.len() > MAX_BODY_BYTES as u64 {
+        return Err(too_large());
     }
-    std::fs::read(path).map_err(file_err)
+    let mut bytes = Vec::new();
+    file.take(MAX_BODY_BYTES as u64 + 1).read_to_end(&mut bytes).map_err(file_err)?;
+    if bytes.len() > MAX_BODY_BYTES {
+        return Err(too_large());
+    }
+    Ok(bytes)
 }
 
 impl FrameSource for FileSource {
