@@ -207,3 +207,47 @@ fn a_missing_video_device_is_named_as_missing() {
         assert!(!stderr.contains("connection refused"), "{stderr}");
     }
 }
+
+/// Issue 33 item 3: `run --camera camera` (the simulated camera's frames served on loopback
+/// and searched by the `Camera` driver, as `--camera simimage` searches them) calibrates with
+/// example 1 and its lift measures the optical centre. The search window the image path sets
+/// (`VisionCameraSearchRadius`: neighbouring marks outside it) held every probe of the walk
+/// but not the corners of the lift's square grid, so every lift reading was lost and the centre
+/// kept at (0, 0). A quarter-size camera over the same field (444² px at 0.00812 in/px; the
+/// geometry in pixels is the built-in world's / 4) keeps the test's frames small.
+#[test]
+fn the_image_path_calibration_lift_measures_the_optical_centre() {
+    let mut world = World::default_world();
+    world.camera.resolution = [444, 444];
+    world.camera.units_per_pixel *= 4.0;
+    let bias = world.camera.center_bias_px;
+    let dir = std::env::temp_dir().join(format!("mach-vision-image-lift-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    let path = dir.join("world.toml");
+    std::fs::write(&path, world.to_toml().expect("a world")).expect("write");
+    let example = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/programs/01-calibrate-sheet.nc");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_mach-vision"))
+        .args(["run", "--json", "--camera", "camera", "--world"])
+        .arg(&path)
+        .arg(example)
+        .output()
+        .expect("spawn");
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(out.status.success(), "stderr: {}", String::from_utf8_lossy(&out.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let cal = report["programs"][0]["steps"]
+        .as_array()
+        .expect("steps")
+        .iter()
+        .find(|s| s["type"] == "sheet_calibration")
+        .expect("the calibration");
+    let centre = &cal["centre"];
+    assert_eq!((&centre["measured"], &centre["pairs"]), (&serde_json::Value::Bool(true), &25.into()), "{cal}");
+    assert!(cal["warning"].is_null(), "{cal}");
+    // Where the camera has it, within 3σ.
+    let sigma = centre["sigma_px"].as_f64().expect("σ");
+    for (axis, truth) in bias.iter().enumerate() {
+        let got = centre["offset_px"][axis].as_f64().expect("offset");
+        assert!((got - truth).abs() < 3.0 * sigma, "axis {axis}: {got} px, truth {truth} px, σ {sigma} px");
+    }
+}

@@ -36,7 +36,7 @@
 //! The pixel that matters is the one that sees the same table X/Y at every height: where the
 //! machine's Z direction meets the image. After the probe moves (K known) the walk measures it
 //! (`lift_centre`): it reads the last dot from a [`LIFT_GRID`]² grid of camera positions (±a
-//! fifth of the field) at the calibration height, rises `VisionCalibrationLift` (machine +Z:
+//! fifth of the field, within the probes' reach: `lift_positions`) at the calibration height, rises `VisionCalibrationLift` (machine +Z:
 //! away from the part, marks move towards the image centre), reads the same positions again and
 //! comes back down. The image shrinks about the centre `c`: `p_lift = r·p₀ + (1 − r)·c`, fitted
 //! by [`vision_math::fit_centre`] with its 1σ. `VisionPxCenterOffsetX/Y = c − res/2` and its σ
@@ -705,6 +705,31 @@ fn check_quick_scale(
 /// ~0.7 px at 0.1 px noise and a 4 % lift; 16 left the ±4 % heights at 1.19× the floor).
 pub const LIFT_GRID: usize = 5;
 
+/// The lift's camera positions about `around` (program frame): a [`LIFT_GRID`]² grid `±step`
+/// wide, serpentine so each move is one grid step, every position farther than `step` from
+/// `around` brought in radially onto that circle.
+///
+/// Decision (issue 33): the walk has read the mark `step` away from the image centre along each
+/// axis (its probe moves), and no farther; a square grid's corners lie √2 × `step` out, where a
+/// camera that searches only a disc about its centre does not find a mark (the image path on
+/// the built-in world: a `VisionCameraSearchRadius` of 572 px for a 247 px dot, so a mark is
+/// whole inside it up to 448 px out; the probes reach 355 px, the corners 502 px). Within the
+/// circle every reading lies where a probe proved the camera reads, whatever shape its field
+/// has; the spread of positions, which sets the centre's σ, shrinks by only √(0.5 / 0.38) =
+/// 1.15× against the square.
+fn lift_positions(around: Point2<f64>, step: f64) -> Vec<Point2<f64>> {
+    let g = LIFT_GRID;
+    #[allow(clippy::cast_precision_loss)]
+    let t = |i: usize| -1.0 + 2.0 * i as f64 / (g - 1) as f64;
+    (0..g)
+        .flat_map(|i| (0..g).map(move |j| (i, if i % 2 == 0 { j } else { g - 1 - j })))
+        .map(|(i, j)| {
+            let v = Vector2::new(t(i), t(j));
+            around + v / v.norm().max(1.0) * step
+        })
+        .collect()
+}
+
 /// What the calibration lift came to.
 struct Lifted {
     /// The measured `VisionPxCenterOffsetX/Y` (pixels) and 1σ (pixels), or `None` (keep both).
@@ -715,8 +740,8 @@ struct Lifted {
 }
 
 /// The calibration lift (see the module doc): reads the mark of dot `dot` (its centre at
-/// `around`, program frame) from a [`LIFT_GRID`]² grid of camera positions `±step` about it at
-/// the calibration height, rises `VisionCalibrationLift`, reads the same positions again, comes
+/// `around`, program frame) from the camera positions [`lift_positions`] gives at the
+/// calibration height, rises `VisionCalibrationLift`, reads the same positions again, comes
 /// back down and fits the pixel the image shrank about.
 ///
 /// Decision: a lift that cannot measure (the rise refused, a mark lost, a fit without a scale
@@ -752,14 +777,7 @@ fn lift_centre(
     if lift_in == 0.0 {
         return Ok(kept(false, "VisionCalibrationLift is 0: calibrated at one height".into(), false));
     }
-    let g = LIFT_GRID;
-    #[allow(clippy::cast_precision_loss)]
-    let t = |i: usize| -1.0 + 2.0 * i as f64 / (g - 1) as f64;
-    // Serpentine, so each move is one grid step.
-    let positions: Vec<Point2<f64>> = (0..g)
-        .flat_map(|i| (0..g).map(move |j| (i, if i % 2 == 0 { j } else { g - 1 - j })))
-        .map(|(i, j)| around + Vector2::new(t(i), t(j)) * step)
-        .collect();
+    let positions = lift_positions(around, step);
     walker.lifting = true;
     let read = |walker: &mut Walker<'_>, at: &[Point2<f64>]| -> Result<Vec<Point2<f64>>, VisionError> {
         let mut out = Vec::with_capacity(at.len());
@@ -771,8 +789,14 @@ fn lift_centre(
         Ok(out)
     };
     let cannot = |what: &str, e: &VisionError| {
+        // The failure's own reason: the calibration stands, so nothing but the centre "failed"
+        // or was "left unchanged".
+        let why = match e {
+            VisionError::Calibration { reason } => reason.clone(),
+            other => other.to_string(),
+        };
         format!(
-            "the optical centre was not measured ({what}: {e}); VisionPxCenterOffset kept — the calibration \
+            "the optical centre was not measured ({what}: {why}); VisionPxCenterOffset kept — the calibration \
              stands at this height"
         )
     };
@@ -998,6 +1022,24 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
 #[allow(clippy::float_cmp)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_lift_positions_stay_within_the_probes_reach() {
+        let around = Point2::new(1.0, -2.0);
+        let at = lift_positions(around, 0.5);
+        assert_eq!(at.len(), LIFT_GRID * LIFT_GRID);
+        assert!(at.iter().all(|p| (p - around).norm() <= 0.5 + 1e-12));
+        // The axes' ends, the centre and the inner ring as the square grid has them; the
+        // corners on the circle.
+        let corner = Vector2::new(1.0, 1.0).normalize() * 0.5;
+        for want in
+            [Vector2::new(0.5, 0.0), Vector2::new(0.0, -0.5), Vector2::zeros(), Vector2::new(0.25, 0.25), corner]
+        {
+            assert!(at.iter().any(|p| (p - around - want).norm() < 1e-12), "{want}");
+        }
+        // Serpentine: no move longer than one grid step (0.25) along an axis.
+        assert!(at.windows(2).all(|w| (w[1] - w[0]).amax() <= 0.25 + 1e-12));
+    }
 
     #[test]
     fn remap_detection_for_all_eight_mountings() {

@@ -130,6 +130,9 @@ pub(crate) struct World {
     /// Uniform pixel noise amplitude (±px) added to every reading.
     pub noise_px: f64,
     pub rng: u64,
+    /// A search window about the image centre, pixels: only a mark wholly inside it is found
+    /// (as the `Camera` driver's `VisionCameraSearchRadius`); `None`: the whole image.
+    pub window_px: Option<f64>,
 }
 
 impl Default for World {
@@ -169,6 +172,7 @@ impl Default for World {
             triggers: 0,
             noise_px: 0.0,
             rng: 0x9E37_79B9_7F4A_7C15,
+            window_px: None,
         }
     }
 }
@@ -214,11 +218,15 @@ impl World {
         let axis = self.camera_axis();
         // The image scales with the working distance, about the optical axis's pixel.
         let grow = (self.working_distance_in + self.z) / self.working_distance_in;
+        let radius_px = 0.5 * self.mark_size / self.optics.pitch_in.x.max(self.optics.pitch_in.y) / grow;
+        let in_window =
+            |p: &Point2<f64>| self.window_px.is_none_or(|r| (p - Point2::from(self.res * 0.5)).norm() + radius_px <= r);
         let best = self
             .marks
             .iter()
             .map(|m| self.optics.pixel((m - axis) / grow))
             .filter(|p| p.x >= 0.0 && p.y >= 0.0 && p.x < self.res.x && p.y < self.res.y)
+            .filter(in_window)
             .min_by(|a, b| {
                 let c = Point2::from(self.res * 0.5);
                 (a - c).norm().total_cmp(&(b - c).norm())
