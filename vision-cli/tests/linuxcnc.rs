@@ -190,3 +190,28 @@ fn a_capture_without_the_camera_tools_offset_applied_names_g43() {
     let (ok, out, err) = run(&[], &program);
     assert!(ok, "{out}{err}");
 }
+
+/// The truth measures the tool that cuts (issue 33 item 7): LinuxCNC's example 4 ends by loading
+/// the camera again for its closing M280, but its slot is cut with T1, which the fit's truth
+/// line must measure. The cutter sits off the spindle here, so measuring another tool, or
+/// the cutter without its G43 offsets, shows as a miss of half an inch.
+#[test]
+fn the_truth_line_measures_the_cutter_not_the_camera_loaded_at_the_end() {
+    let dir = scratch("cutter");
+    let text = std::fs::read_to_string(world(&dir, [1.0, 1.0])).expect("world");
+    let from = "number = 1                     # the cutter\noffset = [0.0, 0.0, 0.0]";
+    assert!(text.contains(from), "the built-in world's cutter moved");
+    let path = dir.join("offset-cutter.toml");
+    std::fs::write(&path, text.replace(from, "number = 1\noffset = [0.5, -0.25, 0.0]")).expect("write");
+    let (ok, out, err) = run(&["--world", path.to_str().expect("path"), "--json"], &example("04-rectangle-fit.ngc"));
+    assert!(ok, "{err}");
+    let steps = steps(&out);
+    let truth = &fit(&steps)["cut_error"];
+    assert_eq!(truth["tool"], 1, "the slot is cut with T1: {truth}");
+    let landed = truth["max"].as_f64().expect("the truth");
+    assert!(landed < 0.0005, "the cutter lands {landed} in from the true part");
+    let (ok, text_out, err) = run(&["--world", path.to_str().expect("path")], &example("04-rectangle-fit.ngc"));
+    assert!(ok, "{err}");
+    assert!(text_out.contains("truth: tool T1 lands at most"), "{text_out}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

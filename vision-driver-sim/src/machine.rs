@@ -142,24 +142,50 @@ impl SimMachine {
     }
 
     /// The cut error of nominal point `nominal` of fixture `fixture` (work coordinates, world
-    /// unit): the distance, in the world unit, between where the active tool's point really goes
-    /// when the program commands `nominal` (after `setup`, through the alignment modals) and
-    /// where that point of the fixture really lies. The tool's point is the spindle plus the
-    /// tool's true offset; for the camera tool, the point imaged at the image centre (what the
-    /// camera tool's table offset refers to with `PxCenterOffset` 0).
+    /// unit) for the active tool: [`SimMachine::tool_cut_error`] with the tool loaded now.
+    ///
+    /// # Errors
+    /// As [`SimMachine::tool_cut_error`].
+    pub fn cut_error(&self, setup: &[String], fixture: &str, nominal: Point2<f64>) -> Result<f64, SimError> {
+        self.tool_cut_error(setup, self.interp.active_tool(), fixture, nominal)
+    }
+
+    /// The cut error of nominal point `nominal` of fixture `fixture` (work coordinates, world
+    /// unit) for tool `tool`: the distance, in the world unit, between where that tool's point
+    /// really goes when the program commands `nominal` (after `setup`, through the alignment
+    /// modals) and where that point of the fixture really lies. The tool's point is the spindle
+    /// plus the tool's true offset; for the camera tool, the point imaged at the image centre
+    /// (what the camera tool's table offset refers to with `PxCenterOffset` 0).
+    ///
+    /// A `tool` other than the loaded one is loaded after `setup` (on the copy) with its
+    /// offsets applied as a program applies them to cut: `T M6`, and on Mach4 and LinuxCNC
+    /// `G43 H` (LinuxCNC applies a tool's X/Y offset only with G43; seed 002 has no G43). The
+    /// loaded tool is measured with the offsets the machine applies now.
     ///
     /// # Errors
     /// [`SimError::UnknownFixture`], or [`SimError::Machine`] from the move.
-    pub fn cut_error(&self, setup: &[String], fixture: &str, nominal: Point2<f64>) -> Result<f64, SimError> {
+    pub fn tool_cut_error(
+        &self,
+        setup: &[String],
+        tool: u32,
+        fixture: &str,
+        nominal: Point2<f64>,
+    ) -> Result<f64, SimError> {
         let world = self.sim.world();
         let unit = world.length_unit();
         let f = world.fixtures.iter().find(|f| f.name == fixture).ok_or_else(|| SimError::UnknownFixture {
             name: fixture.to_string(),
             known: world.fixtures.iter().map(|f| f.name.clone()).collect::<Vec<_>>().join(", "),
         })?;
+        let mut setup = setup.to_vec();
+        if tool != self.interp.active_tool() {
+            setup.push(match self.interp.config().dialect {
+                Dialect::MachineMotion => format!("T{tool} M6"),
+                Dialect::Mach4 | Dialect::LinuxCnc => format!("T{tool} M6 G43 H{tool}"),
+            });
+        }
         let units = self.interp.units();
-        let spindle = self.machine_point_for(setup, nominal * unit.factor_to(units))?;
-        let tool = self.interp.active_tool();
+        let spindle = self.machine_point_for(&setup, nominal * unit.factor_to(units))?;
         let tool_offset = if tool == world.machine.camera_tool {
             self.sim.true_camera_offset(Vector2::zeros(), unit)
         } else {
@@ -298,5 +324,34 @@ mod tests {
         assert!(matches!(m.cut_error(&[], "nope", p), Err(SimError::UnknownFixture { .. })));
         assert!(matches!(m.cut_error(&["G6".into()], "demo target", p), Err(SimError::Machine { .. })));
         assert_eq!(m.interpreter().active_tool(), 1, "the question ran on a copy");
+    }
+
+    /// A tool other than the loaded one is measured as a program loads it to cut: on every
+    /// dialect the same as loading it for real, also on LinuxCNC, whose G43 applies its X/Y.
+    #[test]
+    fn a_tool_not_loaded_is_measured_with_its_offsets_applied_as_for_a_cut() {
+        for dialect in ["mach4", "linuxcnc", "machinemotion"] {
+            let toml = crate::DEFAULT_WORLD_TOML
+                .replace("dialect = \"mach4\"", &format!("dialect = \"{dialect}\""))
+                .replace("offset = [0.0, 0.0, 0.0]", "offset = [0.5, -0.25, 0.0]");
+            let sim = Sim::new(World::from_toml(&toml).expect("world")).expect("sim");
+            let mut m = SimMachine::new(&sim).expect("machine");
+            let load = |tool: u32| match dialect {
+                "machinemotion" => format!("T{tool} M6"),
+                _ => format!("T{tool} M6 G43 H{tool}"),
+            };
+            execute(&mut m, &load(98));
+            let p = Point2::new(6.0, 4.0);
+            let camera = m.cut_error(&[], "demo target", p).expect("camera");
+            let cutter = m.tool_cut_error(&[], 1, "demo target", p).expect("cutter");
+            assert_eq!(m.interpreter().active_tool(), 98, "{dialect}: the question ran on a copy");
+            execute(&mut m, &load(1));
+            let loaded = m.cut_error(&[], "demo target", p).expect("loaded");
+            assert!((cutter - loaded).abs() < 1e-12, "{dialect}: {cutter} vs loaded {loaded}");
+            // Both miss by the fixture's own pose alone (no alignment: 0.04 in at this corner);
+            // a cutter measured with the camera's offsets would be 3.6 in off.
+            let pose = (sim.world().fixtures[0].true_point(p, LengthUnit::Inch) - p).norm();
+            assert!((camera - pose).abs() < 1e-6 && (loaded - pose).abs() < 1e-9, "{dialect}: {camera} {loaded}");
+        }
     }
 }

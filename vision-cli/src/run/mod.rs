@@ -22,7 +22,7 @@ use vision_path::{Limits, PlanConfig, Setpoints};
 
 use crate::trace::DialectArg;
 use crate::{read_text, world, Failure};
-use report::{calibration_truth, pound, steps, ProgramReport, Report, Step};
+use report::{calibration_truth, pound, steps, Cutters, ProgramReport, Report, Step};
 
 /// Setpoint period of the cycle-time planning, seconds.
 const CYCLE_PERIOD_S: f64 = 0.001;
@@ -222,7 +222,9 @@ impl Runner {
         let mut planner = StreamedPlan::start(config);
         let mut kept = KeptItems::default();
         let mut moves = 0u64;
+        let mut cutters = Cutters::new(self.machine.interpreter().active_tool());
         let mut collect = |e: &Event| {
+            cutters.push(e);
             if matches!(e, Event::Linear(_) | Event::Arc(_)) {
                 moves += 1;
             }
@@ -234,7 +236,7 @@ impl Runner {
         let cycle = planner.finish();
         let steps_not_listed = self.handler.records_dropped();
         let records = self.handler.take_records();
-        let steps = steps(&records, &self.sim, &self.machine);
+        let steps = steps(&records, &self.sim, &self.machine, &cutters);
         let alignment = alignment_time(&config, &kept, &steps);
         let calibrated =
             steps.iter().any(|s| matches!(s, Step::SheetCalibration { .. } | Step::QuickCalibration { .. }));

@@ -7,6 +7,7 @@ use vision_core::{
     Telemetry,
 };
 use vision_driver_sim::{Sim, SimMachine};
+use vision_gcode::{Event, Rate};
 use vision_math::{LengthUnit, Point2, Vector2};
 
 use crate::Failure;
@@ -112,11 +113,15 @@ pub(crate) enum Step {
 #[derive(Debug, Serialize)]
 pub(crate) struct CutError {
     pub fixture: String,
-    /// The tool active at the end of the program, whose point is measured.
+    /// The tool measured that lands farthest (one of `tools`).
     pub tool: u32,
+    /// The tools that cut after the fit, each measured: those that made a feed move after the
+    /// fit's line and before the next M280 or M282 (the tool loaded at the end of the program
+    /// when none did), in the order they first cut.
+    pub tools: Vec<u32>,
     /// Grid points over the run's marks (their bounding box, 5 × 5).
     pub points: usize,
-    /// Largest distance, world unit.
+    /// Largest distance over the points and the tools, world unit.
     pub max: f64,
 }
 
@@ -131,11 +136,76 @@ pub(crate) struct CalibrationTruth {
     pub remap_matches: bool,
 }
 
-/// The steps of one program's records, with the cut error of every fit.
-pub(crate) fn steps(records: &[Record], sim: &Sim, machine: &SimMachine) -> Vec<Step> {
+/// The most runs of feed moves [`Cutters`] keeps per program (a few kB); the feed moves after
+/// them are not told apart.
+const MAX_CUTTER_RUNS: usize = 4096;
+
+/// One run of feed moves (G1, G2/G3, canned-cycle feeds) made with one tool, in program order.
+#[derive(Debug, Clone, Copy)]
+struct FeedRun {
+    tool: u32,
+    /// The lowest and highest source lines among the run's moves.
+    first_line: u32,
+    last_line: u32,
+}
+
+/// Which tools made the feed moves of a program (the tools that cut), from its events: the
+/// loaded tool follows the M6 tool changes; consecutive feed moves with one tool are one run.
+#[derive(Debug)]
+pub(crate) struct Cutters {
+    loaded: u32,
+    runs: Vec<FeedRun>,
+    /// A feed move came after the runs kept were full.
+    overflowed: bool,
+}
+
+impl Cutters {
+    /// Before a program, with `loaded` the tool loaded then.
+    pub(crate) fn new(loaded: u32) -> Cutters {
+        Cutters { loaded, runs: Vec::new(), overflowed: false }
+    }
+
+    /// Follows one event of the program.
+    pub(crate) fn push(&mut self, event: &Event) {
+        let line = match event {
+            Event::ToolChange { tool, .. } => {
+                self.loaded = *tool;
+                return;
+            }
+            Event::Linear(m) if matches!(m.rate, Rate::Feed(_)) => m.line,
+            Event::Arc(m) => m.line,
+            _ => return,
+        };
+        let full = self.runs.len() >= MAX_CUTTER_RUNS;
+        match self.runs.last_mut() {
+            Some(run) if run.tool == self.loaded && !self.overflowed => {
+                run.first_line = run.first_line.min(line);
+                run.last_line = run.last_line.max(line);
+            }
+            _ if !full => self.runs.push(FeedRun { tool: self.loaded, first_line: line, last_line: line }),
+            _ => self.overflowed = true,
+        }
+    }
+
+    /// The tools of the feed moves kept after line `after` and before line `before`, each once,
+    /// in the order they first cut.
+    fn between(&self, after: u32, before: u32) -> Vec<u32> {
+        let mut tools = Vec::new();
+        for r in self.runs.iter().filter(|r| r.last_line > after && r.first_line < before) {
+            if !tools.contains(&r.tool) {
+                tools.push(r.tool);
+            }
+        }
+        tools
+    }
+}
+
+/// The steps of one program's records, with the cut error of every fit measured for the tools
+/// that cut after it (`cutters`, from the program's events).
+pub(crate) fn steps(records: &[Record], sim: &Sim, machine: &SimMachine, cutters: &Cutters) -> Vec<Step> {
     let mut run_marks: Vec<(Point2<f64>, LengthUnit)> = Vec::new();
     let mut out = Vec::with_capacity(records.len());
-    for r in records {
+    for (i, r) in records.iter().enumerate() {
         let line = r.line;
         let step = match &r.result {
             Err(e) => Step::Refused { line, mcode: r.mcode, message: e.to_string() },
@@ -150,12 +220,23 @@ pub(crate) fn steps(records: &[Record], sim: &Sim, machine: &SimMachine) -> Vec<
                 }
                 Step::Capture { line, report: c.clone() }
             }
-            Ok(Outcome::Apply(reply)) => Step::Fit {
-                line,
-                report: reply.report.clone(),
-                gcode: reply.gcode.clone(),
-                cut_error: cut_error(sim, machine, &reply.gcode, &run_marks),
-            },
+            Ok(Outcome::Apply(reply)) => {
+                // The alignment holds until the next M280 cancels it or M282 replaces it.
+                let until = records[i + 1..]
+                    .iter()
+                    .find(|n| matches!(n.result, Ok(Outcome::Begin(_) | Outcome::Apply(_))))
+                    .map_or(u32::MAX, |n| n.line);
+                let mut tools = cutters.between(line, until);
+                if tools.is_empty() {
+                    tools.push(machine.interpreter().active_tool());
+                }
+                Step::Fit {
+                    line,
+                    report: reply.report.clone(),
+                    gcode: reply.gcode.clone(),
+                    cut_error: cut_error(sim, machine, &reply.gcode, &run_marks, tools),
+                }
+            }
             Ok(Outcome::Calibrate(reply)) => match &reply.report {
                 CalReport::Sheet(s) => Step::SheetCalibration { line, report: s.clone() },
                 CalReport::Quick(q) => Step::QuickCalibration { line, report: q.clone() },
@@ -174,12 +255,13 @@ const GRID: u32 = 5;
 
 /// The cut error of the alignment `gcode` over the run's marks: the fixture that carries every
 /// mark of the run (at its nominal position), a 5 × 5 grid over their bounding box, the tool
-/// active now. `None` when no present fixture carries the marks (nothing to compare with).
+/// `tool`. `None` when no present fixture carries the marks (nothing to compare with).
 fn cut_error(
     sim: &Sim,
     machine: &SimMachine,
     gcode: &[String],
     marks: &[(Point2<f64>, LengthUnit)],
+    tools: Vec<u32>,
 ) -> Option<CutError> {
     let world = sim.world();
     let unit = world.length_unit();
@@ -195,11 +277,16 @@ fn cut_error(
     let grid: Vec<Point2<f64>> = (0..GRID)
         .flat_map(|i| (0..GRID).map(move |j| lo + Vector2::new(step.x * f64::from(i), step.y * f64::from(j))))
         .collect();
-    let mut max: f64 = 0.0;
-    for p in &grid {
-        max = max.max(machine.cut_error(gcode, &fixture.name, *p).ok()?);
+    let (mut worst, mut max) = (*tools.first()?, 0.0);
+    for &tool in &tools {
+        for p in &grid {
+            let e = machine.tool_cut_error(gcode, tool, &fixture.name, *p).ok()?;
+            if e > max {
+                (worst, max) = (tool, e);
+            }
+        }
     }
-    Some(CutError { fixture: fixture.name.clone(), tool: machine.interpreter().active_tool(), points: grid.len(), max })
+    Some(CutError { fixture: fixture.name.clone(), tool: worst, tools, points: grid.len(), max })
 }
 
 /// The calibration truth now (after a program that calibrated), the camera tool's table
@@ -228,4 +315,57 @@ pub(crate) fn pound(machine: &SimMachine, params: &Params) -> Result<PoundReport
     let block = PoundBlock::new(params.pound_var_base()).map_err(|e| Failure::Input(e.to_string()))?;
     let interp = machine.interpreter();
     Ok(block.report(|a| Some(interp.param(a))))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use vision_gcode::{LinearMove, PathMode, Xyz};
+
+    fn linear(line: u32, rate: Rate) -> Event {
+        let path = PathMode::ExactStop;
+        Event::Linear(LinearMove { line, start: Xyz::ZERO, end: Xyz::ZERO, rate, path })
+    }
+
+    fn tool_change(line: u32, tool: u32) -> Event {
+        Event::ToolChange { line, tool, offset: Xyz::ZERO }
+    }
+
+    #[test]
+    fn the_cutters_are_the_tools_of_the_feed_moves_between_the_lines() {
+        let mut c = Cutters::new(1);
+        for e in [
+            tool_change(9, 98),
+            linear(10, Rate::Feed(10.0)), // a feed with the camera, before the fit
+            linear(18, Rate::Rapid),
+            tool_change(20, 1),
+            linear(24, Rate::Rapid),
+            linear(26, Rate::Feed(20.0)),
+            linear(27, Rate::Feed(60.0)),
+            tool_change(28, 2),
+            linear(29, Rate::Feed(20.0)),
+            linear(45, Rate::Feed(20.0)), // a subprogram's line, after the main program's end
+            tool_change(34, 98),          // loaded again for the closing M280: no feed follows
+            linear(35, Rate::Rapid),
+        ] {
+            c.push(&e);
+        }
+        assert_eq!(c.between(19, u32::MAX), vec![1, 2], "the fit at line 19 is cut with T1 and T2");
+        assert_eq!(c.between(19, 28), vec![1], "an M280 at line 28 ends the alignment");
+        assert_eq!(c.between(5, 15), vec![98]);
+        assert_eq!(c.between(45, u32::MAX), Vec::<u32>::new(), "no feed after line 45");
+    }
+
+    #[test]
+    fn the_runs_kept_are_bounded() {
+        let mut c = Cutters::new(1);
+        for i in 0..(2 * MAX_CUTTER_RUNS as u32) {
+            c.push(&tool_change(2 * i, i % 2 + 1));
+            c.push(&linear(2 * i + 1, Rate::Feed(1.0)));
+        }
+        assert_eq!(c.runs.len(), MAX_CUTTER_RUNS);
+        assert!(c.overflowed);
+        assert_eq!(c.between(0, u32::MAX), vec![1, 2]);
+        assert_eq!(c.between(u32::MAX - 1, u32::MAX), Vec::<u32>::new());
+    }
 }

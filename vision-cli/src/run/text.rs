@@ -216,9 +216,15 @@ fn step(s: &mut String, step: &Step, world_unit: &str) {
             }
             match cut_error {
                 Some(c) => {
+                    let of = if c.tools.len() > 1 {
+                        let names: Vec<String> = c.tools.iter().map(|t| format!("T{t}")).collect();
+                        format!("; the farthest of {}", names.join(", "))
+                    } else {
+                        String::new()
+                    };
                     let _ = writeln!(
                         s,
-                        "              truth: tool T{} lands at most {} {world_unit} from the real {} ({} points)",
+                        "              truth: tool T{} lands at most {} {world_unit} from the real {} ({} points{of})",
                         c.tool,
                         l(c.max),
                         c.fixture,

@@ -52,4 +52,21 @@ print('task: installed mach_vision', mach_vision.__version__, 'from', mach_visio
 "
 python3 "$here/run.py" --module "$module" --work "$work" --installed "$lib"
 rm -rf "$work"
+# Removal leaves nothing, also where Python cached the remaps beside them (as it does when
+# LinuxCNC runs as root; the runs above set PYTHONDONTWRITEBYTECODE): the package's prerm.
+case "$installed_before" in
+    *" installed") ;;
+    *)
+        python3 -m compileall -q "$lib"
+        [ -d "$lib/__pycache__" ] || { echo "task: compileall left no $lib/__pycache__" >&2; exit 1; }
+        trap - EXIT
+        dpkg -r mach-vision >/dev/null
+        if [ -e /usr/lib/mach-vision ]; then
+            echo "task: dpkg -r mach-vision left /usr/lib/mach-vision:" >&2
+            find /usr/lib/mach-vision | head -n 5 >&2
+            exit 1
+        fi
+        echo "task: dpkg -r removed the package and its __pycache__"
+        ;;
+esac
 echo "task: the stage took $(( $(date +%s) - start )) s"
