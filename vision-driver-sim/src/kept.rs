@@ -219,4 +219,25 @@ mod tests {
         let huge = "#".repeat(MAX_KEPT_BYTES + 1);
         assert!(KeptState::from_toml(&huge).is_err());
     }
+
+    #[test]
+    fn the_kept_parameters_are_the_stored_positions_and_the_six_systems() {
+        let numbers: Vec<u32> = kept_numbers().map(|(n, _)| n).collect();
+        let mut want = vec![5161, 5162, 5163, 5181, 5182, 5183];
+        for i in 0..6 {
+            want.extend([5221 + 20 * i, 5222 + 20 * i, 5223 + 20 * i, 5230 + 20 * i]);
+        }
+        assert_eq!(numbers, want);
+        assert!(kept_numbers().all(|(n, length)| length == (n % 20 != 10)), "rotations are angles");
+    }
+
+    #[test]
+    fn a_kept_file_of_exactly_the_bound_is_read_and_an_offset_beyond_the_machines_range_refused() {
+        let body = "unit = \"in\"\n";
+        let padded = format!("{body}#{}\n", "x".repeat(MAX_KEPT_BYTES - body.len() - 2));
+        assert_eq!(padded.len(), MAX_KEPT_BYTES);
+        KeptState::from_toml(&padded).expect("at the bound");
+        let far = "unit = \"in\"\n[[tool]]\nnumber = 3\noffset = [1e300, 0.0, 0.0]\n";
+        assert!(KeptState::from_toml(far).expect_err("beyond").to_string().contains("tool 3"));
+    }
 }

@@ -117,6 +117,8 @@ pub(crate) struct World {
     pub res: Vector2<f64>,
     /// The frame size the camera reports (`CameraDriver::frame_size`); `None`: it reports none.
     pub frame: Option<(u32, u32)>,
+    /// The camera driver's name.
+    pub camera_name: &'static str,
     /// Optical axis minus spindle, inches.
     pub cam_offset: Vector2<f64>,
     pub script: VecDeque<Result<Reading, DriverError>>,
@@ -163,6 +165,7 @@ impl Default for World {
             optics: Optics::square(0.0, true),
             res: Vector2::new(1776.0, 1776.0),
             frame: None,
+            camera_name: "Fake",
             cam_offset: Vector2::zeros(),
             script: VecDeque::new(),
             select_job: true,
@@ -439,7 +442,7 @@ pub(crate) struct FakeCamera(pub Shared);
 
 impl CameraDriver for FakeCamera {
     fn name(&self) -> &str {
-        "Fake"
+        lock(&self.0).camera_name
     }
     fn capabilities(&self) -> Capabilities {
         Capabilities { select_job: lock(&self.0).select_job, grab_image: true }

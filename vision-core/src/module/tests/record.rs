@@ -129,3 +129,41 @@ fn a_camera_turned_on_its_mount_is_refused_and_a_slight_turn_is_a_warning() {
         }
     }
 }
+
+#[test]
+fn the_recorded_offset_is_compared_in_the_machines_units_now() {
+    // Calibrated in inches with the camera 0.5, −0.25 in from the spindle; run in mm.
+    let mut world =
+        World { marks: vec![Point2::new(0.2, 0.1)], cam_offset: Vector2::new(0.5, -0.25), ..World::default() };
+    world.offsets.insert(98, Vector2::new(0.5, -0.25));
+    let mut rig = Rig::with_world(world);
+    rig.module.params.set_cal_k(Matrix2::zeros()).expect("zero");
+    rig.module.m283(&mut rig.machine, Calibrate::Quick { diameter: 0.5 }).expect("quick");
+    assert_eq!(rig.module.params().calibration.recorded_tool(), Some((98, Vector2::new(0.5, -0.25))));
+    rig.world().units = vision_math::LengthUnit::Millimetre;
+    rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect("the same offset, in mm");
+    // 0.002 mm off is within a table's rounding (0.0001 in); 0.01 in is not.
+    rig.machine.set_tool_offset(98, Vector2::new(12.702, -6.35)).expect("mm");
+    rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect("within 0.0001 in");
+    rig.machine.set_tool_offset(98, Vector2::new(12.954, -6.35)).expect("mm");
+    let (what, text) = changed(rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect_err("refused"));
+    assert_eq!(what, "the camera tool's offset");
+    assert!(text.contains("every mark would be read 0.25400 mm off"), "{text}");
+}
+
+#[test]
+fn a_driver_name_the_record_cannot_hold_is_not_recorded() {
+    for (name, recorded) in [("Fake camera", None), ("Fake-2_b", Some("Fake-2_b")), ("Fake\u{e9}", None)] {
+        let world = World { marks: vec![Point2::new(0.2, 0.1)], camera_name: name, ..World::default() };
+        let mut rig = Rig::with_world(world);
+        rig.module.params.set_cal_k(Matrix2::zeros()).expect("zero");
+        rig.module.m283(&mut rig.machine, Calibrate::Quick { diameter: 0.5 }).expect("calibrates whatever the name");
+        assert_eq!(rig.module.params().calibration.recorded_driver(), recorded, "{name}");
+    }
+    let long: &'static str = Box::leak("F".repeat(65).into_boxed_str());
+    let world = World { marks: vec![Point2::new(0.2, 0.1)], camera_name: long, ..World::default() };
+    let mut rig = Rig::with_world(world);
+    rig.module.params.set_cal_k(Matrix2::zeros()).expect("zero");
+    rig.module.m283(&mut rig.machine, Calibrate::Quick { diameter: 0.5 }).expect("calibrates");
+    assert_eq!(rig.module.params().calibration.recorded_driver(), None);
+}
