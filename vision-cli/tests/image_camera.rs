@@ -149,6 +149,9 @@ fn calibrate_into(profile: &std::path::Path) -> Params {
     let registry = vision_host::cameras(None);
     let saved = vision_core::ProfileStore::new(profile).with_defaults(registry.params()).load().expect("saved");
     assert!(saved.get("VisionCal_K11").expect("K11").as_f64().is_some_and(|k| k > 0.0), "M283 saved K");
+    // The record of what it was calibrated with (issue 33): the driver and the mark it searched for.
+    assert_eq!(saved.get("VisionCal_Driver").expect("driver").to_string(), "\"Camera\"");
+    assert_eq!(saved.get("VisionCal_Mark").expect("mark").to_string(), "\"dot, dark on light\"");
     saved
 }
 

@@ -250,6 +250,13 @@ pub trait CameraDriver: Send {
         Err(DriverError::new(DriverErrorKind::Unsupported, format!("camera driver {} cannot keep images", self.name())))
     }
 
+    /// The mark the driver searches for, as a short text (`dot, dark on light`), for the
+    /// calibration's record: M281 warns when it differs from the one M283 calibrated with. The
+    /// default, for a camera that runs its own job (Keyence), is `None`.
+    fn mark_spec(&self) -> Option<String> {
+        None
+    }
+
     /// The size of the frames the camera delivers, `(width, height)` in pixels, when the camera
     /// reports one (a camera whose images the driver decodes; the simulator). A driver that
     /// has not seen a frame yet may take one to find out; a failure to take it is `None` (the

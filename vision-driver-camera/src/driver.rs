@@ -253,6 +253,21 @@ impl<S: FrameSource> CameraDriver for FrameDriver<S> {
         self.source.select_job(job).map_err(DriverError::from)
     }
 
+    /// The shape and contrast searched for (the diameter is left out: unset, it follows K).
+    fn mark_spec(&self) -> Option<String> {
+        let mark = &self.config.mark;
+        let kind = match mark.kind {
+            crate::MarkKind::Dot => "dot",
+            crate::MarkKind::Ring => "ring",
+            crate::MarkKind::Cross => "cross",
+        };
+        let contrast = match mark.polarity {
+            crate::Polarity::Dark => "dark on light",
+            crate::Polarity::Light => "light on dark",
+        };
+        Some(format!("{kind}, {contrast}"))
+    }
+
     /// The last frame's size; before the first trigger, one frame is taken to find it out.
     fn frame_size(&mut self) -> Option<(u32, u32)> {
         if self.frame_size.is_none() {

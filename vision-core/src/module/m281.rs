@@ -364,6 +364,7 @@ impl VisionModule {
             outside_image_note(&self.params, native),
             self.height_note(width, height, unit),
             turn_note,
+            self.mark_note(),
         ];
         for note in notes.into_iter().flatten() {
             warning = Some(warning.map_or_else(|| note.clone(), |w| format!("{note}; {w}")));

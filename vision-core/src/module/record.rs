@@ -15,6 +15,7 @@ use vision_math::Vector2;
 
 use super::VisionModule;
 use crate::controller;
+use crate::driver::CameraDriver;
 use crate::error::VisionError;
 use crate::machine::Machine;
 use crate::params::Calibration;
@@ -123,6 +124,20 @@ impl VisionModule {
         Ok(())
     }
 
+    /// A warning when the camera searches for another mark than the one M283 calibrated with
+    /// (its shape or contrast changed): the centre it reports may be another point of the
+    /// print. `None` when the same, or either is unknown.
+    pub(crate) fn mark_note(&self) -> Option<String> {
+        let recorded = self.params.calibration.recorded_mark()?;
+        let now = self.driver.as_deref()?.mark_spec()?;
+        (now != recorded).then(|| {
+            format!(
+                "the camera searches for a {now} mark, M283 calibrated with a {recorded} one: check \
+                 VisionCameraMark and VisionCameraPolarity, or recalibrate"
+            )
+        })
+    }
+
     /// `calibration` with the record of it made now: the image size, the loaded driver's name,
     /// and `tool`'s offset in `machine`'s table (in the machine's units, which `calibration`'s
     /// `Cal_Units` must be).
@@ -143,10 +158,11 @@ impl VisionModule {
             .map(|d| d.name().to_string())
             .filter(|n| n.len() <= 64 && n.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-'))
             .unwrap_or_default();
+        let mark = self.driver.as_deref().and_then(CameraDriver::mark_spec).unwrap_or_default();
         let tool = match tool {
             Some(t) => Some((t, controller::tool_offset(machine, t)?)),
             None => None,
         };
-        calibration.recorded(resolution, &driver, tool)
+        calibration.recorded(resolution, &driver, &mark, tool)
     }
 }

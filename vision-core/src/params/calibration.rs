@@ -54,6 +54,10 @@ profile_part! {
         /// `VisionCal_Driver`: the camera driver M283 calibrated with, as the driver names itself
         /// (`Keyence`, `Camera`, `Sim`; empty = not recorded). M280–M282 refuse under another.
         (Calibration) cal_driver: String => &str = String::new(), "VisionCal_Driver", driver_record;
+        /// `VisionCal_Mark`: the mark the camera searched for when M283 calibrated (its
+        /// driver's words, e.g. `dot, dark on light`; empty = not recorded or a camera that runs
+        /// its own job). M281 warns while the camera searches for another.
+        (Calibration) cal_mark: String => &str = String::new(), "VisionCal_Mark", short_text;
         /// `VisionCal_ToolNumber`: the camera tool whose X/Y offset the sheet walk (M283 C/P)
         /// wrote (0 = none recorded: M283 Q writes no offset).
         (Calibration) cal_tool_number: i64 => i64 = 0, "VisionCal_ToolNumber", tool;
@@ -194,6 +198,13 @@ impl Calibration {
         (!self.cal_driver.is_empty()).then_some(self.cal_driver.as_str())
     }
 
+    /// The mark the camera searched for when this calibration was made; `None` when not
+    /// recorded.
+    #[must_use]
+    pub fn recorded_mark(&self) -> Option<&str> {
+        (!self.cal_mark.is_empty()).then_some(self.cal_mark.as_str())
+    }
+
     /// The camera tool and its X/Y offset (`Cal_Units`) this calibration was made with; `None`
     /// when not recorded.
     #[must_use]
@@ -202,8 +213,9 @@ impl Calibration {
         Some((tool, Vector2::new(self.cal_tool_offset_x, self.cal_tool_offset_y)))
     }
 
-    /// This calibration with its record: the image size (pixels), the driver's name and the
-    /// camera tool with its X/Y offset in `Cal_Units` it was made with (`None`: no tool).
+    /// This calibration with its record: the image size (pixels), the driver's name, the mark
+    /// it searched for (empty: none known) and the camera tool with its X/Y offset in
+    /// `Cal_Units` it was made with (`None`: no tool).
     ///
     /// # Errors
     /// [`VisionError::InvalidParam`] for a value out of its range; `self` is unchanged.
@@ -211,9 +223,11 @@ impl Calibration {
         &self,
         resolution: (i64, i64),
         driver: &str,
+        mark: &str,
         tool: Option<(u32, Vector2<f64>)>,
     ) -> Result<Calibration, VisionError> {
         let mut next = self.clone();
+        next.set_raw("VisionCal_Mark", &ParamValue::from(mark))?;
         next.set_raw("VisionCal_ResX", &ParamValue::from(resolution.0))?;
         next.set_raw("VisionCal_ResY", &ParamValue::from(resolution.1))?;
         next.set_raw("VisionCal_Driver", &ParamValue::from(driver))?;

@@ -119,6 +119,8 @@ pub(crate) struct World {
     pub frame: Option<(u32, u32)>,
     /// The camera driver's name.
     pub camera_name: &'static str,
+    /// The mark the camera says it searches for (`CameraDriver::mark_spec`).
+    pub mark_spec: Option<&'static str>,
     /// Optical axis minus spindle, inches.
     pub cam_offset: Vector2<f64>,
     pub script: VecDeque<Result<Reading, DriverError>>,
@@ -166,6 +168,7 @@ impl Default for World {
             res: Vector2::new(1776.0, 1776.0),
             frame: None,
             camera_name: "Fake",
+            mark_spec: None,
             cam_offset: Vector2::zeros(),
             script: VecDeque::new(),
             select_job: true,
@@ -468,6 +471,9 @@ impl CameraDriver for FakeCamera {
     }
     fn frame_size(&mut self) -> Option<(u32, u32)> {
         lock(&self.0).frame
+    }
+    fn mark_spec(&self) -> Option<String> {
+        lock(&self.0).mark_spec.map(str::to_string)
     }
     fn grab_image(&mut self, request: &ImageRequest<'_>) -> Result<std::path::PathBuf, DriverError> {
         let mut w = lock(&self.0);

@@ -167,3 +167,24 @@ fn a_driver_name_the_record_cannot_hold_is_not_recorded() {
     rig.module.m283(&mut rig.machine, Calibrate::Quick { diameter: 0.5 }).expect("calibrates");
     assert_eq!(rig.module.params().calibration.recorded_driver(), None);
 }
+
+#[test]
+fn another_mark_than_the_one_calibrated_with_is_a_warning() {
+    let world = World { marks: vec![Point2::new(0.2, 0.1)], mark_spec: Some("dot, dark on light"), ..World::default() };
+    let mut rig = Rig::with_world(world);
+    rig.module.params.set_cal_k(Matrix2::zeros()).expect("zero");
+    rig.module.m283(&mut rig.machine, Calibrate::Quick { diameter: 0.5 }).expect("quick");
+    assert_eq!(rig.module.params().calibration.recorded_mark(), Some("dot, dark on light"));
+    let same = rig.module.m281(&mut rig.machine, false).expect("captures").report;
+    assert!(same.warning.is_none(), "{:?}", same.warning);
+    rig.world().mark_spec = Some("ring, dark on light");
+    let other = rig.module.m281(&mut rig.machine, false).expect("captures: a warning, not a refusal").report;
+    let w = other.warning.expect("a warning");
+    assert!(
+        w.contains("the camera searches for a ring, dark on light mark, M283 calibrated with a dot, dark on light one"),
+        "{w}"
+    );
+    // A camera that says nothing of its mark (Keyence) is not compared.
+    rig.world().mark_spec = None;
+    assert!(rig.module.m281(&mut rig.machine, false).expect("captures").report.warning.is_none());
+}
