@@ -594,3 +594,63 @@ fn a_percent_line_inside_a_program_is_refused_as_rs274_does() {
     run(&mut mach4, program);
     assert_eq!(mach4.machine_position(), Xyz::new(2.0, 1.0, 0.0));
 }
+
+// Issue 33: rs274's current point after a change of system.
+
+#[test]
+fn a_change_of_system_carries_rs274s_current_point_not_the_machine_position() {
+    // rs274 (interp_convert.cc `convert_coordinate_system` → interp_find.cc
+    // `find_current_in_system`) moves its current point into the new system: the point plus the
+    // G92/G52 offset, rotated by the old system's rotation, moved from the old origin to the
+    // new one, rotated back, the offset taken off again. After `G10 L2 P0 R90` with G52 X10 in
+    // force that point no longer reads the machine position (the rotation turned the point,
+    // not the offset), and G55 carries the discrepancy over: G28's first leg (to the current
+    // point) goes to machine (0, 10), not (10, 0) where the machine stands. rs274 printed
+    // STRAIGHT_TRAVERSE(-10, 10, 0) there, under G55 with G52 X10 (compare.py: agree).
+    let program = "G21 G90\nG52 X10\nG0 X0 Y0\nG10 L2 P0 R90\nG55\nG28\nM2";
+    let events = run(&mut linuxcnc_mm(), program);
+    assert_moves(&moves(&events), &[(R, [10.0, 0.0, 0.0]), (R, [0.0, 10.0, 0.0]), (R, [0.0, 0.0, 0.0])]);
+    // An incremental move after the change starts from that point too: X+1 from (-10, 10).
+    let events = run(&mut linuxcnc_mm(), "G21 G90\nG52 X10\nG0 X0 Y0\nG10 L2 P0 R90\nG55\nG91 G0 X1\nM2");
+    assert_moves(&moves(&events), &[(R, [10.0, 0.0, 0.0]), (R, [1.0, 10.0, 0.0])]);
+    // Without an offset in force, or without a rotation change, the point reads the machine
+    // and the change of system moves nothing.
+    let events = run(&mut linuxcnc_mm(), "G21 G90\nG0 X10 Y0\nG10 L2 P0 R90\nG55\nG28\nM2");
+    assert_moves(&moves(&events), &[(R, [10.0, 0.0, 0.0]), (R, [10.0, 0.0, 0.0]), (R, [0.0, 0.0, 0.0])]);
+}
+
+#[test]
+fn a_parameter_write_leaves_rs274s_current_point_alone() {
+    // rs274's parameters are storage: writing a work offset (or a rotation) changes neither the
+    // frame in use nor its current point. After `G10 L2 P0 R90` with G52 X10 in force that point
+    // is (0, 0) while the machine stands at (10, 0); `#5241 = 0` keeps it, so G91 X1 goes to
+    // program (1, 0), machine (0, 11). rs274 printed STRAIGHT_TRAVERSE(1, 0, 0) (compare.py:
+    // agree); re-deriving the point from the machine went to (10, 1).
+    let events = run(&mut linuxcnc_mm(), "G21 G90\nG52 X10\nG0 X0 Y0\nG10 L2 P0 R90\n#5241 = 0\nG91 G0 X1\nM2");
+    assert_moves(&moves(&events), &[(R, [10.0, 0.0, 0.0]), (R, [0.0, 11.0, 0.0])]);
+    // Mach4 applies a written offset of the active system at once; the machine stays put.
+    let mut mach4 = Interpreter::new(InterpreterConfig {
+        dialect: Dialect::Mach4,
+        ..InterpreterConfig::new(LengthUnit::Millimetre)
+    });
+    let events = run(&mut mach4, "G21 G90\nG0 X1 Y0\n#5221 = 5\nG91 G0 X1\nM2");
+    assert_moves(&moves(&events), &[(R, [1.0, 0.0, 0.0]), (R, [2.0, 0.0, 0.0])]);
+}
+
+#[test]
+fn a_tool_change_or_length_moves_rs274s_current_point_by_the_change_only() {
+    // rs274 (`convert_tool_length_offset`) adds the change of tool offset, rotated into the
+    // system, to its current point; M6 leaves it. After `G10 L2 P0 R90` with G52 X10 in force
+    // the point is (0, 0) while the machine stands at (10, 0), so G91 X1 goes to machine
+    // (0, 11) after each of these lines. rs274 printed STRAIGHT_TRAVERSE(1, 0, z) for all three
+    // (compare.py: agree); re-deriving the point from the machine went to (10, 1).
+    for line in ["T1 M6", "G43.1 Z1", "G49"] {
+        let program = format!("G21 G90\nG52 X10\nG0 X0 Y0\nG10 L2 P0 R90\n{line}\nG91 G0 X1\nM2");
+        let events = run(&mut linuxcnc_mm(), &program);
+        assert_moves(&moves(&events), &[(R, [10.0, 0.0, 0.0]), (R, [0.0, 11.0, 0.0])]);
+    }
+    // A length in a rotated system: the point moves along Z only, the machine stays.
+    let mut interp = linuxcnc_mm();
+    run(&mut interp, "%\nG21 G90\nG10 L2 P0 R30\nG0 X1 Y2 Z3\nG43.1 Z0.5\n%");
+    assert!((interp.program_position() - Xyz::new(1.0, 2.0, 2.5)).norm() < 1e-12, "{:?}", interp.program_position());
+}
