@@ -549,12 +549,13 @@ impl LineRun<'_> {
         match self.cfg.dialect {
             Dialect::MachineMotion => self.st.tool_offset = entry.offset,
             Dialect::Mach4 => self.st.tool_offset = Xyz::new(entry.offset.x, entry.offset.y, self.st.tool_offset.z),
-            // Nothing reaches the frame, and rs274 leaves its current point.
             Dialect::LinuxCnc => {}
         }
-        if self.cfg.dialect != Dialect::LinuxCnc {
-            self.st.rederive_program(self.params);
-        }
+        // LinuxCNC too: after a tool change its task re-reads the current point from the
+        // machine position (emccanon.cc `GET_EXTERNAL_POSITION`, unrotated, offsets off). The
+        // standalone rs274 keeps its last printed point unrotated instead (saicanon.cc), so it
+        // differs after a rotation change with G52/G92 in force; the machine is right.
+        self.st.rederive_program(self.params);
         self.emit(Event::ToolChange { line: self.line, tool, offset: entry.offset });
         Ok(())
     }
