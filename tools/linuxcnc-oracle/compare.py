@@ -13,9 +13,13 @@ Each program gets one verdict:
   agree          both ran; same motions
   differ         both ran; the first different motion is shown
   refused        rs274 ran it, mach-vision refused it (its message is shown)
-  both-refuse    rs274 stops with an error, and so does mach-vision
+  both-refuse    rs274 stops with an error, and so does mach-vision (perhaps on another line);
+                 a different motion among those both made first is a `differ`
   rs274-refuses  rs274 stops with an error, mach-vision runs it (not a comparison: LinuxCNC's
                  own limits, e.g. a subroutine file run without its call)
+  skipped        marked "(oracle: writes length parameters)" and compared on a millimetre
+                 machine with an rs274 that keeps length parameters in inches (see
+                 honours_machine_units)
 
 Usage: compare.py [--rs274 PATH] [--trace PATH] [--units mm|in] [--subroutine-path DIRS]
                   [--tool-table FILE] [--random N [--seed S]] [--quiet] [PROGRAM...]
@@ -53,14 +57,19 @@ def numbers(args):
     return [float(x) for x in re.split(r"[,\s]+", args.strip()) if x]
 
 
-def run_rs274(rs274, program, tool_table, subroutine_path, timeout):
-    """Returns (motions, error) with motions in machine coordinates, millimetres."""
+def run_rs274(rs274, program, units, tool_table, subroutine_path, timeout):
+    """Returns (motions, error) with motions in machine coordinates, millimetres: the motions
+    rs274 printed before it stopped, also when it stopped with an error."""
     with tempfile.TemporaryDirectory(prefix="oracle-") as tmp:
         var = os.path.join(tmp, "rs274.var")
         open(var, "w").close()
         ini = os.path.join(tmp, "oracle.ini")
         with open(ini, "w") as f:
             f.write("[RS274NGC]\nSUBROUTINE_PATH = %s\n" % subroutine_path)
+            # The machine's units, as mach-vision's --machine-units: the unit of the length
+            # parameters (#5221 = 1 is 1 in on an inch machine). Without it rs274 stores them
+            # in inches (driver.cc) whatever the program's units.
+            f.write("[TRAJ]\nLINEAR_UNITS = %s\n" % ("inch" if units == "in" else "mm"))
         cmd = [rs274, "-g", "-i", ini, "-t", tool_table, "-v", var, program]
         env = rs274_env(rs274)
         env["HOME"] = tmp
@@ -70,8 +79,9 @@ def run_rs274(rs274, program, tool_table, subroutine_path, timeout):
             return None, "rs274 timed out"
     out = p.stdout.decode("latin-1")
     err = p.stderr.decode("latin-1").replace("executing", "").strip()
+    error = None
     if p.returncode != 0:
-        return None, err.splitlines()[0] if err else "rs274 exit %d" % p.returncode
+        error = err.splitlines()[0] if err else "rs274 exit %d" % p.returncode
     scale = 1.0  # mm per printed unit
     g5x = [0.0, 0.0, 0.0]
     g92 = [0.0, 0.0, 0.0]
@@ -134,7 +144,7 @@ def run_rs274(rs274, program, tool_table, subroutine_path, timeout):
                             "radius": off_axis(end_m, axis_point, normal)})
         elif name in ("STRAIGHT_PROBE", "RIGID_TAP", "NURBS_FEED", "SPLINE_FEED"):
             motions.append({"kind": name.lower(), "end": None, "unit": scale, "src": line.strip()})
-    return motions, None
+    return motions, error
 
 
 def run_trace(trace, program, units, subroutine_path, timeout):
@@ -165,6 +175,24 @@ def run_trace(trace, program, units, subroutine_path, timeout):
         error = p.stderr.decode("utf-8", "replace").strip().splitlines()[-1:] or ["exit %d" % p.returncode]
         error = error[0]
     return motions, error
+
+
+# A program marked so reads or writes length parameters (#5221 = 1 ...), whose unit is the
+# machine's: compared on a millimetre machine only where rs274 keeps them in millimetres.
+LENGTH_PARAMETERS = "(oracle: writes length parameters)"
+
+
+def honours_machine_units(rs274, tool_table, timeout):
+    """Whether rs274 keeps length parameters in the [TRAJ] LINEAR_UNITS its INI names. The
+    2.9.0 pre-release in Debian 12 keeps them in inches whatever the INI says (LinuxCNC issue
+    #1279, fixed in 2.9.0 by reading LINEAR_UNITS in driver.cc)."""
+    with tempfile.TemporaryDirectory(prefix="oracle-probe-") as tmp:
+        probe = os.path.join(tmp, "probe.ngc")
+        with open(probe, "w") as f:
+            f.write("G21\n#5221 = 1\nG55\nG54\nG0 X0\nM2\n")
+        motions, error = run_rs274(rs274, probe, "mm", tool_table, tmp, timeout)
+    # G0 X0 in G54 with X offset #5221 = 1: machine X1 mm, or 25.4 mm on an inch-only rs274.
+    return error is None and len(motions) == 1 and abs(motions[0]["end"][0] - 1.0) < TOLERANCE
 
 
 def close(a, b, unit):
@@ -221,8 +249,9 @@ def polyline(t, ours, j, start=None):
     return None
 
 
-def compare(theirs, ours):
-    """The first difference as text, or None."""
+def compare(theirs, ours, prefix=False):
+    """The first difference as text, or None. With `prefix` (both refused the program, perhaps
+    on different lines) only the motions both made are compared."""
     j = done = 0
     for i, t in enumerate(theirs):
         if j >= len(ours):
@@ -248,7 +277,7 @@ def compare(theirs, ours):
             if t["cw"] != o["cw"] or t["turns"] != o["turns"]:
                 return "%s: rs274 %s x%d, ours %s x%d" % (
                     where, "cw" if t["cw"] else "ccw", t["turns"], "cw" if o["cw"] else "ccw", o["turns"])
-    if done != len(theirs) or j != len(ours):
+    if not prefix and (done != len(theirs) or j != len(ours)):
         return "rs274 made %d motions, ours %d" % (len(theirs), len(ours))
     return None
 
@@ -339,7 +368,40 @@ def focus_feature(rng, lines, pos, absolute, big):
     return pos, True
 
 
-def random_program(rng, focus=0.0):
+def carry_feature(rng, lines, big):
+    """Appends one of issue 33's features: an XY rotation change (G10 L2 R) with a G52/G92
+    offset in force, which leaves rs274's current point off the machine position, then what
+    carries that point (a G54-G59 change, a parameter write, G43.1/G49), then what goes from
+    it (G28/G30's first leg, a G91 move, a G91 polar move). Leaves G90 in force. No M6: after
+    a tool change LinuxCNC's task re-reads the point from the machine, the standalone rs274
+    its last printed point, unrotated (saicanon.cc), so the two differ by design there."""
+    f = fmt4
+    lines.append("G90 G0 X%s Y%s" % (f(rng.uniform(0.2, 1) * big), f(rng.uniform(0.2, 1) * big)))
+    lines.append("%s X%s Y%s" % (rng.choice(["G52", "G92"]), f(rng.uniform(-1, 1) * big), f(rng.uniform(-1, 1) * big)))
+    lines.append("G10 L2 P0 R%s" % f(rng.uniform(-180, 180)))
+    for _ in range(rng.randint(1, 2)):
+        what = rng.random()
+        if what < 0.4:
+            lines.append("G%d" % rng.randint(54, 59))
+        elif what < 0.6:
+            # Rewriting a stored value (or an angle) is the same in every machine unit.
+            n = rng.choice([5221 + 20 * rng.randint(0, 5) + rng.randint(0, 2), 5230 + 20 * rng.randint(0, 5)])
+            lines.append("#%d = #%d" % (n, n) if n % 10 != 0 else "#%d = %s" % (n, f(rng.uniform(-90, 90))))
+        elif what < 0.85:
+            lines.append("G43.1 Z%s" % f(rng.uniform(-0.5, 0.5) * big))
+        else:
+            lines.append("G49")
+    go = rng.random()
+    if go < 0.5:
+        lines.append("%s%s" % (rng.choice(["G28", "G30"]), rng.choice(["", " " + axis_words(rng, big)])))
+    elif go < 0.8:
+        lines.append("G91 %s %s" % (rng.choice(["G0", "G1"]), axis_words(rng, big, 0.5)))
+    else:
+        lines.append("G91 G0 @%s ^%s" % (f(rng.uniform(0.1, 1) * big), f(rng.uniform(-180, 180))))
+    lines.append("G90 G49")
+
+
+def random_program(rng, focus=0.0, carry=0.0):
     """A random program of the G-code both interpreters share: units, planes, G90/G91, G0-G3
     (centre and R forms, full circles, P turns), polar words, work offsets, G10 L2 rotations,
     G10 L20, G52, G92, G53, canned cycles and o-word loops. `focus` is the share of steps
@@ -353,6 +415,10 @@ def random_program(rng, focus=0.0):
     pos = [0.0, 0.0, 0.0]  # the program point, tracked for arcs under G90 only
     absolute = True
     for _ in range(rng.randint(5, 25)):
+        if carry and rng.random() < carry:
+            carry_feature(rng, lines, big)
+            pos, absolute = None, True
+            continue
         if focus and rng.random() < focus:
             pos, absolute = focus_feature(rng, lines, pos, absolute, big)
             continue
@@ -507,6 +573,10 @@ def main():
     ap.add_argument("--focus", type=float, default=0.0, metavar="SHARE",
                     help="share (0-1) of each random program's steps given to G10 L20/G52/G92 in "
                          "rotated systems, G53 inside canned cycles and full circles with P")
+    ap.add_argument("--carry", type=float, default=0.0, metavar="SHARE",
+                    help="share (0-1) of each random program's steps given to rotation changes with "
+                         "G52/G92 in force followed by G54-G59, parameter writes or G43.1/G49 and then "
+                         "G28/G30 or a G91 move (issue 33)")
     ap.add_argument("--strict", action="store_true",
                     help="also fail (exit 1) when only one side refuses a program (for the cases/ set)")
     ap.add_argument("programs", nargs="*")
@@ -517,19 +587,32 @@ def main():
         for i in range(a.random):
             path = os.path.join(folder, "random-%04d.ngc" % i)
             with open(path, "w") as f:
-                f.write(random_program(rng, a.focus))
+                f.write(random_program(rng, a.focus, a.carry))
             a.programs.append(path)
     with tempfile.TemporaryDirectory(prefix="oracle-tbl-") as tbl_dir:
         tool_table = a.tool_table or default_tool_table(tbl_dir)
         verdicts = collections.Counter()
         reasons = collections.Counter()
+        inch_only = a.units == "mm" and not honours_machine_units(a.rs274, tool_table, a.timeout)
         for program in a.programs:
+            with open(program, encoding="latin-1") as f:
+                if inch_only and LENGTH_PARAMETERS in f.read():
+                    verdicts["skipped"] += 1
+                    if not a.quiet:
+                        print("%-13s %s: it writes length parameters, which this rs274 keeps in inches "
+                              "(LinuxCNC issue #1279; compare with --units in)" % ("skipped", program))
+                    continue
             sub_path = a.subroutine_path or os.path.dirname(os.path.abspath(program))
-            theirs, their_error = run_rs274(a.rs274, os.path.abspath(program), tool_table, sub_path, a.timeout)
+            theirs, their_error = run_rs274(a.rs274, os.path.abspath(program), a.units, tool_table, sub_path, a.timeout)
             ours, our_error = run_trace(a.trace, program, a.units, sub_path, a.timeout)
             if their_error is not None:
                 verdict = "both-refuse" if our_error is not None else "rs274-refuses"
                 detail = their_error if our_error is None else "%s | ours: %s" % (their_error, our_error)
+                # Refused by both, yet a move before the refusals may still go elsewhere.
+                both = our_error is not None and None not in (theirs, ours)
+                diff = compare(theirs, ours, prefix=True) if both else None
+                if diff:
+                    verdict, detail = "differ", "before both refuse (%s): %s" % (their_error, diff)
             else:
                 if our_error is not None:
                     verdict, detail = "refused", our_error
@@ -541,7 +624,8 @@ def main():
             if not a.quiet:
                 print("%-13s %s: %s" % (verdict, program, detail))
         print("# %d programs: %s" % (len(a.programs), ", ".join(
-            "%d %s" % (verdicts[k], k) for k in ("agree", "differ", "refused", "both-refuse", "rs274-refuses"))))
+            "%d %s" % (verdicts[k], k) for k in ("agree", "differ", "refused", "both-refuse", "rs274-refuses")))
+              + (", %d skipped" % verdicts["skipped"] if verdicts["skipped"] else ""))
         if reasons and not a.quiet:
             print("# mach-vision's refusals, most frequent first:")
             for reason, n in reasons.most_common(25):

@@ -594,3 +594,89 @@ fn a_percent_line_inside_a_program_is_refused_as_rs274_does() {
     run(&mut mach4, program);
     assert_eq!(mach4.machine_position(), Xyz::new(2.0, 1.0, 0.0));
 }
+
+// Issue 33: rs274's current point after a change of system.
+
+#[test]
+fn a_change_of_system_carries_rs274s_current_point_not_the_machine_position() {
+    // rs274 (interp_convert.cc `convert_coordinate_system` → interp_find.cc
+    // `find_current_in_system`) moves its current point into the new system: the point plus the
+    // G92/G52 offset, rotated by the old system's rotation, moved from the old origin to the
+    // new one, rotated back, the offset taken off again. After `G10 L2 P0 R90` with G52 X10 in
+    // force that point no longer reads the machine position (the rotation turned the point,
+    // not the offset), and G55 carries the discrepancy over: G28's first leg (to the current
+    // point) goes to machine (0, 10), not (10, 0) where the machine stands. rs274 printed
+    // STRAIGHT_TRAVERSE(-10, 10, 0) there, under G55 with G52 X10 (compare.py: agree).
+    let program = "G21 G90\nG52 X10\nG0 X0 Y0\nG10 L2 P0 R90\nG55\nG28\nM2";
+    let events = run(&mut linuxcnc_mm(), program);
+    assert_moves(&moves(&events), &[(R, [10.0, 0.0, 0.0]), (R, [0.0, 10.0, 0.0]), (R, [0.0, 0.0, 0.0])]);
+    // An incremental move after the change starts from that point too: X+1 from (-10, 10).
+    let events = run(&mut linuxcnc_mm(), "G21 G90\nG52 X10\nG0 X0 Y0\nG10 L2 P0 R90\nG55\nG91 G0 X1\nM2");
+    assert_moves(&moves(&events), &[(R, [10.0, 0.0, 0.0]), (R, [1.0, 10.0, 0.0])]);
+    // Without an offset in force, or without a rotation change, the point reads the machine
+    // and the change of system moves nothing.
+    let events = run(&mut linuxcnc_mm(), "G21 G90\nG0 X10 Y0\nG10 L2 P0 R90\nG55\nG28\nM2");
+    assert_moves(&moves(&events), &[(R, [10.0, 0.0, 0.0]), (R, [10.0, 0.0, 0.0]), (R, [0.0, 0.0, 0.0])]);
+}
+
+#[test]
+fn a_parameter_write_leaves_rs274s_current_point_alone() {
+    // rs274's parameters are storage: writing a work offset (or a rotation) changes neither the
+    // frame in use nor its current point. After `G10 L2 P0 R90` with G52 X10 in force that point
+    // is (0, 0) while the machine stands at (10, 0); `#5241 = 0` keeps it, so G91 X1 goes to
+    // program (1, 0), machine (0, 11). rs274 printed STRAIGHT_TRAVERSE(1, 0, 0) (compare.py:
+    // agree); re-deriving the point from the machine went to (10, 1).
+    let events = run(&mut linuxcnc_mm(), "G21 G90\nG52 X10\nG0 X0 Y0\nG10 L2 P0 R90\n#5241 = 0\nG91 G0 X1\nM2");
+    assert_moves(&moves(&events), &[(R, [10.0, 0.0, 0.0]), (R, [0.0, 11.0, 0.0])]);
+    // Mach4 applies a written offset of the active system at once; the machine stays put.
+    let mut mach4 = Interpreter::new(InterpreterConfig {
+        dialect: Dialect::Mach4,
+        ..InterpreterConfig::new(LengthUnit::Millimetre)
+    });
+    let events = run(&mut mach4, "G21 G90\nG0 X1 Y0\n#5221 = 5\nG91 G0 X1\nM2");
+    assert_moves(&moves(&events), &[(R, [1.0, 0.0, 0.0]), (R, [2.0, 0.0, 0.0])]);
+}
+
+#[test]
+fn a_tool_length_moves_rs274s_current_point_by_the_change_only() {
+    // rs274 (`convert_tool_length_offset`) adds the change of tool offset, rotated into the
+    // system, to its current point. After `G10 L2 P0 R90` with G52 X10 in force the point is
+    // (0, 0) while the machine stands at (10, 0), so G91 X1 goes to machine (0, 11) after
+    // either line. rs274 printed STRAIGHT_TRAVERSE(1, 0, z) for both (compare.py: agree);
+    // re-deriving the point from the machine went to (10, 1).
+    let before = |line: &str| format!("G21 G90\nG52 X10\nG0 X0 Y0\nG10 L2 P0 R90\n{line}\nG91 G0 X1\nM2");
+    for line in ["G43.1 Z1", "G49"] {
+        let events = run(&mut linuxcnc_mm(), &before(line));
+        assert_moves(&moves(&events), &[(R, [10.0, 0.0, 0.0]), (R, [0.0, 11.0, 0.0])]);
+    }
+    // A tool change is where LinuxCNC's task re-reads the point from the machine
+    // (emccanon.cc `GET_EXTERNAL_POSITION`): X1 from there reaches (10, 1). The standalone
+    // rs274 reads back its last printed point instead, unrotated (saicanon.cc), and printed a
+    // move to (0, 11): an artefact of the oracle, not LinuxCNC's behaviour.
+    let events = run(&mut linuxcnc_mm(), &before("T1 M6"));
+    assert_moves(&moves(&events), &[(R, [10.0, 0.0, 0.0]), (R, [10.0, 1.0, 0.0])]);
+    // A length in a rotated system: the point moves along Z only, the machine stays.
+    let mut interp = linuxcnc_mm();
+    run(&mut interp, "%\nG21 G90\nG10 L2 P0 R30\nG0 X1 Y2 Z3\nG43.1 Z0.5\n%");
+    assert!((interp.program_position() - Xyz::new(1.0, 2.0, 2.5)).norm() < 1e-12, "{:?}", interp.program_position());
+}
+
+#[test]
+fn g28_with_axis_words_homes_those_program_axes_in_a_rotated_system() {
+    // rs274 (`convert_home`): the stored position (machine coordinates) is read in the current
+    // system (`find_relative`), and the named axes of the waypoint take its program coordinates;
+    // the others keep the waypoint's. In a system rotated by 90° homing X alone therefore moves
+    // the machine's Y. rs274 printed, program coordinates: G28 X0 → (0, 2), (0, 2); G30 Y1 →
+    // (3, 1), (3, 2) with #5181-#5183 = machine (-2, 1, 1) (compare.py: agree).
+    let program = "G21 G90\nG10 L2 P0 R90\nG0 X1 Y2\nG28 X0\nG0 X1 Y2 Z1\nG30.1\nG0 X3 Y1 Z0\nG30 Y1\nM2";
+    let events = run(&mut linuxcnc_mm(), program);
+    #[rustfmt::skip]
+    let want = [
+        (R, [-2.0, 1.0, 0.0]), (R, [-2.0, 0.0, 0.0]), (R, [-2.0, 0.0, 0.0]),
+        (R, [-2.0, 1.0, 1.0]), (R, [-1.0, 3.0, 0.0]), (R, [-1.0, 3.0, 0.0]), (R, [-2.0, 3.0, 0.0]),
+    ];
+    assert_moves(&moves(&events), &want);
+    // Unrotated, the same as homing the machine axis (the other dialects' rule).
+    let events = run(&mut linuxcnc_mm(), "G21 G90\nG10 L2 P1 X5 Y6\nG0 X1 Y2\nG28 X0\nM2");
+    assert_moves(&moves(&events), &[(R, [6.0, 8.0, 0.0]), (R, [5.0, 8.0, 0.0]), (R, [0.0, 8.0, 0.0])]);
+}

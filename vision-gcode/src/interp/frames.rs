@@ -183,7 +183,7 @@ impl LineRun<'_> {
     /// `find_current_in_system`): with the G92 offset, rotated by the active system's rotation,
     /// moved from the active origin to that system's, rotated back by its rotation, without
     /// the G92 offset.
-    fn current_in_system(&self, system: u32) -> Xyz {
+    pub(super) fn current_in_system(&self, system: u32) -> Xyz {
         let (p, g92, active) = (self.st.program, self.g92_triple(), self.st.origin);
         let [ox, oy, oz] = self.params.triple(work_offset_base(system));
         let turned = SystemRotation::turn(self.st.rotation, Point2::new(p.x + g92.x, p.y + g92.y));

@@ -8,7 +8,7 @@ use super::motion::Polyline;
 use crate::config::{Dialect, InterpreterConfig};
 use crate::error::{GCode, RunProblem};
 use crate::event::{Coolant, Event, OutputChange, OutputWrite, PathMode, SpindleCommand};
-use crate::frame::Placement;
+use crate::frame::{Placement, SystemRotation};
 use crate::geom::{Plane, Xyz, MAX_COORDINATE};
 use crate::interp::modal::Modal;
 use crate::interp::MAX_REPEATS;
@@ -218,10 +218,18 @@ impl LineRun<'_> {
             let system = u32::from(code / 10 - 53);
             // rs274 reloads a system's parameters only when it becomes active, not when it is
             // selected again (a written #5221 waits for that).
-            if system != self.st.system || self.cfg.dialect != Dialect::LinuxCnc {
+            if self.cfg.dialect != Dialect::LinuxCnc {
                 self.st.system = system;
                 self.st.load_system(self.cfg, self.params);
                 self.st.rederive_program(self.params);
+            } else if system != self.st.system {
+                // rs274 carries its current point into the new system rather than reading the
+                // machine position; the two differ after a rotation change with a G92/G52
+                // offset in force, and the next G28 leg or incremental move goes from rs274's.
+                let program = self.current_in_system(system);
+                self.st.system = system;
+                self.st.load_system(self.cfg, self.params);
+                self.st.program = program;
             }
         }
         if let Some(code) = groups.get(Group::Path) {
@@ -501,11 +509,21 @@ impl LineRun<'_> {
             _ => Xyz::ZERO,
         };
         let offset = self.cfg.dialect.applied_tool_offset(offset);
+        let old = self.st.tool_offset;
         self.st.tool_offset = match self.cfg.dialect {
             Dialect::Mach4 => Xyz::new(self.st.tool_offset.x, self.st.tool_offset.y, offset.z),
             Dialect::MachineMotion | Dialect::LinuxCnc => offset,
         };
-        self.st.rederive_program(self.params);
+        if self.cfg.dialect == Dialect::LinuxCnc {
+            // rs274 (`convert_tool_length_offset`) moves its current point by the change,
+            // rotated into the system: the same as re-deriving it while the point reads the
+            // machine position, and it keeps rs274's point where it does not.
+            let p = self.st.program;
+            let d = SystemRotation::turn(-self.st.rotation, Point2::new(old.x - offset.x, old.y - offset.y));
+            self.st.program = Xyz::new(p.x + d.x, p.y + d.y, p.z + old.z - offset.z);
+        } else {
+            self.st.rederive_program(self.params);
+        }
         Ok(())
     }
 
@@ -533,6 +551,10 @@ impl LineRun<'_> {
             Dialect::Mach4 => self.st.tool_offset = Xyz::new(entry.offset.x, entry.offset.y, self.st.tool_offset.z),
             Dialect::LinuxCnc => {}
         }
+        // LinuxCNC too: after a tool change its task re-reads the current point from the
+        // machine position (emccanon.cc `GET_EXTERNAL_POSITION`, unrotated, offsets off). The
+        // standalone rs274 keeps its last printed point unrotated instead (saicanon.cc), so it
+        // differs after a rotation change with G52/G92 in force; the machine is right.
         self.st.rederive_program(self.params);
         self.emit(Event::ToolChange { line: self.line, tool, offset: entry.offset });
         Ok(())

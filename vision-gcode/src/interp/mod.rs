@@ -327,11 +327,12 @@ impl Interpreter {
         // A user M-code's handler gets the line's comments (the only lines that allocate).
         let comments: Vec<&str> = if user.is_some() { block.comments().collect() } else { Vec::new() };
         read.map_err(|p| GcodeError::run(line, p))?;
-        let mut offsets_written = false;
+        let (mut offsets_written, mut g92_written) = (false, false);
         for (target, v) in &self.assigns {
             let written = match target {
                 Target::Number(n) => {
                     offsets_written |= affects_frame(*n);
+                    g92_written |= (G92_OFFSET..G92_OFFSET + 3).contains(n);
                     self.params.write(*n, *v)
                 }
                 Target::Named(name) => self.params.write_named(name, *v),
@@ -347,7 +348,7 @@ impl Interpreter {
                 return Err(GcodeError::run(line, problem));
             }
             if offsets_written {
-                self.modal.after_offset_write(&self.config, &self.params);
+                self.modal.after_offset_write(&self.config, &self.params, g92_written);
             }
             self.refresh_mirrors();
             return self.user_line(code, &words, &comments, at, handler, sink);
@@ -355,7 +356,7 @@ impl Interpreter {
         self.pending.clear();
         let mut st = self.modal;
         if offsets_written {
-            st.after_offset_write(&self.config, &self.params);
+            st.after_offset_write(&self.config, &self.params, g92_written);
         }
         let mut run = LineRun {
             cfg: &self.config,

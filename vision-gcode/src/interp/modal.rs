@@ -131,14 +131,20 @@ impl Modal {
         self.rotation = system_rotation(config, params, self.system);
     }
 
-    /// After a program line wrote an offset parameter (G92 or a system's origin): the G92
-    /// offset always takes effect; a written origin of the active system does at once in Mach4
-    /// and seed 002, and under LinuxCNC only when the system is selected again from another
-    /// one, or a G10 sets it (rs274 2.9: `convert_coordinate_system` reloads the parameters only
-    /// on a change of system). The program point is re-derived: the machine stays.
-    pub(crate) fn after_offset_write(&mut self, config: &InterpreterConfig, params: &ParameterTable) {
+    /// After a program line wrote an offset parameter (G92 or a system's origin or rotation;
+    /// `g92` whether the G92 offset was among them): the G92 offset always takes effect; a
+    /// written origin of the active system does at once in Mach4 and seed 002, and under
+    /// LinuxCNC only when the system is selected again from another one, or a G10 sets it
+    /// (rs274 2.9: `convert_coordinate_system` reloads the parameters only on a change of
+    /// system). Where the frame changed the program point is re-derived: the machine stays.
+    /// Under LinuxCNC a written origin leaves the frame, so rs274's current point stays as it
+    /// is (it need not read the machine position after a rotation change with a G92/G52
+    /// offset in force).
+    pub(crate) fn after_offset_write(&mut self, config: &InterpreterConfig, params: &ParameterTable, g92: bool) {
         if config.dialect != Dialect::LinuxCnc {
             self.load_system(config, params);
+        } else if !g92 {
+            return;
         }
         self.rederive_program(params);
     }

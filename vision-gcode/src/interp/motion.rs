@@ -135,7 +135,7 @@ impl LineRun<'_> {
     }
 
     /// G28 / G30: via the point the axis words name (if any) to the position stored at
-    /// `#home`…`#home + 2`.
+    /// `#home`…`#home + 2` (machine coordinates); with axis words, on those axes only.
     pub(super) fn g28(&mut self, home: u32, name: &'static str) -> Result<(), RunProblem> {
         let given = AXIS_LETTERS.map(|l| self.w.has(l));
         let pl = self.placement();
@@ -143,12 +143,27 @@ impl LineRun<'_> {
         let via = self.target(name)?;
         let m = self.checked(pl.machine_of(via))?;
         self.rapid_to_machine(m);
-        let home = self.params.triple(home);
-        let mut m = self.st.machine;
-        let all = !given.iter().any(|g| *g);
-        for axis in (0..3).filter(|&a| all || given[a]) {
-            m.set_axis(axis, home[axis]);
-        }
+        let [hx, hy, hz] = self.params.triple(home);
+        let home = Xyz::new(hx, hy, hz);
+        let m = if !given.iter().any(|g| *g) {
+            home
+        } else if self.cfg.dialect == Dialect::LinuxCnc {
+            // rs274 (`convert_home`) reads the stored position in the current system
+            // (`find_relative`) and gives the named program axes of the waypoint its
+            // coordinates: in a rotated system homing X alone moves the machine's Y too.
+            let mut end = via;
+            let at = pl.program_of(home);
+            for axis in (0..3).filter(|&a| given[a]) {
+                end.set_axis(axis, at.axis(axis));
+            }
+            self.checked(pl.machine_of(end))?
+        } else {
+            let mut m = self.st.machine;
+            for axis in (0..3).filter(|&a| given[a]) {
+                m.set_axis(axis, home.axis(axis));
+            }
+            m
+        };
         self.rapid_to_machine(m);
         self.st.rederive_program(self.params);
         Ok(())
