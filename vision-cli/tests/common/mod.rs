@@ -4,7 +4,8 @@ use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 /// Runs the binary with `args` under an address-space limit of `megabytes`, killed after
-/// `seconds`: its output, or `None` when it ran out of time.
+/// `seconds`: its output, or `None` when it ran out of time (it blocked). Standard input is
+/// empty, so nothing waits on the terminal.
 pub(crate) fn bounded(args: &[&str], megabytes: u64, seconds: u64) -> Option<Output> {
     let script = format!("ulimit -v {} && exec \"$0\" \"$@\"", megabytes * 1024);
     let mut child = Command::new("sh")
@@ -12,6 +13,7 @@ pub(crate) fn bounded(args: &[&str], megabytes: u64, seconds: u64) -> Option<Out
         .arg(script)
         .arg(env!("CARGO_BIN_EXE_mach-vision"))
         .args(args)
+        .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
