@@ -516,7 +516,10 @@ pub fn from_toml_with(text: &str, base: Params) -> Result<Params, String> {
     };
     let vision = tables(file.remove(VISION).ok_or("cannot parse: missing table [vision]")?, VISION)?;
     for (name, value) in vision {
-        params.set(&name, param_value(&name, value)?).map_err(|e| e.to_string())?;
+        params.set(&name, param_value(&name, value)?).map_err(|e| match e {
+            VisionError::UnknownParam { .. } => unknown_key(&name, &params),
+            other => other.to_string(),
+        })?;
     }
     for (table, entries) in file {
         let entries = tables(entries, &table)?;
@@ -525,8 +528,10 @@ pub fn from_toml_with(text: &str, base: Params) -> Result<Params, String> {
             let value = param_value(&name, value)?;
             if !settings.set(&name, &value).map_err(|e| e.to_string())? {
                 let names: Vec<&str> = settings.specs().map(|s| s.name).collect();
+                let hint = did_you_mean(&name, names.iter().copied()).map(|n| format!(" (did you mean {n}?)"));
                 return Err(format!(
-                    "[{table}] {name}: unknown setting — [{table}] holds {}; the core's parameters go in [vision]",
+                    "[{table}] {name}: unknown setting{} — [{table}] holds {}; the core's parameters go in [vision]",
+                    hint.unwrap_or_default(),
                     names.join(", ")
                 ));
             }
@@ -534,6 +539,71 @@ pub fn from_toml_with(text: &str, base: Params) -> Result<Params, String> {
     }
     params.calibration.check_k().map_err(|e| e.to_string())?;
     Ok(params)
+}
+
+/// The message for `name`, a key of `[vision]` that no parameter has: the name a typo or a
+/// name cut short most likely meant, from the parameters `params` holds (the core's and every
+/// driver's), when one is that close.
+fn unknown_key(name: &str, params: &Params) -> String {
+    let e = VisionError::UnknownParam { name: name.to_string() };
+    let known = Params::specs().chain(params.drivers_settings().flat_map(|d| d.specs())).map(|s| s.name);
+    match did_you_mean(name, known) {
+        Some(near) => format!("{e} (did you mean {near}?)"),
+        None => e.to_string(),
+    }
+}
+
+/// The one name of `known` that `name` is one edit away from, ignoring case: a letter wrong,
+/// missing or extra, two letters swapped, or the name cut short (a prefix of at least
+/// [`MIN_PREFIX_CHARS`] characters that only one known name starts with). `None` when no name
+/// is that close, or two are equally close (a guess between them would mislead).
+fn did_you_mean<'a>(name: &str, known: impl Iterator<Item = &'a str>) -> Option<&'a str> {
+    let lower = name.to_ascii_lowercase();
+    let mut typo = Vec::new();
+    let mut cut = Vec::new();
+    for k in known {
+        let k_lower = k.to_ascii_lowercase();
+        if k_lower == lower {
+            continue;
+        }
+        if edit_distance(&lower, &k_lower) <= 1 {
+            typo.push(k);
+        } else if lower.chars().count() >= MIN_PREFIX_CHARS && k_lower.starts_with(&lower) {
+            cut.push(k);
+        }
+    }
+    typo.dedup();
+    cut.dedup();
+    match (typo.as_slice(), cut.as_slice()) {
+        ([one], _) | ([], [one]) => Some(*one),
+        _ => None,
+    }
+}
+
+/// The shortest prefix [`did_you_mean`] takes for a name cut short: longer than the shared
+/// `Vision` and a word, so `VisionCamera` alone suggests nothing.
+const MIN_PREFIX_CHARS: usize = 14;
+
+/// The optimal-string-alignment distance between `a` and `b`: the fewest single-character
+/// insertions, deletions, substitutions and swaps of two neighbours that turn one into the other.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let a: Vec<char> = a.chars().collect();
+    let b: Vec<char> = b.chars().collect();
+    // Rows i-2, i-1 and i of the table; d[j] = distance between a[..i] and b[..j].
+    let mut before: Vec<usize> = vec![0; b.len() + 1];
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    for i in 1..=a.len() {
+        let mut row = vec![i; b.len() + 1];
+        for j in 1..=b.len() {
+            let cost = usize::from(a[i - 1] != b[j - 1]);
+            row[j] = (prev[j] + 1).min(row[j - 1] + 1).min(prev[j - 1] + cost);
+            if i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] {
+                row[j] = row[j].min(before[j - 2] + 1);
+            }
+        }
+        before = std::mem::replace(&mut prev, row);
+    }
+    prev[b.len()]
 }
 
 /// A TOML value as a parameter value.
@@ -698,6 +768,41 @@ mod tests {
             assert_eq!(count, 2, "the temporary file was removed (the profile and its lock file stay)");
         }
         let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn edit_distance_counts_single_edits_and_swaps() {
+        assert_eq!(edit_distance("", ""), 0);
+        assert_eq!(edit_distance("abc", ""), 3);
+        assert_eq!(edit_distance("", "ab"), 2);
+        assert_eq!(edit_distance("kitten", "sitting"), 3);
+        assert_eq!(edit_distance("visionport", "visonport"), 1, "a letter missing");
+        assert_eq!(edit_distance("visionport", "visionportt"), 1, "a letter extra");
+        assert_eq!(edit_distance("visionport", "visionpart"), 1, "a letter wrong");
+        assert_eq!(edit_distance("visionport", "visionprot"), 1, "two letters swapped");
+        assert_eq!(edit_distance("visionport", "visionip"), 4);
+    }
+
+    #[test]
+    fn a_key_one_edit_away_gets_did_you_mean() {
+        let e = from_toml("[vision]\nVisionCameraTool = 98\n").expect_err("cut short");
+        assert!(
+            e.contains("unknown parameter \"VisionCameraTool\"") && e.contains("did you mean VisionCameraToolNumber?"),
+            "{e}"
+        );
+        let e = from_toml("[vision]\nVisionEnabeld = true\n").expect_err("swapped");
+        assert!(e.contains("did you mean VisionEnabled?"), "{e}");
+        let p = from_toml("[vision]\nvisionenabled = true\n").expect("any case is the name itself");
+        assert_eq!(p.get("VisionEnabled"), Ok(ParamValue::Bool(true)));
+        let e = from_toml("[vision]\nVisionBogus = 1\n").expect_err("far from all");
+        assert!(!e.contains("did you mean"), "{e}");
+        // `VisionCal_K1` is one edit from K11 and K12 alike: no guess.
+        let e = from_toml("[vision]\nVisionCal_K1 = 1\n").expect_err("ambiguous");
+        assert!(!e.contains("did you mean"), "{e}");
+        let e =
+            from_toml_with("[vision]\n[probe]\nVisionProbeLevl = 3\n", Params::default().with_driver_settings(&PROBE))
+                .expect_err("a driver's table");
+        assert!(e.contains("did you mean VisionProbeLevel?"), "{e}");
     }
 
     #[test]
