@@ -76,7 +76,7 @@ use crate::driver::{CameraDriver, Reading};
 use crate::error::VisionError;
 use crate::machine::{checked, Machine};
 use crate::module::capture::{centred_px, chain_with, k_in, mark_size, outside_image_note};
-use crate::module::dro::Dro;
+use crate::module::dro::{Dro, WalkProgress};
 use crate::params::Params;
 use crate::ser;
 use crate::sheets::{cal_sheet, known_sheets};
@@ -570,6 +570,14 @@ impl<'a> Walker<'a> {
     }
 
     /// The axis-detect bump from the current position; returns the remap and the two pairs.
+    /// Tells the host's progress sink where the walk is; a replay (the stepwise walk) tells
+    /// nothing, its stages were told when they ran.
+    fn progress(&mut self, progress: WalkProgress) {
+        if matches!(self.source, Source::Live(_)) {
+            self.dro.progress(progress);
+        }
+    }
+
     fn axis_detect(&mut self) -> Result<(AxisReport, [(usize, usize); 2]), VisionError> {
         let bump = LengthUnit::Inch.convert(BUMP_IN, self.unit);
         let start = self.position()?;
@@ -921,6 +929,7 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
     };
     let mut station = d_of(&walker.shots[0], k)?;
     for (i, n_i) in nominal.iter().enumerate() {
+        walker.progress(WalkProgress::SheetDot { dot: i + 1, dots: nominal.len() });
         if i > 0 {
             station += n_i - nominal[i - 1];
         }
@@ -942,6 +951,7 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
     walker.known = Some((k, remap));
 
     // 3b. The optical centre from the lift over the last dot; the offset below is solved at it.
+    walker.progress(WalkProgress::Lift);
     let lifted = lift_centre(walker, params, station, probe, nominal.len() - 1)?;
     let mut solved = params.clone();
     if let Some((offset, sigma)) = lifted.centre {
@@ -980,6 +990,7 @@ pub(crate) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
     //    as the new offset will see it (the module doc explains the `+ b`).
     let mut verify = Vec::with_capacity(nominal.len());
     for (i, n_i) in nominal.iter().enumerate() {
+        walker.progress(WalkProgress::Verify { dot: i + 1, dots: nominal.len() });
         walker.move_abs(n_i + b)?;
         let s = walker.shoot(i)?;
         let shot = walker.shots[s];

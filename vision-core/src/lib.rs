@@ -70,8 +70,8 @@ pub use driver::{CameraDriver, Capabilities, DriverError, DriverErrorKind, Image
 pub use error::VisionError;
 pub use machine::{Machine, MachineError, MachineErrorKind, Timestamp};
 pub use module::{
-    AlignReport, Capture, CaptureStep, Dot, DroppedMark, JobReport, Pieces, PredictedError, Recentred, Reply, Run,
-    RunMode, StepwiseCapture, StepwiseWalk, TelemetrySink, VisionModule,
+    AlignReport, Capture, CaptureStep, Dot, DroppedMark, JobReport, Pieces, PredictedError, ProgressSink, Recentred,
+    Reply, Run, RunMode, StepwiseCapture, StepwiseWalk, TelemetrySink, VisionModule, WalkProgress,
 };
 pub use params::{
     Access, Calibration, Config, DriverSettings, ParamKind, ParamSpec, ParamValue, Params, Section, Setting,

@@ -16,16 +16,59 @@ use crate::params::Telemetry;
 /// bridge copies it to its DROs; the module never waits on it.
 pub type TelemetrySink = Box<dyn FnMut(&Telemetry) + Send>;
 
-/// The module's telemetry and its sink.
+/// Where M283's walk is, handed to the host's [`ProgressSink`] as the walk reaches each stage,
+/// so a long calibration (some eighty triggers) can show the operator how far it got.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum WalkProgress {
+    /// The sheet walk moves to dot `dot` (1-based) of the sheet's `dots`, to centre and probe it.
+    SheetDot {
+        /// The dot, 1-based.
+        dot: usize,
+        /// The sheet's dots.
+        dots: usize,
+    },
+    /// The calibration lift over the last dot (the optical centre) starts.
+    Lift,
+    /// The verify pass moves to dot `dot` (1-based) of `dots`.
+    Verify {
+        /// The dot, 1-based.
+        dot: usize,
+        /// The sheet's dots.
+        dots: usize,
+    },
+}
+
+impl std::fmt::Display for WalkProgress {
+    /// The operator's words: `M283: dot 3 of 5`, `M283: lift over the last dot`,
+    /// `M283: verify dot 2 of 5`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            WalkProgress::SheetDot { dot, dots } => write!(f, "M283: dot {dot} of {dots}"),
+            WalkProgress::Lift => f.write_str("M283: lift over the last dot (the optical centre)"),
+            WalkProgress::Verify { dot, dots } => write!(f, "M283: verify dot {dot} of {dots}"),
+        }
+    }
+}
+
+/// Receives M283's [`WalkProgress`] while the walk runs (not on a stepwise walk's replays).
+pub type ProgressSink = Box<dyn FnMut(WalkProgress) + Send>;
+
+/// The module's telemetry and its sinks.
 #[derive(Default)]
 pub(crate) struct Dro {
     values: Telemetry,
     sink: Option<TelemetrySink>,
+    progress: Option<ProgressSink>,
 }
 
 impl std::fmt::Debug for Dro {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Dro").field("values", &self.values).field("sink", &self.sink.is_some()).finish()
+        f.debug_struct("Dro")
+            .field("values", &self.values)
+            .field("sink", &self.sink.is_some())
+            .field("progress", &self.progress.is_some())
+            .finish()
     }
 }
 
@@ -38,6 +81,18 @@ impl Dro {
     /// Replaces the sink (`None` removes it).
     pub(crate) fn set_sink(&mut self, sink: Option<TelemetrySink>) {
         self.sink = sink;
+    }
+
+    /// Replaces the progress sink (`None` removes it).
+    pub(crate) fn set_progress_sink(&mut self, sink: Option<ProgressSink>) {
+        self.progress = sink;
+    }
+
+    /// Hands `progress` to the progress sink.
+    pub(crate) fn progress(&mut self, progress: WalkProgress) {
+        if let Some(sink) = self.progress.as_mut() {
+            sink(progress);
+        }
     }
 
     /// Applies `edit` to the values, then hands them to the sink.

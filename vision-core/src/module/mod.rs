@@ -43,7 +43,7 @@ use crate::registry::DriverRegistry;
 use dro::Dro;
 
 pub use capture::{Capture, Recentred};
-pub use dro::TelemetrySink;
+pub use dro::{ProgressSink, TelemetrySink, WalkProgress};
 pub use height::HeightReport;
 pub use m280::RunMode;
 pub use m281::{CaptureStep, StepwiseCapture};
@@ -225,6 +225,12 @@ impl VisionModule {
     /// at its end (see [`TelemetrySink`]); `None` removes the sink.
     pub fn set_telemetry_sink(&mut self, sink: Option<TelemetrySink>) {
         self.dro.set_sink(sink);
+    }
+
+    /// Hands M283's [`WalkProgress`] to `sink` as the walk reaches each dot (see
+    /// [`ProgressSink`]); `None` removes the sink.
+    pub fn set_progress_sink(&mut self, sink: Option<ProgressSink>) {
+        self.dro.set_progress_sink(sink);
     }
 
     /// Reads any parameter by its manual name (case-insensitive): configuration, calibration or

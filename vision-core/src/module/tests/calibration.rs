@@ -503,6 +503,31 @@ fn every_calibration_trigger_reaches_the_dro_as_it_happens() {
     assert!(offset(end) < 1e-3 && end.last_status() == "OK", "{end:?}");
 }
 
+/// M283 tells the host where its walk is as it gets there: each of sheet 1's five dots in
+/// order before that dot's triggers, the lift after the last dot's, then the verify pass.
+#[test]
+fn the_walk_tells_its_progress_dot_by_dot_as_it_goes() {
+    use crate::module::WalkProgress;
+    let mut rig = standard_rig();
+    let log: std::sync::Arc<std::sync::Mutex<Vec<(usize, WalkProgress)>>> = std::sync::Arc::default();
+    let (seen, world) = (log.clone(), rig.shared.clone());
+    rig.module.set_progress_sink(Some(Box::new(move |p| {
+        let triggers = world.lock().map_or(0, |w| w.triggers);
+        seen.lock().expect("log").push((triggers, p));
+    })));
+    rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("calibrates");
+    let log = log.lock().expect("log").clone();
+    let stages: Vec<WalkProgress> = log.iter().map(|(_, p)| *p).collect();
+    let mut want: Vec<WalkProgress> = (1..=5).map(|dot| WalkProgress::SheetDot { dot, dots: 5 }).collect();
+    want.push(WalkProgress::Lift);
+    want.extend((1..=5).map(|dot| WalkProgress::Verify { dot, dots: 5 }));
+    assert_eq!(stages, want);
+    // Told before the dot's triggers: after the axis detect's 3, then 5 more per dot.
+    let at: Vec<usize> = log.iter().take(5).map(|(t, _)| *t).collect();
+    assert_eq!(at, [3, 8, 13, 18, 23]);
+    assert_eq!(WalkProgress::SheetDot { dot: 3, dots: 25 }.to_string(), "M283: dot 3 of 25");
+}
+
 /// A trigger that loses the mark clears the previous mark's values on the DRO at once, and
 /// M283 refused before any trigger still writes `LastStatus`.
 #[test]
