@@ -16,7 +16,7 @@ pub(crate) struct EmulateArgs {
     #[arg(long, value_name = "W.toml")]
     world: Option<PathBuf>,
     /// TCP port on 127.0.0.1 (0 picks a free one).
-    #[arg(long, default_value_t = 8500)]
+    #[arg(long, default_value_t = 8500, allow_negative_numbers = true)]
     port: u16,
 }
 

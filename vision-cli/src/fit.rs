@@ -11,6 +11,7 @@ use clap::{Args, ValueEnum};
 use serde::{Deserialize, Serialize};
 use vision_math::{Fit, Model, Point2};
 
+use crate::terminal::{is_terminal, Stream};
 use crate::Failure;
 
 /// Arguments of `mach-vision fit`.
@@ -113,6 +114,14 @@ fn read_input(file: Option<&PathBuf>) -> Result<String, Failure> {
             std::fs::read_to_string(path).map_err(|e| Failure::Input(format!("cannot read {}: {e}", path.display())))
         }
         _ => {
+            if file.is_none() && is_terminal(Stream::Stdin) {
+                // Not left waiting in silence for input the person may not know is wanted.
+                crate::terminal::show(&format!(
+                    "mach-vision fit: reading the JSON from standard input — type or paste it, then press {} \
+                     (or give a file: mach-vision fit FILE.json)",
+                    if cfg!(windows) { "Ctrl-Z and Enter" } else { "Ctrl-D" }
+                ));
+            }
             let mut s = String::new();
             std::io::stdin()
                 .read_to_string(&mut s)

@@ -32,10 +32,10 @@ pub(crate) struct LocateArgs {
     #[arg(long, value_enum, default_value_t = MarkArg::Dot)]
     mark: MarkArg,
     /// Expected size in image pixels: a dot's or ring's outer diameter, a cross's bar length.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     diameter: f64,
     /// Accepted size deviation in percent (0 < PCT < 100).
-    #[arg(long, default_value_t = 25.0)]
+    #[arg(long, default_value_t = 25.0, allow_negative_numbers = true)]
     tolerance: f64,
     /// Dark mark on a light ground, or light on dark.
     #[arg(long, value_enum, default_value_t = PolarityArg::Dark)]

@@ -11,6 +11,7 @@ mod picture;
 mod plan;
 mod run;
 mod sheet;
+mod terminal;
 mod trace;
 mod trigger;
 mod world;
@@ -22,7 +23,15 @@ use vision_core::text::{printable_line, printable_lines, MAX_MESSAGE_CHARS};
 
 /// Camera alignment for CNC machines.
 #[derive(Debug, Parser)]
-#[command(name = "mach-vision", version, about)]
+#[command(
+    name = "mach-vision",
+    version,
+    about,
+    after_help = "Every subcommand that reads G-code (trace, plan, run) defaults to --dialect mach4, the manual's \
+                  controller.\n\nEnvironment: MACH_VISION_TERMINAL=always (or never) treats every standard stream as a \
+                  terminal (or as none): run's progress on standard error, fit's note that it reads standard input, \
+                  and a refusal printed once. Unset, the operating system says which streams are terminals."
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

@@ -11,6 +11,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 use vision_gcode::{Interpreter, InterpreterConfig};
+use vision_math::show::number;
 use vision_math::{LengthUnit, MM_PER_INCH};
 use vision_path::{Event, GcodeItems, Limits, OutputCommand, PathError, PlanConfig, Setpoints, Step};
 
@@ -21,32 +22,66 @@ use crate::Failure;
 #[derive(Debug, Args)]
 pub(crate) struct PlanArgs {
     /// Maximum path acceleration, machine units/s² (the seed's `maxPathAcceleration`).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     accel: f64,
     /// Setpoint period, milliseconds.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     period: f64,
     /// Write every setpoint (time, line, position, velocity) and event to this CSV file.
     #[arg(long)]
     csv: Option<PathBuf>,
     /// Every axis's maximum speed, machine units/s [default: 500 mm/s in the machine unit].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     max_speed: Option<f64>,
     /// Every axis's maximum acceleration, machine units/s² [default: --accel].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     axis_accel: Option<f64>,
     /// Feed (machine units/min) for feed moves before any F [default: none, such a move is an
     /// error].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     default_feed: Option<f64>,
     /// The machine's coordinate unit; the program's G20/G21 are converted.
     #[arg(long, value_enum, default_value_t = UnitArg::In)]
     machine_units: UnitArg,
-    /// Whose G-code rules apply where the controllers differ (as in `trace`).
-    #[arg(long, value_parser = DialectArg::parse, default_value_t = DialectArg::MACHINEMOTION)]
+    /// Whose G-code rules apply where the controllers differ; the default is Mach4, the
+    /// manual's controller, as in `trace` and `run`.
+    #[arg(long, value_parser = DialectArg::parser(), ignore_case = true, default_value_t = DialectArg::DEFAULT)]
     dialect: DialectArg,
+    /// Print the report as one JSON object (as `run`, `trace` and `fit` do).
+    #[arg(long)]
+    json: bool,
     /// The G-code program; standard input when `-`.
     program: PathBuf,
+}
+
+/// The JSON report: the planner's settings and what it planned (lengths in the machine unit).
+#[derive(Debug, serde::Serialize)]
+struct Report {
+    program: String,
+    /// The machine unit (`in` or `mm`) of every length below.
+    unit: &'static str,
+    period_ms: f64,
+    /// Units/s².
+    path_accel: f64,
+    /// Every axis's maximum speed, units/s.
+    axis_max_speed: f64,
+    /// Every axis's maximum acceleration, units/s².
+    axis_max_accel: f64,
+    /// Seconds; null for a program without motion.
+    cycle_time_s: Option<f64>,
+    setpoints: u64,
+    events: u64,
+    /// The last setpoint's position and line; null for a program without motion.
+    end: Option<End>,
+}
+
+/// Where the plan ends.
+#[derive(Debug, serde::Serialize)]
+struct End {
+    x: f64,
+    y: f64,
+    z: f64,
+    line: usize,
 }
 
 /// Runs the subcommand; returns the report.
@@ -99,12 +134,33 @@ pub(crate) fn run(args: &PlanArgs) -> Result<String, Failure> {
         csv.finish()?;
     }
     let u = unit.short_name();
+    if args.json {
+        let report = Report {
+            program: name.to_string(),
+            unit: u,
+            period_ms: args.period,
+            path_accel: limits.max_path_accel,
+            axis_max_speed: limits.axes[0].max_speed,
+            axis_max_accel: limits.axes[0].max_accel,
+            cycle_time_s: last.as_ref().map(|s| s.time),
+            setpoints,
+            events,
+            end: last.map(|s| End { x: s.position.x, y: s.position.y, z: s.position.z, line: s.line }),
+        };
+        let mut json = serde_json::to_string_pretty(&report).map_err(|e| Failure::Input(e.to_string()))?;
+        json.push('\n');
+        return Ok(json);
+    }
     let mut report = String::new();
-    // Writing to a String cannot fail.
+    // Writing to a String cannot fail. The settings as messages show numbers (10 significant
+    // digits at most), not a float's every digit.
     let _ = writeln!(
         report,
         "# {name}: {} ms setpoints, path acceleration {} {u}/s², axes {} {u}/s and {} {u}/s²",
-        args.period, limits.max_path_accel, limits.axes[0].max_speed, limits.axes[0].max_accel
+        number(args.period),
+        number(limits.max_path_accel),
+        number(limits.axes[0].max_speed),
+        number(limits.axes[0].max_accel)
     );
     if let Some(s) = last {
         let p = s.position;

@@ -54,8 +54,8 @@ pub(crate) enum Format {
 #[derive(Debug, Args)]
 pub(crate) struct SheetArgs {
     /// The sheet number (`M283 C<N>`, on LinuxCNC `M283 P<N>`).
-    #[arg(default_value_t = 1)]
-    sheet: u32,
+    #[arg(default_value_t = 1, allow_negative_numbers = true)]
+    sheet: i64,
     /// The paper it is printed on.
     #[arg(long, value_enum, default_value_t = Paper::Letter)]
     paper: Paper,
@@ -277,7 +277,7 @@ pub(crate) fn pdf(shapes: &[Shape], paper: Paper) -> Vec<u8> {
 
 /// Runs `mach-vision sheet`.
 pub(crate) fn run(args: &SheetArgs) -> Result<String, Failure> {
-    let sheet = cal_sheet(args.sheet).ok_or_else(|| {
+    let sheet = u32::try_from(args.sheet).ok().and_then(cal_sheet).ok_or_else(|| {
         Failure::Input(format!("no calibration sheet {} — the sheets are {}", args.sheet, known_sheets()))
     })?;
     let by_name = args.output.as_ref().and_then(|p| p.extension()).and_then(|e| e.to_str()).and_then(|e| {

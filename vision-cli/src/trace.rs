@@ -34,8 +34,9 @@ pub(crate) struct TraceArgs {
     /// on the controllers: the `/` is ignored).
     #[arg(long)]
     block_delete: bool,
-    /// Whose rules apply where the controllers differ.
-    #[arg(long, value_parser = DialectArg::parse, default_value_t = DialectArg::MACHINEMOTION)]
+    /// Whose G-code rules apply where the controllers differ; the default is Mach4, the
+    /// manual's controller, as in `plan` and `run`.
+    #[arg(long, value_parser = DialectArg::parser(), ignore_case = true, default_value_t = DialectArg::DEFAULT)]
     dialect: DialectArg,
     /// Folders searched for `name.ngc` when `o<name> call` names a subroutine the program does
     /// not define (LinuxCNC's SUBROUTINE_PATH); colon-separated, or repeat the option.
@@ -46,20 +47,31 @@ pub(crate) struct TraceArgs {
 }
 
 /// `--dialect NAME`: the controller whose G-code rules apply where the controllers differ
-/// (shared with `plan` and `run`): `machinemotion` (seed 002: G92 zeroes unnamed axes, M6
-/// applies tool offsets, nested comments), `mach4` (G92 keeps unnamed axes, G43 applies tool
-/// length offsets, flat comments) or `linuxcnc` (2.9: as Mach4 without G68/G51; its tool table
-/// is added). Any name in `vision_core::CONTROLLERS`.
+/// (shared with `plan` and `run`): `mach4` (G92 keeps unnamed axes, G43 applies tool length
+/// offsets, flat comments), `linuxcnc` (2.9: as Mach4 without G68/G51; its tool table is added)
+/// or `machinemotion` (seed 002: G92 zeroes unnamed axes, M6 applies tool offsets, nested
+/// comments). Any name in `vision_core::CONTROLLERS`, in any case; `--help` lists them.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct DialectArg(pub(crate) &'static dyn Controller);
 
 impl DialectArg {
-    /// Seed 002's MachineMotion, the default of `trace` and `plan` (the path interface's tools).
-    pub(crate) const MACHINEMOTION: DialectArg = DialectArg(&vision_core::controller::MachineMotion);
+    /// Mach4, every subcommand's default. Decision: the controller a user most likely has — the
+    /// manual's (SPEC), the one the Windows package installs into — so that `trace`, `plan` and
+    /// `run` read a program alike when no `--dialect` is given (`run` takes the world's
+    /// `machine.dialect`, whose default is the same Mach4).
+    pub(crate) const DEFAULT: DialectArg = DialectArg(&vision_core::controller::Mach4);
 
     /// Parses a controller's name (case-insensitive).
     pub(crate) fn parse(name: &str) -> Result<DialectArg, String> {
         vision_core::controller::by_name(name).map(DialectArg).map_err(|e| e.to_string())
+    }
+
+    /// The option's parser: the controllers' names as clap's possible values (so `--help` lists
+    /// them; the option sets `ignore_case`).
+    pub(crate) fn parser() -> impl clap::builder::TypedValueParser<Value = DialectArg> {
+        use clap::builder::TypedValueParser as _;
+        clap::builder::PossibleValuesParser::new(vision_core::controller::names())
+            .try_map(|name| DialectArg::parse(&name))
     }
 
     /// The interpreter's dialect.

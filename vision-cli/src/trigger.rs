@@ -16,10 +16,10 @@ pub(crate) struct TriggerArgs {
     #[arg(long)]
     ip: String,
     /// Camera port.
-    #[arg(long, default_value_t = 8500)]
+    #[arg(long, default_value_t = 8500, allow_negative_numbers = true)]
     port: u16,
     /// Seconds for the whole exchange (connect, send, reply).
-    #[arg(long, default_value_t = 3.0)]
+    #[arg(long, default_value_t = 3.0, allow_negative_numbers = true)]
     timeout: f64,
     /// Print the reading as one JSON object.
     #[arg(long)]

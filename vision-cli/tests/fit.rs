@@ -99,3 +99,31 @@ fn degenerate_geometry_and_wrong_shapes_exit_2_with_the_reason() {
         assert!(out.stdout.is_empty(), "{input}: no report, no G51");
     }
 }
+
+/// Issue 34 item 7: `fit` with no file tells a person at a terminal that it reads standard
+/// input, instead of waiting silently; piped input gets no note.
+#[test]
+fn fit_without_a_file_says_it_reads_standard_input_on_a_terminal() {
+    let input = std::fs::read_to_string(example4()).expect("example 4");
+    let note = "reading the JSON from standard input";
+    let fit = |terminal: &str, args: &[&str]| {
+        let mut child = bin()
+            .args(args)
+            .env("MACH_VISION_TERMINAL", terminal)
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("spawn");
+        child.stdin.take().expect("stdin").write_all(input.as_bytes()).expect("write stdin");
+        child.wait_with_output().expect("wait")
+    };
+    let out = fit("always", &["fit"]);
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.starts_with("mach-vision fit: ") && err.contains(note) && err.lines().count() == 1, "{err}");
+    let plain = fit("never", &["fit"]);
+    assert!(plain.stderr.is_empty(), "{}", String::from_utf8_lossy(&plain.stderr));
+    assert_eq!(out.stdout, plain.stdout, "the note is not in the report");
+    assert!(fit("always", &["fit", "-"]).stderr.is_empty(), "`-` asks for standard input itself");
+}

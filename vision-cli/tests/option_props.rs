@@ -103,3 +103,33 @@ proptest! {
         prop_assert!(out.status.code() != Some(1), "fit has no exit 1: {json}");
     }
 }
+
+/// Issue 34 item 7: a negative number given to a numeric option (`--accel -5`) is the option's
+/// value and gets the option's range message (exit 2), never clap's "unexpected argument".
+#[test]
+fn negative_numbers_reach_every_numeric_options_range_check() {
+    let p = program();
+    let p = p.to_str().expect("utf-8");
+    let cases: [(&[&str], &str); 14] = [
+        (&["plan", "--accel", "-5", p], "max path acceleration (units/s²) = -5 is invalid"),
+        (&["plan", "--accel", "1", "--period", "-1", p], "setpoint period (s) = -0.001 is invalid"),
+        (&["plan", "--accel", "1", "--max-speed", "-1", p], "axis max speed (units/s) = -1 is invalid"),
+        (&["plan", "--accel", "1", "--axis-accel", "-1", p], "axis max acceleration (units/s²) = -1 is invalid"),
+        (&["plan", "--accel", "1", "--default-feed", "-1", p], "--default-feed -1 is invalid"),
+        (&["locate", "--diameter", "-3", p], "--diameter -3: not a positive number"),
+        (&["locate", "--diameter", "10", "--tolerance", "-3", p], "--tolerance -3: not a percentage"),
+        (&["trigger", "--ip", "127.0.0.1", "--timeout", "-1"], "--timeout -1 must be more than 0 s"),
+        (&["trigger", "--ip", "127.0.0.1", "--port", "-1"], "-1 is not in 0..=65535"),
+        (&["emulate", "--port", "-1"], "-1 is not in 0..=65535"),
+        (&["run", "--port", "-1", p], "-1 is not in 0..=65535"),
+        (&["run", "--clock", "-1", p], "-1 is before 1970-01-01 00:00 UTC"),
+        (&["sheet", "-1"], "no calibration sheet -1"),
+        (&["sheet", "-1", "--format", "svg"], "no calibration sheet -1"),
+    ];
+    for (args, message) in cases {
+        let out = bin().args(args).stdin(Stdio::null()).output().expect("spawn");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(!err.contains("unexpected argument") && err.contains(message), "{args:?}: {err}");
+    }
+}

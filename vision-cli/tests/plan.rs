@@ -201,3 +201,61 @@ fn the_closing_percent_ends_the_plan() {
         assert_eq!(report_value(&text, "end"), "X2.0000 Y1.0000 Z0.0000 (line 8)", "{dialect}");
     }
 }
+
+/// Issue 34 item 7: `plan --json` prints one JSON object with the text report's values.
+#[test]
+fn plan_json_is_one_object_with_the_reports_values() {
+    let path = program("json.nc", "G90 G20\nG1 X1 F10\nM30\n");
+    let text = plan(&["--accel", "10"], &path);
+    let out = plan(&["--accel", "10", "--json"], &path);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let text = String::from_utf8(text.stdout).expect("utf-8");
+    assert_eq!(format!("{:.3} s", v["cycle_time_s"].as_f64().expect("cycle")), report_value(&text, "cycle time"));
+    assert_eq!(v["setpoints"].to_string(), report_value(&text, "setpoints"));
+    assert_eq!(v["events"].to_string(), report_value(&text, "events"));
+    assert_eq!((v["end"]["x"].as_f64(), v["end"]["line"].as_u64()), (Some(1.0), Some(3)));
+    assert_eq!(
+        (v["unit"].as_str(), v["path_accel"].as_f64(), v["period_ms"].as_f64()),
+        (Some("in"), Some(10.0), Some(1.0))
+    );
+    assert!((v["axis_max_speed"].as_f64().expect("speed") - 500.0 / 25.4).abs() < 1e-12, "{v}");
+}
+
+/// Issue 34 item 7: the settings line reads numbers as messages do (`vision_math::show::number`),
+/// not a float's every digit.
+#[test]
+fn plan_prints_its_settings_with_the_message_number_formatter() {
+    let path = program("settings.nc", "G90 G20\nG1 X1 F10\n");
+    let out = plan(&["--accel", "10"], &path);
+    let text = String::from_utf8(out.stdout).expect("utf-8");
+    let first = text.lines().next().expect("settings line");
+    assert!(
+        first.ends_with(": 1 ms setpoints, path acceleration 10 in/s², axes 19.68503937 in/s and 10 in/s²"),
+        "{first}"
+    );
+}
+
+/// Issue 34 item 7: `trace`, `plan` and `run` read a program alike without `--dialect`: all
+/// default to Mach4 (a comment ends at its first `)`, where seed 002's would nest), and
+/// `--help` lists the dialects and the default.
+#[test]
+fn every_subcommand_defaults_to_the_mach4_dialect_and_lists_the_dialects() {
+    let path = program("nested-comment.nc", "G90 G20\nG1 F10 Y0 (outer (inner) X1\nM30\n");
+    let trace = bin().arg("trace").arg(&path).output().expect("trace");
+    assert!(trace.status.success(), "{}", String::from_utf8_lossy(&trace.stderr));
+    assert!(String::from_utf8_lossy(&trace.stdout).contains("X1.0000"), "X1 is a word after the comment");
+    let planned = plan(&["--accel", "10"], &path);
+    assert!(planned.status.success(), "{}", String::from_utf8_lossy(&planned.stderr));
+    assert_eq!(report_value(&String::from_utf8_lossy(&planned.stdout), "end"), "X1.0000 Y0.0000 Z0.0000 (line 3)");
+    let run = bin().arg("run").arg(&path).output().expect("run");
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let seed = bin().args(["trace", "--dialect", "machinemotion"]).arg(&path).output().expect("trace");
+    assert!(!seed.status.success(), "seed 002's comments nest: the comment is never closed");
+    for sub in ["trace", "plan", "run"] {
+        let help = bin().args([sub, "--help"]).output().expect("help");
+        let help = String::from_utf8_lossy(&help.stdout);
+        assert!(help.contains("[possible values: mach4, linuxcnc, machinemotion]"), "{sub}: {help}");
+        assert!(help.contains("mach4") && help.contains("the manual's controller"), "{sub}: {help}");
+    }
+}

@@ -506,3 +506,166 @@ fn a_height_change_is_reported_in_text_json_and_telemetry() {
     let h = &steps(&r, "fit")[0]["height"];
     assert!(f(&h["change_pct"]).abs() < 3.0 * f(&h["sigma_pct"]) && h["warning"].is_null(), "{h}");
 }
+
+/// `run ARGS… PROGRAMS…` with standard error seen as a terminal (`always`) or not (`never`), or
+/// as the test's pipe really is (`None`).
+fn run_as(terminal: Option<&str>, args: &[&str], programs: &[&Path]) -> Output {
+    let mut cmd = bin();
+    cmd.env_remove("MACH_VISION_TERMINAL");
+    if let Some(t) = terminal {
+        cmd.env("MACH_VISION_TERMINAL", t);
+    }
+    cmd.arg("run").args(args).args(programs).output().expect("spawn")
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// Issue 34 item 5: on a terminal, each Vision M-code's line of the report reaches standard
+/// error as it runs, M283's walk dot by dot before its step, in program order; the report on
+/// standard output is byte for byte the one without progress.
+#[test]
+fn on_a_terminal_progress_shows_each_step_and_the_walk_in_order() {
+    let (cal, fit) = (example("01-calibrate-sheet.nc"), example("04-rectangle-fit.nc"));
+    let shown = run_as(Some("always"), &["--clock", "0"], &[&cal, &fit]);
+    let plain = run_as(Some("never"), &["--clock", "0"], &[&cal, &fit]);
+    assert!(shown.status.success() && plain.status.success(), "{}", stderr(&shown));
+    assert_eq!(shown.stdout, plain.stdout, "progress never changes standard output");
+    let lines: Vec<String> = stderr(&shown).lines().map(|l| l.trim().to_string()).collect();
+    let mut want = vec![format!("== {}: running", cal.display())];
+    want.extend((1..=5).map(|d| format!("M283: dot {d} of 5")));
+    want.push("M283: lift over the last dot (the optical centre)".into());
+    want.extend((1..=5).map(|d| format!("M283: verify dot {d} of 5")));
+    want.push("line   12  M283  calibration sheet 1: 83 triggers, 1970-01-01T00:00:00+00:00".into());
+    want.push(format!("== {}: running", fit.display()));
+    want.push("line   11  M280  begin a rectangle run".into());
+    assert_eq!(lines[..want.len()], want[..], "{lines:#?}");
+    // Each capture's and the fit's line, as the report prints its first line.
+    let report = String::from_utf8_lossy(&plain.stdout);
+    let rest = &lines[want.len()..];
+    assert_eq!(rest.len(), 5, "{rest:#?}");
+    for (i, line) in rest.iter().enumerate() {
+        assert!(report.lines().any(|r| r.trim() == line), "step {i}: {line} is the report's line");
+    }
+    assert!(rest[..4].iter().all(|l| l.contains("M281  dot")) && rest[4].contains("M282  rectangle fit"), "{rest:#?}");
+}
+
+/// Standard error that is no terminal (a pipe, a file, a CI log) stays as it was: nothing on a
+/// run that succeeds; `--report` still lists the files it wrote, and `--quiet` silences that
+/// list and the progress, never an error.
+#[test]
+fn progress_is_for_terminals_only_and_quiet_silences_it_but_not_errors() {
+    let fit = example("04-rectangle-fit.nc");
+    for terminal in [None, Some("never")] {
+        let out = run_as(terminal, &[], &[&fit]);
+        assert!(out.status.success() && out.stderr.is_empty(), "{terminal:?}: {}", stderr(&out));
+    }
+    let out = run_as(Some("always"), &["--quiet"], &[&fit]);
+    assert!(out.status.success() && out.stderr.is_empty(), "{}", stderr(&out));
+    let dir = scratch("quiet");
+    let pictures = dir.join("pictures");
+    let pictures = pictures.to_str().expect("utf-8");
+    let out = run_as(None, &["--report", pictures], &[&fit]);
+    assert!(stderr(&out).starts_with("mach-vision: wrote ") && stderr(&out).contains("-fit.svg"), "{}", stderr(&out));
+    let out = run_as(Some("always"), &["-q", "--report", pictures], &[&fit]);
+    assert!(out.status.success() && out.stderr.is_empty(), "{}", stderr(&out));
+    let refused = write(&dir, "refused.nc", "G90 G20\nT1 M6\nM280\n");
+    let out = run_as(Some("always"), &["--quiet"], &[&refused]);
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(stderr(&out).lines().count(), 1, "{}", stderr(&out));
+    assert!(stderr(&out).starts_with("mach-vision: "), "{}", stderr(&out));
+}
+
+/// Issue 34 item 7: on a terminal a refusal is printed once — in the report's step — not again
+/// as `stopped:` and on the error line; where standard output is no terminal the error line
+/// still says why (the person may see only it).
+#[test]
+fn on_a_terminal_a_refusal_is_printed_once() {
+    let dir = scratch("refusal");
+    let refused = write(&dir, "refused.nc", "G90 G20\nT1 M6\nM280\n");
+    let why = "camera tool T98 is not the active tool";
+    let out = run_as(Some("always"), &[], &[&refused]);
+    assert_eq!(out.status.code(), Some(1));
+    let (report, err) = (String::from_utf8_lossy(&out.stdout), stderr(&out));
+    assert_eq!(report.matches(why).count() + err.matches(why).count(), 1, "{report}\n{err}");
+    assert!(report.contains("  line    3  M280  refused: camera tool T98"), "{report}");
+    assert!(report.contains("  stopped at line 3 by the refusal above"), "{report}");
+    assert!(err.ends_with(": stopped at line 3 — the refusal above says why\n"), "{err}");
+    assert!(err.contains("line    3  M280  refused\n"), "the progress line: {err}");
+    let out = run_as(Some("never"), &[], &[&refused]);
+    assert!(stderr(&out).contains(why), "{}", stderr(&out));
+    assert_eq!(String::from_utf8_lossy(&out.stdout).matches(why).count(), 1);
+    // A failure that is no refusal keeps its reason in the report.
+    let bad = write(&dir, "bad.nc", "G0 X[1/0]\n");
+    let out = run_as(Some("always"), &[], &[&bad]);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("  stopped: line 1: "), "{}", stderr(&out));
+}
+
+/// Issue 34 item 7: `run -` reads the program from standard input, as `trace`, `plan` and `fit`.
+#[test]
+fn run_reads_standard_input_for_dash() {
+    let program = std::fs::read(example("04-rectangle-fit.nc")).expect("ex4");
+    let run_stdin = |args: &[&str]| {
+        let mut child = bin()
+            .arg("run")
+            .args(args)
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("spawn");
+        let mut stdin = child.stdin.take().expect("stdin");
+        std::io::Write::write_all(&mut stdin, &program).expect("write");
+        drop(stdin);
+        child.wait_with_output().expect("wait")
+    };
+    let out = run_stdin(&["--json", "-"]);
+    let report = json(&out);
+    assert_eq!(report["programs"][0]["program"], "stdin");
+    assert_eq!(steps(&report, "fit").len(), 1);
+    let file = json(&run(&["--json"], &[&example("04-rectangle-fit.nc")]));
+    assert_eq!(report["programs"][0]["steps"][5]["gcode"], file["programs"][0]["steps"][5]["gcode"]);
+    let out = run_stdin(&["-", "-"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("- (standard input) can be given once"), "{}", stderr(&out));
+}
+
+/// Issue 34 item 7: a profile whose camera is not the one the run uses gets a note naming the
+/// camera used and the options that pick the profile's.
+#[test]
+fn run_says_when_it_uses_another_camera_than_the_profiles() {
+    let dir = scratch("camera-note");
+    let fit = example("04-rectangle-fit.nc");
+    let base = "VisionEnabled = true\nVisionCameraToolNumber = 98\n";
+    let keyence =
+        write(&dir, "k.toml", &format!("[vision]\n{base}VisionDriver = \"Keyence\"\nVisionIP = \"192.168.0.10\"\n"));
+    let k = keyence.to_str().expect("utf-8");
+    let out = run_as(None, &["--profile", k], &[&fit]);
+    let err = stderr(&out);
+    assert!(
+        err.contains("the profile names camera driver Keyence, but this run uses the simulated camera (--camera sim)")
+            && err.contains("give --camera keyence --ip 192.168.0.10 --port 8500"),
+        "{err}"
+    );
+    // The profile's driver on the CLI's loopback emulator is not the profile's camera either.
+    let out = run_as(None, &["--profile", k, "--camera", "keyence"], &[&fit]);
+    assert!(stderr(&out).contains("give --camera keyence --ip 192.168.0.10"), "{}", stderr(&out));
+    let sim = write(&dir, "s.toml", &format!("[vision]\n{base}VisionDriver = \"Sim\"\n"));
+    let out = run_as(None, &["--profile", sim.to_str().expect("utf-8")], &[&fit]);
+    assert!(!stderr(&out).contains("profile names camera"), "{}", stderr(&out));
+}
+
+/// Issue 34 item 7: a profile key one edit from a real one is refused with "did you mean".
+#[test]
+fn a_mistyped_profile_key_gets_did_you_mean() {
+    let dir = scratch("did-you-mean");
+    let profile = write(&dir, "p.toml", "[vision]\nVisionEnabled = true\nVisionCameraTool = 98\n");
+    let out = run_as(None, &["--profile", profile.to_str().expect("utf-8")], &[&example("04-rectangle-fit.nc")]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("\"VisionCameraTool\"") && stderr(&out).contains("did you mean VisionCameraToolNumber?"),
+        "{}",
+        stderr(&out)
+    );
+}

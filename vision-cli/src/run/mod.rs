@@ -20,7 +20,8 @@ use vision_host::{ProgramHandler, Session, SimFrames};
 use vision_mcode::{fixed_clock, system_clock};
 use vision_path::{Limits, PlanConfig, Setpoints};
 
-use crate::trace::DialectArg;
+use crate::terminal::{is_terminal, Progress, Stream};
+use crate::trace::{read_program, DialectArg};
 use crate::{read_text, world, Failure};
 use report::{calibration_truth, pound, steps, Cutters, ProgramReport, Report, Step};
 
@@ -40,7 +41,7 @@ const CAMERA: &str = vision_driver_camera::DRIVER_NAME;
 #[derive(Debug, Args)]
 pub(crate) struct RunArgs {
     /// G-code programs, run in order on the same machine (tool table, profile and pound
-    /// variables carry over from one to the next).
+    /// variables carry over from one to the next); `-` reads one from standard input.
     #[arg(required = true, value_name = "PROGRAM.nc")]
     programs: Vec<PathBuf>,
     /// The simulated world (TOML); default: the built-in world.
@@ -63,7 +64,7 @@ pub(crate) struct RunArgs {
     #[arg(long)]
     ip: Option<String>,
     /// Keyence camera port (with `--camera keyence --ip`).
-    #[arg(long, default_value_t = 8500)]
+    #[arg(long, default_value_t = 8500, allow_negative_numbers = true)]
     port: u16,
     /// Frame source for `--camera camera`: a V4L2 device, an `http://` snapshot URL, or an
     /// image file or folder (the profile's `VisionCameraSource` when absent is replaced, for
@@ -73,20 +74,35 @@ pub(crate) struct RunArgs {
     /// Print the report as one JSON object.
     #[arg(long)]
     json: bool,
+    /// Show no progress and no list of the files `--report` wrote; errors and warnings still
+    /// go to standard error. (Progress — each Vision M-code as it runs, M283's walk dot by
+    /// dot — is shown on standard error when it is a terminal, or when the environment sets
+    /// MACH_VISION_TERMINAL=always; never on standard output.)
+    #[arg(long, short)]
+    quiet: bool,
     /// Also write one SVG picture per fit and per sheet calibration into this folder
     /// (created if missing).
     #[arg(long, value_name = "DIR")]
     report: Option<PathBuf>,
-    /// The controller the simulated machine is (`mach4`, `linuxcnc`, `machinemotion`): its
-    /// G-code dialect and its rules for the Vision M-codes; default: the world's
-    /// `machine.dialect` (`mach4` unless the world says otherwise).
-    #[arg(long, value_parser = DialectArg::parse)]
+    /// The controller the simulated machine is: its G-code dialect and its rules for the Vision
+    /// M-codes; default: the world's `machine.dialect`, which is mach4 (the manual's
+    /// controller, as in `trace` and `plan`) unless the world says otherwise.
+    #[arg(long, value_parser = DialectArg::parser(), ignore_case = true)]
     dialect: Option<DialectArg>,
     /// Run as if the clock read this many seconds after 1970-01-01 00:00 UTC (the time M283
     /// stamps its calibration with and M281 D1 names images by), so that two runs print the
     /// same report; default: the system clock.
-    #[arg(long, value_name = "UNIX_SECONDS")]
+    #[arg(long, value_name = "UNIX_SECONDS", allow_negative_numbers = true, value_parser = unix_seconds)]
     clock: Option<u64>,
+}
+
+/// `--clock`'s value: whole seconds since 1970-01-01 00:00 UTC, not before it.
+fn unix_seconds(text: &str) -> Result<u64, String> {
+    match text.trim().parse::<i128>() {
+        Ok(s) if s < 0 => Err(format!("{s} is before 1970-01-01 00:00 UTC: give 0 or more seconds")),
+        Ok(s) => u64::try_from(s).map_err(|_| format!("{s} is past the largest time, {} seconds", u64::MAX)),
+        Err(_) => Err("not a whole number of seconds".to_string()),
+    }
 }
 
 /// Everything a run needs, set up: the simulated machine and camera, and the Vision session
@@ -107,7 +123,7 @@ fn set(params: &mut Params, name: &str, value: impl Into<vision_core::ParamValue
 }
 
 impl Runner {
-    fn new(args: &RunArgs) -> Result<Runner, Failure> {
+    fn new(args: &RunArgs, progress: Progress) -> Result<Runner, Failure> {
         let mut world = world::load(args.world.as_deref())?;
         if let Some(dialect) = args.dialect {
             world.machine.controller = ControllerName(dialect.0);
@@ -129,6 +145,11 @@ impl Runner {
                 p
             }
             None => sim.calibrated_params(&registry.params()).map_err(|e| Failure::Input(e.to_string()))?,
+        };
+
+        let profile_camera = match &args.profile {
+            Some(path) if path.exists() => Some(ProfileCamera::of(&params)?),
+            _ => None,
         };
 
         // The camera choices below are for this session: the profile keeps the file's (or,
@@ -189,7 +210,20 @@ impl Runner {
             }
         };
 
+        // Another driver, or the profile's driver pointed at the CLI's own loopback camera.
+        let other_camera = |f: &ProfileCamera| {
+            !f.driver.eq_ignore_ascii_case(&driver)
+                || (driver == KEYENCE && args.ip.is_none())
+                || (driver == CAMERA && args.source.is_none())
+        };
+        if let Some(file) = profile_camera.filter(other_camera) {
+            crate::terminal::show(&file.note(&camera, &args.camera));
+        }
+
         let mut module = VisionModule::from_registry(params, &registry).map_err(|e| Failure::Input(e.to_string()))?;
+        if progress.on() {
+            module.set_progress_sink(Some(Box::new(|p| crate::terminal::show(&format!("              {p}")))));
+        }
         if let Some(path) = &args.profile {
             let mut store = ProfileStore::new(path).with_defaults(registry.params());
             for (name, value) in file_values {
@@ -216,7 +250,8 @@ impl Runner {
     /// Runs one program (its text already read) and reports it. The moves stream into the
     /// cycle-time planner as the program makes them; only the first [`MAX_KEPT_ITEMS`] are
     /// kept, for the alignment time, so memory does not grow with the program.
-    fn run(&mut self, path: &Path, text: &str) -> ProgramReport {
+    fn run(&mut self, program: &str, text: &str, progress: Progress) -> ProgramReport {
+        progress.line(&format!("== {program}: running"));
         let start = self.machine.interpreter().machine_position();
         let config = self.plan_config(start);
         let mut planner = StreamedPlan::start(config);
@@ -232,7 +267,9 @@ impl Runner {
             kept.push(&item);
             planner.push(item);
         };
-        let result = self.machine.run_program(text, Some(&mut self.handler), &mut collect);
+        let world_unit = self.sim.unit().short_name();
+        let mut streamed = Streamed { handler: &mut self.handler, progress, world_unit };
+        let result = self.machine.run_program(text, Some(&mut streamed), &mut collect);
         let cycle = planner.finish();
         let steps_not_listed = self.handler.records_dropped();
         let records = self.handler.take_records();
@@ -245,13 +282,17 @@ impl Runner {
         } else {
             None
         };
+        let stopped_by_refusal = match (&result, records.last()) {
+            (Err(e), Some(r)) if steps_not_listed == 0 && r.result.is_err() && r.line == e.line() => Some(r.line),
+            _ => None,
+        };
         let (outcome, error) = match result {
             Ok(RunOutcome::Completed { .. }) => ("completed".to_string(), None),
             Ok(RunOutcome::Ended { line, code }) => (format!("ended by M{code} at line {line}"), None),
             Err(e) => (format!("failed at line {}", e.line()), Some(e.to_string())),
         };
         ProgramReport {
-            program: path.display().to_string(),
+            program: program.to_string(),
             outcome,
             moves,
             cycle_time_s: cycle.as_ref().ok().copied(),
@@ -262,6 +303,7 @@ impl Runner {
             steps_not_listed,
             calibration_truth,
             error,
+            stopped_by_refusal,
         }
     }
 
@@ -271,6 +313,79 @@ impl Runner {
         let world = self.sim.world();
         let (speed, accel) = world.machine.motion_limits(world.unit);
         PlanConfig::new(Limits::uniform(accel, speed, accel), CYCLE_PERIOD_S, start)
+    }
+}
+
+/// The handler a program runs with: the session's, and each Vision M-code's line of the report
+/// shown as progress the moment it has run (its cut error is known only after the program).
+struct Streamed<'a> {
+    handler: &'a mut ProgramHandler,
+    progress: Progress,
+    world_unit: &'static str,
+}
+
+impl vision_gcode::MCodeHandler for Streamed<'_> {
+    fn call(
+        &mut self,
+        call: &vision_gcode::UserMCode<'_>,
+        ctx: &mut vision_gcode::Context<'_>,
+    ) -> Result<Vec<String>, vision_gcode::HandlerError> {
+        let before = self.handler.records().len();
+        let result = self.handler.call(call, ctx);
+        if self.progress.on() && self.handler.records().len() > before {
+            if let Some(record) = self.handler.records().last() {
+                self.progress.line(&text::progress_line(&report::step(record, None), self.world_unit));
+            }
+        }
+        result
+    }
+}
+
+/// The camera a profile file names, to tell the user when `--camera` picked another.
+struct ProfileCamera {
+    /// `VisionDriver`.
+    driver: String,
+    /// The options that pick it: `--camera keyence --ip … --port …`, `--camera camera --source …`.
+    options: String,
+}
+
+impl ProfileCamera {
+    fn of(params: &Params) -> Result<ProfileCamera, Failure> {
+        let text = |name: &str| -> Result<String, Failure> {
+            let value = params.get(name).map_err(|e| Failure::Input(e.to_string()))?;
+            Ok(match value {
+                vision_core::ParamValue::Text(t) => t,
+                other => other.to_string(),
+            })
+        };
+        let driver = text("VisionDriver")?;
+        let quoted = |v: &str| {
+            let v = vision_core::text::printable_line(v, 200);
+            if v.is_empty() || v.contains(char::is_whitespace) {
+                format!("'{v}'")
+            } else {
+                v
+            }
+        };
+        let options = if driver.eq_ignore_ascii_case(KEYENCE) {
+            format!("--camera keyence --ip {} --port {}", quoted(&text("VisionIP")?), text("VisionPort")?)
+        } else if driver.eq_ignore_ascii_case(CAMERA) {
+            format!("--camera camera --source {}", quoted(&text("VisionCameraSource")?))
+        } else {
+            format!("--camera {}", quoted(&driver.to_ascii_lowercase()))
+        };
+        Ok(ProfileCamera { driver, options })
+    }
+
+    /// The note: which camera the run uses, and how to use the profile's.
+    fn note(&self, camera: &str, option: &str) -> String {
+        format!(
+            "mach-vision: the profile names camera driver {}, but this run uses the {camera} (--camera {}); to use \
+             the profile's camera, give {}",
+            vision_core::text::printable_line(&self.driver, 64),
+            vision_core::text::printable_line(option, 64),
+            self.options
+        )
     }
 }
 
@@ -448,6 +563,14 @@ fn camera_name(registry: &DriverRegistry, camera: &str) -> Result<String, Failur
     })
 }
 
+/// The report's name for the program read from standard input (`-`).
+const STDIN_NAME: &str = "stdin";
+
+/// Whether `path` is `-`, standard input.
+fn is_stdin(path: &Path) -> bool {
+    path.as_os_str() == "-"
+}
+
 /// Runs `mach-vision run`.
 pub(crate) fn run(args: &RunArgs) -> Result<String, Failure> {
     if args.ip.is_some() && !args.camera.eq_ignore_ascii_case(KEYENCE) {
@@ -456,16 +579,33 @@ pub(crate) fn run(args: &RunArgs) -> Result<String, Failure> {
     if args.source.is_some() && !args.camera.eq_ignore_ascii_case(CAMERA) {
         return Err(Failure::Input("--source needs --camera camera".into()));
     }
+    if args.programs.iter().filter(|p| is_stdin(p)).count() > 1 {
+        return Err(Failure::Input("- (standard input) can be given once: it holds one program".into()));
+    }
     // Every program is read before anything runs: an unreadable file is bad input, not a
     // session cut off halfway with its report lost.
-    let texts = args.programs.iter().map(|p| read_text(p, "program")).collect::<Result<Vec<_>, _>>()?;
-    let mut session = Runner::new(args)?;
+    let texts = args
+        .programs
+        .iter()
+        .map(|p| if is_stdin(p) { read_program(p) } else { read_text(p, "program") })
+        .collect::<Result<Vec<_>, _>>()?;
+    let progress = Progress::new(args.quiet);
+    // On a terminal the report above the error line already says why a refusal stopped the
+    // run: the error line then only says where.
+    let report_shows_refusal = !args.json && is_terminal(Stream::Stdout) && is_terminal(Stream::Stderr);
+    let mut session = Runner::new(args, progress)?;
     let mut programs = Vec::with_capacity(args.programs.len());
     let mut failure = None;
     for (path, text) in args.programs.iter().zip(&texts) {
-        let report = session.run(path, text);
+        let name = if is_stdin(path) { STDIN_NAME.to_string() } else { path.display().to_string() };
+        let report = session.run(&name, text, progress);
         if let Some(e) = &report.error {
-            failure = Some(format!("{}: {e}", report.program));
+            failure = Some(match report.stopped_by_refusal {
+                Some(line) if report_shows_refusal => {
+                    format!("{}: stopped at line {line} — the refusal above says why", report.program)
+                }
+                _ => format!("{}: {e}", report.program),
+            });
         }
         programs.push(report);
         if failure.is_some() {
@@ -492,7 +632,9 @@ pub(crate) fn run(args: &RunArgs) -> Result<String, Failure> {
             eprintln!("mach-vision: --report {}: the run made no fit or sheet calibration to draw", dir.display());
         }
         for path in written {
-            eprintln!("mach-vision: wrote {}", vision_core::text::printable_line(&path.display().to_string(), 400));
+            if !args.quiet {
+                eprintln!("mach-vision: wrote {}", vision_core::text::printable_line(&path.display().to_string(), 400));
+            }
         }
     }
     let output = if args.json {

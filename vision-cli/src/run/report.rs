@@ -59,6 +59,10 @@ pub(crate) struct ProgramReport {
     pub calibration_truth: Option<CalibrationTruth>,
     /// Why the program stopped, if it failed.
     pub error: Option<String>,
+    /// The line whose Vision M-code was refused and stopped the program, when that refusal is
+    /// the last step listed (the text report then says why once).
+    #[serde(skip)]
+    pub stopped_by_refusal: Option<u32>,
 }
 
 #[allow(clippy::trivially_copy_pass_by_ref)] // serde's `skip_serializing_if` passes a reference
@@ -206,19 +210,14 @@ pub(crate) fn steps(records: &[Record], sim: &Sim, machine: &SimMachine, cutters
     let mut run_marks: Vec<(Point2<f64>, LengthUnit)> = Vec::new();
     let mut out = Vec::with_capacity(records.len());
     for (i, r) in records.iter().enumerate() {
-        let line = r.line;
-        let step = match &r.result {
-            Err(e) => Step::Refused { line, mcode: r.mcode, message: e.to_string() },
-            Ok(Outcome::Begin(reply)) => {
-                run_marks.clear();
-                Step::Begin { line, mode: reply.report }
-            }
+        let mut cut = None;
+        match &r.result {
+            Ok(Outcome::Begin(_)) => run_marks.clear(),
             Ok(Outcome::Capture(reply)) => {
                 let c = &reply.report;
                 if c.dot_index.is_some() {
                     run_marks.push((c.commanded, c.unit));
                 }
-                Step::Capture { line, report: c.clone() }
             }
             Ok(Outcome::Apply(reply)) => {
                 // The alignment holds until the next M280 cancels it or M282 replaces it.
@@ -226,26 +225,36 @@ pub(crate) fn steps(records: &[Record], sim: &Sim, machine: &SimMachine, cutters
                     .iter()
                     .find(|n| matches!(n.result, Ok(Outcome::Begin(_) | Outcome::Apply(_))))
                     .map_or(u32::MAX, |n| n.line);
-                let mut tools = cutters.between(line, until);
+                let mut tools = cutters.between(r.line, until);
                 if tools.is_empty() {
                     tools.push(machine.interpreter().active_tool());
                 }
-                Step::Fit {
-                    line,
-                    report: reply.report.clone(),
-                    gcode: reply.gcode.clone(),
-                    cut_error: cut_error(sim, machine, &reply.gcode, &run_marks, tools),
-                }
+                cut = cut_error(sim, machine, &reply.gcode, &run_marks, tools);
             }
-            Ok(Outcome::Calibrate(reply)) => match &reply.report {
-                CalReport::Sheet(s) => Step::SheetCalibration { line, report: s.clone() },
-                CalReport::Quick(q) => Step::QuickCalibration { line, report: q.clone() },
-            },
-            Ok(Outcome::SelectJob(reply)) => Step::Job { line, report: reply.report },
-        };
-        out.push(step);
+            _ => {}
+        }
+        out.push(step(r, cut));
     }
     out
+}
+
+/// The step of record `r`; `cut_error` is the simulator's verdict on an M282 (known only once
+/// the program has run: `None` while it streams).
+pub(crate) fn step(r: &Record, cut_error: Option<CutError>) -> Step {
+    let line = r.line;
+    match &r.result {
+        Err(e) => Step::Refused { line, mcode: r.mcode, message: e.to_string() },
+        Ok(Outcome::Begin(reply)) => Step::Begin { line, mode: reply.report },
+        Ok(Outcome::Capture(reply)) => Step::Capture { line, report: reply.report.clone() },
+        Ok(Outcome::Apply(reply)) => {
+            Step::Fit { line, report: reply.report.clone(), gcode: reply.gcode.clone(), cut_error }
+        }
+        Ok(Outcome::Calibrate(reply)) => match &reply.report {
+            CalReport::Sheet(s) => Step::SheetCalibration { line, report: s.clone() },
+            CalReport::Quick(q) => Step::QuickCalibration { line, report: q.clone() },
+        },
+        Ok(Outcome::SelectJob(reply)) => Step::Job { line, report: reply.report },
+    }
 }
 
 /// Distance within which a commanded point counts as a fixture's nominal mark, world unit.

@@ -101,9 +101,27 @@ fn program(s: &mut String, p: &ProgramReport, world_unit: &str) {
             if t.remap_matches { "" } else { ", axis flags WRONG" }
         );
     }
-    if let Some(e) = &p.error {
-        let _ = writeln!(s, "  stopped: {e}");
+    match (&p.error, p.stopped_by_refusal) {
+        // The refusal's line above says why, once.
+        (Some(_), Some(line)) => {
+            let _ = writeln!(s, "  stopped at line {line} by the refusal above");
+        }
+        (Some(e), None) => {
+            let _ = writeln!(s, "  stopped: {e}");
+        }
+        (None, _) => {}
     }
+}
+
+/// The progress line of a step as it happens: its first line in the report (a refusal without
+/// its reason, which the report and the error line give).
+pub(crate) fn progress_line(step: &Step, world_unit: &str) -> String {
+    if let Step::Refused { line, mcode, .. } = step {
+        return format!("  line {line:>4}  M{mcode}  refused");
+    }
+    let mut s = String::new();
+    self::step(&mut s, step, world_unit);
+    s.lines().next().unwrap_or_default().to_string()
 }
 
 #[allow(clippy::too_many_lines)] // one arm per M-code, each a few lines
