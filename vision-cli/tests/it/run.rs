@@ -616,7 +616,8 @@ fn run_reads_standard_input_for_dash() {
             .spawn()
             .expect("spawn");
         let mut stdin = child.stdin.take().expect("stdin");
-        std::io::Write::write_all(&mut stdin, &program).expect("write");
+        // `- -` is refused before standard input is read: the pipe may close under the write.
+        let _ = std::io::Write::write_all(&mut stdin, &program);
         drop(stdin);
         child.wait_with_output().expect("wait")
     };
@@ -668,4 +669,89 @@ fn a_mistyped_profile_key_gets_did_you_mean() {
         "{}",
         stderr(&out)
     );
+}
+
+/// Issue 34 item 5: the progress lines arrive while the run is still running, not with the
+/// report at its end. The camera is an HTTP snapshot source on loopback that this test holds:
+/// it answers M280's resolution check with a blank frame of the calibration's size, then
+/// accepts M281's requests and never answers, so the run waits in M281 (for up to a 60 s
+/// camera timeout) — and M280's line must already be on standard error then. Released, the
+/// camera fails, M281 is refused and the run ends.
+#[test]
+fn progress_lines_arrive_while_the_run_waits_on_the_camera() {
+    use std::io::{Read as _, Write as _};
+    use std::net::TcpListener;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+
+    let mut frame = Vec::new();
+    image::GrayImage::from_pixel(1776, 1776, image::Luma([200]))
+        .write_to(&mut std::io::Cursor::new(&mut frame), image::ImageFormat::Png)
+        .expect("png");
+    let listener = TcpListener::bind("127.0.0.1:0").expect("bind");
+    listener.set_nonblocking(true).expect("nonblocking");
+    let url = format!("http://{}/snapshot", listener.local_addr().expect("addr"));
+    let (release, done) = (Arc::new(AtomicBool::new(false)), Arc::new(AtomicBool::new(false)));
+    let (release_camera, camera_done) = (release.clone(), done.clone());
+    let camera = std::thread::spawn(move || {
+        let (mut held, mut answered) = (Vec::new(), false);
+        while !camera_done.load(Ordering::SeqCst) {
+            match listener.accept() {
+                Ok((mut stream, _)) if !answered => {
+                    answered = true;
+                    stream.set_nonblocking(false).expect("blocking");
+                    let mut request = [0u8; 4096];
+                    let _ = stream.read(&mut request);
+                    let head = format!(
+                        "HTTP/1.1 200 OK\r\nContent-Type: image/png\r\nContent-Length: {}\r\nConnection: close\r\n\r\n",
+                        frame.len()
+                    );
+                    let _ = stream.write_all(head.as_bytes()).and_then(|()| stream.write_all(&frame));
+                }
+                Ok((stream, _)) if !release_camera.load(Ordering::SeqCst) => held.push(stream),
+                Ok(_) => {} // released: dropped at once, the request fails
+                Err(_) => std::thread::sleep(std::time::Duration::from_millis(10)),
+            }
+            if release_camera.load(Ordering::SeqCst) {
+                held.clear();
+            }
+        }
+    });
+    let dir = scratch("streamed");
+    let profile = write(
+        &dir,
+        "p.toml",
+        "[vision]\nVisionEnabled = true\nVisionCameraToolNumber = 98\nVisionCal_K11 = 0.00203\n\
+         VisionCal_K22 = 0.00203\nVisionDriver = \"Camera\"\n[camera]\nVisionCameraTimeout = 60\n\
+         VisionCameraMarkDiameterPx = 40\n",
+    );
+    let mut child = bin()
+        .env("MACH_VISION_TERMINAL", "always")
+        .args(["run", "--camera", "camera", "--source", &url, "--profile"])
+        .arg(&profile)
+        .arg(example("04-rectangle-fit.nc"))
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    let mut lines = BufReader::new(child.stderr.take().expect("stderr")).lines();
+    let mut seen = Vec::new();
+    for line in lines.by_ref() {
+        let line = line.expect("utf-8");
+        seen.push(line.clone());
+        if line.contains("M280  begin a rectangle run") {
+            break;
+        }
+    }
+    let still_running = child.try_wait().expect("wait").is_none();
+    release.store(true, Ordering::SeqCst);
+    let rest: Vec<String> = lines.map(|l| l.expect("utf-8")).collect();
+    let status = child.wait().expect("wait");
+    done.store(true, Ordering::SeqCst);
+    camera.join().expect("camera thread");
+    assert!(seen.last().is_some_and(|l| l.contains("line   11  M280")), "{seen:#?}\n{rest:#?}");
+    assert!(still_running, "M280's line came only when the run had ended: {seen:#?}");
+    assert_eq!(status.code(), Some(1), "{rest:#?}");
+    assert!(rest.iter().any(|l| l.contains("line   13  M281  refused")), "{rest:#?}");
 }
