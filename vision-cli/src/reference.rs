@@ -235,10 +235,10 @@ fn mcodes_md() -> String {
         "The Vision M-codes M280–M284, the words each takes and the values of each word. A word's value may \
          be an expression or a #variable; letters may be written in either case. Every word must be one the \
          M-code takes, given at most once, with a finite value; otherwise the line is refused before \
-         anything moves or changes, with the message shown. What each M-code does, and what it refuses \
-         while it runs (no calibration, the wrong tool, too few marks, a fit outside the quality gates, …), \
-         is in the [calibration](../calibration.md) and [alignment](../alignment.md) guides; the \
-         parameters they read are in [parameters.md](parameters.md).\n\n",
+         anything moves or changes, with the message shown. What each M-code does is in the \
+         [calibration](../calibration.md) and [alignment](../alignment.md) guides; what they refuse while \
+         they run is [at the end](#refusals-while-an-m-code-runs); the parameters they read are in \
+         [parameters.md](parameters.md).\n\n",
     );
     md.push_str("| M-code | Does | Words |\n|---|---|---|\n");
     for spec in MCODES {
@@ -313,6 +313,17 @@ fn mcodes_md() -> String {
         "\nA number outside M280–M284 is not a Vision M-code: `M279` → {}\n",
         VisionCall::parse(279, &[]).expect_err("not vision")
     ));
+    md.push_str(
+        "\n## Refusals while an M-code runs\n\nA line whose words are accepted may still be refused by \
+         the Vision module: every kind of refusal, what gives it, and its message with example values \
+         (the parts in the example that name a tool, a value or a reason are the case's own). A refused \
+         M-code changes nothing: no parameter, no alignment, no tool offset (a move it made before the \
+         refusal is not undone; M283 leaves K, the axis flags and the tool offset as they were). The \
+         message also goes to the `VisionLastStatus` telemetry.\n\n| Given by | Message (example) |\n|---|---|\n",
+    );
+    for e in vision_core::VisionError::examples() {
+        md.push_str(&format!("| {} | {} |\n", e.given_by(), e.to_string().replace('|', "\\|")));
+    }
     md
 }
 
