@@ -115,7 +115,7 @@ fn parts() -> Vec<Part> {
                 read back to decide anything. Setting one is refused. The value shown is the one before any \
                 M-code ran."
             .into(),
-        table: "—".into(),
+        table: "not stored".into(),
         specs: Telemetry::SPECS.iter().map(|s| (s, telemetry.get(s.name))).collect(),
     });
     parts
@@ -151,11 +151,11 @@ fn parameters_md() -> String {
         for (spec, default) in &part.specs {
             let default = default.as_ref().map_or_else(String::new, |v| format!("`{}`", toml_text(v)));
             let unit = if spec.unit.is_empty() { "—" } else { spec.unit };
+            let table = if part.table.starts_with('[') { format!("`{}`", part.table) } else { part.table.clone() };
             md.push_str(&format!(
-                "| [`{}`](#{}) | `{}` | {default} | {unit} | {} |\n",
+                "| [`{}`](#{}) | {table} | {default} | {unit} | {} |\n",
                 spec.name,
                 spec.name.to_ascii_lowercase(),
-                part.table,
                 spec.writer
             ));
         }

@@ -73,8 +73,8 @@ pub(super) const TOOL: Check<i64> = Check {
     refusal: None,
 };
 pub(super) const POUND_BASE: Check<i64> = Check {
-    range: "≥ 100, with the 40-variable block #B..#B+39 at or below #9999 and outside #5061..#5081 and \
-            #5201..#5500 (100 to 9960)",
+    range: "an integer B ≥ 100 whose 40-variable block #B..#B+39 ends at or below #9999 and stays outside \
+            #5061..#5081 and #5201..#5500",
     accepts: |v| PoundBlock::new(*v).is_ok(),
     refusal: Some(|v| PoundBlock::new(*v).err().map(|e| e.to_string()).unwrap_or_default()),
 };
