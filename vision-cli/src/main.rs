@@ -9,6 +9,8 @@ mod image_size;
 mod locate;
 mod picture;
 mod plan;
+#[cfg(test)]
+mod reference;
 mod run;
 mod sheet;
 mod terminal;

@@ -313,6 +313,91 @@ impl From<MathError> for VisionError {
     }
 }
 
+/// The refusals as the M-code reference (`docs/reference/mcodes.md`) lists them.
+impl VisionError {
+    /// What gives this refusal: the M-codes, or the step outside them (a profile load, a
+    /// parameter write).
+    #[must_use]
+    pub fn given_by(&self) -> &'static str {
+        match self {
+            VisionError::NotEnabled => "M280–M284",
+            VisionError::WrongTool { .. } => "M280–M283",
+            VisionError::ToolOffsetNotApplied { .. } | VisionError::CaptureOrder { .. } => "M281",
+            VisionError::NotCalibrated | VisionError::BadCalibration { .. } => "M281",
+            VisionError::PoundBaseReserved { .. } | VisionError::PoundBlockMissing { .. } => "M280, M281",
+            VisionError::NoMark { .. } => "M281, M283",
+            VisionError::Driver(_) | VisionError::NoDriver { .. } => "M281, M283, M284",
+            VisionError::UnknownDriver { .. } => "loading the Vision module (`VisionDriver`)",
+            VisionError::TooFewDots { .. } | VisionError::FitRejected { .. } => "M282",
+            VisionError::Math(_) => "M281, M282",
+            VisionError::SelectJobUnsupported { .. } => "M284",
+            VisionError::UnknownParam { .. } | VisionError::ReadOnlyParam { .. } => {
+                "setting a parameter (profile, command line, DRO)"
+            }
+            VisionError::InvalidParam { .. } => "setting a parameter, loading a profile; M283 and M284 as they write",
+            VisionError::Profile { .. } => "loading the profile; M283 and M284 as they save it",
+            VisionError::Machine(_) => "M280–M284 (the machine refused a move, a write or a read)",
+            VisionError::UnknownController { .. } => "choosing the controller (`--dialect`, world `machine.dialect`)",
+            VisionError::CalibrationChanged { .. } => "M280–M282",
+            VisionError::UnknownSheet { .. }
+            | VisionError::Calibration { .. }
+            | VisionError::AlignmentActive
+            | VisionError::WalkOrder { .. } => "M283",
+            VisionError::DialectWord { .. } => "M283 on LinuxCNC",
+        }
+    }
+
+    /// One refusal of each kind, with example values, in the order the enum declares them.
+    #[must_use]
+    pub fn examples() -> Vec<VisionError> {
+        use crate::machine::MachineErrorKind;
+        vec![
+            VisionError::NotEnabled,
+            VisionError::WrongTool { camera: 98, active: 1 },
+            VisionError::ToolOffsetNotApplied { camera: 98, table: [-3.25, 1.75], applied: [0.0, 0.0] },
+            VisionError::NotCalibrated,
+            VisionError::BadCalibration { reason: "singular".into() },
+            VisionError::PoundBaseReserved { base: 5050, end: 5089 },
+            VisionError::PoundBlockMissing {
+                base: 5580,
+                end: 5619,
+                reason: "LinuxCNC's numbered parameters end at #5601".into(),
+            },
+            VisionError::NoMark { reason: None },
+            VisionError::Driver(DriverError::new(DriverErrorKind::Timeout, "")),
+            VisionError::NoDriver { name: "Keyence".into() },
+            VisionError::UnknownDriver { name: "Keyense".into(), known: "Sim, Keyence, Camera".into() },
+            VisionError::TooFewDots { mode: "rectangle", needed: 3, got: 2 },
+            VisionError::Math(MathError::CoincidentPoints),
+            VisionError::FitRejected { reason: "shift 2.8000 in exceeds VisionFitMaxShift = 2.5000 in".into() },
+            VisionError::SelectJobUnsupported { driver: "Camera".into() },
+            VisionError::UnknownParam { name: "VisionCameraTool".into() },
+            VisionError::ReadOnlyParam { name: "VisionLastStatus".into() },
+            VisionError::InvalidParam {
+                name: "VisionCameraResX".into(),
+                value: "1".into(),
+                reason: "must be an image size of 2..100000 pixels".into(),
+            },
+            VisionError::Profile { path: "vision.toml".into(), reason: "unknown key VisionFoo in [vision]".into() },
+            VisionError::Machine(MachineError::new(MachineErrorKind::Stopped, "the program was stopped")),
+            VisionError::UnknownController { name: "fanuc".into(), known: "mach4, linuxcnc, machinemotion".into() },
+            VisionError::UnknownSheet { sheet: 2, known: "1".into() },
+            VisionError::CalibrationChanged {
+                what: "the camera driver",
+                detail: "the loaded driver is Camera, K was calibrated with Keyence".into(),
+                fix: "switch back to the Keyence camera, or run M283 C1 to calibrate this one".into(),
+            },
+            VisionError::Calibration { reason: "dot 3 of sheet 1 was not found".into() },
+            VisionError::AlignmentActive,
+            VisionError::WalkOrder { what: "no M283 walk is in progress; M283 starts one" },
+            VisionError::DialectWord {
+                message: "M283 C1: on LinuxCNC the sheet number is P: write M283 P1 (C is an axis word)".into(),
+            },
+            VisionError::CaptureOrder { what: "no re-centring is in progress; M281 starts one" },
+        ]
+    }
+}
+
 #[cfg(test)]
 #[allow(clippy::float_cmp)]
 mod tests {
@@ -357,5 +442,27 @@ mod tests {
             .to_string()
             .starts_with("VisionPoundVarBase is in reserved range"));
         assert_eq!(VisionError::from(MathError::NotCalibrated), VisionError::NotCalibrated);
+    }
+
+    /// The reference lists every refusal: `examples` holds each variant the enum declares
+    /// (counted from this file's source, so a new variant without an example fails here).
+    #[test]
+    fn every_refusal_has_an_example_for_the_reference() {
+        let source = include_str!("error.rs");
+        let body =
+            source.split("pub enum VisionError {").nth(1).and_then(|b| b.split("\n}\n").next()).expect("the enum");
+        let declared: Vec<&str> = body
+            .lines()
+            .filter_map(|l| l.strip_prefix("    "))
+            .filter(|l| l.starts_with(|c: char| c.is_ascii_uppercase()))
+            .map(|l| l.split([' ', '(', ',']).next().unwrap_or(l))
+            .collect();
+        let examples = VisionError::examples();
+        let shown: Vec<String> =
+            examples.iter().map(|e| format!("{e:?}").split([' ', '(', '{']).next().unwrap_or("").to_string()).collect();
+        assert_eq!(shown, declared, "VisionError::examples: one per variant, in declaration order");
+        for e in &examples {
+            assert!(!e.given_by().is_empty() && !e.to_string().is_empty(), "{e:?}");
+        }
     }
 }

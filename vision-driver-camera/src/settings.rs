@@ -35,6 +35,8 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             spec: spec(
                 "VisionCameraSource",
                 ParamKind::Text,
+                "",
+                "a V4L2 device, an http:// snapshot URL, or an image file or folder",
                 "`VisionCameraSource`: where frames come from: a V4L2 device (`/dev/video0`), an HTTP \
                  snapshot URL (`http://host:8080/?action=snapshot`), or an image file or folder (replay, \
                  one image per trigger in name order).",
@@ -46,6 +48,8 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             spec: spec(
                 "VisionCameraWidth",
                 ParamKind::Integer,
+                "px",
+                "0 (the device's largest) or a size up to 16384 pixels",
                 "`VisionCameraWidth`: V4L2 frame width, pixels; 0 takes the device's largest.",
             ),
             default: || ParamValue::Int(0),
@@ -55,6 +59,8 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             spec: spec(
                 "VisionCameraHeight",
                 ParamKind::Integer,
+                "px",
+                "0 (the device's largest) or a size up to 16384 pixels",
                 "`VisionCameraHeight`: V4L2 frame height, pixels; 0 takes the device's largest.",
             ),
             default: || ParamValue::Int(0),
@@ -64,6 +70,8 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             spec: spec(
                 "VisionCameraPixelFormat",
                 ParamKind::Choice(PIXEL_FORMATS),
+                "",
+                "",
                 "`VisionCameraPixelFormat`: V4L2 pixel format, auto, MJPEG, YUYV or GREY (auto prefers \
                  GREY, then YUYV, then MJPEG: uncompressed frames have no JPEG artefacts).",
             ),
@@ -74,6 +82,8 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             spec: spec(
                 "VisionCameraMark",
                 ParamKind::Choice(MARKS),
+                "",
+                "",
                 "`VisionCameraMark`: the printed fiducial, dot (filled disc), ring or cross.",
             ),
             default: || ParamValue::Text("dot".to_string()),
@@ -83,6 +93,8 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             spec: spec(
                 "VisionCameraMarkDiameterPx",
                 ParamKind::Float,
+                "px",
+                "0 (derive it) or a diameter up to 16384 pixels",
                 "`VisionCameraMarkDiameterPx`: the mark's expected diameter in the image, pixels; 0 derives it \
                  from VisionMarkDiameter and the calibrated K.",
             ),
@@ -93,6 +105,8 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             spec: spec(
                 "VisionCameraMarkTolerance",
                 ParamKind::Float,
+                "%",
+                "more than 0 and less than 100 percent",
                 "`VisionCameraMarkTolerance`: how far the seen diameter may differ from the expected one, \
                  percent, more than 0 and less than 100.",
             ),
@@ -103,6 +117,8 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             spec: spec(
                 "VisionCameraPolarity",
                 ParamKind::Choice(POLARITIES),
+                "",
+                "",
                 "`VisionCameraPolarity`: dark (a dark mark on a light ground, as printed) or light.",
             ),
             default: || ParamValue::Text("dark".to_string()),
@@ -112,6 +128,8 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             spec: spec(
                 "VisionCameraSearchRadius",
                 ParamKind::Float,
+                "%",
+                "5 to 100 percent",
                 "`VisionCameraSearchRadius`: search only within this distance of the image centre, percent of \
                  half the shorter image side, 5 to 100 (100: the whole frame). M281 re-centres the mark, so a \
                  radius that leaves neighbouring marks outside keeps them from making the view ambiguous.",
@@ -123,6 +141,8 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             spec: spec(
                 "VisionCameraTimeout",
                 ParamKind::Float,
+                "s",
+                "more than 0 and at most 300 seconds",
                 "`VisionCameraTimeout`: time allowed for one frame (connect, request, whole image; or one \
                  device capture), and again for the mark search in it, seconds, more than 0 and at most 300.",
             ),
@@ -133,6 +153,8 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             spec: spec(
                 "VisionCameraFlushFrames",
                 ParamKind::Integer,
+                "frames",
+                "0 to 30 frames",
                 "`VisionCameraFlushFrames`: frames taken and thrown away before the one searched, so none \
                  predates the last move (V4L2 queues frames; a snapshot server may hold an old one), 0 to 30.",
             ),
@@ -142,8 +164,16 @@ pub static SETTINGS: SettingsTable = SettingsTable {
     ],
 };
 
-const fn spec(name: &'static str, kind: ParamKind, doc: &'static str) -> ParamSpec {
-    ParamSpec { name, kind, access: Access::Config, section: Section::Connection, doc }
+/// A setting's description: `unit` and `range` (worded to follow "must be", as the check's
+/// refusal says it) for the parameter reference; the operator writes every setting.
+const fn spec(
+    name: &'static str,
+    kind: ParamKind,
+    unit: &'static str,
+    range: &'static str,
+    doc: &'static str,
+) -> ParamSpec {
+    ParamSpec { name, kind, access: Access::Config, section: Section::Connection, doc, unit, range, writer: "operator" }
 }
 
 /// The driver's settings in `params`: its table, or the defaults when `params` has none.
@@ -200,5 +230,33 @@ fn flush(v: &ParamValue) -> Result<(), String> {
     match v {
         ParamValue::Int(n) if (0..=MAX_FLUSH_FRAMES).contains(n) => Ok(()),
         _ => Err(format!("must be 0 to {MAX_FLUSH_FRAMES} frames")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_refusal_quotes_the_range_the_reference_shows() {
+        // The source's refusal says what is wrong with the given one; the choices are checked
+        // by their kind (the reference lists the words).
+        let bad = [
+            ("VisionCameraWidth", ParamValue::Int(MAX_SIDE_PX + 1)),
+            ("VisionCameraHeight", ParamValue::Int(-1)),
+            ("VisionCameraMarkDiameterPx", ParamValue::Float(-1.0)),
+            ("VisionCameraMarkTolerance", ParamValue::Float(100.0)),
+            ("VisionCameraSearchRadius", ParamValue::Float(4.0)),
+            ("VisionCameraTimeout", ParamValue::Float(0.0)),
+            ("VisionCameraFlushFrames", ParamValue::Int(31)),
+        ];
+        for (name, value) in bad {
+            let s = SETTINGS.settings.iter().find(|s| s.spec.name == name).expect(name);
+            assert_eq!((s.check)(&value), Err(format!("must be {}", s.spec.range)), "{name}");
+        }
+        for s in SETTINGS.settings {
+            let choice = matches!(s.spec.kind, ParamKind::Choice(_));
+            assert_eq!(s.spec.range.is_empty(), choice, "{}: a range unless a choice", s.spec.name);
+        }
     }
 }

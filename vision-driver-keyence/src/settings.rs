@@ -24,7 +24,13 @@ pub static SETTINGS: SettingsTable = SettingsTable {
     table: TABLE,
     settings: &[
         Setting {
-            spec: spec("VisionIP", ParamKind::Text, "`VisionIP`: camera IP address or host name."),
+            spec: spec(
+                "VisionIP",
+                ParamKind::Text,
+                "",
+                "an IP address (e.g. 192.168.208.80) or a host name",
+                "`VisionIP`: camera IP address or host name.",
+            ),
             default: || ParamValue::Text(DEFAULT_IP.to_string()),
             check: host,
         },
@@ -32,6 +38,8 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             spec: spec(
                 "VisionPort",
                 ParamKind::Integer,
+                "",
+                "a TCP port 1..65535",
                 "`VisionPort`: the camera's Non-Procedural command TCP port (Keyence VS default 8500).",
             ),
             default: || ParamValue::Int(8500),
@@ -41,6 +49,8 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             spec: spec(
                 "VisionTimeout",
                 ParamKind::Float,
+                "s",
+                "more than 0 and at most 300 seconds",
                 "`VisionTimeout`: time allowed for one whole driver call (connect, command, complete reply), \
                  seconds, more than 0 and at most 300.",
             ),
@@ -51,6 +61,8 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             spec: spec(
                 "VisionImageWatchDir",
                 ParamKind::Text,
+                "",
+                "a folder path of at most 4096 bytes",
                 "`VisionImageWatchDir`: folder the camera FTP-pushes its images into; empty disables M281 D1.",
             ),
             default: || ParamValue::Text(String::new()),
@@ -60,6 +72,8 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             spec: spec(
                 "VisionImageGrabTimeout",
                 ParamKind::Float,
+                "s",
+                "between 0 and 60 seconds",
                 "`VisionImageGrabTimeout`: how long M281 D1 waits for a fresh image, seconds, 0 to 60.",
             ),
             default: || ParamValue::Float(2.0),
@@ -68,8 +82,16 @@ pub static SETTINGS: SettingsTable = SettingsTable {
     ],
 };
 
-const fn spec(name: &'static str, kind: ParamKind, doc: &'static str) -> ParamSpec {
-    ParamSpec { name, kind, access: Access::Config, section: Section::Connection, doc }
+/// A setting's description: `unit` and `range` (worded to follow "must be", as the check's
+/// refusal says it) for the parameter reference; the operator writes every setting.
+const fn spec(
+    name: &'static str,
+    kind: ParamKind,
+    unit: &'static str,
+    range: &'static str,
+    doc: &'static str,
+) -> ParamSpec {
+    ParamSpec { name, kind, access: Access::Config, section: Section::Connection, doc, unit, range, writer: "operator" }
 }
 
 /// The driver's settings in `params`: its table, or the defaults when `params` has none.
@@ -117,5 +139,26 @@ fn grab_timeout(v: &ParamValue) -> Result<(), String> {
     match v {
         ParamValue::Float(t) if t.is_finite() && (0.0..=MAX_IMAGE_GRAB_TIMEOUT_S).contains(t) => Ok(()),
         _ => Err("must be between 0 and 60 seconds".into()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_refusal_quotes_the_range_the_reference_shows() {
+        let bad = [
+            ("VisionIP", ParamValue::Text("-camera".into())),
+            ("VisionPort", ParamValue::Int(0)),
+            ("VisionTimeout", ParamValue::Float(0.0)),
+            ("VisionImageWatchDir", ParamValue::Text("a\0b".into())),
+            ("VisionImageGrabTimeout", ParamValue::Float(61.0)),
+        ];
+        assert_eq!(bad.len(), SETTINGS.settings.len(), "a bad value for every setting");
+        for (name, value) in bad {
+            let s = SETTINGS.settings.iter().find(|s| s.spec.name == name).expect(name);
+            assert_eq!((s.check)(&value), Err(format!("must be {}", s.spec.range)), "{name}");
+        }
     }
 }

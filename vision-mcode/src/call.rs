@@ -26,14 +26,89 @@ pub enum VisionCall {
     SelectJob(Option<u32>),
 }
 
-/// The letters each M-code takes.
-fn allowed(m: u32) -> &'static [char] {
-    match m {
-        280 | 282 | 284 => &['P'],
-        281 => &['D'],
-        283 => &['Q', 'C'],
-        _ => &[],
-    }
+/// One word a Vision M-code takes, as the M-code reference shows it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WordSpec {
+    /// The letter (upper case; a program may write either case).
+    pub letter: char,
+    /// The values it takes and what each means, e.g. `3 similarity, 4 or omitted rectangle`.
+    pub values: &'static str,
+    /// Values the word refuses, one per way to be wrong: the reference shows the parser's
+    /// refusal of each (so the words shown are the parser's own).
+    pub refused: &'static [f64],
+}
+
+/// One Vision M-code and the words it takes: [`VisionCall::parse`] accepts exactly these
+/// letters, and the M-code reference is generated from this table.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct McodeSpec {
+    /// The M number (280–284).
+    pub m: u32,
+    /// What it does, in a few words.
+    pub title: &'static str,
+    /// Its words, in the order [`VisionCall::parse`] reads them.
+    pub words: &'static [WordSpec],
+}
+
+/// Every Vision M-code with its words, M280 to M284.
+pub const MCODES: &[McodeSpec] = &[
+    McodeSpec {
+        m: 280,
+        title: "begin an alignment run",
+        words: &[WordSpec {
+            letter: 'P',
+            values: "3 similarity fit, 4 or omitted rectangle fit",
+            refused: &[5.0, 3.5],
+        }],
+    },
+    McodeSpec {
+        m: 281,
+        title: "capture the mark under the camera",
+        words: &[WordSpec {
+            letter: 'D',
+            values: "0 or omitted discard the camera's image, 1 keep it (the camera driver saves it)",
+            refused: &[2.0],
+        }],
+    },
+    McodeSpec {
+        m: 282,
+        title: "fit the captured marks and apply the alignment",
+        words: &[WordSpec {
+            letter: 'P',
+            values: "0 or omitted all of the fit, 1 the shift only, 2 shift and rotation, 3 shift, rotation and scale",
+            refused: &[4.0, -1.0],
+        }],
+    },
+    McodeSpec {
+        m: 283,
+        title: "calibrate the camera (K, axis flags, camera tool offset)",
+        words: &[
+            WordSpec {
+                letter: 'Q',
+                values: "quick calibration on one dot of this diameter, current units, > 0 and at most 1e9",
+                refused: &[-0.5, 0.0],
+            },
+            WordSpec {
+                letter: 'C',
+                values: "walk calibration sheet n (C1; on LinuxCNC the letter is P: M283 P1)",
+                refused: &[1.5, -1.0],
+            },
+        ],
+    },
+    McodeSpec {
+        m: 284,
+        title: "switch the camera job",
+        words: &[WordSpec {
+            letter: 'P',
+            values: "camera job 0..999; omitted: the profile's VisionActiveJob",
+            refused: &[1000.0, 1.5, -1.0],
+        }],
+    },
+];
+
+/// The letters M-code `m` takes (none for a number outside M280–M284).
+fn allowed(m: u32) -> &'static [WordSpec] {
+    MCODES.iter().find(|s| s.m == m).map_or(&[], |s| s.words)
 }
 
 impl VisionCall {
@@ -52,8 +127,8 @@ impl VisionCall {
         let mut values: [Option<f64>; 2] = [None, None];
         for &(letter, value) in words {
             let letter = letter.to_ascii_uppercase();
-            let Some(slot) = letters.iter().position(|l| *l == letter) else {
-                return Err(McodeError::UnknownWord { m, letter, allowed: letters.iter().collect() });
+            let Some(slot) = letters.iter().position(|w| w.letter == letter) else {
+                return Err(McodeError::UnknownWord { m, letter, allowed: letters.iter().map(|w| w.letter).collect() });
             };
             if values[slot].is_some() {
                 return Err(McodeError::RepeatedWord { m, letter });
@@ -186,6 +261,25 @@ mod tests {
         for m in VISION_MCODES {
             let call = p(m, if m == 283 { &[('C', 1.0)] } else { &[] }).expect("valid");
             assert_eq!(call.mcode(), m);
+        }
+    }
+
+    #[test]
+    fn the_table_is_what_the_parser_takes() {
+        let numbers: Vec<u32> = MCODES.iter().map(|s| s.m).collect();
+        assert_eq!(numbers, VISION_MCODES.collect::<Vec<_>>());
+        for spec in MCODES {
+            assert!(spec.words.len() <= 2, "M{}: parse keeps two word slots", spec.m);
+            for w in spec.words {
+                // Alone a word of M283 is complete; every refused value is refused as a bad word.
+                for &v in w.refused {
+                    let e = VisionCall::parse(spec.m, &[(w.letter, v)]).expect_err("refused");
+                    assert!(matches!(e, McodeError::BadWord { .. }), "M{} {}{v}: {e}", spec.m, w.letter);
+                }
+            }
+            let unknown = VisionCall::parse(spec.m, &[('X', 1.0)]).expect_err("X");
+            let letters: String = spec.words.iter().map(|w| w.letter).collect();
+            assert_eq!(unknown, McodeError::UnknownWord { m: spec.m, letter: 'X', allowed: letters });
         }
     }
 

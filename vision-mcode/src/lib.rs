@@ -26,7 +26,7 @@ mod error;
 mod machine;
 mod outcome;
 
-pub use call::{VisionCall, VISION_MCODES};
+pub use call::{McodeSpec, VisionCall, WordSpec, MCODES, VISION_MCODES};
 pub use error::McodeError;
 pub use machine::{fixed_clock, system_clock, Clock, ContextMachine};
 pub use outcome::Outcome;

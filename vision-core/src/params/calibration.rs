@@ -3,7 +3,7 @@
 
 use vision_math::{LengthUnit, Matrix2, Remap, Vector2};
 
-use super::checks::{any, driver_record, finite, noise_px_wide, pixel_offset, resolution_record, short_text, tool};
+use super::checks::{Check, DRIVER_RECORD, FINITE, NOISE_PX_WIDE, PIXEL_OFFSET, RESOLUTION_RECORD, SHORT_TEXT, TOOL};
 use super::ParamValue;
 use crate::error::VisionError;
 
@@ -19,54 +19,54 @@ profile_part! {
     /// profile holds, so a centre measured before stays as good as it was.
     Calibration in calibration {
         /// `VisionCameraSwapXY`: swap the centred pixel x and y (set by M283's axis detect).
-        (Calibration) camera_swap_xy: bool => bool = false, "VisionCameraSwapXY", any;
+        (Calibration, "", "M283") camera_swap_xy: bool => bool = false, "VisionCameraSwapXY", Check::ANY;
         /// `VisionCameraInvertX`: negate pixel x after the swap (set by M283).
-        (Calibration) camera_invert_x: bool => bool = false, "VisionCameraInvertX", any;
+        (Calibration, "", "M283") camera_invert_x: bool => bool = false, "VisionCameraInvertX", Check::ANY;
         /// `VisionCameraInvertY`: negate pixel y after the swap (set by M283).
-        (Calibration) camera_invert_y: bool => bool = false, "VisionCameraInvertY", any;
+        (Calibration, "", "M283") camera_invert_y: bool => bool = false, "VisionCameraInvertY", Check::ANY;
         /// `VisionCal_K11`: K row 1 column 1, `Cal_Units` per pixel.
-        (Calibration) cal_k11: f64 => f64 = 0.0, "VisionCal_K11", finite;
+        (Calibration, "Cal_Units/px", "M283") cal_k11: f64 => f64 = 0.0, "VisionCal_K11", FINITE;
         /// `VisionCal_K12`: K row 1 column 2, `Cal_Units` per pixel.
-        (Calibration) cal_k12: f64 => f64 = 0.0, "VisionCal_K12", finite;
+        (Calibration, "Cal_Units/px", "M283") cal_k12: f64 => f64 = 0.0, "VisionCal_K12", FINITE;
         /// `VisionCal_K21`: K row 2 column 1, `Cal_Units` per pixel.
-        (Calibration) cal_k21: f64 => f64 = 0.0, "VisionCal_K21", finite;
+        (Calibration, "Cal_Units/px", "M283") cal_k21: f64 => f64 = 0.0, "VisionCal_K21", FINITE;
         /// `VisionCal_K22`: K row 2 column 2, `Cal_Units` per pixel.
-        (Calibration) cal_k22: f64 => f64 = 0.0, "VisionCal_K22", finite;
+        (Calibration, "Cal_Units/px", "M283") cal_k22: f64 => f64 = 0.0, "VisionCal_K22", FINITE;
         /// `VisionCal_Date`: ISO local time of the last successful calibration (empty = never).
-        (Calibration) cal_date: String => &str = String::new(), "VisionCal_Date", short_text;
+        (Calibration, "", "M283") cal_date: String => &str = String::new(), "VisionCal_Date", SHORT_TEXT;
         /// `VisionCal_Units`: the unit K is calibrated in (`in` or `mm`).
-        (Calibration) cal_units: LengthUnit => LengthUnit = LengthUnit::Inch, "VisionCal_Units", any;
+        (Calibration, "", "M283") cal_units: LengthUnit => LengthUnit = LengthUnit::Inch, "VisionCal_Units", Check::ANY;
         /// `VisionPxCenterOffsetX`: optical-centre bias subtracted after the image-centre shift,
         /// pixels.
-        (Calibration) px_center_offset_x: f64 => f64 = 0.0, "VisionPxCenterOffsetX", pixel_offset;
+        (Calibration, "px", "M283 C/P with VisionCalibrationLift > 0, or the operator") px_center_offset_x: f64 => f64 = 0.0, "VisionPxCenterOffsetX", PIXEL_OFFSET;
         /// `VisionPxCenterOffsetY`: same, Y, pixels.
-        (Calibration) px_center_offset_y: f64 => f64 = 0.0, "VisionPxCenterOffsetY", pixel_offset;
+        (Calibration, "px", "M283 C/P with VisionCalibrationLift > 0, or the operator") px_center_offset_y: f64 => f64 = 0.0, "VisionPxCenterOffsetY", PIXEL_OFFSET;
         /// `VisionPxCenterSigmaPx`: the 1σ per pixel axis of the optical centre M283's lift
         /// measured (the larger axis's), pixels; 0 = not measured (the offset was set by hand, or
         /// never measured), and M282 assumes `VisionCenterUncertaintyPx` instead.
-        (Calibration) px_center_sigma_px: f64 => f64 = 0.0, "VisionPxCenterSigmaPx", noise_px_wide;
+        (Calibration, "px", "M283 C/P with VisionCalibrationLift > 0, or the operator") px_center_sigma_px: f64 => f64 = 0.0, "VisionPxCenterSigmaPx", NOISE_PX_WIDE;
         /// `VisionCal_ResX`: the image width M283 calibrated at, pixels (0 = not recorded: a
         /// calibration made before the record existed). M280–M282 refuse while
         /// `VisionCameraResX` or the camera's frames differ.
-        (Calibration) cal_res_x: i64 => i64 = 0, "VisionCal_ResX", resolution_record;
+        (Calibration, "px", "M283") cal_res_x: i64 => i64 = 0, "VisionCal_ResX", RESOLUTION_RECORD;
         /// `VisionCal_ResY`: the image height M283 calibrated at, pixels (0 = not recorded).
-        (Calibration) cal_res_y: i64 => i64 = 0, "VisionCal_ResY", resolution_record;
+        (Calibration, "px", "M283") cal_res_y: i64 => i64 = 0, "VisionCal_ResY", RESOLUTION_RECORD;
         /// `VisionCal_Driver`: the camera driver M283 calibrated with, as the driver names itself
         /// (`Keyence`, `Camera`, `Sim`; empty = not recorded). M280–M282 refuse under another.
-        (Calibration) cal_driver: String => &str = String::new(), "VisionCal_Driver", driver_record;
+        (Calibration, "", "M283") cal_driver: String => &str = String::new(), "VisionCal_Driver", DRIVER_RECORD;
         /// `VisionCal_Mark`: the mark the camera searched for when M283 calibrated (its
         /// driver's words, e.g. `dot, dark on light`; empty = not recorded or a camera that runs
         /// its own job). M281 warns while the camera searches for another.
-        (Calibration) cal_mark: String => &str = String::new(), "VisionCal_Mark", short_text;
+        (Calibration, "", "M283") cal_mark: String => &str = String::new(), "VisionCal_Mark", SHORT_TEXT;
         /// `VisionCal_ToolNumber`: the camera tool whose X/Y offset the sheet walk (M283 C/P)
         /// wrote (0 = none recorded: M283 Q writes no offset).
-        (Calibration) cal_tool_number: i64 => i64 = 0, "VisionCal_ToolNumber", tool;
+        (Calibration, "", "M283 (0 after M283 Q)") cal_tool_number: i64 => i64 = 0, "VisionCal_ToolNumber", TOOL;
         /// `VisionCal_ToolOffsetX`: the X offset the sheet walk wrote to that tool, `Cal_Units`.
         /// M280–M282 refuse while the tool table holds another: every mark would be read off by
         /// the difference.
-        (Calibration) cal_tool_offset_x: f64 => f64 = 0.0, "VisionCal_ToolOffsetX", finite;
+        (Calibration, "Cal_Units", "M283 C/P") cal_tool_offset_x: f64 => f64 = 0.0, "VisionCal_ToolOffsetX", FINITE;
         /// `VisionCal_ToolOffsetY`: the Y offset the sheet walk wrote, `Cal_Units`.
-        (Calibration) cal_tool_offset_y: f64 => f64 = 0.0, "VisionCal_ToolOffsetY", finite;
+        (Calibration, "Cal_Units", "M283 C/P") cal_tool_offset_y: f64 => f64 = 0.0, "VisionCal_ToolOffsetY", FINITE;
     }
 }
 

@@ -236,6 +236,25 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn every_spec_says_who_writes_it_and_a_refusal_quotes_its_range() {
+        for s in Params::specs() {
+            assert!(!s.writer.is_empty(), "{}: who writes it", s.name);
+            assert!(!s.doc.trim().is_empty(), "{}: what it means", s.name);
+        }
+        let mut p = Params::default();
+        for (name, bad) in [("VisionCameraResX", 1), ("VisionPoundVarBase", 5050), ("VisionRecenterPasses", 11)] {
+            let spec = Params::spec(name).expect("known");
+            assert!(!spec.range.is_empty(), "{name}");
+            let refusal = p.set(name, bad).expect_err("out of range").to_string();
+            if name != "VisionPoundVarBase" {
+                assert!(refusal.ends_with(&format!("must be {}", spec.range)), "{refusal}");
+            }
+        }
+        assert_eq!(Params::spec("VisionEnabled").map(|s| s.range), Some(""), "a flag takes every value of its kind");
+        assert_eq!(Params::spec("VisionCalibrationLift").map(|s| s.unit), Some("in"));
+    }
+
+    #[test]
     fn writes_are_validated_and_telemetry_refused() {
         let mut p = Params::default();
         p.set("VisionEnabled", "Yes").expect("yes");
@@ -276,6 +295,9 @@ pub(crate) mod tests {
                     access: Access::Config,
                     section: Section::Connection,
                     doc: "`VisionProbeLevel`: a level 1..9.",
+                    unit: "",
+                    range: "a level 1..9",
+                    writer: "operator",
                 },
                 default: || ParamValue::Int(5),
                 check: |v| match v {
@@ -290,6 +312,9 @@ pub(crate) mod tests {
                     access: Access::Config,
                     section: Section::Connection,
                     doc: "`VisionProbeMode`: fast or slow.",
+                    unit: "",
+                    range: "",
+                    writer: "operator",
                 },
                 default: || ParamValue::Text("fast".into()),
                 check: |_| Ok(()),

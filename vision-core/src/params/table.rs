@@ -4,14 +4,14 @@
 
 /// Declares one part of the parameter set: a struct with one private field per parameter, its
 /// typed getters, its [`ParamSpec`] table and by-name read/write. Adding a parameter is one
-/// entry here (name, type, default, range check); the profile, the CLI and the DRO views follow.
+/// entry here (section, unit, writer, name, type, default, range check); the profile, the CLI and the DRO views follow.
 macro_rules! param_struct {
     (
         $(#[doc = $sdoc:literal])+
         $Struct:ident ($access:ident) {
             $(
                 $(#[doc = $doc:literal])+
-                ($section:ident) $field:ident : $ty:ty => $ret:ty = $default:expr, $name:literal, $check:expr;
+                ($section:ident, $unit:literal, $writer:literal) $field:ident : $ty:ty => $ret:ty = $default:expr, $name:literal, $check:expr;
             )*
         }
     ) => {
@@ -44,6 +44,9 @@ macro_rules! param_struct {
                     access: $crate::params::Access::$access,
                     section: $crate::params::Section::$section,
                     doc: concat!($($doc),+),
+                    unit: $unit,
+                    range: { let check: $crate::params::checks::Check<$ty> = $check; check.range },
+                    writer: $writer,
                 },
             )*];
 
@@ -68,7 +71,7 @@ macro_rules! param_struct {
                         let v = <$ty as $crate::params::typed::ParamType>::from_value(value)
                             .ok_or_else(|| invalid($crate::params::typed::kind_reason(<$ty as $crate::params::typed::ParamType>::KIND)))?;
                         let check: $crate::params::checks::Check<$ty> = $check;
-                        check(&v).map_err(invalid)?;
+                        check.check(&v).map_err(invalid)?;
                         self.$field = v;
                         return Ok(true);
                     }
@@ -89,7 +92,7 @@ macro_rules! profile_part {
     (@getters $via:ident {
         $(
             $(#[doc = $doc:literal])+
-            ($section:ident) $field:ident : $ty:ty => $ret:ty = $default:expr, $name:literal, $check:expr;
+            ($section:ident, $unit:literal, $writer:literal) $field:ident : $ty:ty => $ret:ty = $default:expr, $name:literal, $check:expr;
         )*
     }) => {
         impl $crate::params::Params {

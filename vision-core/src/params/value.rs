@@ -138,4 +138,13 @@ pub struct ParamSpec {
     pub section: Section,
     /// What it means, with units.
     pub doc: &'static str,
+    /// Its unit as the parameter reference shows it (`px`, `in`, `s`, `%`, `Cal_Units/px`;
+    /// empty: a count, a flag or text).
+    pub unit: &'static str,
+    /// The values it accepts, worded to follow "must be" (the refusal quotes the same words);
+    /// empty: every value of its [`ParamKind`].
+    pub range: &'static str,
+    /// Who writes it in normal use (`operator`, `M283`, `M284`, …); the operator may edit every
+    /// persisted parameter in the profile.
+    pub writer: &'static str,
 }
