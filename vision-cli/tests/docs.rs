@@ -168,7 +168,8 @@ fn samples(lines: &[&str]) -> (Vec<Sample>, Vec<String>) {
     while i < lines.len() {
         let line = lines[i];
         if let Some(info) = fence(line) {
-            let close = (i + 1..lines.len()).find(|&j| fence(lines[j]).is_some());
+            // A closing fence carries no info string (CommonMark).
+            let close = (i + 1..lines.len()).find(|&j| lines[j].trim() == "```");
             let Some(close) = close else {
                 problems.push(format!("line {}: a fence that is never closed", i + 1));
                 break;
