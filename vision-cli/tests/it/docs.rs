@@ -20,7 +20,7 @@
 //! README.md has at most 250 lines, none over 100 characters but a sample's (the program's
 //! own lines), and every relative link in these files, with its `#anchor`, must resolve.
 //!
-//! `MACH_VISION_BLESS=1 cargo test -p vision-cli --test docs` rewrites stale samples with
+//! `MACH_VISION_BLESS=1 cargo test -p vision-cli --test it docs::` rewrites stale samples with
 //! what the commands print now (then read the diff).
 
 use std::fs;
