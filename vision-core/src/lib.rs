@@ -48,6 +48,12 @@
 //! # Ok::<(), VisionError>(())
 //! ```
 
+/// The integrators' guide (`docs/integrators.md`): its minimal `Machine` + `CameraDriver` host
+/// runs as a doc-test, so the guide cannot drift from the traits.
+#[cfg(doctest)]
+#[doc = include_str!("../../docs/integrators.md")]
+pub struct IntegratorsGuide;
+
 pub mod calibrate;
 pub mod controller;
 pub mod driver;

@@ -9,6 +9,7 @@ mod bad_input;
 mod bounded;
 mod cam_job;
 mod dialect;
+mod docs;
 mod fit;
 mod hostile_input;
 mod image_camera;

@@ -311,12 +311,12 @@ fn trigger_at_a_device_that_is_no_keyence_camera_says_what_it_answered() {
     drop(server);
 }
 
-/// The field names the README's "JSON output of `run --json`" section documents (the backticked
+/// The field names docs/reference/cli.md's "JSON output of `run --json`" section documents (the backticked
 /// names in the first column of its tables).
 fn documented_fields() -> std::collections::BTreeSet<String> {
-    let readme =
-        std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../README.md")).expect("README");
-    let start = readme.find("## JSON output of `run --json`").expect("the README documents run --json");
+    let readme = std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../docs/reference/cli.md"))
+        .expect("docs/reference/cli.md");
+    let start = readme.find("## JSON output of `run --json`").expect("the CLI reference documents run --json");
     let section = &readme[start..];
     let section = &section[..section[3..].find("\n## ").map_or(section.len(), |e| e + 3)];
     section
@@ -374,8 +374,8 @@ fn the_json_output_is_documented_field_by_field() {
     keys(&r2, &mut seen);
     let undocumented: Vec<_> = seen.difference(&documented).collect();
     let missing: Vec<_> = documented.difference(&seen).collect();
-    assert!(undocumented.is_empty(), "fields in the output but not in the README: {undocumented:?}");
-    assert!(missing.is_empty(), "fields in the README but not in the output: {missing:?}");
+    assert!(undocumented.is_empty(), "fields in the output but not in docs/reference/cli.md: {undocumented:?}");
+    assert!(missing.is_empty(), "fields in docs/reference/cli.md but not in the output: {missing:?}");
     // The telemetry map holds every telemetry parameter by its manual name.
     let telemetry = r["telemetry"].as_object().expect("telemetry map");
     let names: Vec<&str> = vision_core::Telemetry::SPECS.iter().map(|s| s.name).collect();
