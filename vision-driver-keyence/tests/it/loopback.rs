@@ -3,7 +3,7 @@
 //! `common::SLACK`), and the next trigger must be answered correctly.
 #![allow(clippy::float_cmp)]
 
-mod common;
+use crate::common;
 
 use std::time::{Duration, Instant};
 

@@ -1,6 +1,6 @@
 //! The setpoint stream on hand-made programs: corners, arcs, stops, errors, bad input.
 
-mod common;
+use crate::common;
 
 use common::{norm, sub, Program};
 use vision_path::Xyz;

@@ -11,13 +11,13 @@ use vision_host::{ProgramHandler, Record, Session};
 use vision_math::{LengthUnit, Point2, Vector2};
 use vision_mcode::{fixed_clock, Outcome};
 
-const EX1: &str = include_str!("../../examples/programs/01-calibrate-sheet.nc");
-const EX2: &str = include_str!("../../examples/programs/02-verify-calibration.nc");
-const EX3: &str = include_str!("../../examples/programs/03-quick-diameter-cal.nc");
-const EX4: &str = include_str!("../../examples/programs/04-rectangle-fit.nc");
-const EX5: &str = include_str!("../../examples/programs/05-similarity-fit.nc");
-const EX6: &str = include_str!("../../examples/programs/06-pound-variables.nc");
-const EX7: &str = include_str!("../../examples/programs/07-switch-jobs.nc");
+const EX1: &str = include_str!("../../../examples/programs/01-calibrate-sheet.nc");
+const EX2: &str = include_str!("../../../examples/programs/02-verify-calibration.nc");
+const EX3: &str = include_str!("../../../examples/programs/03-quick-diameter-cal.nc");
+const EX4: &str = include_str!("../../../examples/programs/04-rectangle-fit.nc");
+const EX5: &str = include_str!("../../../examples/programs/05-similarity-fit.nc");
+const EX6: &str = include_str!("../../../examples/programs/06-pound-variables.nc");
+const EX7: &str = include_str!("../../../examples/programs/07-switch-jobs.nc");
 
 /// A world, its machine, and the Vision session as the M-code handler (the path of
 /// `mach-vision run` and of every bridge).
@@ -626,7 +626,7 @@ fn recentring_keeps_the_floor_at_the_calibration_height() {
 }
 
 /// The README's figures: 4000 worlds calibrated perfectly and 1000 calibrated by the sheet walk
-/// (`cargo test -p vision-cli --test acceptance -- --ignored --nocapture`).
+/// (`cargo test -p vision-cli --test it acceptance:: -- --ignored --nocapture`).
 #[test]
 #[ignore = "about 10 s in a debug build; the quick form runs always"]
 fn recentring_keeps_the_floor_at_the_calibration_height_over_many_worlds() {
@@ -832,7 +832,7 @@ fn a_height_change_is_measured_corrected_and_predicted() {
 }
 
 /// The README's figures: 60 worlds, 120 fits per case, with issue 25's settings beside
-/// (`cargo test --release -p vision-cli --test acceptance height -- --ignored --nocapture`).
+/// (`cargo test --release -p vision-cli --test it acceptance::height -- --ignored --nocapture`).
 #[test]
 #[ignore = "about 3 s in a release build; the quick form runs always"]
 fn a_height_change_is_measured_corrected_and_predicted_over_many_worlds() {

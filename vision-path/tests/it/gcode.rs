@@ -1,7 +1,7 @@
 //! G-code through the interpreter and the adapter: what the interpreter reports is what the
 //! planner drives, and the bounds hold on what G-code really contains (rounded arcs).
 
-mod common;
+use crate::common;
 
 use common::{worst_second_difference, Run};
 use vision_gcode::{Interpreter, InterpreterConfig, Xyz};

@@ -11,7 +11,7 @@ fn scratch(name: &str, text: &str) -> PathBuf {
     path
 }
 
-mod common;
+use crate::common;
 
 use common::bounded;
 

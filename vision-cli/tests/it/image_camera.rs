@@ -4,7 +4,7 @@
 //! starts, which renders what the simulated machine's camera sees where the machine is.
 //!
 //! The figures in `benches/README.md` come from
-//! `cargo test --release -p vision-cli --test image_camera -- --nocapture`.
+//! `cargo test --release -p vision-cli --test it image_camera:: -- --nocapture`.
 
 use vision_core::{Params, Timestamp, VisionModule};
 use vision_driver_camera::server::{Encoding, SnapshotServer};
@@ -15,7 +15,7 @@ use vision_host::{ProgramHandler, Record, Session, SimFrames};
 use vision_math::Point2;
 use vision_mcode::fixed_clock;
 
-const EX4: &str = include_str!("../../examples/programs/04-rectangle-fit.nc");
+const EX4: &str = include_str!("../../../examples/programs/04-rectangle-fit.nc");
 
 /// The demo part's area, inches: where the cut error is measured.
 fn grid() -> Vec<Point2<f64>> {

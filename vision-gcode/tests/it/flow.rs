@@ -6,11 +6,11 @@
 use vision_gcode::{GcodeError, Interpreter, InterpreterConfig, RunProblem, SyntaxProblem, Xyz};
 use vision_math::LengthUnit;
 
-mod common;
+use crate::common;
 use common::moves;
 
 /// Written for these tests (every o-word form); `ext.ngc` is [`EXT`], on the subroutine path.
-const PROGRAM: &str = include_str!("programs/linuxcnc_flow.ngc");
+const PROGRAM: &str = include_str!("../programs/linuxcnc_flow.ngc");
 
 const EXT: &str = "o<ext> sub\nG0 X#1 Y#1\no<ext> return\no<ext> endsub\n";
 

@@ -5,7 +5,7 @@
 //! came to rest; and the path comes to rest only where an event, a dwell or a corner that is
 //! not blended between two lines (G61, `G64 P0`, a reversal, an arc) makes it.
 
-mod common;
+use crate::common;
 
 use std::fmt::Write as _;
 

@@ -1,4 +1,4 @@
-//! What several of the CLI's test binaries share.
+//! What several of the test modules share.
 
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};

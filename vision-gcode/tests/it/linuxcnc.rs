@@ -10,7 +10,7 @@ use vision_gcode::{
 };
 use vision_math::LengthUnit;
 
-mod common;
+use crate::common;
 use common::moves;
 
 fn machine(unit: LengthUnit) -> Interpreter {

@@ -3,7 +3,7 @@
 //! 1 ms setpoints, tool 1 on device 1 ports 0/1, and a default feed (several snippets feed
 //! without ever programming `F`).
 
-mod common;
+use crate::common;
 
 use common::{interior_rests, norm, sub, Run};
 use vision_gcode::{Interpreter, InterpreterConfig};

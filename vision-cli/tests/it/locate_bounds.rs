@@ -46,7 +46,7 @@ fn png(name: &str, side: u32, dot: f64) -> PathBuf {
     path
 }
 
-mod common;
+use crate::common;
 
 /// Runs `mach-vision locate ARGS` under an address-space limit of `megabytes`, killed after
 /// `seconds` ([`common::bounded`]).

@@ -20,7 +20,7 @@ fn arg(p: &Path) -> &str {
     p.to_str().expect("utf-8 path")
 }
 
-mod common;
+use crate::common;
 
 use common::bounded;
 

@@ -2,7 +2,7 @@
 //! values are refused with a clear message, and no accepted input yields a cycle time that
 //! breaks |Δp| ≤ v·T or a plan that never ends.
 
-mod common;
+use crate::common;
 
 use common::Program;
 use vision_path::{Item, Limits, PathError, PathMode, PlanConfig, Rate, Setpoints, Xyz};

@@ -20,6 +20,26 @@ fn sheet(args: &[&str]) -> std::process::Output {
 /// Pixels per inch the sheet is rasterised at.
 const PPI: f64 = 150.0;
 
+/// The SVG file drawn by librsvg's `rsvg-convert` (Debian's `librsvg2-bin`, which `scripts/test`
+/// installs) at [`PPI`] on white: an SVG renderer that is not ours. Grey levels, row-major, and
+/// the width in pixels; the size is checked against the paper's `(width, height)` in inches.
+fn rasterise(svg: &std::path::Path, paper_in: (f64, f64)) -> (Vec<u8>, usize) {
+    let png = svg.with_extension("png");
+    let dpi = PPI.to_string();
+    let out = Command::new("rsvg-convert")
+        .args(["--dpi-x", &dpi, "--dpi-y", &dpi, "--background-color", "white", "--format", "png", "-o"])
+        .arg(&png)
+        .arg(svg)
+        .output()
+        .unwrap_or_else(|e| panic!("rsvg-convert ({e}): install Debian's librsvg2-bin (scripts/test does)"));
+    assert!(out.status.success(), "rsvg-convert: {}", String::from_utf8_lossy(&out.stderr));
+    let image = image::open(&png).expect("rsvg-convert's PNG").to_luma8();
+    let (w, h) = (image.width() as usize, image.height() as usize);
+    let expected = ((paper_in.0 * PPI).round() as usize, (paper_in.1 * PPI).round() as usize);
+    assert!(w.abs_diff(expected.0) <= 1 && h.abs_diff(expected.1) <= 1, "{w}x{h} px, expected {expected:?}");
+    (image.into_raw(), w)
+}
+
 #[test]
 fn the_svg_sheet_rasterised_has_every_dot_where_the_table_says_within_a_thousandth() {
     let table = cal_sheet(1).expect("sheet 1");
@@ -33,13 +53,7 @@ fn the_svg_sheet_rasterised_has_every_dot_where_the_table_says_within_a_thousand
         assert!(text.contains(&format!("width=\"{w_in:.4}in\" height=\"{h_in:.4}in\"")), "physical size");
         assert!(text.contains("check: this bar measures 100 mm") && text.contains("check: this bar measures 4 in"));
 
-        let tree = resvg::usvg::Tree::from_str(&text, &resvg::usvg::Options::default()).expect("valid SVG");
-        // usvg gives inches at 96 px/in; draw at PPI.
-        let scale = (PPI / 96.0) as f32;
-        let (w, h) = ((w_in * PPI).ceil() as u32, (h_in * PPI).ceil() as u32);
-        let mut pixmap = resvg::tiny_skia::Pixmap::new(w, h).expect("pixmap");
-        resvg::render(&tree, resvg::tiny_skia::Transform::from_scale(scale, scale), &mut pixmap.as_mut());
-        let gray: Vec<u8> = pixmap.pixels().iter().map(|p| p.demultiply().red()).collect();
+        let (gray, w) = rasterise(&file, (w_in, h_in));
 
         let d = table.mark_diameter_in * PPI;
         let spec = MarkSpec::new(MarkKind::Dot, d, 0.1, Polarity::DarkOnLight).expect("spec");
@@ -49,8 +63,7 @@ fn the_svg_sheet_rasterised_has_every_dot_where_the_table_says_within_a_thousand
             let half = 0.6 * PPI;
             let (u0, v0) = ((u - half) as usize, (v - half) as usize);
             let n = (2.0 * half) as usize;
-            let window: Vec<u8> =
-                (v0..v0 + n).flat_map(|row| gray[row * w as usize + u0..row * w as usize + u0 + n].to_vec()).collect();
+            let window: Vec<u8> = (v0..v0 + n).flat_map(|row| gray[row * w + u0..row * w + u0 + n].to_vec()).collect();
             let image = GrayImage::new(n, n, Pixels::Gray8(&window)).expect("image");
             let Located::Found(m) = locate(&image, &spec).expect("locate") else {
                 panic!("{paper}: no dot found at ({x}, {y}) in")

@@ -80,24 +80,24 @@ fn exercise(text: &str) {
 }
 
 const PROGRAMS: &[&str] = &[
-    include_str!("programs/example1_calibration.nc"),
-    include_str!("programs/example2_verify.nc"),
-    include_str!("programs/example4_rectangle_fit.nc"),
-    include_str!("programs/example6_pound_vars.nc"),
-    include_str!("programs/example7_job_switch.nc"),
+    include_str!("../programs/example1_calibration.nc"),
+    include_str!("../programs/example2_verify.nc"),
+    include_str!("../programs/example4_rectangle_fit.nc"),
+    include_str!("../programs/example6_pound_vars.nc"),
+    include_str!("../programs/example7_job_switch.nc"),
     "G90 G21 G61 G17 G90.1\nG0 X500 Y250 Z500\nG3 X0 Y250 I250 J250\nG3 X500 Y250 I250 J250",
     "G90 G21 G61 G18 G90.1\nG0 X500 Y500 Z250\nG3 X0 Z250 I250 K250\nG2 X500 Z250 R-250 P2",
     "G90 G20 F10\nG52 X0.1 Y0.2\nG68 X3 Y2 R0.5\nG51 X1.001 Y0.999\nG0 X6 Y4\nG2 X0 Y4 I-3 J0\nG69 G50 G52 X0 Y0",
     "#1 = [2 * ATAN[1]/[2]] #2 = [#1 MOD 7 ** 2]\nG1 X[#1 / 3] Y-#2 Z[SQRT[ABS[#2]]] F[100 + #1]\nG10 L20 P0 X0\nG92 Y1\nG28.1\nG28 X2",
     "T1 M6 M3\nG4 P0.5\nM4 $1\nM5 A1 P2\nM0\nM1\nM2",
-    include_str!("programs/linuxcnc_flow.ngc"),
+    include_str!("../programs/linuxcnc_flow.ngc"),
     "%\nO0001\nG0 X0\nM98 P1000 L3\nM98 P2000\nM30\nO1000\nG91 G1 X1 F100\nG90\nM99\nO2000\nM98 P1000\nM99\n%",
     "o<s> sub\n#<l> = #1\no1 if [#<l> GT 1]\nG0 X#<l>\no1 else\nG1 Y1 F9\no1 endif\no<s> endsub\no2 repeat [3]\no<s> call [2]\no2 endrepeat\no3 do\n#<_k> = [#<_k> + 1]\no3 while [#<_k> LT 3]",
     "G21 G0 @10 ^90\nG91 G0 ^45\nG0 @-2\nG90 G81 R1 Z-1 F10 @5 ^30\nG91 G81 R.1 Z-.5 ^60 L6\nG90 G80 G2 @5 ^-30 I0 J5\nG10 L2 P0 R30\nG52 X1\nG91 G1 X1\nM2",
     "%\nG17 G40 G49 G80 G90 G20\nT2 M6\nS12000 M3\nG43 H2 M8\nG53 G0 Z0\n/G0 X1\nG0 X0.5 Y0.5 Z0.2\nG98 G81 X1 Y1 Z-0.3 R0.1 F20\nX2\nG99 G83 X3 Q0.1 Z-0.5 R0.1 L2\nG91 G73 X0.5 Z-0.2 R-0.1 Q0.05 L3\nG90 G82 P0.2 Z-0.1 R0.1 X1\nG85 X2\nG89 X3 P0.1\nG80 G0 Z1\nG2 I0.5 F30\nG3 X1 Y1 R0.5 P2\nG64 P0.01 Q0.01\nG43.1 Z0.1\nG49 M9\nG30 G92.1\nM5\n%\nG1 X9",
 ];
 
-/// 384 cases per property in CI; `FUZZ_CASES=100000 cargo test --release --test fuzz` for a
+/// 384 cases per property in CI; `FUZZ_CASES=100000 cargo test --release --test it fuzz::` for a
 /// deeper local run.
 fn cases() -> u32 {
     std::env::var("FUZZ_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(384)

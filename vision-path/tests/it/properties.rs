@@ -13,7 +13,7 @@
 //! * a single straight move takes the analytic trapezoid (or triangle) time, rounded up to
 //!   the next period.
 
-mod common;
+use crate::common;
 
 use common::{distance, norm, segments, sub, tangent, Program, Run, PLANES};
 use proptest::prelude::*;

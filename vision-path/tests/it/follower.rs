@@ -1,6 +1,6 @@
 //! The seed's API: configure, start, poll, stop — against a recording sink.
 
-mod common;
+use crate::common;
 
 use std::sync::{Arc, Mutex};
 use std::time::Duration;

@@ -1,6 +1,6 @@
 //! The emulator on its own, over raw loopback sockets: what a VS camera answers, byte for byte.
 
-mod common;
+use crate::common;
 
 use std::io::{Read, Write};
 use std::net::TcpStream;

@@ -1,0 +1,15 @@
+//! vision-path's integration tests as one test binary, a module per subject: each file under
+//! `tests/` is one more binary to compile and link. The allocation-counting tests stay a binary of
+//! their own, since a global allocator is per binary.
+
+mod common;
+
+mod follower;
+mod fuzz;
+mod gcode;
+mod gcode_props;
+mod limits;
+mod properties;
+mod seed002;
+mod stream;
+mod units;
