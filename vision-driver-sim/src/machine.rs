@@ -3,7 +3,8 @@
 use vision_core::Controller;
 use vision_gcode::params::WORK_OFFSET_BASE;
 use vision_gcode::{
-    Context, Dialect, Event, EventSink, GcodeError, Interpreter, InterpreterConfig, MCodeHandler, RunOutcome, Tool, Xyz,
+    Context, Dialect, Event, EventSink, GcodeError, Interpreter, InterpreterConfig, MCodeHandler, OffsetParts,
+    RunOutcome, Tool, Xyz,
 };
 use vision_math::{Point2, Vector2};
 
@@ -179,9 +180,10 @@ impl SimMachine {
         })?;
         let mut setup = setup.to_vec();
         if tool != self.interp.active_tool() {
-            setup.push(match self.interp.config().dialect {
-                Dialect::MachineMotion => format!("T{tool} M6"),
-                Dialect::Mach4 | Dialect::LinuxCnc => format!("T{tool} M6 G43 H{tool}"),
+            // G43 applies what M6 leaves out of the offset.
+            setup.push(match self.interp.config().rules().tool_change_applies {
+                OffsetParts::Whole => format!("T{tool} M6"),
+                OffsetParts::Xy | OffsetParts::Length | OffsetParts::Nothing => format!("T{tool} M6 G43 H{tool}"),
             });
         }
         let units = self.interp.units();

@@ -5,8 +5,9 @@ use std::path::PathBuf;
 
 use vision_math::LengthUnit;
 
+pub use crate::dialect::Dialect;
+use crate::dialect::DialectRules;
 use crate::event::PathMode;
-use crate::geom::Xyz;
 use crate::tools::ToolTable;
 
 /// Default chord tolerance for arcs turned into polylines: 0.0001 in.
@@ -15,65 +16,6 @@ pub const CHORD_TOLERANCE_INCH: f64 = 0.0001;
 pub const CHORD_TOLERANCE_MM: f64 = 0.0025;
 /// The default limit on polyline segments for one arc.
 pub const MAX_ARC_SEGMENTS: u64 = 10_000_000;
-
-/// Whose rules apply where the controllers differ.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Dialect {
-    /// Seed 002's MachineMotion path following: `G92` zeroes the axes it does not name, tool
-    /// offsets apply from `M6` on, parentheses nest inside comments. The default.
-    #[default]
-    MachineMotion,
-    /// Mach4 (the alignment plug-in's controller): `G92` keeps the axes it does not name, tool
-    /// length offsets apply from `G43` only, comments end at the first `)`.
-    Mach4,
-    /// LinuxCNC 2.9: as Mach4, and `G68`/`G69`/`G51`/`G50` (which LinuxCNC does not have) are
-    /// refused.
-    LinuxCnc,
-}
-
-impl Dialect {
-    /// The highest numbered parameter: LinuxCNC 2.9's 5601 (`RS274NGC_MAX_PARAMETERS` is 5602,
-    /// indices below it); 9999 for Mach4 and seed 002, the range the pound-variable block of
-    /// the seed's profile assumes (no source here gives Mach4 a smaller one).
-    #[must_use]
-    pub const fn last_parameter(self) -> u32 {
-        match self {
-            Dialect::LinuxCnc => 5601,
-            Dialect::MachineMotion | Dialect::Mach4 => 9999,
-        }
-    }
-
-    /// Every dialect.
-    pub const ALL: [Dialect; 3] = [Dialect::MachineMotion, Dialect::Mach4, Dialect::LinuxCnc];
-
-    /// The dialect called `name` ([`Dialect::name`]), if any.
-    #[must_use]
-    pub fn from_name(name: &str) -> Option<Dialect> {
-        Dialect::ALL.into_iter().find(|d| d.name() == name)
-    }
-
-    /// The tool offset the placement subtracts from a work point (X, Y) and adds (Z), from the
-    /// tool table's entry `table`: the entry itself, except that LinuxCNC *adds* a tool's X/Y
-    /// table offset to a programmed point, as it does its length (`machine = … + tool`). Its
-    /// own inverse.
-    #[must_use]
-    pub fn applied_tool_offset(self, table: Xyz) -> Xyz {
-        match self {
-            Dialect::LinuxCnc => Xyz::new(-table.x, -table.y, table.z),
-            Dialect::MachineMotion | Dialect::Mach4 => table,
-        }
-    }
-
-    /// Its name on the command line: `machinemotion`, `mach4`, `linuxcnc`.
-    #[must_use]
-    pub fn name(self) -> &'static str {
-        match self {
-            Dialect::MachineMotion => "machinemotion",
-            Dialect::Mach4 => "mach4",
-            Dialect::LinuxCnc => "linuxcnc",
-        }
-    }
-}
 
 /// Set-up of an [`crate::Interpreter`].
 #[derive(Debug, Clone, PartialEq)]
@@ -104,7 +46,8 @@ pub struct InterpreterConfig {
     /// The block-delete switch: when on, lines starting with `/` are skipped; when off (the
     /// default, as on the controllers) the `/` is ignored and the line runs.
     pub block_delete: bool,
-    /// Whose rules apply where the controllers differ. Default [`Dialect::MachineMotion`].
+    /// Whose rules apply where the controllers differ ([`Dialect::rules`]). Default
+    /// [`Dialect::MachineMotion`].
     pub dialect: Dialect,
     /// Folders searched, in order, for `name.ngc` when `o<name> call` names a subroutine the
     /// program does not define (LinuxCNC's `SUBROUTINE_PATH`). Default: none.
@@ -121,6 +64,12 @@ impl Default for InterpreterConfig {
 }
 
 impl InterpreterConfig {
+    /// The rules of its dialect: what the interpreter asks where the controllers differ.
+    #[must_use]
+    pub const fn rules(&self) -> &'static DialectRules {
+        self.dialect.rules()
+    }
+
     /// Defaults for a machine whose coordinates are in `machine_unit`.
     #[must_use]
     pub fn new(machine_unit: LengthUnit) -> InterpreterConfig {
@@ -137,7 +86,7 @@ impl InterpreterConfig {
             user_mcodes: 100..=999,
             tools: ToolTable::numbered(1, 254),
             block_delete: false,
-            dialect: Dialect::MachineMotion,
+            dialect: Dialect::default(),
             subroutine_path: Vec::new(),
             max_loop_iterations: 10_000_000,
         }

@@ -46,6 +46,7 @@
 
 mod arc;
 pub mod config;
+mod dialect;
 pub mod error;
 pub mod event;
 mod expr;
@@ -68,7 +69,8 @@ mod whole;
 mod words;
 
 pub use arc::{CENTRE_TOLERANCE_INCH, CENTRE_TOLERANCE_MM, RADIUS_TOLERANCE_INCH, RADIUS_TOLERANCE_MM};
-pub use config::{Dialect, InterpreterConfig};
+pub use config::InterpreterConfig;
+pub use dialect::{CommentRule, Dialect, DialectRules, OffsetParts};
 pub use error::{GCode, GcodeError, RunProblem, SyntaxProblem};
 pub use event::{
     ArcMove, Coolant, Event, EventSink, LinearMove, OutputChange, OutputWrite, PathMode, Rate, SpindleCommand, UserCall,

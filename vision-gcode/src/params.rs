@@ -12,9 +12,18 @@ use crate::error::RunProblem;
 use crate::geom::MAX_COORDINATE;
 use crate::whole::whole_in;
 
-/// Highest parameter number of any dialect ([`crate::Dialect::last_parameter`] gives each one's):
-/// Mach4's and seed 002's.
-pub const MAX_PARAMETER: u32 = crate::Dialect::Mach4.last_parameter();
+/// Highest parameter number of any dialect ([`crate::Dialect::last_parameter`] gives each one's).
+pub const MAX_PARAMETER: u32 = {
+    let (mut i, mut max) = (0, 0);
+    while i < crate::Dialect::ALL.len() {
+        let last = crate::Dialect::ALL[i].last_parameter();
+        if last > max {
+            max = last;
+        }
+        i += 1;
+    }
+    max
+};
 /// `#5161`–`#5163`: the G28 position (machine coordinates, machine units).
 pub const G28_POSITION: u32 = 5161;
 /// `#5181`–`#5183`: the G30 position (machine coordinates, machine units).
@@ -110,10 +119,10 @@ impl Default for ParameterTable {
 
 #[cfg(test)]
 impl ParameterTable {
-    /// All parameters zero, seed 002's range.
+    /// All parameters zero, the default dialect's (seed 002's) range.
     #[must_use]
     pub(crate) fn new() -> ParameterTable {
-        ParameterTable::for_dialect(crate::Dialect::MachineMotion)
+        ParameterTable::for_dialect(crate::Dialect::default())
     }
 }
 
@@ -126,7 +135,7 @@ impl ParameterTable {
             values: vec![0.0; last as usize + 1].into_boxed_slice(),
             last,
             dialect: dialect.name(),
-            predefined: (dialect == crate::Dialect::LinuxCnc).then_some([0.0; PREDEFINED.len()]),
+            predefined: dialect.rules().named_predefined_parameters.then_some([0.0; PREDEFINED.len()]),
             undo: Vec::new(),
             globals: HashMap::new(),
             frames: vec![HashMap::new()],

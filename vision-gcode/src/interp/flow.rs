@@ -13,7 +13,6 @@ use std::sync::Arc;
 
 use super::line::Flow;
 use super::{At, Interpreter, Piece, ProgramStream, RunOutcome, MAX_REPEATS};
-use crate::config::Dialect;
 use crate::error::{GcodeError, RunProblem, SyntaxProblem};
 use crate::event::EventSink;
 use crate::expr::eval;
@@ -365,7 +364,7 @@ impl Interpreter {
             call @ (Flow::Call { .. } | Flow::Return) => self.flow_start(text, 1, Some(call), program),
             Flow::End(code) => Ok(over(Piece::Over(RunOutcome::Ended { line: 1, code }))),
             Flow::Percent if program.delimited => Ok(over(Piece::Over(RunOutcome::Completed { lines: 1 }))),
-            Flow::Percent if program.started && self.config.dialect == Dialect::LinuxCnc => {
+            Flow::Percent if program.started && self.config.rules().percent_inside_refused => {
                 Err(GcodeError::run(1, RunProblem::PercentInside))
             }
             // A comment that mentions M98: no control flow after all, but the rest runs here.
@@ -468,7 +467,7 @@ impl Interpreter {
                     Flow::Percent if program.delimited && src == 0 => {
                         return Ok(Some(Piece::Over(RunOutcome::Completed { lines: line })))
                     }
-                    Flow::Percent if src == 0 && self.config.dialect == Dialect::LinuxCnc => {
+                    Flow::Percent if src == 0 && self.config.rules().percent_inside_refused => {
                         return Err(GcodeError::run(line, RunProblem::PercentInside))
                     }
                     Flow::Percent => program.delimited = false,

@@ -4,7 +4,6 @@ use vision_math::Point2;
 
 use super::line::{in_range, LineRun};
 use super::modal::{system_rotation, work_offset_base, SYSTEMS};
-use crate::config::Dialect;
 use crate::error::RunProblem;
 use crate::frame::{Placement, SystemRotation};
 use crate::geom::{Xyz, AXIS_LETTERS};
@@ -78,7 +77,7 @@ impl LineRun<'_> {
                 for axis in (0..3).filter(|&a| given[a]) {
                     self.params.set(base + axis as u32, v.axis(axis));
                 }
-            } else if self.cfg.dialect == Dialect::LinuxCnc {
+            } else if self.cfg.rules().carries_current_point {
                 self.l20_origin(system, v, given)?;
                 if system == self.st.system {
                     self.st.load_system(self.cfg, self.params);
@@ -101,14 +100,14 @@ impl LineRun<'_> {
                 return Ok(());
             }
         }
-        if let (Some(r), Dialect::LinuxCnc) = (rotation, self.cfg.dialect) {
+        if let Some(r) = rotation.filter(|_| self.cfg.rules().rotated_systems) {
             self.params.set(work_rotation(system), r);
         }
         if system == self.st.system {
             self.st.load_system(self.cfg, self.params);
             // rs274 moves its current point by the change (rotated_current) whether or not the
             // rotation changed; the others have no rotation and re-derive it.
-            if self.st.rotation == before.1 && self.cfg.dialect != Dialect::LinuxCnc {
+            if self.st.rotation == before.1 && !self.cfg.rules().carries_current_point {
                 self.st.rederive_program(self.params);
             } else {
                 self.st.program = self.rotated_current(before.0, before.1);
@@ -121,7 +120,7 @@ impl LineRun<'_> {
     /// Mach4 and seed 002 rotate with G68: there only `R0` is accepted, and it does nothing.
     fn g10_rotation(&mut self, l: f64) -> Result<Option<f64>, RunProblem> {
         let Some(r) = self.w.take(b'R', "G10")? else { return Ok(None) };
-        if self.cfg.dialect != Dialect::LinuxCnc {
+        if !self.cfg.rules().rotated_systems {
             if r != 0.0 {
                 return Err(RunProblem::Unsupported {
                     code: "G10 L2 R".into(),
@@ -225,12 +224,12 @@ impl LineRun<'_> {
         let given = self.given_axes("G92")?;
         // Seed 002: an axis without a word gets a zero G92 offset (Mach4 and LinuxCNC keep it).
         // Do that first, so the given axes are computed in the frame that will hold.
-        if self.cfg.dialect == Dialect::MachineMotion {
+        if self.cfg.rules().g92_zeroes_unnamed_axes {
             for axis in (0..3).filter(|&a| !given[a]) {
                 self.params.set(G92_OFFSET + axis as u32, 0.0);
             }
         }
-        if self.cfg.dialect == Dialect::LinuxCnc {
+        if self.cfg.rules().g52_shares_g92_offset {
             return self.shared_offset("G92");
         }
         self.st.rederive_program(self.params);
@@ -271,7 +270,7 @@ impl LineRun<'_> {
 
     /// G92.1 / G92.2: the G92 offset back to zero (the program point is re-derived).
     pub(super) fn g92_reset(&mut self) {
-        if self.cfg.dialect == Dialect::LinuxCnc {
+        if self.cfg.rules().carries_current_point {
             // rs274 (interp_convert.cc, `convert_axis_offsets`) adds the old offset to the
             // current point: the same as re-deriving it, except where the point no longer
             // reads the machine position (after a rotation change with a G92 offset in force).
@@ -289,7 +288,7 @@ impl LineRun<'_> {
     }
 
     pub(super) fn g52(&mut self) -> Result<(), RunProblem> {
-        if self.cfg.dialect == Dialect::LinuxCnc {
+        if self.cfg.rules().g52_shares_g92_offset {
             return self.shared_offset("G52");
         }
         let (v, given) = self.absolute_point("G52")?;

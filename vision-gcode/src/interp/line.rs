@@ -5,7 +5,7 @@
 
 use super::cycles::CycleCursor;
 use super::motion::Polyline;
-use crate::config::{Dialect, InterpreterConfig};
+use crate::config::InterpreterConfig;
 use crate::error::{GCode, RunProblem};
 use crate::event::{Coolant, Event, OutputChange, OutputWrite, PathMode, SpindleCommand};
 use crate::frame::{Placement, SystemRotation};
@@ -218,11 +218,9 @@ impl LineRun<'_> {
             let system = u32::from(code / 10 - 53);
             // rs274 reloads a system's parameters only when it becomes active, not when it is
             // selected again (a written #5221 waits for that).
-            if self.cfg.dialect != Dialect::LinuxCnc {
-                self.st.system = system;
-                self.st.load_system(self.cfg, self.params);
-                self.st.rederive_program(self.params);
-            } else if system != self.st.system {
+            let rules = self.cfg.rules();
+            let reloads = system != self.st.system || !rules.origin_reloads_on_system_change;
+            if reloads && rules.carries_current_point {
                 // rs274 carries its current point into the new system rather than reading the
                 // machine position; the two differ after a rotation change with a G92/G52
                 // offset in force, and the next G28 leg or incremental move goes from rs274's.
@@ -230,6 +228,10 @@ impl LineRun<'_> {
                 self.st.system = system;
                 self.st.load_system(self.cfg, self.params);
                 self.st.program = program;
+            } else if reloads {
+                self.st.system = system;
+                self.st.load_system(self.cfg, self.params);
+                self.st.rederive_program(self.params);
             }
         }
         if let Some(code) = groups.get(Group::Path) {
@@ -285,7 +287,7 @@ impl LineRun<'_> {
                 Some(feature) => RunProblem::Unsupported { code: GCode(code).to_string(), feature },
                 None => RunProblem::UnknownGCode { code: GCode(code) },
             })?;
-            if matches!(group, Group::Rotation | Group::Scale) && self.cfg.dialect == Dialect::LinuxCnc {
+            if matches!(group, Group::Rotation | Group::Scale) && !self.cfg.rules().rotation_and_scale_codes {
                 return Err(RunProblem::Unsupported {
                     code: GCode(code).to_string(),
                     feature: "scaling and rotation (G50/G51, G68/G69: Mach and Fanuc codes LinuxCNC does not have)",
@@ -457,7 +459,7 @@ impl LineRun<'_> {
     /// feed move needs a new F); the others do so when the mode changes, since F then means
     /// another thing.
     fn feed_mode(&mut self, per_revolution: bool) {
-        if self.cfg.dialect == Dialect::LinuxCnc || self.st.per_revolution != per_revolution {
+        if self.cfg.rules().feed_mode_always_zeroes_feed || self.st.per_revolution != per_revolution {
             self.st.feed = Some(0.0);
         }
         self.st.per_revolution = per_revolution;
@@ -508,13 +510,11 @@ impl LineRun<'_> {
             }
             _ => Xyz::ZERO,
         };
-        let offset = self.cfg.dialect.applied_tool_offset(offset);
+        let rules = self.cfg.rules();
+        let offset = rules.applied_tool_offset(offset);
         let old = self.st.tool_offset;
-        self.st.tool_offset = match self.cfg.dialect {
-            Dialect::Mach4 => Xyz::new(self.st.tool_offset.x, self.st.tool_offset.y, offset.z),
-            Dialect::MachineMotion | Dialect::LinuxCnc => offset,
-        };
-        if self.cfg.dialect == Dialect::LinuxCnc {
+        self.st.tool_offset = rules.tool_length_applies.take(old, offset);
+        if rules.carries_current_point {
             // rs274 (`convert_tool_length_offset`) moves its current point by the change,
             // rotated into the system: the same as re-deriving it while the point reads the
             // machine position, and it keeps rs274's point where it does not.
@@ -542,15 +542,9 @@ impl LineRun<'_> {
         let tool = self.st.selected_tool;
         let entry = self.cfg.tools.get(tool).ok_or(RunProblem::UnknownTool { tool })?;
         self.st.tool = tool;
-        // Seed 002 has no G43: the tool's offsets apply from M6. Mach4: its X/Y offset applies
-        // from M6 (the manual's programs select the camera with `T98 M6` alone and expect its
-        // optical axis on the commanded point, SPEC §5), the length waits for G43. LinuxCNC
-        // applies all of it with G43 only.
-        match self.cfg.dialect {
-            Dialect::MachineMotion => self.st.tool_offset = entry.offset,
-            Dialect::Mach4 => self.st.tool_offset = Xyz::new(entry.offset.x, entry.offset.y, self.st.tool_offset.z),
-            Dialect::LinuxCnc => {}
-        }
+        let rules = self.cfg.rules();
+        let offset = rules.applied_tool_offset(entry.offset);
+        self.st.tool_offset = rules.tool_change_applies.take(self.st.tool_offset, offset);
         // LinuxCNC too: after a tool change its task re-reads the current point from the
         // machine position (emccanon.cc `GET_EXTERNAL_POSITION`, unrotated, offsets off). The
         // standalone rs274 keeps its last printed point unrotated instead (saicanon.cc), so it
@@ -569,7 +563,7 @@ impl LineRun<'_> {
         let name = command.gcode();
         let dollar = self.w.take(b'$', name)?;
         // Seed 002's explicit `A<device> P<port>` form; elsewhere a lone A is the rotary axis.
-        let explicit = self.w.has(b'A') && (self.cfg.dialect == Dialect::MachineMotion || self.w.has(b'P'));
+        let explicit = self.w.has(b'A') && (self.cfg.rules().lone_a_selects_output || self.w.has(b'P'));
         let change = if explicit {
             let (Some(a), Some(p)) = (self.w.take(b'A', name)?, self.w.take(b'P', name)?) else {
                 return Err(RunProblem::OutputForm { code: name });

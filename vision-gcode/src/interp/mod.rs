@@ -15,7 +15,7 @@ pub use cycles::MAX_CYCLE_MOVES;
 pub use flow::{needs_program, FlowRun};
 pub use modal::MotionMode;
 
-use crate::config::{Dialect, InterpreterConfig};
+use crate::config::InterpreterConfig;
 use crate::error::{GcodeError, RunProblem};
 use crate::event::{Event, EventSink, PathMode, UserCall};
 use crate::geom::{Plane, Xyz};
@@ -172,7 +172,7 @@ impl Interpreter {
     /// # Errors
     /// Under LinuxCNC, [`RunProblem::NoProgramEnd`] at line `lines`.
     pub fn end_of_text(&self, lines: u32) -> Result<RunOutcome, GcodeError> {
-        if self.config.dialect == Dialect::LinuxCnc {
+        if self.config.rules().program_end_required {
             return Err(GcodeError::run(lines, RunProblem::NoProgramEnd));
         }
         Ok(RunOutcome::Completed { lines })
@@ -203,7 +203,7 @@ impl Interpreter {
                 Flow::End(code) => return Ok(Piece::Over(RunOutcome::Ended { line, code })),
                 Flow::Percent if program.delimited => return Ok(Piece::Over(RunOutcome::Completed { lines: line })),
                 // `%` on the first non-blank line opens a delimited program; the next `%` ends it.
-                Flow::Percent if program.started && self.config.dialect == Dialect::LinuxCnc => {
+                Flow::Percent if program.started && self.config.rules().percent_inside_refused => {
                     return Err(GcodeError::run(line, RunProblem::PercentInside))
                 }
                 Flow::Percent => program.delimited = !program.started,
@@ -436,14 +436,14 @@ impl Interpreter {
         self.publisher.publish(st.machine);
         self.params.set_mirror(ACTIVE_SYSTEM, f64::from(st.system));
         self.params.set_mirror(TOOL_NUMBER, f64::from(st.tool));
-        let off = self.current(self.config.dialect.applied_tool_offset(st.tool_offset));
+        let off = self.current(self.config.rules().applied_tool_offset(st.tool_offset));
         let pos = self.current(st.program);
         for (i, (o, p)) in [(off.x, pos.x), (off.y, pos.y), (off.z, pos.z)].into_iter().enumerate() {
             let i = u32::try_from(i).unwrap_or(0);
             self.params.set_mirror(TOOL_OFFSET + i, o);
             self.params.set_mirror(POSITION + i, p);
         }
-        if self.config.dialect == Dialect::LinuxCnc {
+        if self.config.rules().named_predefined_parameters {
             let flag = |b: bool| if b { 1.0 } else { 0.0 };
             let inch = st.units == LengthUnit::Inch;
             let feed = st.feed.map_or(0.0, |f| self.config.machine_unit.convert(f, st.units));
@@ -740,12 +740,9 @@ impl Interpreter {
 
     fn after_tool_write(&mut self, tool: u32, offset: Xyz) {
         if tool == self.modal.tool {
-            // Under Mach4 the table's length reaches the machine through G43 only.
-            let offset = self.config.dialect.applied_tool_offset(offset);
-            self.modal.tool_offset = match self.config.dialect {
-                Dialect::Mach4 => Xyz::new(offset.x, offset.y, self.modal.tool_offset.z),
-                Dialect::MachineMotion | Dialect::LinuxCnc => offset,
-            };
+            let rules = self.config.rules();
+            let offset = rules.applied_tool_offset(offset);
+            self.modal.tool_offset = rules.table_write_applies.take(self.modal.tool_offset, offset);
             self.modal.rederive_program(&self.params);
             self.refresh_mirrors();
         }

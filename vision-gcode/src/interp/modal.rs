@@ -3,7 +3,7 @@
 use vision_math::LengthUnit;
 
 use super::cycles::CycleState;
-use crate::config::{Dialect, InterpreterConfig};
+use crate::config::InterpreterConfig;
 use crate::error::GCode;
 use crate::event::PathMode;
 use crate::frame::{Frame, Placement, SystemRotation};
@@ -141,7 +141,7 @@ impl Modal {
     /// is (it need not read the machine position after a rotation change with a G92/G52
     /// offset in force).
     pub(crate) fn after_offset_write(&mut self, config: &InterpreterConfig, params: &ParameterTable, g92: bool) {
-        if config.dialect != Dialect::LinuxCnc {
+        if !config.rules().origin_reloads_on_system_change {
             self.load_system(config, params);
         } else if !g92 {
             return;
@@ -159,7 +159,7 @@ impl Modal {
 /// Coordinate system `system`'s XY rotation, degrees: its parameter under LinuxCNC, 0 in the
 /// dialects without coordinate-system rotation.
 pub(crate) fn system_rotation(config: &InterpreterConfig, params: &ParameterTable, system: u32) -> f64 {
-    if config.dialect == Dialect::LinuxCnc {
+    if config.rules().rotated_systems {
         params.get(work_rotation(system))
     } else {
         0.0

@@ -3,7 +3,6 @@
 use crate::arc::{
     Arc, Tolerance, CENTRE_TOLERANCE_INCH, CENTRE_TOLERANCE_MM, RADIUS_TOLERANCE_INCH, RADIUS_TOLERANCE_MM,
 };
-use crate::config::Dialect;
 use crate::error::{GCode, RunProblem};
 use crate::event::{ArcMove, Event, EventSink, LinearMove, PathMode, Rate};
 use crate::frame::{Placement, SystemRotation};
@@ -122,7 +121,7 @@ impl LineRun<'_> {
     /// (radians).
     pub(super) fn polar_words(&mut self, owner: &'static str) -> Result<(Option<f64>, Option<f64>), RunProblem> {
         let refuse = |problem| Err(RunProblem::Polar { problem });
-        if self.cfg.dialect != Dialect::LinuxCnc {
+        if !self.cfg.rules().polar_words {
             return refuse("a LinuxCNC feature; program X and Y in this dialect");
         }
         if self.st.plane != Plane::Xy {
@@ -147,7 +146,7 @@ impl LineRun<'_> {
         let home = Xyz::new(hx, hy, hz);
         let m = if !given.iter().any(|g| *g) {
             home
-        } else if self.cfg.dialect == Dialect::LinuxCnc {
+        } else if self.cfg.rules().home_axes_in_current_system {
             // rs274 (`convert_home`) reads the stored position in the current system
             // (`find_relative`) and gives the named program axes of the waypoint its
             // coordinates: in a rotated system homing X alone moves the machine's Y too.
@@ -294,7 +293,7 @@ impl LineRun<'_> {
             return Err(RunProblem::G53Form { hint: "switch to G90 first" });
         }
         let owner = if rate == Rate::Rapid { "G53 G0" } else { "G53 G1" };
-        if self.cfg.dialect == Dialect::LinuxCnc {
+        if self.cfg.rules().carries_current_point {
             return self.g53_linuxcnc(owner, rate);
         }
         let mut end = self.st.machine;

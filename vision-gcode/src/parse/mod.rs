@@ -251,11 +251,11 @@ impl Parser {
         Parser::default()
     }
 
-    /// A parser with `dialect`'s comment rule ([`CommentRule::of`]); [`Parser::new`] nests
-    /// parentheses inside comments (seed 002's).
+    /// A parser with `dialect`'s comment rule ([`crate::DialectRules::comments`]);
+    /// [`Parser::new`] nests parentheses inside comments (seed 002's).
     #[must_use]
     pub fn for_dialect(dialect: Dialect) -> Parser {
-        Parser { comments_rule: CommentRule::of(dialect), ..Parser::default() }
+        Parser { comments_rule: dialect.rules().comments, ..Parser::default() }
     }
 
     /// Parses one line of text (without its line break).
@@ -478,7 +478,7 @@ impl Parser {
     }
 }
 
-/// Where a `(` comment ends: the rule of each dialect.
+/// Where a `(` comment ends ([`crate::DialectRules::comments`]).
 ///
 /// * [`CommentRule::Nested`] (seed 002, MachineMotion): at the `)` that balances its `(`; the
 ///   manual's programs write `( Corners at (+/- 2.5, +/- 4.0) inch )`.
@@ -511,16 +511,6 @@ struct CommentEnd {
 }
 
 impl CommentRule {
-    /// The rule of `dialect`'s controller.
-    #[must_use]
-    pub const fn of(dialect: Dialect) -> CommentRule {
-        match dialect {
-            Dialect::MachineMotion => CommentRule::Nested,
-            Dialect::Mach4 => CommentRule::Mach4,
-            Dialect::LinuxCnc => CommentRule::Rs274,
-        }
-    }
-
     /// Where the comment opened at `open` (a `(`) ends.
     fn end(self, bytes: &[u8], open: usize) -> PResult<CommentEnd> {
         let rest = bytes.get(open + 1..).unwrap_or(&[]);
