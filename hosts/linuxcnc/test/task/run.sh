@@ -1,7 +1,8 @@
 #!/bin/sh
 # The real-task stage of scripts/test: LinuxCNC 2.9's task, motion and HAL, headless, with the
 # remaps and the real module on a simulated camera (run.py), then the Debian package built
-# (scripts/package-deb), installed with dpkg -i and run the same way from the installed files.
+# (scripts/package-deb, which also checks that every path the docs it holds name is in it),
+# installed with dpkg -i and run the same way from the installed files.
 # Installs linuxcnc-uspace with apt-get when LinuxCNC is missing (root; Debian 12). The package
 # is removed again at the end unless it was installed before.
 set -eu
