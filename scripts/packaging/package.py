@@ -43,7 +43,7 @@ PATH_EXTENSIONS = {
 # macros and scripts the project writes. Other bare names (`Machine.ini`, `lua53.dll`,
 # `MachVision.toml`) are the machine's or the user's.
 BARE_EXTENSIONS = {"md", "txt", "pdf", "nc", "ngc", "lua", "mcs", "py"}
-# Names that are no file: `../..` style words, a lone slash.
+# The docs a package holds, which the check reads.
 TEXT_DOC = re.compile(r"\.(md|txt)$", re.IGNORECASE)
 
 

@@ -27,6 +27,9 @@ work="$target/linuxcnc-task"
 # The package (release builds) first: built beside the LinuxCNC runs it starved their
 # non-real-time task and motion on a 2-core machine (homing and moves timed out).
 deb=$(bash "$root/scripts/package-deb" "$target/deb" | tail -n 1)
+# (sh has no pipefail: a package-deb that failed, e.g. on a doc naming a file the package lacks,
+# printed no package path)
+case "$deb" in *.deb) [ -f "$deb" ] ;; *) false ;; esac || { echo "task: scripts/package-deb failed" >&2; exit 1; }
 python3 "$here/run.py" --module "$module" --work "$work"
 installed_before=$(dpkg-query -W -f='${Status}' mach-vision 2>/dev/null || true)
 dpkg -i "$deb" >/dev/null
