@@ -5,7 +5,8 @@
 #
 # 1. Builds Windows Lua 5.3.6 (lua.exe + lua53.dll, the DLL name Mach4 exports its Lua under;
 #    see ../WINDOWS.md) from Debian's lua5.3 source package, with MinGW-w64, and the shipped
-#    artifacts with scripts/build-windows (mach_vision.dll, mach-vision.exe, the zip).
+#    artifacts with scripts/build-windows (mach_vision.dll, mach-vision.exe, the zip; the zip's
+#    docs are checked to name only files the zip holds: scripts/packaging/package.py).
 # 2. Loads the shipped mach_vision.dll with `require` into that lua.exe under Wine and runs the
 #    real m280.mcs / m281.mcs against a minimal fake `mc` (load_test.lua, as load-test.sh does in
 #    Linux's lua5.3): a success, and a refusal that reaches mcCntlSetLastError and stops the cycle;
@@ -46,9 +47,16 @@ mkdir -p "$win"
 "$wine" cmd /c exit >/dev/null 2>&1 &
 prefix_pid=$!
 
-# 1a. The shipped files (also installs MinGW-w64 and Debian's Rust when missing).
+# The Linux build: compared with in 3, and it draws the zip's calibration sheet in 1a.
+if [ ! -x "$linux_exe" ]; then
+    cargo build --quiet --manifest-path "$root/Cargo.toml" -p vision-cli
+    linux_exe="$root/target/debug/mach-vision"
+fi
+
+# 1a. The shipped files and the zip, whose docs are checked to name only files it holds (also
+# installs MinGW-w64 and Debian's Rust when missing).
 # (against lua53.dll, the Lua built below, whatever MACH4_LUA_DLL says)
-MACH4_LUA_DLL="" "$root/scripts/build-windows"
+MACH4_LUA_DLL="" MACH_VISION_LINUX_CLI="$linux_exe" "$root/scripts/build-windows"
 
 # 1b. Windows Lua 5.3.6 from Debian's source package (its signed index vouches for the tarball),
 #     fetched through a private apt configuration with a deb-src line; built once per target/.
@@ -97,10 +105,6 @@ say "the shipped mach_vision.dll in Windows Lua 5.3 (lua.exe, lua53.dll), the ca
 kill "$emulator" 2>/dev/null || true
 
 # 3. mach-vision.exe against the Linux build, examples 1-8.
-if [ ! -x "$linux_exe" ]; then
-    cargo build --quiet --manifest-path "$root/Cargo.toml" -p vision-cli
-    linux_exe="$root/target/debug/mach-vision"
-fi
 say "mach-vision.exe run on examples 1-8 against $linux_exe"
 cd "$root"
 for program in examples/programs/0[1-8]-*.nc; do

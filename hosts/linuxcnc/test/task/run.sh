@@ -1,7 +1,8 @@
 #!/bin/sh
 # The real-task stage of scripts/test: LinuxCNC 2.9's task, motion and HAL, headless, with the
 # remaps and the real module on a simulated camera (run.py), then the Debian package built
-# (scripts/package-deb), installed with dpkg -i and run the same way from the installed files.
+# (scripts/package-deb, which also checks that every path the docs it holds name is in it),
+# installed with dpkg -i and run the same way from the installed files.
 # Installs linuxcnc-uspace with apt-get when LinuxCNC is missing (root; Debian 12). The package
 # is removed again at the end unless it was installed before.
 set -eu
@@ -26,6 +27,9 @@ work="$target/linuxcnc-task"
 # The package (release builds) first: built beside the LinuxCNC runs it starved their
 # non-real-time task and motion on a 2-core machine (homing and moves timed out).
 deb=$(bash "$root/scripts/package-deb" "$target/deb" | tail -n 1)
+# (sh has no pipefail: a package-deb that failed, e.g. on a doc naming a file the package lacks,
+# printed no package path)
+case "$deb" in *.deb) [ -f "$deb" ] ;; *) false ;; esac || { echo "task: scripts/package-deb failed" >&2; exit 1; }
 python3 "$here/run.py" --module "$module" --work "$work"
 installed_before=$(dpkg-query -W -f='${Status}' mach-vision 2>/dev/null || true)
 dpkg -i "$deb" >/dev/null
