@@ -6,7 +6,7 @@
 //! [`CameraConfig::from_params`]: crate::CameraConfig::from_params
 
 use vision_core::params::{DriverSettings, Setting, SettingsTable};
-use vision_core::{Access, ParamKind, ParamSpec, ParamValue, Params, Section};
+use vision_core::{ParamKind, ParamSpec, ParamValue, Params};
 
 /// The driver's profile table, `[camera]`.
 pub const TABLE: &str = "camera";
@@ -32,7 +32,7 @@ pub static SETTINGS: SettingsTable = SettingsTable {
     table: TABLE,
     settings: &[
         Setting {
-            spec: spec(
+            spec: ParamSpec::driver_setting(
                 "VisionCameraSource",
                 ParamKind::Text,
                 "",
@@ -45,7 +45,7 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             check: source,
         },
         Setting {
-            spec: spec(
+            spec: ParamSpec::driver_setting(
                 "VisionCameraWidth",
                 ParamKind::Integer,
                 "px",
@@ -56,7 +56,7 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             check: side,
         },
         Setting {
-            spec: spec(
+            spec: ParamSpec::driver_setting(
                 "VisionCameraHeight",
                 ParamKind::Integer,
                 "px",
@@ -67,7 +67,7 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             check: side,
         },
         Setting {
-            spec: spec(
+            spec: ParamSpec::driver_setting(
                 "VisionCameraPixelFormat",
                 ParamKind::Choice(PIXEL_FORMATS),
                 "",
@@ -79,7 +79,7 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             check: |_| Ok(()),
         },
         Setting {
-            spec: spec(
+            spec: ParamSpec::driver_setting(
                 "VisionCameraMark",
                 ParamKind::Choice(MARKS),
                 "",
@@ -90,7 +90,7 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             check: |_| Ok(()),
         },
         Setting {
-            spec: spec(
+            spec: ParamSpec::driver_setting(
                 "VisionCameraMarkDiameterPx",
                 ParamKind::Float,
                 "px",
@@ -102,7 +102,7 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             check: diameter,
         },
         Setting {
-            spec: spec(
+            spec: ParamSpec::driver_setting(
                 "VisionCameraMarkTolerance",
                 ParamKind::Float,
                 "%",
@@ -114,7 +114,7 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             check: tolerance,
         },
         Setting {
-            spec: spec(
+            spec: ParamSpec::driver_setting(
                 "VisionCameraPolarity",
                 ParamKind::Choice(POLARITIES),
                 "",
@@ -125,7 +125,7 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             check: |_| Ok(()),
         },
         Setting {
-            spec: spec(
+            spec: ParamSpec::driver_setting(
                 "VisionCameraSearchRadius",
                 ParamKind::Float,
                 "%",
@@ -138,7 +138,7 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             check: radius,
         },
         Setting {
-            spec: spec(
+            spec: ParamSpec::driver_setting(
                 "VisionCameraTimeout",
                 ParamKind::Float,
                 "s",
@@ -150,7 +150,7 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             check: timeout,
         },
         Setting {
-            spec: spec(
+            spec: ParamSpec::driver_setting(
                 "VisionCameraFlushFrames",
                 ParamKind::Integer,
                 "frames",
@@ -163,18 +163,6 @@ pub static SETTINGS: SettingsTable = SettingsTable {
         },
     ],
 };
-
-/// A setting's description: `unit` and `range` (worded to follow "must be", as the check's
-/// refusal says it) for the parameter reference; the operator writes every setting.
-const fn spec(
-    name: &'static str,
-    kind: ParamKind,
-    unit: &'static str,
-    range: &'static str,
-    doc: &'static str,
-) -> ParamSpec {
-    ParamSpec { name, kind, access: Access::Config, section: Section::Connection, doc, unit, range, writer: "operator" }
-}
 
 /// The driver's settings in `params`: its table, or the defaults when `params` has none.
 #[must_use]

@@ -8,7 +8,7 @@
 //! [`KeyenceConfig::from_params`]: crate::KeyenceConfig::from_params
 
 use vision_core::params::{DriverSettings, Setting, SettingsTable};
-use vision_core::{Access, ParamKind, ParamSpec, ParamValue, Params, Section};
+use vision_core::{ParamKind, ParamSpec, ParamValue, Params};
 
 /// The driver's profile table, `[keyence]`.
 pub const TABLE: &str = "keyence";
@@ -24,7 +24,7 @@ pub static SETTINGS: SettingsTable = SettingsTable {
     table: TABLE,
     settings: &[
         Setting {
-            spec: spec(
+            spec: ParamSpec::driver_setting(
                 "VisionIP",
                 ParamKind::Text,
                 "",
@@ -35,7 +35,7 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             check: host,
         },
         Setting {
-            spec: spec(
+            spec: ParamSpec::driver_setting(
                 "VisionPort",
                 ParamKind::Integer,
                 "",
@@ -46,7 +46,7 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             check: port,
         },
         Setting {
-            spec: spec(
+            spec: ParamSpec::driver_setting(
                 "VisionTimeout",
                 ParamKind::Float,
                 "s",
@@ -58,7 +58,7 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             check: timeout,
         },
         Setting {
-            spec: spec(
+            spec: ParamSpec::driver_setting(
                 "VisionImageWatchDir",
                 ParamKind::Text,
                 "",
@@ -69,7 +69,7 @@ pub static SETTINGS: SettingsTable = SettingsTable {
             check: folder,
         },
         Setting {
-            spec: spec(
+            spec: ParamSpec::driver_setting(
                 "VisionImageGrabTimeout",
                 ParamKind::Float,
                 "s",
@@ -81,18 +81,6 @@ pub static SETTINGS: SettingsTable = SettingsTable {
         },
     ],
 };
-
-/// A setting's description: `unit` and `range` (worded to follow "must be", as the check's
-/// refusal says it) for the parameter reference; the operator writes every setting.
-const fn spec(
-    name: &'static str,
-    kind: ParamKind,
-    unit: &'static str,
-    range: &'static str,
-    doc: &'static str,
-) -> ParamSpec {
-    ParamSpec { name, kind, access: Access::Config, section: Section::Connection, doc, unit, range, writer: "operator" }
-}
 
 /// The driver's settings in `params`: its table, or the defaults when `params` has none.
 #[must_use]

@@ -148,3 +148,18 @@ pub struct ParamSpec {
     /// persisted parameter in the profile.
     pub writer: &'static str,
 }
+
+impl ParamSpec {
+    /// A camera driver's connection setting, which the operator writes: `unit` and `range`
+    /// (worded to follow "must be", as the check's refusal says it) for the parameter reference.
+    #[must_use]
+    pub const fn driver_setting(
+        name: &'static str,
+        kind: ParamKind,
+        unit: &'static str,
+        range: &'static str,
+        doc: &'static str,
+    ) -> Self {
+        Self { name, kind, access: Access::Config, section: Section::Connection, doc, unit, range, writer: "operator" }
+    }
+}
