@@ -780,6 +780,8 @@ mod tests {
         assert_eq!(edit_distance("visionport", "visionportt"), 1, "a letter extra");
         assert_eq!(edit_distance("visionport", "visionpart"), 1, "a letter wrong");
         assert_eq!(edit_distance("visionport", "visionprot"), 1, "two letters swapped");
+        assert_eq!(edit_distance("visionport", "ivsionport"), 1, "the first two letters swapped");
+        assert_eq!(edit_distance("ab", "ba"), 1);
         assert_eq!(edit_distance("visionport", "visionip"), 4);
     }
 
