@@ -136,7 +136,11 @@ fn report(fit: &Fit, commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Res
     let t = &fit.transform;
     let chain = t.chain();
     let gcode = match &chain {
-        Some(c) => Some(c.gcode().map_err(|e| Failure::Input(e.to_string()))?.to_vec()),
+        Some(c) => {
+            let commands = vision_core::controller::modal_commands(c).map_err(|e| Failure::Input(e.to_string()))?;
+            let mach4 = &vision_core::controller::Mach4;
+            Some(vision_mcode::lines(mach4, &commands).map_err(|e| Failure::Input(e.to_string()))?)
+        }
         None => None,
     };
     let l = t.linear();

@@ -71,6 +71,7 @@ use vision_math::{
     fit_centre, fit_rectangle, solve_linear, LengthUnit, Matrix2, PixelChain, Point2, Remap, Vector2, MM_PER_INCH,
 };
 
+use crate::command::MachineCommand;
 use crate::controller::{program_to_machine, rotation};
 use crate::driver::{CameraDriver, Reading};
 use crate::error::VisionError;
@@ -89,8 +90,6 @@ pub const PROBE_FOV_FRACTION: f64 = 0.2;
 pub const MIN_BUMP_PX: f64 = 2.0;
 /// Largest sheet print-scale error accepted, as a fraction (10 %).
 pub const MAX_SHEET_SCALE_DEV: f64 = 0.10;
-/// Decimals of the coordinates in calibration moves.
-const MOVE_DECIMALS: usize = 7;
 
 /// Where a stepwise M283 walk needs its next capture (see
 /// [`crate::VisionModule::m283_next`]): the camera tool's X/Y and its height.
@@ -362,17 +361,15 @@ struct Shot {
     in_fit: bool,
 }
 
-/// The lines of an incremental rapid by `d` (program frame), back to G90 after it (the Vision
-/// M-codes expect absolute programs, as the manual's do).
-pub(crate) fn relative_move(d: vision_math::Vector2<f64>) -> Vec<String> {
-    let x = fixed(d.x, MOVE_DECIMALS);
-    let y = fixed(d.y, MOVE_DECIMALS);
-    vec![format!("G91 G0 X{x} Y{y}"), "G90".to_string()]
+/// An incremental rapid by `d` (program frame), absolute again after it (the Vision M-codes
+/// expect absolute programs, as the manual's do).
+pub(crate) fn relative_move(d: vision_math::Vector2<f64>) -> MachineCommand {
+    MachineCommand::MoveBy(d)
 }
 
-/// The line of an absolute rapid to `target` (program frame).
-pub(crate) fn absolute_move(target: Point2<f64>) -> String {
-    format!("G90 G0 X{} Y{}", fixed(target.x, MOVE_DECIMALS), fixed(target.y, MOVE_DECIMALS))
+/// An absolute rapid to `target` (program frame).
+pub(crate) fn absolute_move(target: Point2<f64>) -> MachineCommand {
+    MachineCommand::MoveTo(target)
 }
 
 /// Where a walker's readings come from.
@@ -463,17 +460,17 @@ impl<'a> Walker<'a> {
         }
     }
 
-    /// Moves the head by `dz` along machine Z (current units, `G91 G0 Z`, then G90) and
-    /// settles. `Err(true)`: the move ran but the settle failed (the head moved); `Err(false)`:
-    /// the controller refused the move (it did not).
+    /// Moves the head by `dz` along machine Z (current units, relative, then absolute again)
+    /// and settles. `Err(true)`: the move ran but the settle failed (the head moved);
+    /// `Err(false)`: the controller refused the move (it did not).
     fn move_z(&mut self, dz: f64) -> Result<(), (bool, VisionError)> {
-        let lines = vec![format!("G91 G0 Z{}", fixed(dz, MOVE_DECIMALS)), "G90".to_string()];
+        let command = MachineCommand::MoveZBy(dz);
         if let Source::Replay { lift, .. } = &mut self.source {
             *lift += dz;
-            self.ran.extend(lines);
+            self.ran.extend(self.machine.gcode(&command).map_err(|e| (false, e.into()))?);
             return Ok(());
         }
-        self.machine.run_gcode(&lines).map_err(|e| (false, e.into()))?;
+        let lines = self.machine.command(&command).map_err(|e| (false, e.into()))?;
         self.ran.extend(lines);
         self.machine.dwell(self.params.trigger_settle_s()).map_err(|e| (true, e.into()))
     }
@@ -492,14 +489,17 @@ impl<'a> Walker<'a> {
         }
     }
 
-    /// Runs `lines` (a move to `target`, program frame) on the machine, records them, settles.
-    fn run(&mut self, lines: Vec<String>, target: Point2<f64>) -> Result<(), VisionError> {
-        if let Source::Replay { at, .. } = &mut self.source {
+    /// Runs `command` (a move to `target`, program frame) on the machine, records its lines,
+    /// settles.
+    fn run(&mut self, command: MachineCommand, target: Point2<f64>) -> Result<(), VisionError> {
+        let lines = if let Source::Replay { at, .. } = &mut self.source {
             *at = target;
+            self.machine.gcode(&command)?
         } else {
-            self.machine.run_gcode(&lines)?;
+            let lines = self.machine.command(&command)?;
             self.machine.dwell(self.params.trigger_settle_s())?;
-        }
+            lines
+        };
         self.ran.extend(lines);
         Ok(())
     }
@@ -518,7 +518,7 @@ impl<'a> Walker<'a> {
 
     /// Absolute G90 move to `target`, then settle.
     fn move_abs(&mut self, target: Point2<f64>) -> Result<(), VisionError> {
-        self.run(vec![absolute_move(target)], target)
+        self.run(absolute_move(target), target)
     }
 
     /// Triggers and records a shot of walk dot `dot`; returns its index. The DRO shows the

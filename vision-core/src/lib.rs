@@ -3,7 +3,8 @@
 //! [`CameraDriver`] for the camera and [`Machine`] for the CNC.
 //!
 //! * [`driver`]: the camera trait; drivers return native pixels, all math lives here.
-//! * [`machine`]: the one machine trait every front end implements (positions, G-code, tools,
+//! * [`command`]: what the module asks the machine to do ([`MachineCommand`]), typed.
+//! * [`machine`]: the one machine trait every front end implements (positions, commands, tools,
 //!   units, pound variables, clock), with typed [`MachineError`]s.
 //! * [`controller`]: every rule that differs between Mach4, LinuxCNC and seed 002's
 //!   MachineMotion, one file each ([`Controller`], [`CONTROLLERS`]).
@@ -23,11 +24,12 @@
 //! `vision-host`'s session parses `M280 P3`, `M281 D1`, … (through `vision-mcode`) into typed
 //! values ([`RunMode`], [`Pieces`], [`Calibrate`], a job number, a keep-image flag) and calls
 //! [`VisionModule::m280`] … [`VisionModule::m284`] with the controller's [`Machine`]. The module
-//! runs its own G-code through [`Machine::run_gcode`] (M280's cancel, M282's alignment, M283's
-//! moves), as the machine's [`Controller`] writes it; [`Reply::gcode`] lists what it ran. The
-//! run's state is typed ([`Run`]); the `Last*` / `Run_*` telemetry is written from it after each
-//! operation and never read back. Drivers come from a [`DriverRegistry`] by `VisionDriver`;
-//! parameters load and save with a [`ProfileStore`].
+//! hands the machine typed [`MachineCommand`]s ([`Machine::command`]: M280's cancel, M282's
+//! alignment, M283's moves), as the machine's [`Controller`] chooses them; the bridge runs them
+//! in its controller's G-code text (written by `vision-mcode`), and [`Reply::gcode`] lists the
+//! lines it ran. The run's state is typed ([`Run`]); the `Last*` / `Run_*` telemetry is
+//! written from it after each operation and never read back. Drivers come from a
+//! [`DriverRegistry`] by `VisionDriver`; parameters load and save with a [`ProfileStore`].
 //!
 //! The decisions where the spec is open are in `docs/vision-module.md`.
 //!
@@ -55,6 +57,7 @@
 pub struct IntegratorsGuide;
 
 pub mod calibrate;
+pub mod command;
 pub mod controller;
 pub mod driver;
 mod error;
@@ -71,6 +74,7 @@ pub mod text;
 pub use calibrate::{
     AxisReport, CalReport, Calibrate, CentreReport, DotVerify, KChange, QuickReport, SheetReport, WalkTarget,
 };
+pub use command::MachineCommand;
 pub use controller::{Controller, CONTROLLERS};
 pub use driver::{CameraDriver, Capabilities, DriverError, DriverErrorKind, ImageRequest, Judgment, Reading};
 pub use error::VisionError;

@@ -1,8 +1,8 @@
 //! The CNC side: what the Vision module needs from its host (SPEC §6).
 //!
 //! The host is a real control or the simulated machine that wraps a G-code interpreter: one
-//! trait for both. The module never parses G-code itself: it asks the host for positions and
-//! state and hands it G-code text to run.
+//! trait for both. The module never parses or writes G-code itself: it asks the host for
+//! positions and state and hands it typed [`MachineCommand`]s to run.
 
 use std::fmt;
 use std::sync::Arc;
@@ -10,6 +10,7 @@ use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 use vision_math::{LengthUnit, Point2, Vector2};
 
+use crate::command::MachineCommand;
 use crate::controller::Controller;
 
 /// The common kind of a machine failure, so a host or the module can react without reading
@@ -179,27 +180,51 @@ fn civil_from_days(z: i64) -> (i64, u32, u32) {
 /// Every read can fail: a controller's scripting call can, and the failure reaches the operator
 /// with its [`MachineErrorKind`] instead of a made-up value.
 ///
-/// The host executes synchronously: when [`Machine::execute`] returns, the motion is done and
+/// The host executes synchronously: when [`Machine::command`] returns, the motion is done and
 /// [`Machine::program_position`] reports the new position.
 pub trait Machine {
     /// Which controller this is: every rule that differs between controllers (how an alignment
     /// is applied, the tool table's sign, re-centring, …) comes from it.
     fn controller(&self) -> &'static dyn Controller;
 
-    /// Runs one G-code line and returns when its motion is finished (Mach4:
-    /// `mcCntlGcodeExecuteWait`; LinuxCNC: `self.execute`).
+    /// The G-code lines this controller runs for `command`, in order: the bridge answers with
+    /// `vision-mcode`'s text for its controller (`vision_mcode::gcode`). The module lists them in
+    /// [`crate::Reply::gcode`], also for a stepwise walk's moves that the host runs itself.
+    ///
+    /// # Errors
+    /// The controller has no text for the command, or a number in it is not finite.
+    fn gcode(&self, command: &MachineCommand) -> Result<Vec<String>, MachineError>;
+
+    /// Runs one line of [`Machine::gcode`]'s text and returns when its motion is finished
+    /// (Mach4: `mcCntlGcodeExecuteWait`; LinuxCNC: `self.execute`). The module never writes a
+    /// line itself: it calls [`Machine::command`].
     ///
     /// # Errors
     /// The controller refused the line or stopped during it.
     fn execute(&mut self, line: &str) -> Result<(), MachineError>;
 
-    /// Runs `lines` in order, each with [`Machine::execute`]; lines after a failing one are not
-    /// run.
+    /// Runs `command`: its [`Machine::gcode`] lines, each with [`Machine::execute`]; returns the
+    /// lines run. Lines after a failing one are not run.
     ///
     /// # Errors
-    /// The first line's failure.
-    fn run_gcode(&mut self, lines: &[String]) -> Result<(), MachineError> {
-        lines.iter().try_for_each(|line| self.execute(line))
+    /// The text's failure, or the first line's.
+    fn command(&mut self, command: &MachineCommand) -> Result<Vec<String>, MachineError> {
+        let lines = self.gcode(command)?;
+        lines.iter().try_for_each(|line| self.execute(line))?;
+        Ok(lines)
+    }
+
+    /// Runs `commands` in order, each with [`Machine::command`]; returns every line run.
+    /// Commands after a failing one are not run.
+    ///
+    /// # Errors
+    /// The first command's failure.
+    fn run(&mut self, commands: &[MachineCommand]) -> Result<Vec<String>, MachineError> {
+        let mut ran = Vec::new();
+        for command in commands {
+            ran.extend(self.command(command)?);
+        }
+        Ok(ran)
     }
 
     /// Saves the program's modal state — motion mode, distance mode, feed and feed mode, plane,

@@ -4,9 +4,9 @@
 
 use serde::ser::{SerializeMap, SerializeStruct};
 use serde::{Serialize, Serializer};
-use vision_math::linuxcnc::LinuxCncAlignment;
 use vision_math::{AlignmentChain, Fit, LengthUnit, Matrix2, Point2, Remap, Vector2};
 
+use crate::controller::{HowApplied, WorkRotation};
 use crate::driver::Judgment;
 use crate::params::ParamValue;
 
@@ -59,16 +59,30 @@ pub(crate) fn chain<S: Serializer>(c: &AlignmentChain, s: S) -> Result<S::Ok, S:
     st.end()
 }
 
-/// `{ rotation_deg, g52, base_rotation_deg, ignored_scale }`: M282's LinuxCNC lines.
-#[allow(clippy::ref_option)] // serde's `serialize_with` hands the field by reference
-pub(crate) fn linuxcnc<S: Serializer>(a: &Option<LinuxCncAlignment>, s: S) -> Result<S::Ok, S::Error> {
-    let Some(a) = a else { return s.serialize_none() };
-    let mut st = s.serialize_struct("LinuxCncAlignment", 4)?;
-    st.serialize_field("rotation_deg", &a.rotation_deg)?;
-    st.serialize_field("g52", &[a.g52.x, a.g52.y])?;
-    st.serialize_field("base_rotation_deg", &a.base_rotation_deg)?;
-    st.serialize_field("ignored_scale", &[a.ignored_scale.x, a.ignored_scale.y])?;
-    st.end()
+/// Nothing, or for a controller that rotates its work offset one entry named after it:
+/// `{ rotation_deg, g52, base_rotation_deg, ignored_scale }` (M282's report, flattened).
+impl Serialize for HowApplied {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        /// The entry's value.
+        struct Entry<'a>(&'a WorkRotation, Vector2<f64>);
+        impl Serialize for Entry<'_> {
+            fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+                let Entry(w, ignored) = self;
+                let mut st = s.serialize_struct("WorkRotation", 4)?;
+                st.serialize_field("rotation_deg", &w.rotation_deg)?;
+                st.serialize_field("g52", &[w.shift.x, w.shift.y])?;
+                st.serialize_field("base_rotation_deg", &w.base_rotation_deg)?;
+                st.serialize_field("ignored_scale", &[ignored.x, ignored.y])?;
+                st.end()
+            }
+        }
+        let mut map = s.serialize_map(None)?;
+        if let Some(w) = &self.work_rotation {
+            let ignored = self.scale_left_out.map_or(Vector2::new(1.0, 1.0), |l| l.scale);
+            map.serialize_entry(self.controller, &Entry(w, ignored))?;
+        }
+        map.end()
+    }
 }
 
 /// `{ model, rotation_deg, scale, shear, commanded_centroid, observed_centroid, len, rms,

@@ -28,7 +28,7 @@
 //! * The crate depends on `vision-core`, `vision-gcode` and the pure `vision-locate` (its
 //!   renderer) only. [`SimMachine`] is not itself a [`vision_core::Machine`]: the one bridge
 //!   from an interpreter to that trait is
-//!   `vision_mcode::ContextMachine`, which a host wraps around [`SimMachine::context`].
+//!   `vision_host::ContextMachine`, which a host wraps around [`SimMachine::context`].
 //! * The reading-mode camera reports the in-view mark nearest the image centre (count = marks
 //!   in view); the image mode draws every mark that reaches into the frame, and the finder
 //!   judges (two marks in its search window: NG).

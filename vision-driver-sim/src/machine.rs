@@ -31,7 +31,7 @@ pub fn interpreter_dialect(controller: &dyn Controller) -> Dialect {
 /// triggered from inside an M-code handler.
 ///
 /// It is not itself a [`vision_core::Machine`]: the one bridge from an interpreter to that trait
-/// is `vision_mcode::ContextMachine`, which a host wraps around [`SimMachine::context`]. This
+/// is `vision_host::ContextMachine`, which a host wraps around [`SimMachine::context`]. This
 /// crate stays below the M-code layer.
 #[derive(Debug)]
 pub struct SimMachine {
@@ -107,7 +107,7 @@ impl SimMachine {
     }
 
     /// Host access to the machine outside a program: G-code, dwells, parameters, tool offsets
-    /// (events go to `sink`). `vision_mcode::ContextMachine::new(&mut machine.context(sink),
+    /// (events go to `sink`). `vision_host::ContextMachine::new(&mut machine.context(sink),
     /// &clock)` makes it a [`vision_core::Machine`].
     pub fn context<'a>(&'a mut self, sink: &'a mut dyn EventSink) -> Context<'a> {
         self.interp.context(sink)
@@ -321,7 +321,8 @@ mod tests {
             rotation_deg: f.rotation_deg,
             shift: Vector2::zeros(),
         };
-        let setup = chain.gcode().expect("finite").to_vec();
+        let setup =
+            vec![format!("G51 X{} Y{}", chain.scale.x, chain.scale.y), format!("G68 X0 Y0 R{}", chain.rotation_deg)];
         assert!(m.cut_error(&setup, "demo target", p).expect("cut") < 1e-6);
         assert!(matches!(m.cut_error(&[], "nope", p), Err(SimError::UnknownFixture { .. })));
         assert!(matches!(m.cut_error(&["G6".into()], "demo target", p), Err(SimError::Machine { .. })));

@@ -2,7 +2,9 @@
 
 use vision_core::Controller;
 use vision_gcode::{Context, HandlerError, MCodeHandler, UserMCode};
-use vision_mcode::{Clock, ContextMachine, Outcome};
+use vision_mcode::Outcome;
+
+use crate::machine::{Clock, ContextMachine};
 
 use crate::error::HostError;
 use crate::session::Session;

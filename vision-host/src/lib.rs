@@ -31,6 +31,7 @@
 mod cameras;
 mod error;
 mod handler;
+mod machine;
 mod session;
 #[cfg(feature = "testkit")]
 pub mod testkit;
@@ -38,10 +39,11 @@ pub mod testkit;
 pub use cameras::{cameras, sim_image_config, SimFrames, SIM_IMAGE};
 pub use error::HostError;
 pub use handler::{ProgramHandler, Record, MAX_RECORDS};
+pub use machine::{fixed_clock, system_clock, Clock, ContextMachine};
 pub use session::{registry, Session};
 /// The machine trait a bridge implements, its errors, and the controllers.
 pub use vision_core::controller::{self, linuxcnc};
 /// How a bridge makes a message safe to show (control characters escaped, huge quoted input
 /// cut): the same rule as the CLI's.
 pub use vision_core::text::{printable_line, MAX_MESSAGE_CHARS};
-pub use vision_core::{Controller, Machine, MachineError, MachineErrorKind, Timestamp};
+pub use vision_core::{Controller, Machine, MachineCommand, MachineError, MachineErrorKind, Timestamp};

@@ -2,12 +2,12 @@
 
 use std::path::Path;
 
+use vision_core::controller::ScaleLeftOut;
 use vision_core::{
     CaptureStep, DriverRegistry, Machine, ProfileStore, StepwiseCapture, StepwiseWalk, VisionError, VisionModule,
     WalkTarget,
 };
-use vision_math::linuxcnc::LinuxCncAlignment;
-use vision_math::{AlignmentChain, Vector2};
+use vision_math::AlignmentChain;
 use vision_mcode::{McodeError, Outcome, VisionCall};
 
 use crate::error::HostError;
@@ -234,13 +234,13 @@ impl Session {
 }
 
 /// The operator's status line after a successful call, with the call's warning (a mark outside
-/// the image, a height change, …) when it has one. On LinuxCNC, M282 says which scale it left
-/// out.
+/// the image, a height change, …) when it has one. On a controller that cannot scale, M282 says
+/// which scale it left out.
 fn summary(outcome: &Outcome) -> String {
     let (done, warning) = match outcome {
         Outcome::Begin(_) => ("M280: Vision run started".to_string(), None),
         Outcome::Capture(r) => ("M281: mark captured".to_string(), r.report.warning.as_deref()),
-        Outcome::Apply(reply) => (apply_summary(reply.report.linuxcnc.as_ref()), None),
+        Outcome::Apply(reply) => (apply_summary(reply.report.how.scale_left_out.as_ref()), None),
         Outcome::Calibrate(r) => ("M283: calibration done and saved".to_string(), r.report.warning()),
         Outcome::SelectJob(_) => ("M284: camera job selected".to_string(), None),
     };
@@ -250,15 +250,15 @@ fn summary(outcome: &Outcome) -> String {
     }
 }
 
-/// M282's status line: the scale a LinuxCNC alignment could not apply, when there was any.
-fn apply_summary(linuxcnc: Option<&LinuxCncAlignment>) -> String {
-    match linuxcnc {
-        Some(a) if a.ignored_scale != Vector2::new(1.0, 1.0) => format!(
-            "M282: alignment applied without scale (LinuxCNC cannot scale): scale X {:.6} / Y {:.6} ignored, {:.4} % \
-             from 1",
-            a.ignored_scale.x,
-            a.ignored_scale.y,
-            a.ignored_scale_dev_pct()
+/// M282's status line: the scale the controller could not apply, and why, when there was any.
+fn apply_summary(left_out: Option<&ScaleLeftOut>) -> String {
+    match left_out {
+        Some(l) if l.is_some_scale() => format!(
+            "M282: alignment applied without scale ({}): scale X {:.6} / Y {:.6} ignored, {:.4} % from 1",
+            l.reason,
+            l.scale.x,
+            l.scale.y,
+            l.dev_pct()
         ),
         _ => "M282: alignment applied".to_string(),
     }
@@ -268,7 +268,7 @@ fn apply_summary(linuxcnc: Option<&LinuxCncAlignment>) -> String {
 mod tests {
     use super::*;
     use vision_core::{Capture, Judgment, Reply};
-    use vision_math::{LengthUnit, Point2};
+    use vision_math::{LengthUnit, Point2, Vector2};
 
     #[test]
     fn the_status_line_carries_the_calls_warning() {

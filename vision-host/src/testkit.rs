@@ -2,12 +2,12 @@
 //! as `mach-vision run` sets them up ([`Rig`]), the run path of the CLI as the reference
 //! ([`reference`]), and a [`Trace`] of a program to compare a bridge's run by.
 
+use crate::machine::{fixed_clock, Clock};
 use vision_core::{Params, Timestamp, VisionModule};
 use vision_driver_keyence::emulator::{DriverSource, Emulator, EmulatorHandle, NumberStyle, OutputFormat};
 use vision_driver_sim::{Sim, SimMachine, World};
 use vision_gcode::{MCodeHandler, RunOutcome};
 use vision_math::Vector2;
-use vision_mcode::{fixed_clock, Clock};
 
 use crate::{ProgramHandler, Session};
 

@@ -3,7 +3,9 @@
 use std::path::PathBuf;
 
 use mlua::{FromLua, Function, IntoLuaMulti, Lua, MultiValue, Table, Value};
-use vision_host::{printable_line, Controller, Machine, MachineError, MachineErrorKind, MAX_MESSAGE_CHARS};
+use vision_host::{
+    printable_line, Controller, Machine, MachineCommand, MachineError, MachineErrorKind, MAX_MESSAGE_CHARS,
+};
 use vision_math::{LengthUnit, Point2, Vector2};
 
 /// `mcCntlGetUnitsCurrent` for G20 (the G-code number × 10).
@@ -164,6 +166,10 @@ fn describe(v: &Value) -> String {
 impl Machine for Mach4 {
     fn controller(&self) -> &'static dyn Controller {
         &vision_host::controller::Mach4
+    }
+
+    fn gcode(&self, command: &MachineCommand) -> Result<Vec<String>, MachineError> {
+        Ok(vision_mcode::gcode(self.controller(), command)?)
     }
 
     fn execute(&mut self, line: &str) -> Result<(), MachineError> {

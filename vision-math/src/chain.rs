@@ -1,4 +1,5 @@
-//! The modal alignment chain M282 emits: `G51` scale → `G68` rotation → `G52` shift (SPEC §6).
+//! The modal alignment chain M282 emits: `G51` scale → `G68` rotation → `G52` shift (SPEC §6),
+//! and the fixed decimals its numbers are written with (the text is `vision-mcode`'s).
 
 use nalgebra::{Matrix2, Point2, UnitComplex, Vector2};
 
@@ -10,9 +11,6 @@ pub const POSITION_DECIMALS: usize = 7;
 pub const ANGLE_DECIMALS: usize = 9;
 /// Decimals for `G51` factors: rounding moves a point 1000 units away by ≤ 5·10⁻⁸.
 pub const SCALE_DECIMALS: usize = 10;
-
-/// The line that cancels any alignment: `G69 G50 G52 X0 Y0`.
-pub const CANCEL_LINE: &str = "G69 G50 G52 X0 Y0";
 
 /// The three alignment modals, in program units, exactly as they execute.
 ///
@@ -111,7 +109,7 @@ impl AlignmentChain {
         Some(Point2::new(v.x / self.scale.x, v.y / self.scale.y))
     }
 
-    /// The chain a controller runs after reading [`AlignmentChain::gcode`]'s lines: every field
+    /// The chain a controller runs after reading the lines written for it: every field
     /// rounded to the decimals it is written with (moves no point by more than 1e-6 units).
     /// `None` if a field is NaN or infinite.
     #[must_use]
@@ -126,37 +124,23 @@ impl AlignmentChain {
         })
     }
 
-    /// The four lines M282 emits, with fixed decimals ([`POSITION_DECIMALS`],
-    /// [`ANGLE_DECIMALS`], [`SCALE_DECIMALS`]); never `NaN`, `inf` or `-0`:
-    ///
-    /// ```text
-    /// G69 G50 G52 X0 Y0
-    /// G52 X{tx} Y{ty}
-    /// G68 X{cx} Y{cy} R{theta_deg}
-    /// G51 X{sx} Y{sy}
-    /// ```
+    /// Refuses a chain no controller can be handed: a field NaN or infinite, or past
+    /// [`crate::bounds`] (fixed decimals would write hundreds of digits).
     ///
     /// # Errors
     /// [`MathError::NonFinite`] if any field is NaN or infinite, [`MathError::BeyondBound`] past
     /// [`crate::bounds`].
-    pub fn gcode(&self) -> Result<[String; 4], MathError> {
+    pub fn check(&self) -> Result<(), MathError> {
         let all =
             [self.scale.x, self.scale.y, self.center.x, self.center.y, self.rotation_deg, self.shift.x, self.shift.y];
         if !all.iter().all(|v| v.is_finite()) {
             return Err(MathError::NonFinite { what: "the alignment chain" });
         }
-        // Past the bounds, fixed decimals would write hundreds of digits.
         for v in [self.center.x, self.center.y, self.shift.x, self.shift.y] {
             bounds::coordinate("the alignment's centre or shift", v)?;
         }
         bounds::rotation_deg("the alignment's rotation", self.rotation_deg)?;
-        let p = |v: f64| fixed(v, POSITION_DECIMALS);
-        Ok([
-            CANCEL_LINE.to_string(),
-            format!("G52 X{} Y{}", p(self.shift.x), p(self.shift.y)),
-            format!("G68 X{} Y{} R{}", p(self.center.x), p(self.center.y), fixed(self.rotation_deg, ANGLE_DECIMALS)),
-            format!("G51 X{} Y{}", fixed(self.scale.x, SCALE_DECIMALS), fixed(self.scale.y, SCALE_DECIMALS)),
-        ])
+        Ok(())
     }
 }
 
@@ -186,8 +170,7 @@ mod tests {
             shift: Vector2::new(-0.010_478_12, 0.015_755_24),
         };
         let emitted = chain.as_emitted().expect("finite");
-        let lines = chain.gcode().expect("finite");
-        assert_eq!(emitted.gcode().expect("finite"), lines);
+        assert_eq!(emitted.as_emitted(), Some(emitted), "written again, it stays");
         assert_eq!(emitted.shift.x, -0.010_478_1);
         assert_eq!(emitted.rotation_deg, 0.300_602_523);
         for p in [Point2::new(0.0, 0.0), Point2::new(6.0, 4.0)] {
@@ -234,20 +217,13 @@ mod tests {
     }
 
     #[test]
-    fn gcode_has_fixed_decimals_and_no_negative_zero() {
-        let chain = AlignmentChain {
-            scale: Vector2::new(1.0, 0.999_5),
-            center: Point2::new(3.0, -2.0),
-            rotation_deg: -0.000_000_000_01,
-            shift: Vector2::new(-0.000_000_01, 0.125),
-        };
-        let lines = chain.gcode().expect("finite");
-        assert_eq!(lines[0], "G69 G50 G52 X0 Y0");
-        assert_eq!(lines[1], "G52 X0.0000000 Y0.1250000");
-        assert_eq!(lines[2], "G68 X3.0000000 Y-2.0000000 R0.000000000");
-        assert_eq!(lines[3], "G51 X1.0000000000 Y0.9995000000");
-        let bad = AlignmentChain { rotation_deg: f64::NAN, ..chain };
-        assert!(bad.gcode().is_err());
+    fn a_chain_past_the_bounds_or_not_finite_is_refused() {
+        let chain = AlignmentChain { center: Point2::new(3.0, -2.0), ..AlignmentChain::IDENTITY };
+        assert_eq!(chain.check(), Ok(()));
+        assert!(matches!(AlignmentChain { rotation_deg: f64::NAN, ..chain }.check(), Err(MathError::NonFinite { .. })));
+        let far = AlignmentChain { shift: Vector2::new(1e308, 0.0), ..chain };
+        assert!(matches!(far.check(), Err(MathError::BeyondBound { .. })));
+        assert!(matches!(AlignmentChain { rotation_deg: 1e308, ..chain }.check(), Err(MathError::BeyondBound { .. })));
     }
 
     #[test]

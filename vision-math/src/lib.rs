@@ -5,8 +5,10 @@
 //! * [`fit`]: closed-form least-squares fits from commanded to observed points — rigid,
 //!   similarity, rectangle (the true 5-parameter minimum) and affine — and the 2×2 solve
 //!   calibration needs.
-//! * [`chain`]: the `G51 → G68 → G52` modal chain M282 emits, its exact `apply`, and its text.
-//! * [`linuxcnc`]: the same alignment in LinuxCNC's dialect (`G10 L2 P0 R` + `G52`, no scale).
+//! * [`chain`]: the `G51 → G68 → G52` modal chain M282 emits, its exact `apply`, and the fixed
+//!   decimals its text is written with (`vision-mcode` writes the text).
+//! * [`linuxcnc`]: the same alignment as LinuxCNC executes it (a G5x rotation and a `G52`
+//!   shift, no scale).
 //! * [`units`]: inch ↔ millimetre.
 //!
 //! No I/O, no allocation on the fit path, no NaN: every degenerate input is a [`MathError`].
@@ -22,8 +24,7 @@
 //! for (n, o) in commanded.iter().zip(&observed) {
 //!     assert!((chain.apply(*n) - o).norm() <= fit.max_residual + 1e-12);
 //! }
-//! let gcode = chain.gcode()?;
-//! assert_eq!(gcode[0], "G69 G50 G52 X0 Y0");
+//! chain.check()?;
 //! # Ok::<(), vision_math::MathError>(())
 //! ```
 

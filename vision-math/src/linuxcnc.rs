@@ -1,4 +1,4 @@
-//! M282's alignment in LinuxCNC's dialect (SPEC §9): LinuxCNC has no G68 and no G51.
+//! M282's alignment as LinuxCNC executes it (SPEC §9): LinuxCNC has no G68 and no G51.
 //!
 //! LinuxCNC rotates the active G5x system (`G10 L2 P0 R`, degrees, counter-clockwise) about its
 //! origin, and its canon maps a programmed XY `p` to the machine as
@@ -25,7 +25,7 @@ use nalgebra::Vector2;
 #[cfg(test)]
 use nalgebra::{Matrix2, Point2};
 
-use crate::chain::{fixed, AlignmentChain, ANGLE_DECIMALS, POSITION_DECIMALS};
+use crate::chain::AlignmentChain;
 use crate::{bounds, MathError};
 
 /// M282's alignment as LinuxCNC executes it: a G5x rotation and a G52 shift.
@@ -98,33 +98,20 @@ impl LinuxCncAlignment {
         })
     }
 
-    /// The lines M282 emits, with [`POSITION_DECIMALS`] and [`ANGLE_DECIMALS`]; both replace
-    /// what an earlier M282 set, so a second M282 never compounds:
-    ///
-    /// ```text
-    /// G10 L2 P0 R{rotation_deg}
-    /// G52 X{gx} Y{gy}
-    /// ```
+    /// Refuses an alignment no controller can be handed: a field NaN or infinite, or past
+    /// [`crate::bounds`] (fixed decimals would write hundreds of digits).
     ///
     /// # Errors
     /// [`MathError::NonFinite`] if a field is NaN or infinite, [`MathError::BeyondBound`] past
     /// [`crate::bounds`].
-    pub fn gcode(&self) -> Result<[String; 2], MathError> {
+    pub fn check(&self) -> Result<(), MathError> {
         if !(self.rotation_deg.is_finite() && self.g52.x.is_finite() && self.g52.y.is_finite()) {
             return Err(MathError::NonFinite { what: "the LinuxCNC alignment" });
         }
         bounds::rotation_deg("the LinuxCNC alignment's G5x rotation", self.rotation_deg)?;
         bounds::coordinate("the LinuxCNC alignment's G52 shift", self.g52.x)?;
         bounds::coordinate("the LinuxCNC alignment's G52 shift", self.g52.y)?;
-        Ok([rotation_line(self.rotation_deg), g52_line(self.g52)])
-    }
-
-    /// The lines that cancel this alignment: [`cancel_gcode`] of its base rotation.
-    ///
-    /// # Errors
-    /// [`MathError::NonFinite`] if the base rotation is NaN or infinite.
-    pub fn cancel_gcode(&self) -> Result<[String; 2], MathError> {
-        cancel_gcode(self.base_rotation_deg)
+        Ok(())
     }
 
     /// Largest deviation of the ignored scale from 1, percent (0 when the chain had no scale).
@@ -132,33 +119,6 @@ impl LinuxCncAlignment {
     pub fn ignored_scale_dev_pct(&self) -> f64 {
         (self.ignored_scale.x - 1.0).abs().max((self.ignored_scale.y - 1.0).abs()) * 100.0
     }
-}
-
-/// Clears the G52 shift (LinuxCNC keeps it in the G92 registers).
-pub const CLEAR_G52: &str = "G52 X0 Y0";
-
-/// The lines M280 (and an abort) emit to cancel an alignment on LinuxCNC: clear G52 and put the
-/// active G5x system's rotation back to `base_rotation_deg` (degrees counter-clockwise):
-///
-/// ```text
-/// G52 X0 Y0
-/// G10 L2 P0 R{base_rotation_deg}
-/// ```
-///
-/// # Errors
-/// [`MathError::NonFinite`] if `base_rotation_deg` is NaN or infinite,
-/// [`MathError::BeyondBound`] past [`crate::bounds::MAX_ROTATION_DEG`].
-pub fn cancel_gcode(base_rotation_deg: f64) -> Result<[String; 2], MathError> {
-    bounds::rotation_deg("the G5x rotation before the alignment", base_rotation_deg)?;
-    Ok([CLEAR_G52.to_string(), rotation_line(base_rotation_deg)])
-}
-
-fn rotation_line(degrees: f64) -> String {
-    format!("G10 L2 P0 R{}", fixed(degrees, ANGLE_DECIMALS))
-}
-
-fn g52_line(g52: Vector2<f64>) -> String {
-    format!("G52 X{} Y{}", fixed(g52.x, POSITION_DECIMALS), fixed(g52.y, POSITION_DECIMALS))
 }
 
 /// LinuxCNC's canon for XY with no tool offset and the G5x origin at zero, written out
@@ -181,15 +141,12 @@ mod tests {
         Matrix2::new(c, -s, s, c)
     }
 
-    /// Reads back the numbers of the emitted lines, as LinuxCNC's parser would.
-    fn parse(lines: &[String; 2]) -> (f64, Vector2<f64>) {
-        let word = |line: &str, letter: char| -> f64 {
-            let w = line.split(' ').find(|w| w.starts_with(letter)).expect("word present");
-            w[1..].parse().expect("a number")
-        };
-        assert!(lines[0].starts_with("G10 L2 P0 R"), "{}", lines[0]);
-        assert!(lines[1].starts_with("G52 X"), "{}", lines[1]);
-        (word(&lines[0], 'R'), Vector2::new(word(&lines[1], 'X'), word(&lines[1], 'Y')))
+    /// The numbers as the lines write them (9 decimals of angle, 7 of position), read back.
+    fn written(a: &LinuxCncAlignment) -> (f64, Vector2<f64>) {
+        use crate::chain::{fixed, ANGLE_DECIMALS, POSITION_DECIMALS};
+        let read = |v: f64, decimals: usize| fixed(v, decimals).parse::<f64>().expect("a number");
+        let p = |v: f64| read(v, POSITION_DECIMALS);
+        (read(a.rotation_deg, ANGLE_DECIMALS), Vector2::new(p(a.g52.x), p(a.g52.y)))
     }
 
     #[test]
@@ -206,29 +163,30 @@ mod tests {
         // t' = c − R·c + t = (1, 0) − (0, 1) + (0, 2) = (1, 1); G52 = Rᵀ·t' = (1, −1).
         assert_relative_eq!(a.g52.x, 1.0, epsilon = 1e-12);
         assert_relative_eq!(a.g52.y, -1.0, epsilon = 1e-12);
-        assert_eq!(a.gcode().expect("finite"), ["G10 L2 P0 R90.000000000", "G52 X1.0000000 Y-1.0000000"]);
+        assert_relative_eq!(a.rotation_deg, 90.0);
         let w = canon(a.rotation_deg, a.g52, Point2::new(2.0, 0.0));
         assert_relative_eq!(w.x, 1.0, epsilon = 1e-12);
         assert_relative_eq!(w.y, 3.0, epsilon = 1e-12);
     }
 
     #[test]
-    fn cancel_clears_g52_and_restores_the_base_rotation() {
-        assert_eq!(cancel_gcode(0.0).expect("finite"), ["G52 X0 Y0", "G10 L2 P0 R0.000000000"]);
+    fn the_rotation_adds_to_the_base_and_a_far_one_is_refused() {
         let chain = AlignmentChain { rotation_deg: 1.5, ..AlignmentChain::IDENTITY };
         let a = LinuxCncAlignment::from_chain(&chain, -12.25, 2.0).expect("rigid");
-        assert_eq!(a.gcode().expect("finite")[0], "G10 L2 P0 R-10.750000000");
-        assert_eq!(a.cancel_gcode().expect("finite"), ["G52 X0 Y0", "G10 L2 P0 R-12.250000000"]);
-        assert!(cancel_gcode(f64::NAN).is_err());
+        assert_eq!((a.rotation_deg, a.base_rotation_deg), (-10.75, -12.25));
+        assert_eq!(a.check(), Ok(()));
+        assert!(matches!(
+            LinuxCncAlignment { g52: Vector2::new(f64::NAN, 0.0), ..a }.check(),
+            Err(MathError::NonFinite { .. })
+        ));
         // A base rotation of 1e308 (#3991 or the G5x rotation) is refused, never written as
         // a 309-digit `G10 L2 P0 R…`.
         for far in [1e308, -2e6] {
-            let e = cancel_gcode(far).expect_err("far");
+            let e = LinuxCncAlignment::from_chain(&chain, far, 2.0).expect_err("far");
             assert!(matches!(e, MathError::BeyondBound { .. }), "{e:?}");
             assert!(e.to_string().len() < 200, "{e}");
-            assert!(LinuxCncAlignment::from_chain(&chain, far, 2.0).is_err());
             let a = LinuxCncAlignment { rotation_deg: far, ..a };
-            assert!(matches!(a.gcode(), Err(MathError::BeyondBound { .. })));
+            assert!(matches!(a.check(), Err(MathError::BeyondBound { .. })));
         }
     }
 
@@ -280,7 +238,7 @@ mod tests {
             let got = canon(a.rotation_deg, a.g52, p);
             prop_assert!((got.coords - want).norm() <= 1e-9, "{got} vs {want}");
             // The text: 7 decimals on G52 (≤ 7.1e-8) and 9 on R (≤ 1.5e-11 rad · 1.5e3).
-            let (r, g52) = parse(&a.gcode().expect("finite"));
+            let (r, g52) = written(&a);
             let text = canon(r, g52, p);
             prop_assert!((text.coords - want).norm() <= 1e-7, "{text} vs {want}");
         }

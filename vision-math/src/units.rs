@@ -34,15 +34,6 @@ impl LengthUnit {
         }
     }
 
-    /// The G-code word that selects this unit (`G20` or `G21`).
-    #[must_use]
-    pub fn gcode(self) -> &'static str {
-        match self {
-            LengthUnit::Inch => "G20",
-            LengthUnit::Millimetre => "G21",
-        }
-    }
-
     /// Short name: `in` or `mm` (the manual's `Cal_Units` values).
     #[must_use]
     pub fn short_name(self) -> &'static str {
@@ -77,7 +68,6 @@ mod tests {
         assert_eq!(LengthUnit::Inch.factor_to(LengthUnit::Millimetre), 25.4);
         assert_eq!(LengthUnit::Millimetre.convert(25.4, LengthUnit::Inch), 1.0);
         assert_eq!(LengthUnit::Inch.convert(2.0, LengthUnit::Inch), 2.0);
-        assert_eq!(LengthUnit::Millimetre.gcode(), "G21");
         assert_eq!(LengthUnit::Inch.short_name(), "in");
     }
 }

@@ -4,12 +4,14 @@
 //!   letters, repeated words, non-finite and out-of-range values refused with a clear message).
 //! * [`VisionCall::run`]: dispatches to [`vision_core::VisionModule`] and returns an
 //!   [`Outcome`]: the module's report, and the G-code it ran on the machine
-//!   ([`Outcome::gcode`]; M282's lines formatted by `vision_math::AlignmentChain::gcode`: fixed
-//!   decimals that move no point by more than 1e-6 units; never NaN, inf or `-0`).
-//! * [`ContextMachine`]: the simulated machine, the one [`vision_core::Machine`] over the
-//!   interpreter (inside an M-code handler, or around a standalone interpreter), so the
-//!   module's moves run synchronously on it. `vision-host`'s session runs the M-codes on it as
-//!   on any controller.
+//!   ([`Outcome::gcode`]).
+//! * [`gcode`]: the module's typed commands ([`vision_core::MachineCommand`]: what the
+//!   controller decided the machine must do) → each controller's G-code text ([`TEXTS`]), with
+//!   fixed decimals that move no point by more than 1e-6 units; never NaN, inf or `-0`. Every
+//!   bridge's [`vision_core::Machine::gcode`] answers with it.
+//!
+//! M-code words in, G-code text out: a new controller is its rules in `vision-core`, its row
+//! of [`TEXTS`] here, and its bridge.
 //!
 //! ```
 //! use vision_core::RunMode;
@@ -23,10 +25,10 @@
 
 mod call;
 mod error;
-mod machine;
 mod outcome;
+mod text;
 
 pub use call::{McodeSpec, VisionCall, WordSpec, MCODES, VISION_MCODES};
 pub use error::McodeError;
-pub use machine::{fixed_clock, system_clock, Clock, ContextMachine};
 pub use outcome::Outcome;
+pub use text::{gcode, lines, text_of, AlignmentWords, ControllerText, TextError, TEXTS};

@@ -6,7 +6,9 @@ use std::cell::RefCell;
 use pyo3::call::PyCallArgs;
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
-use vision_host::{printable_line, Controller, Machine, MachineError, MachineErrorKind, MAX_MESSAGE_CHARS};
+use vision_host::{
+    printable_line, Controller, Machine, MachineCommand, MachineError, MachineErrorKind, MAX_MESSAGE_CHARS,
+};
 use vision_math::{LengthUnit, Point2, Vector2};
 
 use crate::words::shown;
@@ -99,6 +101,10 @@ fn python_error(py: Python<'_>, method: &str, e: &PyErr) -> MachineError {
 impl Machine for PyHost<'_> {
     fn controller(&self) -> &'static dyn Controller {
         &vision_host::controller::LinuxCnc
+    }
+
+    fn gcode(&self, command: &MachineCommand) -> Result<Vec<String>, MachineError> {
+        Ok(vision_mcode::gcode(self.controller(), command)?)
     }
 
     fn execute(&mut self, line: &str) -> Result<(), MachineError> {

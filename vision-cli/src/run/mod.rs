@@ -16,8 +16,8 @@ use vision_driver_camera::FrameSource;
 use vision_driver_keyence::emulator::EmulatorHandle;
 use vision_driver_sim::{ControllerName, Sim, SimMachine};
 use vision_gcode::{Event, RunOutcome};
+use vision_host::{fixed_clock, system_clock};
 use vision_host::{ProgramHandler, Session, SimFrames};
-use vision_mcode::{fixed_clock, system_clock};
 use vision_path::{Limits, PlanConfig, Setpoints};
 
 use crate::terminal::{is_terminal, Progress, Stream};

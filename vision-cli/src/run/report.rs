@@ -50,9 +50,9 @@ pub(crate) struct ProgramReport {
     /// Why there is no alignment time although an M282 followed an M280, if so.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub alignment_note: Option<String>,
-    /// Every Vision M-code, in order (the first [`vision_mcode::MAX_RECORDS`]).
+    /// Every Vision M-code, in order (the first [`vision_host::MAX_RECORDS`]).
     pub steps: Vec<Step>,
-    /// Vision M-codes past the first [`vision_mcode::MAX_RECORDS`]: ran, but not listed.
+    /// Vision M-codes past the first [`vision_host::MAX_RECORDS`]: ran, but not listed.
     #[serde(skip_serializing_if = "is_zero")]
     pub steps_not_listed: u64,
     /// What the simulator knows about the calibration after the program, when it calibrated.

@@ -174,13 +174,14 @@ fn step(s: &mut String, step: &Step, world_unit: &str) {
                 xy(chain.shift.x, chain.shift.y),
                 xy(chain.center.x, chain.center.y)
             );
-            if let Some(lc) = a.linuxcnc.as_ref().filter(|lc| lc.ignored_scale != vision_math::Vector2::new(1.0, 1.0)) {
+            if let Some(l) = a.how.scale_left_out.as_ref().filter(|l| l.is_some_scale()) {
                 let _ = writeln!(
                     s,
-                    "              LinuxCNC cannot scale: scale X {:.7} Y {:.7} left out ({:.4} % from 1)",
-                    lc.ignored_scale.x,
-                    lc.ignored_scale.y,
-                    lc.ignored_scale_dev_pct()
+                    "              {}: scale X {:.7} Y {:.7} left out ({:.4} % from 1)",
+                    l.reason,
+                    l.scale.x,
+                    l.scale.y,
+                    l.dev_pct()
                 );
             }
             for (i, r) in a.residuals.iter().enumerate() {

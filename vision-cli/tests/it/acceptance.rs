@@ -7,9 +7,10 @@
 use vision_core::{CalReport, Params, Timestamp, VisionModule};
 use vision_driver_sim::{Fixture, Sim, SimMachine, World};
 use vision_gcode::Event;
+use vision_host::fixed_clock;
 use vision_host::{ProgramHandler, Record, Session};
 use vision_math::{LengthUnit, Point2, Vector2};
-use vision_mcode::{fixed_clock, Outcome};
+use vision_mcode::Outcome;
 
 const EX1: &str = include_str!("../../../examples/programs/01-calibrate-sheet.nc");
 const EX2: &str = include_str!("../../../examples/programs/02-verify-calibration.nc");

@@ -11,9 +11,9 @@ use vision_driver_camera::server::{Encoding, SnapshotServer};
 use vision_driver_camera::FrameSource;
 use vision_driver_sim::{ImageLook, MarkShape, Sim, SimMachine, World};
 use vision_gcode::Event;
+use vision_host::fixed_clock;
 use vision_host::{ProgramHandler, Record, Session, SimFrames};
 use vision_math::Point2;
-use vision_mcode::fixed_clock;
 
 const EX4: &str = include_str!("../../../examples/programs/04-rectangle-fit.nc");
 

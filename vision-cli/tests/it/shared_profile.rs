@@ -36,7 +36,7 @@ fn a_stale_session_keeps_the_calibration_another_process_saved() {
     assert!(calibrated.cal_k() != start.cal_k() && !calibrated.cal_date().is_empty(), "the run calibrated");
 
     // … and this session, still holding K = 0, switches the job.
-    let mut handler = ProgramHandler::new(session, &vision_host::controller::Mach4, vision_mcode::system_clock());
+    let mut handler = ProgramHandler::new(session, &vision_host::controller::Mach4, vision_host::system_clock());
     let mut machine = SimMachine::new(&sim).expect("machine");
     let end = machine.run_program("M284 P2\nM30\n", Some(&mut handler), &mut |_: &vision_gcode::Event| {});
     assert!(end.is_ok(), "{end:?}");

@@ -1,6 +1,7 @@
 //! LinuxCNC 2.9 (SPEC §9): no G68 and no G51, so M282 rotates the active G5x system
-//! (`G10 L2 P0 R`, about its origin) and shifts with `G52` (kept in the G92 registers), and
-//! cannot scale ([`vision_math::linuxcnc`]).
+//! ([`MachineCommand::SetWorkRotation`], about its origin) and shifts
+//! ([`MachineCommand::SetShift`], kept in the G92 registers), and cannot scale
+//! ([`vision_math::linuxcnc`]).
 //!
 //! LinuxCNC keeps the G5x rotation and the G92/G52 offset in its var file, across M2 and
 //! restarts, so an alignment outlives the program and the session that made it. M280 must then
@@ -10,10 +11,11 @@
 //! already lists it, so the install guide and the tests' var file list
 //! [`PERSISTENT_PARAMS`].
 
-use vision_math::linuxcnc::{cancel_gcode, LinuxCncAlignment};
-use vision_math::{AlignmentChain, Point2, Vector2};
+use vision_math::linuxcnc::LinuxCncAlignment;
+use vision_math::{bounds, AlignmentChain, MathError, Point2, Vector2};
 
-use super::{Applied, Controller};
+use super::{Applied, AppliedBy, Controller, HowApplied, ScaleLeftOut, WorkRotation};
+use crate::command::MachineCommand;
 use crate::error::VisionError;
 use crate::machine::{checked, Machine, MachineError};
 
@@ -68,11 +70,10 @@ impl Controller for LinuxCnc {
         -1.0
     }
 
-    /// Runs `G52 X0 Y0` and `G10 L2 P0 R{θ₀}`, then clears the flag. When a line is refused the
-    /// flag stays set, so the next M280 restores θ₀ again.
+    /// Runs [`cancel_commands`] of θ₀, then clears the flag. When a command is refused the flag
+    /// stays set, so the next M280 restores θ₀ again.
     fn cancel_alignment(&self, machine: &mut dyn Machine) -> Result<Vec<String>, VisionError> {
-        let lines = cancel_gcode(self.base_rotation(machine)?)?.to_vec();
-        machine.run_gcode(&lines)?;
+        let lines = machine.run(&cancel_commands(self.base_rotation(machine)?)?)?;
         machine.set_pound(ALIGNMENT_ACTIVE_PARAM, 0.0)?;
         Ok(lines)
     }
@@ -85,14 +86,24 @@ impl Controller for LinuxCnc {
     }
 
     /// Stores θ₀ and sets the flag first (so that an M280 after a refused line still restores
-    /// θ₀), then runs `G10 L2 P0 R…` and `G52 X… Y…`; the scale is left out and reported.
+    /// θ₀), then runs [`alignment_commands`]; the scale is left out and reported.
     fn apply_alignment(&self, machine: &mut dyn Machine, chain: &AlignmentChain) -> Result<Applied, VisionError> {
         let alignment = LinuxCncAlignment::from_chain(chain, self.base_rotation(machine)?, 0.0)?;
-        let gcode = alignment.gcode()?.to_vec();
+        let commands = alignment_commands(&alignment)?;
         machine.set_pound(BASE_ROTATION_PARAM, alignment.base_rotation_deg)?;
         machine.set_pound(ALIGNMENT_ACTIVE_PARAM, 1.0)?;
-        machine.run_gcode(&gcode)?;
-        Ok(Applied { gcode, chain: chain.rigid(), linuxcnc: Some(alignment) })
+        let gcode = machine.run(&commands)?;
+        let how = HowApplied {
+            controller: self.name(),
+            by: AppliedBy::Machine,
+            scale_left_out: Some(ScaleLeftOut { scale: alignment.ignored_scale, reason: CANNOT_SCALE }),
+            work_rotation: Some(WorkRotation {
+                rotation_deg: alignment.rotation_deg,
+                base_rotation_deg: alignment.base_rotation_deg,
+                shift: alignment.g52,
+            }),
+        };
+        Ok(Applied { gcode, chain: chain.rigid(), how })
     }
 
     /// Read whole from the machine (the flag and θ₀ in persistent parameters, the G5x rotation
@@ -119,6 +130,30 @@ impl Controller for LinuxCnc {
             checked::rotation_deg(G5X_ROTATION_WHAT, machine.xy_rotation_deg()?)
         }
     }
+}
+
+/// Why the scale is left out, in the operator's words.
+const CANNOT_SCALE: &str = "LinuxCNC cannot scale";
+
+/// The commands that make `alignment` the one active: the G5x rotation, then the shift under
+/// it; both replace what an earlier M282 set, so a second M282 never compounds.
+///
+/// # Errors
+/// [`MathError::NonFinite`] or [`MathError::BeyondBound`] ([`LinuxCncAlignment::check`]).
+pub fn alignment_commands(alignment: &LinuxCncAlignment) -> Result<[MachineCommand; 2], MathError> {
+    alignment.check()?;
+    Ok([MachineCommand::SetWorkRotation { deg: alignment.rotation_deg }, MachineCommand::SetShift(alignment.g52)])
+}
+
+/// The commands that cancel an alignment (M280, an abort): clear the shift and put the G5x
+/// rotation back to `base_rotation_deg` (θ₀, degrees counter-clockwise).
+///
+/// # Errors
+/// [`MathError::NonFinite`] or [`MathError::BeyondBound`] for a θ₀ past
+/// [`bounds::MAX_ROTATION_DEG`].
+pub fn cancel_commands(base_rotation_deg: f64) -> Result<[MachineCommand; 2], MathError> {
+    let deg = bounds::rotation_deg("the G5x rotation before the alignment", base_rotation_deg)?;
+    Ok([MachineCommand::ClearShift, MachineCommand::SetWorkRotation { deg }])
 }
 
 /// What a θ₀ read from [`BASE_ROTATION_PARAM`] is called in a message.
@@ -165,6 +200,15 @@ pub fn active_chain(flag: f64, base_rotation_deg: f64, rotation_deg: f64, g92: V
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn cancel_restores_the_base_rotation_and_refuses_a_far_one() {
+        let want = [MachineCommand::ClearShift, MachineCommand::SetWorkRotation { deg: -12.25 }];
+        assert_eq!(cancel_commands(-12.25), Ok(want));
+        for far in [f64::NAN, 1e308, -2e6] {
+            assert!(cancel_commands(far).is_err(), "{far}");
+        }
+    }
 
     #[test]
     fn active_chain_reads_the_flag_and_rotates_the_g92_shift() {

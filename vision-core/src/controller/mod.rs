@@ -20,10 +20,9 @@ mod machinemotion;
 
 use std::fmt;
 
-use vision_math::chain::CANCEL_LINE;
-use vision_math::linuxcnc::LinuxCncAlignment;
-use vision_math::{AlignmentChain, Matrix2, Vector2};
+use vision_math::{AlignmentChain, MathError, Matrix2, Vector2};
 
+use crate::command::MachineCommand;
 use crate::error::VisionError;
 use crate::machine::{checked, Machine, MachineError};
 
@@ -39,8 +38,82 @@ pub struct Applied {
     /// The chain applied (program frame → work frame, current units): the fit's, or its rigid
     /// part where the controller cannot scale.
     pub chain: AlignmentChain,
-    /// LinuxCNC's form of it (rotation of the G5x system, G52 shift, the scale left out).
-    pub linuxcnc: Option<LinuxCncAlignment>,
+    /// How it was applied, in terms every controller fills.
+    pub how: HowApplied,
+}
+
+/// How an alignment was applied: who applies it, the scale left out, and the work-offset
+/// rotation where a controller rotates its work offset instead of a rotation modal.
+///
+/// Serialized (inside M282's report) as nothing, or, for a controller that rotates its work
+/// offset, one entry named after the controller: `{ rotation_deg, g52, base_rotation_deg,
+/// ignored_scale }`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HowApplied {
+    /// The controller's name ([`Controller::name`]).
+    pub controller: &'static str,
+    /// Who maps the program's points.
+    pub by: AppliedBy,
+    /// The fit's scale that was not applied, on a controller that cannot scale (`(1, 1)` when
+    /// the fit had none); `None` where the scale is applied.
+    pub scale_left_out: Option<ScaleLeftOut>,
+    /// The rotation put in the work offset and the shift under it, on a controller that
+    /// rotates its work offset; `None` where the rotation is a modal of its own.
+    pub work_rotation: Option<WorkRotation>,
+}
+
+impl HowApplied {
+    /// Applied on the machine with its own modals: nothing left out, no work-offset rotation.
+    #[must_use]
+    pub fn modal(controller: &'static str) -> HowApplied {
+        HowApplied { controller, by: AppliedBy::Machine, scale_left_out: None, work_rotation: None }
+    }
+}
+
+/// Who maps the program's points through the alignment.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AppliedBy {
+    /// The controller, with the commands the module ran (Mach4, LinuxCNC, MachineMotion).
+    Machine,
+    /// The host, rewriting the program's points before the controller sees them (a controller
+    /// with no alignment modal and no work-offset rotation, such as Grbl's).
+    Host,
+}
+
+/// A scale a controller could not apply.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScaleLeftOut {
+    /// The per-axis factors left out (dimensionless).
+    pub scale: Vector2<f64>,
+    /// Why, in the operator's words (`LinuxCNC cannot scale`).
+    pub reason: &'static str,
+}
+
+impl ScaleLeftOut {
+    /// Largest deviation of the scale left out from 1, percent (0 when there was none).
+    #[must_use]
+    pub fn dev_pct(&self) -> f64 {
+        (self.scale.x - 1.0).abs().max((self.scale.y - 1.0).abs()) * 100.0
+    }
+
+    /// True when a factor differs from 1 (something was really left out).
+    #[must_use]
+    pub fn is_some_scale(&self) -> bool {
+        self.scale != Vector2::new(1.0, 1.0)
+    }
+}
+
+/// The alignment as a rotation of the active work offset about its origin and a shift under it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WorkRotation {
+    /// The work offset's rotation after the alignment, degrees counter-clockwise: the base
+    /// rotation plus the fit's.
+    pub rotation_deg: f64,
+    /// The work offset's rotation before the alignment, degrees counter-clockwise; the cancel
+    /// restores it.
+    pub base_rotation_deg: f64,
+    /// The local shift, current units, in the rotated frame.
+    pub shift: Vector2<f64>,
 }
 
 /// The rules of one controller. Implementations are unit structs listed in [`CONTROLLERS`].
@@ -58,7 +131,7 @@ pub trait Controller: fmt::Debug + Send + Sync {
     /// (LinuxCNC).
     fn tool_table_sign(&self) -> f64;
 
-    /// M280: cancels any alignment on `machine`; returns the lines run.
+    /// M280: cancels any alignment on `machine` (the commands it needs); returns the lines run.
     ///
     /// # Errors
     /// The machine's refusal ([`VisionError::Machine`]).
@@ -71,7 +144,8 @@ pub trait Controller: fmt::Debug + Send + Sync {
     /// Why it cannot be applied, in the operator's words.
     fn check_fit(&self, full: &AlignmentChain, max_scale_dev_pct: f64) -> Result<(), VisionError>;
 
-    /// M282: makes `chain` the active alignment on `machine`.
+    /// M282: makes `chain` the active alignment on `machine`, with the commands this
+    /// controller needs.
     ///
     /// # Errors
     /// The machine's refusal; the lines before the refused one have run.
@@ -180,8 +254,8 @@ pub(crate) fn rotation(deg: f64) -> Matrix2<f64> {
 }
 
 /// Implements [`Controller`] for `$controller`, a controller whose alignment is the G68/G51/G52
-/// modals (Mach4, seed 002): cancelled with `G69 G50 G52 X0 Y0`, applied as the chain's four
-/// lines and remembered by the module; a tool table that holds the module's offset; moves that
+/// modals (Mach4, seed 002): cancelled with [`MachineCommand::CancelAlignment`], applied with
+/// [`modal_commands`] and remembered by the module; a tool table that holds the module's offset; moves that
 /// finish before the next line, so M281 may re-centre; no G5x rotation under the alignment.
 macro_rules! modal_controller {
     ($controller:ty, name = $name:literal, dialect = $dialect:literal) => {
@@ -234,24 +308,40 @@ macro_rules! modal_controller {
 }
 use modal_controller;
 
-/// The alignment of a controller with G68/G51/G52 modals: cancelled with `G69 G50 G52 X0 Y0`,
-/// applied as the chain's four lines, state kept by the module.
+/// The commands that make `chain` the alignment on a controller with scale, rotation and shift
+/// modals: cancel, then shift, rotation about the centre and scale, each replacing the one
+/// before, so a second M282 never compounds.
+///
+/// # Errors
+/// [`MathError::NonFinite`] or [`MathError::BeyondBound`] for a chain no controller can be
+/// handed ([`AlignmentChain::check`]).
+pub fn modal_commands(chain: &AlignmentChain) -> Result<[MachineCommand; 4], MathError> {
+    chain.check()?;
+    Ok([
+        MachineCommand::CancelAlignment,
+        MachineCommand::SetShift(chain.shift),
+        MachineCommand::SetRotation { centre: chain.center, deg: chain.rotation_deg },
+        MachineCommand::SetScale(chain.scale),
+    ])
+}
+
+/// The alignment of a controller with scale, rotation and shift modals: cancelled with
+/// [`MachineCommand::CancelAlignment`], applied with [`modal_commands`], state kept by the
+/// module.
 mod modal {
-    use super::{Applied, CANCEL_LINE};
+    use super::{modal_commands, Applied, HowApplied};
+    use crate::command::MachineCommand;
     use crate::error::VisionError;
     use crate::machine::{Machine, MachineError};
     use vision_math::AlignmentChain;
 
     pub(super) fn cancel(machine: &mut dyn Machine) -> Result<Vec<String>, VisionError> {
-        let gcode = vec![CANCEL_LINE.to_string()];
-        machine.run_gcode(&gcode)?;
-        Ok(gcode)
+        Ok(machine.run(&[MachineCommand::CancelAlignment])?)
     }
 
     pub(super) fn apply(machine: &mut dyn Machine, chain: &AlignmentChain) -> Result<Applied, VisionError> {
-        let gcode = chain.gcode()?.to_vec();
-        machine.run_gcode(&gcode)?;
-        Ok(Applied { gcode, chain: *chain, linuxcnc: None })
+        let gcode = machine.run(&modal_commands(chain)?)?;
+        Ok(Applied { gcode, chain: *chain, how: HowApplied::modal(machine.controller().name()) })
     }
 
     /// The remembered chain, unless the machine says no alignment is active.

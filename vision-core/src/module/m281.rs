@@ -82,7 +82,7 @@ impl VisionModule {
     /// its own point in the modes it had (a feed move stays a feed move). Only a reading inside
     /// the image is moved from, so a move never exceeds the field of view. This runs
     /// [`VisionModule::m281_begin`] and [`VisionModule::m281_next`] back to back, for a machine
-    /// whose [`Machine::run_gcode`] returns once the move is done (Mach4, the simulator); a
+    /// whose [`Machine::command`] returns once the move is done (Mach4, the simulator); a
     /// controller that only queues G-code from an M-code (LinuxCNC) calls them itself and waits
     /// for its motion in between.
     ///
@@ -246,8 +246,7 @@ impl VisionModule {
             }
             let moved = checked::program_position(machine)
                 .map_err(VisionError::from)
-                .map(|at| relative_move(target - at))
-                .and_then(|lines| machine.run_gcode(&lines).map(|()| lines).map_err(VisionError::from));
+                .and_then(|at| machine.command(&relative_move(target - at)).map_err(VisionError::from));
             return match moved {
                 Ok(lines) => {
                     capture.gcode.extend(lines);
@@ -259,11 +258,10 @@ impl VisionModule {
         }
         if capture.passes > 0 {
             // Back where the program put the camera: the program goes on from its own point.
-            let lines = vec![absolute_move(capture.commanded)];
-            if let Err(e) = machine.run_gcode(&lines) {
-                return Err(self.abandon(machine, &capture, e.into()));
+            match machine.command(&absolute_move(capture.commanded)) {
+                Ok(lines) => capture.gcode.extend(lines),
+                Err(e) => return Err(self.abandon(machine, &capture, e.into())),
             }
-            capture.gcode.extend(lines);
         }
         if capture.saved {
             if let Err(e) = machine.restore_modal_state() {

@@ -1,7 +1,6 @@
 //! M282: solve the run's fit and emit it as modal G51 / G68 / G52.
 
 use vision_math::fit::{find_outlier, residual_sigma, Shared};
-use vision_math::linuxcnc::LinuxCncAlignment;
 use vision_math::{
     fit_piece, fit_rectangle, fit_similarity, AlignmentChain, Fit, LengthUnit, Model, Piece, Point2, Vector2,
 };
@@ -9,7 +8,7 @@ use vision_math::{
 use super::height::{self, HeightReport};
 use super::m280::RunMode;
 use super::{Reply, VisionModule};
-use crate::controller::Applied;
+use crate::controller::{Applied, HowApplied};
 use crate::error::VisionError;
 use crate::machine::Machine;
 use crate::ser;
@@ -25,8 +24,8 @@ use crate::ser;
 /// * `Scale` (`P3`): scale about the commanded centroid (one factor for a similarity run, one
 ///   per axis for a rectangle run), with the compensating `G52` that keeps the centroid still.
 ///
-/// Every mode emits the same four lines ([`AlignmentChain::gcode`]) with the other pieces at
-/// identity, so a later M282 always replaces, never compounds.
+/// Every mode emits the same commands ([`crate::controller::modal_commands`] on Mach4) with the
+/// other pieces at identity, so a later M282 always replaces, never compounds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Pieces {
@@ -85,10 +84,11 @@ pub struct AlignReport {
     /// `VisionHeightCorrection`, corrected the captures for); `None` when no M281 of the run
     /// read its mark from two positions.
     pub height: Option<HeightReport>,
-    /// On a LinuxCNC host: the lines' values (`G10 L2 P0 R`, `G52`), θ₀, and the scale that
-    /// was not applied; `None` on Mach4 (and left out of the JSON then).
-    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "ser::linuxcnc")]
-    pub linuxcnc: Option<LinuxCncAlignment>,
+    /// How the controller applied it: on the machine or by the host, the scale left out and
+    /// why, the work-offset rotation (LinuxCNC's G5x rotation, θ₀ and the shift). In the JSON
+    /// only where there is a work-offset rotation, named after the controller.
+    #[serde(flatten)]
+    pub how: HowApplied,
 }
 
 /// The cut error a fit predicts over the part (see [`vision_math::fit::Prediction`]): from the
@@ -127,7 +127,8 @@ impl VisionModule {
     /// squares when there are more marks than the minimum), checks the quality gates, writes
     /// `Run_*` (the emitted chain: `Run_Tx/Ty` = G52, `Run_Theta` = G68 R in radians,
     /// `Run_Sx/Sy` = G51, `Run_CenterX/Y` = G68 X/Y), closes the run (`Run_Active` = 0) and runs
-    /// the four lines of [`AlignmentChain::gcode`] on the machine; the reply lists them.
+    /// the controller's alignment commands on the machine (on Mach4 the four lines of
+    /// [`crate::controller::modal_commands`]); the reply lists the lines.
     ///
     /// With five marks or more, the one mark whose distance from the fit of the others exceeds
     /// `VisionOutlierFactor` × the noise is left out first and reported
@@ -140,11 +141,11 @@ impl VisionModule {
     /// X and Y by enough to miss one by more than `VisionFitMaxAxisScaleError` (the refusal
     /// advises rectangle mode). Lengths in inches, ×25.4 under G21.
     ///
-    /// On LinuxCNC (no G68, no G51: [`crate::controller::linuxcnc`], [`vision_math::linuxcnc`]) the lines
-    /// are `G10 L2 P0 R{θ₀ + θ}` and `G52`, the scale gate refuses with "LinuxCNC cannot
-    /// scale: …", and within it the rigid part of the chain is applied (the report's `chain`,
-    /// residuals and `Run_*`) and the scale left out is in [`AlignReport::linuxcnc`]. θ₀ and the
-    /// alignment flag are written before the lines run.
+    /// On LinuxCNC (no G68, no G51: [`crate::controller::linuxcnc`], [`vision_math::linuxcnc`]) the
+    /// commands rotate the G5x system by θ₀ + θ and shift, the scale gate refuses with "LinuxCNC
+    /// cannot scale: …", and within it the rigid part of the chain is applied (the report's
+    /// `chain`, residuals and `Run_*`) and the scale left out is in [`AlignReport::how`]. θ₀ and
+    /// the alignment flag are written before the lines run.
     ///
     /// Every accepted fit predicts its cut error over the marks' bounding box
     /// ([`AlignReport::predicted`], `VisionRun_PredictedSigma` / `…Bound`).
@@ -231,7 +232,7 @@ impl VisionModule {
                 fit_piece(Piece::Scale { uniform: mode == RunMode::Similarity }, &commanded, &observed)?.chain
             }
         };
-        let Applied { gcode, chain, linuxcnc } = controller.apply_alignment(machine, &chain)?;
+        let Applied { gcode, chain, how } = controller.apply_alignment(machine, &chain)?;
         // What the machine runs: the chain as its G-code's decimals write it (a controller that
         // keeps the alignment itself, LinuxCNC, is read back instead at the next call).
         self.alignment = chain.as_emitted();
@@ -285,7 +286,7 @@ impl VisionModule {
                 predicted,
                 dropped,
                 height,
-                linuxcnc,
+                how,
             },
         })
     }

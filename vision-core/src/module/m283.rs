@@ -86,8 +86,8 @@ impl VisionModule {
     ///
     /// Decision: the tool table goes first because undoing it is one write of a value we hold;
     /// when the save then fails, the old offset is written back and the error is the save's. If
-    /// that restore fails too, the error says so and gives the offset to set by hand. The G-code
-    /// runs through [`Machine::run_gcode`] as the walk goes; the reply lists every line run.
+    /// that restore fails too, the error says so and gives the offset to set by hand. The moves
+    /// run through [`Machine::command`] as the walk goes; the reply lists every line run.
     ///
     /// Telemetry: every trigger writes the `Last*` values as it happens (through the best K
     /// known at that moment: the old calibration's, then each one the walk solves; the offsets
@@ -204,7 +204,7 @@ impl VisionModule {
                 Ok(Reply { gcode: ran, report })
             }
             Err(e) => {
-                let _ = machine.run_gcode(&[absolute_move(start)]);
+                let _ = machine.command(&absolute_move(start));
                 if modal_saved {
                     // Best effort, as the move back: the error already says what failed.
                     let _ = machine.restore_modal_state();

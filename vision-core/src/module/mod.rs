@@ -5,11 +5,12 @@
 //! module ran. A refused call returns a [`VisionError`] and changes nothing it promises to keep
 //! (see each entry point).
 //!
-//! Decision: every entry point delivers its G-code the same way — it runs the lines itself
-//! through [`Machine::run_gcode`], in order, while it works (M280's cancel line, M282's four
-//! modal lines, M283's moves), and [`Reply::gcode`] lists what it ran. A host never runs a
-//! reply's lines again. Running them inside the call is what M283 needs anyway (it moves, then
-//! triggers), and it lets M280/M282 commit their state only after the machine took the lines.
+//! Decision: every entry point delivers its G-code the same way — it runs its commands itself
+//! through [`Machine::command`], in order, while it works (M280's cancel, M282's alignment,
+//! M283's moves), and [`Reply::gcode`] lists the lines the machine ran for them. A host never
+//! runs a reply's lines again. Running them inside the call is what M283 needs anyway (it
+//! moves, then triggers), and it lets M280/M282 commit their state only after the machine took
+//! the lines.
 //!
 //! Common checks, in order, for every entry point: `VisionEnabled` ("Vision is not enabled");
 //! for M280–M283 the camera-tool check (`VisionCameraToolNumber` ≠ 0 and another tool active);
@@ -54,7 +55,7 @@ pub use m284::{JobReport, MAX_JOB};
 /// What an entry point hands back: the G-code it ran, then a report.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Reply<R> {
-    /// Lines the module ran on the machine through [`Machine::run_gcode`], in order (empty
+    /// Lines the module ran on the machine through [`Machine::command`], in order (empty
     /// when none). Informational: the host must not run them again.
     pub gcode: Vec<String>,
     /// What happened.

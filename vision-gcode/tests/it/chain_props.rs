@@ -235,12 +235,16 @@ proptest! {
             rotation_deg: theta,
             shift: Vector2::new(tx, ty),
         };
+        use vision_core::controller::{linuxcnc, LinuxCnc};
+        let fail = |e: vision_math::MathError| TestCaseError::fail(e.to_string());
+        let text = |commands: &[vision_core::MachineCommand]| vision_mcode::lines(&LinuxCnc, commands).expect("text");
         let first = LinuxCncAlignment::from_chain(&AlignmentChain { rotation_deg: -theta, ..chain }, base, 0.0)
-            .and_then(|a| a.gcode())
-            .map_err(|e| TestCaseError::fail(e.to_string()))?;
-        let alignment = LinuxCncAlignment::from_chain(&chain, base, 0.0).map_err(|e| TestCaseError::fail(e.to_string()))?;
-        let lines = alignment.gcode().map_err(|e| TestCaseError::fail(e.to_string()))?;
-        let cancel = alignment.cancel_gcode().map_err(|e| TestCaseError::fail(e.to_string()))?;
+            .and_then(|a| linuxcnc::alignment_commands(&a))
+            .map_err(fail)?;
+        let first = text(&first);
+        let alignment = LinuxCncAlignment::from_chain(&chain, base, 0.0).map_err(fail)?;
+        let lines = text(&linuxcnc::alignment_commands(&alignment).map_err(fail)?);
+        let cancel = text(&linuxcnc::cancel_commands(alignment.base_rotation_deg).map_err(fail)?);
         let setup = format!("G21\nG10 L2 P1 X{} Y{} Z{} R{base}\nG54", origin.x, origin.y, origin.z);
         let program = format!("{setup}\n{}\n{}\n{}\n{}\nG0 X{} Y{} Z{}\n%", first[0], first[1], lines[0], lines[1], p.x, p.y, p.z);
         let mut events = Vec::new();

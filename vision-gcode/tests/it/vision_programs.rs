@@ -4,10 +4,16 @@
 
 #![allow(clippy::float_cmp)]
 
+use vision_core::controller::modal_commands;
 use vision_gcode::{
     Context, Event, HandlerError, Interpreter, InterpreterConfig, MCodeHandler, RunOutcome, Tool, UserMCode, Xyz,
 };
 use vision_math::{AlignmentChain, Model, Point2, Vector2};
+
+/// Mach4's text for `commands`, as its bridge writes it.
+fn mach4_text(commands: &[vision_core::MachineCommand]) -> Vec<String> {
+    vision_mcode::lines(&vision_core::controller::Mach4, commands).expect("text")
+}
 
 /// Where the part really lies: nominal mark `n` (work frame) is at `part.apply(n)`.
 fn rectangle_part() -> AlignmentChain {
@@ -99,7 +105,7 @@ impl MCodeHandler for FakeVision {
             280 => {
                 self.dots.clear();
                 self.model = if call.word('P') == Some(3.0) { Model::Similarity } else { Model::Rectangle };
-                Ok(vec![vision_math::chain::CANCEL_LINE.to_string()])
+                Ok(mach4_text(&[vision_core::MachineCommand::CancelAlignment]))
             }
             281 => {
                 self.capture(ctx)?;
@@ -110,7 +116,8 @@ impl MCodeHandler for FakeVision {
                 let fit = self.model.fit(&commanded, &observed).map_err(|e| HandlerError::Failed(e.to_string()))?;
                 let chain = fit.transform.chain().ok_or_else(|| HandlerError::Failed("no chain".into()))?;
                 self.emitted = Some(chain);
-                Ok(chain.gcode().map_err(|e| HandlerError::Failed(e.to_string()))?.to_vec())
+                let commands = modal_commands(&chain).map_err(|e| HandlerError::Failed(e.to_string()))?;
+                Ok(mach4_text(&commands))
             }
             283 => {
                 // The axis-detect bump, synchronously: move, look, move back.
@@ -228,7 +235,8 @@ fn example4_and_5_fits_apply_and_are_cancelled() {
         // The same program cut before its cancel line: M282's lines are in force, and every
         // nominal mark, commanded with the cutter (tool 1, no offset), lands on the part.
         let text = program(name);
-        let cut = text.rfind(&format!("\n{}", vision_math::chain::CANCEL_LINE)).expect("a cancel line");
+        let cancel = mach4_text(&[vision_core::MachineCommand::CancelAlignment]);
+        let cut = text.rfind(&format!("\n{}", cancel[0])).expect("a cancel line");
         let mut vision = FakeVision::new(part, &marks);
         let mut interp = machine();
         let outcome = interp.run(&text[..cut], Some(&mut vision), &mut Vec::new()).expect("runs");
@@ -280,7 +288,7 @@ fn m282_gcode_carries_every_commanded_mark_onto_its_observation() {
         [Point2::new(0.1, 0.05), Point2::new(6.0999, 0.1024), Point2::new(6.065, 4.1023), Point2::new(0.0651, 4.0499)];
     for model in [Model::Rectangle, Model::Similarity] {
         let fit = model.fit(&commanded, &observed).expect("fits");
-        let lines = fit.transform.chain().expect("chain").gcode().expect("finite");
+        let lines = mach4_text(&modal_commands(&fit.transform.chain().expect("chain")).expect("finite"));
         for (unit_line, k) in [("G20", 1.0), ("G21", 25.4)] {
             let mut interp = machine();
             let mut text = format!("{unit_line} G90 T98 M6\n");

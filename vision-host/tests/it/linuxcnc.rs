@@ -5,7 +5,7 @@
 
 use std::collections::BTreeMap;
 
-use vision_core::{DriverRegistry, Timestamp, VisionModule};
+use vision_core::{DriverRegistry, MachineCommand, Timestamp, VisionModule};
 use vision_driver_sim::{Fixture, Sim, SimMachine};
 use vision_host::{linuxcnc, testkit, Controller, HostError, Machine, MachineError, MachineErrorKind, Session};
 use vision_math::{LengthUnit, Matrix2, Point2, Vector2};
@@ -106,6 +106,9 @@ fn unsupported(line: &str) -> MachineError {
 }
 
 impl Machine for FakeLinuxCnc {
+    fn gcode(&self, command: &MachineCommand) -> Result<Vec<String>, MachineError> {
+        Ok(vision_mcode::gcode(self.controller(), command)?)
+    }
     fn execute(&mut self, line: &str) -> Result<(), MachineError> {
         let mut g = Vec::new();
         let mut words = BTreeMap::new();

@@ -6,9 +6,10 @@ use std::sync::{Arc, Mutex};
 
 use vision_core::{CameraDriver, Capabilities, DriverError, Judgment, Params, Reading, Timestamp, VisionModule};
 use vision_gcode::{Event, Interpreter, InterpreterConfig};
+use vision_host::fixed_clock;
 use vision_host::{controller, ProgramHandler, Session};
 use vision_math::{Matrix2, PixelChain, Remap, Vector2};
-use vision_mcode::{fixed_clock, Outcome};
+use vision_mcode::Outcome;
 
 /// A camera that reports the queued offsets (machine units from the camera to the mark) as
 /// native pixels through the configured K, and records job switches.

@@ -62,7 +62,7 @@ fn a_fresh_profile_is_disabled_until_enabled() {
     let mut sink = |_: &vision_gcode::Event| {};
     let mut ctx = interp.context(&mut sink);
     let clock = clock();
-    let mut host = vision_mcode::ContextMachine::new(&mut ctx, &clock, &vision_host::controller::Mach4);
+    let mut host = vision_host::ContextMachine::new(&mut ctx, &clock, &vision_host::controller::Mach4);
     let e = session.mcode(&mut host, 280, &[]).expect_err("disabled");
     assert!(matches!(e, HostError::Mcode(McodeError::Vision(_))), "{e:?}");
     assert!(e.to_string().contains("not enabled"), "{e}");

@@ -7,8 +7,8 @@ use std::sync::Arc;
 
 use vision_core::{ProfileStore, Timestamp};
 use vision_host::testkit::{sim, uncalibrated_params};
+use vision_host::Clock;
 use vision_host::{cameras, ProgramHandler, Session};
-use vision_mcode::Clock;
 
 /// One Vision call of a session.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -179,30 +179,26 @@ proptest! {
         let map = truth_map(theta, sx, sy, shift);
         let o: Vec<_> = n.iter().map(&map).collect();
         let fit = fit_rectangle(&n, &o).expect("rectangle");
-        let lines = fit.transform.chain().expect("chain").gcode().expect("finite");
-        let parsed = parse_chain(&lines);
+        let chain = fit.transform.chain().expect("chain");
+        let parsed = written(&chain);
         for (ni, oi) in n.iter().zip(&o) {
             let d = (parsed.apply(*ni) - oi).norm();
-            prop_assert!(d <= 1e-6, "rounded chain misses by {d}: {lines:?}");
+            prop_assert!(d <= 1e-6, "rounded chain misses by {d}: {chain:?}");
         }
     }
 }
 
-/// Reads back the words of the four emitted lines (a tiny, independent reader).
-fn parse_chain(lines: &[String; 4]) -> AlignmentChain {
-    let word = |line: &str, letter: char| -> f64 {
-        line.split_whitespace()
-            .filter_map(|w| w.strip_prefix(letter))
-            .filter_map(|v| v.parse::<f64>().ok())
-            .next_back()
-            .expect("word present")
-    };
-    assert_eq!(lines[0], "G69 G50 G52 X0 Y0");
+/// The chain as its lines write it: each number through its fixed decimals and read back (a
+/// reader independent of [`AlignmentChain::as_emitted`]).
+fn written(chain: &AlignmentChain) -> AlignmentChain {
+    use crate::chain::{fixed, ANGLE_DECIMALS, POSITION_DECIMALS, SCALE_DECIMALS};
+    let read = |v: f64, decimals: usize| fixed(v, decimals).parse::<f64>().expect("a number");
+    let p = |v: f64| read(v, POSITION_DECIMALS);
     AlignmentChain {
-        shift: Vector2::new(word(&lines[1], 'X'), word(&lines[1], 'Y')),
-        center: Point2::new(word(&lines[2], 'X'), word(&lines[2], 'Y')),
-        rotation_deg: word(&lines[2], 'R'),
-        scale: Vector2::new(word(&lines[3], 'X'), word(&lines[3], 'Y')),
+        shift: Vector2::new(p(chain.shift.x), p(chain.shift.y)),
+        center: Point2::new(p(chain.center.x), p(chain.center.y)),
+        rotation_deg: read(chain.rotation_deg, ANGLE_DECIMALS),
+        scale: Vector2::new(read(chain.scale.x, SCALE_DECIMALS), read(chain.scale.y, SCALE_DECIMALS)),
     }
 }
 
@@ -339,7 +335,7 @@ proptest! {
                 prop_assert!(fit.rms.is_finite() && fit.max_residual.is_finite());
                 prop_assert!(fit.transform.theta_rad().is_finite() && fit.transform.scale.iter().all(|v| v.is_finite()));
                 if let Some(chain) = fit.transform.chain() {
-                    prop_assert!(chain.gcode().is_ok());
+                    prop_assert!(chain.check().is_ok());
                 }
             }
         }

@@ -1,14 +1,15 @@
-//! Tiny in-test fakes: a machine that tracks position under `G0/G1 G90/G91 G20/G21 X Y` and
-//! M282's modal lines, and a camera that makes native pixels from its own optics model (mount
+//! Tiny in-test fakes: a machine that writes Mach4's text for the module's commands and tracks
+//! position under `G0/G1 G90/G91 G20/G21 X Y` and M282's modal lines, and a camera that makes native pixels from its own optics model (mount
 //! rotation, mirror, pixel pitch, image centre), written from the physics and independently of
 //! `vision_math::PixelChain`. The world (marks, spindle, camera) is kept in inches.
 
 use std::collections::{BTreeMap, VecDeque};
 use std::sync::{Arc, Mutex, MutexGuard};
 
-use vision_math::chain::CANCEL_LINE;
+use vision_math::chain::{fixed, ANGLE_DECIMALS, POSITION_DECIMALS, SCALE_DECIMALS};
 use vision_math::{AlignmentChain, LengthUnit, Matrix2, Point2, Remap, Vector2};
 
+use crate::command::MachineCommand;
 use crate::controller::{Controller, Mach4};
 use crate::driver::{CameraDriver, Capabilities, DriverError, DriverErrorKind, ImageRequest, Judgment, Reading};
 use crate::machine::{Machine, MachineError, MachineErrorKind, Timestamp};
@@ -102,7 +103,7 @@ pub(crate) struct World {
     pub fail_pound: Option<u32>,
     /// The highest pound variable the machine has.
     pub last_pound: u32,
-    /// `run_gcode` fails after this many more calls.
+    /// A call of the machine (`FakeMachine::run_lines`) fails after this many more.
     pub fail_gcode_after: Option<usize>,
     /// Modal states saved by the module (distance mode, units), newest last.
     pub saved_modal: Vec<(bool, LengthUnit)>,
@@ -262,40 +263,16 @@ fn lock(s: &Shared) -> MutexGuard<'_, World> {
 /// The fake machine.
 pub(crate) struct FakeMachine(pub Shared);
 
+/// Mach4's cancel line, as the fake writes and reads it.
+pub(crate) const CANCEL_LINE: &str = "G69 G50 G52 X0 Y0";
+
 impl FakeMachine {
     pub(crate) fn world(&self) -> MutexGuard<'_, World> {
         lock(&self.0)
     }
-}
 
-impl Machine for FakeMachine {
-    fn controller(&self) -> &'static dyn Controller {
-        &Mach4
-    }
-    fn program_position(&self) -> Result<Point2<f64>, MachineError> {
-        let w = self.world();
-        Ok(Point2::new(w.inch_to_cur(w.program.x), w.inch_to_cur(w.program.y)))
-    }
-    fn save_modal_state(&mut self) -> Result<(), MachineError> {
-        let mut w = self.world();
-        let state = (w.absolute, w.units);
-        w.saved_modal.push(state);
-        Ok(())
-    }
-    fn restore_modal_state(&mut self) -> Result<(), MachineError> {
-        let mut w = self.world();
-        let (absolute, units) =
-            w.saved_modal.pop().ok_or_else(|| MachineError::new(MachineErrorKind::Other, "nothing saved"))?;
-        (w.absolute, w.units) = (absolute, units);
-        Ok(())
-    }
-    fn alignment_active(&self) -> Result<Option<bool>, MachineError> {
-        Ok(Some(self.world().alignment.is_some()))
-    }
-    fn execute(&mut self, line: &str) -> Result<(), MachineError> {
-        self.run_gcode(&[line.to_string()])
-    }
-    fn run_gcode(&mut self, lines: &[String]) -> Result<(), MachineError> {
+    /// Runs `lines` as one call of the machine (which [`World::fail_gcode_after`] counts).
+    pub(crate) fn run_lines(&mut self, lines: &[String]) -> Result<(), MachineError> {
         let mut w = self.world();
         if let Some(n) = w.fail_gcode_after {
             if n == 0 {
@@ -354,6 +331,68 @@ impl Machine for FakeMachine {
             }
         }
         Ok(())
+    }
+}
+
+/// The fake's text for `command`: Mach4's, written here independently of `vision-mcode`.
+fn fake_text(command: &MachineCommand) -> Vec<String> {
+    let p = |v: f64| fixed(v, POSITION_DECIMALS);
+    match *command {
+        MachineCommand::CancelAlignment => vec![CANCEL_LINE.to_string()],
+        MachineCommand::ClearShift => vec!["G52 X0 Y0".to_string()],
+        MachineCommand::SetShift(v) => vec![format!("G52 X{} Y{}", p(v.x), p(v.y))],
+        MachineCommand::SetRotation { centre, deg } => {
+            vec![format!("G68 X{} Y{} R{}", p(centre.x), p(centre.y), fixed(deg, ANGLE_DECIMALS))]
+        }
+        MachineCommand::SetScale(v) => {
+            vec![format!("G51 X{} Y{}", fixed(v.x, SCALE_DECIMALS), fixed(v.y, SCALE_DECIMALS))]
+        }
+        MachineCommand::SetWorkRotation { deg } => vec![format!("G10 L2 P0 R{}", fixed(deg, ANGLE_DECIMALS))],
+        MachineCommand::MoveTo(t) => vec![format!("G90 G0 X{} Y{}", p(t.x), p(t.y))],
+        MachineCommand::MoveBy(d) => vec![format!("G91 G0 X{} Y{}", p(d.x), p(d.y)), "G90".to_string()],
+        MachineCommand::MoveZBy(dz) => vec![format!("G91 G0 Z{}", p(dz)), "G90".to_string()],
+    }
+}
+
+impl Machine for FakeMachine {
+    fn controller(&self) -> &'static dyn Controller {
+        &Mach4
+    }
+    fn program_position(&self) -> Result<Point2<f64>, MachineError> {
+        let w = self.world();
+        Ok(Point2::new(w.inch_to_cur(w.program.x), w.inch_to_cur(w.program.y)))
+    }
+    fn save_modal_state(&mut self) -> Result<(), MachineError> {
+        let mut w = self.world();
+        let state = (w.absolute, w.units);
+        w.saved_modal.push(state);
+        Ok(())
+    }
+    fn restore_modal_state(&mut self) -> Result<(), MachineError> {
+        let mut w = self.world();
+        let (absolute, units) =
+            w.saved_modal.pop().ok_or_else(|| MachineError::new(MachineErrorKind::Other, "nothing saved"))?;
+        (w.absolute, w.units) = (absolute, units);
+        Ok(())
+    }
+    fn alignment_active(&self) -> Result<Option<bool>, MachineError> {
+        Ok(Some(self.world().alignment.is_some()))
+    }
+    fn gcode(&self, command: &MachineCommand) -> Result<Vec<String>, MachineError> {
+        Ok(fake_text(command))
+    }
+    fn execute(&mut self, line: &str) -> Result<(), MachineError> {
+        self.run_lines(&[line.to_string()])
+    }
+    /// One call of the machine, as [`Machine::run`]'s.
+    fn command(&mut self, command: &MachineCommand) -> Result<Vec<String>, MachineError> {
+        self.run(std::slice::from_ref(command))
+    }
+    /// All the commands' lines as one call of the machine.
+    fn run(&mut self, commands: &[MachineCommand]) -> Result<Vec<String>, MachineError> {
+        let lines: Vec<String> = commands.iter().flat_map(fake_text).collect();
+        self.run_lines(&lines)?;
+        Ok(lines)
     }
     fn active_tool(&self) -> Result<u32, MachineError> {
         Ok(self.world().tool)
@@ -526,7 +565,7 @@ impl Rig {
 
     /// Runs G-code on the fake machine.
     pub(crate) fn run(&mut self, lines: &[String]) {
-        self.machine.run_gcode(lines).expect("fake machine runs it");
+        self.machine.run_lines(lines).expect("fake machine runs it");
     }
 
     /// `G90 G0 X.. Y..` in current units.

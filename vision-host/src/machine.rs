@@ -3,7 +3,7 @@
 use std::sync::Arc;
 use std::time::SystemTime;
 
-use vision_core::{Controller, Machine, MachineError, MachineErrorKind, Timestamp};
+use vision_core::{Controller, Machine, MachineCommand, MachineError, MachineErrorKind, Timestamp};
 use vision_gcode::params::{TOOL_OFFSET, WORK_OFFSET_STRIDE, WORK_ROTATION};
 use vision_gcode::{Context, GcodeError};
 use vision_math::{LengthUnit, Point2, Vector2};
@@ -27,8 +27,9 @@ pub fn fixed_clock(t: Timestamp) -> Clock {
 /// [`vision_core::Machine`] over an interpreter [`Context`] — the simulated machine: inside an
 /// M-code handler, or around a standalone interpreter (`Interpreter::context`).
 ///
-/// Every length is in the interpreter's current units (G20/G21), as the trait asks. G-code runs
-/// synchronously through [`Context::execute`], so calibration moves, then triggers, then reads
+/// Every length is in the interpreter's current units (G20/G21), as the trait asks. The
+/// commands run in the controller's text (`vision_mcode::gcode`), synchronously through
+/// [`Context::execute`], so calibration moves, then triggers, then reads
 /// the new position. The interpreter knows its alignment exactly, so it answers
 /// [`Machine::alignment_active`]; the G5x rotation and the G92 offset are its own.
 pub struct ContextMachine<'c, 'a> {
@@ -62,6 +63,10 @@ fn host(kind: MachineErrorKind) -> impl Fn(GcodeError) -> MachineError {
 impl Machine for ContextMachine<'_, '_> {
     fn controller(&self) -> &'static dyn Controller {
         self.controller
+    }
+
+    fn gcode(&self, command: &MachineCommand) -> Result<Vec<String>, MachineError> {
+        Ok(vision_mcode::gcode(self.controller, command)?)
     }
 
     fn execute(&mut self, line: &str) -> Result<(), MachineError> {
