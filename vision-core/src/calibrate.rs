@@ -638,10 +638,11 @@ pub(crate) fn quick(walker: &mut Walker<'_>, params: &Params, diameter: f64) -> 
     let r = walker.shots[s].reading;
     let (w, h) = if remap.swap_xy { (r.height_px, r.width_px) } else { (r.width_px, r.height_px) };
     if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0) {
-        return Err(fail(
+        return Err(fail(format!(
             "the camera job does not report the mark's width and height — M283 Q needs a camera \
-             output that includes them (judgment,count,x,y,width,height,angle,score); or use M283 C1 (on LinuxCNC M283 P1)",
-        ));
+             output that includes them (judgment,count,x,y,width,height,angle,score); or use {}",
+            walker.machine.controller().sheet_calibration()
+        )));
     }
     let k = Matrix2::new(diameter / w, 0.0, 0.0, diameter / h);
     let (p, q) = motion_pairs(&walker.shots, &pairs, remap);

@@ -4,6 +4,7 @@
 use vision_math::show::number;
 use vision_math::MathError;
 
+use crate::controller::sheet_calibrations;
 use crate::driver::{DriverError, DriverErrorKind};
 use crate::machine::MachineError;
 
@@ -48,11 +49,11 @@ pub enum VisionError {
     },
 
     /// K11..K22 are all zero.
-    #[error("K matrix is zero — run M283 to calibrate first (M283 C1, on LinuxCNC M283 P1, or M283 Q)")]
+    #[error("K matrix is zero — run M283 to calibrate first ({}, or M283 Q)", sheet_calibrations())]
     NotCalibrated,
 
     /// K cannot be inverted or holds a non-finite number.
-    #[error("K matrix is unusable ({reason}) — re-run M283 to calibrate (M283 C1, on LinuxCNC M283 P1, or M283 Q)")]
+    #[error("K matrix is unusable ({reason}) — re-run M283 to calibrate ({}, or M283 Q)", sheet_calibrations())]
     BadCalibration {
         /// What is wrong with it.
         reason: String,
@@ -142,8 +143,9 @@ pub enum VisionError {
     /// A fit failed a quality gate (`VisionFitMax*`).
     #[error(
         "alignment refused: {reason} — likely causes: the camera found the wrong mark, the part \
-         moved during the run, a bad calibration (re-run M283 C1, on LinuxCNC M283 P1), or the marks were captured in \
-         the wrong order; nothing was applied"
+         moved during the run, a bad calibration (re-run {}), or the marks were captured in the wrong order; \
+         nothing was applied",
+        sheet_calibrations()
     )]
     FitRejected {
         /// Which gate tripped, with the numbers.

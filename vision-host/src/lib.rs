@@ -4,12 +4,14 @@
 //!
 //! * [`Session`]: owns the [`vision_core::VisionModule`] (parameters, dot list, camera driver,
 //!   profile) and runs one M-code at a time on a [`vision_core::Machine`] through
-//!   `vision-mcode`; the module runs the G-code it emits on that machine as it goes. For a
-//!   controller whose M-code cannot both move and trigger (LinuxCNC), M283 also runs stepwise:
-//!   [`Session::walk_begin`], then [`Session::walk_next`] → the machine moves →
-//!   [`Session::walk_capture`], then [`Session::walk_finish`].
+//!   `vision-mcode`; the module runs its commands on that machine as it goes (the machine writes
+//!   them in its controller's G-code text, from `vision-mcode`). For a controller whose M-code
+//!   cannot both move and trigger (LinuxCNC), M283 also runs stepwise: [`Session::walk_begin`],
+//!   then [`Session::walk_next`] → the machine moves → [`Session::walk_capture`], then
+//!   [`Session::walk_finish`].
 //! * [`ProgramHandler`]: the interpreter's M280–M284 handler that runs a whole program on the
-//!   simulated machine through a [`Session`] (what `mach-vision run` does).
+//!   simulated machine ([`ContextMachine`], telling time by a [`Clock`]) through a [`Session`]
+//!   (what `mach-vision run` does).
 //! * [`cameras`]: the one list of camera drivers, with their settings; [`registry`]: the ones a
 //!   real machine can use (no simulator), picked by `VisionDriver`.
 //!

@@ -33,6 +33,10 @@ impl Controller for LinuxCnc {
         "linuxcnc"
     }
 
+    fn title(&self) -> &'static str {
+        "LinuxCNC"
+    }
+
     /// M283's sheet is `Pn` on LinuxCNC, the manual's `Cn`: C is an axis word, which the task
     /// refuses ("Bad character 'c' used") on a machine without a C axis before any remap runs,
     /// and moves on a machine with one. `C` that reaches here (rs274, a C-axis machine) is

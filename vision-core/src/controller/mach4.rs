@@ -9,4 +9,4 @@ use super::modal_controller;
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Mach4;
 
-modal_controller!(Mach4, name = "mach4", dialect = "mach4");
+modal_controller!(Mach4, name = "mach4", title = "Mach4", dialect = "mach4");

@@ -10,4 +10,4 @@ use super::modal_controller;
 #[derive(Debug, Clone, Copy, Default)]
 pub struct MachineMotion;
 
-modal_controller!(MachineMotion, name = "machinemotion", dialect = "machinemotion");
+modal_controller!(MachineMotion, name = "machinemotion", title = "MachineMotion", dialect = "machinemotion");

@@ -121,6 +121,9 @@ pub trait Controller: fmt::Debug + Send + Sync {
     /// Its name on the command line and in world files: `mach4`, `linuxcnc`, `machinemotion`.
     fn name(&self) -> &'static str;
 
+    /// Its name in messages to the operator: `Mach4`, `LinuxCNC`, `MachineMotion`.
+    fn title(&self) -> &'static str;
+
     /// The name of the G-code dialect its interpreter follows (`vision_gcode::Dialect::name`);
     /// the simulator maps it to the interpreter's dialect in one place.
     fn dialect(&self) -> &'static str;
@@ -174,7 +177,7 @@ pub trait Controller: fmt::Debug + Send + Sync {
     /// How an operator calls the manual's sheet calibration on this controller, for advice in
     /// messages: `M283 C1`, or what [`Controller::manual_words`] takes instead of `C`.
     fn sheet_calibration(&self) -> &'static str {
-        "M283 C1"
+        MANUAL_SHEET_CALIBRATION
     }
 
     /// Vision M-code `m`'s words as the manual writes them, from the words of its line in this
@@ -187,6 +190,22 @@ pub trait Controller: fmt::Debug + Send + Sync {
         let _ = m;
         Ok(words.to_vec())
     }
+}
+
+/// The manual's sheet calibration call, [`Controller::sheet_calibration`] unless a controller
+/// calls it otherwise.
+pub const MANUAL_SHEET_CALIBRATION: &str = "M283 C1";
+
+/// The sheet calibration as every controller calls it, for advice given where the machine's
+/// controller is not known: the manual's call, then `on {title} {call}` for each controller
+/// that calls it otherwise (`M283 C1, on LinuxCNC M283 P1`).
+#[must_use]
+pub fn sheet_calibrations() -> String {
+    let mut advice = MANUAL_SHEET_CALIBRATION.to_string();
+    for c in CONTROLLERS.iter().filter(|c| c.sheet_calibration() != MANUAL_SHEET_CALIBRATION) {
+        advice.push_str(&format!(", on {} {}", c.title(), c.sheet_calibration()));
+    }
+    advice
 }
 
 /// Every controller, by [`Controller::name`].
@@ -258,10 +277,14 @@ pub(crate) fn rotation(deg: f64) -> Matrix2<f64> {
 /// [`modal_commands`] and remembered by the module; a tool table that holds the module's offset; moves that
 /// finish before the next line, so M281 may re-centre; no G5x rotation under the alignment.
 macro_rules! modal_controller {
-    ($controller:ty, name = $name:literal, dialect = $dialect:literal) => {
+    ($controller:ty, name = $name:literal, title = $title:literal, dialect = $dialect:literal) => {
         impl $crate::controller::Controller for $controller {
             fn name(&self) -> &'static str {
                 $name
+            }
+
+            fn title(&self) -> &'static str {
+                $title
             }
 
             fn dialect(&self) -> &'static str {
@@ -378,6 +401,11 @@ mod tests {
             let words = [(letter.chars().next().expect("a letter"), value.parse::<f64>().expect("a number"))];
             assert_eq!(c.manual_words(283, &words).expect(call), vec![('C', 1.0)], "{}", c.name());
         }
+    }
+
+    #[test]
+    fn advice_names_every_controllers_sheet_calibration() {
+        assert_eq!(sheet_calibrations(), "M283 C1, on LinuxCNC M283 P1");
     }
 
     #[test]
