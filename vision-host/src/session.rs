@@ -253,7 +253,7 @@ fn summary(outcome: &Outcome) -> String {
 /// M282's status line: the scale the controller could not apply, and why, when there was any.
 fn apply_summary(left_out: Option<&ScaleLeftOut>) -> String {
     match left_out {
-        Some(l) if l.is_some_scale() => format!(
+        Some(l) if l.is_scaled() => format!(
             "M282: alignment applied without scale ({}): scale X {:.6} / Y {:.6} ignored, {:.4} % from 1",
             l.reason,
             l.scale.x,

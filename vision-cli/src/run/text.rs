@@ -174,7 +174,7 @@ fn step(s: &mut String, step: &Step, world_unit: &str) {
                 xy(chain.shift.x, chain.shift.y),
                 xy(chain.center.x, chain.center.y)
             );
-            if let Some(l) = a.how.scale_left_out.as_ref().filter(|l| l.is_some_scale()) {
+            if let Some(l) = a.how.scale_left_out.as_ref().filter(|l| l.is_scaled()) {
                 let _ = writeln!(
                     s,
                     "              {}: scale X {:.7} Y {:.7} left out ({:.4} % from 1)",

@@ -96,9 +96,9 @@ impl ScaleLeftOut {
         (self.scale.x - 1.0).abs().max((self.scale.y - 1.0).abs()) * 100.0
     }
 
-    /// True when a factor differs from 1 (something was really left out).
+    /// True when a factor differs from 1 (the fit had a scale, and it was left out).
     #[must_use]
-    pub fn is_some_scale(&self) -> bool {
+    pub fn is_scaled(&self) -> bool {
         self.scale != Vector2::new(1.0, 1.0)
     }
 }
