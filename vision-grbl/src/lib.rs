@@ -9,3 +9,5 @@
 //!   motion timed from its acceleration and rate settings, for tests and demonstrations.
 
 pub mod emulator;
+pub mod response;
+pub mod stream;

@@ -46,6 +46,8 @@ use std::time::{Duration, Instant};
 
 pub use machine::Machine;
 #[cfg(unix)]
+pub(crate) use pty::make_raw;
+#[cfg(unix)]
 pub use pty::PtyEmulator;
 
 /// Which firmware the emulator answers as.
