@@ -364,6 +364,12 @@ impl Sender {
 
     /// Polls until a status report arrives.
     pub fn status(&mut self) -> Result<Status, StreamError> {
+        // Reports already on their way answer an earlier poll: read past them.
+        while let Some(r) = self.next(Duration::ZERO)? {
+            if let Response::Status(s) = r {
+                self.note_status(s);
+            }
+        }
         self.waiting_status = false;
         self.last_poll = None;
         let deadline = Instant::now() + self.options.timeout;
