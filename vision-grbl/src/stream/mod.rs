@@ -75,10 +75,10 @@ pub enum StreamError {
         /// Lines that were already in the controller's buffer behind it.
         in_flight: usize,
     },
-    /// The controller raised an alarm.
-    #[error("ALARM:{code} while streaming (last line answered: {reached:?})")]
+    /// The controller raised an alarm, or is locked in one.
+    #[error("ALARM:{code} (last line answered: {reached:?})")]
     Alarm {
-        /// Grbl's alarm code.
+        /// Grbl's alarm code (0 when the controller reported the state without the message).
         code: u8,
         /// Index of the last line the controller answered, if any.
         reached: Option<usize>,
@@ -123,6 +123,13 @@ pub struct StreamReport {
     pub planner_dry: usize,
     /// Status reports read while streaming.
     pub status_reports: usize,
+}
+
+/// `$` lines Grbl runs only when idle (system.c: settings, `$#`, `$H`, `$I`, `$N`, `$RST`):
+/// the sender waits for an `Idle` report before sending them.
+pub fn needs_idle(line: &str) -> bool {
+    let upper = line.trim().to_ascii_uppercase();
+    upper.starts_with('$') && !matches!(upper.as_str(), "$" | "$G" | "$X" | "$C" | "$$")
 }
 
 /// Lines Grbl stores in EEPROM or that change settings: sent alone (send-response).
@@ -183,6 +190,7 @@ pub struct Sender {
     wco: [f64; 3],
     last_poll: Option<Instant>,
     waiting_status: bool,
+    last_alarm: Option<u8>,
 }
 
 impl std::fmt::Debug for Sender {
@@ -236,6 +244,7 @@ impl Sender {
             wco: [0.0; 3],
             last_poll: None,
             waiting_status: false,
+            last_alarm: None,
         };
         // A controller that has just been reset greets us; wait briefly for that before asking.
         let deadline = Instant::now() + Duration::from_millis(300);
@@ -324,7 +333,13 @@ impl Sender {
     /// Waits for the next line; `Ok(None)` on timeout.
     fn next(&mut self, wait: Duration) -> Result<Option<Response>, StreamError> {
         match self.events.recv_timeout(wait) {
-            Ok(Event::Line(l)) => Ok(parse_line(&l).ok()),
+            Ok(Event::Line(l)) => {
+                let r = parse_line(&l).ok();
+                if let Some(Response::Alarm(code)) = r {
+                    self.last_alarm = Some(code);
+                }
+                Ok(r)
+            }
             Ok(Event::Closed(reason)) => Err(StreamError::ConnectionLost { reason, reached: None }),
             Err(RecvTimeoutError::Timeout) => Ok(None),
             Err(RecvTimeoutError::Disconnected) => {
@@ -393,7 +408,7 @@ impl Sender {
                 return Ok(s);
             }
             if s.state == Some(MachineState::Alarm) {
-                return Err(StreamError::Alarm { code: 0, reached: None });
+                return Err(StreamError::Alarm { code: self.last_alarm.unwrap_or(0), reached: None });
             }
             if Instant::now() >= deadline {
                 return Err(StreamError::Timeout(timeout));

@@ -3,7 +3,7 @@
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
-use super::{needs_sync, Sender, StreamError, StreamReport};
+use super::{needs_idle, needs_sync, Sender, StreamError, StreamReport};
 use crate::response::{MachineState, Response};
 
 pub(super) fn stream_lines<S: AsRef<str>>(sender: &mut Sender, lines: &[S]) -> Result<StreamReport, StreamError> {
@@ -17,6 +17,8 @@ pub(super) fn stream_lines<S: AsRef<str>>(sender: &mut Sender, lines: &[S]) -> R
     let mut last_answer = Instant::now();
     let mut motion_started = false;
     let mut dry = false;
+    // An `Idle` report read since the last answer, with nothing in flight.
+    let mut idle_seen = false;
     loop {
         // Send every line that fits.
         while next < lines.len() {
@@ -28,6 +30,7 @@ pub(super) fn stream_lines<S: AsRef<str>>(sender: &mut Sender, lines: &[S]) -> R
             let sync = needs_sync(text);
             let blocked = in_flight.back().is_some_and(|&(_, _, s)| s)
                 || (sync && !in_flight.is_empty())
+                || (needs_idle(text) && !(in_flight.is_empty() && idle_seen))
                 || used + len > sender.rx_buffer;
             if blocked {
                 waiting_since.get_or_insert_with(Instant::now);
@@ -57,6 +60,7 @@ pub(super) fn stream_lines<S: AsRef<str>>(sender: &mut Sender, lines: &[S]) -> R
         match event {
             Some(Response::Ok) => {
                 last_answer = Instant::now();
+                idle_seen = false;
                 if let Some((index, len, _)) = in_flight.pop_front() {
                     used -= len;
                     reached = Some(index);
@@ -82,6 +86,9 @@ pub(super) fn stream_lines<S: AsRef<str>>(sender: &mut Sender, lines: &[S]) -> R
                     report.planner_dry += 1;
                 }
                 dry = now_dry;
+                // Only a report asked for after the last answer shows the state after it.
+                let fresh = sender.last_poll.is_some_and(|p| p > last_answer);
+                idle_seen = fresh && in_flight.is_empty() && s.state == Some(MachineState::Idle);
                 sender.note_status(s);
             }
             Some(Response::Welcome { .. }) => {

@@ -4,7 +4,7 @@ use std::time::Duration;
 
 use vision_grbl::emulator::{Emulator, EmulatorConfig, Flavour};
 use vision_grbl::response::MachineState;
-use vision_grbl::stream::{needs_sync, Sender, SenderOptions, StreamError};
+use vision_grbl::stream::{needs_idle, needs_sync, Sender, SenderOptions, StreamError};
 
 fn emulator(flavour: Flavour) -> Emulator {
     let config = EmulatorConfig {
@@ -39,6 +39,18 @@ fn lines_that_write_eeprom_or_settings_go_alone() {
     for line in ["G1 X1", "G92 X0", "(G54) G0 X1", "G0 X1 ; G10", "G540"] {
         assert!(!needs_sync(line), "{line}");
     }
+}
+
+#[test]
+fn a_setting_waits_for_the_machine_to_stop() {
+    let grbl = emulator(Flavour::Grbl);
+    let mut s = connect(&grbl);
+    assert!(needs_idle("$10=3") && needs_idle("$#") && !needs_idle("$G") && !needs_idle("G1 X1"));
+    // Grbl answers error:8 to a setting while moving; the sender waits for Idle instead.
+    s.stream(&["G1 X30 F3000", "$10=3", "G1 X0"]).expect("stream");
+    let status = s.wait_idle(Duration::from_secs(10)).expect("idle");
+    assert!(status.buffer.is_some(), "$10=3 took: reports carry Bf");
+    assert_eq!(status.mpos, Some([0.0; 3]));
 }
 
 #[test]
