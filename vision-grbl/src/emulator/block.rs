@@ -4,6 +4,7 @@
 // Axis loops index several arrays at once, as gcode.c does.
 #![allow(clippy::needless_range_loop)]
 
+use super::canned;
 use super::gcode::{AxisCommand, GcState, NonModal, Op, Parsed, Stored, INCH, MAX_N};
 use super::status as st;
 
@@ -181,12 +182,30 @@ pub(crate) fn check_and_run(
     }
     // [20] Motion modes.
     let mut arc: Option<([f64; 3], f64, bool)> = None;
+    let mut cycle = None;
     if motion == 80 {
         if axis_words {
             return Err(st::AXIS_WORDS_EXIST);
         }
     } else if axis_command == AxisCommand::Motion {
-        if motion == 0 || motion == 1 {
+        if motion == 81 || motion == 82 {
+            if feed == 0.0 {
+                return Err(st::UNDEFINED_FEED_RATE);
+            }
+            let r_word = w.r.map(|r| {
+                if incremental {
+                    gc.position[2] + r * unit
+                } else {
+                    r * unit + block_coord[2] + gc.coord_offset[2] + gc.tlo
+                }
+            });
+            used_r = true;
+            cycle = Some(canned::resolve(r_word, w.xyz[2].map(|_| xyz[2]), gc.canned)?);
+            if motion == 82 && w.p.is_none() {
+                return Err(st::VALUE_WORD_MISSING);
+            }
+            used_lp = true;
+        } else if motion == 0 || motion == 1 {
             if motion == 1 && feed == 0.0 {
                 return Err(st::UNDEFINED_FEED_RATE);
             }
@@ -291,6 +310,9 @@ pub(crate) fn check_and_run(
         ops.extend([Op::Sync, Op::WcoChanged]);
     }
     gc.incremental = incremental;
+    if let Some(v) = p.retract_to_r {
+        gc.retract_to_r = v;
+    }
     gc.scale = scale;
     match non_modal {
         NonModal::SetCoord => {
@@ -330,7 +352,16 @@ pub(crate) fn check_and_run(
     gc.motion = motion;
     if motion != 80 && axis_command == AxisCommand::Motion {
         let rate = |length: f64| if inverse_time { feed * length } else { feed };
+        if let Some(c) = cycle {
+            let dwell = if motion == 82 { w.p } else { None };
+            let retract = p.retract_to_r.unwrap_or(gc.retract_to_r);
+            let (moves, end) = canned::hole(c, gc.position, (xyz[0], xyz[1]), feed, dwell, retract);
+            ops.extend(moves);
+            xyz = end;
+            gc.canned = (Some(c.r), Some(c.z));
+        }
         match (motion, arc) {
+            (81 | 82, _) => {}
             (0, _) => ops.push(Op::Line(xyz, None)),
             (_, Some((ijk, radius, cw))) => {
                 let arc = Arc {

@@ -58,6 +58,10 @@ pub(crate) struct GcState {
     pub(crate) tlo: f64,
     /// grblHAL's G51 scale factors and origin.
     pub(crate) scale: Option<([f64; 3], [f64; 3])>,
+    /// grblHAL canned cycles: the sticky R (retract plane, mm machine) and Z (depth, mm machine).
+    pub(crate) canned: (Option<f64>, Option<f64>),
+    /// grblHAL G99: retract to R rather than to the starting Z (G98).
+    pub(crate) retract_to_r: bool,
 }
 
 /// What survives a reset: G54..G59, G28 and G30 (EEPROM).
@@ -89,6 +93,8 @@ impl GcState {
             coord_offset: [0.0; 3],
             tlo: 0.0,
             scale: None,
+            canned: (None, None),
+            retract_to_r: false,
         }
     }
 
@@ -199,6 +205,7 @@ pub(crate) fn execute(
     let mut axis_command = AxisCommand::None;
     let mut tool_length: Option<bool> = None; // Some(true): G43.1, Some(false): G49
     let mut scaling: Option<bool> = None;
+    let mut retract_to_r: Option<bool> = None;
     let mut groups = 0u32;
     let mut i = 0;
     // STEP 2: import the words (gcode.c).
@@ -314,6 +321,19 @@ pub(crate) fn execute(
                         13
                     }
                     // grblHAL (gcode.c): G50/G51 scaling, modal group G11.
+                    // grblHAL: the drilling cycles G81 (drill) and G82 (drill, dwell).
+                    81 | 82 if flavour == Flavour::GrblHal => {
+                        if axis_command != AxisCommand::None {
+                            return Err(st::AXIS_COMMAND_CONFLICT);
+                        }
+                        axis_command = AxisCommand::Motion;
+                        motion = int_value as u8;
+                        1
+                    }
+                    98 | 99 if flavour == Flavour::GrblHal => {
+                        retract_to_r = Some(int_value == 99);
+                        10
+                    }
                     50 | 51 if flavour == Flavour::GrblHal => {
                         axis_command = AxisCommand::Scaling;
                         scaling = Some(int_value == 51);
@@ -413,6 +433,7 @@ pub(crate) fn execute(
             axis_command,
             tool_length,
             scaling,
+            retract_to_r,
         },
         gc,
         stored,
@@ -439,4 +460,6 @@ pub(crate) struct Parsed {
     pub(crate) tool_length: Option<bool>,
     /// `Some(true)`: G51, `Some(false)`: G50 (grblHAL).
     pub(crate) scaling: Option<bool>,
+    /// `Some(true)`: G99, `Some(false)`: G98 (grblHAL).
+    pub(crate) retract_to_r: Option<bool>,
 }

@@ -6,6 +6,7 @@
 //! `ok`/`error:N` per line with the parser's checks in Grbl's order, status reports with `WCO`
 //! every 10 (idle) or 30 (busy) reports or after a change, `$G`, `$#`, `$I`, `$$`, `$X`, `$H`,
 //! `$C`, and the real-time bytes `?`, `!`, `~` and 0x18 (`ALARM:3` after a reset in motion).
+//! As grblHAL it also runs the drilling cycles G81/G82 (the `canned` module).
 //! Motion is timed from `$110`–`$112` and `$120`–`$122`: see the `motion` module for the
 //! planner it keeps. Time runs [`EmulatorConfig::time_scale`] times faster than real time.
 //!
@@ -26,6 +27,7 @@
 //! ```
 
 mod block;
+mod canned;
 mod gcode;
 mod machine;
 mod motion;

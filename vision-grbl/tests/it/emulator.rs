@@ -189,3 +189,20 @@ fn grblhal_latches_errors_until_a_dollar_line_and_accepts_g51() {
     let mut g = machine(Flavour::Grbl);
     assert_eq!(exchange(&mut g, b"G0 X0\r\n", 1.0), "ok\r\nok\r\n");
 }
+
+#[test]
+fn grblhal_drills_with_g81_and_g82_where_grbl_refuses_them() {
+    let mut m = machine(Flavour::GrblHal);
+    assert_eq!(answer(&mut m, "G0 Z5"), "ok");
+    assert_eq!(answer(&mut m, "G81 X10 Y10 Z-2 F600"), "error:28", "no R");
+    assert_eq!(answer(&mut m, ""), "ok");
+    assert_eq!(answer(&mut m, "G98 G81 X10 Y10 Z-2 R1 F600"), "ok");
+    assert!(exchange(&mut m, b"?", 0.0).contains("MPos:10.000,10.000,5.000"), "back at the starting Z");
+    assert_eq!(answer(&mut m, "G99 X20"), "ok", "R and Z are kept");
+    assert!(exchange(&mut m, b"?", 0.0).contains("MPos:20.000,10.000,1.000"), "G99 stays at R");
+    assert_eq!(answer(&mut m, "G82 X30 P0.2"), "ok");
+    assert_eq!(answer(&mut m, "G80"), "ok");
+    let mut g = machine(Flavour::Grbl);
+    assert_eq!(answer(&mut g, "G81 X10 Y10 Z-2 R1 F600"), "error:20");
+    assert_eq!(answer(&mut g, "G98"), "error:20");
+}
