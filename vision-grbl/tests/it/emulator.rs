@@ -206,3 +206,18 @@ fn grblhal_drills_with_g81_and_g82_where_grbl_refuses_them() {
     assert_eq!(answer(&mut g, "G81 X10 Y10 Z-2 R1 F600"), "error:20");
     assert_eq!(answer(&mut g, "G98"), "error:20");
 }
+
+#[test]
+fn m0_holds_until_resume_and_a_busy_machine_reports_wco_every_thirtieth_time() {
+    let mut m = machine(Flavour::Grbl);
+    assert_eq!(exchange(&mut m, b"G1 X5 F3000\nM0\nG1 X10\n", 2.0), "ok\r\nok\r\nok\r\n");
+    assert!(exchange(&mut m, b"?", 1.0).starts_with("<Hold:0|MPos:5.000,"));
+    exchange(&mut m, b"~", 2.0);
+    assert!(exchange(&mut m, b"?", 0.0).starts_with("<Idle|MPos:10.000,"));
+    exchange(&mut m, b"G1 X500 F100\n", 0.1);
+    let reports: Vec<String> = (0..100).map(|_| exchange(&mut m, b"?", 0.01)).collect();
+    assert!(reports.iter().all(|r| r.starts_with("<Run|")));
+    let with_wco: Vec<usize> = reports.iter().enumerate().filter(|(_, r)| r.contains("WCO")).map(|(i, _)| i).collect();
+    let gaps: Vec<usize> = with_wco.windows(2).map(|w| w[1] - w[0]).collect();
+    assert!(gaps.len() >= 2 && gaps.iter().all(|&g| g == 30), "{with_wco:?}");
+}

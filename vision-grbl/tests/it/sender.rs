@@ -116,7 +116,8 @@ fn a_lost_connection_ends_with_the_line_reached() {
 fn feed_hold_and_resume_from_another_thread() {
     let grbl = emulator(Flavour::Grbl);
     let mut s = connect(&grbl);
-    s.stream(&["G1 X100 F3000"]).expect("stream");
+    // 10 s of motion at 20x: half a second to hold it in, even on a loaded machine.
+    s.stream(&["G1 X100 F600"]).expect("stream");
     let control = s.control();
     std::thread::sleep(Duration::from_millis(20));
     control.feed_hold().expect("hold");
@@ -154,5 +155,35 @@ fn streams_1000_short_segments_with_the_planner_fed() {
     assert!(report.longest_wait > Duration::ZERO, "the buffer filled");
     let status = s.wait_idle(Duration::from_secs(30)).expect("idle");
     assert_eq!(status.mpos.map(|p| p[0]), Some(1000.0));
-    assert_eq!(report.planner_dry, 0, "{report:?}");
+    // Lines ahead cover about 35 ms of real time here: a scheduler stall longer than that on a
+    // busy machine can drain the planner once or twice; a sender that cannot keep up drains it
+    // on most of the 1000 segments.
+    assert!(report.planner_dry <= 2, "{report:?}");
+}
+
+#[cfg(unix)]
+#[test]
+fn streams_over_a_pseudo_terminal() {
+    use vision_grbl::emulator::PtyEmulator;
+    let config = EmulatorConfig { time_scale: 20.0, ..Default::default() };
+    let pty = PtyEmulator::open(config).expect("pty");
+    let port = pty.path().to_str().expect("utf-8").to_string();
+    let mut s = Sender::connect(&port, &SenderOptions::default()).expect("connect");
+    assert_eq!(s.rx_buffer(), 128);
+    s.stream(&["G21 G91", "G1 X1 F500", "G1 Y1"]).expect("stream");
+    let status = s.wait_idle(Duration::from_secs(10)).expect("idle");
+    assert_eq!(status.mpos, Some([1.0, 1.0, 0.0]));
+    let refused = Sender::connect(&port, &SenderOptions { baud: Some(12345), ..Default::default() });
+    assert!(matches!(refused, Err(StreamError::Open { .. })), "an unknown baud rate is refused");
+}
+
+#[test]
+fn a_dwell_mid_stream_counts_as_the_planner_running_dry() {
+    let config = EmulatorConfig { time_scale: 20.0, settings: vec![(10, 3.0)], ..Default::default() };
+    let grbl = Emulator::bind("127.0.0.1:0", config).expect("bind");
+    let mut s = connect(&grbl);
+    // 8 s of dwell at 20x: 400 ms, two polls at least see an empty planner with a line to come.
+    let report = s.stream(&["G1 X1 F500", "G4 P8", "G1 X2"]).expect("stream");
+    assert_eq!(report.planner_dry, 1, "{report:?}");
+    assert!(report.status_reports >= 2, "{report:?}");
 }
