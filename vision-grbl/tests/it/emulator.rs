@@ -221,3 +221,24 @@ fn m0_holds_until_resume_and_a_busy_machine_reports_wco_every_thirtieth_time() {
     let gaps: Vec<usize> = with_wco.windows(2).map(|w| w[1] - w[0]).collect();
     assert!(gaps.len() >= 2 && gaps.iter().all(|&g| g == 30), "{with_wco:?}");
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+    /// Any bytes, G-code-like or not, get answers and never a panic or a non-finite position.
+    #[test]
+    fn arbitrary_input_never_panics(
+        chunks in proptest::collection::vec("[GMXYZIJKRFPSTLN$?!~0-9 .\\-\\n;()=#]{0,40}", 1..30),
+        hal in proptest::bool::ANY,
+    ) {
+        let mut m = machine(if hal { Flavour::GrblHal } else { Flavour::Grbl });
+        for chunk in &chunks {
+            m.receive(chunk.as_bytes());
+            m.advance(0.05);
+        }
+        m.receive(&[0x18, b'?']);
+        m.advance(0.0);
+        let out = String::from_utf8(m.take_output()).expect("ascii");
+        proptest::prop_assert!(out.contains("<"));
+        proptest::prop_assert!(m.machine_position().iter().all(|v| v.is_finite()));
+    }
+}
