@@ -50,7 +50,8 @@ enum Command {
     /// Plan a G-code program's motion (interpreter + path planner): the cycle time, and every
     /// setpoint as CSV with --csv.
     Plan(plan::PlanArgs),
-    /// Serve an emulated Keyence VS camera (the simulated camera) on 127.0.0.1 until Ctrl-C.
+    /// Serve an emulated Keyence VS camera (the simulated camera; the default) or a Grbl
+    /// controller (`emulate grbl`) on 127.0.0.1 until Ctrl-C.
     Emulate(emulate::EmulateArgs),
     /// Trigger a Keyence camera (real or emulated) once and print the decoded reading.
     Trigger(trigger::TriggerArgs),

@@ -263,6 +263,37 @@ fn emulate_serves_the_simulated_camera_and_trigger_reads_it() {
     );
 }
 
+#[cfg(unix)]
+#[test]
+fn emulate_grbl_serves_a_controller_on_tcp_and_a_pty() {
+    use vision_grbl::stream::{Sender, SenderOptions, StreamError};
+    let mut child = bin()
+        .args(["emulate", "grbl", "--pty", "--listen", "127.0.0.1:0", "--time-scale", "20"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("spawn");
+    let mut lines = BufReader::new(child.stdout.take().expect("stdout")).lines();
+    let tcp = lines.next().expect("tcp line").expect("read");
+    let pty = lines.next().expect("pty line").expect("read");
+    let tcp = tcp
+        .split_whitespace()
+        .find(|w| w.starts_with("tcp://"))
+        .expect("tcp address")
+        .trim_end_matches(';')
+        .to_string();
+    let pty =
+        pty.split_whitespace().find(|w| w.starts_with("/dev/")).expect("pty path").trim_end_matches(';').to_string();
+    for port in [tcp, pty] {
+        let mut sender = Sender::connect(&port, &SenderOptions::default()).expect("connect");
+        assert_eq!(sender.rx_buffer(), 128, "{port}");
+        sender.stream(&["G21 G91", "G1 X1 F1000"]).expect("stream");
+        assert!(matches!(sender.stream(&["M280"]), Err(StreamError::Firmware { code: 23, .. })), "{port}");
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+}
+
 #[test]
 fn trigger_names_its_timeout_option_when_refusing_it() {
     for (timeout, want) in [

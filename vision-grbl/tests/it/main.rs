@@ -1,0 +1,6 @@
+//! vision-grbl's integration tests: the emulator held to Grbl's protocol, the sender against
+//! the emulator, and the parsers on arbitrary bytes.
+
+mod emulator;
+mod parsers;
+mod sender;
