@@ -62,6 +62,7 @@ pub mod calibrate {
         WalkTarget, BUMP_IN, LIFT_GRID, MAX_SHEET_SCALE_DEV, MIN_BUMP_PX, PROBE_FOV_FRACTION, QUICK_SCALE_TOLERANCE,
     };
 }
+
 pub mod controller;
 pub mod driver;
 mod error;
