@@ -14,21 +14,8 @@
 //!    generator, then rounding to the output depth (clamped).
 //!
 //! Pixel convention as in [`GrayImage`](crate::GrayImage): (0, 0) is the centre of the top-left
-//! pixel, x right, y down, all lengths in pixels, angles in radians from +x towards +y.
-//!
-//! ```
-//! use vision_locate::render::{render, Depth, Lighting, PlacedMark, Scene, Shape};
-//!
-//! let scene = Scene {
-//!     marks: vec![PlacedMark { shape: Shape::Dot { diameter: 40.0 }, x: 63.3, y: 47.8, reflectance: 0.1 }],
-//!     blur_sigma: 1.0,
-//!     noise_sigma: 2.0,
-//!     ..Scene::blank(128, 96, Depth::Eight)
-//! };
-//! let image = render(&scene)?;
-//! assert_eq!((image.width(), image.height()), (128, 96));
-//! # Ok::<(), vision_locate::render::RenderError>(())
-//! ```
+//! pixel, x right, y down, all lengths in pixels, angles in radians from +x towards +y. An
+//! example: [`render`].
 
 use std::f64::consts::PI;
 use std::fmt;
@@ -300,6 +287,20 @@ impl SplitMix64 {
 }
 
 /// Renders `scene` (see the module docs for the steps).
+///
+/// ```
+/// use vision_locate::render::{render, Depth, Lighting, PlacedMark, Scene, Shape};
+///
+/// let scene = Scene {
+///     marks: vec![PlacedMark { shape: Shape::Dot { diameter: 40.0 }, x: 63.3, y: 47.8, reflectance: 0.1 }],
+///     blur_sigma: 1.0,
+///     noise_sigma: 2.0,
+///     ..Scene::blank(128, 96, Depth::Eight)
+/// };
+/// let image = render(&scene)?;
+/// assert_eq!((image.width(), image.height()), (128, 96));
+/// # Ok::<(), vision_locate::render::RenderError>(())
+/// ```
 pub fn render(scene: &Scene) -> Result<OwnedImage, RenderError> {
     let (w, h) = (scene.width, scene.height);
     let mut out = radiance(scene)?;

@@ -5,28 +5,24 @@
 mod kept;
 mod pictures;
 mod report;
+mod setup;
 mod text;
+mod timing;
 
 use std::path::{Path, PathBuf};
 
 use clap::Args;
-use vision_core::{DriverRegistry, Params, ProfileStore, VisionModule};
-use vision_driver_camera::server::{Encoding, SnapshotServer};
-use vision_driver_camera::FrameSource;
+use vision_driver_camera::server::SnapshotServer;
 use vision_driver_keyence::emulator::EmulatorHandle;
-use vision_driver_sim::{ControllerName, Sim, SimMachine};
+use vision_driver_sim::{Sim, SimMachine};
 use vision_gcode::{Event, RunOutcome};
-use vision_host::{fixed_clock, system_clock};
-use vision_host::{ProgramHandler, Session, SimFrames};
-use vision_path::{Limits, PlanConfig, Setpoints};
+use vision_host::ProgramHandler;
 
 use crate::terminal::{is_terminal, Progress, Stream};
 use crate::trace::{read_program, DialectArg};
-use crate::{read_text, world, Failure};
+use crate::{read_text, Failure};
 use report::{calibration_truth, pound, steps, Cutters, ProgramReport, Report, Step};
-
-/// Setpoint period of the cycle-time planning, seconds.
-const CYCLE_PERIOD_S: f64 = 0.001;
+use timing::{alignment_time, KeptItems, StreamedPlan};
 
 /// The Keyence driver's registry name: the one camera `--ip`/`--port` address, and the one the
 /// CLI can emulate on loopback.
@@ -118,138 +114,16 @@ struct Runner {
     _snapshots: Option<SnapshotServer>,
 }
 
-fn set(params: &mut Params, name: &str, value: impl Into<vision_core::ParamValue>) -> Result<(), Failure> {
-    params.set(name, value).map_err(|e| Failure::Input(e.to_string()))
-}
-
 impl Runner {
-    fn new(args: &RunArgs, progress: Progress) -> Result<Runner, Failure> {
-        let mut world = world::load(args.world.as_deref())?;
-        if let Some(dialect) = args.dialect {
-            world.machine.controller = ControllerName(dialect.0);
-        }
-        let sim = Sim::new(world).map_err(|e| Failure::Input(e.to_string()))?;
-        let camera_tool = i64::from(sim.world().machine.camera_tool);
-        let registry = vision_host::cameras(Some(&sim));
-        let driver = camera_name(&registry, &args.camera)?;
-
-        let mut params = match &args.profile {
-            Some(path) if path.exists() => ProfileStore::new(path)
-                .with_defaults(registry.params())
-                .load()
-                .map_err(|e| Failure::Input(e.to_string()))?,
-            Some(_) => {
-                let mut p = registry.params();
-                set(&mut p, "VisionEnabled", true)?;
-                set(&mut p, "VisionCameraToolNumber", camera_tool)?;
-                p
-            }
-            None => sim.calibrated_params(&registry.params()).map_err(|e| Failure::Input(e.to_string()))?,
-        };
-
-        let profile_camera = match &args.profile {
-            Some(path) if path.exists() => Some(ProfileCamera::of(&params)?),
-            _ => None,
-        };
-
-        // The camera choices below are for this session: the profile keeps the file's (or,
-        // for a new profile, the defaults), as do the settings of the CLI's own loopback
-        // snapshot server.
-        let mut session_only = vec!["VisionDriver", "VisionIP", "VisionPort"];
-        if driver == CAMERA && args.source.is_none() {
-            session_only.extend(LOOPBACK_CAMERA_SETTINGS);
-        }
-        let file_values = session_only
-            .into_iter()
-            .map(|name| params.get(name).map(|v| (name, v)).map_err(|e| Failure::Input(e.to_string())))
-            .collect::<Result<Vec<_>, _>>()?;
-        let mut snapshots = None;
-        let (camera, emulator) = match (driver.as_str(), &args.ip) {
-            ("Sim", _) => {
-                set(&mut params, "VisionDriver", "Sim")?;
-                ("simulated camera".to_string(), None)
-            }
-            (CAMERA, _) => {
-                set(&mut params, "VisionDriver", CAMERA)?;
-                match &args.source {
-                    Some(source) => {
-                        set(&mut params, "VisionCameraSource", source.as_str())?;
-                        (format!("Camera driver -> {}", vision_core::text::printable_line(source, 120)), None)
-                    }
-                    None => {
-                        let server = serve_frames(&sim, &mut params)?;
-                        let text = format!(
-                            "Camera driver -> HTTP snapshots at {} (the simulated camera's rendered frames)",
-                            server.url("/snapshot")
-                        );
-                        snapshots = Some(server);
-                        (text, None)
-                    }
-                }
-            }
-            (KEYENCE, Some(ip)) => {
-                set(&mut params, "VisionDriver", "Keyence")?;
-                set(&mut params, "VisionIP", ip.as_str())?;
-                set(&mut params, "VisionPort", i64::from(args.port))?;
-                (format!("Keyence VS at {ip}:{}", args.port), None)
-            }
-            (KEYENCE, None) => {
-                let emulator = world::serve_camera(&sim, "127.0.0.1:0")
-                    .map_err(|e| Failure::Input(format!("cannot start the loopback camera emulator: {e}")))?;
-                set(&mut params, "VisionDriver", "Keyence")?;
-                set(&mut params, "VisionIP", "127.0.0.1")?;
-                set(&mut params, "VisionPort", i64::from(emulator.addr().port()))?;
-                (
-                    format!("Keyence driver -> emulated VS camera at {} (the simulated camera)", emulator.addr()),
-                    Some(emulator),
-                )
-            }
-            (other, _) => {
-                set(&mut params, "VisionDriver", other)?;
-                (format!("{other} camera"), None)
-            }
-        };
-
-        // Another driver, or the profile's driver pointed at the CLI's own loopback camera.
-        let other_camera = |f: &ProfileCamera| {
-            !f.driver.eq_ignore_ascii_case(&driver)
-                || (driver == KEYENCE && args.ip.is_none())
-                || (driver == CAMERA && args.source.is_none())
-        };
-        if let Some(file) = profile_camera.filter(other_camera) {
-            crate::terminal::show(&file.note(&camera, &args.camera));
-        }
-
-        let mut module = VisionModule::from_registry(params, &registry).map_err(|e| Failure::Input(e.to_string()))?;
-        if progress.on() {
-            module.set_progress_sink(Some(Box::new(|p| crate::terminal::show(&format!("              {p}")))));
-        }
-        if let Some(path) = &args.profile {
-            let mut store = ProfileStore::new(path).with_defaults(registry.params());
-            for (name, value) in file_values {
-                store = store.keep(name, value);
-            }
-            // Found before any motion, not when M283/M284 saves after it.
-            store.check_writable().map_err(|e| Failure::Input(e.to_string()))?;
-            module = module.with_profile(store);
-        }
-        let mut machine = SimMachine::new(&sim).map_err(|e| Failure::Input(e.to_string()))?;
-        if let Some(path) = &args.profile {
-            kept::restore(path, &mut machine)?;
-        }
-        let clock = args.clock.map_or_else(system_clock, |s| fixed_clock(vision_core::Timestamp::from_unix(s, 0)));
-        let handler = ProgramHandler::new(Session::new(module), sim.world().machine.controller(), clock);
-        Ok(Runner { sim, machine, handler, camera, _emulator: emulator, _snapshots: snapshots })
-    }
-
     /// The Vision module.
     fn module(&self) -> &vision_core::VisionModule {
         self.handler.session().module()
     }
 
     /// Runs one program (its text already read) and reports it. The moves stream into the
-    /// cycle-time planner as the program makes them; only the first [`MAX_KEPT_ITEMS`] are
-    /// kept, for the alignment time, so memory does not grow with the program.
+    /// cycle-time planner as the program makes them; only the first
+    /// [`timing::MAX_KEPT_ITEMS`] are kept, for the alignment time, so memory does not grow
+    /// with the program.
     fn run(&mut self, program: &str, text: &str, progress: Progress) -> ProgramReport {
         progress.line(&format!("== {program}: running"));
         let start = self.machine.interpreter().machine_position();
@@ -306,14 +180,6 @@ impl Runner {
             stopped_by_refusal,
         }
     }
-
-    /// The planner's set-up for the world's machine: a 1 ms period within `machine.max_speed` /
-    /// `max_accel`, from `start` (machine units).
-    fn plan_config(&self, start: vision_path::Xyz) -> PlanConfig {
-        let world = self.sim.world();
-        let (speed, accel) = world.machine.motion_limits(world.unit);
-        PlanConfig::new(Limits::uniform(accel, speed, accel), CYCLE_PERIOD_S, start)
-    }
 }
 
 /// The handler a program runs with: the session's, and each Vision M-code's line of the report
@@ -339,228 +205,6 @@ impl vision_gcode::MCodeHandler for Streamed<'_> {
         }
         result
     }
-}
-
-/// The camera a profile file names, to tell the user when `--camera` picked another.
-struct ProfileCamera {
-    /// `VisionDriver`.
-    driver: String,
-    /// The options that pick it: `--camera keyence --ip … --port …`, `--camera camera --source …`.
-    options: String,
-}
-
-impl ProfileCamera {
-    fn of(params: &Params) -> Result<ProfileCamera, Failure> {
-        let text = |name: &str| -> Result<String, Failure> {
-            let value = params.get(name).map_err(|e| Failure::Input(e.to_string()))?;
-            Ok(match value {
-                vision_core::ParamValue::Text(t) => t,
-                other => other.to_string(),
-            })
-        };
-        let driver = text("VisionDriver")?;
-        let quoted = |v: &str| {
-            let v = vision_core::text::printable_line(v, 200);
-            if v.is_empty() || v.contains(char::is_whitespace) {
-                format!("'{v}'")
-            } else {
-                v
-            }
-        };
-        let options = if driver.eq_ignore_ascii_case(KEYENCE) {
-            format!("--camera keyence --ip {} --port {}", quoted(&text("VisionIP")?), text("VisionPort")?)
-        } else if driver.eq_ignore_ascii_case(CAMERA) {
-            format!("--camera camera --source {}", quoted(&text("VisionCameraSource")?))
-        } else {
-            format!("--camera {}", quoted(&driver.to_ascii_lowercase()))
-        };
-        Ok(ProfileCamera { driver, options })
-    }
-
-    /// The note: which camera the run uses, and how to use the profile's.
-    fn note(&self, camera: &str, option: &str) -> String {
-        format!(
-            "mach-vision: the profile names camera driver {}, but this run uses the {camera} (--camera {}); to use \
-             the profile's camera, give {}",
-            vision_core::text::printable_line(&self.driver, 64),
-            vision_core::text::printable_line(option, 64),
-            self.options
-        )
-    }
-}
-
-/// The most planner items `run` keeps per program for the alignment time (about 16 MB); the
-/// items past them are planned as they stream, not kept.
-const MAX_KEPT_ITEMS: usize = 100_000;
-
-/// The first [`MAX_KEPT_ITEMS`] items of a program, and the lowest line of those not kept.
-#[derive(Default)]
-struct KeptItems {
-    items: Vec<vision_path::Item>,
-    /// The lowest source line among the items not kept, if any was not.
-    lowest_dropped: Option<usize>,
-}
-
-impl KeptItems {
-    fn push(&mut self, item: &vision_path::Item) {
-        if self.items.len() < MAX_KEPT_ITEMS {
-            self.items.push(item.clone());
-        } else {
-            let line = item.line();
-            self.lowest_dropped = Some(self.lowest_dropped.map_or(line, |l| l.min(line)));
-        }
-    }
-
-    /// Every item of the lines up to `last`, or `None` when some of them were not kept.
-    fn through(&self, last: usize) -> Option<Vec<vision_path::Item>> {
-        if self.lowest_dropped.is_some_and(|l| l <= last) {
-            return None;
-        }
-        Some(self.items.iter().filter(|i| i.line() <= last).cloned().collect())
-    }
-}
-
-/// The time from the last M280 that an M282 follows to that M282 (the motion, settles and
-/// re-centring of the alignment), seconds: the plan up to the M282's line minus the plan before
-/// the M280's. `Ok(None)` without such a pair or when the motion cannot be planned; `Err` with
-/// the reason when the items before the M282 were too many to keep.
-fn alignment_time(config: &PlanConfig, kept: &KeptItems, steps: &[Step]) -> Result<Option<f64>, String> {
-    // The last M280 that an M282 follows, and that M282.
-    let mut begin = None;
-    let mut pair = None;
-    for step in steps {
-        match step {
-            Step::Begin { line, .. } => begin = Some(*line),
-            Step::Fit { line, .. } => {
-                if let Some(b) = begin.take() {
-                    pair = Some((b, *line));
-                }
-            }
-            _ => {}
-        }
-    }
-    let Some((begin, fit)) = pair else { return Ok(None) };
-    let until = |last: u32| -> Result<Option<f64>, String> {
-        let prefix = kept.through(last as usize).ok_or_else(|| {
-            format!("not computed: the program made more than {MAX_KEPT_ITEMS} moves and other motion items, some before line {fit}'s M282")
-        })?;
-        Ok(plan_time(config, prefix).ok())
-    };
-    let (Some(to_fit), Some(before)) = (until(fit)?, until(begin.saturating_sub(1))?) else { return Ok(None) };
-    Ok(Some(to_fit - before))
-}
-
-/// The time the motion (moves, dwells, calibration settles) of `items` takes, seconds.
-fn plan_time(config: &PlanConfig, items: impl IntoIterator<Item = vision_path::Item>) -> Result<f64, String> {
-    let stream = Setpoints::from_items(config, items).map_err(|e| e.to_string())?;
-    stream.run_to_end().map(|s| s.cycle_time).map_err(|e| e.to_string())
-}
-
-/// Items sent to the planner together (one channel message).
-const PLAN_BATCH: usize = 1024;
-
-/// The cycle-time planner running beside the interpreter: the interpreter pushes events and the
-/// planner pulls items, so the two meet at a bounded channel, the planner on a thread of its
-/// own (a few batches in flight, never the whole program).
-struct StreamedPlan {
-    batch: Vec<vision_path::Item>,
-    sender: Option<std::sync::mpsc::SyncSender<Vec<vision_path::Item>>>,
-    /// The planner's thread, or why it could not start.
-    thread: Result<std::thread::JoinHandle<Result<f64, String>>, String>,
-}
-
-impl StreamedPlan {
-    fn start(config: PlanConfig) -> StreamedPlan {
-        let (sender, receiver) = std::sync::mpsc::sync_channel::<Vec<vision_path::Item>>(4);
-        let thread = std::thread::Builder::new()
-            .name("cycle-time planner".into())
-            .spawn(move || plan_time(&config, receiver.into_iter().flatten()))
-            .map_err(|e| format!("the path planner could not start: {e}"));
-        let sender = thread.is_ok().then_some(sender);
-        StreamedPlan { batch: Vec::with_capacity(PLAN_BATCH), sender, thread }
-    }
-
-    fn push(&mut self, item: vision_path::Item) {
-        self.batch.push(item);
-        if self.batch.len() >= PLAN_BATCH {
-            self.send();
-        }
-    }
-
-    fn send(&mut self) {
-        let batch = std::mem::replace(&mut self.batch, Vec::with_capacity(PLAN_BATCH));
-        // A planner that stopped early (a path it cannot plan) has its answer: the rest is not
-        // needed.
-        if let Some(sender) = &self.sender {
-            if sender.send(batch).is_err() {
-                self.sender = None;
-            }
-        }
-    }
-
-    /// The cycle time of everything pushed, seconds, or why there is none.
-    fn finish(mut self) -> Result<f64, String> {
-        self.send();
-        self.sender = None;
-        self.thread?.join().unwrap_or_else(|_| Err("the path planner stopped unexpectedly".to_string()))
-    }
-}
-
-/// The camera driver's settings [`serve_frames`] sets for the loopback snapshot server: its
-/// URL (which dies with the run), timeout and flush count, and the mark settings the simulated
-/// operator would set. They are the session's: a profile saved by the run keeps the file's
-/// values (the defaults for a new profile).
-const LOOPBACK_CAMERA_SETTINGS: [&str; 7] = [
-    "VisionCameraSource",
-    "VisionCameraTimeout",
-    "VisionCameraFlushFrames",
-    "VisionCameraSearchRadius",
-    "VisionCameraMarkDiameterPx",
-    "VisionCameraMark",
-    "VisionCameraPolarity",
-];
-
-/// Serves the simulated camera's rendered frames as PNG snapshots on a loopback port, and
-/// points the camera driver's settings at it with the mark settings the simulated operator
-/// would set ([`vision_host::sim_image_config`]); no frame is flushed (each is rendered at the
-/// request, so none is stale), and the timeout is 60 s (a frame is rendered at each request).
-fn serve_frames(sim: &Sim, params: &mut Params) -> Result<SnapshotServer, Failure> {
-    let config = vision_host::sim_image_config(sim, params).map_err(|e| Failure::Input(e.to_string()))?;
-    let mark = config.mark;
-    if let Some(d) = mark.diameter_px {
-        set(params, "VisionCameraMarkDiameterPx", d)?;
-    }
-    set(params, "VisionCameraSearchRadius", mark.search_radius_pct)?;
-    let kind = match mark.kind {
-        vision_driver_camera::MarkKind::Dot => "dot",
-        vision_driver_camera::MarkKind::Ring => "ring",
-        vision_driver_camera::MarkKind::Cross => "cross",
-    };
-    set(params, "VisionCameraMark", kind)?;
-    let polarity = if mark.polarity == vision_driver_camera::Polarity::Dark { "dark" } else { "light" };
-    set(params, "VisionCameraPolarity", polarity)?;
-    set(params, "VisionCameraFlushFrames", 0_i64)?;
-    // Rendering a frame takes a fraction of a second in a release build, seconds in a debug one.
-    set(params, "VisionCameraTimeout", 60.0)?;
-    let mut frames = SimFrames(sim.clone());
-    let server = SnapshotServer::bind("127.0.0.1:0", Encoding::Png, move || frames.frame().map_err(|e| e.to_string()))
-        .map_err(|e| Failure::Input(format!("cannot start the loopback snapshot server: {e}")))?;
-    set(params, "VisionCameraSource", server.url("/snapshot").as_str())?;
-    Ok(server)
-}
-
-/// The registered name `--camera` gives (any case).
-///
-/// # Errors
-/// [`Failure::Input`] naming the cameras there are, for a name none is registered under.
-fn camera_name(registry: &DriverRegistry, camera: &str) -> Result<String, Failure> {
-    registry.name(camera).map(str::to_string).ok_or_else(|| {
-        Failure::Input(format!(
-            "--camera {}: no such camera — the cameras are {} (any case)",
-            vision_core::text::printable_line(camera, 64),
-            registry.names().join(", ").to_ascii_lowercase()
-        ))
-    })
 }
 
 /// The report's name for the program read from standard input (`-`).
@@ -647,77 +291,5 @@ pub(crate) fn run(args: &RunArgs) -> Result<String, Failure> {
     match failure {
         None => Ok(output),
         Some(message) => Err(Failure::RunWithReport { output, message }),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use vision_path::{Item, PathMode, Rate, Segment, Shape, Xyz};
-
-    use super::*;
-
-    /// A tiny feed move at `line`, from x0 to x1 (inches).
-    fn step(line: usize, x0: f64, x1: f64) -> Item {
-        Item::Move(Segment {
-            line,
-            start: Xyz::new(x0, 0.0, 0.0),
-            end: Xyz::new(x1, 0.0, 0.0),
-            shape: Shape::Line,
-            rate: Rate::Feed(60.0),
-            mode: PathMode::ExactStop,
-        })
-    }
-
-    #[test]
-    fn kept_items_stop_at_the_bound_and_know_which_lines_are_whole() {
-        let mut kept = KeptItems::default();
-        // Line 1 first, then lines 2.. past the bound, then line 3 again (a loop).
-        kept.push(&step(1, 0.0, 0.001));
-        for i in 0..MAX_KEPT_ITEMS + 10 {
-            let line = 2 + i / 1000;
-            kept.push(&step(line, 0.0, 0.0));
-        }
-        kept.push(&step(3, 0.0, 0.0));
-        assert_eq!(kept.items.len(), MAX_KEPT_ITEMS, "no more than the bound is held");
-        let last_kept_line = kept.items.last().map(Item::line).expect("items");
-        assert_eq!(kept.lowest_dropped, Some(3), "the loop's line 3 was dropped");
-        assert_eq!(kept.through(2).map(|v| v.len()), Some(1001));
-        assert!(kept.through(3).is_none());
-        assert!(kept.through(last_kept_line).is_none());
-    }
-
-    #[test]
-    fn the_loopback_server_sets_only_the_settings_kept_out_of_the_profile() {
-        let sim = Sim::new(vision_driver_sim::World::default_world()).expect("world");
-        let registry = vision_host::cameras(Some(&sim));
-        let before = registry.params();
-        let mut after = before.clone();
-        let _server = serve_frames(&sim, &mut after).expect("served");
-        let changed: Vec<&str> = after
-            .config_values()
-            .into_iter()
-            .filter(|(name, value)| before.get(name).ok().as_ref() != Some(value))
-            .map(|(name, _)| name)
-            .collect();
-        assert!(changed.contains(&"VisionCameraSource"), "{changed:?}");
-        for name in changed {
-            assert!(LOOPBACK_CAMERA_SETTINGS.contains(&name), "{name} is set for the loopback server but saved");
-        }
-    }
-
-    #[test]
-    fn the_streamed_plan_agrees_with_planning_the_items_whole() {
-        let config = PlanConfig::new(Limits::uniform(10.0, 5.0, 10.0), CYCLE_PERIOD_S, Xyz::ZERO);
-        // Over two batches, to and fro.
-        let items: Vec<Item> = (0..PLAN_BATCH + 7)
-            .map(|i| if i % 2 == 0 { step(i + 1, 0.0, 0.01) } else { step(i + 1, 0.01, 0.0) })
-            .collect();
-        let mut streamed = StreamedPlan::start(config);
-        for item in &items {
-            streamed.push(item.clone());
-        }
-        let whole = plan_time(&config, items).expect("plans");
-        assert_eq!(streamed.finish(), Ok(whole));
-        assert!(whole > 0.0);
     }
 }

@@ -61,31 +61,6 @@ pub enum CaptureStep {
 impl VisionModule {
     /// **M281**: triggers at the current commanded position and stores the observed point.
     ///
-    /// Moves (re-centring and probes, issue 28): a mark read off the image centre carries K's
-    /// error at the part's height times its distance from the centre. After each reading M281
-    /// decides from the error budget whether to move (`VisionRecenterTolerance` 0, the
-    /// default): it moves when the scale's 1σ the run has measured so far (6 % before any
-    /// move) times the distance of the reading nearest the centre exceeds 0.3 × the camera's
-    /// noise (`VisionCameraNoisePx`). It then moves the camera over that reading (re-centring)
-    /// or, when the mark is closer to the centre than a quarter of `VisionHeightProbePx` and not
-    /// yet probed, so that the mark lands `VisionHeightProbePx` on the far side (a probe: a long
-    /// baseline for the scale). Each move is an incremental `G91 G0`, then `G90`, a settle of
-    /// `VisionTriggerSettleSec` and a trigger, at most `VisionRecenterPasses` times (0 reads in
-    /// one shot); `VisionRecenterTolerance` > 0 is issue 25's fixed rule instead (re-centre
-    /// while farther than it, no probes). The capture is the reading nearest the image centre;
-    /// every reading of the mark inside the image measures the image scale at the part's
-    /// height ([`vision_math::scale`]), which the run collects for M282. `commanded` stays
-    /// where the program put the camera, and the reply lists the moves.
-    /// After the last reading the camera moves back to where the program put it, and the
-    /// program's modal state, saved before the first move, is restored
-    /// ([`Machine::save_modal_state`]), on success and failure alike: the program goes on from
-    /// its own point in the modes it had (a feed move stays a feed move). Only a reading inside
-    /// the image is moved from, so a move never exceeds the field of view. This runs
-    /// [`VisionModule::m281_begin`] and [`VisionModule::m281_next`] back to back, for a machine
-    /// whose [`Machine::command`] returns once the move is done (Mach4, the simulator); a
-    /// controller that only queues G-code from an M-code (LinuxCNC) calls them itself and waits
-    /// for its motion in between.
-    ///
     /// `O = C + K·R·(p − res/2 − PxCenterOffset)` with K converted from `Cal_Units` to the
     /// machine's unit; with an alignment active, `O` is reported in the program frame (SPEC §2).
     /// In a run the capture is appended to the dot list, written to slot `n` (n = 1–4, the n-th
@@ -93,21 +68,22 @@ impl VisionModule {
     /// grows; outside a run only slot 0 and the telemetry are written. Every success writes the
     /// `Last*` telemetry with `LastStatus` = `OK`.
     ///
-    /// `keep_image` (D1): when the driver advertises `grab_image`, it keeps the image of the
-    /// reading reported in the images folder ([`crate::CameraDriver::grab_image`]); no image
-    /// is a warning in `LastStatus` (`OK (warning: …)`) and [`Capture::warning`], not a failed
-    /// capture.
+    /// A mark read off the image centre may move the camera over it or past it; the capture is
+    /// the reading nearest the centre, then the camera and the program's modal state go back
+    /// ([`Machine::save_modal_state`]), on success and failure alike (`docs/vision-module.md`,
+    /// M281's moves). This runs [`VisionModule::m281_begin`] and [`VisionModule::m281_next`].
+    ///
+    /// `keep_image` (D1): keeps the reported reading's image when the driver advertises
+    /// [`crate::CameraDriver::grab_image`]; no image is a warning ([`Capture::warning`]).
     ///
     /// # Errors
     /// [`VisionError::NotEnabled`], [`VisionError::WrongTool`], [`VisionError::ToolOffsetNotApplied`],
     /// [`VisionError::PoundBaseReserved`], [`VisionError::PoundBlockMissing`],
-    /// [`VisionError::NotCalibrated`] (all before the trigger: only `LastStatus` changes);
-    /// [`VisionError::NoDriver`]; after a trigger [`VisionError::Driver`] or
-    /// [`VisionError::NoMark`] (`LastJudgment` and `LastStatus` record the failed trigger and the
-    /// other `Last*` values are cleared); [`VisionError::Machine`] for a refused re-centring move
-    /// (a camera that re-centred stays where it moved); a failed pound-variable write (the
-    /// variables already written are restored). The dot list, the slots and `Run_DotCount`
-    /// change only on success.
+    /// [`VisionError::NotCalibrated`] (before the trigger: only `LastStatus` changes);
+    /// [`VisionError::NoDriver`]; [`VisionError::Driver`] or [`VisionError::NoMark`] (the failed
+    /// trigger is recorded, the other `Last*` cleared); [`VisionError::Machine`] for a refused
+    /// move; a failed pound-variable write (those written are restored). The dot list, the
+    /// slots and `Run_DotCount` change only on success.
     pub fn m281(&mut self, machine: &mut dyn Machine, keep_image: bool) -> Result<Reply<Capture>, VisionError> {
         let mut step = self.m281_begin(machine, keep_image)?;
         loop {

@@ -131,32 +131,11 @@ impl VisionModule {
     /// [`crate::controller::modal_commands`]); the reply lists the lines.
     ///
     /// With five marks or more, the one mark whose distance from the fit of the others exceeds
-    /// `VisionOutlierFactor` × the noise is left out first and reported
-    /// ([`AlignReport::dropped`]).
-    ///
-    /// Quality gates, judged on the full fit of the run's model whatever `pieces` is emitted
-    /// (0 disables a gate): X or Y scale off 1 by more than `VisionFitMaxScaleDev` percent;
-    /// shift ‖observed centroid − commanded centroid‖ above `VisionFitMaxShift`; worst mark
-    /// residual above `VisionFitMaxResidual`; for a similarity fit, marks scaled differently in
-    /// X and Y by enough to miss one by more than `VisionFitMaxAxisScaleError` (the refusal
-    /// advises rectangle mode). Lengths in inches, ×25.4 under G21.
-    ///
-    /// On LinuxCNC (no G68, no G51: [`crate::controller::linuxcnc`], [`vision_math::linuxcnc`]) the
-    /// commands rotate the G5x system by θ₀ + θ and shift, the scale gate refuses with "LinuxCNC
-    /// cannot scale: …", and within it the rigid part of the chain is applied (the report's
-    /// `chain`, residuals and `Run_*`) and the scale left out is in [`AlignReport::how`]. θ₀ and
-    /// the alignment flag are written before the lines run.
-    ///
-    /// Every accepted fit predicts its cut error over the marks' bounding box
-    /// ([`AlignReport::predicted`], `VisionRun_PredictedSigma` / `…Bound`).
-    ///
-    /// Height (issue 28): when the run's M281s read marks from more than one camera position,
-    /// the image scale they measured ([`vision_math::ScaleEvidence`]) is the working-distance
-    /// change, reported with its 1σ in [`AlignReport::height`] and `VisionRun_Height*`. With
-    /// `VisionHeightCorrection` (default) every capture is corrected first, its offset from the
-    /// camera ([`super::Dot::reach`]) times `1 + ε` (scale ∝ working distance), before the
-    /// outlier search, the fit and the gates. Beyond `VisionHeightWarnPct` the report warns
-    /// with the manual's advice, and so does `VisionLastStatus`.
+    /// `VisionOutlierFactor` × the noise is left out first ([`AlignReport::dropped`]). Every
+    /// accepted fit predicts its cut error over the marks' bounding box
+    /// ([`AlignReport::predicted`]); the height change the captures measured is in
+    /// [`AlignReport::height`]. The gates, LinuxCNC's lines and the height correction:
+    /// `docs/vision-module.md` (M282).
     ///
     /// Works after a run's M282 too (the dot list stays until the next M280), so a second M282
     /// can emit another selection from the same captures; the output replaces, never compounds.

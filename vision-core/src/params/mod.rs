@@ -14,15 +14,8 @@
 //! state (mode, open or not, the dot list) is typed in [`crate::module::Run`], not here.
 //! Read parameters with the typed getters (`params.cal_k()`, `params.pound_var_base()`, …) or by
 //! name with [`Params::get`] (case-insensitive); write them by name with [`Params::set`], which
-//! validates the value and refuses telemetry.
-//!
-//! Units: lengths follow the parameter's doc (K and the pixel centre offset are per `Cal_Units`;
-//! the fit gates are in inches and are converted to millimetres under G21); times are seconds.
-//!
-//! Decision: the fit quality gates (`VisionFitMaxScaleDev` in percent, `VisionFitMaxShift`,
-//! `VisionFitMaxResidual` and `VisionFitMaxAxisScaleError` in inches), `VisionOutlierFactor` and
-//! `VisionCameraNoisePx` are additions to the manual's set; 0 disables a gate. Each default
-//! says why it was chosen.
+//! validates the value and refuses telemetry. Units: lengths follow the parameter's doc; times
+//! are seconds. The units and the additions to the manual's set: `docs/vision-module.md`.
 //!
 //! The code, by concern: [`ParamValue`] and the other descriptions in `value.rs`; the Rust types a
 //! parameter can have in `typed.rs`; the range checks in `checks.rs`; the table machinery

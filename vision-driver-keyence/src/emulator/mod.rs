@@ -1,30 +1,8 @@
 //! A TCP server that behaves like a Keyence VS camera on its Non-Procedural command port, for
 //! tests, benchmarks, demonstrations and (later) `mach-vision emulate`.
 //!
-//! What it does, command by command (replies end in the configured [`Delimiter`], CR by
-//! default; commands may end in CR, LF or CRLF):
-//!
-//! | command | reply |
-//! | --- | --- |
-//! | `TRG` | `TRG`, then the Data Output line of the next [`Shot`] (after [`EmulatorSettings::inspection_time`]) |
-//! | `FVR` | `FVR,<version>` |
-//! | `PR` | `PR,<device>,<job>` (job as three digits) |
-//! | `PL,d,n` (VS) or `PW,d,n` (CV-X/IV, [`Series`]) | `PL` / `PW`; the other command is unknown (`01`) |
-//! | `RUN`, `SET` | `RUN` / `SET`, switching to Run / Setup mode |
-//! | `MOR` | `MOR,1` in Run mode, `MOR,0` in Setup mode |
-//!
-//! Errors, as `ER,<cmd>,<nn>`: `01` unknown command; `02` wrong number of arguments (also a
-//! command longer than 500 bytes); `03` device not 1–2 or job above [`EmulatorSettings::max_job`];
-//! `04` an argument that is not a number; `05` while a job loads ([`EmulatorSettings::load_time`]);
-//! `06` `TRG`, `PR`, `PL`/`PW` in Setup mode; `07` a command whose delimiter has not come
-//! [`EmulatorSettings::command_timeout`] (3 s) after its first byte.
-//!
-//! **One client at a time.** A second client is accepted by the operating system, then, if
-//! the first is still connected after [`EmulatorSettings::handover_grace`] (100 ms), its
-//! connection is reset (TCP RST): it sees the connection closed or reset before any reply,
-//! which the driver reports as the camera closing the connection. The grace lets a client that
-//! has just dropped its connection (after a timeout) reconnect at once; clients queued behind a
-//! waiting one share its grace, so each hears at once that the camera is taken.
+//! The commands it answers, its errors and its one-client rule: `docs/keyence-driver.md`
+//! (the emulator).
 //!
 //! **Faults** ([`Fault`]) are queued with [`EmulatorHandle::inject`] or
 //! [`EmulatorBuilder::faults`]; each `TRG` consumes the next one.

@@ -21,14 +21,7 @@
 //! largest, with at least 99 % (Bonferroni). This is the fit's own error only: a wrong K, a
 //! wrong camera offset or a part that moved are not in it.
 //!
-//! # Outliers
-//!
-//! [`find_outlier`] refits without each mark in turn and measures how far that mark lies from
-//! the fit of the others (its leave-one-out residual, which a single displaced mark cannot
-//! hide by pulling the fit towards itself). The mark with the largest such residual is an
-//! outlier when that residual exceeds `factor` times the noise: the larger of σ and the
-//! spread of the others' residuals. It needs five marks or more, so that the others still
-//! over-determine the fit.
+//! The one mark that does not belong with the others: [`find_outlier`].
 
 use nalgebra::{DMatrix, Matrix2, Point2, Vector2};
 
@@ -219,7 +212,7 @@ pub fn residual_sigma(model: Model, marks: usize, rms: f64) -> Option<f64> {
     Some((rms * rms * marks as f64 / dof as f64).sqrt())
 }
 
-/// A mark that does not belong with the others (see the module doc).
+/// A mark that does not belong with the others (see [`find_outlier`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Outlier {
     /// Its index in the points given.
@@ -236,6 +229,11 @@ pub const MIN_MARKS_FOR_OUTLIERS: usize = 5;
 /// The mark whose leave-one-out residual exceeds `factor` × the noise (the larger of `sigma`
 /// and the residual σ of the fit without it), if any; `None` below
 /// [`MIN_MARKS_FOR_OUTLIERS`] marks. Lengths in machine units.
+///
+/// It refits without each mark in turn and measures how far that mark lies from the fit of the
+/// others (its leave-one-out residual, which a single displaced mark cannot hide by pulling the
+/// fit towards itself). It needs five marks or more, so that the others still over-determine
+/// the fit.
 ///
 /// # Errors
 /// As [`Model::fit`] for the input (mismatched lengths, non-finite or degenerate points).

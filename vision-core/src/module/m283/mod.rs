@@ -51,6 +51,8 @@ pub enum Calibrate {
         n: u32,
     },
 }
+
+/// A calibration failure with `reason`.
 fn fail(reason: impl Into<String>) -> VisionError {
     VisionError::Calibration { reason: reason.into() }
 }
