@@ -106,15 +106,6 @@ impl<T: Ordered> Check<T> {
     pub const fn closed(range: &'static str, lo: T, hi: T) -> Check<T> {
         Check::within(range, Bound::Included(lo), Bound::Included(hi))
     }
-
-    /// The bounds of a [`Check::within`], `None` for another rule (for tests of a range's ends).
-    #[must_use]
-    pub fn bounds(&self) -> Option<(&Bound<T>, &Bound<T>)> {
-        match &self.rule {
-            Rule::Within(lo, hi, _) => Some((&**lo, &**hi)),
-            _ => None,
-        }
-    }
 }
 
 pub(super) const FINITE: Check<f64> = Check::within("a finite number", Bound::Unbounded, Bound::Unbounded);
@@ -183,7 +174,5 @@ mod tests {
         assert!(FINITE.accepts(&-1e300) && NON_NEGATIVE.accepts(&1e300));
         assert!(TOOL.accepts(&i64::from(u32::MAX)) && !TOOL.accepts(&(i64::from(u32::MAX) + 1)) && !TOOL.accepts(&-1));
         assert!(RESOLUTION_RECORD.accepts(&0) && !RESOLUTION_RECORD.accepts(&1) && RESOLUTION_RECORD.accepts(&2));
-        assert_eq!(closed.bounds(), Some((&Bound::Included(0.0), &Bound::Included(1.0))));
-        assert_eq!(RESOLUTION_RECORD.bounds(), None);
     }
 }
