@@ -14,6 +14,7 @@
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
+use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, ValueEnum};
 use serde_json::json;
 use vision_driver_camera::decode::{decode_grey, DecodeError, GreySamples};
@@ -29,8 +30,8 @@ use crate::{image_size, Failure};
 #[derive(Debug, Args)]
 pub(crate) struct LocateArgs {
     /// The mark's shape.
-    #[arg(long, value_enum, default_value_t = MarkArg::Dot)]
-    mark: MarkArg,
+    #[arg(long, value_parser = mark_kind(), default_value_t = MarkKind::Dot)]
+    mark: MarkKind,
     /// Expected size in image pixels: a dot's or ring's outer diameter, a cross's bar length.
     #[arg(long, allow_negative_numbers = true)]
     diameter: f64,
@@ -48,14 +49,15 @@ pub(crate) struct LocateArgs {
     images: Vec<PathBuf>,
 }
 
-#[derive(Debug, Clone, Copy, ValueEnum)]
-enum MarkArg {
-    /// A filled disc.
-    Dot,
-    /// A circular ring.
-    Ring,
-    /// Two perpendicular bars.
-    Cross,
+/// `--mark`: the finder's [`MarkKind`], listed in the help as clap lists an enum's values.
+fn mark_kind() -> impl TypedValueParser<Value = MarkKind> {
+    let help = |kind: MarkKind| match kind {
+        MarkKind::Dot => "A filled disc",
+        MarkKind::Ring => "A circular ring",
+        MarkKind::Cross => "Two perpendicular bars",
+    };
+    PossibleValuesParser::new(MarkKind::ALL.map(|k| PossibleValue::new(k.name()).help(help(k))))
+        .try_map(|word| word.parse::<MarkKind>())
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -134,11 +136,7 @@ fn spec_of(args: &LocateArgs, kind: MarkKind, polarity: Polarity) -> Result<Mark
 }
 
 pub(crate) fn run(args: &LocateArgs) -> Result<String, Failure> {
-    let kind = match args.mark {
-        MarkArg::Dot => MarkKind::Dot,
-        MarkArg::Ring => MarkKind::Ring,
-        MarkArg::Cross => MarkKind::Cross,
-    };
+    let kind = args.mark;
     let polarity = match args.polarity {
         PolarityArg::Dark => Polarity::DarkOnLight,
         PolarityArg::Light => Polarity::LightOnDark,

@@ -4,10 +4,10 @@
 //! machine units lives in the core. Each driver keeps its own rich error type and maps it to a
 //! [`DriverErrorKind`] so the core can react without knowing the driver.
 
-use std::fmt;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 use std::time::{Duration, SystemTime};
+
+use crate::kind_error::{Kind, KindError};
 
 /// The camera's pass/fail verdict for a trigger.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -130,68 +130,18 @@ pub enum DriverErrorKind {
     Other,
 }
 
+impl Kind for DriverErrorKind {
+    const NAME: &'static str = "DriverError";
+    const PREFIX: &'static str = "";
+}
+
 /// A driver failure: the common [`DriverErrorKind`] the core reacts to, and the driver's own
-/// typed error, kept whole as the cause.
+/// typed error, kept whole as the cause ([`KindError`]).
 ///
 /// `Display` is the driver's explanation as it is: what happened in the camera's terms and
 /// what to do. Only the driver knows its camera, so the core never rewrites or prefixes it.
-/// The typed error is reachable with [`DriverError::get_ref`] and [`DriverError::downcast_ref`]
-/// (like [`std::io::Error`], the wrapper is transparent: [`std::error::Error::source`] is the
-/// driver error's own source, so a report that walks the chain does not print its text twice).
-///
-/// The cause is shared ([`Arc`]) so errors stay `Clone`; two errors are equal when their kinds
-/// and texts are, which is what a caller or a test can observe.
-#[derive(Debug, Clone)]
-pub struct DriverError {
-    kind: DriverErrorKind,
-    source: Arc<dyn std::error::Error + Send + Sync>,
-}
-
-impl DriverError {
-    /// An error of `kind` caused by `source`: the driver's typed error, or a message
-    /// (`&str`/`String`) for a driver without one.
-    pub fn new(kind: DriverErrorKind, source: impl Into<Box<dyn std::error::Error + Send + Sync>>) -> Self {
-        DriverError { kind, source: Arc::from(source.into()) }
-    }
-
-    /// The common kind.
-    #[must_use]
-    pub fn kind(&self) -> DriverErrorKind {
-        self.kind
-    }
-
-    /// The driver's own error.
-    #[must_use]
-    pub fn get_ref(&self) -> &(dyn std::error::Error + Send + Sync + 'static) {
-        &*self.source
-    }
-
-    /// The driver's own error as `E`, when it is one.
-    #[must_use]
-    pub fn downcast_ref<E: std::error::Error + 'static>(&self) -> Option<&E> {
-        self.source.downcast_ref::<E>()
-    }
-}
-
-impl fmt::Display for DriverError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        fmt::Display::fmt(&self.source, f)
-    }
-}
-
-impl PartialEq for DriverError {
-    fn eq(&self, other: &Self) -> bool {
-        self.kind == other.kind && self.to_string() == other.to_string()
-    }
-}
-
-impl Eq for DriverError {}
-
-impl std::error::Error for DriverError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        self.source.source()
-    }
-}
+/// The typed error is reachable with [`KindError::get_ref`] and [`KindError::downcast_ref`].
+pub type DriverError = KindError<DriverErrorKind>;
 
 /// A smart camera, seen by the core. Implemented by `vision-driver-keyence`,
 /// `vision-driver-sim`, and test fakes.
@@ -275,6 +225,8 @@ pub trait CameraDriver: Send {
 #[cfg(test)]
 #[allow(clippy::float_cmp)]
 mod tests {
+    use std::fmt;
+
     use super::*;
 
     #[test]

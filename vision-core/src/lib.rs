@@ -68,6 +68,7 @@ pub mod command;
 pub mod controller;
 pub mod driver;
 mod error;
+pub mod kind_error;
 pub mod machine;
 pub mod module;
 pub mod params;
@@ -85,6 +86,7 @@ pub use command::MachineCommand;
 pub use controller::{Controller, CONTROLLERS};
 pub use driver::{CameraDriver, Capabilities, DriverError, DriverErrorKind, ImageRequest, Judgment, Reading};
 pub use error::VisionError;
+pub use kind_error::{Kind, KindError};
 pub use machine::{Machine, MachineError, MachineErrorKind, Timestamp};
 pub use module::{
     AlignReport, Capture, CaptureStep, Dot, DroppedMark, JobReport, Pieces, PredictedError, ProgressSink, Recentred,

@@ -4,14 +4,13 @@
 //! trait for both. The module never parses or writes G-code itself: it asks the host for
 //! positions and state and hands it typed [`MachineCommand`]s to run.
 
-use std::fmt;
-use std::sync::Arc;
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 use vision_math::{LengthUnit, Point2, Vector2};
 
 use crate::command::MachineCommand;
 use crate::controller::Controller;
+use crate::kind_error::{Kind, KindError};
 
 /// The common kind of a machine failure, so a host or the module can react without reading
 /// text (an e-stop is not a missing tool).
@@ -33,67 +32,16 @@ pub enum MachineErrorKind {
     Other,
 }
 
+impl Kind for MachineErrorKind {
+    const NAME: &'static str = "MachineError";
+    const PREFIX: &'static str = "machine: ";
+}
+
 /// A failure reported by the host machine: the common [`MachineErrorKind`] and the host's own
-/// cause, kept whole (like [`crate::DriverError`]).
+/// cause, kept whole ([`KindError`], like [`crate::DriverError`]).
 ///
-/// `Display` is `machine: ` and the host's own words. The cause is shared ([`Arc`]) so errors
-/// stay `Clone`; two errors are equal when their kinds and texts are.
-#[derive(Debug, Clone)]
-pub struct MachineError {
-    kind: MachineErrorKind,
-    source: Arc<dyn std::error::Error + Send + Sync>,
-}
-
-impl MachineError {
-    /// An error of `kind` caused by `source`: the host's typed error, or a message.
-    pub fn new(kind: MachineErrorKind, source: impl Into<Box<dyn std::error::Error + Send + Sync>>) -> Self {
-        MachineError { kind, source: Arc::from(source.into()) }
-    }
-
-    /// The same error as a `kind` (a bridge that knows better what a failed call meant).
-    #[must_use]
-    pub fn with_kind(self, kind: MachineErrorKind) -> Self {
-        MachineError { kind, ..self }
-    }
-
-    /// The common kind.
-    #[must_use]
-    pub fn kind(&self) -> MachineErrorKind {
-        self.kind
-    }
-
-    /// The host's own error.
-    #[must_use]
-    pub fn get_ref(&self) -> &(dyn std::error::Error + Send + Sync + 'static) {
-        &*self.source
-    }
-
-    /// The host's own error as `E`, when it is one.
-    #[must_use]
-    pub fn downcast_ref<E: std::error::Error + 'static>(&self) -> Option<&E> {
-        self.source.downcast_ref::<E>()
-    }
-}
-
-impl fmt::Display for MachineError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "machine: {}", self.source)
-    }
-}
-
-impl PartialEq for MachineError {
-    fn eq(&self, other: &Self) -> bool {
-        self.kind == other.kind && self.to_string() == other.to_string()
-    }
-}
-
-impl Eq for MachineError {}
-
-impl std::error::Error for MachineError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        self.source.source()
-    }
-}
+/// `Display` is `machine: ` and the host's own words.
+pub type MachineError = KindError<MachineErrorKind>;
 
 /// A point in time from the host's clock, with the local UTC offset so that calibration dates
 /// can be written in local time without a time-zone database.

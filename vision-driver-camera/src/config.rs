@@ -4,7 +4,8 @@ use std::fmt;
 use std::path::PathBuf;
 use std::time::Duration;
 
-use vision_core::{ParamValue, Params};
+use vision_core::Params;
+pub use vision_locate::MarkKind;
 
 use crate::error::CameraError;
 use crate::http::HttpUrl;
@@ -116,17 +117,6 @@ impl fmt::Display for PixelFormat {
     }
 }
 
-/// The printed fiducial's shape (`VisionCameraMark`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum MarkKind {
-    /// A filled disc.
-    Dot,
-    /// A ring.
-    Ring,
-    /// A cross.
-    Cross,
-}
-
 /// Which way the mark contrasts with its ground (`VisionCameraPolarity`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Polarity {
@@ -199,26 +189,17 @@ impl CameraConfig {
     /// [`CameraError::Config`] naming the setting when a value is out of range.
     pub fn from_params(params: &Params) -> Result<CameraConfig, CameraError> {
         let table = settings::settings(params);
-        let value = |name: &'static str| {
-            table.get(name).cloned().ok_or(CameraError::Config { setting: name, reason: "is missing".into() })
-        };
         let bad = |setting: &'static str, reason: String| CameraError::Config { setting, reason };
-        let text = |name: &'static str| match value(name)? {
-            ParamValue::Text(s) => Ok(s),
-            other => Err(bad(name, format!("{other} is not text"))),
+        let missing = |name: &'static str| bad(name, "is missing".into());
+        // The table read each value as its type and checked its range when it was set.
+        let text = |name: &'static str| table.text(name).ok_or_else(|| missing(name));
+        let float = |name: &'static str| table.float(name).ok_or_else(|| missing(name));
+        let count = |name: &'static str| {
+            let v = table.int(name).ok_or_else(|| missing(name))?;
+            u32::try_from(v).map_err(|_| bad(name, format!("{v}")))
         };
-        let int = |name: &'static str, max: i64| match value(name)? {
-            ParamValue::Int(v) if (0..=max).contains(&v) => u32::try_from(v).map_err(|_| bad(name, format!("{v}"))),
-            other => Err(bad(name, format!("{other} is not an integer 0..{max}"))),
-        };
-        let float = |name: &'static str| match value(name)? {
-            ParamValue::Float(v) if v.is_finite() => Ok(v),
-            other => Err(bad(name, format!("{other} is not a number"))),
-        };
-        let source = Source::parse(&text("VisionCameraSource")?).map_err(|r| bad("VisionCameraSource", r))?;
-        let (w, h) =
-            (int("VisionCameraWidth", settings::MAX_SIDE_PX)?, int("VisionCameraHeight", settings::MAX_SIDE_PX)?);
-        let size = match (w, h) {
+        let source = Source::parse(text("VisionCameraSource")?).map_err(|r| bad("VisionCameraSource", r))?;
+        let size = match (count("VisionCameraWidth")?, count("VisionCameraHeight")?) {
             (0, 0) => None,
             (0, _) | (_, 0) => {
                 return Err(bad("VisionCameraWidth", "and VisionCameraHeight must both be 0 or both be set".into()))
@@ -232,12 +213,10 @@ impl CameraConfig {
             "GREY" => Some(PixelFormat::Grey),
             other => return Err(bad("VisionCameraPixelFormat", format!("{other} is not auto, MJPEG, YUYV or GREY"))),
         };
-        let kind = match text("VisionCameraMark")?.to_ascii_lowercase().as_str() {
-            "dot" => MarkKind::Dot,
-            "ring" => MarkKind::Ring,
-            "cross" => MarkKind::Cross,
-            other => return Err(bad("VisionCameraMark", format!("{other} is not dot, ring or cross"))),
-        };
+        let mark = text("VisionCameraMark")?;
+        let kind = mark
+            .parse::<MarkKind>()
+            .map_err(|_| bad("VisionCameraMark", format!("{} is not dot, ring or cross", mark.to_ascii_lowercase())))?;
         let polarity = match text("VisionCameraPolarity")?.to_ascii_lowercase().as_str() {
             "dark" => Polarity::Dark,
             "light" => Polarity::Light,
@@ -259,41 +238,29 @@ impl CameraConfig {
             },
             timeout: Duration::try_from_secs_f64(seconds)
                 .map_err(|_| bad("VisionCameraTimeout", format!("{seconds} s is not a duration")))?,
-            flush_frames: int("VisionCameraFlushFrames", settings::MAX_FLUSH_FRAMES)?,
+            flush_frames: count("VisionCameraFlushFrames")?,
         };
         config.validate()?;
         Ok(config)
     }
 
-    /// Checks every field.
+    /// Checks every field against the settings' ranges ([`settings`]), for a configuration
+    /// built in code; a derived diameter and a frame size have their own.
     ///
     /// # Errors
     /// [`CameraError::Config`] naming the first bad one.
     pub fn validate(&self) -> Result<(), CameraError> {
-        let bad = |setting: &'static str, reason: &str| Err(CameraError::Config { setting, reason: reason.into() });
-        #[allow(clippy::cast_precision_loss)] // a small integer
-        let max_side = settings::MAX_SIDE_PX as f64;
+        let named = |setting: &'static str| move |reason: String| CameraError::Config { setting, reason };
         if let Some(d) = self.mark.diameter_px {
-            if !(d.is_finite() && d >= 2.0 && d <= max_side) {
-                return bad("VisionCameraMarkDiameterPx", "must be 2 to 16384 pixels");
-            }
+            settings::DIAMETER_SET.check(&d).map_err(named("VisionCameraMarkDiameterPx"))?;
         }
-        if !(self.mark.tolerance_pct.is_finite() && self.mark.tolerance_pct > 0.0 && self.mark.tolerance_pct < 100.0) {
-            return bad("VisionCameraMarkTolerance", "must be more than 0 and less than 100 percent");
-        }
-        let r = self.mark.search_radius_pct;
-        if !(r.is_finite() && (settings::MIN_SEARCH_RADIUS_PCT..=100.0).contains(&r)) {
-            return bad("VisionCameraSearchRadius", "must be 5 to 100 percent");
-        }
-        if self.timeout.is_zero() || self.timeout.as_secs_f64() > settings::MAX_TIMEOUT_S {
-            return bad("VisionCameraTimeout", "must be more than 0 and at most 300 seconds");
-        }
-        if i64::from(self.flush_frames) > settings::MAX_FLUSH_FRAMES {
-            return bad("VisionCameraFlushFrames", "must be 0 to 30 frames");
-        }
+        settings::TOLERANCE.check(&self.mark.tolerance_pct).map_err(named("VisionCameraMarkTolerance"))?;
+        settings::SEARCH_RADIUS.check(&self.mark.search_radius_pct).map_err(named("VisionCameraSearchRadius"))?;
+        settings::TIMEOUT.check(&self.timeout.as_secs_f64()).map_err(named("VisionCameraTimeout"))?;
+        settings::FLUSH_FRAMES.check(&i64::from(self.flush_frames)).map_err(named("VisionCameraFlushFrames"))?;
         if let Some((w, h)) = self.size {
-            if w == 0 || h == 0 || i64::from(w.max(h)) > settings::MAX_SIDE_PX {
-                return bad("VisionCameraWidth", "must be 1 to 16384 pixels, with VisionCameraHeight");
+            for side in [w, h] {
+                settings::SIDE_SET.check(&i64::from(side)).map_err(named("VisionCameraWidth"))?;
             }
         }
         Ok(())
@@ -314,6 +281,8 @@ fn derived_diameter(params: &Params) -> Option<f64> {
 
 #[cfg(test)]
 mod tests {
+    use vision_core::ParamValue;
+
     use super::*;
 
     fn params() -> Params {
@@ -378,6 +347,8 @@ mod tests {
 
 #[cfg(test)]
 mod props {
+    use vision_core::ParamValue;
+
     use super::*;
     use proptest::prelude::*;
 

@@ -6,7 +6,7 @@ use std::time::{Duration, Instant};
 use vision_core::{CameraDriver, Capabilities, DriverError, DriverRegistry, ImageRequest, Judgment, Params, Reading};
 use vision_locate::{Budget, GrayImage, LocateError, Located, NotFoundReason, Pixels};
 
-use crate::config::{CameraConfig, MarkKind, Polarity, Source};
+use crate::config::{CameraConfig, Polarity, Source};
 use crate::error::CameraError;
 use crate::frame::Frame;
 use crate::source::{FileSource, FrameSource, HttpSource};
@@ -134,16 +134,11 @@ impl<S: FrameSource> FrameDriver<S> {
                      image pixels"
                 .into(),
         })?;
-        let kind = match m.kind {
-            MarkKind::Dot => vision_locate::MarkKind::Dot,
-            MarkKind::Ring => vision_locate::MarkKind::Ring,
-            MarkKind::Cross => vision_locate::MarkKind::Cross,
-        };
         let polarity = match m.polarity {
             Polarity::Dark => vision_locate::Polarity::DarkOnLight,
             Polarity::Light => vision_locate::Polarity::LightOnDark,
         };
-        vision_locate::MarkSpec::new(kind, diameter, m.tolerance_pct / 100.0, polarity)
+        vision_locate::MarkSpec::new(m.kind, diameter, m.tolerance_pct / 100.0, polarity)
             .map_err(|e| CameraError::Config { setting: "VisionCameraMarkDiameterPx", reason: e.to_string() })
     }
 
@@ -256,11 +251,7 @@ impl<S: FrameSource> CameraDriver for FrameDriver<S> {
     /// The shape and contrast searched for (the diameter is left out: unset, it follows K).
     fn mark_spec(&self) -> Option<String> {
         let mark = &self.config.mark;
-        let kind = match mark.kind {
-            crate::MarkKind::Dot => "dot",
-            crate::MarkKind::Ring => "ring",
-            crate::MarkKind::Cross => "cross",
-        };
+        let kind = mark.kind.name();
         let contrast = match mark.polarity {
             crate::Polarity::Dark => "dark on light",
             crate::Polarity::Light => "light on dark",

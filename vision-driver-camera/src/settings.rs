@@ -5,8 +5,10 @@
 //!
 //! [`CameraConfig::from_params`]: crate::CameraConfig::from_params
 
-use vision_core::params::{DriverSettings, Setting, SettingsTable};
-use vision_core::{ParamKind, ParamSpec, ParamValue, Params};
+use std::ops::Bound;
+
+use vision_core::params::{Check, DriverSettings, Setting, SettingsTable};
+use vision_core::Params;
 
 /// The driver's profile table, `[camera]`.
 pub const TABLE: &str = "camera";
@@ -14,7 +16,7 @@ pub const TABLE: &str = "camera";
 /// The pixel formats `VisionCameraPixelFormat` accepts (`auto`: the device's best).
 pub const PIXEL_FORMATS: &[&str] = &["auto", "MJPEG", "YUYV", "GREY"];
 /// The mark kinds `VisionCameraMark` accepts.
-pub const MARKS: &[&str] = &["dot", "ring", "cross"];
+pub const MARKS: &[&str] = vision_locate::MarkKind::NAMES;
 /// The polarities `VisionCameraPolarity` accepts: a dark mark on a light ground, or the reverse.
 pub const POLARITIES: &[&str] = &["dark", "light"];
 
@@ -27,140 +29,121 @@ pub const MAX_FLUSH_FRAMES: i64 = 30;
 /// Largest `VisionCameraWidth` / `VisionCameraHeight` and `VisionCameraMarkDiameterPx`, pixels.
 pub const MAX_SIDE_PX: i64 = 16_384;
 
+/// `VisionCameraSource`: what [`Source::parse`] reads (its refusal says what is wrong).
+///
+/// [`Source::parse`]: crate::Source::parse
+pub const SOURCE: Check<String> =
+    Check::explained("a V4L2 device, an http:// snapshot URL, or an image file or folder", |s| {
+        crate::config::Source::parse(s).map(|_| ())
+    });
+/// `VisionCameraWidth` and `VisionCameraHeight`, pixels.
+pub const SIDE: Check<i64> = Check::closed("0 (the device's largest) or a size up to 16384 pixels", 0, MAX_SIDE_PX);
+/// A frame size the driver asks for, both sides set, pixels.
+pub const SIDE_SET: Check<i64> = Check::closed("1 to 16384 pixels, with VisionCameraHeight", 1, MAX_SIDE_PX);
+/// `VisionCameraMarkDiameterPx`, pixels (0: derived).
+#[allow(clippy::cast_precision_loss)] // a small integer
+pub const DIAMETER: Check<f64> =
+    Check::closed("0 (derive it) or a diameter up to 16384 pixels", 0.0, MAX_SIDE_PX as f64);
+/// The diameter the driver searches for, pixels.
+#[allow(clippy::cast_precision_loss)] // a small integer
+pub const DIAMETER_SET: Check<f64> = Check::closed("2 to 16384 pixels", 2.0, MAX_SIDE_PX as f64);
+/// `VisionCameraMarkTolerance`, percent.
+pub const TOLERANCE: Check<f64> =
+    Check::within("more than 0 and less than 100 percent", Bound::Excluded(0.0), Bound::Excluded(100.0));
+/// `VisionCameraSearchRadius`, percent.
+pub const SEARCH_RADIUS: Check<f64> = Check::closed("5 to 100 percent", MIN_SEARCH_RADIUS_PCT, 100.0);
+/// `VisionCameraTimeout`, seconds.
+pub const TIMEOUT: Check<f64> =
+    Check::within("more than 0 and at most 300 seconds", Bound::Excluded(0.0), Bound::Included(MAX_TIMEOUT_S));
+/// `VisionCameraFlushFrames`.
+pub const FLUSH_FRAMES: Check<i64> = Check::closed("0 to 30 frames", 0, MAX_FLUSH_FRAMES);
+
 /// The camera driver's settings.
 pub static SETTINGS: SettingsTable = SettingsTable {
     table: TABLE,
     settings: &[
-        Setting {
-            spec: ParamSpec::driver_setting(
-                "VisionCameraSource",
-                ParamKind::Text,
-                "",
-                "a V4L2 device, an http:// snapshot URL, or an image file or folder",
-                "`VisionCameraSource`: where frames come from: a V4L2 device (`/dev/video0`), an HTTP \
-                 snapshot URL (`http://host:8080/?action=snapshot`), or an image file or folder (replay, \
-                 one image per trigger in name order).",
-            ),
-            default: || ParamValue::Text("/dev/video0".to_string()),
-            check: source,
-        },
-        Setting {
-            spec: ParamSpec::driver_setting(
-                "VisionCameraWidth",
-                ParamKind::Integer,
-                "px",
-                "0 (the device's largest) or a size up to 16384 pixels",
-                "`VisionCameraWidth`: V4L2 frame width, pixels; 0 takes the device's largest.",
-            ),
-            default: || ParamValue::Int(0),
-            check: side,
-        },
-        Setting {
-            spec: ParamSpec::driver_setting(
-                "VisionCameraHeight",
-                ParamKind::Integer,
-                "px",
-                "0 (the device's largest) or a size up to 16384 pixels",
-                "`VisionCameraHeight`: V4L2 frame height, pixels; 0 takes the device's largest.",
-            ),
-            default: || ParamValue::Int(0),
-            check: side,
-        },
-        Setting {
-            spec: ParamSpec::driver_setting(
-                "VisionCameraPixelFormat",
-                ParamKind::Choice(PIXEL_FORMATS),
-                "",
-                "",
-                "`VisionCameraPixelFormat`: V4L2 pixel format, auto, MJPEG, YUYV or GREY (auto prefers \
-                 GREY, then YUYV, then MJPEG: uncompressed frames have no JPEG artefacts).",
-            ),
-            default: || ParamValue::Text("auto".to_string()),
-            check: |_| Ok(()),
-        },
-        Setting {
-            spec: ParamSpec::driver_setting(
-                "VisionCameraMark",
-                ParamKind::Choice(MARKS),
-                "",
-                "",
-                "`VisionCameraMark`: the printed fiducial, dot (filled disc), ring or cross.",
-            ),
-            default: || ParamValue::Text("dot".to_string()),
-            check: |_| Ok(()),
-        },
-        Setting {
-            spec: ParamSpec::driver_setting(
-                "VisionCameraMarkDiameterPx",
-                ParamKind::Float,
-                "px",
-                "0 (derive it) or a diameter up to 16384 pixels",
-                "`VisionCameraMarkDiameterPx`: the mark's expected diameter in the image, pixels; 0 derives it \
-                 from VisionMarkDiameter and the calibrated K.",
-            ),
-            default: || ParamValue::Float(0.0),
-            check: diameter,
-        },
-        Setting {
-            spec: ParamSpec::driver_setting(
-                "VisionCameraMarkTolerance",
-                ParamKind::Float,
-                "%",
-                "more than 0 and less than 100 percent",
-                "`VisionCameraMarkTolerance`: how far the seen diameter may differ from the expected one, \
-                 percent, more than 0 and less than 100.",
-            ),
-            default: || ParamValue::Float(25.0),
-            check: tolerance,
-        },
-        Setting {
-            spec: ParamSpec::driver_setting(
-                "VisionCameraPolarity",
-                ParamKind::Choice(POLARITIES),
-                "",
-                "",
-                "`VisionCameraPolarity`: dark (a dark mark on a light ground, as printed) or light.",
-            ),
-            default: || ParamValue::Text("dark".to_string()),
-            check: |_| Ok(()),
-        },
-        Setting {
-            spec: ParamSpec::driver_setting(
-                "VisionCameraSearchRadius",
-                ParamKind::Float,
-                "%",
-                "5 to 100 percent",
-                "`VisionCameraSearchRadius`: search only within this distance of the image centre, percent of \
-                 half the shorter image side, 5 to 100 (100: the whole frame). M281 re-centres the mark, so a \
-                 radius that leaves neighbouring marks outside keeps them from making the view ambiguous.",
-            ),
-            default: || ParamValue::Float(100.0),
-            check: radius,
-        },
-        Setting {
-            spec: ParamSpec::driver_setting(
-                "VisionCameraTimeout",
-                ParamKind::Float,
-                "s",
-                "more than 0 and at most 300 seconds",
-                "`VisionCameraTimeout`: time allowed for one frame (connect, request, whole image; or one \
-                 device capture), and again for the mark search in it, seconds, more than 0 and at most 300.",
-            ),
-            default: || ParamValue::Float(3.0),
-            check: timeout,
-        },
-        Setting {
-            spec: ParamSpec::driver_setting(
-                "VisionCameraFlushFrames",
-                ParamKind::Integer,
-                "frames",
-                "0 to 30 frames",
-                "`VisionCameraFlushFrames`: frames taken and thrown away before the one searched, so none \
-                 predates the last move (V4L2 queues frames; a snapshot server may hold an old one), 0 to 30.",
-            ),
-            default: || ParamValue::Int(2),
-            check: flush,
-        },
+        Setting::text(
+            "VisionCameraSource",
+            "/dev/video0",
+            SOURCE,
+            "`VisionCameraSource`: where frames come from: a V4L2 device (`/dev/video0`), an HTTP \
+             snapshot URL (`http://host:8080/?action=snapshot`), or an image file or folder (replay, \
+             one image per trigger in name order).",
+        ),
+        Setting::int(
+            "VisionCameraWidth",
+            "px",
+            0,
+            SIDE,
+            "`VisionCameraWidth`: V4L2 frame width, pixels; 0 takes the device's largest.",
+        ),
+        Setting::int(
+            "VisionCameraHeight",
+            "px",
+            0,
+            SIDE,
+            "`VisionCameraHeight`: V4L2 frame height, pixels; 0 takes the device's largest.",
+        ),
+        Setting::choice(
+            "VisionCameraPixelFormat",
+            PIXEL_FORMATS,
+            "auto",
+            "`VisionCameraPixelFormat`: V4L2 pixel format, auto, MJPEG, YUYV or GREY (auto prefers \
+             GREY, then YUYV, then MJPEG: uncompressed frames have no JPEG artefacts).",
+        ),
+        Setting::choice(
+            "VisionCameraMark",
+            MARKS,
+            "dot",
+            "`VisionCameraMark`: the printed fiducial, dot (filled disc), ring or cross.",
+        ),
+        Setting::float(
+            "VisionCameraMarkDiameterPx",
+            "px",
+            0.0,
+            DIAMETER,
+            "`VisionCameraMarkDiameterPx`: the mark's expected diameter in the image, pixels; 0 derives it \
+             from VisionMarkDiameter and the calibrated K.",
+        ),
+        Setting::float(
+            "VisionCameraMarkTolerance",
+            "%",
+            25.0,
+            TOLERANCE,
+            "`VisionCameraMarkTolerance`: how far the seen diameter may differ from the expected one, \
+             percent, more than 0 and less than 100.",
+        ),
+        Setting::choice(
+            "VisionCameraPolarity",
+            POLARITIES,
+            "dark",
+            "`VisionCameraPolarity`: dark (a dark mark on a light ground, as printed) or light.",
+        ),
+        Setting::float(
+            "VisionCameraSearchRadius",
+            "%",
+            100.0,
+            SEARCH_RADIUS,
+            "`VisionCameraSearchRadius`: search only within this distance of the image centre, percent of \
+             half the shorter image side, 5 to 100 (100: the whole frame). M281 re-centres the mark, so a \
+             radius that leaves neighbouring marks outside keeps them from making the view ambiguous.",
+        ),
+        Setting::float(
+            "VisionCameraTimeout",
+            "s",
+            3.0,
+            TIMEOUT,
+            "`VisionCameraTimeout`: time allowed for one frame (connect, request, whole image; or one \
+             device capture), and again for the mark search in it, seconds, more than 0 and at most 300.",
+        ),
+        Setting::int(
+            "VisionCameraFlushFrames",
+            "frames",
+            2,
+            FLUSH_FRAMES,
+            "`VisionCameraFlushFrames`: frames taken and thrown away before the one searched, so none \
+             predates the last move (V4L2 queues frames; a snapshot server may hold an old one), 0 to 30.",
+        ),
     ],
 };
 
@@ -170,60 +153,12 @@ pub fn settings(params: &Params) -> DriverSettings {
     params.driver_settings(TABLE).cloned().unwrap_or_else(|| DriverSettings::new(&SETTINGS))
 }
 
-fn source(v: &ParamValue) -> Result<(), String> {
-    match v {
-        ParamValue::Text(s) => crate::config::Source::parse(s).map(|_| ()),
-        _ => Err("must be text".into()),
-    }
-}
-
-fn side(v: &ParamValue) -> Result<(), String> {
-    match v {
-        ParamValue::Int(p) if (0..=MAX_SIDE_PX).contains(p) => Ok(()),
-        _ => Err(format!("must be 0 (the device's largest) or a size up to {MAX_SIDE_PX} pixels")),
-    }
-}
-
-fn diameter(v: &ParamValue) -> Result<(), String> {
-    #[allow(clippy::cast_precision_loss)] // a small integer
-    let max = MAX_SIDE_PX as f64;
-    match v {
-        ParamValue::Float(d) if d.is_finite() && *d >= 0.0 && *d <= max => Ok(()),
-        _ => Err(format!("must be 0 (derive it) or a diameter up to {MAX_SIDE_PX} pixels")),
-    }
-}
-
-fn tolerance(v: &ParamValue) -> Result<(), String> {
-    match v {
-        ParamValue::Float(t) if t.is_finite() && *t > 0.0 && *t < 100.0 => Ok(()),
-        _ => Err("must be more than 0 and less than 100 percent".into()),
-    }
-}
-
-fn radius(v: &ParamValue) -> Result<(), String> {
-    match v {
-        ParamValue::Float(r) if r.is_finite() && (MIN_SEARCH_RADIUS_PCT..=100.0).contains(r) => Ok(()),
-        _ => Err("must be 5 to 100 percent".into()),
-    }
-}
-
-fn timeout(v: &ParamValue) -> Result<(), String> {
-    match v {
-        ParamValue::Float(t) if t.is_finite() && *t > 0.0 && *t <= MAX_TIMEOUT_S => Ok(()),
-        _ => Err("must be more than 0 and at most 300 seconds".into()),
-    }
-}
-
-fn flush(v: &ParamValue) -> Result<(), String> {
-    match v {
-        ParamValue::Int(n) if (0..=MAX_FLUSH_FRAMES).contains(n) => Ok(()),
-        _ => Err(format!("must be 0 to {MAX_FLUSH_FRAMES} frames")),
-    }
-}
-
 #[cfg(test)]
 mod tests {
+    use vision_core::{ParamKind, ParamValue};
+
     use super::*;
+    use crate::CameraConfig;
 
     #[test]
     fn each_refusal_quotes_the_range_the_reference_shows() {
@@ -240,11 +175,95 @@ mod tests {
         ];
         for (name, value) in bad {
             let s = SETTINGS.settings.iter().find(|s| s.spec.name == name).expect(name);
-            assert_eq!((s.check)(&value), Err(format!("must be {}", s.spec.range)), "{name}");
+            assert_eq!(s.check(&value), Err(format!("must be {}", s.spec.range)), "{name}");
         }
         for s in SETTINGS.settings {
             let choice = matches!(s.spec.kind, ParamKind::Choice(_));
             assert_eq!(s.spec.range.is_empty(), choice, "{}: a range unless a choice", s.spec.name);
+        }
+    }
+
+    /// Each end of each range, and the nearest value beyond it, through the profile's setter.
+    #[test]
+    fn each_range_ends_where_its_words_say() {
+        let cases: [(&str, &[ParamValue], &[ParamValue]); 8] = [
+            (
+                "VisionCameraWidth",
+                &[ParamValue::Int(0), ParamValue::Int(16_384)],
+                &[ParamValue::Int(-1), ParamValue::Int(16_385)],
+            ),
+            (
+                "VisionCameraHeight",
+                &[ParamValue::Int(0), ParamValue::Int(16_384)],
+                &[ParamValue::Int(-1), ParamValue::Int(16_385)],
+            ),
+            (
+                "VisionCameraMarkDiameterPx",
+                &[ParamValue::Float(0.0), ParamValue::Float(16_384.0)],
+                &[ParamValue::Float(-1e-9), ParamValue::Float(16_384.001), ParamValue::Float(f64::NAN)],
+            ),
+            (
+                "VisionCameraMarkTolerance",
+                &[ParamValue::Float(1e-9), ParamValue::Float(99.999)],
+                &[ParamValue::Float(0.0), ParamValue::Float(100.0), ParamValue::Float(f64::INFINITY)],
+            ),
+            (
+                "VisionCameraSearchRadius",
+                &[ParamValue::Float(5.0), ParamValue::Float(100.0)],
+                &[ParamValue::Float(4.999), ParamValue::Float(100.001)],
+            ),
+            (
+                "VisionCameraTimeout",
+                &[ParamValue::Float(1e-9), ParamValue::Float(300.0)],
+                &[ParamValue::Float(0.0), ParamValue::Float(300.001), ParamValue::Float(f64::NAN)],
+            ),
+            (
+                "VisionCameraFlushFrames",
+                &[ParamValue::Int(0), ParamValue::Int(30)],
+                &[ParamValue::Int(-1), ParamValue::Int(31)],
+            ),
+            (
+                "VisionCameraSource",
+                &[ParamValue::Text("/dev/video0".into()), ParamValue::Text("http://cam/".into())],
+                &[ParamValue::Text(" ".into()), ParamValue::Text("https://cam/".into())],
+            ),
+        ];
+        for (name, accepted, refused) in cases {
+            for v in accepted {
+                let mut p = Params::default().with_driver_settings(&SETTINGS);
+                p.set(name, v.clone()).unwrap_or_else(|e| panic!("{name} = {v}: {e}"));
+                assert_eq!(p.get(name).as_ref(), Ok(v), "{name}");
+            }
+            for v in refused {
+                let mut p = Params::default().with_driver_settings(&SETTINGS);
+                let e = p.set(name, v.clone()).expect_err(name).to_string();
+                assert!(e.starts_with(&format!("{name} = ")), "{e}");
+                assert_eq!(
+                    p.get(name),
+                    Ok(SETTINGS.settings.iter().find(|s| s.spec.name == name).expect(name).default_value())
+                );
+            }
+        }
+        // The driver's own ranges for what it is asked to search: a set diameter, a set size.
+        assert!(DIAMETER_SET.accepts(&2.0) && !DIAMETER_SET.accepts(&1.999) && DIAMETER_SET.accepts(&16_384.0));
+        assert!(SIDE_SET.accepts(&1) && !SIDE_SET.accepts(&0) && !SIDE_SET.accepts(&16_385));
+    }
+
+    proptest::proptest! {
+        /// Any text for any setting: the profile refuses it by name or keeps a value the typed
+        /// read turns into a configuration or a named refusal. Never a panic.
+        #[test]
+        fn any_text_for_any_setting_is_read_or_refused(which in 0usize..11, text in "\\PC{0,40}|[-+]?[0-9]{0,6}(\\.[0-9]{0,4})?(e[-+]?[0-9]{1,3})?") {
+            let name = SETTINGS.settings[which].spec.name;
+            let mut p = Params::default().with_driver_settings(&SETTINGS);
+            match p.set(name, text.as_str()) {
+                Ok(()) => {
+                    if let Err(e) = CameraConfig::from_params(&p) {
+                        proptest::prop_assert!(e.to_string().contains("VisionCamera"), "{e}");
+                    }
+                }
+                Err(e) => proptest::prop_assert!(e.to_string().contains(name), "{e}"),
+            }
         }
     }
 }

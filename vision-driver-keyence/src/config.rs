@@ -4,11 +4,11 @@
 use std::path::PathBuf;
 use std::time::Duration;
 
-use vision_core::{ParamValue, Params};
+use vision_core::Params;
 
 use crate::error::KeyenceError;
 use crate::protocol::Limits;
-use crate::settings::{self, MAX_IMAGE_GRAB_TIMEOUT_S};
+use crate::settings;
 
 /// The Keyence Non-Procedural port (SPEC §7).
 pub const DEFAULT_PORT: u16 = 8500;
@@ -89,21 +89,14 @@ impl KeyenceConfig {
     /// [`KeyenceError::Config`] naming the setting when a value is out of the driver's range.
     pub fn from_params(params: &Params) -> Result<KeyenceConfig, KeyenceError> {
         let table = settings::settings(params);
-        let value = |name: &str| table.get(name).cloned().ok_or_else(|| bad(format!("{name} is missing")));
-        let text = |name: &str| match value(name)? {
-            ParamValue::Text(s) => Ok(s),
-            other => Err(bad(format!("{name} {other} is not text"))),
+        // The table read each value as its type and checked its range when it was set.
+        let text = |name: &str| table.text(name).ok_or_else(|| bad(format!("{name} is missing")));
+        let seconds = |name: &str| {
+            let s = table.float(name).ok_or_else(|| bad(format!("{name} is missing")))?;
+            Duration::try_from_secs_f64(s).map_err(|_| bad(format!("{name} {s} s is not a duration")))
         };
-        let seconds = |name: &str| match value(name)? {
-            ParamValue::Float(s) => {
-                Duration::try_from_secs_f64(s).map_err(|_| bad(format!("{name} {s} s is not a duration")))
-            }
-            other => Err(bad(format!("{name} {other} is not a number of seconds"))),
-        };
-        let port = match value("VisionPort")? {
-            ParamValue::Int(p) => u16::try_from(p).map_err(|_| bad(format!("VisionPort {p} is not a TCP port")))?,
-            other => return Err(bad(format!("VisionPort {other} is not a TCP port"))),
-        };
+        let port = table.int("VisionPort").ok_or_else(|| bad("VisionPort is missing".into()))?;
+        let port = u16::try_from(port).map_err(|_| bad(format!("VisionPort {port} is not a TCP port")))?;
         let config = KeyenceConfig {
             timeout: seconds("VisionTimeout")?,
             images: ImageWatch {
@@ -125,16 +118,16 @@ impl KeyenceConfig {
         if self.ip.trim().is_empty() {
             return bad("VisionIP is empty".into());
         }
-        if self.port == 0 {
+        if !settings::PORT.accepts(&i64::from(self.port)) {
             return bad("VisionPort 0 is not a TCP port".into());
         }
-        if self.timeout.is_zero() || self.timeout > MAX_TIMEOUT {
+        if !settings::TIMEOUT.accepts(&self.timeout.as_secs_f64()) {
             return bad(format!("VisionTimeout {:?} must be more than 0 and at most 300 s", self.timeout));
         }
         if let Some(d) = self.memory_device.filter(|d| !(1..=2).contains(d)) {
             return bad(format!("memory device {d} must be 1 or 2"));
         }
-        if self.images.timeout.as_secs_f64() > MAX_IMAGE_GRAB_TIMEOUT_S {
+        if !settings::GRAB_TIMEOUT.accepts(&self.images.timeout.as_secs_f64()) {
             return bad(format!("VisionImageGrabTimeout {:?} must be at most 60 s", self.images.timeout));
         }
         if self.keepalive.is_some_and(|k| k < Duration::from_secs(1)) {

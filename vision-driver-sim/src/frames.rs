@@ -13,12 +13,13 @@
 //! focus distance × 100.
 
 use vision_locate::render::{self, Depth, Lighting, PlacedMark, Scene, Shape};
+use vision_locate::MarkKind;
 use vision_locate::{OwnedImage, OwnedPixels};
 use vision_math::Point2;
 
 use crate::error::SimError;
 use crate::sim::{Sim, State};
-use crate::world::{ImageLook, MarkShape};
+use crate::world::ImageLook;
 
 /// A rendered frame and the truth in it.
 #[derive(Debug, Clone, PartialEq)]
@@ -146,10 +147,10 @@ fn scene(st: &State) -> (Scene, Vec<Point2<f64>>, f64) {
         .iter()
         .map(|&(p, d, deg)| PlacedMark {
             shape: match look.mark {
-                MarkShape::Dot => Shape::Dot { diameter: d },
-                MarkShape::Ring => Shape::Ring { diameter: d, line_width: d * line },
+                MarkKind::Dot => Shape::Dot { diameter: d },
+                MarkKind::Ring => Shape::Ring { diameter: d, line_width: d * line },
                 // Counter-clockwise on the table is towards −y in the image.
-                MarkShape::Cross => Shape::Cross { length: d, bar_width: d * line, angle: -deg.to_radians() },
+                MarkKind::Cross => Shape::Cross { length: d, bar_width: d * line, angle: -deg.to_radians() },
             },
             x: p.x - 0.5,
             y: p.y - 0.5,

@@ -74,7 +74,8 @@ pub use machine::SimMachine;
 pub use optics::Optics;
 pub use sim::Sim;
 pub use truth::CalibrationError;
+/// The marks' shape in [`ImageLook`]: the finder's own type.
+pub use vision_locate::MarkKind;
 pub use world::{
-    CameraMount, ControllerName, Fixture, ImageLook, Job, MachineSetup, MarkShape, Tool, World, WorldUnit,
-    DEFAULT_WORLD_TOML,
+    CameraMount, ControllerName, Fixture, ImageLook, Job, MachineSetup, Tool, World, WorldUnit, DEFAULT_WORLD_TOML,
 };

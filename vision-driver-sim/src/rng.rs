@@ -1,23 +1,22 @@
-//! A small deterministic random source (SplitMix64 + Box–Muller): the same seed gives the same
-//! noise on every platform and in every version, which a dependency could not promise.
+//! The reading-mode camera's noise: Gaussian draws (Box–Muller) on the renderer's SplitMix64,
+//! so the same seed gives the same noise on every platform and in every version, which a
+//! dependency could not promise.
+
+use vision_locate::render::SplitMix64;
 
 /// A seeded generator of uniform and Gaussian numbers.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone)]
 pub(crate) struct Rng {
-    state: u64,
+    bits: SplitMix64,
 }
 
 impl Rng {
     pub(crate) fn new(seed: u64) -> Rng {
-        Rng { state: seed }
+        Rng { bits: SplitMix64::new(seed) }
     }
 
     fn next_u64(&mut self) -> u64 {
-        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        self.bits.next_u64()
     }
 
     /// Uniform in (0, 1].

@@ -10,6 +10,7 @@
 
 use serde::{Deserialize, Serialize};
 use vision_core::{cal_sheet, Controller};
+use vision_locate::MarkKind;
 use vision_math::{LengthUnit, Point2, Vector2};
 
 use crate::error::SimError;
@@ -156,27 +157,15 @@ pub struct CameraMount {
     pub image: Option<ImageLook>,
 }
 
-/// The printed mark's shape in a rendered frame.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum MarkShape {
-    /// A filled disc of the fixture's diameter.
-    #[default]
-    Dot,
-    /// A ring whose outer diameter is the fixture's diameter.
-    Ring,
-    /// A cross whose bars are the fixture's diameter tip to tip, turned with the fixture.
-    Cross,
-}
-
 /// What the image-mode camera sees besides the geometry (which is the reading-mode camera's:
 /// the same optics, the same marks): the print, the focus, the light and the sensor.
 /// Reflectances are 0 (black) to 1 (white).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ImageLook {
-    /// The marks' shape.
-    pub mark: MarkShape,
+    /// The marks' shape: a dot of the fixture's diameter, a ring of that outer diameter, or a
+    /// cross whose bars are that long tip to tip, turned with the fixture.
+    pub mark: MarkKind,
     /// Reflectance of the ink (a light mark on a dark ground when above `ground`).
     pub ink: f64,
     /// Reflectance of the paper or part around the marks.
@@ -209,7 +198,7 @@ impl Default for ImageLook {
     /// light gradient, no clutter.
     fn default() -> Self {
         ImageLook {
-            mark: MarkShape::Dot,
+            mark: MarkKind::Dot,
             ink: 0.08,
             ground: 0.85,
             line_width_pct: 20.0,
@@ -522,7 +511,7 @@ impl ImageLook {
             }
         };
         range("line_width_pct", self.line_width_pct, 50.0)?;
-        if self.mark != MarkShape::Dot && self.line_width_pct < 1.0 {
+        if self.mark != MarkKind::Dot && self.line_width_pct < 1.0 {
             return invalid("camera.image.line_width_pct", "must be at least 1 for a ring or a cross");
         }
         range("blur_px", self.blur_px, 50.0)?;

@@ -1,8 +1,8 @@
 //! [`cameras`]: the one list of camera drivers, with their settings.
 
 use vision_core::{CameraDriver, DriverError, DriverRegistry, Params};
-use vision_driver_camera::{CameraConfig, CameraError, Frame, FrameDriver, FrameSource, MarkKind, Polarity};
-use vision_driver_sim::{MarkShape, Sim};
+use vision_driver_camera::{CameraConfig, CameraError, Frame, FrameDriver, FrameSource, Polarity};
+use vision_driver_sim::Sim;
 
 /// The image-mode simulated camera's registry name: the simulator's rendered frames searched
 /// by the `Camera` driver.
@@ -78,11 +78,7 @@ impl FrameSource for SimFrames {
 pub fn sim_image_config(sim: &Sim, params: &Params) -> Result<CameraConfig, CameraError> {
     let mut config = CameraConfig::from_params(params)?;
     let look = sim.image_look();
-    config.mark.kind = match look.mark {
-        MarkShape::Dot => MarkKind::Dot,
-        MarkShape::Ring => MarkKind::Ring,
-        MarkShape::Cross => MarkKind::Cross,
-    };
+    config.mark.kind = look.mark;
     config.mark.polarity = if look.ink < look.ground { Polarity::Dark } else { Polarity::Light };
     let explicit = params.get("VisionCameraMarkDiameterPx").ok().and_then(|v| v.as_f64()).is_some_and(|d| d > 0.0);
     if !explicit {

@@ -24,8 +24,8 @@
 //! [`NotFoundReason::Cluttered`]; and [`locate_within`] stops at a [`Budget`]'s deadline
 //! ([`LocateError::Deadline`]). None of them ever turns into a reported mark.
 //!
-//! [`render`] draws such marks with known truth (anti-aliased, blurred, lit, noisy) for tests,
-//! benchmarks and the simulator.
+//! `render` (the `render` feature) draws such marks with known truth (anti-aliased, blurred,
+//! lit, noisy) for tests, benchmarks and the simulator; the finder does not need it.
 //!
 //! ```
 //! use vision_locate::render::{render, Depth, PlacedMark, Scene, Shape};
@@ -50,6 +50,7 @@ mod detect;
 mod edge;
 mod fit;
 mod image;
+#[cfg(any(test, feature = "render"))]
 pub mod render;
 mod spec;
 mod special;
@@ -59,7 +60,7 @@ use std::time::Instant;
 
 pub use detect::MAX_BLOBS;
 pub use image::{GrayImage, ImageError, OwnedImage, OwnedPixels, Pixels};
-pub use spec::{MarkKind, MarkSpec, Polarity, SpecError, MIN_DIAMETER_PX};
+pub use spec::{MarkKind, MarkSpec, Polarity, SpecError, UnknownMarkKind, MIN_DIAMETER_PX};
 
 use detect::{block_factor, search, Cut};
 use fit::{fit, Annulus, Cross, Disc, FitFailure, FitResult, Img};

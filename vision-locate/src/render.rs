@@ -1,21 +1,17 @@
-//! A pure renderer of marks with known truth: what a camera sees of a printed dot, ring or cross.
+//! Draws marks with known truth (the `render` feature): what a camera sees of a printed dot,
+//! ring or cross, for the simulator's frames and the finder's tests and benchmarks.
 //!
-//! The simulator renders its camera's frames with it, and the finder's tests and benchmarks use
-//! it as ground truth. The image is built in this order, each step exact or controlled:
+//! In order, each step exact or controlled: (1) **reflectance** (0 black, 1 white): the
+//! background, an optional [`Texture`], the [`Clutter`], then the marks, each a signed distance
+//! function whose pixels get their exact covered area (8 × 8 sub-squares, each cut by the
+//! shape's local tangent line, so an edge costs no sampling bias); (2) **defocus**, a Gaussian
+//! blur of [`Scene::blur_sigma`] px; (3) **light**, a planar [`Lighting`]; (4) **noise**,
+//! Gaussian of [`Scene::noise_sigma`] grey levels from a seeded [`SplitMix64`], then rounded
+//! and clamped to the output depth.
 //!
-//! 1. **Reflectance** (0 = black, 1 = white): the background, an optional machined-surface
-//!    [`Texture`], the [`Clutter`] items, then the marks on top. Each shape is a signed distance
-//!    function; a pixel's value is its exact covered area, computed on 8 × 8 sub-squares each cut
-//!    by the shape's local tangent line (a closed form), so a straight or gently curved edge
-//!    costs no sampling bias.
-//! 2. **Defocus**: a Gaussian blur of standard deviation [`Scene::blur_sigma`] pixels.
-//! 3. **Light**: multiplied by a planar illumination [`Lighting`] (level and gradient).
-//! 4. **Noise**: additive Gaussian of [`Scene::noise_sigma`] grey levels from a seeded
-//!    generator, then rounding to the output depth (clamped).
-//!
-//! Pixel convention as in [`GrayImage`](crate::GrayImage): (0, 0) is the centre of the top-left
-//! pixel, x right, y down, all lengths in pixels, angles in radians from +x towards +y. An
-//! example: [`render`].
+//! Pixels as in [`GrayImage`](crate::GrayImage): (0, 0) is the top-left pixel's centre, x
+//! right, y down; lengths in pixels, angles in radians from +x towards +y. An example:
+//! [`render`].
 
 use std::f64::consts::PI;
 use std::fmt;

@@ -2,16 +2,67 @@
 
 use std::fmt;
 
-/// The shape of the printed mark.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+/// The shape of the printed mark: the one type the finder, the camera driver's
+/// `VisionCameraMark`, the simulator's world file and the CLI's `--mark` share. Written as its
+/// lower-case word (`dot`, `ring`, `cross`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize), serde(rename_all = "lowercase"))]
 pub enum MarkKind {
     /// A filled disc; `diameter_px` is its diameter.
+    #[default]
     Dot,
     /// A circular ring of any line width; `diameter_px` is its outer diameter.
     Ring,
     /// Two equal perpendicular bars crossing at their middles, any bar width and rotation;
     /// `diameter_px` is the tip-to-tip length of a bar.
     Cross,
+}
+
+impl MarkKind {
+    /// Every kind, in the order they are listed.
+    pub const ALL: [MarkKind; 3] = [MarkKind::Dot, MarkKind::Ring, MarkKind::Cross];
+    /// Their words, in the same order.
+    pub const NAMES: &'static [&'static str] = &["dot", "ring", "cross"];
+
+    /// The kind's word: `dot`, `ring` or `cross`.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            MarkKind::Dot => "dot",
+            MarkKind::Ring => "ring",
+            MarkKind::Cross => "cross",
+        }
+    }
+}
+
+impl fmt::Display for MarkKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A word that names no [`MarkKind`].
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct UnknownMarkKind(pub String);
+
+impl fmt::Display for UnknownMarkKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} is not dot, ring or cross", self.0)
+    }
+}
+
+impl std::error::Error for UnknownMarkKind {}
+
+impl std::str::FromStr for MarkKind {
+    type Err = UnknownMarkKind;
+
+    /// Reads `dot`, `ring` or `cross`, in any case.
+    fn from_str(s: &str) -> Result<MarkKind, UnknownMarkKind> {
+        MarkKind::ALL
+            .into_iter()
+            .find(|k| k.name().eq_ignore_ascii_case(s))
+            .ok_or_else(|| UnknownMarkKind(s.to_string()))
+    }
 }
 
 /// Which way the mark differs from its surround.

@@ -9,7 +9,7 @@
 use vision_core::{Params, Timestamp, VisionModule};
 use vision_driver_camera::server::{Encoding, SnapshotServer};
 use vision_driver_camera::FrameSource;
-use vision_driver_sim::{ImageLook, MarkShape, Sim, SimMachine, World};
+use vision_driver_sim::{ImageLook, MarkKind, Sim, SimMachine, World};
 use vision_gcode::Event;
 use vision_host::fixed_clock;
 use vision_host::{ProgramHandler, Record, Session, SimFrames};
@@ -62,12 +62,12 @@ fn worlds() -> Vec<(&'static str, World)> {
     defocused.camera.image = Some(ImageLook { light_gradient_pct: 30.0, noise_grey: 4.0, ..ImageLook::default() });
     let mut rings = base.clone();
     rings.seed = 13;
-    rings.camera.image = Some(ImageLook { mark: MarkShape::Ring, clutter: 12, ..ImageLook::default() });
+    rings.camera.image = Some(ImageLook { mark: MarkKind::Ring, clutter: 12, ..ImageLook::default() });
     let mut crosses = base.clone();
     crosses.seed = 17;
     crosses.fixtures[0].rotation_deg = 4.0;
     crosses.camera.image =
-        Some(ImageLook { mark: MarkShape::Cross, ink: 0.9, ground: 0.25, light: 0.8, ..ImageLook::default() });
+        Some(ImageLook { mark: MarkKind::Cross, ink: 0.9, ground: 0.25, light: 0.8, ..ImageLook::default() });
     vec![
         ("built-in (dot, 20 % light gradient, σ 2 grey)", base),
         ("part turned 2°, camera 1.5°, seed 7", moved),

@@ -1,95 +1,142 @@
-//! The range checks of the parameter tables: each names the values it accepts ([`Check::range`],
-//! which the refusal and the parameter reference both quote), so what is checked and what is
-//! documented cannot differ.
+//! The range checks of the parameter tables and of the drivers' settings: each names the values
+//! it accepts ([`Check::range`], which the refusal and the parameter reference both quote), so
+//! what is checked and what is documented cannot differ. A numeric range is data
+//! ([`Check::within`]), the one helper every interval is checked with.
+
+use std::mem::ManuallyDrop;
+use std::ops::{Bound, RangeBounds};
 
 use crate::pound::PoundBlock;
 
-/// A range check of a parameter's values.
+/// A value a [`Check::within`] can bound: ordered, and for a float a number (NaN and ±∞ are
+/// outside every range).
+pub trait Ordered: PartialOrd + Copy + 'static {
+    /// Whether `self` lies between `lo` and `hi`.
+    fn within(&self, lo: &Bound<Self>, hi: &Bound<Self>) -> bool;
+}
+
+impl Ordered for f64 {
+    fn within(&self, lo: &Bound<f64>, hi: &Bound<f64>) -> bool {
+        self.is_finite() && (lo.as_ref(), hi.as_ref()).contains(self)
+    }
+}
+
+impl Ordered for i64 {
+    fn within(&self, lo: &Bound<i64>, hi: &Bound<i64>) -> bool {
+        (lo.as_ref(), hi.as_ref()).contains(self)
+    }
+}
+
+/// A range check of a parameter's or a driver setting's values.
 #[derive(Debug)]
-pub(crate) struct Check<T: 'static> {
+pub struct Check<T: 'static> {
     /// The values accepted, worded to follow "must be" ("between 0 and 60 seconds"); empty:
     /// every value of the parameter's type.
-    pub(crate) range: &'static str,
-    /// Whether `v` is accepted.
-    accepts: fn(&T) -> bool,
-    /// The refusal when it is more specific than "must be {range}" (the pound block names the
-    /// variables it would clash with).
-    refusal: Option<fn(&T) -> String>,
+    pub range: &'static str,
+    rule: Rule<T>,
+}
+
+/// How a [`Check`] decides.
+#[derive(Debug)]
+enum Rule<T: 'static> {
+    /// Every value.
+    Any,
+    /// Between two bounds; the function is [`Ordered::within`]. The bounds are `Copy`
+    /// ([`Ordered`]): `ManuallyDrop` only tells the compiler that a `Check<String>` in a constant
+    /// has nothing to drop.
+    Within(ManuallyDrop<Bound<T>>, ManuallyDrop<Bound<T>>, fn(&T, &Bound<T>, &Bound<T>) -> bool),
+    /// A rule the range words describe.
+    Test(fn(&T) -> bool),
+    /// A rule that says itself why a value is refused (the pound block names the variables it
+    /// would clash with).
+    Explained(fn(&T) -> Result<(), String>),
 }
 
 impl<T> Check<T> {
     /// Every value of the type.
-    pub(crate) const ANY: Check<T> = Check { range: "", accepts: |_| true, refusal: None };
+    pub const ANY: Check<T> = Check { range: "", rule: Rule::Any };
+
+    /// The values `accepts` says yes to, which `range` describes.
+    #[must_use]
+    pub const fn test(range: &'static str, accepts: fn(&T) -> bool) -> Check<T> {
+        Check { range, rule: Rule::Test(accepts) }
+    }
+
+    /// The values `explain` says yes to; its `Err` is the refusal, more specific than "must be
+    /// {range}".
+    #[must_use]
+    pub const fn explained(range: &'static str, explain: fn(&T) -> Result<(), String>) -> Check<T> {
+        Check { range, rule: Rule::Explained(explain) }
+    }
+
+    /// Whether `v` is accepted.
+    #[must_use]
+    pub fn accepts(&self, v: &T) -> bool {
+        self.check(v).is_ok()
+    }
 
     /// `Err` says what the value must be.
-    pub(crate) fn check(&self, v: &T) -> Result<(), String> {
-        if (self.accepts)(v) {
+    ///
+    /// # Errors
+    /// "must be {range}", or the explained rule's own words.
+    pub fn check(&self, v: &T) -> Result<(), String> {
+        let ok = match &self.rule {
+            Rule::Any => true,
+            Rule::Within(lo, hi, within) => within(v, lo, hi),
+            Rule::Test(accepts) => accepts(v),
+            Rule::Explained(explain) => return explain(v),
+        };
+        if ok {
             Ok(())
         } else {
-            Err(self.refusal.map_or_else(|| format!("must be {}", self.range), |r| r(v)))
+            Err(format!("must be {}", self.range))
         }
     }
 }
 
-pub(super) const FINITE: Check<f64> = Check { range: "a finite number", accepts: |v| v.is_finite(), refusal: None };
+impl<T: Ordered> Check<T> {
+    /// The values between `lo` and `hi` (a float also finite), which `range` describes.
+    #[must_use]
+    pub const fn within(range: &'static str, lo: Bound<T>, hi: Bound<T>) -> Check<T> {
+        Check { range, rule: Rule::Within(ManuallyDrop::new(lo), ManuallyDrop::new(hi), T::within) }
+    }
+
+    /// The values from `lo` to `hi`, both included.
+    #[must_use]
+    pub const fn closed(range: &'static str, lo: T, hi: T) -> Check<T> {
+        Check::within(range, Bound::Included(lo), Bound::Included(hi))
+    }
+}
+
+pub(super) const FINITE: Check<f64> = Check::within("a finite number", Bound::Unbounded, Bound::Unbounded);
 pub(super) const NON_NEGATIVE: Check<f64> =
-    Check { range: "a finite number ≥ 0 (0 disables)", accepts: |v| v.is_finite() && *v >= 0.0, refusal: None };
-pub(super) const SECONDS_60: Check<f64> =
-    Check { range: "between 0 and 60 seconds", accepts: |v| v.is_finite() && (0.0..=60.0).contains(v), refusal: None };
-pub(super) const PIXEL_OFFSET: Check<f64> = Check {
-    range: "a finite number of pixels (|v| ≤ 100000)",
-    accepts: |v| v.is_finite() && v.abs() <= 100_000.0,
-    refusal: None,
-};
-pub(super) const NOISE_PX: Check<f64> =
-    Check { range: "between 0 and 10 pixels", accepts: |v| v.is_finite() && (0.0..=10.0).contains(v), refusal: None };
-pub(super) const NOISE_PX_WIDE: Check<f64> = Check {
-    range: "between 0 and 1000 pixels",
-    accepts: |v| v.is_finite() && (0.0..=1000.0).contains(v),
-    refusal: None,
-};
-pub(super) const LIFT_IN: Check<f64> = Check {
-    range: "between 0 and 2 inches (0 = calibrate at one height)",
-    accepts: |v| v.is_finite() && (0.0..=2.0).contains(v),
-    refusal: None,
-};
-pub(super) const PASSES: Check<i64> =
-    Check { range: "0..10 passes (0 reads in one shot)", accepts: |v| (0..=10).contains(v), refusal: None };
-pub(super) const JOB: Check<i64> = Check {
-    range: "a camera job 0..999 (0 = leave the camera's job)",
-    accepts: |v| (0..=999).contains(v),
-    refusal: None,
-};
-pub(super) const RESOLUTION: Check<i64> =
-    Check { range: "an image size of 2..100000 pixels", accepts: |v| (2..=100_000).contains(v), refusal: None };
-pub(super) const RESOLUTION_RECORD: Check<i64> = Check {
-    range: "an image size of 2..100000 pixels (0 = not recorded)",
-    accepts: |v| *v == 0 || (2..=100_000).contains(v),
-    refusal: None,
-};
-pub(super) const TOOL: Check<i64> = Check {
-    range: "a tool number ≥ 0 (0 disables the camera-tool check)",
-    accepts: |v| (0..=i64::from(u32::MAX)).contains(v),
-    refusal: None,
-};
-pub(super) const POUND_BASE: Check<i64> = Check {
-    range: "an integer B ≥ 100 whose 40-variable block #B..#B+39 ends at or below #9999 and stays outside \
-            #5061..#5081 and #5201..#5500",
-    accepts: |v| PoundBlock::new(*v).is_ok(),
-    refusal: Some(|v| PoundBlock::new(*v).err().map(|e| e.to_string()).unwrap_or_default()),
-};
-pub(super) const DRIVER_NAME: Check<String> = Check {
-    range: "a driver name (letters, digits, _ or -), e.g. Keyence",
-    accepts: |v| is_driver_name(v),
-    refusal: None,
-};
-pub(super) const DRIVER_RECORD: Check<String> = Check {
-    range: "a driver name (letters, digits, _ or -), or empty (not recorded)",
-    accepts: |v| v.is_empty() || is_driver_name(v),
-    refusal: None,
-};
+    Check::within("a finite number ≥ 0 (0 disables)", Bound::Included(0.0), Bound::Unbounded);
+pub(super) const SECONDS_60: Check<f64> = Check::closed("between 0 and 60 seconds", 0.0, 60.0);
+pub(super) const PIXEL_OFFSET: Check<f64> =
+    Check::closed("a finite number of pixels (|v| ≤ 100000)", -100_000.0, 100_000.0);
+pub(super) const NOISE_PX: Check<f64> = Check::closed("between 0 and 10 pixels", 0.0, 10.0);
+pub(super) const NOISE_PX_WIDE: Check<f64> = Check::closed("between 0 and 1000 pixels", 0.0, 1000.0);
+pub(super) const LIFT_IN: Check<f64> = Check::closed("between 0 and 2 inches (0 = calibrate at one height)", 0.0, 2.0);
+pub(super) const PASSES: Check<i64> = Check::closed("0..10 passes (0 reads in one shot)", 0, 10);
+pub(super) const JOB: Check<i64> = Check::closed("a camera job 0..999 (0 = leave the camera's job)", 0, 999);
+pub(super) const RESOLUTION: Check<i64> = Check::closed("an image size of 2..100000 pixels", 2, 100_000);
+pub(super) const RESOLUTION_RECORD: Check<i64> =
+    Check::test("an image size of 2..100000 pixels (0 = not recorded)", |v| *v == 0 || RESOLUTION.accepts(v));
+pub(super) const TOOL: Check<i64> =
+    Check::closed("a tool number ≥ 0 (0 disables the camera-tool check)", 0, u32::MAX as i64);
+pub(super) const POUND_BASE: Check<i64> = Check::explained(
+    "an integer B ≥ 100 whose 40-variable block #B..#B+39 ends at or below #9999 and stays outside \
+     #5061..#5081 and #5201..#5500",
+    |v| PoundBlock::new(*v).map(|_| ()).map_err(|e| e.to_string()),
+);
+pub(super) const DRIVER_NAME: Check<String> =
+    Check::test("a driver name (letters, digits, _ or -), e.g. Keyence", |v| is_driver_name(v));
+pub(super) const DRIVER_RECORD: Check<String> =
+    Check::test("a driver name (letters, digits, _ or -), or empty (not recorded)", |v| {
+        v.is_empty() || is_driver_name(v)
+    });
 pub(super) const SHORT_TEXT: Check<String> =
-    Check { range: "text of at most 4096 bytes", accepts: |v| v.len() <= 4096 && !v.contains('\0'), refusal: None };
+    Check::test("text of at most 4096 bytes", |v| v.len() <= 4096 && !v.contains('\0'));
 
 fn is_driver_name(v: &str) -> bool {
     !v.is_empty() && v.len() <= 64 && v.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
@@ -113,5 +160,19 @@ mod tests {
         for bad in [99, 5030, 5500, 9961] {
             assert!(POUND_BASE.check(&bad).is_err(), "{bad}");
         }
+    }
+
+    #[test]
+    fn a_range_keeps_its_ends_open_or_closed_and_refuses_what_is_not_a_number() {
+        let open = Check::within("more than 0 and less than 1", Bound::Excluded(0.0), Bound::Excluded(1.0));
+        assert!(!open.accepts(&0.0) && open.accepts(&1e-12) && open.accepts(&(1.0 - 1e-12)) && !open.accepts(&1.0));
+        let closed = Check::closed("0 to 1", 0.0, 1.0);
+        assert!(closed.accepts(&0.0) && closed.accepts(&1.0) && !closed.accepts(&-1e-12) && !closed.accepts(&1.1));
+        for not_a_number in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            assert!(!FINITE.accepts(&not_a_number) && !NON_NEGATIVE.accepts(&not_a_number), "{not_a_number}");
+        }
+        assert!(FINITE.accepts(&-1e300) && NON_NEGATIVE.accepts(&1e300));
+        assert!(TOOL.accepts(&i64::from(u32::MAX)) && !TOOL.accepts(&(i64::from(u32::MAX) + 1)) && !TOOL.accepts(&-1));
+        assert!(RESOLUTION_RECORD.accepts(&0) && !RESOLUTION_RECORD.accepts(&1) && RESOLUTION_RECORD.accepts(&2));
     }
 }

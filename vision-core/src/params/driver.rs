@@ -5,22 +5,126 @@
 
 use std::fmt;
 
+use super::checks::Check;
 use super::typed::{coerce, kind_reason};
-use super::value::{ParamSpec, ParamValue};
+use super::value::{ParamKind, ParamSpec, ParamValue};
 use crate::error::VisionError;
 
-/// One setting of a camera driver, as the driver declares it.
+/// One setting of a camera driver, as the driver declares it: its description, default and
+/// range in one place (the description's `range` is the check's).
 #[derive(Debug)]
 pub struct Setting {
     /// Its name (the manual's, `Vision…`), type, section and description with units.
     /// `access` is [`Access::Config`](super::Access::Config): a driver setting is written by
     /// the operator and persisted.
     pub spec: ParamSpec,
-    /// The value before anything sets it, of `spec.kind`.
-    pub default: fn() -> ParamValue,
-    /// The driver's range check of a value already read as `spec.kind` (a
-    /// [`ParamValue::Int`] for an integer, …): `Err` says what the value must be.
-    pub check: fn(&ParamValue) -> Result<(), String>,
+    /// Its default and range check, of `spec.kind`.
+    pub value: SettingValue,
+}
+
+/// A driver setting's type with its default and range check.
+#[derive(Debug)]
+pub enum SettingValue {
+    /// An integer.
+    Int {
+        /// The value before anything sets it.
+        default: i64,
+        /// The values accepted.
+        check: Check<i64>,
+    },
+    /// A real number.
+    Float {
+        /// The value before anything sets it.
+        default: f64,
+        /// The values accepted.
+        check: Check<f64>,
+    },
+    /// Free text.
+    Text {
+        /// The value before anything sets it.
+        default: &'static str,
+        /// The values accepted.
+        check: Check<String>,
+    },
+    /// One of the words of its [`ParamKind::Choice`].
+    Choice {
+        /// The word before anything sets it.
+        default: &'static str,
+    },
+}
+
+impl Setting {
+    /// An integer setting in `unit` (empty: a count).
+    #[must_use]
+    pub const fn int(
+        name: &'static str,
+        unit: &'static str,
+        default: i64,
+        check: Check<i64>,
+        doc: &'static str,
+    ) -> Self {
+        let spec = ParamSpec::driver_setting(name, ParamKind::Integer, unit, check.range, doc);
+        Setting { spec, value: SettingValue::Int { default, check } }
+    }
+
+    /// A real-number setting in `unit`.
+    #[must_use]
+    pub const fn float(
+        name: &'static str,
+        unit: &'static str,
+        default: f64,
+        check: Check<f64>,
+        doc: &'static str,
+    ) -> Self {
+        let spec = ParamSpec::driver_setting(name, ParamKind::Float, unit, check.range, doc);
+        Setting { spec, value: SettingValue::Float { default, check } }
+    }
+
+    /// A text setting.
+    #[must_use]
+    pub const fn text(name: &'static str, default: &'static str, check: Check<String>, doc: &'static str) -> Self {
+        let spec = ParamSpec::driver_setting(name, ParamKind::Text, "", check.range, doc);
+        Setting { spec, value: SettingValue::Text { default, check } }
+    }
+
+    /// A choice of `words` (read case-insensitively, kept as declared); the reference lists them.
+    #[must_use]
+    pub const fn choice(
+        name: &'static str,
+        words: &'static [&'static str],
+        default: &'static str,
+        doc: &'static str,
+    ) -> Self {
+        let spec = ParamSpec::driver_setting(name, ParamKind::Choice(words), "", "", doc);
+        Setting { spec, value: SettingValue::Choice { default } }
+    }
+
+    /// The value before anything sets it.
+    #[must_use]
+    pub fn default_value(&self) -> ParamValue {
+        match &self.value {
+            SettingValue::Int { default, .. } => ParamValue::Int(*default),
+            SettingValue::Float { default, .. } => ParamValue::Float(*default),
+            SettingValue::Text { default, .. } | SettingValue::Choice { default } => {
+                ParamValue::Text((*default).to_string())
+            }
+        }
+    }
+
+    /// The range check of a value already read as `spec.kind` (a [`ParamValue::Int`] for an
+    /// integer, …).
+    ///
+    /// # Errors
+    /// What the value must be: "must be {range}", or the check's own words.
+    pub fn check(&self, v: &ParamValue) -> Result<(), String> {
+        match (&self.value, v) {
+            (SettingValue::Int { check, .. }, ParamValue::Int(i)) => check.check(i),
+            (SettingValue::Float { check, .. }, ParamValue::Float(f)) => check.check(f),
+            (SettingValue::Text { check, .. }, ParamValue::Text(t)) => check.check(t),
+            (SettingValue::Choice { .. }, ParamValue::Text(_)) => Ok(()),
+            _ => Err(kind_reason(self.spec.kind)),
+        }
+    }
 }
 
 /// A camera driver's settings: the profile table that holds them and the settings themselves.
@@ -61,7 +165,7 @@ impl DriverSettings {
     /// `table`'s settings at their defaults.
     #[must_use]
     pub fn new(table: &'static SettingsTable) -> DriverSettings {
-        DriverSettings { table, values: table.settings.iter().map(|s| (s.default)()).collect() }
+        DriverSettings { table, values: table.settings.iter().map(Setting::default_value).collect() }
     }
 
     /// The profile table's name (`keyence`).
@@ -87,6 +191,35 @@ impl DriverSettings {
         self.index(name).map(|i| &self.values[i])
     }
 
+    /// The integer setting `name`; `None` when the table has no such integer setting.
+    #[must_use]
+    pub fn int(&self, name: &str) -> Option<i64> {
+        match self.get(name)? {
+            ParamValue::Int(v) => Some(*v),
+            _ => None,
+        }
+    }
+
+    /// The real-number setting `name`, finite and in its range; `None` when the table has no
+    /// such setting.
+    #[must_use]
+    pub fn float(&self, name: &str) -> Option<f64> {
+        match self.get(name)? {
+            ParamValue::Float(v) => Some(*v),
+            _ => None,
+        }
+    }
+
+    /// The text or choice setting `name` (a choice as declared); `None` when the table has no
+    /// such setting.
+    #[must_use]
+    pub fn text(&self, name: &str) -> Option<&str> {
+        match self.get(name)? {
+            ParamValue::Text(v) => Some(v),
+            _ => None,
+        }
+    }
+
     /// Sets `name` (case-insensitive) to `value` read as the setting's type and checked by the
     /// driver; `Ok(false)` when the table has no such setting.
     ///
@@ -102,7 +235,7 @@ impl DriverSettings {
             reason,
         };
         let typed = coerce(spec.kind, value).ok_or_else(|| invalid(kind_reason(spec.kind)))?;
-        (self.table.settings[i].check)(&typed).map_err(invalid)?;
+        self.table.settings[i].check(&typed).map_err(invalid)?;
         self.values[i] = typed;
         Ok(true)
     }

@@ -36,8 +36,9 @@ mod value;
 use vision_math::{Matrix2, Remap};
 
 pub use calibration::{Calibration, K_MAX_ANISOTROPY, K_SCALE_MAX_IN, K_SCALE_MIN_IN};
+pub use checks::{Check, Ordered};
 pub use config::Config;
-pub use driver::{DriverSettings, Setting, SettingsTable};
+pub use driver::{DriverSettings, Setting, SettingValue, SettingsTable};
 pub use telemetry::Telemetry;
 pub use value::{Access, ParamKind, ParamSpec, ParamValue, Section};
 
@@ -281,37 +282,14 @@ pub(crate) mod tests {
     pub(crate) static PROBE: SettingsTable = SettingsTable {
         table: "probe",
         settings: &[
-            Setting {
-                spec: ParamSpec {
-                    name: "VisionProbeLevel",
-                    kind: ParamKind::Integer,
-                    access: Access::Config,
-                    section: Section::Connection,
-                    doc: "`VisionProbeLevel`: a level 1..9.",
-                    unit: "",
-                    range: "a level 1..9",
-                    writer: "operator",
-                },
-                default: || ParamValue::Int(5),
-                check: |v| match v {
-                    ParamValue::Int(1..=9) => Ok(()),
-                    _ => Err("must be a level 1..9".into()),
-                },
-            },
-            Setting {
-                spec: ParamSpec {
-                    name: "VisionProbeMode",
-                    kind: ParamKind::Choice(&["fast", "slow"]),
-                    access: Access::Config,
-                    section: Section::Connection,
-                    doc: "`VisionProbeMode`: fast or slow.",
-                    unit: "",
-                    range: "",
-                    writer: "operator",
-                },
-                default: || ParamValue::Text("fast".into()),
-                check: |_| Ok(()),
-            },
+            Setting::int(
+                "VisionProbeLevel",
+                "",
+                5,
+                Check::closed("a level 1..9", 1, 9),
+                "`VisionProbeLevel`: a level 1..9.",
+            ),
+            Setting::choice("VisionProbeMode", &["fast", "slow"], "fast", "`VisionProbeMode`: fast or slow."),
         ],
     };
 
