@@ -273,7 +273,6 @@ pub trait CameraDriver: Send {
 }
 
 #[cfg(test)]
-#[allow(clippy::float_cmp)]
 mod tests {
     use super::*;
 

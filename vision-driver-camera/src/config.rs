@@ -271,7 +271,6 @@ impl CameraConfig {
     /// [`CameraError::Config`] naming the first bad one.
     pub fn validate(&self) -> Result<(), CameraError> {
         let bad = |setting: &'static str, reason: &str| Err(CameraError::Config { setting, reason: reason.into() });
-        #[allow(clippy::cast_precision_loss)] // a small integer
         let max_side = settings::MAX_SIDE_PX as f64;
         if let Some(d) = self.mark.diameter_px {
             if !(d.is_finite() && d >= 2.0 && d <= max_side) {

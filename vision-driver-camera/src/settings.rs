@@ -185,7 +185,6 @@ fn side(v: &ParamValue) -> Result<(), String> {
 }
 
 fn diameter(v: &ParamValue) -> Result<(), String> {
-    #[allow(clippy::cast_precision_loss)] // a small integer
     let max = MAX_SIDE_PX as f64;
     match v {
         ParamValue::Float(d) if d.is_finite() && *d >= 0.0 && *d <= max => Ok(()),

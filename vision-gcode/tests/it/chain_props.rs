@@ -5,8 +5,6 @@
 //! reads the very same `f64`s; the expected position is computed in the documented order
 //! (`docs/gcode-interpreter.md`, "The frame chain"), so equality is exact.
 
-#![allow(clippy::float_cmp)]
-
 use proptest::prelude::*;
 use vision_gcode::{Interpreter, InterpreterConfig, Tool, Xyz};
 use vision_math::{AlignmentChain, LengthUnit, Point2, Vector2};
