@@ -11,7 +11,8 @@
 //!   [`Calibration`], [`Telemetry`]); [`profile`]: the TOML file of the first two ([`Params`]).
 //! * [`module`]: [`VisionModule`] with the typed entry points `m280` … `m284`.
 //! * [`pound`]: the pound-variable block.
-//! * [`calibrate`]: M283's axis detect, quick calibration and sheet walk; [`sheets`]: `CAL_SHEETS`.
+//! * [`calibrate`]: M283's modes and reports (the routine is in `module/m283/`); [`sheets`]:
+//!   `CAL_SHEETS`.
 //! * [`registry`]: the camera drivers by name, with their settings tables.
 //! * [`text`]: messages and reports made safe to show a person (control characters, huge input).
 //!
@@ -54,7 +55,13 @@
 #[doc = include_str!("../../docs/integrators.md")]
 pub struct IntegratorsGuide;
 
-pub mod calibrate;
+/// M283's modes and reports (the routine is in `module/m283/`), at the path they had.
+pub mod calibrate {
+    pub use crate::module::m283::{
+        detect_remap, AxisReport, CalReport, Calibrate, CentreReport, DotVerify, KChange, QuickReport, SheetReport,
+        WalkTarget, BUMP_IN, LIFT_GRID, MAX_SHEET_SCALE_DEV, MIN_BUMP_PX, PROBE_FOV_FRACTION, QUICK_SCALE_TOLERANCE,
+    };
+}
 pub mod controller;
 pub mod driver;
 mod error;

@@ -4,8 +4,8 @@ use vision_math::{AlignmentChain, LengthUnit, PixelChain, Point2, ScaleEvidence,
 
 use super::capture::{mark_size, observe, outside_image_note, pixel_chain, require_mark, Capture, Recentred};
 use super::height::{self, NextMove};
+use super::m283::{absolute_move, relative_move};
 use super::{Dot, Reply, VisionModule};
-use crate::calibrate::{absolute_move, relative_move};
 use crate::driver::{ImageRequest, Reading};
 use crate::error::VisionError;
 use crate::machine::{checked, Machine, Timestamp};

@@ -22,7 +22,7 @@ mod height;
 mod m280;
 mod m281;
 mod m282;
-mod m283;
+pub(crate) mod m283;
 mod m284;
 mod record;
 

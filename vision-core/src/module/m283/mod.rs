@@ -1,17 +1,59 @@
-//! M283: calibrate K (and, for `Cn`, the camera tool offset).
+//! M283: calibrate K (and, for `Cn`, the camera tool offset): the axis-detect bump, quick
+//! calibration (`Qd`) and the sheet walk (`Cn`). How the sheet walk solves K, the sheet pose,
+//! the camera offset and the optical centre: `docs/calibration-solve.md`.
+//!
+//! Nothing in the routines commits: `quick` and `sheet_walk` return a `Solution` (K, remap,
+//! tool offset, report) and [`VisionModule::m283`] applies it in one place, or nothing.
+
+mod axis;
+mod lift;
+mod quick;
+mod report;
+mod sheet;
+mod walk;
 
 use vision_math::chain::fixed;
 use vision_math::{AlignmentChain, LengthUnit, Point2, Vector2};
 
+pub use axis::{detect_remap, BUMP_IN, MIN_BUMP_PX};
+pub use lift::LIFT_GRID;
+pub use quick::QUICK_SCALE_TOLERANCE;
+pub use report::{AxisReport, CalReport, CentreReport, DotVerify, KChange, QuickReport, SheetReport};
+pub use sheet::{MAX_SHEET_SCALE_DEV, PROBE_FOV_FRACTION};
+pub use walk::WalkTarget;
+pub(crate) use walk::{absolute_move, relative_move};
+
 use super::capture::pixel_chain;
 use super::{Reply, VisionModule};
-use crate::calibrate::{absolute_move, quick, sheet_walk, CalReport, Calibrate, Solution, WalkTarget, Walker};
 use crate::controller;
 use crate::driver::Reading;
 use crate::error::VisionError;
 use crate::machine::{checked, Machine, MachineError};
 use crate::params::Params;
 use crate::sheets::{cal_sheet, known_sheets};
+use quick::quick;
+use report::Solution;
+use sheet::sheet_walk;
+use walk::Walker;
+
+/// Which calibration M283 runs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Calibrate {
+    /// `Qd`: K = diag(d/width_px, d/height_px) from one trigger over a dot of diameter `d`
+    /// (current units).
+    Quick {
+        /// The printed dot's diameter, current units.
+        diameter: f64,
+    },
+    /// `Cn`: walk calibration sheet `n` of [`crate::sheets::CAL_SHEETS`].
+    Sheet {
+        /// The sheet number.
+        n: u32,
+    },
+}
+fn fail(reason: impl Into<String>) -> VisionError {
+    VisionError::Calibration { reason: reason.into() }
+}
 
 /// True when `chain` moves no point (within 1e-12).
 fn is_identity(chain: &AlignmentChain) -> bool {
@@ -74,26 +116,13 @@ impl VisionModule {
     /// * [`Calibrate::Sheet`]: walks the sheet, solves the full K, measures the optical centre
     ///   by the calibration lift (`VisionCalibrationLift`; Z comes back before the verify),
     ///   solves the sheet pose and the camera tool's X/Y offset at it by least squares, re-walks
-    ///   every dot in G90 and reports (see [`crate::calibrate`]). The offset goes to `VisionCameraToolNumber`, or to the active
-    ///   tool when that is 0.
+    ///   every dot in G90 and reports. The offset goes to `VisionCameraToolNumber`, or to the
+    ///   active tool when that is 0.
     ///
-    /// The walk writes nothing; its solution is applied here, in one place, or not at all:
-    /// 1. the new [`crate::Calibration`] (K11..K22, the remap flags, `Cal_Date` from the machine
-    ///    clock, `Cal_Units` = the machine's unit; the pixel centre offset and its σ as the
-    ///    calibration lift measured them, or kept) is built and validated;
-    /// 2. the camera tool's offset is written to the machine's tool table (sheet walk only);
-    /// 3. the profile is saved atomically, and only then the module takes the new calibration.
-    ///
-    /// Decision: the tool table goes first because undoing it is one write of a value we hold;
-    /// when the save then fails, the old offset is written back and the error is the save's. If
-    /// that restore fails too, the error says so and gives the offset to set by hand. The G-code
-    /// runs through [`Machine::run_gcode`] as the walk goes; the reply lists every line run.
-    ///
-    /// Telemetry: every trigger writes the `Last*` values as it happens (through the best K
-    /// known at that moment: the old calibration's, then each one the walk solves; the offsets
-    /// in units are 0 while there is none), a failed one clears the offsets and size; at the end
-    /// the last trigger is shown through the new K and `LastStatus` is `OK` (`OK (warning: …)`
-    /// with the report's warning), or the error.
+    /// The walk writes nothing; its solution (the new [`crate::Calibration`], the camera tool's
+    /// offset) is applied here, in one place, or not at all; every trigger updates the `Last*`
+    /// telemetry as it happens and the reply lists every line run through
+    /// [`Machine::run_gcode`]. The commit order and the telemetry: `docs/calibration-solve.md`.
     ///
     /// # Errors
     /// [`VisionError::NotEnabled`], [`VisionError::WrongTool`], [`VisionError::UnknownSheet`],
