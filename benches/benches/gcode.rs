@@ -1,4 +1,4 @@
-#![allow(missing_docs)] // criterion_group!/criterion_main! generate undocumented items.
+#![expect(missing_docs, reason = "criterion_group!/criterion_main! generate undocumented items.")]
 //! vision-gcode: parse, and parse + interpret, of a generated 1 M-line program (G1/G2/G3,
 //! comments, parameters and expressions); and the public `gcode` crate parsing the same program
 //! without its parameter lines, for comparison; and a control-flow program (an o-word
@@ -17,8 +17,7 @@ const LINES: usize = 1_000_000;
 fn parse_all(parser: &mut Parser, text: &str) -> usize {
     let mut words = 0;
     for (i, line) in text.lines().enumerate() {
-        // Line numbers fit in u32 for any benchmark input.
-        #[allow(clippy::cast_possible_truncation)]
+        #[expect(clippy::cast_possible_truncation, reason = "Line numbers fit in u32 for any benchmark input.")]
         if let Ok(block) = parser.parse_line(line, i as u32 + 1) {
             words += block.words().len();
         }

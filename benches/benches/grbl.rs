@@ -1,4 +1,4 @@
-#![allow(missing_docs)] // criterion_group!/criterion_main! generate undocumented items.
+#![expect(missing_docs, reason = "criterion_group!/criterion_main! generate undocumented items.")]
 //! vision-grbl: 10 000 short segments (1 mm at 2000 mm/min) streamed by the sender to the Grbl
 //! emulator over loopback TCP, the emulator timing the motion (at 50× real time so one stream
 //! takes about 6 s). Measured: the sending thread's CPU time per line (`iter_custom` returns

@@ -1,4 +1,4 @@
-#![allow(missing_docs)] // criterion_group!/criterion_main! generate undocumented items.
+#![expect(missing_docs, reason = "criterion_group!/criterion_main! generate undocumented items.")]
 //! vision-driver-keyence: one `TRG` round trip through the driver against the emulator, next to
 //! a raw `TcpStream` writing the same `TRG\r` and reading the same two reply lines from the same
 //! emulator; and the driver's protocol work alone (framing + parsing, in memory).

@@ -1,4 +1,4 @@
-#![allow(missing_docs)] // criterion_group!/criterion_main! generate undocumented items.
+#![expect(missing_docs, reason = "criterion_group!/criterion_main! generate undocumented items.")]
 //! vision-locate: time per 1280 × 960 8-bit frame (issue 27's budget: ≤ 3 ms on one core), for
 //! a dot of 30, 60, 120 and 200 px, sharp and blurred (σ = 2 px) with a 30 % light gradient,
 //! and a mark-free frame (the coarse search alone); a ring and a cross of 60 px.

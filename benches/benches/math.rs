@@ -1,4 +1,4 @@
-#![allow(missing_docs)] // criterion_group!/criterion_main! generate undocumented items.
+#![expect(missing_docs, reason = "criterion_group!/criterion_main! generate undocumented items.")]
 //! vision-math: fits at N = 3, 4, 16, 1000, the pixel chain, and the comparisons with an
 //! SVD-based Umeyama (nalgebra) and a dense QR least-squares solve (faer).
 
@@ -72,7 +72,6 @@ fn fits(c: &mut Criterion) {
 
 /// Umeyama's similarity through a 2×2 SVD, as Eigen's `umeyama` and most libraries do it.
 fn umeyama_svd(cmd: &[Point2<f64>], obs: &[Point2<f64>]) -> (Matrix2<f64>, Vector2<f64>) {
-    #[allow(clippy::cast_precision_loss)]
     let inv = 1.0 / cmd.len() as f64;
     let cn = cmd.iter().fold(Vector2::zeros(), |a, p| a + p.coords) * inv;
     let co = obs.iter().fold(Vector2::zeros(), |a, p| a + p.coords) * inv;

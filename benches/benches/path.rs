@@ -1,4 +1,4 @@
-#![allow(missing_docs)] // criterion_group!/criterion_main! generate undocumented items.
+#![expect(missing_docs, reason = "criterion_group!/criterion_main! generate undocumented items.")]
 //! vision-path: setpoint generation at a 1 ms period — the planner alone on a 1 M-segment
 //! dense polyline (G64 and G61), and the interpreter + planner on the G-code benchmark's
 //! generated program. Throughput is in setpoints: one setpoint is 1 ms of machine time, so

@@ -41,7 +41,6 @@ fn main() {
         }
     };
     let s = t.elapsed().as_secs_f64();
-    #[allow(clippy::cast_precision_loss)]
     let rate = lines as f64 / s / 1e6;
     println!("{what}: {lines} lines in {:.1} ms = {rate:.2} M lines/s ({count} words/events)", s * 1e3);
 }

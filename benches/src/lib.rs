@@ -17,9 +17,8 @@ fn lcg(seed: u64) -> impl FnMut() -> f64 {
     let mut state = seed;
     move || {
         state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
-        #[allow(clippy::cast_precision_loss)]
-        let unit = (state >> 11) as f64 / (1u64 << 53) as f64;
-        unit
+
+        (state >> 11) as f64 / (1u64 << 53) as f64
     }
 }
 

@@ -158,7 +158,7 @@ fn report(fit: &Fit, commanded: &[Point2<f64>], observed: &[Point2<f64>]) -> Res
         observed_centroid: [t.observed_centroid.x, t.observed_centroid.y],
         shift: chain.map(|c| [c.shift.x, c.shift.y]),
         center: chain.map(|c| [c.center.x, c.center.y]),
-        residual_lengths: residuals.iter().map(|r| r.norm()).collect(),
+        residual_lengths: residuals.iter().map(vision_math::Vector2::norm).collect(),
         residuals: residuals.iter().map(|r| [r.x, r.y]).collect(),
         rms: fit.rms,
         max_residual: fit.max_residual,

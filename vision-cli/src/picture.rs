@@ -64,7 +64,6 @@ const BAND_SHARE: f64 = 0.25;
 
 /// How wide `text` is at `size` px, at most (see [`ADVANCE`]).
 pub(crate) fn text_width(text: &str, size: f64) -> f64 {
-    #[allow(clippy::cast_precision_loss)] // a line of text
     let chars = text.chars().count() as f64;
     chars * size * ADVANCE
 }
@@ -393,6 +392,7 @@ fn hull(points: impl Iterator<Item = [f64; 2]>) -> Vec<[f64; 2]> {
 }
 
 #[cfg(test)]
+#[expect(clippy::float_cmp, reason = "tests compare exact values")]
 mod tests {
     use super::*;
 
@@ -453,7 +453,7 @@ mod tests {
         assert_eq!(class("dropped").len(), 1);
         assert_eq!(class("band").len(), 1);
         let texts: String =
-            doc.descendants().filter(|e| e.is_text()).filter_map(|e| e.text()).collect::<Vec<_>>().join("\n");
+            doc.descendants().filter(roxmltree::Node::is_text).filter_map(|e| e.text()).collect::<Vec<_>>().join("\n");
         assert!(texts.contains("M282 rectangle fit <line 20> & more"), "{texts}");
         // The largest error length (the 0.0002 in truth) wants ×3750 to be an eighth of the
         // 6 in drawing: ×5000 is the nearest round factor.

@@ -286,7 +286,7 @@ fn mcodes_md() -> String {
             match refusal(mach4, spec.m, words) {
                 Some(message) => md.push_str(&format!("- `{shown}` → {message}\n")),
                 None => {
-                    assert!(i >= table_examples, "MCODES: M{} lists {shown} as refused, but it is accepted", spec.m)
+                    assert!(i >= table_examples, "MCODES: M{} lists {shown} as refused, but it is accepted", spec.m);
                 }
             }
         }

@@ -131,12 +131,10 @@ pub(crate) fn layout(sheet: &CalSheet, paper: Paper) -> Result<Vec<Shape>, Failu
         "Zero work X/Y with the spindle on the crosshair, select the camera tool, jog it over dot 1, run M283.".into(),
     ];
     for (i, line) in title.iter().enumerate() {
-        #[allow(clippy::cast_precision_loss)] // three lines
         let y = h - 0.55 - 0.22 * i as f64;
         shapes.push(Shape::Text { x: 0.6, y, size: if i == 0 { 0.17 } else { 0.13 }, text: line.clone() });
     }
     for (i, (length, label)) in BARS.iter().enumerate() {
-        #[allow(clippy::cast_precision_loss)] // two bars
         let y = 0.55 + 0.4 * i as f64;
         let x0 = 0.6;
         shapes.push(Shape::Line { x0, y0: y, x1: x0 + length, y1: y, width: 0.02 });

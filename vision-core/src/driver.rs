@@ -223,7 +223,6 @@ pub trait CameraDriver: Send {
 }
 
 #[cfg(test)]
-#[allow(clippy::float_cmp)]
 mod tests {
     use std::fmt;
 

@@ -90,7 +90,7 @@ pub enum VisionError {
     #[error(
         "NG / no mark found — the camera job did not find a fiducial in the field of view{}; re-jog \
          over the mark, check lighting, verify the camera job is locating the right feature",
-        miss_note(.reason)
+        miss_note(.reason.as_deref())
     )]
     NoMark {
         /// Why, in the driver's words, when it says ([`crate::CameraDriver::miss_reason`]): a
@@ -268,8 +268,8 @@ pub enum VisionError {
 /// A driver failure as the operator reads it: the driver's words as they are, or, when the
 /// driver said nothing, what the core knows — the kind of failure.
 /// `NoMark`'s reason as a parenthesis after "field of view", or nothing.
-fn miss_note(reason: &Option<String>) -> String {
-    match reason.as_deref().map(str::trim) {
+fn miss_note(reason: Option<&str>) -> String {
+    match reason.map(str::trim) {
         Some(r) if !r.is_empty() => format!(" ({r})"),
         _ => String::new(),
     }
@@ -401,7 +401,6 @@ impl VisionError {
 }
 
 #[cfg(test)]
-#[allow(clippy::float_cmp)]
 mod tests {
     use super::*;
 

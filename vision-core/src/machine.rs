@@ -334,7 +334,6 @@ pub(crate) mod checked {
 }
 
 #[cfg(test)]
-#[allow(clippy::float_cmp)]
 mod tests {
     use super::*;
 

@@ -149,7 +149,6 @@ pub struct PoundReport {
 }
 
 #[cfg(test)]
-#[allow(clippy::float_cmp)]
 mod tests {
     use super::*;
 

@@ -31,16 +31,19 @@ pub(crate) fn matrix<S: Serializer>(m: &Matrix2<f64>, s: S) -> Result<S::Ok, S::
 }
 
 /// `"in"` or `"mm"`.
+#[expect(clippy::trivially_copy_pass_by_ref, reason = "serde's `serialize_with` passes a reference")]
 pub(crate) fn unit<S: Serializer>(u: &LengthUnit, s: S) -> Result<S::Ok, S::Error> {
     s.serialize_str(u.short_name())
 }
 
 /// `"OK"`, `"NG"` or `"unknown"`: the judgment's label.
+#[expect(clippy::trivially_copy_pass_by_ref, reason = "serde's `serialize_with` passes a reference")]
 pub(crate) fn judgment<S: Serializer>(j: &Judgment, s: S) -> Result<S::Ok, S::Error> {
     s.serialize_str(j.label())
 }
 
 /// `{ swap_xy, invert_x, invert_y }`.
+#[expect(clippy::trivially_copy_pass_by_ref, reason = "serde's `serialize_with` passes a reference")]
 pub(crate) fn remap<S: Serializer>(r: &Remap, s: S) -> Result<S::Ok, S::Error> {
     let mut st = s.serialize_struct("Remap", 3)?;
     st.serialize_field("swap_xy", &r.swap_xy)?;

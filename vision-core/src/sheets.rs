@@ -51,7 +51,7 @@ pub fn known_sheets() -> String {
 }
 
 #[cfg(test)]
-#[allow(clippy::float_cmp)]
+#[expect(clippy::float_cmp, reason = "tests compare exact values")]
 mod tests {
     use super::*;
     use vision_math::fit_rectangle;

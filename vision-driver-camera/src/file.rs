@@ -32,7 +32,7 @@ pub fn open_regular(path: &Path) -> Result<File, OpenError> {
     if file_type.is_file() {
         Ok(file)
     } else {
-        Err(OpenError::NotRegular { kind: kind_of(&file_type) })
+        Err(OpenError::NotRegular { kind: kind_of(file_type) })
     }
 }
 
@@ -47,7 +47,7 @@ fn open_without_blocking(path: &Path) -> std::io::Result<File> {
     File::open(path)
 }
 
-fn kind_of(file_type: &std::fs::FileType) -> &'static str {
+fn kind_of(file_type: std::fs::FileType) -> &'static str {
     #[cfg(unix)]
     {
         use std::os::unix::fs::FileTypeExt;

@@ -41,11 +41,9 @@ pub const SIDE: Check<i64> = Check::closed("0 (the device's largest) or a size u
 /// A frame size the driver asks for, both sides set, pixels.
 pub const SIDE_SET: Check<i64> = Check::closed("1 to 16384 pixels, with VisionCameraHeight", 1, MAX_SIDE_PX);
 /// `VisionCameraMarkDiameterPx`, pixels (0: derived).
-#[allow(clippy::cast_precision_loss)] // a small integer
 pub const DIAMETER: Check<f64> =
     Check::closed("0 (derive it) or a diameter up to 16384 pixels", 0.0, MAX_SIDE_PX as f64);
 /// The diameter the driver searches for, pixels.
-#[allow(clippy::cast_precision_loss)] // a small integer
 pub const DIAMETER_SET: Check<f64> = Check::closed("2 to 16384 pixels", 2.0, MAX_SIDE_PX as f64);
 /// `VisionCameraMarkTolerance`, percent.
 pub const TOLERANCE: Check<f64> =

@@ -239,22 +239,27 @@ mod tests {
         }
     }
 
-    fn offer(fourcc: &[u8; 4], width: u32, height: u32) -> FormatOffer {
-        FormatOffer { fourcc: *fourcc, width, height }
+    fn offer(fourcc: [u8; 4], width: u32, height: u32) -> FormatOffer {
+        FormatOffer { fourcc, width, height }
     }
 
     fn webcam() -> Vec<FormatOffer> {
-        vec![offer(b"YUYV", 640, 480), offer(b"MJPG", 1280, 960), offer(b"YUYV", 1280, 960), offer(b"H264", 1920, 1080)]
+        vec![
+            offer(*b"YUYV", 640, 480),
+            offer(*b"MJPG", 1280, 960),
+            offer(*b"YUYV", 1280, 960),
+            offer(*b"H264", 1920, 1080),
+        ]
     }
 
     #[test]
     fn negotiation_takes_the_largest_then_the_best_format() {
         let (p, o) = negotiate("d", &webcam(), None, None).expect("auto");
-        assert_eq!((p, o), (PixelFormat::Yuyv, offer(b"YUYV", 1280, 960)), "H264 is not decoded; YUYV beats MJPEG");
+        assert_eq!((p, o), (PixelFormat::Yuyv, offer(*b"YUYV", 1280, 960)), "H264 is not decoded; YUYV beats MJPEG");
         let (p, _) = negotiate("d", &webcam(), Some(PixelFormat::Mjpeg), None).expect("mjpeg");
         assert_eq!(p, PixelFormat::Mjpeg);
         let (_, o) = negotiate("d", &webcam(), None, Some((640, 480))).expect("size");
-        assert_eq!(o, offer(b"YUYV", 640, 480));
+        assert_eq!(o, offer(*b"YUYV", 640, 480));
         let e = negotiate("/dev/video7", &webcam(), Some(PixelFormat::Grey), Some((640, 480))).expect_err("no grey");
         assert_eq!(
             e.to_string(),
@@ -271,7 +276,7 @@ mod tests {
         let row = |y0: u8| [y0, 128, y0 + 1, 128, y0 + 2, 128, y0 + 3, 128, 0, 0, 0, 0];
         let frame = [row(0), row(4)].concat();
         let device = Fake {
-            offers: vec![offer(b"YUYV", 4, 2)],
+            offers: vec![offer(*b"YUYV", 4, 2)],
             adjust: None,
             stride_pad: 4,
             captures: VecDeque::from([Ok(Some(frame.clone())), Ok(Some(frame)), Ok(None)]),
@@ -293,8 +298,8 @@ mod tests {
     fn a_device_that_changes_the_format_or_fails_is_reported() {
         let mut source = V4l2Source::new(
             Fake {
-                offers: vec![offer(b"MJPG", 1280, 960)],
-                adjust: Some(offer(b"MJPG", 640, 480)),
+                offers: vec![offer(*b"MJPG", 1280, 960)],
+                adjust: Some(offer(*b"MJPG", 640, 480)),
                 stride_pad: 0,
                 captures: VecDeque::new(),
                 set_calls: 0,
@@ -307,7 +312,7 @@ mod tests {
         assert!(matches!(&e, CameraError::FormatChanged { got, .. } if got == "MJPEG 640×480"), "{e}");
         let mut source = V4l2Source::new(
             Fake {
-                offers: vec![offer(b"GREY", 2, 2)],
+                offers: vec![offer(*b"GREY", 2, 2)],
                 adjust: None,
                 stride_pad: 0,
                 captures: VecDeque::from([Err(io::Error::other("device unplugged")), Ok(Some(vec![1, 2, 3]))]),

@@ -70,7 +70,6 @@ impl LinuxDevice {
         loop {
             // SAFETY: `arg` is a buffer of the size the request encodes (checked against the
             // header), valid for the call.
-            #[allow(clippy::cast_possible_truncation)] // request numbers fit the C type
             let r = unsafe { libc::ioctl(self.fd.as_raw_fd(), request as _, arg.as_mut_ptr()) };
             if r != -1 {
                 return Ok(());

@@ -17,7 +17,7 @@ pub(crate) fn window(frame: &Frame, radius_pct: f64) -> Option<(Frame, u32, u32)
     let r = radius_pct.max(0.0) / 100.0 * w.min(h) / 2.0;
     let (cx, cy) = (w / 2.0, h / 2.0);
     // Pixel i covers [i, i + 1) in native (corner) coordinates.
-    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)] // clamped to the frame
+    #[expect(clippy::cast_possible_truncation, clippy::cast_sign_loss, reason = "clamped to the frame")]
     let span = |c: f64, side: f64| ((c - r).floor().max(0.0) as u32, (c + r).ceil().min(side) as u32);
     let (x0, x1) = span(cx, w);
     let (y0, y1) = span(cy, h);

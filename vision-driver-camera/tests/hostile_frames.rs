@@ -1,6 +1,7 @@
 //! Hostile and damaged frames (issue 33): a header declaring a huge image, a metadata bomb, a
 //! cut-short file, 10-bit data in 16-bit samples, and paths that are not regular files. Each is
 //! refused (or read) within a bound this binary measures with its counting allocator.
+#![expect(clippy::cast_possible_truncation, reason = "test values are small and whole")]
 
 use std::io::Cursor;
 use std::path::PathBuf;

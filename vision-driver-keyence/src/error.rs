@@ -386,7 +386,7 @@ fn secs(d: Duration) -> String {
     if s >= 1.0 && (s - s.round()).abs() < 1e-9 {
         format!("{} s", s.round())
     } else {
-        format!("{:.3} s", s)
+        format!("{s:.3} s")
     }
 }
 

@@ -111,7 +111,6 @@ fn copy_new(src: &Path, dir: &Path, stamp: &str) -> Result<PathBuf, String> {
 }
 
 #[cfg(test)]
-#[allow(clippy::float_cmp)]
 mod tests {
     use super::*;
     use std::time::UNIX_EPOCH;

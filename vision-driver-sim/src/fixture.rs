@@ -41,7 +41,6 @@ impl Fixture {
             return Point2::origin();
         }
         let marks = self.nominal_marks(unit);
-        #[allow(clippy::cast_precision_loss)]
         let n = marks.len().max(1) as f64;
         Point2::from(marks.iter().fold(Vector2::zeros(), |a, m| a + m.coords) / n)
     }

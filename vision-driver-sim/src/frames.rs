@@ -216,7 +216,6 @@ mod tests {
         for (i, &v) in px.iter().enumerate() {
             let dark = (255.0 - f64::from(v)).max(0.0) - (255.0 - 0.85 * 0.9 * 255.0);
             if dark > 1.0 {
-                #[allow(clippy::cast_precision_loss)]
                 let (x, y) = ((i % w) as f64, (i / w) as f64);
                 sx += dark * x;
                 sy += dark * y;

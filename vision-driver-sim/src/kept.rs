@@ -163,6 +163,7 @@ impl SimMachine {
 }
 
 #[cfg(test)]
+#[expect(clippy::float_cmp, reason = "tests compare exact values")]
 mod tests {
     use super::*;
     use crate::{Sim, World};

@@ -21,9 +21,7 @@ impl Rng {
 
     /// Uniform in (0, 1].
     fn open_unit(&mut self) -> f64 {
-        #[allow(clippy::cast_precision_loss)] // 53 bits are exact
-        let u = ((self.next_u64() >> 11) + 1) as f64 / (1u64 << 53) as f64;
-        u
+        ((self.next_u64() >> 11) + 1) as f64 / (1u64 << 53) as f64
     }
 
     /// A standard normal sample.
@@ -41,7 +39,6 @@ mod tests {
     fn gaussian_has_unit_variance_and_is_reproducible() {
         let mut a = Rng::new(7);
         let samples: Vec<f64> = (0..20_000).map(|_| a.gaussian()).collect();
-        #[allow(clippy::cast_precision_loss)]
         let n = samples.len() as f64;
         let mean = samples.iter().sum::<f64>() / n;
         let var = samples.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n;

@@ -130,6 +130,7 @@ impl Arc {
     /// positive `radius` gives at most a semicircle, a negative one more).
     ///
     /// `tol` is the radius tolerance.
+    #[expect(clippy::float_cmp, reason = "a full circle is an exact repeat of the start point")]
     pub(crate) fn centre_from_radius(
         plane: Plane,
         start: Xyz,
@@ -210,8 +211,11 @@ impl Arc {
             if chord_tolerance >= r { FRAC_PI_2 } else { (2.0 * (1.0 - chord_tolerance / r).acos()).min(FRAC_PI_2) };
         let n = (self.angle / step).ceil();
         if n.is_finite() && n >= 1.0 {
-            // Saturating float → int conversion: absurd counts are refused by the caller.
-            #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+            #[expect(
+                clippy::cast_possible_truncation,
+                clippy::cast_sign_loss,
+                reason = "Saturating float → int conversion: absurd counts are refused by the caller."
+            )]
             {
                 n as u64
             }

@@ -77,8 +77,11 @@ impl ArcMove {
     pub fn extra_turns(&self) -> u32 {
         let turns = (self.angle / std::f64::consts::TAU - 1e-9).floor();
         if turns > 0.0 {
-            // A finite, non-negative count far below u32::MAX for any real arc.
-            #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+            #[expect(
+                clippy::cast_possible_truncation,
+                clippy::cast_sign_loss,
+                reason = "A finite, non-negative count far below u32::MAX for any real arc."
+            )]
             {
                 turns as u32
             }

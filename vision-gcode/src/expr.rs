@@ -178,6 +178,7 @@ impl BinOp {
     ///
     /// # Errors
     /// Division by zero; a negative number to a non-integer power.
+    #[expect(clippy::float_cmp, reason = "whole means exactly whole")]
     pub(crate) fn apply(self, a: f64, b: f64) -> Result<f64, RunProblem> {
         let truth = |t: bool| if t { 1.0 } else { 0.0 };
         Ok(match self {
@@ -295,7 +296,6 @@ fn node_name(node: Node) -> &'static str {
 }
 
 #[cfg(test)]
-#[allow(clippy::float_cmp)]
 mod tests {
     use super::*;
 

@@ -52,6 +52,7 @@ impl Frame {
     }
 
     /// True when the X/Y map keeps circles circles (|sx| = |sy|).
+    #[expect(clippy::float_cmp, reason = "exact: a similarity has equal scale magnitudes by construction")]
     pub(crate) fn is_similarity(&self) -> bool {
         self.chain.scale.x.abs() == self.chain.scale.y.abs()
     }
@@ -181,7 +182,6 @@ impl Placement {
 }
 
 #[cfg(test)]
-#[allow(clippy::float_cmp)]
 mod tests {
     use super::*;
 

@@ -8,6 +8,7 @@ const CARET: usize = 28;
 pub(crate) const SLOTS: usize = 29;
 
 /// The slots by ASCII code: a table, not a `match`, as this runs for every word.
+#[expect(clippy::cast_possible_truncation, reason = "the slots are below 29")]
 const SLOT_OF: [u8; 128] = {
     let mut table = [0u8; 128];
     let mut c = b'A';

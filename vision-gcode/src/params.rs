@@ -325,7 +325,7 @@ impl ParameterTable {
 }
 
 #[cfg(test)]
-#[allow(clippy::float_cmp)]
+#[expect(clippy::float_cmp, reason = "tests compare exact values")]
 mod tests {
     use super::*;
 

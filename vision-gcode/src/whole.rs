@@ -6,8 +6,7 @@
 pub(crate) fn whole_in(value: f64, tolerance: f64, max: u32) -> Option<u32> {
     let r = value.round();
     if (value - r).abs() < tolerance && (0.0..=f64::from(max)).contains(&r) {
-        // Whole and in 0..=max: exact.
-        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+        #[expect(clippy::cast_possible_truncation, clippy::cast_sign_loss, reason = "Whole and in 0..=max: exact.")]
         Some(r as u32)
     } else {
         None

@@ -192,7 +192,6 @@ pub(crate) fn whole(letter: u8, v: f64) -> Result<u32, RunProblem> {
 }
 
 #[cfg(test)]
-#[allow(clippy::float_cmp)]
 mod tests {
     use super::*;
     use crate::parse::Parser;

@@ -1,6 +1,7 @@
 //! A runaway generated line (issue 17 item 16, `1+1+…` over megabytes) is refused with a clear
 //! message, and refusing it takes little memory beyond the text itself: a global allocator in
 //! this test binary tracks the peak of live bytes.
+#![expect(clippy::float_cmp, reason = "tests compare exact values")]
 
 use vision_gcode::{Event, GcodeError, Interpreter, InterpreterConfig, SyntaxProblem};
 

@@ -136,6 +136,7 @@ fn main() {
 /// The σ (px) of the blur the renderer really applies for `sigma`: its Gaussian is sampled at
 /// whole pixels out to 4σ and normalised, which below σ ≈ 0.7 px blurs less than the continuous
 /// Gaussian (σ = 0.5 → 0.46, 0.3 → 0.09). The bound takes the Gaussian of the same variance.
+#[expect(clippy::cast_possible_truncation, reason = "study values are small and whole")]
 fn rendered_blur(sigma: f64) -> f64 {
     if sigma <= 0.0 {
         return 0.0;
@@ -150,6 +151,7 @@ fn rendered_blur(sigma: f64) -> f64 {
     (second / sum).sqrt()
 }
 
+#[expect(clippy::cast_possible_truncation, reason = "study values are small and whole")]
 fn jpeg_round_trip(px: &[u8], quality: u8) -> Vec<u8> {
     let mut buf = Vec::new();
     JpegEncoder::new_with_quality(&mut buf, quality)

@@ -73,6 +73,11 @@ const NOISE_HIST_BYTES: u64 = 4096 * 4;
 
 /// The block size, px, for `spec`: about a sixth of the smallest diameter keeps the mark ≥ 6
 /// blocks wide.
+#[expect(
+    clippy::cast_possible_truncation,
+    clippy::cast_sign_loss,
+    reason = "image indices: non-negative, floored and within the image"
+)]
 pub(crate) fn block_factor(spec: &MarkSpec) -> usize {
     ((spec.min_diameter() / 6.0).round() as usize).max(1)
 }
@@ -99,6 +104,7 @@ pub(crate) fn search_bytes(width: usize, height: usize, spec: &MarkSpec) -> u64 
     downsample.max(mean).max(labelling).saturating_add(kept + NOISE_HIST_BYTES)
 }
 
+#[expect(clippy::cast_possible_truncation, clippy::cast_sign_loss, reason = "pixel counts fit in u32")]
 pub(crate) fn search<T: Copy + Into<f64> + Into<u32>>(
     img: &Img<'_, T>,
     spec: &MarkSpec,
@@ -383,6 +389,7 @@ fn downsample<T: Copy + Into<u32>>(img: &Img<'_, T>, f: usize, w: usize, h: usiz
 /// sums, then along columns as a running sum of whole rows (both loops run along memory and
 /// vectorise); the clipped window's pixel count is a product of its row and column extents.
 /// Sums in f64 keep long sums exact enough.
+#[expect(clippy::cast_possible_truncation, reason = "a score in f32")]
 fn box_mean(img: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
     let mut rows = vec![0.0f64; w * h];
     let mut prefix = vec![0.0f64; w + 1];
@@ -421,11 +428,16 @@ fn box_mean(img: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
 /// Noise standard deviation (grey levels) from the median absolute difference of horizontal
 /// neighbours on every 16th row: robust to the few edges in view. The median comes from a
 /// histogram in steps of 1/8 of an 8-bit grey level.
+#[expect(
+    clippy::cast_possible_truncation,
+    clippy::cast_sign_loss,
+    reason = "image indices: non-negative, floored and within the image"
+)]
 fn noise_sigma<T: Copy + Into<u32>>(img: &Img<'_, T>, full_scale: f64) -> f64 {
+    const BINS: usize = 4096;
     if img.w < 2 {
         return 0.0;
     }
-    const BINS: usize = 4096;
     let per_bin = full_scale / 255.0 / 8.0;
     let inv = 1.0 / per_bin;
     let mut hist = vec![0u32; BINS];

@@ -166,7 +166,7 @@ fn antiderivatives(u: f64) -> [f64; 4] {
 const INSIDE: Edge = Edge { m: 1.0, dt: 0.0, ds: 0.0, dphi: 0.0 };
 const OUTSIDE: Edge = Edge { m: 0.0, dt: 0.0, ds: 0.0, dphi: 0.0 };
 
-#[allow(clippy::too_many_arguments)]
+#[expect(clippy::too_many_arguments, reason = "the inner loop's terms as scalars, so it inlines")]
 #[inline]
 fn exact(t: f64, s: f64, inv: f64, c1: f64, c2: f64, k: f64, a: f64, b: f64, sign: f64) -> Edge {
     let p1 = antiderivatives((t + c1) * inv);

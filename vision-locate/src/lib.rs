@@ -457,6 +457,7 @@ pub fn dot_crb(diameter: f64, blur_sigma: f64, background: f64, contrast: f64, n
 }
 
 #[cfg(test)]
+#[expect(clippy::cast_possible_truncation, clippy::cast_sign_loss, reason = "test values are small and whole")]
 mod tests {
     use super::*;
     use crate::fit::{band, solve, MAXP};

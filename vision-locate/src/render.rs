@@ -170,9 +170,12 @@ impl Scene {
     /// measured on.
     #[must_use]
     pub fn dot_field(size: usize, diameter: f64, pitch: f64) -> Scene {
-        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss, clippy::cast_precision_loss)]
+        #[expect(
+            clippy::cast_possible_truncation,
+            clippy::cast_sign_loss,
+            reason = "a count, floored and non-negative"
+        )]
         let n = ((size as f64 - pitch) / pitch).floor().max(0.0) as usize;
-        #[allow(clippy::cast_precision_loss)]
         let marks = (0..n * n)
             .map(|k| PlacedMark {
                 shape: Shape::Dot { diameter },
@@ -297,6 +300,11 @@ impl SplitMix64 {
 /// assert_eq!((image.width(), image.height()), (128, 96));
 /// # Ok::<(), vision_locate::render::RenderError>(())
 /// ```
+#[expect(
+    clippy::cast_possible_truncation,
+    clippy::cast_sign_loss,
+    reason = "grey levels, rounded and clamped to the depth before"
+)]
 pub fn render(scene: &Scene) -> Result<OwnedImage, RenderError> {
     let (w, h) = (scene.width, scene.height);
     let mut out = radiance(scene)?;
@@ -484,6 +492,7 @@ fn paint_clutter(refl: &mut [f64], w: usize, h: usize, c: &Clutter) {
 
 /// Paints `value` over `refl` weighted by each pixel's covered area of {sdf < 0}; `bound` is
 /// (centre x, centre y, radius) px of a disc holding the shape, or `None` for unbounded shapes.
+#[expect(clippy::cast_possible_truncation, clippy::cast_sign_loss, reason = "pixel indices, clamped to the image")]
 fn paint(
     refl: &mut [f64],
     w: usize,
@@ -513,6 +522,7 @@ fn paint(
 
 /// Covered fraction of pixel (`px`, `py`) by {sdf < 0}.
 fn coverage(sdf: &impl Fn(f64, f64) -> f64, px: f64, py: f64) -> f64 {
+    const K: usize = 8;
     let d = sdf(px, py);
     // Half the pixel diagonal is 0.707: beyond it the pixel is wholly in or out.
     if d >= 0.75 {
@@ -521,7 +531,6 @@ fn coverage(sdf: &impl Fn(f64, f64) -> f64, px: f64, py: f64) -> f64 {
     if d <= -0.75 {
         return 1.0;
     }
-    const K: usize = 8;
     let hs = 1.0 / K as f64;
     let mut sum = 0.0;
     for j in 0..K {
@@ -569,6 +578,11 @@ fn halfplane_area(d: f64, a: f64, b: f64) -> f64 {
     }
 }
 
+#[expect(
+    clippy::cast_possible_truncation,
+    clippy::cast_sign_loss,
+    reason = "hashing the index: the bits are what counts; wave numbers are small and whole"
+)]
 fn paint_texture(refl: &mut [f64], w: usize, h: usize, t: &Texture, seed: u64) {
     let (s, c) = t.angle.sin_cos();
     let (mx, my) = (w as f64 / 2.0, h as f64 / 2.0);
@@ -594,6 +608,7 @@ fn paint_texture(refl: &mut [f64], w: usize, h: usize, t: &Texture, seed: u64) {
 }
 
 /// Separable Gaussian blur of `sigma` px, edges replicated.
+#[expect(clippy::cast_possible_truncation, reason = "a kernel radius of a few sigma, sigma bounded")]
 fn gaussian_blur(img: &mut [f64], w: usize, h: usize, sigma: f64) {
     let r = (4.0 * sigma).ceil() as isize;
     let mut k: Vec<f64> = (-r..=r).map(|i| (-(i as f64).powi(2) / (2.0 * sigma * sigma)).exp()).collect();
@@ -617,6 +632,11 @@ fn gaussian_blur(img: &mut [f64], w: usize, h: usize, sigma: f64) {
 }
 
 /// The centred kernel `k` (odd length) applied to `line` at `at`, the line's ends replicated.
+#[expect(
+    clippy::cast_possible_wrap,
+    clippy::cast_sign_loss,
+    reason = "image rows are far below isize::MAX; the index is clamped into the row"
+)]
 fn convolve_at(line: &[f64], k: &[f64], at: usize) -> f64 {
     let r = (k.len() / 2) as isize;
     let last = line.len() as isize - 1;
@@ -691,6 +711,12 @@ fn clutter_distance(c: &Clutter, x: f64, y: f64) -> f64 {
 }
 
 #[cfg(test)]
+#[expect(
+    clippy::cast_possible_truncation,
+    clippy::cast_sign_loss,
+    clippy::float_cmp,
+    reason = "test values are small and whole; tests compare exact values"
+)]
 mod tests {
     use super::*;
 

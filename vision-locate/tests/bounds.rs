@@ -2,6 +2,12 @@
 //! as cluttered once it holds more than `MAX_BLOBS` mark-sized blobs, the search never takes
 //! more memory than `search_bytes` says (and refuses, unallocated, above `MAX_SEARCH_BYTES`),
 //! and a deadline cuts it off.
+#![expect(
+    clippy::cast_possible_truncation,
+    clippy::cast_sign_loss,
+    clippy::float_cmp,
+    reason = "test values are small and whole; tests compare exact values"
+)]
 
 use std::time::{Duration, Instant};
 

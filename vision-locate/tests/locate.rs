@@ -1,6 +1,7 @@
 //! The finder against rendered images with known truth: accuracy under blur, light gradient,
 //! noise and JPEG; the judgments (several, clipped, size out of range); no mark where there is
 //! none; typed errors; no panic on any input.
+#![expect(clippy::cast_possible_truncation, reason = "test values are small and whole")]
 
 use image::codecs::jpeg::JpegEncoder;
 use proptest::prelude::*;
@@ -52,7 +53,7 @@ fn levels(polarity: Polarity) -> (f64, f64) {
     }
 }
 
-#[allow(clippy::too_many_arguments)]
+#[expect(clippy::too_many_arguments, reason = "every knob of a test scene")]
 fn scene_with(
     kind: MarkKind,
     polarity: Polarity,
@@ -344,7 +345,7 @@ fn no_mark_is_reported_where_there_is_none() {
                     period: g.range(2.0, 30.0),
                     angle: g.range(0.0, 3.0),
                     arc_radius: None,
-                })
+                });
             }
             2 => {
                 scene.texture = Some(Texture {
@@ -352,7 +353,7 @@ fn no_mark_is_reported_where_there_is_none() {
                     period: g.range(2.0, 30.0),
                     angle: g.range(0.0, 3.0),
                     arc_radius: Some(g.range(100.0, 2000.0)),
-                })
+                });
             }
             3 => {
                 scene.clutter.push(Clutter::Edge {

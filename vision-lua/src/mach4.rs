@@ -74,6 +74,7 @@ impl Mach4 {
     }
 
     /// Checks a return code.
+    #[expect(clippy::float_cmp, reason = "Mach4 error codes are small whole numbers, exact in f64")]
     fn check(&self, call: &str, rc: &Value) -> Result<(), MachineError> {
         match rc {
             Value::Nil => Ok(()),
@@ -189,6 +190,7 @@ impl Machine for Mach4 {
 
     /// `mcCntlMachineStatePop`, then the saved motion and distance modes put back where the pop
     /// left another (`G0`/`G1`/`G80`, `G90`/`G91`).
+    #[expect(clippy::float_cmp, reason = "G numbers are small whole numbers, exact in f64")]
     fn restore_modal_state(&mut self) -> Result<(), MachineError> {
         let (motion, distance) =
             self.saved.pop().ok_or_else(|| comm("no modal state was saved (mcCntlMachineStatePush)"))?;
@@ -197,7 +199,6 @@ impl Machine for Mach4 {
             if self.pound(var)? == want {
                 continue;
             }
-            #[allow(clippy::float_cmp)] // G numbers are small whole numbers, exact in f64
             let settable = [0.0, 1.0, 80.0, 90.0, 91.0].contains(&want);
             if !settable {
                 return Err(MachineError::new(
@@ -223,7 +224,7 @@ impl Machine for Mach4 {
     fn active_tool(&self) -> Result<u32, MachineError> {
         let tool: f64 = self.value("mcToolGetCurrent", self.inst.clone())?;
         if tool.fract() == 0.0 && (0.0..=f64::from(u32::MAX)).contains(&tool) {
-            #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)] // checked above
+            #[expect(clippy::cast_possible_truncation, clippy::cast_sign_loss, reason = "checked above")]
             Ok(tool as u32)
         } else {
             Err(comm(format!("mc.mcToolGetCurrent returned {tool}, not a tool number")))

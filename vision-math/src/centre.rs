@@ -62,7 +62,6 @@ pub fn fit_centre(before: &[Point2<f64>], after: &[Point2<f64>], noise_px: f64) 
     if !(noise_px.is_finite() && noise_px >= 0.0) {
         return Err(MathError::NonFinite { what: "the camera noise" });
     }
-    #[allow(clippy::cast_precision_loss)]
     let nf = n as f64;
     let mean = |v: &[Point2<f64>]| v.iter().fold(Vector2::zeros(), |s, p| s + p.coords) / nf;
     let (m0, m1) = (mean(before), mean(after));

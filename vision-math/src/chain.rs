@@ -156,7 +156,7 @@ pub fn fixed(v: f64, decimals: usize) -> String {
 }
 
 #[cfg(test)]
-#[allow(clippy::float_cmp)]
+#[expect(clippy::float_cmp, reason = "tests compare exact values")]
 mod tests {
     use super::*;
     use approx::assert_relative_eq;

@@ -8,9 +8,8 @@ impl Normal {
     /// A uniform draw in (0, 1).
     pub(crate) fn unit(&mut self) -> f64 {
         self.0 = self.0.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
-        #[allow(clippy::cast_precision_loss)]
-        let u = ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64;
-        u
+
+        ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
     }
 
     /// A standard normal draw.

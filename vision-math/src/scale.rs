@@ -69,7 +69,6 @@ impl ScaleEvidence {
         if readings.len() < 2 {
             return Ok(());
         }
-        #[allow(clippy::cast_precision_loss)] // a handful of readings
         let n = readings.len() as f64;
         let c_mean = readings.iter().fold(Vector2::zeros(), |a, (c, _)| a + c.coords) / n;
         let d_mean = readings.iter().fold(Vector2::zeros(), |a, (_, d)| a + d) / n;
@@ -147,7 +146,6 @@ pub fn image_turn(readings: &[(Point2<f64>, Vector2<f64>)], sigma: f64) -> Optio
     if readings.len() < 2 || !(sigma.is_finite() && sigma > 0.0) {
         return None;
     }
-    #[allow(clippy::cast_precision_loss)] // a handful of readings
     let n = readings.len() as f64;
     let c_mean = readings.iter().fold(Vector2::zeros(), |a, (c, _)| a + c.coords) / n;
     let d_mean = readings.iter().fold(Vector2::zeros(), |a, (_, d)| a + d) / n;
@@ -215,7 +213,7 @@ mod tests {
             let s = 1.0 + 0.06 * (2.0 * rng.unit() - 1.0);
             let sigma = 0.0001 + 0.0004 * rng.unit();
             let mut e = ScaleEvidence::default();
-            #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+            #[expect(clippy::cast_possible_truncation, clippy::cast_sign_loss, reason = "a draw in [0, 4), floored")]
             let marks = 1 + (rng.unit() * 4.0) as usize;
             for _ in 0..marks {
                 let mark = Point2::new(10.0 * rng.unit(), 10.0 * rng.unit());

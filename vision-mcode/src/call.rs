@@ -163,7 +163,7 @@ impl VisionCall {
 
 /// An M-code word's value as an integer; `None` for a fraction or a value too large to be one.
 fn integer_word(v: f64) -> Option<i64> {
-    #[allow(clippy::cast_possible_truncation)] // checked integral and in range
+    #[expect(clippy::cast_possible_truncation, reason = "checked integral and in range")]
     (v.is_finite() && v.fract() == 0.0 && v.abs() < 1e15).then_some(v as i64)
 }
 

@@ -205,6 +205,7 @@ fn biarc(a: Xyz, ta: Xyz, b: Xyz, tb: Xyz) -> Option<Vec<Curve>> {
 }
 
 #[cfg(test)]
+#[expect(clippy::float_cmp, reason = "tests compare exact values")]
 mod tests {
     use super::*;
     use crate::curve::{ArcCurve, LineCurve};

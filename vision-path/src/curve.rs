@@ -120,7 +120,8 @@ impl ArcCurve {
     }
 
     /// The arc over `phi ∈ [range.0, range.1]` (radians from `e1`) with exact ends.
-    #[allow(clippy::too_many_arguments)]
+    #[expect(clippy::too_many_arguments, reason = "an arc's whole description")]
+    #[expect(clippy::float_cmp, reason = "equal heights give an exactly flat helix")]
     fn build(
         base: Xyz,
         e1: Xyz,

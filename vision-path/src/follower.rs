@@ -327,6 +327,7 @@ pub(crate) fn check_axes(axes: &AxisMap, item: Item) -> Result<Item, PathError> 
 
 /// Whether a segment moves axis `i`: its end differs, or it is an arc whose plane contains
 /// (part of) the axis.
+#[expect(clippy::float_cmp, reason = "an axis moves when its end differs at all")]
 fn moves(seg: &Segment, i: usize) -> bool {
     if seg.end.axis(i) != seg.start.axis(i) {
         return true;

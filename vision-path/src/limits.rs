@@ -219,6 +219,7 @@ pub(crate) fn speed_and_accel(f: &ShapeFactors, requested: f64, limits: &Limits)
 }
 
 #[cfg(test)]
+#[expect(clippy::float_cmp, reason = "tests compare exact values")]
 mod tests {
     use super::*;
 

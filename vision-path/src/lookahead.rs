@@ -22,8 +22,7 @@ use crate::shaper::{Marker, Piece, Shaped, Shaper};
 use crate::PathError;
 
 /// A piece with its planned entry and exit speeds, or a stop.
-// Pieces are the common case; boxing them would allocate once per piece.
-#[allow(clippy::large_enum_variant)]
+#[expect(clippy::large_enum_variant, reason = "Pieces are the common case; boxing them would allocate once per piece.")]
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) enum Ready {
     Piece { piece: Piece, v0: f64, v1: f64 },
@@ -111,6 +110,7 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Lookahead<I> {
         (reach, cap2)
     }
 
+    #[expect(clippy::float_cmp, reason = "settled when the pass leaves the value exactly unchanged")]
     fn release(&mut self) {
         let closed = self.closing.is_some() || self.input_done;
         // Backward pass: `b` assumes a stop at the window's end, `free` an unbounded end.
@@ -154,6 +154,7 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Lookahead<I> {
 }
 
 #[cfg(test)]
+#[expect(clippy::float_cmp, reason = "tests compare exact values")]
 mod tests {
     use super::*;
     use vision_gcode::{PathMode, Rate};

@@ -63,8 +63,7 @@ pub struct Summary {
     pub line: usize,
 }
 
-// Pieces are the common case; boxing them would allocate once per piece.
-#[allow(clippy::large_enum_variant)]
+#[expect(clippy::large_enum_variant, reason = "Pieces are the common case; boxing them would allocate once per piece.")]
 enum Span {
     Motion { piece: Piece, profile: Profile, t0: f64, t1: f64 },
     Rest { pos: Xyz, line: usize, t1: f64 },
@@ -179,6 +178,7 @@ impl<I: Iterator<Item = Result<Item, PathError>>> Setpoints<I> {
     }
 
     /// The first tick at or after `t`.
+    #[expect(clippy::cast_possible_truncation, clippy::cast_sign_loss, reason = "a non-negative tick count, floored")]
     fn grid_tick(&self, t: f64) -> u64 {
         // From below: `t` is often exactly a tick time, and `t / T` may round above k.
         let mut k = (t / self.period).floor().max(0.0) as u64;

@@ -53,8 +53,7 @@ pub(crate) enum Marker {
 }
 
 /// What the shaper produces.
-// Pieces are the common case; boxing them would allocate once per piece.
-#[allow(clippy::large_enum_variant)]
+#[expect(clippy::large_enum_variant, reason = "Pieces are the common case; boxing them would allocate once per piece.")]
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) enum Shaped {
     Piece(Piece),

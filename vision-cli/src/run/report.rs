@@ -65,7 +65,7 @@ pub(crate) struct ProgramReport {
     pub stopped_by_refusal: Option<u32>,
 }
 
-#[allow(clippy::trivially_copy_pass_by_ref)] // serde's `skip_serializing_if` passes a reference
+#[expect(clippy::trivially_copy_pass_by_ref, reason = "serde's `skip_serializing_if` passes a reference")]
 fn is_zero(n: &u64) -> bool {
     *n == 0
 }
@@ -327,6 +327,7 @@ pub(crate) fn pound(machine: &SimMachine, params: &Params) -> Result<PoundReport
 }
 
 #[cfg(test)]
+#[expect(clippy::cast_possible_truncation, reason = "test values are small and whole")]
 mod tests {
     use super::*;
     use vision_gcode::{LinearMove, PathMode, Xyz};

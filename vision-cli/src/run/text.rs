@@ -124,7 +124,6 @@ pub(crate) fn progress_line(step: &Step, world_unit: &str) -> String {
     s.lines().next().unwrap_or_default().to_string()
 }
 
-#[allow(clippy::too_many_lines)] // one arm per M-code, each a few lines
 fn step(s: &mut String, step: &Step, world_unit: &str) {
     match step {
         Step::Begin { line, mode } => {

@@ -3,6 +3,12 @@
 //! rotation ±5°, shift ±0.5 in, scale 0.995–1.005, σ = 0.1 px at 0.002 in/px), calibration
 //! and cut errors against the truth, in inches and in millimetres. It lives here, not in the
 //! simulator, because it needs the Vision M-code handler: the simulator stays below that layer.
+#![expect(
+    clippy::cast_possible_truncation,
+    clippy::cast_sign_loss,
+    clippy::float_cmp,
+    reason = "test values are small and whole; tests compare exact values"
+)]
 
 use vision_core::{CalReport, Params, Timestamp, VisionModule};
 use vision_driver_sim::{Fixture, Sim, SimMachine, World};
@@ -156,9 +162,8 @@ struct Lcg(u64);
 impl Lcg {
     fn unit(&mut self) -> f64 {
         self.0 = self.0.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
-        #[allow(clippy::cast_precision_loss)]
-        let u = (self.0 >> 11) as f64 / (1u64 << 53) as f64;
-        u
+
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
     fn within(&mut self, half: f64) -> f64 {
         (2.0 * self.unit() - 1.0) * half
@@ -425,7 +430,6 @@ fn a_displaced_mark_among_six_is_dropped_and_the_cut_recovers() {
         worst = worst.max(dropped);
     }
     // Root mean square over the cases: the two runs draw different noise, so compare the spread.
-    #[allow(clippy::cast_precision_loss)]
     let n = (cases.end - cases.start) as f64;
     let (floor, recovered) = ((floor / n).sqrt(), (recovered / n).sqrt());
     println!(

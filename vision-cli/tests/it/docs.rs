@@ -127,13 +127,13 @@ fn parse_marker(line: &str) -> Option<Result<Marker, String>> {
                         first = Some(match number(n) {
                             Ok(v) => v,
                             Err(e) => return Some(Err(e)),
-                        })
+                        });
                     }
                     ["last", n, "lines" | "line"] => {
                         last = Some(match number(n) {
                             Ok(v) => v,
                             Err(e) => return Some(Err(e)),
-                        })
+                        });
                     }
                     ["exit", n] => {
                         exit = match n.parse() {
@@ -178,7 +178,7 @@ fn samples(lines: &[&str]) -> (Vec<Sample>, Vec<String>) {
                 let marker = i.checked_sub(1).and_then(|m| parse_marker(lines[m]).map(|r| (m, r)));
                 match marker {
                     Some((m, Ok(Marker { stream, command, first, last, exit }))) => {
-                        found.push(Sample { marker: m, stream, command, first, last, exit, start: i + 1, end: close })
+                        found.push(Sample { marker: m, stream, command, first, last, exit, start: i + 1, end: close });
                     }
                     Some((m, Err(e))) => problems.push(format!("line {}: {e}", m + 1)),
                     None => problems.push(format!(
@@ -275,11 +275,11 @@ fn expected_block(sample: &Sample, output: &str) -> Vec<String> {
     let n = lines.len();
     let head = sample.first.unwrap_or(if sample.last.is_some() { 0 } else { n }).min(n);
     let tail = sample.last.unwrap_or(0).min(n - head);
-    let mut block: Vec<String> = lines[..head].iter().map(|l| l.to_string()).collect();
+    let mut block: Vec<String> = lines[..head].iter().map(std::string::ToString::to_string).collect();
     if head + tail < n {
         block.push("...".into());
     }
-    block.extend(lines[n - tail..].iter().map(|l| l.to_string()));
+    block.extend(lines[n - tail..].iter().map(std::string::ToString::to_string));
     block
 }
 
@@ -294,7 +294,7 @@ fn every_sample_output_is_what_the_command_prints() {
         let lines: Vec<&str> = text.lines().collect();
         let (found, problems) = samples(&lines);
         failures.extend(problems.into_iter().map(|p| format!("{name}: {p}")));
-        let mut rewritten: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
+        let mut rewritten: Vec<String> = lines.iter().map(std::string::ToString::to_string).collect();
         // Later blocks first, so earlier indices stay valid while rewriting.
         for sample in found.iter().rev() {
             checked += 1;

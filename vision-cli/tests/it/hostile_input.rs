@@ -1,6 +1,7 @@
 //! Hostile image and file input through the built binary (issue 33, item 4): `locate` and
 //! `run --camera camera --source` on bombs, cut-short files, FIFOs and devices, forged file
 //! names and absurd options, as the user sees them, under an address-space cap and a deadline.
+#![expect(clippy::cast_possible_truncation, reason = "test values are small and whole")]
 
 use std::io::Cursor;
 use std::path::{Path, PathBuf};

@@ -33,11 +33,11 @@ fn save(name: &str, mark: Option<(f64, f64)>, depth: Depth, rgb: bool) -> PathBu
     match render(&scene).expect("scene").into_pixels() {
         OwnedPixels::Gray8(px) if rgb => {
             let rgb: Vec<u8> = px.iter().flat_map(|&v| [v, v, v]).collect();
-            image::RgbImage::from_raw(200, 150, rgb).expect("size").save(&path).expect("save")
+            image::RgbImage::from_raw(200, 150, rgb).expect("size").save(&path).expect("save");
         }
         OwnedPixels::Gray8(px) => image::GrayImage::from_raw(200, 150, px).expect("size").save(&path).expect("save"),
         OwnedPixels::Gray16(px) => {
-            image::ImageBuffer::<image::Luma<u16>, _>::from_raw(200, 150, px).expect("size").save(&path).expect("save")
+            image::ImageBuffer::<image::Luma<u16>, _>::from_raw(200, 150, px).expect("size").save(&path).expect("save");
         }
     }
     path

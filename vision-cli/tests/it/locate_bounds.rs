@@ -1,6 +1,7 @@
 //! Issue 33: `mach-vision locate` within bounded memory, through the built binary under an
 //! address-space limit — images too large to search are refused from their header, before a
 //! pixel is decoded, and the images are decoded one at a time.
+#![expect(clippy::cast_possible_truncation, clippy::cast_sign_loss, reason = "test values are small and whole")]
 
 use std::io::Write as _;
 use std::path::PathBuf;

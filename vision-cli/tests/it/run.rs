@@ -480,7 +480,7 @@ fn run_report_writes_a_picture_per_fit_and_calibration() {
     let doc = roxmltree::Document::parse(&fit).expect("the SVG parses");
     let class = |c: &str| doc.descendants().filter(|n| n.attribute("class") == Some(c)).count();
     assert_eq!((class("commanded"), class("observed"), class("residual"), class("band")), (4, 4, 4, 1));
-    let text: String = doc.descendants().filter(|n| n.is_text()).map(|n| n.text().unwrap_or("")).collect();
+    let text: String = doc.descendants().filter(roxmltree::Node::is_text).map(|n| n.text().unwrap_or("")).collect();
     assert!(text.contains("04-rectangle-fit.nc: M282 rectangle fit, line 20"), "the title names the program: {text}");
     assert!(text.contains("predicted 99 % bound") && text.contains("true error (simulator)"), "{text}");
     // Issue 34: the arrows are visible (the largest about an eighth of the drawing), the

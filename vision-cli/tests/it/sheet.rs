@@ -1,4 +1,5 @@
 //! `mach-vision sheet`: the printed calibration sheet has its dots at true size and place.
+#![expect(clippy::cast_possible_truncation, clippy::cast_sign_loss, reason = "test values are small and whole")]
 
 use std::path::PathBuf;
 use std::process::Command;

@@ -383,7 +383,7 @@ mod tests {
     #[test]
     fn every_controller_is_found_by_its_name_and_names_are_unique() {
         for c in CONTROLLERS {
-            assert_eq!(by_name(&c.name().to_uppercase()).map(|c| c.name()), Ok(c.name()));
+            assert_eq!(by_name(&c.name().to_uppercase()).map(Controller::name), Ok(c.name()));
         }
         let mut names = names();
         names.dedup();

@@ -72,7 +72,6 @@ pub(crate) fn k_in(params: &Params, unit: LengthUnit) -> Matrix2<f64> {
 
 /// The image resolution, pixels.
 pub(crate) fn resolution(params: &Params) -> Vector2<f64> {
-    #[allow(clippy::cast_precision_loss)] // validated ≤ 100000
     Vector2::new(params.camera_res_x() as f64, params.camera_res_y() as f64)
 }
 

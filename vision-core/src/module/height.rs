@@ -121,7 +121,6 @@ pub(crate) fn report(
     let diameter = LengthUnit::Inch.convert(params.mark_diameter_in(), unit);
     let measured: Vec<f64> = mark_sizes.iter().copied().filter(|m| *m > 0.0 && m.is_finite()).collect();
     let mark_size_pct = (diameter > 0.0 && !measured.is_empty()).then(|| {
-        #[allow(clippy::cast_precision_loss)] // a handful of marks
         let mean = measured.iter().sum::<f64>() / measured.len() as f64;
         (diameter / mean - 1.0) * 100.0
     });

@@ -47,8 +47,10 @@ pub struct StepwiseCapture {
 
 /// Where an M281 stands after [`VisionModule::m281_begin`] or [`VisionModule::m281_next`].
 #[derive(Debug)]
-// One value per machine move, moved a few times: its size costs nothing worth a box.
-#[allow(clippy::large_enum_variant)]
+#[expect(
+    clippy::large_enum_variant,
+    reason = "One value per machine move, moved a few times: its size costs nothing worth a box."
+)]
 pub enum CaptureStep {
     /// A re-centring move was handed to the machine: wait until the machine is there, then
     /// call [`VisionModule::m281_next`] with this.

@@ -224,7 +224,6 @@ impl VisionModule {
             .map(|(_, r)| r.norm())
             .collect();
         let max_residual = used.iter().copied().fold(0.0, f64::max);
-        #[allow(clippy::cast_precision_loss)] // a handful of marks
         let rms = (used.iter().map(|r| r * r).sum::<f64>() / used.len() as f64).sqrt();
 
         let sizes: Vec<f64> = self.run.dots.iter().map(|d| d.mark_size * d.unit.factor_to(unit)).collect();

@@ -28,7 +28,7 @@ mod m284;
 mod record;
 
 #[cfg(test)]
-#[allow(clippy::float_cmp)]
+#[expect(clippy::float_cmp, reason = "tests compare exact values")]
 mod tests;
 
 use std::path::{Path, PathBuf};

@@ -192,7 +192,7 @@ impl Params {
 }
 
 #[cfg(test)]
-#[allow(clippy::float_cmp)]
+#[expect(clippy::float_cmp, reason = "tests compare exact values")]
 pub(crate) mod tests {
     use vision_math::{LengthUnit, Vector2};
 

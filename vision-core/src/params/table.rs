@@ -59,7 +59,9 @@ macro_rules! param_struct {
 
             /// Sets `name` (case-insensitive) to `value` after type and range checks; `Ok(false)`
             /// when `name` is not in this part. Access is the caller's business.
-            #[allow(dead_code)] // telemetry is never written by name
+            // `expect` would be unfulfilled in the tables that are written by name.
+            #[expect(clippy::allow_attributes, reason = "dead in one expansion of the macro only")]
+            #[allow(dead_code, reason = "telemetry is never written by name")]
             pub(crate) fn set_raw(&mut self, name: &str, value: &$crate::params::ParamValue) -> Result<bool, $crate::VisionError> {
                 $(
                     if name.eq_ignore_ascii_case($name) {

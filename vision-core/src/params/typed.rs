@@ -54,7 +54,7 @@ impl ParamType for i64 {
     fn from_value(v: &ParamValue) -> Option<Self> {
         match v {
             ParamValue::Int(i) => Some(*i),
-            #[allow(clippy::cast_possible_truncation)] // checked integral and in range
+            #[expect(clippy::cast_possible_truncation, reason = "checked integral and in range")]
             ParamValue::Float(f) if f.fract() == 0.0 && f.abs() < 9.0e15 => Some(*f as i64),
             ParamValue::Text(s) => s.trim().parse().ok(),
             _ => None,
@@ -74,7 +74,6 @@ impl ParamType for f64 {
     fn from_value(v: &ParamValue) -> Option<Self> {
         match v {
             ParamValue::Float(f) => Some(*f),
-            #[allow(clippy::cast_precision_loss)]
             ParamValue::Int(i) => Some(*i as f64),
             ParamValue::Text(s) => s.trim().parse().ok(),
             ParamValue::Bool(_) => None,

@@ -24,7 +24,6 @@ impl ParamValue {
     pub fn as_f64(&self) -> Option<f64> {
         match self {
             ParamValue::Bool(b) => Some(if *b { 1.0 } else { 0.0 }),
-            #[allow(clippy::cast_precision_loss)] // parameter integers are small
             ParamValue::Int(i) => Some(*i as f64),
             ParamValue::Float(f) => Some(*f),
             ParamValue::Text(_) => None,

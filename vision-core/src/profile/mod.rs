@@ -239,7 +239,6 @@ impl ProfileStore {
 }
 
 #[cfg(test)]
-#[allow(clippy::float_cmp)]
 mod tests {
     use super::*;
     use crate::params::tests::PROBE;

@@ -71,7 +71,7 @@ pub fn from_toml_with(text: &str, base: Params) -> Result<Params, String> {
     }
     let mut file: toml::Table =
         toml::from_str(text).map_err(|e| format!("cannot parse: {}", crate::text::toml_error(&e, text)))?;
-    let known: Vec<&str> = base.drivers_settings().map(|d| d.table()).collect();
+    let known: Vec<&str> = base.drivers_settings().map(crate::params::DriverSettings::table).collect();
     if let Some(key) = file.keys().find(|k| *k != VISION && !known.contains(&k.as_str())) {
         let tables: String = std::iter::once(VISION).chain(known.iter().copied()).map(|t| format!("[{t}]")).collect();
         return Err(format!(
@@ -115,7 +115,8 @@ pub fn from_toml_with(text: &str, base: Params) -> Result<Params, String> {
 /// driver's), when one is that close.
 fn unknown_key(name: &str, params: &Params) -> String {
     let e = VisionError::UnknownParam { name: name.to_string() };
-    let known = Params::specs().chain(params.drivers_settings().flat_map(|d| d.specs())).map(|s| s.name);
+    let known =
+        Params::specs().chain(params.drivers_settings().flat_map(crate::params::DriverSettings::specs)).map(|s| s.name);
     match did_you_mean(name, known) {
         Some(near) => format!("{e} (did you mean {near}?)"),
         None => e.to_string(),
@@ -198,7 +199,6 @@ fn shown(value: &toml::Value) -> String {
 }
 
 #[cfg(test)]
-#[allow(clippy::float_cmp)]
 mod tests {
     use super::*;
     use crate::params::tests::PROBE;

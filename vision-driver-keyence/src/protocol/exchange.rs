@@ -468,7 +468,7 @@ fn io_error(
 }
 
 #[cfg(test)]
-#[allow(clippy::float_cmp)]
+#[expect(clippy::float_cmp, reason = "tests compare exact values")]
 mod tests {
     use super::super::generate::{data_line, DataLine};
     use super::super::mock::{bytewise, Script, Step};

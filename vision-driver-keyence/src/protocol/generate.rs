@@ -28,7 +28,6 @@ struct Value {
 
 impl Value {
     fn f64(self) -> f64 {
-        #[allow(clippy::cast_precision_loss)] // |k| < 2^53: exact
         let k = self.thousandths as f64;
         k / 1000.0
     }
@@ -36,7 +35,7 @@ impl Value {
 
 /// A value within `lo..=hi` (units) nine times in ten, else up to 20 % of the range beyond it.
 fn value(lo: f64, hi: f64) -> impl Strategy<Value = Value> {
-    #[allow(clippy::cast_possible_truncation)] // the bounds are whole thousandths far below 2^63
+    #[expect(clippy::cast_possible_truncation, reason = "the bounds are whole thousandths far below 2^63")]
     let (lo, hi) = ((lo * 1000.0) as i64, (hi * 1000.0) as i64);
     let beyond = (hi - lo) / 5;
     prop_oneof![

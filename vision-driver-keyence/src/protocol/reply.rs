@@ -166,8 +166,11 @@ fn judgment(field: &str) -> Result<Judgment, String> {
 fn count(field: &str) -> Result<u32, String> {
     let v = number(field, "count")?;
     if v >= 0.0 && v <= f64::from(MAX_COUNT) && v.fract() == 0.0 {
-        // In range and whole, so the conversion is exact.
-        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+        #[expect(
+            clippy::cast_possible_truncation,
+            clippy::cast_sign_loss,
+            reason = "In range and whole, so the conversion is exact."
+        )]
         Ok(v as u32)
     } else {
         Err(format!("count {v} is not a whole number 0..={MAX_COUNT}"))
@@ -235,7 +238,6 @@ pub(crate) fn quote_bytes(line: &[u8]) -> String {
 }
 
 #[cfg(test)]
-#[allow(clippy::float_cmp)]
 mod tests {
     use super::super::generate::{data_line, edit};
     use super::*;

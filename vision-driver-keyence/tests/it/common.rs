@@ -1,5 +1,5 @@
 //! Shared helpers for the loopback tests.
-#![allow(dead_code, unreachable_pub)]
+#![expect(unreachable_pub, reason = "helpers shared by the test modules, public to them")]
 
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::Arc;

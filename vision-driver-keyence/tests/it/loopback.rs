@@ -1,7 +1,7 @@
 //! The driver against the emulator over real loopback TCP: every output format, every `ER`
 //! code, every fault. Each failure must come back typed within timeout + 20 % (see
 //! `common::SLACK`), and the next trigger must be answered correctly.
-#![allow(clippy::float_cmp)]
+#![expect(clippy::float_cmp, reason = "tests compare exact values")]
 
 use crate::common;
 

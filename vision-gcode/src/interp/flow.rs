@@ -147,7 +147,7 @@ fn o_word_at(b: &[u8]) -> usize {
 fn oline(text: &str, index: usize) -> Result<Option<OLine>, GcodeError> {
     let b = text.as_bytes();
     let skip = |i: &mut usize| {
-        while b.get(*i).is_some_and(|c| c.is_ascii_whitespace()) {
+        while b.get(*i).is_some_and(u8::is_ascii_whitespace) {
             *i += 1;
         }
     };
@@ -433,7 +433,6 @@ impl Interpreter {
     }
 
     /// One line of a run with control flow; `Some` when the program is over.
-    #[allow(clippy::too_many_lines)] // one arm per o-word keyword
     fn flow_line<'h>(
         &mut self,
         run: &mut FlowRun,
@@ -548,8 +547,11 @@ impl Interpreter {
                         ));
                     }
                     if count >= 1.0 {
-                        // At most MAX_REPEATS here.
-                        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+                        #[expect(
+                            clippy::cast_possible_truncation,
+                            clippy::cast_sign_loss,
+                            reason = "At most MAX_REPEATS here."
+                        )]
                         r.repeats.push((src, pc, count.floor() as u64));
                         pc + 1
                     } else {

@@ -44,6 +44,11 @@ impl LineRun<'_> {
         Ok((p, given))
     }
 
+    #[expect(
+        clippy::cast_possible_truncation,
+        clippy::float_cmp,
+        reason = "L words are whole numbers, exact in f64; an unchanged rotation is the same value"
+    )]
     pub(super) fn g10(&mut self) -> Result<(), RunProblem> {
         let l = self.require(
             b'L',
@@ -118,6 +123,7 @@ impl LineRun<'_> {
 
     /// `G10 … R`: LinuxCNC's rotation of the system (degrees, counter-clockwise; L2 only).
     /// Mach4 and seed 002 rotate with G68: there only `R0` is accepted, and it does nothing.
+    #[expect(clippy::float_cmp, reason = "L words are whole numbers, exact in f64")]
     fn g10_rotation(&mut self, l: f64) -> Result<Option<f64>, RunProblem> {
         let Some(r) = self.w.take(b'R', "G10")? else { return Ok(None) };
         if !self.cfg.rules().rotated_systems {
@@ -155,6 +161,7 @@ impl LineRun<'_> {
     /// rotated system the wanted and the old point are both rotated into the unrotated frame
     /// first, so both X and Y of the origin change even when one word is given: the point then
     /// reads `v` in the rotated system (changing X alone would move its Y reading too).
+    #[expect(clippy::cast_possible_truncation, reason = "axis indices are 0..3")]
     fn l20_origin(&mut self, system: u32, v: Xyz, given: [bool; 3]) -> Result<(), RunProblem> {
         let base = work_offset_base(system);
         let degrees = system_rotation(self.cfg, self.params, system);
@@ -220,6 +227,7 @@ impl LineRun<'_> {
         }
     }
 
+    #[expect(clippy::cast_possible_truncation, reason = "axis indices are 0..3")]
     pub(super) fn g92(&mut self) -> Result<(), RunProblem> {
         let given = self.given_axes("G92")?;
         // Seed 002: an axis without a word gets a zero G92 offset (Mach4 and LinuxCNC keep it).
@@ -250,6 +258,7 @@ impl LineRun<'_> {
     /// the current point, never on the machine position: G92 makes it read the given values
     /// (offset = point + offset − value), G52 sets the offset to the given values (point +=
     /// old offset − value).
+    #[expect(clippy::cast_possible_truncation, reason = "axis indices are 0..3")]
     fn shared_offset(&mut self, code: &'static str) -> Result<(), RunProblem> {
         let g52 = code == "G52";
         let (v, given) = self.absolute_point(code)?;

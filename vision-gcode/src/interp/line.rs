@@ -40,8 +40,10 @@ pub(crate) enum Flow {
 
 /// An action queued until the line commits.
 #[derive(Debug, Clone)]
-// Not boxed: the queue is a reused Vec, and a box would allocate per polyline (tests/no_alloc.rs).
-#[allow(clippy::large_enum_variant)]
+#[expect(
+    clippy::large_enum_variant,
+    reason = "Not boxed: the queue is a reused Vec, and a box would allocate per polyline (tests/no_alloc.rs)."
+)]
 pub(crate) enum Pending {
     Event(Event),
     Polyline(Polyline),

@@ -52,7 +52,6 @@ impl Polyline {
         let interior = PathMode::Blend { tolerance: Some(self.chord_tolerance) };
         for k in self.next..=last {
             // k ≤ segments ≤ the configured limit (10⁷ by default): exact in f64.
-            #[allow(clippy::cast_precision_loss)]
             let t = k as f64 / self.segments as f64;
             let to = self.placement.machine_of(self.arc.point_at(t));
             let path = if k == self.segments { self.path } else { interior };
@@ -175,6 +174,7 @@ impl LineRun<'_> {
     }
 
     /// G28.1 / G30.1: stores the machine position at `#home`…`#home + 2`.
+    #[expect(clippy::cast_possible_truncation, reason = "axis indices are 0..3")]
     pub(super) fn g28_1(&mut self, home: u32) {
         let m = self.st.machine;
         for axis in 0..3 {

@@ -8,9 +8,11 @@
 //! Blanks (space, tab, CR) are ignored everywhere outside comments, as in LinuxCNC: `G 1 X 1 . 5`
 //! is `G1 X1.5`. Letters are case-insensitive.
 
-// Private unless the `bench-internals` feature exposes the module; the accessors only the unit
-// tests and that benchmark read are then unused.
-#![cfg_attr(not(feature = "bench-internals"), allow(unreachable_pub, dead_code))]
+// Private unless the `bench-internals` feature exposes the module.
+#![cfg_attr(
+    not(feature = "bench-internals"),
+    allow(unreachable_pub, dead_code, reason = "read only by the unit tests and that benchmark")
+)]
 
 mod expr;
 mod number;

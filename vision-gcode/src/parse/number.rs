@@ -68,7 +68,6 @@ pub(super) fn number(cur: &mut Cursor<'_>) -> PResult<f64> {
     }
     cur.pos = i;
     if mantissa <= (1 << 53) && decimals < POW10.len() {
-        #[allow(clippy::cast_precision_loss)] // mantissa ≤ 2^53: exact.
         return Ok(mantissa as f64 / POW10[decimals]);
     }
     // Digits and at most one `.`, no blanks: the standard library reads the slice as it is.
@@ -110,7 +109,6 @@ fn general(cur: &mut Cursor<'_>) -> PResult<f64> {
     }
     cur.pos = i;
     if exact && mantissa <= (1 << 53) && (decimals as usize) < POW10.len() {
-        #[allow(clippy::cast_precision_loss)] // mantissa ≤ 2^53: exact.
         return Ok(mantissa as f64 / POW10[decimals as usize]);
     }
     without_blanks(&bytes[start..i]).ok_or((start, SyntaxProblem::BadNumber))
@@ -146,7 +144,7 @@ fn without_blanks(raw: &[u8]) -> Option<f64> {
 }
 
 #[cfg(test)]
-#[allow(clippy::float_cmp)]
+#[expect(clippy::float_cmp, reason = "tests compare exact values")]
 mod tests {
     use super::*;
 

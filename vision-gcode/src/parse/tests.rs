@@ -1,4 +1,4 @@
-#![allow(clippy::float_cmp)]
+#![expect(clippy::float_cmp, reason = "tests compare exact values")]
 
 use super::*;
 use crate::expr::eval;

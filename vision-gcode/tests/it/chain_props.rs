@@ -5,9 +5,8 @@
 //! reads the very same `f64`s; the expected position is computed in the documented order
 //! (`docs/gcode-interpreter.md`, "The frame chain"), so equality is exact.
 
-#![allow(clippy::float_cmp)]
-
 use proptest::prelude::*;
+use vision_core::controller::{linuxcnc, LinuxCnc};
 use vision_gcode::{Interpreter, InterpreterConfig, Tool, Xyz};
 use vision_math::{AlignmentChain, LengthUnit, Point2, Vector2};
 
@@ -235,7 +234,6 @@ proptest! {
             rotation_deg: theta,
             shift: Vector2::new(tx, ty),
         };
-        use vision_core::controller::{linuxcnc, LinuxCnc};
         let fail = |e: vision_math::MathError| TestCaseError::fail(e.to_string());
         let text = |commands: &[vision_core::MachineCommand]| vision_mcode::lines(&LinuxCnc, commands).expect("text");
         let first = LinuxCncAlignment::from_chain(&AlignmentChain { rotation_deg: -theta, ..chain }, base, 0.0)

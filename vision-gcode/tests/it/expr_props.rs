@@ -1,7 +1,7 @@
 //! Random expressions, written with the fewest brackets LinuxCNC's precedence allows, evaluate
 //! like a reference evaluator working on the expression tree — or both refuse them.
-
-#![allow(clippy::float_cmp)]
+#![expect(clippy::cast_possible_wrap, reason = "test values are small and whole")]
+#![expect(clippy::float_cmp, reason = "tests compare exact values")]
 
 use proptest::prelude::*;
 use vision_gcode::{Interpreter, InterpreterConfig};

@@ -1,7 +1,7 @@
 //! LinuxCNC o-word subroutines, control flow and named parameters, checked against LinuxCNC:
 //! the expected moves are what its `rs274` printed for the same program and subroutine file.
 
-#![allow(clippy::float_cmp)]
+#![expect(clippy::float_cmp, reason = "tests compare exact values")]
 
 use vision_gcode::{GcodeError, Interpreter, InterpreterConfig, RunProblem, SyntaxProblem, Xyz};
 use vision_math::LengthUnit;
@@ -76,7 +76,7 @@ fn control_flow_errors_are_named() {
     for (text, line) in [("o1 if [1]\nG0 X1", 1), ("o1 while [1]\no2 endwhile", 2), ("o1 foo", 1), ("o1 break", 1)] {
         match interp.run(text, None, &mut Vec::new()) {
             Err(GcodeError::Syntax { line: l, problem: SyntaxProblem::BadOWord { .. }, .. }) => {
-                assert_eq!(l, line, "{text}")
+                assert_eq!(l, line, "{text}");
             }
             other => panic!("{text}: {other:?}"),
         }

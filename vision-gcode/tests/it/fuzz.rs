@@ -1,5 +1,6 @@
 //! Bad input is part of the product: the parser and the interpreter never panic on arbitrary
 //! text or bytes, or on mutated valid programs, and never emit a non-finite number.
+#![expect(clippy::cast_possible_truncation, clippy::cast_sign_loss, reason = "test values are small and whole")]
 
 use proptest::prelude::*;
 use vision_gcode::{Context, Event, HandlerError, Interpreter, InterpreterConfig, MCodeHandler, UserMCode};

@@ -1,6 +1,6 @@
 //! The user M-code extension point: what a handler sees and may do.
 
-#![allow(clippy::float_cmp)]
+#![expect(clippy::float_cmp, reason = "tests compare exact values")]
 
 use vision_gcode::{
     Context, Event, GcodeError, HandlerError, Interpreter, InterpreterConfig, MCodeHandler, RunProblem, Tool,

@@ -1,6 +1,6 @@
 //! The interpreter's modal state, frame chain, arcs, tools and errors.
 
-#![allow(clippy::float_cmp)]
+#![expect(clippy::float_cmp, reason = "tests compare exact values")]
 
 use vision_gcode::{
     ArcDirection, Event, GcodeError, Interpreter, InterpreterConfig, LinearMove, PathMode, Rate, RunOutcome,

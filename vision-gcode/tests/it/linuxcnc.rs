@@ -2,7 +2,7 @@
 //! interpreter: every expected position below is what `rs274` (LinuxCNC 2.9) printed for the
 //! same program (`tools/linuxcnc-oracle`), with its offsets applied.
 
-#![allow(clippy::float_cmp)]
+#![expect(clippy::float_cmp, reason = "tests compare exact values")]
 
 use vision_gcode::{
     ArcDirection, Coolant, Dialect, Event, GcodeError, Interpreter, InterpreterConfig, Rate, RunOutcome, RunProblem,

@@ -1,6 +1,7 @@
 //! One range rule for every coordinate, offset and parameter that reaches the machine
 //! (issue 17 items 3 and 4): beyond ±`MAX_COORDINATE` machine units is an error naming what,
 //! as the path planner refuses it, and absurd G68 rotations and G51 scales are refused.
+#![expect(clippy::float_cmp, reason = "tests compare exact values")]
 
 use vision_gcode::{Event, GcodeError, Interpreter, InterpreterConfig, RunProblem, MAX_COORDINATE};
 

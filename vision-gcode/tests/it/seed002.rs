@@ -6,7 +6,7 @@
 //! counter-clockwise = device 1 port 1, active high), and a default feed because several
 //! snippets feed without ever programming `F`.
 
-#![allow(clippy::float_cmp)]
+#![expect(clippy::float_cmp, reason = "tests compare exact values")]
 
 use vision_gcode::{
     ArcDirection, DigitalOutput, Event, GcodeError, Interpreter, InterpreterConfig, OutputWrite, PathMode, Plane, Rate,

@@ -1,8 +1,8 @@
 //! The manual's vision programs (examples 1–7, fixtures in `tests/programs/`) parse and run with
 //! a recording handler that plays a simple camera; and the G-code M282 emits, executed here,
 //! carries every commanded mark onto its observed position (SPEC §3's definition of correct).
-
-#![allow(clippy::float_cmp)]
+#![expect(clippy::cast_possible_truncation, clippy::cast_sign_loss, reason = "test values are small and whole")]
+#![expect(clippy::float_cmp, reason = "tests compare exact values")]
 
 use vision_core::controller::modal_commands;
 use vision_gcode::{

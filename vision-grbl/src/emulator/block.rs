@@ -2,7 +2,7 @@
 //! parser state and say what motion follows; and `mc_arc` (motion_control.c).
 
 // Axis loops index several arrays at once, as gcode.c does.
-#![allow(clippy::needless_range_loop)]
+#![expect(clippy::needless_range_loop, reason = "Axis loops index several arrays at once, as gcode.c does.")]
 
 use super::canned;
 use super::gcode::{AxisCommand, GcState, NonModal, Op, Parsed, Stored, INCH, MAX_N};
@@ -10,6 +10,12 @@ use super::status as st;
 
 /// Checks `p` against the state and runs it. `Err` is Grbl's status code; on `Err` nothing
 /// changed.
+#[expect(
+    clippy::cast_possible_truncation,
+    clippy::cast_sign_loss,
+    clippy::float_cmp,
+    reason = "a change of offset at all, as Grbl compares it"
+)]
 pub(crate) fn check_and_run(
     p: Parsed,
     gc: &mut GcState,
@@ -428,6 +434,11 @@ struct Arc {
 
 impl Arc {
     /// The segment ends, the target last (motion_control.c, `mc_arc`).
+    #[expect(
+        clippy::cast_possible_truncation,
+        clippy::cast_sign_loss,
+        reason = "a segment count, floored, non-negative and capped"
+    )]
     fn points(&self, tolerance: f64) -> Vec<[f64; 3]> {
         const EPSILON: f64 = 5e-7;
         let (a0, a1, lin) = self.axes;

@@ -54,6 +54,7 @@ pub(crate) fn hole(
 }
 
 #[cfg(test)]
+#[expect(clippy::float_cmp, reason = "tests compare exact values")]
 mod tests {
     use super::*;
 

@@ -185,6 +185,11 @@ pub(crate) enum AxisCommand {
 }
 
 /// Executes one block (uppercase, no spaces or comments). `Err` is Grbl's status code.
+#[expect(
+    clippy::cast_possible_truncation,
+    clippy::cast_sign_loss,
+    reason = "Grbl keeps a G or M number in a byte and its fraction in a u16 (the wrap is emulated); numbers are checked below 256 before they narrow"
+)]
 pub(crate) fn execute(
     line: &[u8],
     gc: &mut GcState,

@@ -350,6 +350,11 @@ impl Machine {
     }
 
     /// report_realtime_status (report.c), with its WCO and override counters.
+    #[expect(
+        clippy::cast_possible_truncation,
+        clippy::cast_sign_loss,
+        reason = "$10 is a mask of at most 255, checked when set"
+    )]
     fn status_report(&mut self) -> String {
         let mask = self.settings.get(10) as u8;
         let busy = matches!(self.state_name(), "Run" | "Home") || self.hold;

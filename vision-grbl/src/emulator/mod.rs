@@ -125,11 +125,11 @@ impl Emulator {
                         let _ = socket.set_nonblocking(false);
                         let _ = socket.set_nodelay(true);
                         let (Ok(reader), Ok(keep)) = (socket.try_clone(), socket.try_clone()) else { continue };
-                        *current2.lock().unwrap_or_else(|e| e.into_inner()) = Some(keep);
+                        *current2.lock().unwrap_or_else(std::sync::PoisonError::into_inner) = Some(keep);
                         let mut writer = socket;
                         let _ = serve(reader, &mut writer, config.clone(), &stop2);
                         let _ = writer.shutdown(Shutdown::Both);
-                        *current2.lock().unwrap_or_else(|e| e.into_inner()) = None;
+                        *current2.lock().unwrap_or_else(std::sync::PoisonError::into_inner) = None;
                     }
                     Err(e) if e.kind() == io::ErrorKind::WouldBlock => thread::sleep(Duration::from_millis(2)),
                     Err(_) => thread::sleep(Duration::from_millis(2)),
@@ -146,7 +146,7 @@ impl Emulator {
 
     /// Drops the current client's connection, as a cable pulled out would.
     pub fn disconnect(&self) {
-        if let Some(s) = self.current.lock().unwrap_or_else(|e| e.into_inner()).take() {
+        if let Some(s) = self.current.lock().unwrap_or_else(std::sync::PoisonError::into_inner).take() {
             let _ = s.shutdown(Shutdown::Both);
         }
     }

@@ -244,6 +244,7 @@ impl Motion {
 }
 
 #[cfg(test)]
+#[expect(clippy::float_cmp, reason = "tests compare exact values")]
 mod tests {
     use super::*;
 

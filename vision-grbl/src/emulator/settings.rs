@@ -64,6 +64,11 @@ impl Settings {
     }
 
     /// `$number=value`, with `settings.c`'s checks; `Err` is Grbl's status code.
+    #[expect(
+        clippy::cast_possible_truncation,
+        clippy::cast_sign_loss,
+        reason = "setting numbers are checked whole and small first"
+    )]
     pub(crate) fn store(&mut self, number: f64, value: f64) -> Result<(), u8> {
         // system.c: a parameter above 255 is an invalid statement; settings.c: negative values.
         if number > 255.0 {
@@ -86,25 +91,28 @@ impl Settings {
     }
 
     /// `$$`: one `$N=value` line each.
+    #[expect(clippy::cast_possible_truncation, reason = "whole settings print as integers, as Grbl does")]
     pub(crate) fn report(&self) -> String {
         let mut out = String::new();
         for (i, &(n, _, decimals)) in TABLE.iter().enumerate() {
             let v = self.values[i];
             match decimals {
                 None => out.push_str(&format!("${n}={}\r\n", v as i64)),
-                Some(d) => out.push_str(&format!("${n}={:.*}\r\n", d, v)),
+                Some(d) => out.push_str(&format!("${n}={v:.d$}\r\n")),
             }
         }
         out
     }
 
     /// Steps per mm of each axis (`$100`–`$102`), never below 1.
+    #[expect(clippy::cast_possible_truncation, reason = "axis indices are 0..3")]
     pub(crate) fn steps_per_mm(&self) -> [f64; 3] {
         std::array::from_fn(|i| self.get(100 + i as u16).max(1.0))
     }
 }
 
 #[cfg(test)]
+#[expect(clippy::float_cmp, reason = "tests compare exact values")]
 mod tests {
     use super::*;
 

@@ -1,5 +1,6 @@
 //! The `$` lines (system.c, `system_execute_line`).
 
+use super::gcode::Op;
 use super::gcode::{read_float, GcState};
 use super::machine::{Machine, Step};
 use super::settings::Settings;
@@ -68,7 +69,6 @@ impl Machine {
                 }
                 // The emulated homing cycle: a seek to machine zero at `$25`, which becomes home.
                 let seek = self.settings.get(25).max(1.0);
-                use super::gcode::Op;
                 self.steps.extend([
                     Step::HomeStart,
                     Step::Op(Op::Line([0.0; 3], Some(seek))),

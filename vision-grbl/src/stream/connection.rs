@@ -97,7 +97,7 @@ fn configure_terminal(_file: &File, _baud: Option<u32>) -> io::Result<()> {
 
 /// Writes all of `bytes`.
 pub(crate) fn send(writer: &SharedWriter, bytes: &[u8]) -> io::Result<()> {
-    let mut w = writer.lock().unwrap_or_else(|e| e.into_inner());
+    let mut w = writer.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
     w.write_all(bytes)?;
     w.flush()
 }

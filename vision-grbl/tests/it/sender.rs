@@ -95,7 +95,7 @@ fn grblhal_answers_the_lines_behind_an_error_with_the_same_error_until_unlatched
 fn a_lost_connection_ends_with_the_line_reached() {
     let grbl = emulator(Flavour::Grbl);
     let mut s = connect(&grbl);
-    let lines: Vec<String> = (1..=200).map(|i| format!("G1 X{} F600", i)).collect();
+    let lines: Vec<String> = (1..=200).map(|i| format!("G1 X{i} F600")).collect();
     let dropper = std::thread::spawn(move || {
         std::thread::sleep(Duration::from_millis(400));
         grbl.disconnect();

@@ -2,6 +2,7 @@
 //! canon (`machine = g5x + R(rot)·(p + g92) + tool`) for `G10 L2 P0 R`, `G52` and `G0`, and
 //! moves the simulated head there, so the real module with the simulated camera runs as it
 //! would under LinuxCNC.
+#![expect(clippy::float_cmp, reason = "tests compare exact values")]
 
 use std::collections::BTreeMap;
 

@@ -166,7 +166,6 @@ mod emitted {
         nominal: &[Point2<f64>],
         observed: &[Point2<f64>],
     ) -> Option<Vec<Point2<f64>>> {
-        #[allow(clippy::cast_precision_loss)]
         let len = nominal.len() as f64;
         let nc = nominal.iter().fold(Vector2::zeros(), |s, p| s + p.coords) / len;
         let oc = observed.iter().fold(Vector2::zeros(), |s, p| s + p.coords) / len;

@@ -1,7 +1,6 @@
 //! The Cramér–Rao bound of a fitted centre.
 
 // Index loops read like the matrix algebra they implement.
-#![allow(clippy::needless_range_loop)]
 
 use super::model::{edge_width, Model};
 use super::solve::solve;
@@ -10,6 +9,7 @@ use super::MAXP;
 /// Fisher information of the model at (`g`, `lin`) over the pixels it fits on, for noise of
 /// `sigma` grey levels: the Cramér–Rao bound (px) on cx and cy, all other parameters unknown
 /// (the blur s at least [`crate::edge::S_MIN`]).
+#[expect(clippy::cast_possible_truncation, reason = "pixel indices of a mark inside the image")]
 pub(crate) fn crb<M: Model>(model: &M, g: &[f64], lin: &[f64; 6], scale: f64, sigma: f64) -> Option<(f64, f64)> {
     let ng = M::G;
     let n = ng + 6;

@@ -1,7 +1,6 @@
 //! The blurred-shape models: a disc, a ring and a cross, each with its gradient.
 
 // Index loops read like the matrix algebra they implement.
-#![allow(clippy::needless_range_loop)]
 
 use crate::edge::{Blur, Edge, Profile, S_MIN};
 
@@ -292,6 +291,7 @@ mod tests {
         };
         let (x, y) = (13.2, 9.1);
         // The support stays put (as within a pass); the models' own geometry moves.
+        #[expect(clippy::items_after_statements, reason = "the helper sits beside its one use")]
         fn at<'a, M: Model>(
             model: &'a M,
             sup: &[f64],

@@ -1,7 +1,7 @@
 //! The fit: damped Gauss–Newton over the normal equations, coarse to fine.
 
 // Index loops read like the matrix algebra they implement.
-#![allow(clippy::needless_range_loop)]
+#![expect(clippy::needless_range_loop, reason = "Index loops read like the matrix algebra they implement.")]
 
 use super::model::{blur_of, edge_width, Model};
 use super::{Img, MAXP};
@@ -38,7 +38,14 @@ const MAX_ITER: usize = 15;
 /// pixels, and the sums there.
 type Accepted = ([f64; 6], [f64; 6], [f64; 6], Acc);
 
+/// Coarse to fine: while the edge is wide, every 4th (2nd) pixel each way carries the same
+/// information at 1/16 (1/4) of the cost, with the blur held above what that spacing resolves;
+/// the last stage uses every pixel and frees the blur. Each stage: (pixel step, least blur px,
+/// convergence, iterations).
+const STAGES: [(usize, f64, f64, usize); 3] = [(4, 3.0, 0.05, 4), (2, 1.5, 0.02, 3), (1, 0.0, 5e-4, MAX_ITER)];
+
 /// Fits `model` starting from geometry `g0`; `scale` px normalises the plane slopes.
+#[expect(clippy::float_cmp, reason = "the same support exactly, so the cached sums still hold")]
 pub(crate) fn fit<M: Model, T: Copy + Into<f64>, const N: usize>(
     img: &Img<'_, T>,
     model: &M,
@@ -53,11 +60,7 @@ pub(crate) fn fit<M: Model, T: Copy + Into<f64>, const N: usize>(
     let (xr, yr) = (g0[0], g0[1]);
     let inv = 1.0 / scale;
     let mut lin = [0.0; 6];
-    // Coarse to fine: while the edge is wide, every 4th (2nd) pixel each way carries the same
-    // information at 1/16 (1/4) of the cost, with the blur held above what that spacing
-    // resolves; the last stage uses every pixel and frees the blur. The first stage is the
-    // coarsest whose spacing the starting blur reaches.
-    const STAGES: [(usize, f64, f64, usize); 3] = [(4, 3.0, 0.05, 4), (2, 1.5, 0.02, 3), (1, 0.0, 5e-4, MAX_ITER)];
+    // The first stage: the coarsest whose spacing the starting blur reaches.
     let first = STAGES.iter().position(|&(st, ..)| g0[ng - 1] >= st as f64).unwrap_or(2);
     let mut iter = 0;
     let si = ng - 1;
@@ -241,7 +244,12 @@ fn source(k: usize, ng: usize) -> (usize, usize) {
 }
 
 /// The normal equations (and with `sectors` the R² sums) over the fitted pixels.
-#[allow(clippy::too_many_arguments)]
+#[expect(clippy::too_many_arguments, reason = "the pass's state, borrowed apart for the inner loop")]
+#[expect(
+    clippy::cast_possible_truncation,
+    clippy::cast_sign_loss,
+    reason = "pixel indices, clamped to the image before"
+)]
 fn accumulate<M: Model, T: Copy + Into<f64>, const N: usize>(
     img: &Img<'_, T>,
     model: &M,

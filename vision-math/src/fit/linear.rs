@@ -59,7 +59,6 @@ pub fn solve_linear(p: &[Vector2<f64>], q: &[Vector2<f64>]) -> Result<LinearFit,
         sum2 += r2;
         max2 = max2.max(r2);
     }
-    #[allow(clippy::cast_precision_loss)]
     let rms = (sum2 / p.len() as f64).sqrt();
     Ok(LinearFit { m, rms, max_residual: max2.sqrt() })
 }

@@ -425,7 +425,6 @@ impl Moments {
             pyx += ay * qx;
             pyy += ay * qy;
         }
-        #[allow(clippy::cast_precision_loss)] // point counts are far below 2^52
         let inv = 1.0 / len as f64;
         let (mx, my, mqx, mqy) = (sax * inv, say * inv, sqx * inv, sqy * inv);
         let cn = Vector2::new(n0.x + mx, n0.y + my);
@@ -668,5 +667,4 @@ pub(crate) fn unit(re: f64, im: f64, reference: f64) -> Option<(UnitComplex<f64>
 }
 
 #[cfg(test)]
-#[allow(clippy::float_cmp)]
 mod tests;

@@ -91,7 +91,6 @@ pub fn fit_piece(piece: Piece, commanded: &[Point2<f64>], observed: &[Point2<f64
         sum2 += r2;
         max2 = max2.max(r2);
     }
-    #[allow(clippy::cast_precision_loss)]
     let rms = (sum2 / m.len as f64).sqrt();
     if !(rms.is_finite() && max2.is_finite()) {
         return Err(MathError::NonFinite { what: "a residual" });
@@ -100,7 +99,7 @@ pub fn fit_piece(piece: Piece, commanded: &[Point2<f64>], observed: &[Point2<f64
 }
 
 #[cfg(test)]
-#[allow(clippy::float_cmp)]
+#[expect(clippy::float_cmp, reason = "tests compare exact values")]
 mod tests {
     use super::*;
     use crate::fit::fit_rigid;

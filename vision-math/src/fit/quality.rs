@@ -173,7 +173,6 @@ impl Transform {
             })
             .collect();
         let points = if region.is_empty() { commanded } else { region };
-        #[allow(clippy::cast_precision_loss)] // a handful of corners
         let quantile = -2.0 * (0.01 / points.len().max(1) as f64).ln();
         let mut worst = Prediction { sigma: 0.0, bound99: 0.0 };
         for p in points {
@@ -208,7 +207,6 @@ impl Transform {
 #[must_use]
 pub fn residual_sigma(model: Model, marks: usize, rms: f64) -> Option<f64> {
     let dof = (2 * marks).checked_sub(model.parameters()).filter(|d| *d > 0)?;
-    #[allow(clippy::cast_precision_loss)] // a handful of marks
     Some((rms * rms * marks as f64 / dof as f64).sqrt())
 }
 
@@ -286,7 +284,6 @@ mod tests {
             self.0 ^= self.0 >> 12;
             self.0 ^= self.0 << 25;
             self.0 ^= self.0 >> 27;
-            #[allow(clippy::cast_precision_loss)]
             let v = (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64;
             v.max(f64::MIN_POSITIVE)
         }

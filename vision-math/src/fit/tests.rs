@@ -127,7 +127,6 @@ proptest! {
         prop_assert!(g_theta.abs() <= 1e-9 * rn * a_norm2.sqrt(), "dF/dθ = {g_theta}");
         prop_assert!(g_sx.abs() <= 1e-9 * rn * ax2.sqrt(), "dF/dsx = {g_sx}");
         prop_assert!(g_sy.abs() <= 1e-9 * rn * ay2.sqrt(), "dF/dsy = {g_sy}");
-        #[allow(clippy::cast_precision_loss)]
         let root_n = (n.len() as f64).sqrt();
         prop_assert!(g_b.norm() <= 1e-9 * rn * root_n + 1e-12 * spread, "dF/db = {g_b:?}");
     }
@@ -146,8 +145,7 @@ proptest! {
         let o: Vec<_> = n.iter().zip(&noise).map(|(p, e)| map(p) + Vector2::new(e.0, e.1) * sigma).collect();
         for model in Model::ALL {
             let fit = model.fit(&n, &o).expect("well-posed");
-            let r: Vec<f64> = fit.residuals(&n, &o).iter().map(|r| r.norm()).collect();
-            #[allow(clippy::cast_precision_loss)]
+            let r: Vec<f64> = fit.residuals(&n, &o).iter().map(nalgebra::Matrix::norm).collect();
             let rms = (r.iter().map(|r| r * r).sum::<f64>() / r.len() as f64).sqrt();
             let largest = r.iter().fold(0.0, |m: f64, &r| m.max(r));
             let tol = 1e-9 * (sigma + 1e-9);

@@ -1,5 +1,5 @@
 //! Shared helpers: program builders and an independent model of the programmed path.
-#![allow(dead_code, unreachable_pub)]
+#![expect(unreachable_pub, reason = "helpers shared by the test modules, public to them")]
 
 use std::f64::consts::{PI, TAU};
 

@@ -1,4 +1,5 @@
 //! The seed's API: configure, start, poll, stop — against a recording sink.
+#![expect(clippy::float_cmp, reason = "tests compare exact values")]
 
 use crate::common;
 
@@ -202,8 +203,6 @@ fn an_unknown_tool_halts_the_path_with_the_reason_and_the_tool_off() {
 
 #[test]
 fn a_failing_sink_halts_the_path_with_the_reason_and_the_tool_off() {
-    let w = |port, high| OutputWrite { device: 1, port, high };
-    let mut follower = seed_follower();
     /// Drive 1 faults once the path has left X 0.5; outputs still work.
     #[derive(Clone, Default)]
     struct Broken(Arc<Mutex<Vec<OutputWrite>>>);
@@ -219,6 +218,8 @@ fn a_failing_sink_halts_the_path_with_the_reason_and_the_tool_off() {
             Ok(())
         }
     }
+    let w = |port, high| OutputWrite { device: 1, port, high };
+    let mut follower = seed_follower();
     let mut p = Program::new(Xyz::ZERO, PathMode::ExactStop);
     p.item(tool(SpindleCommand::Clockwise));
     p.line_to(Xyz::new(1.0, 0.0, 0.0), Rate::Rapid);

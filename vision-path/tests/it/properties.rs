@@ -12,6 +12,7 @@
 //! * events happen at rest at their programmed point, dwells last their time;
 //! * a single straight move takes the analytic trapezoid (or triangle) time, rounded up to
 //!   the next period.
+#![expect(clippy::float_cmp, reason = "tests compare exact values")]
 
 use crate::common;
 

@@ -2,6 +2,7 @@
 //! machine: millimetres, 1000 mm/s² path acceleration, drives at 500 mm/s and 1000 mm/s²,
 //! 1 ms setpoints, tool 1 on device 1 ports 0/1, and a default feed (several snippets feed
 //! without ever programming `F`).
+#![expect(clippy::float_cmp, reason = "tests compare exact values")]
 
 use crate::common;
 

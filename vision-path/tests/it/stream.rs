@@ -1,4 +1,5 @@
 //! The setpoint stream on hand-made programs: corners, arcs, stops, errors, bad input.
+#![expect(clippy::float_cmp, reason = "tests compare exact values")]
 
 use crate::common;
 

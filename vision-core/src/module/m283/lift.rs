@@ -22,7 +22,6 @@ pub const LIFT_GRID: usize = 5;
 /// reading lies where a probe proved the camera reads (`docs/calibration-solve.md`).
 fn lift_positions(around: Point2<f64>, step: f64) -> Vec<Point2<f64>> {
     let g = LIFT_GRID;
-    #[allow(clippy::cast_precision_loss)]
     let t = |i: usize| -1.0 + 2.0 * i as f64 / (g - 1) as f64;
     (0..g)
         .flat_map(|i| (0..g).map(move |j| (i, if i % 2 == 0 { j } else { g - 1 - j })))

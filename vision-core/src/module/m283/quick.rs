@@ -64,7 +64,7 @@ fn check_quick_scale(
     unit: LengthUnit,
 ) -> Result<(), VisionError> {
     let implied: f64 = pixels.iter().map(|p| (k * p).norm()).sum();
-    let moved: f64 = motion.iter().map(|m| m.norm()).sum();
+    let moved: f64 = motion.iter().map(vision_math::Vector2::norm).sum();
     let ratio = implied / moved;
     if ratio.is_finite() && (1.0 / QUICK_SCALE_TOLERANCE..=QUICK_SCALE_TOLERANCE).contains(&ratio) {
         return Ok(());

@@ -113,7 +113,6 @@ pub(super) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
         let expected = fit.transform.apply(*n_i) - b;
         verify.push(DotVerify { dot: i + 1, nominal: *n_i, expected, observed, residual: observed - expected });
     }
-    #[allow(clippy::cast_precision_loss)]
     let verify_rms = (verify.iter().map(|v| v.residual.norm_squared()).sum::<f64>() / verify.len() as f64).sqrt();
     let verify_max = verify.iter().map(|v| v.residual.norm()).fold(0.0, f64::max);
     let k = if theta0 == 0.0 { k } else { rotation(theta0) * k };

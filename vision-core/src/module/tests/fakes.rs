@@ -206,7 +206,6 @@ impl World {
         self.rng ^= self.rng << 13;
         self.rng ^= self.rng >> 7;
         self.rng ^= self.rng << 17;
-        #[allow(clippy::cast_precision_loss)]
         let u = (self.rng >> 11) as f64 / (1u64 << 53) as f64;
         2.0 * u - 1.0
     }

@@ -129,7 +129,7 @@ fn the_registry_builds_the_driver_vision_driver_names() {
     assert_eq!(e, VisionError::UnknownDriver { name: "Keyence".into(), known: "Fake, Broken".into() });
     params.set("VisionDriver", "fake").expect("set");
     let module = VisionModule::from_registry(params.clone(), &registry).expect("fake");
-    assert_eq!(module.driver().map(|d| d.name()), Some("Fake"));
+    assert_eq!(module.driver().map(crate::driver::CameraDriver::name), Some("Fake"));
     params.set("VisionDriver", "Broken").expect("set");
     let e = VisionModule::from_registry(params, &registry).expect_err("factory error");
     assert_eq!(e.to_string(), "cannot use level 5", "the factory sees its settings, at their defaults");
