@@ -56,13 +56,18 @@ pub const TIMEOUT: Check<f64> =
 /// `VisionCameraFlushFrames`.
 pub const FLUSH_FRAMES: Check<i64> = Check::closed("0 to 30 frames", 0, MAX_FLUSH_FRAMES);
 
+/// `VisionCameraSource`'s default: mjpg-streamer's snapshot URL on this machine (its default
+/// port). An HTTP source opens in every build on every platform, where a V4L2 device needs the
+/// `v4l2` feature and 64-bit Linux; a USB camera is served by mjpg-streamer or ustreamer.
+pub const DEFAULT_SOURCE: &str = "http://127.0.0.1:8080/?action=snapshot";
+
 /// The camera driver's settings.
 pub static SETTINGS: SettingsTable = SettingsTable {
     table: TABLE,
     settings: &[
         Setting::text(
             "VisionCameraSource",
-            "/dev/video0",
+            DEFAULT_SOURCE,
             SOURCE,
             "`VisionCameraSource`: where frames come from: a V4L2 device (`/dev/video0`), an HTTP \
              snapshot URL (`http://host:8080/?action=snapshot`), or an image file or folder (replay, \
