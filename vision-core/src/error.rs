@@ -236,8 +236,8 @@ pub enum VisionError {
 
     /// An operation that needs the alignment modals cancelled found them active.
     #[error(
-        "an alignment transform (G51/G68/G52; on LinuxCNC G10 L2 R and G52) is active — cancel it \
-         with G69 G50 G52 X0 Y0 (on LinuxCNC: M280) before calibrating"
+        "an alignment transform (a shift, rotation or scale of the program frame) is active — cancel \
+         it with M280 before calibrating"
     )]
     AlignmentActive,
 

@@ -149,7 +149,7 @@ pub(crate) fn observe(
     let observed = match alignment {
         None => c + offset,
         Some(chain) => chain.inverse(chain.apply(c) + offset).ok_or_else(|| VisionError::BadCalibration {
-            reason: "the active G51 scale has a zero factor, so the program frame cannot be recovered".into(),
+            reason: "the active alignment's scale has a zero factor, so the program frame cannot be recovered".into(),
         })?,
     };
     if !(observed.x.is_finite() && observed.y.is_finite()) {
