@@ -163,6 +163,23 @@ mod tests {
     }
 
     #[test]
+    fn a_driver_name_and_a_short_text_are_bounded_and_plain() {
+        let longest = "k".repeat(64);
+        for ok in ["Keyence", "my-cam_2", longest.as_str()] {
+            assert!(DRIVER_NAME.accepts(&ok.to_string()) && DRIVER_RECORD.accepts(&ok.to_string()), "{ok}");
+        }
+        let too_long = "k".repeat(65);
+        for bad in ["", "Key ence", "cam/1", "kéyence", too_long.as_str()] {
+            assert!(!DRIVER_NAME.accepts(&bad.to_string()), "{bad:?}");
+        }
+        assert!(DRIVER_RECORD.accepts(&String::new()), "empty: not recorded");
+        assert!(!DRIVER_RECORD.accepts(&"Key ence".to_string()));
+        let longest = "a".repeat(4096);
+        assert!(SHORT_TEXT.accepts(&longest) && SHORT_TEXT.accepts(&String::new()));
+        assert!(!SHORT_TEXT.accepts(&"a".repeat(4097)) && !SHORT_TEXT.accepts(&"a\0b".to_string()));
+    }
+
+    #[test]
     fn a_range_keeps_its_ends_open_or_closed_and_refuses_what_is_not_a_number() {
         let open = Check::within("more than 0 and less than 1", Bound::Excluded(0.0), Bound::Excluded(1.0));
         assert!(!open.accepts(&0.0) && open.accepts(&1e-12) && open.accepts(&(1.0 - 1e-12)) && !open.accepts(&1.0));
