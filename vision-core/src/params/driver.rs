@@ -244,3 +244,40 @@ impl DriverSettings {
         self.table.settings.iter().position(|s| s.spec.name.eq_ignore_ascii_case(name))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    static TABLE: SettingsTable = SettingsTable {
+        table: "fake",
+        settings: &[
+            Setting::int("FakeCount", "", 2, Check::closed("0 to 9", 0, 9), "A count."),
+            Setting::float("FakeSeconds", "s", 1.5, Check::closed("0 to 3 seconds", 0.0, 3.0), "A time."),
+            Setting::text("FakeName", "cam", Check::test("not empty", |t: &String| !t.is_empty()), "A name."),
+            Setting::choice("FakeMode", &["on", "off"], "on", "A mode."),
+        ],
+    };
+
+    #[test]
+    fn each_kind_of_setting_checks_its_own_kind_and_range() {
+        let [count, seconds, name, mode] = TABLE.settings else { panic!("four settings") };
+        assert_eq!(count.check(&ParamValue::Int(9)), Ok(()));
+        assert!(count.check(&ParamValue::Int(10)).is_err() && count.check(&ParamValue::Float(1.0)).is_err());
+        assert_eq!(seconds.check(&ParamValue::Float(3.0)), Ok(()));
+        assert!(seconds.check(&ParamValue::Float(3.5)).is_err() && seconds.check(&ParamValue::Int(1)).is_err());
+        assert_eq!(name.check(&ParamValue::Text("x".into())), Ok(()));
+        assert!(name.check(&ParamValue::Text(String::new())).is_err() && name.check(&ParamValue::Int(1)).is_err());
+        assert_eq!(mode.check(&ParamValue::Text("off".into())), Ok(()));
+        assert!(mode.check(&ParamValue::Float(1.0)).is_err());
+    }
+
+    #[test]
+    fn the_settings_show_as_a_map_of_names_to_values() {
+        let shown = format!("{:?}", DriverSettings::new(&TABLE));
+        assert_eq!(
+            shown,
+            r#"{"FakeCount": Int(2), "FakeSeconds": Float(1.5), "FakeName": Text("cam"), "FakeMode": Text("on")}"#
+        );
+    }
+}
