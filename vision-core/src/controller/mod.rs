@@ -49,7 +49,7 @@ pub struct Applied {
 ///
 /// Serialized (inside M282's report) as nothing, or, for a controller that rotates its work
 /// offset, one entry named after the controller: `{ rotation_deg, g52, base_rotation_deg,
-/// ignored_scale }`.
+/// ignored_scale }`; `"applied_by": "host"` where the host applies it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HowApplied {
     /// The controller's name ([`Controller::name`]).
