@@ -100,7 +100,7 @@ impl OffsetParts {
 pub struct DialectRules {
     /// Where a `(` comment ends: seed 002 nests parentheses (its manual writes
     /// `( Corners at (+/- 2.5, +/- 4.0) inch )`), Mach4 nests when the line balances, LinuxCNC
-    /// ends at the first `)` and refuses a `(` inside.
+    /// ends at the first `)` and refuses a `(` inside, Grbl ends at the first `)`.
     pub comments: CommentRule,
     /// The highest parameter number: LinuxCNC 2.9's 5601 (`RS274NGC_MAX_PARAMETERS` is 5602,
     /// indices below it); 9999 for Mach4 and seed 002, the range the pound-variable block of
@@ -257,14 +257,14 @@ impl DialectRules {
 
     /// Grbl 1.1, the program run by the host (subroutines, expressions, parameters and cycles
     /// expanded there): no G68/G51 and no G52 (`error:20`; the sender applies M282's
-    /// alignment), comments end at the first `)` as in LinuxCNC, G92 keeps the axes it does not
-    /// name, no rotated systems or polar words, no program end needed, `%` ignored. The
-    /// firmware has no tool table: the host keeps it and, since M6 never reaches the firmware,
+    /// alignment), comments end at the first `)` (a `(` inside is text), G92 keeps the axes
+    /// it does not name, no rotated systems or polar words, no program end needed, `%` ignored.
+    /// The firmware has no tool table: the host keeps it and, since M6 never reaches the firmware,
     /// applies the new tool's X/Y at M6 and its length at G43, as Mach4 does. Parameters go to
     /// 9999 (the host's table), no named predefined ones, F is zeroed only by a change of feed
     /// mode, `A` is never an output.
     pub const GRBL: DialectRules = DialectRules {
-        comments: CommentRule::Rs274,
+        comments: CommentRule::FirstClose,
         last_parameter: 9999,
         named_predefined_parameters: false,
         rotation_and_scale_codes: false,

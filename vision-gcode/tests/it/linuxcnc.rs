@@ -264,6 +264,11 @@ fn dialects_differ_where_the_controllers_do() {
         "{err:?}"
     );
     assert!(err.to_string().contains("nested comments"), "{err}");
+    // Grbl ends a comment at its first `)`, a `(` inside included.
+    let mut grbl = with(Dialect::Grbl);
+    run(&mut grbl, "G0 X1 (a (b) Y3");
+    assert_eq!(grbl.machine_position().y, 3.0);
+    assert!(grbl.run("G0 X1 (a (b) c", None, &mut Vec::new()).is_err(), "c has no value");
     // G68/G51 are Mach codes.
     run(&mut with(Dialect::Mach4), "G68 X0 Y0 R30\nG69");
     let refused = problem(&mut with(Dialect::LinuxCnc), "G68 X0 Y0 R30");
