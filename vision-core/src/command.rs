@@ -6,7 +6,7 @@
 //! ([`crate::Machine::gcode`]). Every length is in the machine's current units, every angle in
 //! degrees counter-clockwise seen from +Z, in the program frame unless a variant says otherwise.
 
-use vision_math::{Point2, Vector2};
+use vision_math::{AlignmentChain, Point2, Vector2};
 
 /// One thing the Vision module asks the machine to do.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -40,6 +40,12 @@ pub enum MachineCommand {
     MoveBy(Vector2<f64>),
     /// A rapid along machine Z by `dz` (relative); the distance mode is absolute after it.
     MoveZBy(f64),
+    /// Maps every later move of the program through the chain (program frame → work frame;
+    /// replaces the one before), applied by the host that runs the program, not by G-code:
+    /// a controller with no alignment modals (Grbl).
+    AlignMoves(AlignmentChain),
+    /// Stops mapping the program's moves ([`MachineCommand::AlignMoves`] undone).
+    CancelMoveAlignment,
 }
 
 impl MachineCommand {
@@ -56,6 +62,8 @@ impl MachineCommand {
             MachineCommand::MoveTo(_) => "MoveTo",
             MachineCommand::MoveBy(_) => "MoveBy",
             MachineCommand::MoveZBy(_) => "MoveZBy",
+            MachineCommand::AlignMoves(_) => "AlignMoves",
+            MachineCommand::CancelMoveAlignment => "CancelMoveAlignment",
         }
     }
 
@@ -64,13 +72,16 @@ impl MachineCommand {
     pub fn is_finite(&self) -> bool {
         let finite = |v: &[f64]| v.iter().all(|v| v.is_finite());
         match *self {
-            MachineCommand::CancelAlignment | MachineCommand::ClearShift => true,
+            MachineCommand::CancelAlignment | MachineCommand::ClearShift | MachineCommand::CancelMoveAlignment => true,
             MachineCommand::SetShift(v) | MachineCommand::SetScale(v) | MachineCommand::MoveBy(v) => {
                 finite(&[v.x, v.y])
             }
             MachineCommand::SetRotation { centre, deg } => finite(&[centre.x, centre.y, deg]),
             MachineCommand::SetWorkRotation { deg } | MachineCommand::MoveZBy(deg) => deg.is_finite(),
             MachineCommand::MoveTo(p) => finite(&[p.x, p.y]),
+            MachineCommand::AlignMoves(c) => {
+                finite(&[c.scale.x, c.scale.y, c.center.x, c.center.y, c.rotation_deg, c.shift.x, c.shift.y])
+            }
         }
     }
 }
@@ -87,5 +98,9 @@ mod tests {
         assert!(!MachineCommand::SetRotation { centre: Point2::origin(), deg: f64::INFINITY }.is_finite());
         assert!(!MachineCommand::MoveZBy(f64::NEG_INFINITY).is_finite());
         assert_eq!(MachineCommand::SetWorkRotation { deg: 1.0 }.name(), "SetWorkRotation");
+        let mut chain = AlignmentChain::IDENTITY;
+        assert!(MachineCommand::AlignMoves(chain).is_finite());
+        chain.rotation_deg = f64::NAN;
+        assert!(!MachineCommand::AlignMoves(chain).is_finite());
     }
 }

@@ -6,7 +6,7 @@ use serde::ser::{SerializeMap, SerializeStruct};
 use serde::{Serialize, Serializer};
 use vision_math::{AlignmentChain, Fit, LengthUnit, Matrix2, Point2, Remap, Vector2};
 
-use crate::controller::{HowApplied, WorkRotation};
+use crate::controller::{AppliedBy, HowApplied, WorkRotation};
 use crate::driver::Judgment;
 use crate::params::ParamValue;
 
@@ -83,6 +83,9 @@ impl Serialize for HowApplied {
         if let Some(w) = &self.work_rotation {
             let ignored = self.scale_left_out.map_or(Vector2::new(1.0, 1.0), |l| l.scale);
             map.serialize_entry(self.controller, &Entry(w, ignored))?;
+        }
+        if self.by == AppliedBy::Host {
+            map.serialize_entry("applied_by", "host")?;
         }
         map.end()
     }

@@ -134,10 +134,27 @@ impl SimMachine {
     /// # Errors
     /// [`SimError::Machine`] if `setup` or the move fails.
     pub fn machine_point_for(&self, setup: &[String], p: Point2<f64>) -> Result<Xyz, SimError> {
+        self.aligned_point_for(setup, None, p)
+    }
+
+    /// [`SimMachine::machine_point_for`], with the moves after `setup` mapped through `host`
+    /// (current units), the alignment a host applies to the moves it sends (Grbl).
+    ///
+    /// # Errors
+    /// As [`SimMachine::machine_point_for`]; a chain the interpreter refuses.
+    pub fn aligned_point_for(
+        &self,
+        setup: &[String],
+        host: Option<vision_math::AlignmentChain>,
+        p: Point2<f64>,
+    ) -> Result<Xyz, SimError> {
         let mut copy = self.interp.clone();
         let mut ignore = |_: &Event| {};
         let mut ctx = copy.context(&mut ignore);
         ctx.execute(&setup.join("\n")).map_err(|e| gcode_error(&e))?;
+        if host.is_some() {
+            ctx.set_host_alignment(host).map_err(|e| gcode_error(&e))?;
+        }
         ctx.execute(&format!("G90 G0 X{} Y{}", p.x, p.y)).map_err(|e| gcode_error(&e))?;
         Ok(copy.machine_position())
     }
@@ -172,6 +189,22 @@ impl SimMachine {
         fixture: &str,
         nominal: Point2<f64>,
     ) -> Result<f64, SimError> {
+        self.aligned_cut_error(setup, None, tool, fixture, nominal)
+    }
+
+    /// [`SimMachine::tool_cut_error`] of an alignment the host applies: the moves after `setup`
+    /// (and the tool change) mapped through `host` (current units).
+    ///
+    /// # Errors
+    /// As [`SimMachine::tool_cut_error`]; a chain the interpreter refuses.
+    pub fn aligned_cut_error(
+        &self,
+        setup: &[String],
+        host: Option<vision_math::AlignmentChain>,
+        tool: u32,
+        fixture: &str,
+        nominal: Point2<f64>,
+    ) -> Result<f64, SimError> {
         let world = self.sim.world();
         let unit = world.length_unit();
         let f = world.fixtures.iter().find(|f| f.name == fixture).ok_or_else(|| SimError::UnknownFixture {
@@ -187,7 +220,7 @@ impl SimMachine {
             });
         }
         let units = self.interp.units();
-        let spindle = self.machine_point_for(&setup, nominal * unit.factor_to(units))?;
+        let spindle = self.aligned_point_for(&setup, host, nominal * unit.factor_to(units))?;
         let tool_offset = if tool == world.machine.camera_tool {
             self.sim.true_camera_offset(Vector2::zeros(), unit)
         } else {

@@ -17,11 +17,13 @@ pub enum Dialect {
     Mach4,
     /// LinuxCNC 2.9 ([`DialectRules::LINUXCNC`]).
     LinuxCnc,
+    /// Grbl 1.1 behind a host that runs the program ([`DialectRules::GRBL`]).
+    Grbl,
 }
 
 impl Dialect {
     /// Every dialect.
-    pub const ALL: [Dialect; 3] = [Dialect::MachineMotion, Dialect::Mach4, Dialect::LinuxCnc];
+    pub const ALL: [Dialect; 4] = [Dialect::MachineMotion, Dialect::Mach4, Dialect::LinuxCnc, Dialect::Grbl];
 
     /// Its rules: the one table from a name to what it decides.
     #[must_use]
@@ -30,16 +32,18 @@ impl Dialect {
             Dialect::MachineMotion => &DialectRules::MACHINEMOTION,
             Dialect::Mach4 => &DialectRules::MACH4,
             Dialect::LinuxCnc => &DialectRules::LINUXCNC,
+            Dialect::Grbl => &DialectRules::GRBL,
         }
     }
 
-    /// Its name on the command line: `machinemotion`, `mach4`, `linuxcnc`.
+    /// Its name on the command line: `machinemotion`, `mach4`, `linuxcnc`, `grbl`.
     #[must_use]
     pub const fn name(self) -> &'static str {
         match self {
             Dialect::MachineMotion => "machinemotion",
             Dialect::Mach4 => "mach4",
             Dialect::LinuxCnc => "linuxcnc",
+            Dialect::Grbl => "grbl",
         }
     }
 
@@ -96,7 +100,7 @@ impl OffsetParts {
 pub struct DialectRules {
     /// Where a `(` comment ends: seed 002 nests parentheses (its manual writes
     /// `( Corners at (+/- 2.5, +/- 4.0) inch )`), Mach4 nests when the line balances, LinuxCNC
-    /// ends at the first `)` and refuses a `(` inside.
+    /// ends at the first `)` and refuses a `(` inside, Grbl ends at the first `)`.
     pub comments: CommentRule,
     /// The highest parameter number: LinuxCNC 2.9's 5601 (`RS274NGC_MAX_PARAMETERS` is 5602,
     /// indices below it); 9999 for Mach4 and seed 002, the range the pound-variable block of
@@ -108,6 +112,12 @@ pub struct DialectRules {
     /// G68/G69 rotation and G51/G50 scaling exist (Mach and Fanuc codes); LinuxCNC has
     /// neither and refuses them.
     pub rotation_and_scale_codes: bool,
+    /// G52, the local shift, exists; Grbl has none (`error:20`).
+    pub local_shift_code: bool,
+    /// Why a code the dialect lacks is refused (G68/G51 without
+    /// [`DialectRules::rotation_and_scale_codes`], G52 without
+    /// [`DialectRules::local_shift_code`]), naming the controller; empty where none is refused.
+    pub missing_code_note: &'static str,
     /// Each coordinate system has an XY rotation (`G10 L2 R`, parameter #5210 + 20·n):
     /// LinuxCNC. Elsewhere only `R0` is accepted and does nothing.
     pub rotated_systems: bool,
@@ -173,6 +183,8 @@ impl DialectRules {
         last_parameter: 9999,
         named_predefined_parameters: false,
         rotation_and_scale_codes: true,
+        local_shift_code: true,
+        missing_code_note: "",
         rotated_systems: false,
         polar_words: false,
         program_end_required: false,
@@ -197,6 +209,8 @@ impl DialectRules {
         last_parameter: 9999,
         named_predefined_parameters: false,
         rotation_and_scale_codes: true,
+        local_shift_code: true,
+        missing_code_note: "",
         rotated_systems: false,
         polar_words: false,
         program_end_required: false,
@@ -222,6 +236,8 @@ impl DialectRules {
         last_parameter: 5601,
         named_predefined_parameters: true,
         rotation_and_scale_codes: false,
+        local_shift_code: true,
+        missing_code_note: "Mach and Fanuc codes LinuxCNC does not have",
         rotated_systems: true,
         polar_words: true,
         program_end_required: true,
@@ -237,6 +253,39 @@ impl DialectRules {
         tool_change_applies: OffsetParts::Nothing,
         tool_length_applies: OffsetParts::Whole,
         table_write_applies: OffsetParts::Whole,
+    };
+
+    /// Grbl 1.1, the program run by the host (subroutines, expressions, parameters and cycles
+    /// expanded there): no G68/G51 and no G52 (`error:20`; the sender applies M282's
+    /// alignment), comments end at the first `)` (a `(` inside is text), G92 keeps the axes
+    /// it does not name, no rotated systems or polar words, no program end needed, `%` ignored.
+    /// The firmware has no tool table: the host keeps it and, since M6 never reaches the firmware,
+    /// applies the new tool's X/Y at M6 and its length at G43, as Mach4 does. Parameters go to
+    /// 9999 (the host's table), no named predefined ones, F is zeroed only by a change of feed
+    /// mode, `A` is never an output.
+    pub const GRBL: DialectRules = DialectRules {
+        comments: CommentRule::FirstClose,
+        last_parameter: 9999,
+        named_predefined_parameters: false,
+        rotation_and_scale_codes: false,
+        local_shift_code: false,
+        missing_code_note:
+            "codes Grbl does not have (error:20 on the firmware); M282 applies the alignment in the sender",
+        rotated_systems: false,
+        polar_words: false,
+        program_end_required: false,
+        percent_inside_refused: false,
+        g92_zeroes_unnamed_axes: false,
+        g52_shares_g92_offset: false,
+        carries_current_point: false,
+        origin_reloads_on_system_change: false,
+        home_axes_in_current_system: false,
+        feed_mode_always_zeroes_feed: false,
+        lone_a_selects_output: false,
+        tool_xy_offset_added: false,
+        tool_change_applies: OffsetParts::Xy,
+        tool_length_applies: OffsetParts::Length,
+        table_write_applies: OffsetParts::Xy,
     };
 
     /// The tool offset the placement subtracts from a work point (X, Y) and adds (Z), from the

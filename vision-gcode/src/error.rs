@@ -443,6 +443,18 @@ pub enum RunProblem {
         /// What it does, e.g. "cutter radius compensation".
         feature: &'static str,
     },
+    /// A code the dialect's controller does not have ([`crate::DialectRules::missing_code_note`]).
+    #[error("{code} is not supported: {feature} ({codes}: {note}) is not available on this machine; remove it from the program (or post-process for a 3-axis mill)")]
+    NotInDialect {
+        /// The code as written (`G68`).
+        code: String,
+        /// What it does, e.g. "scaling and rotation".
+        feature: &'static str,
+        /// The codes of the feature (`G50/G51, G68/G69`).
+        codes: &'static str,
+        /// Why, naming the controller.
+        note: &'static str,
+    },
     /// A feed move with a zero feed rate.
     #[error("{code} with feed rate F0: the move would never end; program a positive F")]
     ZeroFeedRate {

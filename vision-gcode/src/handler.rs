@@ -220,6 +220,16 @@ impl<'a> Context<'a> {
         self.interp.write_tool_offset(tool, x, y, self.line)
     }
 
+    /// Makes `chain` (current units; `None`: none) the alignment every later move is mapped
+    /// through, as a host that rewrites the program's points applies it: it replaces the
+    /// G51/G68/G52 X/Y modals and [`Context::active_alignment`] reads it back.
+    ///
+    /// # Errors
+    /// A non-finite number, a centre or shift out of range, a zero scale factor.
+    pub fn set_host_alignment(&mut self, chain: Option<AlignmentChain>) -> Result<(), GcodeError> {
+        self.interp.write_host_alignment(chain, self.line)
+    }
+
     /// The active G51/G68/G52 in current units, `None` when all are cancelled.
     #[must_use]
     pub fn active_alignment(&self) -> Option<AlignmentChain> {

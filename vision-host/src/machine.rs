@@ -69,6 +69,23 @@ impl Machine for ContextMachine<'_, '_> {
         Ok(vision_mcode::gcode(self.controller, command)?)
     }
 
+    /// [`MachineCommand::AlignMoves`] and [`MachineCommand::CancelMoveAlignment`] set the
+    /// interpreter's alignment directly (the host maps the moves; no line runs); every other
+    /// command runs its text.
+    fn command(&mut self, command: &MachineCommand) -> Result<Vec<String>, MachineError> {
+        let chain = match *command {
+            MachineCommand::AlignMoves(chain) => Some(chain),
+            MachineCommand::CancelMoveAlignment => None,
+            _ => {
+                let lines = self.gcode(command)?;
+                lines.iter().try_for_each(|line| self.execute(line))?;
+                return Ok(lines);
+            }
+        };
+        self.ctx.set_host_alignment(chain).map_err(host(MachineErrorKind::RefusedGcode))?;
+        Ok(Vec::new())
+    }
+
     fn execute(&mut self, line: &str) -> Result<(), MachineError> {
         self.ctx.execute(line).map_err(host(MachineErrorKind::RefusedGcode))
     }

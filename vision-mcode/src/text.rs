@@ -17,6 +17,9 @@ pub enum AlignmentWords {
     /// No rotation or scale modal: the work offset is rotated (`G10 L2 P0 R`) and `G52` shifts
     /// (LinuxCNC).
     WorkRotation,
+    /// No alignment in its G-code at all: the host that runs the program maps its moves
+    /// ([`MachineCommand::AlignMoves`]; Grbl).
+    Host,
 }
 
 /// One controller's G-code text.
@@ -30,10 +33,11 @@ pub struct ControllerText {
 
 /// Every controller's text, one row each; a test checks that every controller of
 /// [`vision_core::CONTROLLERS`] has one.
-pub static TEXTS: [ControllerText; 3] = [
+pub static TEXTS: [ControllerText; 4] = [
     ControllerText { controller: "mach4", alignment: AlignmentWords::Modal },
     ControllerText { controller: "linuxcnc", alignment: AlignmentWords::WorkRotation },
     ControllerText { controller: "machinemotion", alignment: AlignmentWords::Modal },
+    ControllerText { controller: "grbl", alignment: AlignmentWords::Host },
 ];
 
 /// Why a command has no text.
@@ -49,6 +53,15 @@ pub enum TextError {
     /// The controller's G-code cannot say it (a rotation modal on LinuxCNC).
     #[error("{controller} has no G-code for {command}")]
     Unsupported {
+        /// The controller's name.
+        controller: &'static str,
+        /// The command's name ([`MachineCommand::name`]).
+        command: &'static str,
+    },
+    /// The command is no G-code on this controller: the host applies it to the moves it sends
+    /// (the machine runs no line for it).
+    #[error("{controller} runs no G-code for {command}: the host applies it to the moves it sends")]
+    AppliedByHost {
         /// The controller's name.
         controller: &'static str,
         /// The command's name ([`MachineCommand::name`]).
@@ -85,25 +98,35 @@ pub fn gcode(controller: &dyn Controller, command: &MachineCommand) -> Result<Ve
     }
     let unsupported = || TextError::Unsupported { controller: text.controller, command: command.name() };
     let modal = text.alignment == AlignmentWords::Modal;
+    let host = text.alignment == AlignmentWords::Host;
     let p = |v: f64| fixed(v, POSITION_DECIMALS);
     let line = match *command {
         MachineCommand::CancelAlignment if modal => "G69 G50 G52 X0 Y0".to_string(),
-        MachineCommand::ClearShift => "G52 X0 Y0".to_string(),
-        MachineCommand::SetShift(v) => format!("G52 X{} Y{}", p(v.x), p(v.y)),
+        MachineCommand::ClearShift if !host => "G52 X0 Y0".to_string(),
+        MachineCommand::SetShift(v) if !host => format!("G52 X{} Y{}", p(v.x), p(v.y)),
         MachineCommand::SetRotation { centre, deg } if modal => {
             format!("G68 X{} Y{} R{}", p(centre.x), p(centre.y), fixed(deg, ANGLE_DECIMALS))
         }
         MachineCommand::SetScale(s) if modal => {
             format!("G51 X{} Y{}", fixed(s.x, SCALE_DECIMALS), fixed(s.y, SCALE_DECIMALS))
         }
-        MachineCommand::SetWorkRotation { deg } if !modal => format!("G10 L2 P0 R{}", fixed(deg, ANGLE_DECIMALS)),
+        MachineCommand::SetWorkRotation { deg } if text.alignment == AlignmentWords::WorkRotation => {
+            format!("G10 L2 P0 R{}", fixed(deg, ANGLE_DECIMALS))
+        }
         MachineCommand::MoveTo(t) => format!("G90 G0 X{} Y{}", p(t.x), p(t.y)),
         MachineCommand::MoveBy(d) => return Ok(vec![format!("G91 G0 X{} Y{}", p(d.x), p(d.y)), "G90".to_string()]),
         MachineCommand::MoveZBy(dz) => return Ok(vec![format!("G91 G0 Z{}", p(dz)), "G90".to_string()]),
+        MachineCommand::AlignMoves(_) | MachineCommand::CancelMoveAlignment if host => {
+            return Err(TextError::AppliedByHost { controller: text.controller, command: command.name() })
+        }
         MachineCommand::CancelAlignment
+        | MachineCommand::ClearShift
+        | MachineCommand::SetShift(_)
         | MachineCommand::SetRotation { .. }
         | MachineCommand::SetScale(_)
-        | MachineCommand::SetWorkRotation { .. } => return Err(unsupported()),
+        | MachineCommand::SetWorkRotation { .. }
+        | MachineCommand::AlignMoves(_)
+        | MachineCommand::CancelMoveAlignment => return Err(unsupported()),
     };
     Ok(vec![line])
 }
@@ -124,13 +147,13 @@ pub fn lines(controller: &dyn Controller, commands: &[MachineCommand]) -> Result
 mod tests {
     use super::*;
     use proptest::prelude::*;
-    use vision_core::controller::{linuxcnc, modal_commands, LinuxCnc, Mach4, MachineMotion};
+    use vision_core::controller::{linuxcnc, modal_commands, Grbl, LinuxCnc, Mach4, MachineMotion};
     use vision_core::CONTROLLERS;
     use vision_math::linuxcnc::LinuxCncAlignment;
     use vision_math::{AlignmentChain, Point2, Vector2};
 
     /// One of each command, with numbers that show the decimals and the sign of zero.
-    fn each_command() -> [MachineCommand; 9] {
+    fn each_command() -> [MachineCommand; 11] {
         [
             MachineCommand::CancelAlignment,
             MachineCommand::ClearShift,
@@ -141,12 +164,14 @@ mod tests {
             MachineCommand::MoveTo(Point2::new(1.0, -0.25)),
             MachineCommand::MoveBy(Vector2::new(0.1, -0.1)),
             MachineCommand::MoveZBy(-0.5),
+            MachineCommand::AlignMoves(AlignmentChain::IDENTITY),
+            MachineCommand::CancelMoveAlignment,
         ]
     }
 
     #[test]
     fn every_command_on_every_controller_is_its_exact_text() {
-        let modal: [Option<&[&str]>; 9] = [
+        let modal: [Option<&[&str]>; 11] = [
             Some(&["G69 G50 G52 X0 Y0"]),
             Some(&["G52 X0 Y0"]),
             Some(&["G52 X0.0000000 Y0.1250000"]),
@@ -156,17 +181,28 @@ mod tests {
             Some(&["G90 G0 X1.0000000 Y-0.2500000"]),
             Some(&["G91 G0 X0.1000000 Y-0.1000000", "G90"]),
             Some(&["G91 G0 Z-0.5000000", "G90"]),
+            None,
+            None,
         ];
         let mut linuxcnc = modal;
         linuxcnc[0] = None;
         linuxcnc[3] = None;
         linuxcnc[4] = None;
         linuxcnc[5] = Some(&["G10 L2 P0 R-10.750000000"]);
-        for (controller, want) in [(&Mach4 as &dyn Controller, modal), (&MachineMotion, modal), (&LinuxCnc, linuxcnc)] {
+        let mut grbl = modal;
+        grbl[..6].fill(None);
+        let controllers =
+            [(&Mach4 as &dyn Controller, modal), (&MachineMotion, modal), (&LinuxCnc, linuxcnc), (&Grbl, grbl)];
+        for (controller, want) in controllers {
             for (command, want) in each_command().iter().zip(want) {
                 let got = gcode(controller, command);
                 match want {
                     Some(lines) => assert_eq!(got, Ok(lines.iter().map(|l| (*l).to_string()).collect())),
+                    None if controller.name() == "grbl"
+                        && matches!(command, MachineCommand::AlignMoves(_) | MachineCommand::CancelMoveAlignment) =>
+                    {
+                        assert_eq!(got, Err(TextError::AppliedByHost { controller: "grbl", command: command.name() }));
+                    }
                     None => assert_eq!(
                         got,
                         Err(TextError::Unsupported { controller: controller.name(), command: command.name() })

@@ -3,12 +3,12 @@
 
 use serde::Serialize;
 use vision_core::{
-    AlignReport, CalReport, Capture, JobReport, Params, PoundBlock, PoundReport, QuickReport, RunMode, SheetReport,
-    Telemetry,
+    controller::AppliedBy, AlignReport, CalReport, Capture, JobReport, Params, PoundBlock, PoundReport, QuickReport,
+    RunMode, SheetReport, Telemetry,
 };
 use vision_driver_sim::{Sim, SimMachine};
 use vision_gcode::{Event, Rate};
-use vision_math::{LengthUnit, Point2, Vector2};
+use vision_math::{AlignmentChain, LengthUnit, Point2, Vector2};
 
 use crate::Failure;
 use vision_host::Record;
@@ -229,7 +229,8 @@ pub(crate) fn steps(records: &[Record], sim: &Sim, machine: &SimMachine, cutters
                 if tools.is_empty() {
                     tools.push(machine.interpreter().active_tool());
                 }
-                cut = cut_error(sim, machine, &reply.gcode, &run_marks, tools);
+                let host = (reply.report.how.by == AppliedBy::Host).then_some(reply.report.chain);
+                cut = cut_error(sim, machine, &reply.gcode, host, &run_marks, tools);
             }
             _ => {}
         }
@@ -262,13 +263,15 @@ const SAME_MARK: f64 = 1e-3;
 /// Grid points per side over the run's marks.
 const GRID: u32 = 5;
 
-/// The cut error of the alignment `gcode` over the run's marks: the fixture that carries every
+/// The cut error of the alignment `gcode` (and `host`, the chain a host applies to the moves)
+/// over the run's marks: the fixture that carries every
 /// mark of the run (at its nominal position), a 5 × 5 grid over their bounding box, the tool
 /// `tool`. `None` when no present fixture carries the marks (nothing to compare with).
 fn cut_error(
     sim: &Sim,
     machine: &SimMachine,
     gcode: &[String],
+    host: Option<AlignmentChain>,
     marks: &[(Point2<f64>, LengthUnit)],
     tools: Vec<u32>,
 ) -> Option<CutError> {
@@ -289,7 +292,7 @@ fn cut_error(
     let (mut worst, mut max) = (*tools.first()?, 0.0);
     for &tool in &tools {
         for p in &grid {
-            let e = machine.tool_cut_error(gcode, tool, &fixture.name, *p).ok()?;
+            let e = machine.aligned_cut_error(gcode, host, tool, &fixture.name, *p).ok()?;
             if e > max {
                 (worst, max) = (tool, e);
             }

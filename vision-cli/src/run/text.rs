@@ -173,6 +173,10 @@ fn step(s: &mut String, step: &Step, world_unit: &str) {
                 xy(chain.shift.x, chain.shift.y),
                 xy(chain.center.x, chain.center.y)
             );
+            if a.how.by == vision_core::controller::AppliedBy::Host {
+                let _ =
+                    writeln!(s, "              applied by the host: every later move mapped through it, no G-code run");
+            }
             if let Some(l) = a.how.scale_left_out.as_ref().filter(|l| l.is_scaled()) {
                 let _ = writeln!(
                     s,

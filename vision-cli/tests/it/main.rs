@@ -11,6 +11,7 @@ mod cam_job;
 mod dialect;
 mod docs;
 mod fit;
+mod grbl;
 mod hostile_input;
 mod image_camera;
 mod linuxcnc;

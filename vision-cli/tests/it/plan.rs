@@ -255,7 +255,7 @@ fn every_subcommand_defaults_to_the_mach4_dialect_and_lists_the_dialects() {
     for sub in ["trace", "plan", "run"] {
         let help = bin().args([sub, "--help"]).output().expect("help");
         let help = String::from_utf8_lossy(&help.stdout);
-        assert!(help.contains("[possible values: mach4, linuxcnc, machinemotion]"), "{sub}: {help}");
+        assert!(help.contains("[possible values: mach4, linuxcnc, machinemotion, grbl]"), "{sub}: {help}");
         assert!(help.contains("mach4") && help.contains("the manual's controller"), "{sub}: {help}");
     }
 }

@@ -14,6 +14,7 @@
 //! [`CONTROLLERS`], and its bridge crate implementing [`crate::Machine`] (see
 //! `docs/add-a-controller.md`).
 
+mod grbl;
 pub mod linuxcnc;
 mod mach4;
 mod machinemotion;
@@ -26,6 +27,7 @@ use crate::command::MachineCommand;
 use crate::error::VisionError;
 use crate::machine::{checked, Machine, MachineError};
 
+pub use grbl::Grbl;
 pub use linuxcnc::LinuxCnc;
 pub use mach4::Mach4;
 pub use machinemotion::MachineMotion;
@@ -47,7 +49,7 @@ pub struct Applied {
 ///
 /// Serialized (inside M282's report) as nothing, or, for a controller that rotates its work
 /// offset, one entry named after the controller: `{ rotation_deg, g52, base_rotation_deg,
-/// ignored_scale }`.
+/// ignored_scale }`; `"applied_by": "host"` where the host applies it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HowApplied {
     /// The controller's name ([`Controller::name`]).
@@ -209,7 +211,7 @@ pub fn sheet_calibrations() -> String {
 }
 
 /// Every controller, by [`Controller::name`].
-pub static CONTROLLERS: [&dyn Controller; 3] = [&Mach4, &LinuxCnc, &MachineMotion];
+pub static CONTROLLERS: [&dyn Controller; 4] = [&Mach4, &LinuxCnc, &MachineMotion, &Grbl];
 
 /// The controller named `name` (case-insensitive).
 ///
@@ -389,7 +391,10 @@ mod tests {
         names.dedup();
         assert_eq!(names.len(), CONTROLLERS.len());
         let e = by_name("fanuc").unwrap_err();
-        assert_eq!(e.to_string(), "unknown controller 'fanuc' — known controllers: mach4, linuxcnc, machinemotion");
+        assert_eq!(
+            e.to_string(),
+            "unknown controller 'fanuc' — known controllers: mach4, linuxcnc, machinemotion, grbl"
+        );
     }
 
     #[test]

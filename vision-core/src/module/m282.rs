@@ -86,7 +86,8 @@ pub struct AlignReport {
     pub height: Option<HeightReport>,
     /// How the controller applied it: on the machine or by the host, the scale left out and
     /// why, the work-offset rotation (LinuxCNC's G5x rotation, θ₀ and the shift). In the JSON
-    /// only where there is a work-offset rotation, named after the controller.
+    /// only where there is a work-offset rotation, named after the controller, and as
+    /// `"applied_by": "host"` where the host maps the moves.
     #[serde(flatten)]
     pub how: HowApplied,
 }

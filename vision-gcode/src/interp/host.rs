@@ -38,6 +38,51 @@ impl Interpreter {
         self.write_param(n, value, 0)
     }
 
+    /// Makes `chain` (current units; `None`: none) the alignment applied to every later move,
+    /// as a host that rewrites the program's points applies it (a Grbl sender): it replaces
+    /// the G51/G68/G52 X/Y modals and is applied exactly as they are, arcs included; M2/M30
+    /// cancel it as they cancel them. The machine stays; the program position is re-derived.
+    ///
+    /// # Errors
+    /// A non-finite number, a centre or shift beyond [`crate::MAX_COORDINATE`], a zero scale
+    /// factor; reported at `line`. Nothing changes then.
+    pub(crate) fn write_host_alignment(
+        &mut self,
+        chain: Option<vision_math::AlignmentChain>,
+        line: u32,
+    ) -> Result<(), GcodeError> {
+        let chain = chain.unwrap_or(vision_math::AlignmentChain::IDENTITY);
+        let all = [
+            chain.scale.x,
+            chain.scale.y,
+            chain.center.x,
+            chain.center.y,
+            chain.rotation_deg,
+            chain.shift.x,
+            chain.shift.y,
+        ];
+        if !all.iter().all(|v| v.is_finite()) {
+            return Err(GcodeError::run(line, RunProblem::NonFinite { what: "the host's alignment" }));
+        }
+        for (letter, factor) in [('X', chain.scale.x), ('Y', chain.scale.y)] {
+            if factor == 0.0 {
+                return Err(GcodeError::run(line, RunProblem::ZeroScale { letter }));
+            }
+        }
+        let (from, to) = (self.modal.units, self.config.machine_unit);
+        let c = |v: f64| from.convert(v, to);
+        let (center, shift) = ((c(chain.center.x), c(chain.center.y)), (c(chain.shift.x), c(chain.shift.y)));
+        for v in [center.0, center.1, shift.0, shift.1] {
+            line::in_range(v, || "the host's alignment".to_string()).map_err(|p| GcodeError::run(line, p))?;
+        }
+        let frame = &mut self.modal.frame;
+        frame.chain.scale = chain.scale;
+        frame.chain.shift = vision_math::Vector2::new(shift.0, shift.1);
+        frame.set_rotation(vision_math::Point2::new(center.0, center.1), chain.rotation_deg);
+        self.modal.rederive_program(&self.params);
+        Ok(())
+    }
+
     /// Sets tool `tool`'s X/Y offset (current units), keeping its length; for the active tool
     /// the machine stays and the program position is re-derived.
     ///

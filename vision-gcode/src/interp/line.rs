@@ -289,10 +289,21 @@ impl LineRun<'_> {
                 Some(feature) => RunProblem::Unsupported { code: GCode(code).to_string(), feature },
                 None => RunProblem::UnknownGCode { code: GCode(code) },
             })?;
-            if matches!(group, Group::Rotation | Group::Scale) && !self.cfg.rules().rotation_and_scale_codes {
-                return Err(RunProblem::Unsupported {
+            let rules = self.cfg.rules();
+            if matches!(group, Group::Rotation | Group::Scale) && !rules.rotation_and_scale_codes {
+                return Err(RunProblem::NotInDialect {
                     code: GCode(code).to_string(),
-                    feature: "scaling and rotation (G50/G51, G68/G69: Mach and Fanuc codes LinuxCNC does not have)",
+                    feature: "scaling and rotation",
+                    codes: "G50/G51, G68/G69",
+                    note: rules.missing_code_note,
+                });
+            }
+            if code == 520 && !rules.local_shift_code {
+                return Err(RunProblem::NotInDialect {
+                    code: GCode(code).to_string(),
+                    feature: "the local shift",
+                    codes: "G52",
+                    note: rules.missing_code_note,
                 });
             }
             let slot = &mut groups.0[group as usize];

@@ -493,6 +493,8 @@ impl Parser {
 /// * [`CommentRule::Rs274`] (LinuxCNC): at its first `)`, and a `(` inside a comment is an
 ///   error, as `close_and_downcase` in LinuxCNC's `interp_internal.cc` refuses it ("Nested
 ///   comment found").
+/// * [`CommentRule::FirstClose`] (Grbl 1.1): at its first `)`; Grbl's line reader ignores
+///   every byte of a comment until then, a `(` included.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum CommentRule {
     /// Parentheses nest inside comments.
@@ -502,6 +504,8 @@ pub enum CommentRule {
     Mach4,
     /// The first `)`; a `(` inside a comment is refused.
     Rs274,
+    /// The first `)`; a `(` inside a comment is part of it.
+    FirstClose,
 }
 
 /// Where a comment ended, and whether it ended at its first `)` although it holds a `(` (so
@@ -527,6 +531,10 @@ impl CommentRule {
                 inner,
                 SyntaxProblem::NestedComment { open: column_of(bytes, open), inner: column_of(bytes, inner) },
             )),
+            CommentRule::FirstClose => {
+                let first = bytes[inner..].iter().position(|&b| b == b')').map(|i| inner + i);
+                first.map(|close| CommentEnd { close, early: true }).ok_or((open, SyntaxProblem::UnclosedComment))
+            }
             CommentRule::Nested => balanced(bytes, open)
                 .map(|close| CommentEnd { close, early: false })
                 .ok_or((open, SyntaxProblem::UnclosedComment)),

@@ -264,10 +264,26 @@ fn dialects_differ_where_the_controllers_do() {
         "{err:?}"
     );
     assert!(err.to_string().contains("nested comments"), "{err}");
+    // Grbl ends a comment at its first `)`, a `(` inside included.
+    let mut grbl = with(Dialect::Grbl);
+    run(&mut grbl, "G0 X1 (a (b) Y3");
+    assert_eq!(grbl.machine_position().y, 3.0);
+    assert!(grbl.run("G0 X1 (a (b) c", None, &mut Vec::new()).is_err(), "c has no value");
     // G68/G51 are Mach codes.
     run(&mut with(Dialect::Mach4), "G68 X0 Y0 R30\nG69");
-    assert!(matches!(problem(&mut with(Dialect::LinuxCnc), "G68 X0 Y0 R30"), RunProblem::Unsupported { .. }));
+    let refused = problem(&mut with(Dialect::LinuxCnc), "G68 X0 Y0 R30");
+    assert_eq!(
+        refused.to_string(),
+        "G68 is not supported: scaling and rotation (G50/G51, G68/G69: Mach and Fanuc codes LinuxCNC does not have) is not available on this machine; remove it from the program (or post-process for a 3-axis mill)"
+    );
     assert_eq!(Dialect::LinuxCnc.name(), "linuxcnc");
+    // Grbl has none of G68, G51 and G52, and the refusal names it; G52 stays elsewhere.
+    for line in ["G68 X0 Y0 R30", "G51 X2 Y2", "G52 X1 Y1"] {
+        let refused = problem(&mut with(Dialect::Grbl), line).to_string();
+        assert!(refused.contains("codes Grbl does not have (error:20 on the firmware)"), "{line}: {refused}");
+        assert!(refused.starts_with(&line[..3]), "{refused}");
+    }
+    run(&mut with(Dialect::Mach4), "G52 X1 Y1");
 }
 
 #[test]

@@ -350,6 +350,8 @@ fn fake_text(command: &MachineCommand) -> Vec<String> {
         MachineCommand::MoveTo(t) => vec![format!("G90 G0 X{} Y{}", p(t.x), p(t.y))],
         MachineCommand::MoveBy(d) => vec![format!("G91 G0 X{} Y{}", p(d.x), p(d.y)), "G90".to_string()],
         MachineCommand::MoveZBy(dz) => vec![format!("G91 G0 Z{}", p(dz)), "G90".to_string()],
+        // The host's commands: no line (Mach4 is never handed them).
+        MachineCommand::AlignMoves(_) | MachineCommand::CancelMoveAlignment => Vec::new(),
     }
 }
 

@@ -1,0 +1,15 @@
+( Grbl: as examples/programs/01-calibrate-sheet.nc, unchanged: mach-vision runs it )
+( as the sender, so M283 C1 runs in the host, whose Grbl dialect reads C there. )
+( Example 1 - Calibration: walk calibration sheet 1 with M283 C1.                )
+( Shows: the axis-detect bump, the sheet walk that solves the full 2x2 K and the )
+( camera tool's X/Y offset, the verify re-walk, and the calibration report.      )
+( Setup, as the manual says:                                                     )
+( 1. Tape sheet flat, X+ right / Y+ up                                           )
+( 2. Spindle tool active, jog over sheet CENTER, zero X and Y                    )
+( 3. Camera tool active, jog over START dot [lower-left -2.5,-4.0]               )
+( The built-in simulated world starts in exactly that state.                     )
+G90 G20 G17 ( absolute, inches, XY plane )
+G54
+T98 M6 ( camera tool - change number to match your setup )
+M283 C1 ( walk sheet 1, solve K, write camera tool offset )
+M30
