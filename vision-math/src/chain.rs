@@ -124,6 +124,14 @@ impl AlignmentChain {
         })
     }
 
+    /// Every number of the chain (scale, centre, rotation, shift) is finite.
+    #[must_use]
+    pub fn is_finite(&self) -> bool {
+        [self.scale.x, self.scale.y, self.center.x, self.center.y, self.rotation_deg, self.shift.x, self.shift.y]
+            .iter()
+            .all(|v| v.is_finite())
+    }
+
     /// Refuses a chain no controller can be handed: a field NaN or infinite, or past
     /// [`crate::bounds`] (fixed decimals would write hundreds of digits).
     ///
@@ -131,9 +139,7 @@ impl AlignmentChain {
     /// [`MathError::NonFinite`] if any field is NaN or infinite, [`MathError::BeyondBound`] past
     /// [`crate::bounds`].
     pub fn check(&self) -> Result<(), MathError> {
-        let all =
-            [self.scale.x, self.scale.y, self.center.x, self.center.y, self.rotation_deg, self.shift.x, self.shift.y];
-        if !all.iter().all(|v| v.is_finite()) {
+        if !self.is_finite() {
             return Err(MathError::NonFinite { what: "the alignment chain" });
         }
         for v in [self.center.x, self.center.y, self.shift.x, self.shift.y] {

@@ -60,16 +60,7 @@ impl LinuxCncAlignment {
         base_rotation_deg: f64,
         max_scale_dev_pct: f64,
     ) -> Result<LinuxCncAlignment, MathError> {
-        let all = [
-            chain.scale.x,
-            chain.scale.y,
-            chain.center.x,
-            chain.center.y,
-            chain.rotation_deg,
-            chain.shift.x,
-            chain.shift.y,
-        ];
-        if !all.iter().all(|v| v.is_finite()) {
+        if !chain.is_finite() {
             return Err(MathError::NonFinite { what: "the alignment chain" });
         }
         bounds::rotation_deg("the G5x rotation before the alignment", base_rotation_deg)?;

@@ -52,16 +52,7 @@ impl Interpreter {
         line: u32,
     ) -> Result<(), GcodeError> {
         let chain = chain.unwrap_or(vision_math::AlignmentChain::IDENTITY);
-        let all = [
-            chain.scale.x,
-            chain.scale.y,
-            chain.center.x,
-            chain.center.y,
-            chain.rotation_deg,
-            chain.shift.x,
-            chain.shift.y,
-        ];
-        if !all.iter().all(|v| v.is_finite()) {
+        if !chain.is_finite() {
             return Err(GcodeError::run(line, RunProblem::NonFinite { what: "the host's alignment" }));
         }
         for (letter, factor) in [('X', chain.scale.x), ('Y', chain.scale.y)] {
