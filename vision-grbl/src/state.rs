@@ -58,6 +58,7 @@ fn three(s: &str) -> Result<[f64; 3], ParseError> {
 /// (`PRB:`, grblHAL's `G59.1:` and `HOME:`). Every one of G54..G59, G28, G30, G92 and TLO must
 /// be there.
 pub fn parse_offsets<S: AsRef<str>>(lines: &[S]) -> Result<Offsets, ParseError> {
+    const NAMES: [&str; 10] = ["G54", "G55", "G56", "G57", "G58", "G59", "G28", "G30", "G92", "TLO"];
     let mut out = Offsets::default();
     // G54..G59, G28, G30, G92, TLO.
     let mut seen = [false; 10];
@@ -91,7 +92,6 @@ pub fn parse_offsets<S: AsRef<str>>(lines: &[S]) -> Result<Offsets, ParseError> 
         };
         seen[slot] = true;
     }
-    const NAMES: [&str; 10] = ["G54", "G55", "G56", "G57", "G58", "G59", "G28", "G30", "G92", "TLO"];
     match seen.iter().position(|s| !s) {
         Some(i) => Err(ParseError::Missing(NAMES[i].to_string())),
         None => Ok(out),
@@ -160,6 +160,7 @@ pub fn parse_settings<S: AsRef<str>>(lines: &[S]) -> Result<Vec<(u16, f64)>, Par
 }
 
 #[cfg(test)]
+#[expect(clippy::float_cmp, reason = "the values are exact in binary")]
 mod tests {
     use super::*;
 
@@ -190,7 +191,15 @@ mod tests {
         assert_eq!(parse_offsets(&["TLO:inf"]), Err(ParseError::BadNumber("inf".into())));
 
         let p = parse_parser_state(&["[GC:G1 G56 G18 G20 G91 G94 M3 M8 T7 F12.5 S1000]"]).expect("state");
-        let want = ParserState { work_system: 3, inches: true, incremental: true, plane: 18, tool: 7, feed: 12.5, spindle: 1000.0 };
+        let want = ParserState {
+            work_system: 3,
+            inches: true,
+            incremental: true,
+            plane: 18,
+            tool: 7,
+            feed: 12.5,
+            spindle: 1000.0,
+        };
         assert_eq!(p, want);
         let p = parse_parser_state(&["GC:G0 G59 G19 G21 G90 G94 G40 G49 G98 M5 M9 T0 F0"]).expect("no S");
         assert_eq!((p.work_system, p.plane, p.inches, p.incremental, p.spindle), (6, 19, false, false, 0.0));
