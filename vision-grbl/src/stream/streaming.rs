@@ -16,6 +16,8 @@ struct Pending {
     index: usize,
     len: usize,
     sync: bool,
+    /// A `$` line sent at rest: its answer does not mean motion.
+    idle: bool,
     text: String,
 }
 
@@ -125,7 +127,12 @@ impl Sender {
         if f.queue.is_empty() {
             f.answer_clock = Instant::now();
         }
-        f.queue.push_back(Pending { index, len, sync, text: text.to_string() });
+        if idle {
+            // The machine stopped for it on purpose: not the planner running dry.
+            f.motion_started = false;
+            f.dry = false;
+        }
+        f.queue.push_back(Pending { index, len, sync, idle, text: text.to_string() });
         f.used += len;
         f.pushed += 1;
         f.report.lines_sent += 1;
@@ -194,7 +201,7 @@ impl Sender {
                 if let Some(p) = f.queue.pop_front() {
                     f.used -= p.len;
                     f.reached = Some(p.index);
-                    f.motion_started = true;
+                    f.motion_started |= !p.idle;
                     f.answer_clock = Instant::now();
                     f.idle_seen = false;
                 }
