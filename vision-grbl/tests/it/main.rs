@@ -1,6 +1,7 @@
-//! vision-grbl's integration tests: the emulator held to Grbl's protocol, the sender against
+//! vision-grbl's integration tests: the emitter against the emulator and the interpreter, the emulator held to Grbl's protocol, the sender against
 //! the emulator, and the parsers on arbitrary bytes.
 
+mod emit;
 mod emulator;
 mod parsers;
 mod sender;
