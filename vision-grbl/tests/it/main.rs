@@ -2,6 +2,7 @@
 //! the emulator, and the parsers on arbitrary bytes.
 
 mod emit;
+mod emit_chain;
 mod emulator;
 mod parsers;
 mod sender;
