@@ -35,8 +35,11 @@ pub(crate) struct EmulateArgs {
     /// What to emulate.
     #[arg(value_enum, default_value_t = Kind::Keyence)]
     kind: Kind,
-    /// keyence: the simulated world (TOML); default: the built-in world. The head stays at the
-    /// world's start position, so the camera sees what lies there.
+    /// The simulated world (TOML); default: the built-in world. keyence: the head stays at the
+    /// world's start position, so the camera sees what lies there. grbl: the controller is the
+    /// world's machine — its G54 is the world's `machine.work_offset` and it powers up at
+    /// `machine.start` (in mm), so `send --camera sim` sees the world's parts where the
+    /// program expects them.
     #[arg(long, value_name = "W.toml")]
     world: Option<PathBuf>,
     /// keyence: TCP port on 127.0.0.1 (0 picks a free one); default 8500.
@@ -69,9 +72,9 @@ pub(crate) fn run(args: &EmulateArgs) -> Result<String, Failure> {
             keyence(args)
         }
         Kind::Grbl => {
-            if args.world.is_some() || args.port.is_some() {
+            if args.port.is_some() {
                 return Err(Failure::Input(
-                    "--world and --port are for `emulate keyence`; `emulate grbl` takes --listen HOST:PORT".into(),
+                    "--port is for `emulate keyence`; `emulate grbl` takes --listen HOST:PORT".into(),
                 ));
             }
             grbl(args)
@@ -105,7 +108,8 @@ fn grbl(args: &EmulateArgs) -> Result<String, Failure> {
         Flavour::Grbl => "Grbl 1.1h",
         Flavour::GrblHal => "grblHAL",
     };
-    let config = EmulatorConfig { flavour, time_scale, ..EmulatorConfig::default() };
+    let world = world::load(args.world.as_deref())?;
+    let config = EmulatorConfig { flavour, time_scale, ..grbl_config(&world) };
     let listen = match (args.listen, args.pty) {
         (Some(addr), _) => Some(addr),
         (None, false) => Some(SocketAddr::from(([127, 0, 0, 1], 0))),
@@ -144,4 +148,13 @@ fn open_pty(config: EmulatorConfig) -> Result<(String, vision_grbl::emulator::Pt
 #[cfg(not(unix))]
 fn open_pty(_config: EmulatorConfig) -> Result<(String, ()), Failure> {
     Err(Failure::Input("--pty needs a Unix system; use --listen".into()))
+}
+
+/// A Grbl controller that is `world`'s machine: G54 = `machine.work_offset`, powered up at
+/// `machine.start`, both in mm as Grbl keeps them.
+fn grbl_config(world: &vision_driver_sim::World) -> EmulatorConfig {
+    let mm = world.length_unit().factor_to(vision_math::LengthUnit::Millimetre);
+    let mut work_offsets = [[0.0; 3]; 6];
+    work_offsets[0] = world.machine.work_offset.map(|v| v * mm);
+    EmulatorConfig { work_offsets, start: world.machine.start.map(|v| v * mm), ..EmulatorConfig::default() }
 }

@@ -12,6 +12,7 @@ mod plan;
 #[cfg(test)]
 mod reference;
 mod run;
+mod send;
 mod sheet;
 mod terminal;
 mod trace;
@@ -30,7 +31,7 @@ use vision_core::text::{printable_line, printable_lines, MAX_MESSAGE_CHARS};
     version,
     about,
     after_help = "Every subcommand that reads G-code (trace, plan, run) defaults to --dialect mach4, the manual's \
-                  controller.\n\nEnvironment: MACH_VISION_TERMINAL=always (or never) treats every standard stream as a \
+                  controller; send always reads Grbl's.\n\nEnvironment: MACH_VISION_TERMINAL=always (or never) treats every standard stream as a \
                   terminal (or as none): run's progress on standard error, fit's note that it reads standard input, \
                   and a refusal printed once. Unset, the operating system says which streams are terminals."
 )]
@@ -45,6 +46,9 @@ enum Command {
     Fit(fit::FitArgs),
     /// Run G-code programs on the simulated machine with the Vision M-codes, and report.
     Run(run::RunArgs),
+    /// Run G-code programs in the host's interpreter and stream them to a Grbl, grblHAL or
+    /// FluidNC controller, with the Vision M-codes run and M282's alignment applied by the host.
+    Send(send::SendArgs),
     /// Run a G-code program with no vision handler and print the machine events it produces.
     Trace(trace::TraceArgs),
     /// Plan a G-code program's motion (interpreter + path planner): the cycle time, and every
@@ -87,6 +91,7 @@ fn main() -> ExitCode {
     let outcome = match cli.command {
         Command::Fit(args) => fit::run(&args),
         Command::Run(args) => run::run(&args),
+        Command::Send(args) => send::run(&args),
         Command::Trace(args) => trace::run(&args),
         Command::Plan(args) => plan::run(&args),
         Command::Emulate(args) => emulate::run(&args),

@@ -12,7 +12,7 @@ use crate::error::VisionError;
 use crate::params::{Params, SettingsTable};
 
 /// Builds a driver from the parameters.
-pub type DriverFactory = Box<dyn Fn(&Params) -> Result<Box<dyn CameraDriver>, DriverError> + Send + Sync>;
+pub type DriverFactory = std::sync::Arc<dyn Fn(&Params) -> Result<Box<dyn CameraDriver>, DriverError> + Send + Sync>;
 
 /// One registered driver.
 struct Entry {
@@ -46,7 +46,7 @@ impl DriverRegistry {
     where
         F: Fn(&Params) -> Result<Box<dyn CameraDriver>, DriverError> + Send + Sync + 'static,
     {
-        self.insert(name, None, Box::new(factory));
+        self.insert(name, None, std::sync::Arc::new(factory));
     }
 
     /// Registers `factory` under `name` for a driver whose settings are `settings`, replacing
@@ -56,7 +56,7 @@ impl DriverRegistry {
     where
         F: Fn(&Params) -> Result<Box<dyn CameraDriver>, DriverError> + Send + Sync + 'static,
     {
-        self.insert(name, Some(settings), Box::new(factory));
+        self.insert(name, Some(settings), std::sync::Arc::new(factory));
     }
 
     fn insert(&mut self, name: &str, settings: Option<&'static SettingsTable>, factory: DriverFactory) {
@@ -111,7 +111,86 @@ impl DriverRegistry {
         }
     }
 
+    /// Passes every driver the registry builds from now on through `wrap`: a host that must act
+    /// around a camera's calls (wait for its machine to stop before a trigger) without knowing
+    /// which camera it is.
+    pub fn wrap_drivers<W>(&mut self, wrap: W)
+    where
+        W: Fn(Box<dyn CameraDriver>) -> Box<dyn CameraDriver> + Send + Sync + 'static,
+    {
+        let wrap = std::sync::Arc::new(wrap);
+        for entry in &mut self.entries {
+            let (wrap, inner) = (std::sync::Arc::clone(&wrap), std::sync::Arc::clone(&entry.factory));
+            entry.factory = std::sync::Arc::new(move |params| inner(params).map(|driver| wrap(driver)));
+        }
+    }
+
     fn entry(&self, name: &str) -> Option<&Entry> {
         self.entries.iter().find(|e| e.name.eq_ignore_ascii_case(name))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::driver::{Capabilities, DriverErrorKind, Reading};
+
+    /// A camera that always sees a mark at (1, 2) px.
+    struct Fixed;
+
+    impl CameraDriver for Fixed {
+        fn name(&self) -> &str {
+            "Fixed"
+        }
+        fn capabilities(&self) -> Capabilities {
+            Capabilities::default()
+        }
+        fn trigger(&mut self) -> Result<Reading, DriverError> {
+            Ok(Reading::position(1.0, 2.0))
+        }
+        fn select_job(&mut self, _job: u32) -> Result<(), DriverError> {
+            Err(DriverError::new(DriverErrorKind::Unsupported, "no jobs"))
+        }
+        fn test_connection(&mut self) -> Result<String, DriverError> {
+            Ok("fixed".into())
+        }
+    }
+
+    /// Refuses every trigger, as a host whose machine never stopped would.
+    struct Refusing(Box<dyn CameraDriver>);
+
+    impl CameraDriver for Refusing {
+        fn name(&self) -> &str {
+            self.0.name()
+        }
+        fn capabilities(&self) -> Capabilities {
+            self.0.capabilities()
+        }
+        fn trigger(&mut self) -> Result<Reading, DriverError> {
+            Err(DriverError::new(DriverErrorKind::Other, "the machine is still moving"))
+        }
+        fn select_job(&mut self, job: u32) -> Result<(), DriverError> {
+            self.0.select_job(job)
+        }
+        fn test_connection(&mut self) -> Result<String, DriverError> {
+            self.0.test_connection()
+        }
+    }
+
+    #[test]
+    fn every_driver_built_after_wrapping_goes_through_the_wrapper() {
+        let mut registry = DriverRegistry::new();
+        registry.register("Fixed", |_| Ok(Box::new(Fixed)));
+        registry.register("Other", |_| Ok(Box::new(Fixed)));
+        let mut plain = registry.create("fixed", &Params::default()).expect("built");
+        assert!(plain.trigger().is_ok());
+        registry.wrap_drivers(|d| Box::new(Refusing(d)));
+        for name in ["Fixed", "other"] {
+            let mut wrapped = registry.create(name, &Params::default()).expect("built");
+            assert_eq!(wrapped.name(), "Fixed");
+            assert_eq!(wrapped.test_connection().expect("passed through"), "fixed");
+            let e = wrapped.trigger().expect_err("the wrapper refuses");
+            assert!(e.to_string().contains("still moving"), "{e}");
+        }
     }
 }

@@ -101,6 +101,24 @@ impl SimMachine {
         &self.interp
     }
 
+    /// Puts the machine at `machine` (machine coordinates, machine units) without a move: where
+    /// a real controller that this machine mirrors reports it is.
+    ///
+    /// # Errors
+    /// [`SimError::Machine`] for a NaN or infinite coordinate.
+    pub fn set_machine_position(&mut self, machine: Xyz) -> Result<(), SimError> {
+        self.interp.set_machine_position(machine).map_err(|e| gcode_error(&e))
+    }
+
+    /// Writes parameter `#n` (offsets in machine units) as a controller's own table would: a
+    /// real controller's work offsets, mirrored. Offsets take effect at once.
+    ///
+    /// # Errors
+    /// [`SimError::Machine`] for a read-only or unknown parameter or a value out of range.
+    pub fn set_param(&mut self, n: u32, value: f64) -> Result<(), SimError> {
+        self.interp.set_param(n, value).map_err(|e| gcode_error(&e))
+    }
+
     /// The interpreter, to change the machine's state outside a program.
     pub(crate) fn interpreter_mut(&mut self) -> &mut Interpreter {
         &mut self.interp

@@ -39,15 +39,15 @@ pub(crate) struct RunArgs {
     /// G-code programs, run in order on the same machine (tool table, profile and pound
     /// variables carry over from one to the next); `-` reads one from standard input.
     #[arg(required = true, value_name = "PROGRAM.nc")]
-    programs: Vec<PathBuf>,
+    pub(crate) programs: Vec<PathBuf>,
     /// The simulated world (TOML); default: the built-in world.
     #[arg(long, value_name = "W.toml")]
-    world: Option<PathBuf>,
+    pub(crate) world: Option<PathBuf>,
     /// The Vision profile to load, and to save calibration (M283) and job changes (M284) to.
     /// A missing file starts a fresh, uncalibrated profile. Default: the profile a perfect
     /// calibration of the world would leave, not saved.
     #[arg(long, value_name = "P.toml")]
-    profile: Option<PathBuf>,
+    pub(crate) profile: Option<PathBuf>,
     /// The camera: any registered driver's name, in any case (`sim`: the world's simulated
     /// camera, called directly; `simimage`: the frames that camera sees, rendered and searched
     /// with vision-locate; `keyence`: a Keyence VS camera over TCP, at `--ip`/`--port`, or
@@ -55,41 +55,41 @@ pub(crate) struct RunArgs {
     /// `camera`: a USB, network or file camera at `--source`, or without `--source` the
     /// simulated camera's rendered frames served as HTTP snapshots on loopback).
     #[arg(long, default_value = "sim", value_name = "NAME")]
-    camera: String,
+    pub(crate) camera: String,
     /// Keyence camera address (with `--camera keyence`).
     #[arg(long)]
-    ip: Option<String>,
+    pub(crate) ip: Option<String>,
     /// Keyence camera port (with `--camera keyence --ip`).
     #[arg(long, default_value_t = 8500, allow_negative_numbers = true)]
-    port: u16,
+    pub(crate) port: u16,
     /// Frame source for `--camera camera`: a V4L2 device, an `http://` snapshot URL, or an
     /// image file or folder (the profile's `VisionCameraSource` when absent is replaced, for
     /// the session only, by the loopback snapshots of the simulated camera).
     #[arg(long, value_name = "DEVICE|URL|PATH")]
-    source: Option<String>,
+    pub(crate) source: Option<String>,
     /// Print the report as one JSON object.
     #[arg(long)]
-    json: bool,
+    pub(crate) json: bool,
     /// Show no progress and no list of the files `--report` wrote; errors and warnings still
     /// go to standard error. (Progress — each Vision M-code as it runs, M283's walk dot by
     /// dot — is shown on standard error when it is a terminal, or when the environment sets
     /// MACH_VISION_TERMINAL=always; never on standard output.)
     #[arg(long, short)]
-    quiet: bool,
+    pub(crate) quiet: bool,
     /// Also write one SVG picture per fit and per sheet calibration into this folder
     /// (created if missing).
     #[arg(long, value_name = "DIR")]
-    report: Option<PathBuf>,
+    pub(crate) report: Option<PathBuf>,
     /// The controller the simulated machine is: its G-code dialect and its rules for the Vision
     /// M-codes; default: the world's `machine.dialect`, which is mach4 (the manual's
     /// controller, as in `trace` and `plan`) unless the world says otherwise.
     #[arg(long, value_parser = DialectArg::parser(), ignore_case = true)]
-    dialect: Option<DialectArg>,
+    pub(crate) dialect: Option<DialectArg>,
     /// Run as if the clock read this many seconds after 1970-01-01 00:00 UTC (the time M283
     /// stamps its calibration with and M281 D1 names images by), so that two runs print the
     /// same report; default: the system clock.
     #[arg(long, value_name = "UNIX_SECONDS", allow_negative_numbers = true, value_parser = unix_seconds)]
-    clock: Option<u64>,
+    pub(crate) clock: Option<u64>,
 }
 
 /// `--clock`'s value: whole seconds since 1970-01-01 00:00 UTC, not before it.
@@ -101,11 +101,16 @@ fn unix_seconds(text: &str) -> Result<u64, String> {
     }
 }
 
+/// Passes the camera driver a run builds through a host's wrapper (`send`'s: the camera triggers
+/// only once the controller has stopped).
+pub(crate) type CameraWrap =
+    Box<dyn Fn(Box<dyn vision_core::CameraDriver>) -> Box<dyn vision_core::CameraDriver> + Send + Sync>;
+
 /// Everything a run needs, set up: the simulated machine and camera, and the Vision session
 /// that runs M280–M284 on it (the path every bridge runs).
-struct Runner {
-    sim: Sim,
-    machine: SimMachine,
+pub(crate) struct Runner {
+    pub(crate) sim: Sim,
+    pub(crate) machine: SimMachine,
     handler: ProgramHandler,
     camera: String,
     /// Keeps the loopback emulator alive for the session.
@@ -124,7 +129,7 @@ impl Runner {
     /// cycle-time planner as the program makes them; only the first
     /// [`timing::MAX_KEPT_ITEMS`] are kept, for the alignment time, so memory does not grow
     /// with the program.
-    fn run(&mut self, program: &str, text: &str, progress: Progress) -> ProgramReport {
+    fn run(&mut self, program: &str, text: &str, progress: Progress, drive: &mut dyn Drive) -> ProgramReport {
         progress.line(&format!("== {program}: running"));
         let start = self.machine.interpreter().machine_position();
         let config = self.plan_config(start);
@@ -140,10 +145,12 @@ impl Runner {
             let item = vision_path::item(e, usize::try_from(e.line()).unwrap_or(usize::MAX));
             kept.push(&item);
             planner.push(item);
+            drive.event(e);
         };
         let world_unit = self.sim.unit().short_name();
         let mut streamed = Streamed { handler: &mut self.handler, progress, world_unit };
         let result = self.machine.run_program(text, Some(&mut streamed), &mut collect);
+        let stopped = drive.finish();
         let cycle = planner.finish();
         let steps_not_listed = self.handler.records_dropped();
         let records = self.handler.take_records();
@@ -156,14 +163,16 @@ impl Runner {
         } else {
             None
         };
-        let stopped_by_refusal = match (&result, records.last()) {
-            (Err(e), Some(r)) if steps_not_listed == 0 && r.result.is_err() && r.line == e.line() => Some(r.line),
+        let stopped_by_refusal = match (&result, records.last(), &stopped) {
+            (Err(e), Some(r), None) if steps_not_listed == 0 && r.result.is_err() && r.line == e.line() => Some(r.line),
             _ => None,
         };
-        let (outcome, error) = match result {
-            Ok(RunOutcome::Completed { .. }) => ("completed".to_string(), None),
-            Ok(RunOutcome::Ended { line, code }) => (format!("ended by M{code} at line {line}"), None),
-            Err(e) => (format!("failed at line {}", e.line()), Some(e.to_string())),
+        let (outcome, error) = match (result, stopped) {
+            // The machine stopped first: what the interpreter did after that never reached it.
+            (_, Some(stop)) => (format!("failed at line {}", stop.line), Some(stop.message)),
+            (Ok(RunOutcome::Completed { .. }), None) => ("completed".to_string(), None),
+            (Ok(RunOutcome::Ended { line, code }), None) => (format!("ended by M{code} at line {line}"), None),
+            (Err(e), None) => (format!("failed at line {}", e.line()), Some(e.to_string())),
         };
         ProgramReport {
             program: program.to_string(),
@@ -179,6 +188,43 @@ impl Runner {
             error,
             stopped_by_refusal,
         }
+    }
+}
+
+/// What a program's events drive besides the cycle-time planner: nothing for `run` (the
+/// simulated machine is the interpreter itself), a real controller for `send`.
+pub(crate) trait Drive {
+    /// One event of the program, in program order, as the interpreter makes it.
+    fn event(&mut self, event: &vision_gcode::Event);
+
+    /// After the program: waits for the machine to finish what it was given. The stop, when the
+    /// machine stopped the program before its end (the interpreter ran on, but nothing after
+    /// the stop reached the machine).
+    fn finish(&mut self) -> Option<DriveStop>;
+
+    /// The figures the report adds (`send`'s streaming).
+    fn figures(&self) -> Option<crate::send::StreamingReport> {
+        None
+    }
+}
+
+/// Why the machine stopped a program.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct DriveStop {
+    /// The program line the machine stopped at.
+    pub line: u32,
+    /// Why, for the report and the error line.
+    pub message: String,
+}
+
+/// `run`'s drive: the interpreter is the machine.
+struct Simulated;
+
+impl Drive for Simulated {
+    fn event(&mut self, _event: &vision_gcode::Event) {}
+
+    fn finish(&mut self) -> Option<DriveStop> {
+        None
     }
 }
 
@@ -217,6 +263,15 @@ fn is_stdin(path: &Path) -> bool {
 
 /// Runs `mach-vision run`.
 pub(crate) fn run(args: &RunArgs) -> Result<String, Failure> {
+    let texts = read_programs(args)?;
+    let progress = Progress::new(args.quiet);
+    let mut session = Runner::new(args, progress, None)?;
+    report_session(args, &mut session, &texts, &mut Simulated, progress)
+}
+
+/// Checks `args`' camera options and reads every program before anything runs: an unreadable
+/// file is bad input, not a session cut off halfway with its report lost.
+pub(crate) fn read_programs(args: &RunArgs) -> Result<Vec<String>, Failure> {
     if args.ip.is_some() && !args.camera.eq_ignore_ascii_case(KEYENCE) {
         return Err(Failure::Input("--ip needs --camera keyence".into()));
     }
@@ -226,23 +281,26 @@ pub(crate) fn run(args: &RunArgs) -> Result<String, Failure> {
     if args.programs.iter().filter(|p| is_stdin(p)).count() > 1 {
         return Err(Failure::Input("- (standard input) can be given once: it holds one program".into()));
     }
-    // Every program is read before anything runs: an unreadable file is bad input, not a
-    // session cut off halfway with its report lost.
-    let texts = args
-        .programs
-        .iter()
-        .map(|p| if is_stdin(p) { read_program(p) } else { read_text(p, "program") })
-        .collect::<Result<Vec<_>, _>>()?;
-    let progress = Progress::new(args.quiet);
+    args.programs.iter().map(|p| if is_stdin(p) { read_program(p) } else { read_text(p, "program") }).collect()
+}
+
+/// Runs the programs `texts` (read from `args.programs`) in `session`, their events also
+/// driving `drive`, and reports them as `args` ask.
+pub(crate) fn report_session(
+    args: &RunArgs,
+    session: &mut Runner,
+    texts: &[String],
+    drive: &mut dyn Drive,
+    progress: Progress,
+) -> Result<String, Failure> {
     // On a terminal the report above the error line already says why a refusal stopped the
     // run: the error line then only says where.
     let report_shows_refusal = !args.json && is_terminal(Stream::Stdout) && is_terminal(Stream::Stderr);
-    let mut session = Runner::new(args, progress)?;
     let mut programs = Vec::with_capacity(args.programs.len());
     let mut failure = None;
-    for (path, text) in args.programs.iter().zip(&texts) {
+    for (path, text) in args.programs.iter().zip(texts) {
         let name = if is_stdin(path) { STDIN_NAME.to_string() } else { path.display().to_string() };
-        let report = session.run(&name, text, progress);
+        let report = session.run(&name, text, progress, drive);
         if let Some(e) = &report.error {
             failure = Some(match report.stopped_by_refusal {
                 Some(line) if report_shows_refusal => {
@@ -260,7 +318,9 @@ pub(crate) fn run(args: &RunArgs) -> Result<String, Failure> {
         kept::save(path, &session.machine)?;
     }
     let params = session.module().params();
+    let streaming = drive.figures();
     let report = Report {
+        command: if streaming.is_some() { "send" } else { "run" },
         world: args.world.as_ref().map_or_else(|| "built-in".to_string(), |p| p.display().to_string()),
         world_unit: session.sim.unit().short_name(),
         camera: session.camera.clone(),
@@ -268,6 +328,7 @@ pub(crate) fn run(args: &RunArgs) -> Result<String, Failure> {
         programs,
         pound: pound(&session.machine, params)?,
         telemetry: session.module().telemetry().clone(),
+        streaming,
     };
     if let Some(dir) = &args.report {
         // On standard error: standard output stays the report (and `--json` one object).

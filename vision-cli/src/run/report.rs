@@ -17,6 +17,9 @@ use vision_mcode::Outcome;
 /// The whole run.
 #[derive(Debug, Serialize)]
 pub(crate) struct Report {
+    /// The subcommand that ran the programs (`run` or `send`), for the text report's heading.
+    #[serde(skip)]
+    pub command: &'static str,
     /// `built-in` or the world file.
     pub world: String,
     /// The world's length unit (of every `truth` length).
@@ -31,6 +34,9 @@ pub(crate) struct Report {
     pub pound: PoundReport,
     /// Every telemetry parameter after the last program, by its manual name.
     pub telemetry: Telemetry,
+    /// `send`: how the programs streamed to the controller.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub streaming: Option<crate::send::StreamingReport>,
 }
 
 /// One program.

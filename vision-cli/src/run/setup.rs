@@ -8,7 +8,7 @@ use vision_driver_sim::{ControllerName, Sim, SimMachine};
 use vision_host::{fixed_clock, system_clock};
 use vision_host::{ProgramHandler, Session, SimFrames};
 
-use super::{kept, RunArgs, Runner, CAMERA, KEYENCE};
+use super::{kept, CameraWrap, RunArgs, Runner, CAMERA, KEYENCE};
 use crate::terminal::Progress;
 use crate::{world, Failure};
 
@@ -18,14 +18,17 @@ fn set(params: &mut Params, name: &str, value: impl Into<vision_core::ParamValue
 
 impl Runner {
     /// Sets up the world, the camera, the profile and the session `args` ask for.
-    pub(super) fn new(args: &RunArgs, progress: Progress) -> Result<Runner, Failure> {
+    pub(crate) fn new(args: &RunArgs, progress: Progress, wrap: Option<CameraWrap>) -> Result<Runner, Failure> {
         let mut world = world::load(args.world.as_deref())?;
         if let Some(dialect) = args.dialect {
             world.machine.controller = ControllerName(dialect.0);
         }
         let sim = Sim::new(world).map_err(|e| Failure::Input(e.to_string()))?;
         let camera_tool = i64::from(sim.world().machine.camera_tool);
-        let registry = vision_host::cameras(Some(&sim));
+        let mut registry = vision_host::cameras(Some(&sim));
+        if let Some(wrap) = wrap {
+            registry.wrap_drivers(wrap);
+        }
         let driver = camera_name(&registry, &args.camera)?;
 
         let mut params = match &args.profile {

@@ -31,9 +31,18 @@ fn xy(x: f64, y: f64) -> String {
 /// Renders the whole report.
 pub(crate) fn render(r: &Report) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "mach-vision run: world {}, camera: {}", r.world, r.camera);
+    let _ = writeln!(s, "mach-vision {}: world {}, camera: {}", r.command, r.world, r.camera);
     if let Some(p) = &r.profile {
         let _ = writeln!(s, "profile: {p}");
+    }
+    if let Some(t) = &r.streaming {
+        let blocks = t.planner_blocks.map_or_else(String::new, |b| format!(", {b} planner blocks"));
+        let _ = writeln!(
+            s,
+            "streamed to {} ({}, {}-byte buffer{blocks}): {} lines, {} bytes in {:.1} s; longest wait for buffer room \
+             {:.0} ms; planner ran dry {} times",
+            t.port, t.firmware, t.rx_buffer, t.lines_sent, t.bytes_sent, t.elapsed_s, t.longest_wait_ms, t.planner_dry
+        );
     }
     for p in &r.programs {
         program(&mut s, p, r.world_unit);

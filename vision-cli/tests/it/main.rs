@@ -20,6 +20,7 @@ mod locate_bounds;
 mod option_props;
 mod plan;
 mod run;
+mod send;
 mod shared_profile;
 mod sheet;
 mod trace;

@@ -206,6 +206,17 @@ impl Emitter {
         Ok(out)
     }
 
+    /// Where the lines sent so far leave the machine, machine coordinates in mm (the firmware's
+    /// `MPos`): the work position as sent plus the frame's offset.
+    #[must_use]
+    pub fn machine_mm(&self) -> [f64; 3] {
+        std::array::from_fn(|i| {
+            #[expect(clippy::cast_precision_loss, reason = "Micrometres within ±1e8: exact in an f64.")]
+            let mm = self.pos[i] as f64 / 1000.0;
+            mm + self.frame.wco[i]
+        })
+    }
+
     /// A machine position (machine units) as the firmware's work coordinates, micrometres.
     fn work_um(&self, p: Xyz, what: &'static str) -> Result<[i64; 3], EmitError> {
         let k = self.frame.mm_per_unit;

@@ -325,6 +325,11 @@ impl Sender {
         self.wco
     }
 
+    /// The code of the last `ALARM:N` the controller printed, if any.
+    pub fn last_alarm(&self) -> Option<u8> {
+        self.last_alarm
+    }
+
     /// The last status report read.
     pub fn last_status(&self) -> Option<&Status> {
         self.last_status.as_ref()

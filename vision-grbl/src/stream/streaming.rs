@@ -157,6 +157,11 @@ impl Sender {
         Ok(self.flight.report.clone())
     }
 
+    /// The streaming figures since connect.
+    pub fn report(&self) -> &StreamReport {
+        &self.flight.report
+    }
+
     /// Lines pushed since connect; the next push gets this index.
     pub fn lines_pushed(&self) -> usize {
         self.flight.pushed
