@@ -3,6 +3,7 @@
 //! for the machine to stop and checks that it stopped where the program put it.
 
 use std::collections::VecDeque;
+use std::io::{BufRead, IsTerminal};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use std::time::{Duration, Instant};
@@ -104,6 +105,9 @@ impl Link {
                 for text in lines {
                     self.push(&text, event.line());
                 }
+                if matches!(event, Event::Stop { optional: false, .. }) {
+                    self.program_stop(event.line());
+                }
             }
             Err(e) => {
                 self.stop = Some(DriveStop {
@@ -111,6 +115,42 @@ impl Link {
                     message: format!("line {} cannot be sent to the controller: {e}", event.line()),
                 });
             }
+        }
+    }
+
+    /// M0: the controller holds once it reaches it; the operator resumes from the terminal
+    /// (Enter), as from a cycle-start button. Without a terminal nobody can: the job stops.
+    fn program_stop(&mut self, line: u32) {
+        if self.stop.is_some() {
+            return;
+        }
+        if !std::io::stdin().is_terminal() {
+            self.stop = Some(DriveStop {
+                line,
+                message: format!(
+                    "M0 at line {line} holds the machine until an operator resumes it, and there is no terminal to \
+                     ask on: run send from a terminal, or remove the M0"
+                ),
+            });
+            let _ = self.sender.control().feed_hold();
+            return;
+        }
+        let waited = self.sender.finish().and_then(|_| loop {
+            let s = self.sender.status()?;
+            if matches!(s.state, Some(MachineState::Hold | MachineState::Idle)) {
+                break Ok(());
+            }
+            std::thread::sleep(vision_grbl::stream::MIN_POLL);
+        });
+        if let Err(e) = waited {
+            self.fail(&e, line);
+            return;
+        }
+        eprintln!("mach-vision: program stop (M0) at line {line}: the machine holds; press Enter to resume");
+        let mut answer = String::new();
+        let _ = std::io::stdin().lock().read_line(&mut answer);
+        if let Err(e) = self.sender.control().resume() {
+            self.fail(&StreamError::Write(e), line);
         }
     }
 

@@ -255,3 +255,16 @@ fn a_controller_in_alarm_is_refused_with_the_way_out() {
     let err = stderr(&out);
     assert!(err.contains("alarm") && err.contains("$H") && err.contains("$X"), "{err}");
 }
+
+/// M0 waits for an operator: with no terminal to ask on, the job stops there, saying so.
+#[test]
+fn a_program_stop_without_a_terminal_stops_the_job_there() {
+    let dir = scratch("m0");
+    let program = moves_program(&dir, 10, 3000.0, "M0");
+    let grbl = Emulator::bind("127.0.0.1:0", world_config()).expect("emulator");
+    let out = send(&format!("tcp://{}", grbl.addr()), &program, &[]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(err.contains("M0 at line 8") && err.contains("no terminal"), "{err}");
+    assert_eq!(report(&out)["programs"][0]["outcome"], "failed at line 8");
+}
