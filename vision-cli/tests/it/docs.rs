@@ -57,7 +57,7 @@ fn doc_files(root: &Path) -> Vec<PathBuf> {
     }
     let mut files = vec![root.join("README.md")];
     walk(&root.join("docs"), &mut files);
-    for host in ["mach4", "linuxcnc"] {
+    for host in ["mach4", "linuxcnc", "grbl"] {
         let dir = root.join("hosts").join(host);
         let mut guides: Vec<PathBuf> = fs::read_dir(&dir)
             .expect("hosts folder")
