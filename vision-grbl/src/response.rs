@@ -88,6 +88,9 @@ pub enum ParseError {
     /// A state word no Grbl sends.
     #[error("unknown machine state {0:?}")]
     UnknownState(String),
+    /// A report lacks a field every Grbl prints (`$#`, `$G`).
+    #[error("no {0} in the report")]
+    Missing(String),
 }
 
 /// Parses one line (without its line end; a trailing CR or LF is ignored).

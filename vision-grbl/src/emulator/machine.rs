@@ -58,11 +58,13 @@ impl Machine {
         for &(n, v) in &config.settings {
             let _ = settings.store(f64::from(n), v);
         }
-        let stored = Stored::default();
+        let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
+        let stored = Stored { coords: config.work_offsets.map(|c| c.map(finite)), ..Stored::default() };
+        let start = config.start.map(finite);
         let mut m = Self {
-            gc: GcState::new([0.0; 3], &stored),
+            gc: GcState::new(start, &stored),
             stored,
-            motion: Motion::new(config.planner_blocks(), [0.0; 3]),
+            motion: Motion::new(config.planner_blocks(), start),
             settings,
             config,
             rx: VecDeque::new(),

@@ -74,11 +74,23 @@ pub struct EmulatorConfig {
     pub m7: bool,
     /// `$N=value` settings applied at power-up, e.g. `(110, 5000.0)` (Grbl's units).
     pub settings: Vec<(u16, f64)>,
+    /// G54..G59 as stored in EEPROM at power-up (mm): each TCP connection powers up a fresh
+    /// controller, so this is what persists between connections. Non-finite values read as 0.
+    pub work_offsets: [[f64; 3]; 6],
+    /// The machine position at power-up (mm). Non-finite values read as 0.
+    pub start: [f64; 3],
 }
 
 impl Default for EmulatorConfig {
     fn default() -> Self {
-        Self { flavour: Flavour::Grbl, time_scale: 1.0, m7: true, settings: Vec::new() }
+        Self {
+            flavour: Flavour::Grbl,
+            time_scale: 1.0,
+            m7: true,
+            settings: Vec::new(),
+            work_offsets: [[0.0; 3]; 6],
+            start: [0.0; 3],
+        }
     }
 }
 

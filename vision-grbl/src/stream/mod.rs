@@ -1,12 +1,14 @@
 //! The sender: streams lines to a Grbl controller the way Grbl's own `stream.py` does, by
 //! character counting — as many lines in flight as fit the controller's receive buffer — and
 //! send-response (one line, wait for its answer) for lines that write settings or EEPROM,
-//! which Grbl refuses or stalls on while moving.
+//! which Grbl refuses or stalls on while moving. Lines go one at a time as a program produces
+//! them ([`Sender::push`], then [`Sender::finish`]) or all at once ([`Sender::stream`]).
 //!
 //! Status reports are polled with `?` at most every 200 ms (5 Hz); the work offset is kept
 //! from the last report that carried `WCO`. The first `error:N` or `ALARM:N` stops streaming:
 //! nothing more is sent, and the error names the line. grblHAL then answers the lines still in
-//! flight with the same error (it latches errors); [`Sender::unlatch`] clears that.
+//! flight with the same error (it latches errors); [`Sender::unlatch`] clears that and lets
+//! pushing start again.
 //!
 //! ```
 //! use vision_grbl::emulator::{Emulator, EmulatorConfig};
@@ -22,6 +24,8 @@
 //! ```
 
 mod connection;
+mod queries;
+mod streaming;
 
 use std::io;
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
@@ -31,6 +35,7 @@ use thiserror::Error;
 
 use crate::response::{parse_line, MachineState, Response, Status};
 use connection::{Event, SharedWriter};
+use streaming::Flight;
 
 /// The fastest status polling (5 Hz).
 pub const MIN_POLL: Duration = Duration::from_millis(200);
@@ -66,7 +71,8 @@ pub enum StreamError {
     /// The controller refused a line; nothing after it was sent.
     #[error("line {} ({text:?}): the controller answered error:{code}", index + 1)]
     Firmware {
-        /// Index of the line in the lines given (0-based).
+        /// Index of the line (0-based): in the lines given to [`Sender::stream`], or counted
+        /// over every [`Sender::push`] since connect. Every index of this type counts so.
         index: usize,
         /// The line as sent.
         text: String,
@@ -107,9 +113,25 @@ pub enum StreamError {
     /// Writing failed.
     #[error("cannot write to the controller: {0}")]
     Write(io::Error),
+    /// An error, alarm or reset stopped streaming earlier; nothing more is sent until
+    /// [`Sender::unlatch`].
+    #[error("streaming stopped at line index {at} (an error, alarm or reset); nothing more is sent")]
+    Stopped {
+        /// Index of the line that was refused, or of the first line not answered (0-based).
+        at: usize,
+    },
+    /// A line holds a byte Grbl acts on wherever it sees it: a line end, `?`, `!`, `~`, 0x18,
+    /// or 0x80..=0xFF (overrides, so also any non-ASCII text). Nothing of it was sent.
+    #[error("line {} holds byte 0x{byte:02x}, which the controller would act on at once", index + 1)]
+    RealTimeByte {
+        /// Index of the line (0-based).
+        index: usize,
+        /// The byte.
+        byte: u8,
+    },
 }
 
-/// What one stream did.
+/// What streaming did since connect (every push and stream added up).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct StreamReport {
     /// Lines sent.
@@ -118,10 +140,11 @@ pub struct StreamReport {
     pub bytes_sent: usize,
     /// The longest a line waited for room in the receive buffer (or for a sync).
     pub longest_wait: Duration,
-    /// How often the planner ran dry while lines were still to come: a status report that
-    /// showed `Idle`, or `Bf:` with every block free, after motion had started.
+    /// How often the planner ran dry while lines were still to come: a status report read in
+    /// push or finish that showed `Idle`, or `Bf:` with every block free, after motion had
+    /// started and before the last pushed line was answered.
     pub planner_dry: usize,
-    /// Status reports read while streaming.
+    /// Status reports read in push and finish.
     pub status_reports: usize,
 }
 
@@ -191,6 +214,7 @@ pub struct Sender {
     last_poll: Option<Instant>,
     waiting_status: bool,
     last_alarm: Option<u8>,
+    flight: Flight,
 }
 
 impl std::fmt::Debug for Sender {
@@ -245,6 +269,7 @@ impl Sender {
             last_poll: None,
             waiting_status: false,
             last_alarm: None,
+            flight: Flight::new(),
         };
         // A controller that has just been reset greets us; wait briefly for that before asking.
         let deadline = Instant::now() + Duration::from_millis(300);
@@ -313,7 +338,9 @@ impl Sender {
         let due = self.last_poll.is_none_or(|t| t.elapsed() >= self.options.poll);
         if due && !self.waiting_status {
             self.write(b"?")?;
-            self.last_poll = Some(Instant::now());
+            let now = Instant::now();
+            self.last_poll = Some(now);
+            self.flight.asked_since.get_or_insert(now);
             self.waiting_status = true;
         } else if self.waiting_status && self.last_poll.is_some_and(|t| t.elapsed() >= self.options.poll * 5) {
             // A report lost to a reset: ask again.
@@ -334,6 +361,7 @@ impl Sender {
     fn next(&mut self, wait: Duration) -> Result<Option<Response>, StreamError> {
         match self.events.recv_timeout(wait) {
             Ok(Event::Line(l)) => {
+                self.flight.asked_since = None;
                 let r = parse_line(&l).ok();
                 if let Some(Response::Alarm(code)) = r {
                     self.last_alarm = Some(code);
@@ -349,8 +377,11 @@ impl Sender {
     }
 
     /// Sends one line and waits for its `ok`; returns the feedback lines (`[…]` contents and
-    /// others) it printed first.
+    /// others) it printed first. Lines pushed before are finished first.
     pub fn command(&mut self, line: &str) -> Result<Vec<String>, StreamError> {
+        if self.flight.in_flight() > 0 {
+            self.finish()?;
+        }
         self.write(format!("{}\n", line.trim_end()).as_bytes())?;
         let deadline = Instant::now() + self.options.timeout;
         let mut text = Vec::new();
@@ -372,19 +403,18 @@ impl Sender {
         }
     }
 
-    /// grblHAL: clears a latched error (an empty line answers `ok` and resets it).
+    /// grblHAL: clears a latched error (an empty line answers `ok` and resets it). On any
+    /// controller it also ends a stop, so pushing can start again.
     pub fn unlatch(&mut self) -> Result<(), StreamError> {
-        self.command("").map(|_| ())
+        self.command("")?;
+        self.flight.stopped = None;
+        Ok(())
     }
 
     /// Polls until a status report arrives.
     pub fn status(&mut self) -> Result<Status, StreamError> {
         // Reports already on their way answer an earlier poll: read past them.
-        while let Some(r) = self.next(Duration::ZERO)? {
-            if let Response::Status(s) = r {
-                self.note_status(s);
-            }
-        }
+        while self.pump(Duration::ZERO, false)?.is_some() {}
         self.waiting_status = false;
         self.last_poll = None;
         let deadline = Instant::now() + self.options.timeout;
@@ -392,8 +422,7 @@ impl Sender {
             self.poll_if_due()?;
             let left =
                 deadline.checked_duration_since(Instant::now()).ok_or(StreamError::Timeout(self.options.timeout))?;
-            if let Some(Response::Status(s)) = self.next(left.min(Duration::from_millis(20)))? {
-                self.note_status(s.clone());
+            if let Some(Response::Status(s)) = self.pump(left.min(Duration::from_millis(20)), false)? {
                 return Ok(s);
             }
         }
@@ -417,11 +446,14 @@ impl Sender {
         }
     }
 
-    /// Streams `lines` with character counting; returns when every line is answered `ok`.
+    /// Pushes every line and finishes: a whole program, so it first ends an earlier stop.
+    /// Indexes in its errors count within `lines`; the report holds the totals since connect.
     pub fn stream<S: AsRef<str>>(&mut self, lines: &[S]) -> Result<StreamReport, StreamError> {
-        stream_lines(self, lines)
+        self.flight.stopped = None;
+        let base = self.flight.pushed();
+        for line in lines {
+            self.push(line.as_ref()).map_err(|e| streaming::rebase(e, base))?;
+        }
+        self.finish().map_err(|e| streaming::rebase(e, base))
     }
 }
-
-mod streaming;
-use streaming::stream_lines;

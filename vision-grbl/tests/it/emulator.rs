@@ -242,3 +242,67 @@ proptest::proptest! {
         proptest::prop_assert!(m.machine_position().iter().all(|v| v.is_finite()));
     }
 }
+
+#[test]
+fn the_planner_holds_15_blocks_and_the_16th_line_waits_for_room() {
+    let mut m = machine(Flavour::Grbl);
+    assert_eq!(answer(&mut m, "$10=3"), "ok");
+    assert_eq!(answer(&mut m, "G91 G1 F60"), "ok");
+    // 20 slow moves of 1 mm (80 bytes): 15 are planned and answered, the 16th waits in the parser.
+    let out = exchange(&mut m, &b"X1\n".repeat(20), 0.01);
+    assert_eq!(out.matches("ok").count(), 15, "{out}");
+    assert!(exchange(&mut m, b"?", 0.0).contains("|Bf:0,"));
+    // The first block done (1 s at 60 mm/min), one more line is answered.
+    assert_eq!(exchange(&mut m, b"", 1.2).matches("ok").count(), 1);
+}
+
+#[test]
+fn grblhal_keeps_1024_bytes_of_receive_buffer() {
+    let mut m = machine(Flavour::GrblHal);
+    m.receive(b"G4 P10\n");
+    m.advance(0.01);
+    // 100 lines of 11 bytes arrive while the dwell keeps the controller from reading.
+    m.receive(&b"G1 X1 F100\n".repeat(100));
+    m.receive(b"?");
+    m.advance(0.0);
+    let report = String::from_utf8(m.take_output()).expect("utf8");
+    assert!(report.contains("<Idle|"), "{report}");
+    m.advance(30.0);
+    let out = String::from_utf8(m.take_output()).expect("utf8");
+    // 1024 bytes: 93 whole lines and `G1 X` of the 94th, which waits for its line end.
+    assert_eq!(out.matches("ok").count(), 1 + 93, "{out}");
+    assert_eq!(exchange(&mut m, b"\n", 1.0), "error:2\r\n", "`G1 X` has no number after X");
+}
+
+#[test]
+#[expect(clippy::float_cmp, reason = "positions are whole steps, exactly representable here")]
+fn configured_work_offsets_and_start_position_are_there_at_power_up() {
+    let config = EmulatorConfig {
+        work_offsets: [[1.0, 2.0, 3.0], [-10.0, 0.5, 0.0], [0.0; 3], [0.0; 3], [0.0; 3], [7.0, 8.0, 9.0]],
+        start: [-5.0, -6.0, -7.0],
+        ..Default::default()
+    };
+    let mut m = Machine::new(config);
+    m.take_output();
+    assert_eq!(m.machine_position(), [-5.0, -6.0, -7.0]);
+    assert_eq!(exchange(&mut m, b"?", 0.0), "<Idle|MPos:-5.000,-6.000,-7.000|FS:0,0|WCO:1.000,2.000,3.000>\r\n");
+    let params = answer(&mut m, "$#");
+    assert!(
+        params.starts_with("[G54:1.000,2.000,3.000]\r\n[G55:-10.000,0.500,0.000]\r\n[G56:0.000,0.000,0.000]\r\n"),
+        "{params}"
+    );
+    assert!(params.contains("[G59:7.000,8.000,9.000]\r\n"), "{params}");
+    assert_eq!(answer(&mut m, "G55"), "ok");
+    assert!(exchange(&mut m, b"?", 0.0).ends_with("|WCO:-10.000,0.500,0.000>\r\n"));
+    assert_eq!(answer(&mut m, "$10=0"), "ok");
+    assert!(exchange(&mut m, b"?", 0.0).starts_with("<Idle|WPos:5.000,-6.500,-7.000|"));
+    assert_eq!(answer(&mut m, "G59 G0 X0 Y0 Z0"), "ok");
+    assert_eq!(m.machine_position(), [7.0, 8.0, 9.0]);
+    // A reset keeps the stored offsets and the position, and selects G54 again.
+    m.receive(&[0x18]);
+    m.take_output();
+    assert!(answer(&mut m, "$G").starts_with("[GC:G0 G54 "));
+    assert!(exchange(&mut m, b"?", 0.0).starts_with("<Idle|WPos:6.000,6.000,6.000|"));
+    let bad = EmulatorConfig { work_offsets: [[f64::NAN; 3]; 6], start: [f64::INFINITY; 3], ..Default::default() };
+    assert_eq!(Machine::new(bad).machine_position(), [0.0; 3], "non-finite values read as 0");
+}

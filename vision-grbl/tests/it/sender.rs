@@ -47,7 +47,8 @@ fn a_setting_waits_for_the_machine_to_stop() {
     let mut s = connect(&grbl);
     assert!(needs_idle("$10=3") && needs_idle("$#") && !needs_idle("$G") && !needs_idle("G1 X1"));
     // Grbl answers error:8 to a setting while moving; the sender waits for Idle instead.
-    s.stream(&["G1 X30 F3000", "$10=3", "G1 X0"]).expect("stream");
+    let report = s.stream(&["G1 X30 F3000", "$10=3", "G1 X0"]).expect("stream");
+    assert_eq!(report.planner_dry, 0, "a stop for a setting is not the planner running dry");
     let status = s.wait_idle(Duration::from_secs(10)).expect("idle");
     assert!(status.buffer.is_some(), "$10=3 took: reports carry Bf");
     assert_eq!(status.mpos, Some([0.0; 3]));
