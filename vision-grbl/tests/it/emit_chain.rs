@@ -201,6 +201,7 @@ fn g18_g3_takes_the_short_way_from_z_towards_x_as_linuxcnc_and_grbl_do() {
         assert_eq!(lines[1].split(' ').next(), program.split(' ').next(), "{lines:?}");
         let mut left_the_quarter = false;
         for line in &lines {
+            crate::emit::check_words(line);
             m.receive(format!("{line}\n").as_bytes());
         }
         for _ in 0..5_000 {
