@@ -260,3 +260,28 @@ fn a_silent_controller_or_one_idle_without_answering_times_out() {
         assert!(start.elapsed() < Duration::from_secs(3), "idle: {idle}");
     }
 }
+
+#[test]
+fn a_reset_or_an_alarm_stops_pushing() {
+    let grbl = emulator(1.0, &[]);
+    let mut s = connect(&grbl, Duration::from_secs(10));
+    let control = s.control();
+    // A reset during a dwell: no alarm (nothing moves), but the queued line is gone.
+    s.push("G4 P0.5").expect("push");
+    s.push("G0 X1").expect("push");
+    control.soft_reset().expect("reset");
+    match s.finish() {
+        Err(StreamError::ConnectionLost { reason, reached: None }) => assert!(reason.contains("reset"), "{reason}"),
+        other => panic!("{other:?}"),
+    }
+    assert!(matches!(s.push("G0 X2"), Err(StreamError::Stopped { at: 0 })));
+    s.unlatch().expect("unlatch");
+    // A reset in motion: ALARM:3, read by the next push, which sends nothing.
+    s.push("G1 X50 F3000").expect("push");
+    s.finish().expect("finish");
+    control.soft_reset().expect("reset");
+    std::thread::sleep(Duration::from_millis(100));
+    assert!(matches!(s.push("G0 X0"), Err(StreamError::Alarm { code: 3, reached: Some(2) })));
+    assert!(matches!(s.push("G0 X0"), Err(StreamError::Stopped { at: 3 })));
+    assert_eq!(s.lines_pushed(), 3);
+}
