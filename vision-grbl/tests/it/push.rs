@@ -24,7 +24,8 @@ fn connect(e: &Emulator, timeout: Duration) -> Sender {
 
 #[test]
 fn pushes_short_moves_one_by_one_and_finishes_with_the_totals() {
-    let grbl = emulator(50.0, &[(10, 3.0)]);
+    // At 20x the 15 planned segments cover about 20 ms of real time.
+    let grbl = emulator(20.0, &[(10, 3.0)]);
     let mut s = connect(&grbl, Duration::from_secs(10));
     s.push("G21 G90 G1 F2000").expect("push");
     for i in 1..=300 {
@@ -138,7 +139,8 @@ fn feed_hold_freezes_the_machine_and_push_waits_past_the_timeout_until_resume() 
     let grbl = emulator(20.0, &[]);
     // A short timeout: the hold below lasts several times longer.
     let mut s = connect(&grbl, Duration::from_millis(500));
-    s.push("G21 G91 G1 F600").expect("push");
+    // 40 mm at 300 mm/min: 0.4 s at 20x to put the hold in.
+    s.push("G21 G91 G1 F300").expect("push");
     for _ in 0..40 {
         s.push("X1").expect("push");
     }
