@@ -1,10 +1,11 @@
 #![expect(missing_docs, reason = "criterion_group!/criterion_main! generate undocumented items.")]
-//! vision-grbl: 10 000 short segments (1 mm at 2000 mm/min) streamed by the sender to the Grbl
-//! emulator over loopback TCP, the emulator timing the motion (at 50× real time so one stream
-//! takes about 6 s). Measured: the sending thread's CPU time per line (`iter_custom` returns
-//! it in place of wall time); printed after each stream: whether the planner ran dry (status
-//! reports with `Bf:` showing every block free, or `Idle`, while lines were still to come),
-//! the longest wait for buffer room, and the wall time.
+//! vision-grbl: 10 000 short segments (1 mm at 2000 mm/min) pushed one at a time by the sender
+//! (`Sender::push`, then `Sender::finish`, as `mach-vision send` streams a program while it
+//! interprets it) to the Grbl emulator over loopback TCP, the emulator timing the motion (at
+//! 50× real time so one stream takes about 6 s). Measured: the sending thread's CPU time per
+//! line (`iter_custom` returns it in place of wall time); printed after each stream: the lines,
+//! how often the planner ran dry (status reports with `Bf:` showing every block free, or
+//! `Idle`, while lines were still to come), the longest wait for buffer room, and the wall time.
 
 use std::hint::black_box;
 use std::time::{Duration, Instant};
@@ -50,7 +51,10 @@ fn stream_10k(c: &mut Criterion) {
                     Sender::connect(&format!("tcp://{}", grbl.addr()), &SenderOptions::default()).expect("connect");
                 let wall = Instant::now();
                 let before = thread_cpu();
-                let report = black_box(sender.stream(&lines).expect("stream"));
+                for line in &lines {
+                    sender.push(black_box(line)).expect("push");
+                }
+                let report = black_box(sender.finish().expect("finish"));
                 cpu += thread_cpu().saturating_sub(before);
                 sender.wait_idle(Duration::from_secs(120)).expect("idle");
                 eprintln!(
@@ -63,7 +67,7 @@ fn stream_10k(c: &mut Criterion) {
                 );
             }
             cpu
-        })
+        });
     });
     group.finish();
 }

@@ -12,7 +12,9 @@
 //!
 //! Not emulated: probing (G38.x answers `error:20`), jogging (`$J=`), sleep, limits, overrides
 //! (the bytes are swallowed), startup lines (accepted, not run). Each TCP connection gets a
-//! freshly powered-up controller, as a USB Grbl resets when a sender opens the port.
+//! freshly powered-up controller, as a USB Grbl resets when a sender opens the port; its
+//! EEPROM offsets and position come from [`EmulatorConfig::work_offsets`] and
+//! [`EmulatorConfig::start`].
 //!
 //! ```
 //! use std::io::{BufRead, BufReader, Write};

@@ -18,8 +18,12 @@
 //! let mut sender = Sender::connect(&format!("tcp://{}", grbl.addr()), &SenderOptions::default())?;
 //! let report = sender.stream(&["G21 G90", "G1 X1 F500", "G1 Y1"])?;
 //! assert_eq!(report.lines_sent, 3);
+//! // Line by line, as an interpreter produces them.
+//! sender.push("G1 X2")?;
+//! sender.push("G1 Y2")?;
+//! assert_eq!(sender.finish()?.lines_sent, 5);
 //! let status = sender.wait_idle(std::time::Duration::from_secs(10))?;
-//! assert_eq!(status.mpos, Some([1.0, 1.0, 0.0]));
+//! assert_eq!(status.mpos, Some([2.0, 2.0, 0.0]));
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
@@ -34,6 +38,7 @@ use std::time::{Duration, Instant};
 use thiserror::Error;
 
 use crate::response::{parse_line, MachineState, Response, Status};
+pub use crate::state::{Offsets, ParserState};
 use connection::{Event, SharedWriter};
 use streaming::Flight;
 
@@ -57,7 +62,8 @@ impl Default for SenderOptions {
     }
 }
 
-/// Why streaming stopped.
+/// Why streaming stopped. Line indexes are 0-based: within the lines given to
+/// [`Sender::stream`], or counted over every [`Sender::push`] since connect.
 #[derive(Debug, Error)]
 pub enum StreamError {
     /// The port could not be opened.
@@ -71,8 +77,7 @@ pub enum StreamError {
     /// The controller refused a line; nothing after it was sent.
     #[error("line {} ({text:?}): the controller answered error:{code}", index + 1)]
     Firmware {
-        /// Index of the line (0-based): in the lines given to [`Sender::stream`], or counted
-        /// over every [`Sender::push`] since connect. Every index of this type counts so.
+        /// Index of the line.
         index: usize,
         /// The line as sent.
         text: String,
@@ -416,7 +421,8 @@ impl Sender {
         Ok(())
     }
 
-    /// Polls until a status report arrives.
+    /// Polls until a status report arrives. Answers to pushed lines read meanwhile are
+    /// accounted for, so it may return their error.
     pub fn status(&mut self) -> Result<Status, StreamError> {
         // Reports already on their way answer an earlier poll: read past them.
         while self.pump(Duration::ZERO, false)?.is_some() {}

@@ -24,7 +24,8 @@ fn connect(e: &Emulator, timeout: Duration) -> Sender {
 
 #[test]
 fn pushes_short_moves_one_by_one_and_finishes_with_the_totals() {
-    let grbl = emulator(50.0, &[(10, 3.0)]);
+    // At 20x the 15 planned segments cover about 20 ms of real time.
+    let grbl = emulator(20.0, &[(10, 3.0)]);
     let mut s = connect(&grbl, Duration::from_secs(10));
     s.push("G21 G90 G1 F2000").expect("push");
     for i in 1..=300 {
@@ -138,7 +139,8 @@ fn feed_hold_freezes_the_machine_and_push_waits_past_the_timeout_until_resume() 
     let grbl = emulator(20.0, &[]);
     // A short timeout: the hold below lasts several times longer.
     let mut s = connect(&grbl, Duration::from_millis(500));
-    s.push("G21 G91 G1 F600").expect("push");
+    // 40 mm at 300 mm/min: 0.4 s at 20x to put the hold in.
+    s.push("G21 G91 G1 F300").expect("push");
     for _ in 0..40 {
         s.push("X1").expect("push");
     }
@@ -259,4 +261,29 @@ fn a_silent_controller_or_one_idle_without_answering_times_out() {
         assert!(matches!(s.finish(), Err(StreamError::Timeout(_))), "idle: {idle}");
         assert!(start.elapsed() < Duration::from_secs(3), "idle: {idle}");
     }
+}
+
+#[test]
+fn a_reset_or_an_alarm_stops_pushing() {
+    let grbl = emulator(1.0, &[]);
+    let mut s = connect(&grbl, Duration::from_secs(10));
+    let control = s.control();
+    // A reset during a dwell: no alarm (nothing moves), but the queued line is gone.
+    s.push("G4 P0.5").expect("push");
+    s.push("G0 X1").expect("push");
+    control.soft_reset().expect("reset");
+    match s.finish() {
+        Err(StreamError::ConnectionLost { reason, reached: None }) => assert!(reason.contains("reset"), "{reason}"),
+        other => panic!("{other:?}"),
+    }
+    assert!(matches!(s.push("G0 X2"), Err(StreamError::Stopped { at: 0 })));
+    s.unlatch().expect("unlatch");
+    // A reset in motion: ALARM:3, read by the next push, which sends nothing.
+    s.push("G1 X50 F3000").expect("push");
+    s.finish().expect("finish");
+    control.soft_reset().expect("reset");
+    std::thread::sleep(Duration::from_millis(100));
+    assert!(matches!(s.push("G0 X0"), Err(StreamError::Alarm { code: 3, reached: Some(2) })));
+    assert!(matches!(s.push("G0 X0"), Err(StreamError::Stopped { at: 3 })));
+    assert_eq!(s.lines_pushed(), 3);
 }
