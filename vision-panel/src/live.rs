@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use vision_core::{Calibration, Params};
+use vision_core::{Calibration, ParamValue, Params};
 use vision_driver_camera::{FrameDriver, FrameSource, Polarity};
 use vision_math::{PixelChain, Vector2};
 
@@ -61,7 +61,13 @@ fn spec<S: FrameSource>(driver: &FrameDriver<S>) -> Option<Spec> {
 fn calibration(params: &Params) -> Vec<(String, String)> {
     Calibration::SPECS
         .iter()
-        .filter_map(|s| params.get(s.name).ok().map(|v| (s.name.to_string(), v.to_string())))
+        .filter_map(|s| {
+            let value = match params.get(s.name).ok()? {
+                ParamValue::Text(t) => t,
+                other => other.to_string(),
+            };
+            Some((s.name.to_string(), value))
+        })
         .collect()
 }
 
