@@ -81,10 +81,17 @@ fn first_look(addr: &str) -> serde_json::Value {
     }
 }
 
-fn scratch(name: &str) -> PathBuf {
+/// A panel on a file camera: a 200×160 frame with a 40 px dot at `at` (or none) and a profile
+/// that gives the dot's diameter, in a scratch folder of their own.
+fn file_camera(name: &str, at: Option<(f64, f64)>) -> (PathBuf, Running) {
     let dir = std::env::temp_dir().join(format!("mv-panel-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("dir");
-    dir
+    let (png, profile) = (dir.join("frame.png"), dir.join("profile.toml"));
+    frame(&png, at);
+    std::fs::write(&profile, "[vision]\n[camera]\nVisionCameraMarkDiameterPx = 40.0\n").expect("profile");
+    let source = png.to_str().expect("utf-8");
+    let running = panel(&["--camera", "camera", "--source", source, "--profile", profile.to_str().expect("utf-8")]);
+    (dir, running)
 }
 
 /// A 200×160 frame, white, with a dark 40 px dot centred at native pixel `at`, when given.
@@ -98,18 +105,7 @@ fn frame(path: &Path, at: Option<(f64, f64)>) {
 
 #[test]
 fn a_file_camera_s_mark_is_the_one_locate_finds_on_the_served_frame() {
-    let dir = scratch("found");
-    let (png, profile) = (dir.join("frame.png"), dir.join("profile.toml"));
-    frame(&png, Some((110.0, 70.0)));
-    std::fs::write(&profile, "[vision]\n[camera]\nVisionCameraMarkDiameterPx = 40.0\n").expect("profile");
-    let running = panel(&[
-        "--camera",
-        "camera",
-        "--source",
-        png.to_str().expect("utf-8"),
-        "--profile",
-        profile.to_str().expect("utf-8"),
-    ]);
+    let (dir, running) = file_camera("found", Some((110.0, 70.0)));
     let state = first_look(&running.1);
     assert_eq!(state["found"], true, "{state}");
     let seq = state["seq"].as_u64().expect("seq");
@@ -134,18 +130,7 @@ fn a_file_camera_s_mark_is_the_one_locate_finds_on_the_served_frame() {
 
 #[test]
 fn no_mark_shows_the_frame_and_the_finder_s_reason() {
-    let dir = scratch("none");
-    let (png, profile) = (dir.join("blank.png"), dir.join("profile.toml"));
-    frame(&png, None);
-    std::fs::write(&profile, "[vision]\n[camera]\nVisionCameraMarkDiameterPx = 40.0\n").expect("profile");
-    let running = panel(&[
-        "--camera",
-        "camera",
-        "--source",
-        png.to_str().expect("utf-8"),
-        "--profile",
-        profile.to_str().expect("utf-8"),
-    ]);
+    let (dir, running) = file_camera("none", None);
     let state = first_look(&running.1);
     assert_eq!(state["found"], false, "{state}");
     assert!(state["why_ng"].as_str().is_some_and(|w| w.contains("no")), "{state}");
