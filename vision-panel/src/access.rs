@@ -48,6 +48,22 @@ impl Access {
             Some(token) => given.is_some_and(|g| same_bytes(token, g.as_bytes())),
         }
     }
+
+    /// Whether a request naming `host` (its `Host` header, `None` when it has none) may see a
+    /// panel without a token: only a loopback name or address. A web page elsewhere that
+    /// points its own name at 127.0.0.1 (DNS rebinding) sends its own name, and is refused.
+    #[must_use]
+    pub(crate) fn allows_host(&self, host: Option<&str>) -> bool {
+        if self.token.is_some() {
+            return true;
+        }
+        let Some(host) = host else { return true };
+        let name = match host.strip_prefix('[') {
+            Some(rest) => rest.split(']').next().unwrap_or_default(),
+            None => host.split(':').next().unwrap_or_default(),
+        };
+        name.eq_ignore_ascii_case("localhost") || name.parse::<std::net::IpAddr>().is_ok_and(|ip| ip.is_loopback())
+    }
 }
 
 /// `a == b` in time that depends on the lengths only, not on where they differ.
@@ -89,5 +105,19 @@ mod tests {
             assert!(!access.allows(wrong), "{wrong:?}");
         }
         assert!(Access::new(addr("127.0.0.1:1"), None).expect("open").allows(None));
+    }
+
+    #[test]
+    fn without_a_token_only_a_loopback_host_is_served() {
+        let open = Access::new(addr("127.0.0.1:8090"), None).expect("open");
+        for host in [None, Some("127.0.0.1:8090"), Some("localhost:8090"), Some("LOCALHOST"), Some("[::1]:8090")] {
+            assert!(open.allows_host(host), "{host:?}");
+        }
+        for host in [Some("evil.example:8090"), Some("192.168.1.5"), Some("[::2]:1"), Some(""), Some("localhost.evil")]
+        {
+            assert!(!open.allows_host(host), "{host:?}");
+        }
+        let with_token = Access::new(addr("0.0.0.0:8090"), Some("t")).expect("token");
+        assert!(with_token.allows_host(Some("machine.local:8090")), "the token guards it");
     }
 }

@@ -12,7 +12,8 @@
 //! * [`PanelHandle::publish`]: hands a [`View`] to every page; never waits on a browser.
 //! * [`observe`]: one trigger of a [`vision_driver_camera::FrameDriver`] as a [`View`].
 //!
-//! Safe by default: loopback only unless a token is given ([`PanelError::TokenRequired`]), the
+//! Safe by default: loopback only unless a token is given ([`PanelError::TokenRequired`]), and
+//! then only for a request naming a loopback host (no DNS rebinding); the
 //! token compared in constant time, built-in assets only, bounded requests, clients and event
 //! streams, and no route that writes anything or moves the machine.
 //!

@@ -39,6 +39,9 @@ pub(crate) fn answer(mut stream: TcpStream, shared: &Shared) -> io::Result<()> {
     if !shared.access.allows(token(&request)) {
         return reply(&mut stream, 401, "text/plain", b"give the panel's token: ?token=...", head_only);
     }
+    if !shared.access.allows_host(request.header("host")) {
+        return reply(&mut stream, 403, "text/plain", b"open the panel as http://127.0.0.1:PORT/", head_only);
+    }
     let handle = &shared.handle;
     match request.path.as_str() {
         "/" | "/index.html" => reply(&mut stream, 200, "text/html; charset=utf-8", PAGE.as_bytes(), head_only),
@@ -75,6 +78,7 @@ fn reason(status: u16) -> &'static str {
         200 => "OK",
         400 => "Bad Request",
         401 => "Unauthorized",
+        403 => "Forbidden",
         404 => "Not Found",
         405 => "Method Not Allowed",
         431 => "Request Header Fields Too Large",

@@ -41,7 +41,7 @@ fn status_and_body(answer: &[u8]) -> (u16, Vec<u8>) {
 }
 
 fn get(addr: SocketAddr, path: &str) -> (u16, Vec<u8>) {
-    send(addr, format!("GET {path} HTTP/1.1\r\nHost: x\r\n\r\n").as_bytes())
+    send(addr, format!("GET {path} HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n").as_bytes())
 }
 
 fn view_with_frame() -> View {
@@ -78,6 +78,8 @@ fn the_page_its_frame_and_its_state_are_served_and_nothing_else() {
         assert_eq!(send(addr, format!("{method} / HTTP/1.1\r\n\r\n").as_bytes()).0, 405, "{method}");
     }
     assert_eq!(send(addr, b"GET / HTTP/1.1\r\n\r\n".as_slice()).0, 200, "HEAD and GET only, no Host needed");
+    let rebound = b"GET /frame.png HTTP/1.1\r\nHost: evil.example:8090\r\n\r\n";
+    assert_eq!(send(addr, rebound).0, 403, "another site's name for 127.0.0.1");
 }
 
 #[test]
