@@ -7,6 +7,7 @@ mod emulate;
 mod fit;
 mod image_size;
 mod locate;
+mod panel;
 mod picture;
 mod plan;
 #[cfg(test)]
@@ -63,6 +64,9 @@ enum Command {
     Locate(locate::LocateArgs),
     /// Draw the calibration sheet M283 walks, to print (SVG or PDF, true size).
     Sheet(sheet::SheetArgs),
+    /// Serve a local web page showing what the camera sees and the mark located on it,
+    /// until Ctrl-C (read-only: nothing on it moves the machine).
+    Panel(panel::PanelArgs),
 }
 
 /// The text of file `path`; `what` names it in the error ("program", "world").
@@ -98,6 +102,7 @@ fn main() -> ExitCode {
         Command::Trigger(args) => trigger::run(&args),
         Command::Locate(args) => locate::run(&args),
         Command::Sheet(args) => sheet::run(&args),
+        Command::Panel(args) => panel::run(&args),
     };
     // Every text a person reads goes through `vision_core::text`: reports and messages quote
     // program comments, file contents and camera replies, which may hold escape sequences or

@@ -2,6 +2,8 @@
 //! ustreamer's `/snapshot` serves — one image per GET — from frames a closure makes, on a
 //! loopback port. For tests, benchmarks and `mach-vision run --camera camera`, which serve the
 //! simulated camera's rendered frames through it so a run goes through HTTP end to end.
+//! [`request`] reads a request head within bounds, for it and for the operator panel
+//! (`vision-panel`), which also serves its frames with [`encode`].
 //!
 //! ```
 //! use vision_driver_camera::server::{Encoding, SnapshotServer};
@@ -17,14 +19,17 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-use std::io::{self, Read, Write};
+pub mod request;
+
+use std::io::{self, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 use std::thread::JoinHandle;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use crate::frame::Frame;
+use request::{read_request, MAX_HEAD_BYTES};
 
 /// How the server encodes frames.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -118,18 +123,12 @@ where
     F: FnMut() -> Result<Frame, String>,
 {
     stream.set_nonblocking(false)?;
-    stream.set_read_timeout(Some(Duration::from_secs(5)))?;
     stream.set_write_timeout(Some(Duration::from_secs(5)))?;
-    let mut head = Vec::new();
-    let mut buf = [0u8; 1024];
-    while !head.windows(4).any(|w| w == b"\r\n\r\n") {
-        let n = stream.read(&mut buf)?;
-        if n == 0 || head.len() > 16 * 1024 {
-            return Ok(());
-        }
-        head.extend_from_slice(&buf[..n]);
-    }
-    if !head.starts_with(b"GET ") {
+    // A head that does not come whole within the bounds is answered with nothing.
+    let Ok(request) = read_request(&mut stream, MAX_HEAD_BYTES, Instant::now() + Duration::from_secs(5)) else {
+        return Ok(());
+    };
+    if request.method != "GET" {
         stream.write_all(b"HTTP/1.1 405 Method Not Allowed\r\nContent-Length: 0\r\nConnection: close\r\n\r\n")?;
         return Ok(());
     }
@@ -155,7 +154,11 @@ where
     }
 }
 
-fn encode(frame: &Frame, encoding: Encoding) -> Result<(Vec<u8>, &'static str), String> {
+/// `frame` encoded, with its content type (`image/png`, `image/jpeg`).
+///
+/// # Errors
+/// The encoder's message.
+pub fn encode(frame: &Frame, encoding: Encoding) -> Result<(Vec<u8>, &'static str), String> {
     let mut out = io::Cursor::new(Vec::new());
     match encoding {
         Encoding::Png => {

@@ -22,6 +22,7 @@ use crate::terminal::{is_terminal, Progress, Stream};
 use crate::trace::{read_program, DialectArg};
 use crate::{read_text, Failure};
 use report::{calibration_truth, pound, steps, Cutters, ProgramReport, Report, Step};
+pub(crate) use setup::camera_name;
 use timing::{alignment_time, KeptItems, StreamedPlan};
 
 /// The Keyence driver's registry name: the one camera `--ip`/`--port` address, and the one the

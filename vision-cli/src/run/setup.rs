@@ -236,7 +236,7 @@ fn serve_frames(sim: &Sim, params: &mut Params) -> Result<SnapshotServer, Failur
 ///
 /// # Errors
 /// [`Failure::Input`] naming the cameras there are, for a name none is registered under.
-fn camera_name(registry: &DriverRegistry, camera: &str) -> Result<String, Failure> {
+pub(crate) fn camera_name(registry: &DriverRegistry, camera: &str) -> Result<String, Failure> {
     registry.name(camera).map(str::to_string).ok_or_else(|| {
         Failure::Input(format!(
             "--camera {}: no such camera — the cameras are {} (any case)",

@@ -18,6 +18,7 @@ mod linuxcnc;
 mod locate;
 mod locate_bounds;
 mod option_props;
+mod panel;
 mod plan;
 mod run;
 mod send;

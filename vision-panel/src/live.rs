@@ -1,0 +1,124 @@
+//! [`observe`]: one look through a camera driver, as M281 takes it — a frame searched by the
+//! driver (its search window, its mark settings) — turned into a [`View`].
+
+use std::sync::Arc;
+
+use vision_core::{Calibration, ParamValue, Params};
+use vision_driver_camera::{FrameDriver, FrameSource, Polarity};
+use vision_math::{PixelChain, Vector2};
+
+use crate::view::{MachineOffset, Mark, Spec, View};
+
+/// Triggers `driver` once and describes what it saw. `params` gives K, the remap and the
+/// optical centre (for the offset in machine units, when K is set) and the calibration shown.
+pub fn observe<S: FrameSource>(driver: &mut FrameDriver<S>, params: &Params) -> View {
+    let source = driver.source().describe();
+    let mut view = View { source, params: calibration(params), spec: spec(driver), ..View::default() };
+    let reading = match driver.measure() {
+        Ok(r) => r,
+        Err(e) => {
+            view.why_ng = Some(format!("the camera: {e}"));
+            return view;
+        }
+    };
+    let Some(frame) = driver.last_frame() else { return view };
+    let (w, h) = (f64::from(frame.width()), f64::from(frame.height()));
+    let pct = driver.config().mark.search_radius_pct;
+    view.search_radius_px = (pct < 100.0).then(|| pct.max(0.0) / 100.0 * w.min(h) / 2.0);
+    if reading.found() {
+        // The driver's native pixels (corner origin) → locate's pixel centres.
+        view.mark = Some(Mark {
+            x: reading.x_px - 0.5,
+            y: reading.y_px - 0.5,
+            diameter: reading.width_px,
+            score: reading.score,
+        });
+        view.offset_px = Some((reading.x_px - w / 2.0, reading.y_px - h / 2.0));
+        let centre = Vector2::new(params.px_center_offset_x(), params.px_center_offset_y());
+        if let Ok(chain) = PixelChain::new(params.cal_k(), params.remap(), Vector2::new(w, h), centre) {
+            let d = chain.delta(vision_math::Point2::new(reading.x_px, reading.y_px));
+            let unit = params.cal_units().short_name().to_string();
+            view.offset_machine = Some(MachineOffset { x: d.x, y: d.y, unit });
+        }
+    } else {
+        view.why_ng = Some(driver.last_miss().map_or_else(|| "no mark".to_string(), |m| m.reason.clone()));
+    }
+    view.frame = Some(Arc::new(frame.clone()));
+    view
+}
+
+fn spec<S: FrameSource>(driver: &FrameDriver<S>) -> Option<Spec> {
+    let mark = &driver.config().mark;
+    Some(Spec {
+        kind: mark.kind.name().to_string(),
+        polarity: if mark.polarity == Polarity::Dark { "dark" } else { "light" }.to_string(),
+        diameter_px: mark.diameter_px?,
+        tolerance_pct: mark.tolerance_pct,
+    })
+}
+
+/// The calibration parameters, by name, as the profile writes them.
+fn calibration(params: &Params) -> Vec<(String, String)> {
+    Calibration::SPECS
+        .iter()
+        .filter_map(|s| {
+            let value = match params.get(s.name).ok()? {
+                ParamValue::Text(t) => t,
+                other => other.to_string(),
+            };
+            Some((s.name.to_string(), value))
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use vision_driver_camera::{CameraConfig, CameraError, Frame, Source};
+    use vision_locate::render::{render, Depth, PlacedMark, Scene, Shape};
+    use vision_locate::OwnedPixels;
+
+    /// A 200×160 frame for each trigger, with a 24 px dark dot centred at pixel centre `.0`.
+    struct Dot(Option<(f64, f64)>);
+
+    impl FrameSource for Dot {
+        fn frame(&mut self) -> Result<Frame, CameraError> {
+            let shape = Shape::Dot { diameter: 24.0 };
+            let marks = self.0.iter().map(|&(x, y)| PlacedMark { shape, x, y, reflectance: 0.1 }).collect();
+            let scene = Scene { marks, blur_sigma: 0.8, ..Scene::blank(200, 160, Depth::Eight) };
+            let OwnedPixels::Gray8(pixels) = render(&scene).expect("scene").into_pixels() else { unreachable!() };
+            Ok(Frame::new(200, 160, pixels).expect("frame"))
+        }
+        fn describe(&self) -> String {
+            "a drawn dot".into()
+        }
+    }
+
+    fn driver(at: Option<(f64, f64)>) -> FrameDriver<Dot> {
+        let config = CameraConfig::new(Source::Files("unused".into()), 24.0);
+        FrameDriver::new(config, Dot(at)).expect("driver")
+    }
+
+    #[test]
+    fn a_found_mark_is_in_locate_pixels_with_its_offset_through_k() {
+        let mut params = Params::default();
+        params.set_cal_k(vision_math::Matrix2::new(0.01, 0.0, 0.0, -0.01)).expect("K");
+        let view = observe(&mut driver(Some((120.5, 60.5))), &params);
+        let mark = view.mark.expect("found");
+        assert!((mark.x - 120.5).abs() < 0.1 && (mark.y - 60.5).abs() < 0.1, "{mark:?}");
+        let (dx, dy) = view.offset_px.expect("offset");
+        assert!((dx - 21.0).abs() < 0.1 && (dy + 19.0).abs() < 0.1, "{dx} {dy}");
+        let m = view.offset_machine.expect("K is set");
+        assert!((m.x - 0.21).abs() < 1e-3 && (m.y - 0.19).abs() < 1e-3, "{m:?}");
+        assert_eq!(view.frame.map(|f| f.width()), Some(200));
+        assert!(view.why_ng.is_none());
+    }
+
+    #[test]
+    fn no_mark_says_why_and_no_k_gives_no_machine_offset() {
+        let view = observe(&mut driver(None), &Params::default());
+        assert!(view.mark.is_none() && view.offset_machine.is_none());
+        assert!(view.why_ng.expect("a reason").contains("no"), "the finder's reason");
+        assert!(view.frame.is_some(), "the frame is shown even without a mark");
+    }
+}
