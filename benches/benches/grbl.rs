@@ -72,5 +72,37 @@ fn stream_10k(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, stream_10k);
+/// The rest of the sender's work per line: the host's interpreter running a 10 000-segment
+/// program (1 mm at 2000 mm/min, a mm machine, Grbl's dialect) and `vision_grbl::emit` writing
+/// each event as a Grbl line, with no I/O. Criterion's time is for the whole program.
+fn interpret_and_emit_10k(c: &mut Criterion) {
+    use vision_gcode::{Dialect, Event, Interpreter, InterpreterConfig, Xyz};
+    use vision_grbl::emit::{Emitter, Frame};
+    use vision_math::LengthUnit;
+
+    let mut text = String::from("G21 G90 G54\nG1 F2000\n");
+    for i in 1..=SEGMENTS {
+        text.push_str(&format!("X{i} Y{}\n", if i % 2 == 0 { "0.05" } else { "0" }));
+    }
+    text.push_str("M30\n");
+    let frame = Frame { mm_per_unit: 1.0, wco: [0.0; 3], work_system: 1 };
+    c.bench_function("grbl/interpret_and_emit_10k_segments", |b| {
+        b.iter(|| {
+            let mut config = InterpreterConfig::new(LengthUnit::Millimetre);
+            config.dialect = Dialect::Grbl;
+            let mut interp = Interpreter::new(config);
+            let mut emitter = Emitter::new(frame, Xyz::ZERO).expect("emitter");
+            let mut bytes = 0usize;
+            let mut sink = |e: &Event| {
+                for line in emitter.event(e).expect("emit") {
+                    bytes += line.len() + 1;
+                }
+            };
+            interp.run(black_box(&text), None, &mut sink).expect("runs");
+            black_box(bytes)
+        });
+    });
+}
+
+criterion_group!(benches, stream_10k, interpret_and_emit_10k);
 criterion_main!(benches);
