@@ -34,6 +34,7 @@ mod cameras;
 mod error;
 mod handler;
 mod machine;
+pub mod panel;
 mod session;
 #[cfg(feature = "testkit")]
 pub mod testkit;
