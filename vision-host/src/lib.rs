@@ -49,4 +49,4 @@ pub use vision_core::controller::{self, linuxcnc};
 /// How a bridge makes a message safe to show (control characters escaped, huge quoted input
 /// cut): the same rule as the CLI's.
 pub use vision_core::text::{printable_line, MAX_MESSAGE_CHARS};
-pub use vision_core::{Controller, Machine, MachineCommand, MachineError, MachineErrorKind, Timestamp};
+pub use vision_core::{Controller, Machine, MachineCommand, MachineError, MachineErrorKind, ParamValue, Timestamp};

@@ -21,6 +21,12 @@ pub const MAX_DOTS: usize = 1000;
 /// How long dropping a publisher waits for its last write, at most.
 const DROP_WAIT: Duration = Duration::from_secs(1);
 
+/// How many times a file's replacement is tried, [`RENAME_PAUSE`] apart.
+const RENAME_TRIES: u32 = 20;
+
+/// The pause between two tries of a replacement.
+const RENAME_PAUSE: Duration = Duration::from_millis(10);
+
 /// What the next write takes: the newest of everything the session handed over.
 #[derive(Default)]
 struct Snapshot {
@@ -246,10 +252,23 @@ impl Writer {
     }
 
     /// Writes `bytes` to `name` in the folder atomically: a temp file beside it, then a rename.
+    /// The rename is tried [`RENAME_TRIES`] times: Windows refuses to replace a file a reader
+    /// (the panel) has open at that moment.
     fn replace(&self, name: &str, bytes: &[u8]) -> Result<(), String> {
         let temp = self.dir.join(format!(".{name}.{}.tmp", std::process::id()));
         let target = self.dir.join(name);
-        std::fs::write(&temp, bytes).and_then(|()| std::fs::rename(&temp, &target)).map_err(|e| {
+        let rename = || {
+            let mut result = std::fs::rename(&temp, &target);
+            for _ in 1..RENAME_TRIES {
+                if result.is_ok() {
+                    break;
+                }
+                std::thread::sleep(RENAME_PAUSE);
+                result = std::fs::rename(&temp, &target);
+            }
+            result
+        };
+        std::fs::write(&temp, bytes).and_then(|()| rename()).map_err(|e| {
             let _ = std::fs::remove_file(&temp);
             format!("{}: {e}", target.display())
         })
