@@ -18,8 +18,9 @@ use super::state::{self, LastCall, PanelDot, PanelState, PanelUnit, PanelValue, 
 /// The most run captures a state lists.
 pub const MAX_DOTS: usize = 1000;
 
-/// How long dropping a publisher waits for its last write, at most.
-const DROP_WAIT: Duration = Duration::from_secs(1);
+/// How long dropping a publisher waits for its last write, at most (a session is dropped when a
+/// bridge reopens it or the controller exits).
+const DROP_WAIT: Duration = Duration::from_millis(250);
 
 /// How many times a file's replacement is tried, [`RENAME_PAUSE`] apart.
 const RENAME_TRIES: u32 = 20;
@@ -74,7 +75,7 @@ impl Shared {
 }
 
 /// Writes a session's state into its panel folder (`state.json`, `frame.png`) from a thread of
-/// its own; see the module's decision. Dropping it waits up to a second for the last write.
+/// its own; see the module's decision. Dropping it waits up to [`DROP_WAIT`] for the last write.
 pub struct Publisher {
     shared: Arc<Shared>,
     dir: PathBuf,
