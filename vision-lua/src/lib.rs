@@ -58,6 +58,26 @@ pub use mach4::Mach4;
 /// The session of one Lua state, taken out for the length of a call.
 struct Slot(Option<Session>);
 
+/// Marks the Lua state while an M-code runs (its session is taken out of the [`Slot`]); removed
+/// when dropped.
+struct Busy(Lua);
+
+impl Busy {
+    fn mark(lua: &Lua) -> Busy {
+        lua.set_app_data(BusyMark);
+        Busy(lua.clone())
+    }
+}
+
+impl Drop for Busy {
+    fn drop(&mut self) {
+        self.0.remove_app_data::<BusyMark>();
+    }
+}
+
+/// The app-data marker [`Busy`] sets.
+struct BusyMark;
+
 /// What every Lua entry point returns: `ok, message, gcode`.
 type Answer = (bool, Option<String>, Vec<String>);
 
@@ -115,6 +135,7 @@ fn open(lua: &Lua, path: PathBuf) -> mlua::Result<Answer> {
 }
 
 fn mcode(lua: &Lua, m: u32, h_param: &Value) -> mlua::Result<Answer> {
+    let _busy = Busy::mark(lua);
     let mut host = match Mach4::new(lua) {
         Ok(host) => host,
         Err(e) => return refused(None, &e.into()),
@@ -139,6 +160,10 @@ fn mcode(lua: &Lua, m: u32, h_param: &Value) -> mlua::Result<Answer> {
 /// `mach_vision.get(name)`: the value, or `nil, "why"`. Without a session yet, the one of
 /// Mach4's profile is opened, as the first M-code would.
 fn get(lua: &Lua, name: &str) -> mlua::Result<(Value, Option<String>)> {
+    if lua.app_data_ref::<BusyMark>().is_some() {
+        // Only when a Mach4 callback of a running M-code calls back in.
+        return Ok((Value::Nil, Some("the Vision session is busy with an M-code".to_string())));
+    }
     let installed = lua.app_data_ref::<Slot>().is_some_and(|slot| slot.0.is_some());
     if !installed {
         let opened = Mach4::new(lua)
@@ -154,8 +179,7 @@ fn get(lua: &Lua, name: &str) -> mlua::Result<(Value, Option<String>)> {
     match value {
         Some(Ok(value)) => Ok((lua_value(lua, value)?, None)),
         Some(Err(e)) => Ok((Value::Nil, Some(printable_line(&e.to_string(), MAX_MESSAGE_CHARS)))),
-        // Only while an M-code of this state runs (a Mach4 callback calling back in).
-        None => Ok((Value::Nil, Some("the Vision session is busy with an M-code".to_string()))),
+        None => Ok((Value::Nil, Some("no Vision session".to_string()))),
     }
 }
 

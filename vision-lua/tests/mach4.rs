@@ -281,6 +281,35 @@ return status, math.type(dots), dots, enabled, math.type(v.get("VisionCal_K11"))
     assert!(!fake(&handler.lua).get::<bool>("stopped").expect("flag"), "a getter never stops the cycle");
 }
 
+/// A Mach4 callback that calls `get` while an M-code runs is told the session is busy; no second
+/// session is opened, and afterwards `get` reads the M-code's session.
+#[test]
+fn get_during_an_mcode_says_busy_and_opens_nothing() {
+    let (_rig, module) = Rig::new(None, Camera::Sim);
+    let lua = mach4_lua();
+    mach_vision::install(&lua, Session::new(module));
+    let (during, after): (Option<String>, bool) = lua
+        .load(
+            r#"
+local v = require("mach_vision")
+local flag = mc.mcCntlGetLocalVarFlag
+mc.mcCntlGetLocalVarFlag = function(...)
+    local value, why = v.get("VisionEnabled")
+    fake.during = fake.during or why
+    return flag(...)
+end
+m280(7)
+mc.mcCntlGetLocalVarFlag = flag
+return fake.during, v.get("VisionEnabled")
+"#,
+        )
+        .eval()
+        .expect("runs");
+    assert_eq!(during.as_deref(), Some("the Vision session is busy with an M-code"));
+    // A session opened from Mach4's profile folder instead would be a fresh, disabled one.
+    assert!(after, "get reads the installed session");
+}
+
 /// A session the module opens from a profile publishes its state beside it: after a refused
 /// M281, `P.panel/state.json` shows the refusal, as `mach_vision.get` does.
 #[test]
