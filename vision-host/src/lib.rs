@@ -14,6 +14,8 @@
 //!   (what `mach-vision run` does).
 //! * [`cameras`]: the one list of camera drivers, with their settings; [`registry`]: the ones a
 //!   real machine can use (no simulator), picked by `VisionDriver`.
+//! * [`panel`]: the folder beside a profile (`P.panel/`) a bridge's session publishes its state
+//!   into ([`Session::publish`]) for `mach-vision panel --profile P`, and its reader.
 //!
 //! A bridge implements [`vision_core::Machine`] over its controller's API and nothing else;
 //! every rule that differs between controllers is the machine's

@@ -75,7 +75,7 @@ impl Shared {
 }
 
 /// Writes a session's state into its panel folder (`state.json`, `frame.png`) from a thread of
-/// its own; see the module's decision. Dropping it waits up to [`DROP_WAIT`] for the last write.
+/// its own; see the module's decision. Dropping it waits up to 250 ms for the last write.
 pub struct Publisher {
     shared: Arc<Shared>,
     dir: PathBuf,
