@@ -112,7 +112,8 @@ impl Session {
         }
     }
 
-    /// Hands the state after M-code `m` (its outcome or refusal) to the publisher.
+    /// Hands the state after M-code `m` (its outcome or refusal) to the publisher, and lets it
+    /// settle ([`Publisher::settle`]).
     fn published(&self, m: u32, result: Result<&Outcome, &HostError>) {
         let Some(publisher) = &self.publisher else { return };
         let call = match result {
@@ -120,6 +121,7 @@ impl Session {
             Err(e) => Err(printable_line(&e.to_string(), MAX_MESSAGE_CHARS)),
         };
         publisher.record(&self.module, Some((m, call)));
+        publisher.settle();
     }
 
     /// Hands the state after a step of M-code `m` to the publisher when the step failed.

@@ -391,8 +391,8 @@ def panel(check, rig, module):
         check.that("panel-fit", telemetry.get("VisionLastStatus") == "OK" and len(state.get("dots", [])) == 4,
                    "status %r, %d dots" % (telemetry.get("VisionLastStatus"), len(state.get("dots", []))))
         # The next session on the profile (a new rs274) goes on from the folder's number. (Only
-        # the number is checked: the module writes from its own thread, and rs274 may exit right
-        # after the M280 before that write; the fit above has the cut after it.)
+        # the number is checked: an M-code waits for the module's writer at most 50 ms, and rs274
+        # exits right after this M280.)
         again = published("panel-seq", "G90 G20 G17\nG54\nT98 M6 G43\nM280\nG0 X1.0 Y1.0\nM2\n")
         if again is not None:
             seqs = (state.get("seq", 0), again.get("seq", 0))

@@ -10,7 +10,7 @@
 mod publisher;
 mod state;
 
-pub use publisher::{Publisher, MAX_DOTS};
+pub use publisher::{Publisher, MAX_DOTS, SETTLE};
 pub use state::{
     panel_dir, parse, read, LastCall, PanelDot, PanelReadError, PanelState, PanelUnit, PanelValue, FORMAT, FRAME_FILE,
     MAX_STATE_BYTES, STATE_FILE,

@@ -3,7 +3,10 @@
 //! Decision: the controller's thread only copies the state into a slot (a lock held for a copy,
 //! never for I/O) and wakes the writer; the writer takes the newest state and writes it (temp
 //! file in the folder, then rename). States that arrive while it writes are merged into the
-//! next write, so a slow disk costs updates, never the controller's time.
+//! next write, so a slow disk costs updates, never the controller's time. At the end of an
+//! M-code the session gives the writer [`SETTLE`] to catch up ([`Publisher::settle`]), so the
+//! folder shows the call before the program goes on (or the controller exits); a writer that
+//! misses it once is never waited on again.
 
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
@@ -21,6 +24,10 @@ pub const MAX_DOTS: usize = 1000;
 /// How long dropping a publisher waits for its last write, at most (a session is dropped when a
 /// bridge reopens it or the controller exits).
 const DROP_WAIT: Duration = Duration::from_millis(250);
+
+/// The most an M-code's end waits for the writer ([`Publisher::settle`]); a write of the
+/// state takes well under a millisecond on a local disk.
+pub const SETTLE: Duration = Duration::from_millis(50);
 
 /// How many times a file's replacement is tried, [`RENAME_PAUSE`] apart.
 const RENAME_TRIES: u32 = 20;
@@ -79,6 +86,8 @@ impl Shared {
 pub struct Publisher {
     shared: Arc<Shared>,
     dir: PathBuf,
+    /// Set when a [`Publisher::settle`] ran out of time: never wait again.
+    slow: std::sync::atomic::AtomicBool,
 }
 
 impl std::fmt::Debug for Publisher {
@@ -103,7 +112,7 @@ impl Publisher {
             slot.stop = true;
             slot.problem = Some(format!("the panel's writer thread did not start: {e}"));
         }
-        Publisher { shared, dir }
+        Publisher { shared, dir, slow: std::sync::atomic::AtomicBool::new(false) }
     }
 
     /// The panel folder.
@@ -151,8 +160,17 @@ impl Publisher {
         problem
     }
 
+    /// Waits up to [`SETTLE`] for the writer, at an M-code's end; once that runs out, never
+    /// again (a slow or stuck disk then costs the controller nothing).
+    pub fn settle(&self) {
+        use std::sync::atomic::Ordering;
+        if !self.slow.load(Ordering::Relaxed) && !self.flush(SETTLE) {
+            self.slow.store(true, Ordering::Relaxed);
+        }
+    }
+
     /// Waits up to `timeout` until every state handed over is written (or failed); true when
-    /// it was. For tests and shutdown: a session never waits on the writer.
+    /// it was.
     pub fn flush(&self, timeout: Duration) -> bool {
         let deadline = Instant::now() + timeout;
         let mut slot = self.shared.lock();
