@@ -15,6 +15,9 @@ pub enum HostError {
     /// M-code's words, the profile's path, …).
     #[error("{0}")]
     Machine(#[from] MachineError),
+    /// A parameter read by a name no parameter has ([`vision_core::VisionError::UnknownParam`]).
+    #[error("{0}")]
+    Param(vision_core::VisionError),
     /// The session could not start: the profile or the camera driver.
     #[error("Vision session: {message}")]
     Setup {

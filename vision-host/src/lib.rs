@@ -14,6 +14,8 @@
 //!   (what `mach-vision run` does).
 //! * [`cameras`]: the one list of camera drivers, with their settings; [`registry`]: the ones a
 //!   real machine can use (no simulator), picked by `VisionDriver`.
+//! * [`panel`]: the folder beside a profile (`P.panel/`) a bridge's session publishes its state
+//!   into ([`Session::publish`]) for `mach-vision panel --profile P`, and its reader.
 //!
 //! A bridge implements [`vision_core::Machine`] over its controller's API and nothing else;
 //! every rule that differs between controllers is the machine's
@@ -34,6 +36,7 @@ mod cameras;
 mod error;
 mod handler;
 mod machine;
+pub mod panel;
 mod session;
 #[cfg(feature = "testkit")]
 pub mod testkit;
@@ -48,4 +51,4 @@ pub use vision_core::controller::{self, linuxcnc};
 /// How a bridge makes a message safe to show (control characters escaped, huge quoted input
 /// cut): the same rule as the CLI's.
 pub use vision_core::text::{printable_line, MAX_MESSAGE_CHARS};
-pub use vision_core::{Controller, Machine, MachineCommand, MachineError, MachineErrorKind, Timestamp};
+pub use vision_core::{Controller, Machine, MachineCommand, MachineError, MachineErrorKind, ParamValue, Timestamp};

@@ -4,13 +4,15 @@ use std::path::Path;
 
 use vision_core::controller::ScaleLeftOut;
 use vision_core::{
-    CaptureStep, DriverRegistry, Machine, ProfileStore, StepwiseCapture, StepwiseWalk, VisionError, VisionModule,
-    WalkTarget,
+    CaptureStep, DriverRegistry, Machine, ParamValue, ProfileStore, StepwiseCapture, StepwiseWalk, VisionError,
+    VisionModule, WalkTarget,
 };
 use vision_math::AlignmentChain;
 use vision_mcode::{McodeError, Outcome, VisionCall};
 
 use crate::error::HostError;
+use crate::panel::{panel_dir, Publisher};
+use vision_core::text::{printable_line, MAX_MESSAGE_CHARS};
 
 /// The camera drivers a real machine can pick by `VisionDriver` (the simulator is not one).
 #[must_use]
@@ -28,6 +30,8 @@ pub struct Session {
     walk: Option<StepwiseWalk>,
     /// The stepwise M281 between its re-centring moves ([`Session::capture_begin`]).
     capture: Option<StepwiseCapture>,
+    /// Where the session's state goes for the panel ([`Session::publish`]).
+    publisher: Option<Publisher>,
 }
 
 impl std::fmt::Debug for Session {
@@ -36,6 +40,7 @@ impl std::fmt::Debug for Session {
             .field("module", &self.module)
             .field("walk", &self.walk)
             .field("capture", &self.capture)
+            .field("publisher", &self.publisher)
             .finish()
     }
 }
@@ -44,7 +49,7 @@ impl Session {
     /// A session around `module` (its driver and profile already set), no alignment active.
     #[must_use]
     pub fn new(module: VisionModule) -> Session {
-        Session { module, walk: None, capture: None }
+        Session { module, walk: None, capture: None, publisher: None }
     }
 
     /// The session of the profile file `profile` (TOML; a missing file starts a fresh,
@@ -72,6 +77,60 @@ impl Session {
         &mut self.module
     }
 
+    /// Reads parameter `name` (case-insensitive): configuration, calibration, a driver's
+    /// setting or telemetry (`VisionLastStatus`, `VisionRun_*`), as a controller's screen shows it.
+    ///
+    /// # Errors
+    /// [`HostError::Param`] for a name no parameter has.
+    pub fn param(&self, name: &str) -> Result<ParamValue, HostError> {
+        self.module.param(name).map_err(HostError::Param)
+    }
+
+    /// Starts publishing the session's state into the panel folder beside its profile
+    /// (`P.toml` → `P.panel/`, see [`crate::panel`]) after every call and every telemetry
+    /// write, and returns the folder; `None` without a profile. A folder that cannot be
+    /// written is told to the operator once, at the next call, and never fails one.
+    pub fn publish(&mut self) -> Option<&Path> {
+        let profile = self.module.profile()?.path().to_path_buf();
+        let publisher = Publisher::start(panel_dir(&profile), &profile);
+        self.module.set_telemetry_sink(Some(publisher.sink()));
+        publisher.record(&self.module, None);
+        self.publisher = Some(publisher);
+        self.publisher.as_ref().map(Publisher::dir)
+    }
+
+    /// The panel's publisher, when [`Session::publish`] started one.
+    #[must_use]
+    pub fn publisher(&self) -> Option<&Publisher> {
+        self.publisher.as_ref()
+    }
+
+    /// Tells the operator the publisher's problem, once, before a call's own messages.
+    fn tell_panel_problem(&self, machine: &mut dyn Machine) {
+        if let Some(problem) = self.publisher.as_ref().and_then(Publisher::take_problem) {
+            machine.message(&format!("Vision panel: {problem}"));
+        }
+    }
+
+    /// Hands the state after M-code `m` (its outcome or refusal) to the publisher, and lets it
+    /// settle ([`Publisher::settle`]).
+    fn published(&self, m: u32, result: Result<&Outcome, &HostError>) {
+        let Some(publisher) = &self.publisher else { return };
+        let call = match result {
+            Ok(outcome) => Ok(outcome.clone()),
+            Err(e) => Err(printable_line(&e.to_string(), MAX_MESSAGE_CHARS)),
+        };
+        publisher.record(&self.module, Some((m, call)));
+        publisher.settle();
+    }
+
+    /// Hands the state after a step of M-code `m` to the publisher when the step failed.
+    fn published_failure<T>(&self, m: u32, result: &Result<T, HostError>) {
+        if let Err(e) = result {
+            self.published(m, Err(e));
+        }
+    }
+
     /// The alignment active as of the last call ([`VisionModule::alignment`]): the one this
     /// session's last M282 applied, or what the controller reported.
     #[must_use]
@@ -88,6 +147,14 @@ impl Session {
     /// machine's failure during the call ([`VisionError::Machine`], with its kind). A refusal
     /// changes nothing.
     pub fn mcode(&mut self, machine: &mut dyn Machine, m: u32, words: &[(char, f64)]) -> Result<Outcome, HostError> {
+        self.tell_panel_problem(machine);
+        let result = self.run_mcode(machine, m, words);
+        self.published(m, result.as_ref());
+        result
+    }
+
+    /// [`Session::mcode`] without the panel.
+    fn run_mcode(&mut self, machine: &mut dyn Machine, m: u32, words: &[(char, f64)]) -> Result<Outcome, HostError> {
         let words = machine.controller().manual_words(m, words).map_err(McodeError::from)?;
         let call = VisionCall::parse(m, &words)?;
         let outcome = call.run(&mut self.module, machine).map_err(McodeError::from)?;
@@ -105,6 +172,14 @@ impl Session {
     /// # Errors
     /// A bad word or M281's refusal ([`HostError::Mcode`]); no capture is in progress then.
     pub fn capture_begin(&mut self, machine: &mut dyn Machine, words: &[(char, f64)]) -> Result<bool, HostError> {
+        self.tell_panel_problem(machine);
+        let result = self.capture_start(machine, words);
+        self.published_failure(281, &result);
+        result
+    }
+
+    /// [`Session::capture_begin`] without the panel.
+    fn capture_start(&mut self, machine: &mut dyn Machine, words: &[(char, f64)]) -> Result<bool, HostError> {
         self.capture = None;
         let words = machine.controller().manual_words(281, words).map_err(McodeError::from)?;
         let VisionCall::Capture { keep_image } = VisionCall::parse(281, &words)? else {
@@ -126,6 +201,14 @@ impl Session {
     /// No capture in progress, or M281's failure ([`HostError::Mcode`]; the capture is dropped,
     /// nothing written, the program's modal state put back).
     pub fn capture_next(&mut self, machine: &mut dyn Machine) -> Result<bool, HostError> {
+        self.tell_panel_problem(machine);
+        let result = self.capture_continue(machine);
+        self.published_failure(281, &result);
+        result
+    }
+
+    /// [`Session::capture_next`] without the panel.
+    fn capture_continue(&mut self, machine: &mut dyn Machine) -> Result<bool, HostError> {
         let Some(capture) = self.capture.take() else {
             return Err(HostError::Mcode(McodeError::from(VisionError::CaptureOrder {
                 what: "no re-centring is in progress; M281 starts one",
@@ -143,7 +226,9 @@ impl Session {
                 true
             }
             CaptureStep::Done(reply) => {
-                machine.message(&summary(&Outcome::Capture(reply)));
+                let outcome = Outcome::Capture(reply);
+                machine.message(&summary(&outcome));
+                self.published(281, Ok(&outcome));
                 false
             }
         }
@@ -159,6 +244,14 @@ impl Session {
     /// A bad word or M283's refusal ([`HostError::Mcode`]), or the controller's
     /// the machine's failure; no walk is in progress then.
     pub fn walk_begin(&mut self, machine: &mut dyn Machine, words: &[(char, f64)]) -> Result<(), HostError> {
+        self.tell_panel_problem(machine);
+        let result = self.walk_start(machine, words);
+        self.published_failure(283, &result);
+        result
+    }
+
+    /// [`Session::walk_begin`] without the panel.
+    fn walk_start(&mut self, machine: &mut dyn Machine, words: &[(char, f64)]) -> Result<(), HostError> {
         self.walk = None;
         let words = machine.controller().manual_words(283, words).map_err(McodeError::from)?;
         let VisionCall::Calibrate(mode) = VisionCall::parse(283, &words)? else {
@@ -205,6 +298,7 @@ impl Session {
         self.walk = None;
         let outcome = Outcome::Calibrate(reply);
         machine.message(&summary(&outcome));
+        self.published(283, Ok(&outcome));
         Ok(outcome)
     }
 
@@ -221,6 +315,7 @@ impl Session {
             })));
         };
         let result = step(&mut self.module, machine, &mut walk).map_err(|e| HostError::Mcode(e.into()));
+        self.published_failure(283, &result);
         let keep = match &result {
             Ok(_) => true,
             Err(HostError::Mcode(McodeError::Vision(VisionError::WalkOrder { .. }))) => true,
@@ -236,7 +331,7 @@ impl Session {
 /// The operator's status line after a successful call, with the call's warning (a mark outside
 /// the image, a height change, …) when it has one. On a controller that cannot scale, M282 says
 /// which scale it left out.
-fn summary(outcome: &Outcome) -> String {
+pub(crate) fn summary(outcome: &Outcome) -> String {
     let (done, warning) = match outcome {
         Outcome::Begin(_) => ("M280: Vision run started".to_string(), None),
         Outcome::Capture(r) => ("M281: mark captured".to_string(), r.report.warning.as_deref()),

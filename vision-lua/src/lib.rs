@@ -21,7 +21,15 @@
 //!
 //! * `mach_vision.mcode(m, hParam)`: runs M-code `m` (280–284) with the words of `hParam`.
 //! * `mach_vision.open(path)`: (re)opens the session from profile file `path`.
+//! * `mach_vision.get(name)`: parameter `name` (case-insensitive: configuration, calibration, a
+//!   driver's setting, or telemetry such as `VisionLastStatus`, `VisionRun_DotCount`) as a Lua
+//!   boolean, integer, number or string; `nil, "why"` for an unknown name or no session. It
+//!   never reports to Mach4 or stops the cycle: a screen's DRO script can call it at any time.
 //! * `mach_vision.version`: the crate version.
+//!
+//! A session opened from a profile `P.toml` publishes its state into `P.panel/` beside it
+//! (`state.json`, `frame.png`: [`vision_host::panel`]) for `mach-vision panel --profile P`;
+//! no server runs inside Mach4.
 //!
 //! ```
 //! # #[cfg(feature = "vendored")] {
@@ -41,13 +49,34 @@ mod mach4;
 
 use std::path::PathBuf;
 
-use mlua::{Lua, Table, Value};
+use mlua::{IntoLua, Lua, Table, Value};
+use vision_host::ParamValue;
 use vision_host::{printable_line, registry, HostError, Session, MAX_MESSAGE_CHARS};
 
 pub use mach4::Mach4;
 
 /// The session of one Lua state, taken out for the length of a call.
 struct Slot(Option<Session>);
+
+/// Marks the Lua state while an M-code runs (its session is taken out of the [`Slot`]); removed
+/// when dropped.
+struct Busy(Lua);
+
+impl Busy {
+    fn mark(lua: &Lua) -> Busy {
+        lua.set_app_data(BusyMark);
+        Busy(lua.clone())
+    }
+}
+
+impl Drop for Busy {
+    fn drop(&mut self) {
+        self.0.remove_app_data::<BusyMark>();
+    }
+}
+
+/// The app-data marker [`Busy`] sets.
+struct BusyMark;
 
 /// What every Lua entry point returns: `ok, message, gcode`.
 type Answer = (bool, Option<String>, Vec<String>);
@@ -67,6 +96,7 @@ pub fn mach_vision(lua: &Lua) -> mlua::Result<Table> {
     let exports = lua.create_table()?;
     exports.set("mcode", lua.create_function(|lua, (m, h_param): (u32, Value)| mcode(lua, m, &h_param))?)?;
     exports.set("open", lua.create_function(|lua, path: String| open(lua, PathBuf::from(path)))?)?;
+    exports.set("get", lua.create_function(|lua, name: String| get(lua, &name))?)?;
     exports.set("version", env!("CARGO_PKG_VERSION"))?;
     Ok(exports)
 }
@@ -86,9 +116,16 @@ fn refused(host: Option<&Mach4>, e: &HostError) -> mlua::Result<Answer> {
     Ok((false, Some(message), Vec::new()))
 }
 
+/// The session of profile `path`, publishing its state beside it.
+fn open_session(path: &std::path::Path) -> Result<Session, HostError> {
+    let mut session = Session::open(path, &registry())?;
+    session.publish();
+    Ok(session)
+}
+
 fn open(lua: &Lua, path: PathBuf) -> mlua::Result<Answer> {
     let host = Mach4::new(lua).ok();
-    match Session::open(&path, &registry()) {
+    match open_session(&path) {
         Ok(session) => {
             install(lua, session);
             Ok((true, None, Vec::new()))
@@ -98,6 +135,7 @@ fn open(lua: &Lua, path: PathBuf) -> mlua::Result<Answer> {
 }
 
 fn mcode(lua: &Lua, m: u32, h_param: &Value) -> mlua::Result<Answer> {
+    let _busy = Busy::mark(lua);
     let mut host = match Mach4::new(lua) {
         Ok(host) => host,
         Err(e) => return refused(None, &e.into()),
@@ -105,7 +143,7 @@ fn mcode(lua: &Lua, m: u32, h_param: &Value) -> mlua::Result<Answer> {
     let taken = lua.app_data_mut::<Slot>().and_then(|mut slot| slot.0.take());
     let session = match taken {
         Some(session) => Ok(session),
-        None => host.profile_path().map_err(HostError::from).and_then(|path| Session::open(&path, &registry())),
+        None => host.profile_path().map_err(HostError::from).and_then(|path| open_session(&path)),
     };
     let mut session = match session {
         Ok(session) => session,
@@ -116,5 +154,41 @@ fn mcode(lua: &Lua, m: u32, h_param: &Value) -> mlua::Result<Answer> {
     match result {
         Ok(outcome) => Ok((true, None, outcome.gcode().to_vec())),
         Err(e) => refused(Some(&host), &e),
+    }
+}
+
+/// `mach_vision.get(name)`: the value, or `nil, "why"`. Without a session yet, the one of
+/// Mach4's profile is opened, as the first M-code would.
+fn get(lua: &Lua, name: &str) -> mlua::Result<(Value, Option<String>)> {
+    if lua.app_data_ref::<BusyMark>().is_some() {
+        // Only when a Mach4 callback of a running M-code calls back in.
+        return Ok((Value::Nil, Some("the Vision session is busy with an M-code".to_string())));
+    }
+    let installed = lua.app_data_ref::<Slot>().is_some_and(|slot| slot.0.is_some());
+    if !installed {
+        let opened = Mach4::new(lua)
+            .and_then(|host| host.profile_path())
+            .map_err(HostError::from)
+            .and_then(|path| open_session(&path));
+        match opened {
+            Ok(session) => install(lua, session),
+            Err(e) => return Ok((Value::Nil, Some(printable_line(&e.to_string(), MAX_MESSAGE_CHARS)))),
+        }
+    }
+    let value = lua.app_data_ref::<Slot>().and_then(|slot| slot.0.as_ref().map(|session| session.param(name)));
+    match value {
+        Some(Ok(value)) => Ok((lua_value(lua, value)?, None)),
+        Some(Err(e)) => Ok((Value::Nil, Some(printable_line(&e.to_string(), MAX_MESSAGE_CHARS)))),
+        None => Ok((Value::Nil, Some("no Vision session".to_string()))),
+    }
+}
+
+/// A parameter as Lua's boolean, integer, number or string.
+fn lua_value(lua: &Lua, value: ParamValue) -> mlua::Result<Value> {
+    match value {
+        ParamValue::Bool(b) => Ok(Value::Boolean(b)),
+        ParamValue::Int(i) => Ok(Value::Integer(i)),
+        ParamValue::Float(f) => Ok(Value::Number(f)),
+        ParamValue::Text(t) => t.into_lua(lua),
     }
 }

@@ -8,6 +8,7 @@ use std::path::Path;
 use mlua::{Function, Lua, Table, Value};
 use vision_core::Params;
 use vision_gcode::{Context, HandlerError, MCodeHandler, UserMCode};
+use vision_host::panel::{self, PanelValue};
 use vision_host::testkit::{example, reference, Call, Camera, Rig, Trace, REFUSALS};
 use vision_host::Session;
 use vision_mcode::VISION_MCODES;
@@ -250,6 +251,97 @@ fn without_a_session_the_module_opens_the_profile_beside_mach4s() {
         lua.globals().get::<Function>("m281").and_then(|f| f.call(())).expect("runs");
     assert!(!ok, "{message:?}");
     assert!(fake(&lua).get::<bool>("stopped").expect("flag"));
+}
+
+/// `mach_vision.get`: parameters and telemetry as Lua's own types after example 4; `nil, "why"`
+/// for a name no parameter has.
+#[test]
+fn get_reads_parameters_and_telemetry_as_lua_values() {
+    let (_, handler) = through_lua(&example("04-rectangle-fit.nc"), None, Camera::Sim);
+    let got: (String, String, i64, bool, String, Value, String) = handler
+        .lua
+        .load(
+            r#"
+local v = require("mach_vision")
+local status = v.get("VisionLastStatus")
+local dots = v.get("VisionRun_DotCount")
+local enabled = v.get("visionenabled")
+local none, why = v.get("VisionNoSuch")
+return status, math.type(dots), dots, enabled, math.type(v.get("VisionCal_K11")), none, why
+"#,
+        )
+        .eval()
+        .expect("runs");
+    let (status, dots_type, dots, enabled, k_type, none, why) = got;
+    assert_eq!(
+        (status.as_str(), dots_type.as_str(), dots, enabled, k_type.as_str()),
+        ("OK", "integer", 4, true, "float")
+    );
+    assert!(none.is_nil() && why.contains("unknown parameter \"VisionNoSuch\""), "{why}");
+    assert!(!fake(&handler.lua).get::<bool>("stopped").expect("flag"), "a getter never stops the cycle");
+}
+
+/// A Mach4 callback that calls `get` while an M-code runs is told the session is busy; no second
+/// session is opened, and afterwards `get` reads the M-code's session.
+#[test]
+fn get_during_an_mcode_says_busy_and_opens_nothing() {
+    let (_rig, module) = Rig::new(None, Camera::Sim);
+    let lua = mach4_lua();
+    mach_vision::install(&lua, Session::new(module));
+    let (during, after): (Option<String>, bool) = lua
+        .load(
+            r#"
+local v = require("mach_vision")
+local flag = mc.mcCntlGetLocalVarFlag
+mc.mcCntlGetLocalVarFlag = function(...)
+    local value, why = v.get("VisionEnabled")
+    fake.during = fake.during or why
+    return flag(...)
+end
+m280(7)
+mc.mcCntlGetLocalVarFlag = flag
+return fake.during, v.get("VisionEnabled")
+"#,
+        )
+        .eval()
+        .expect("runs");
+    assert_eq!(during.as_deref(), Some("the Vision session is busy with an M-code"));
+    // A session opened from Mach4's profile folder instead would be a fresh, disabled one.
+    assert!(after, "get reads the installed session");
+}
+
+/// A session the module opens from a profile publishes its state beside it: after a refused
+/// M281, `P.panel/state.json` shows the refusal, as `mach_vision.get` does.
+#[test]
+fn a_session_opened_from_a_profile_publishes_beside_it() {
+    let dir = std::env::temp_dir().join(format!("mach-vision-lua-panel-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("tmp");
+    let profile = dir.join("Shop.toml");
+    let lua = mach4_lua();
+    let open: Function = lua.load(r#"return require("mach_vision").open"#).eval().expect("open");
+    let (ok, message, _): (bool, Option<String>, Vec<String>) = open.call(profile.display().to_string()).expect("runs");
+    assert!(ok, "{message:?}");
+    let m281: Function = lua.globals().get("m281").expect("m281");
+    let (ok, message, _): (bool, Option<String>, Vec<String>) = m281.call(H_PARAM).expect("runs");
+    let message = message.expect("refused");
+    assert!(!ok && message.contains("not enabled"), "{message}");
+    let status: String = lua.load(r#"return require("mach_vision").get("VisionLastStatus")"#).eval().expect("get");
+    assert!(!status.is_empty() && message.contains(status.as_str()), "{status:?}");
+
+    let folder = dir.join("Shop.panel");
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(10);
+    let state = loop {
+        match panel::read(&folder) {
+            Ok(state) if state.last.is_some() => break state,
+            _ if std::time::Instant::now() < deadline => std::thread::sleep(std::time::Duration::from_millis(10)),
+            other => panic!("no state with the call: {other:?}"),
+        }
+    };
+    let last = state.last.expect("the call");
+    assert!(last.mcode == 281 && !last.ok && last.message == message, "{last:?}");
+    assert_eq!(state.telemetry.get("VisionLastStatus"), Some(&PanelValue::Text(status)));
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// What reaches Mach4's message line is one escaped line, whatever it quotes (here a profile

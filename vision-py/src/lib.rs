@@ -13,6 +13,11 @@
 //! `mach_vision.abi3.so`; without it, as in `cargo test`, it links libpython. The `sim` feature
 //! adds `Session.simulated(...)`, a session on the simulated camera, for the tests only.
 //!
+//! A session opened from a profile `P.toml` publishes its state into `P.panel/` beside it
+//! (`state.json`, `frame.png`: [`vision_host::panel`]) for `mach-vision panel --profile P` or a
+//! QtVCP panel; no server runs inside LinuxCNC. `Session.param(name)` reads any parameter or
+//! telemetry (`VisionLastStatus`) in the remaps' process.
+//!
 //! ```python
 //! import mach_vision
 //!
@@ -35,7 +40,8 @@ use std::thread::ThreadId;
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use vision_host::{printable_line, registry, HostError, Session, MAX_MESSAGE_CHARS};
+use pyo3::IntoPyObjectExt;
+use vision_host::{printable_line, registry, HostError, ParamValue, Session, MAX_MESSAGE_CHARS};
 
 pub use host::PyHost;
 pub use words::{word, WordError};
@@ -154,7 +160,28 @@ impl PySession {
                 "no Vision profile: set MACH_VISION_PROFILE in LinuxCNC's environment to the profile file (TOML)",
             )
         })?;
-        Session::open(&profile, &registry()).map(PySession::wrap).map_err(|e| vision_error(&e))
+        let mut session = Session::open(&profile, &registry()).map_err(|e| vision_error(&e))?;
+        session.publish();
+        Ok(PySession::wrap(session))
+    }
+
+    /// `param(name)`: parameter `name` (case-insensitive: configuration, calibration, a
+    /// driver's setting, or telemetry such as `VisionLastStatus`, `VisionRun_DotCount`) as a
+    /// `bool`, `int`, `float` or `str`. Raises `VisionError` for a name no parameter has.
+    fn param<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyAny>> {
+        let value = self.with(|inner| inner.session.param(name).map_err(|e| vision_error(&e)))?;
+        match value {
+            ParamValue::Bool(b) => b.into_bound_py_any(py),
+            ParamValue::Int(i) => i.into_bound_py_any(py),
+            ParamValue::Float(f) => f.into_bound_py_any(py),
+            ParamValue::Text(t) => t.into_bound_py_any(py),
+        }
+    }
+
+    /// `panel_dir()`: the folder the session publishes its state into (`P.panel` beside profile
+    /// `P.toml`) as a `pathlib.Path`, or `None` without a profile.
+    fn panel_dir(&self) -> PyResult<Option<PathBuf>> {
+        self.with(|inner| Ok(inner.session.publisher().map(|p| p.dir().to_path_buf())))
     }
 
     /// `call(mcode, words, host)`: runs vision M-code `mcode` (280–284) with its block's words
@@ -224,6 +251,7 @@ impl PySession {
     /// scale (X, Y) instead of the world's; `calibrated=False` starts with K never calibrated
     /// (for M283); `params` sets numeric Vision parameters (`{"VisionFitMaxScaleDev": 0.05}`).
     /// `profile` opens the session from that profile file instead, as `Session(profile)` does
+    /// (publishing beside it)
     /// (M283 and M284 save to it; `calibrated` has no effect), with the simulated camera
     /// available to its `VisionDriver` as `Sim`. Before each call the simulated head is put
     /// where `host.machine_position()` (machine X, Y and optionally Z, program units) says the
@@ -244,8 +272,9 @@ impl PySession {
     ) -> PyResult<PySession> {
         let pose = sim::Pose { rotation_deg, shift, scale };
         let params = params.unwrap_or_default();
-        let (simulated, session) =
+        let (simulated, mut session) =
             sim::Simulated::new(camera, pose, calibrated, &params, profile.as_deref()).map_err(|e| vision_error(&e))?;
+        session.publish();
         Ok(PySession::from_inner(Inner { session, sim: Some(simulated) }))
     }
 
@@ -522,6 +551,75 @@ for a in programs:
 assert runs > 150, runs
 "#,
             "shared",
+        );
+    }
+
+    /// `Session.param`: parameters and telemetry as Python's own types, `VisionError` for an
+    /// unknown name; the session publishes beside its profile, the sequence number growing.
+    #[test]
+    fn param_reads_parameters_and_telemetry_and_the_session_publishes_beside_its_profile() {
+        run(
+            cr#"
+import json, os, time
+
+class Host:
+    """Enough of LinuxCNC for M280 and M281's first checks: G20, no tool, nothing moves."""
+    def program_position(self): return (0.0, 0.0)
+    def xy_rotation_deg(self): return 0.0
+    def g92_offset(self): return (0.0, 0.0)
+    def metric(self): return False
+    def execute(self, line): pass
+    def save_modal_state(self): pass
+    def restore_modal_state(self): pass
+    def tool(self): return 0
+    def tool_offset(self, tool): return (0.0, 0.0)
+    def set_tool_offset(self, tool, x, y): pass
+    def pound(self, n): return 0.0
+    def set_pound(self, n, value): pass
+    def dwell(self, seconds): pass
+    def message(self, text): pass
+
+def state(mcode):
+    """state.json once it shows M-code `mcode` (the module writes it from its own thread)."""
+    path = os.path.join(s.panel_dir(), "state.json")
+    deadline = time.time() + 10
+    while True:
+        try:
+            with open(path) as f:
+                got = json.load(f)
+            if got["last"] and got["last"]["mcode"] == mcode:
+                return got
+        except (OSError, ValueError):
+            pass
+        assert time.time() < deadline, "no state with M%d in %s" % (mcode, path)
+        time.sleep(0.01)
+
+s = mach_vision.Session(profile)
+assert str(s.panel_dir()) == os.path.splitext(profile)[0] + ".panel", s.panel_dir()
+assert s.param("visionenabled") is True
+assert s.param("VisionDriver") == "Keyence"
+assert type(s.param("VisionCal_K11")) is float
+s.call(280, {"p": 3.0}, Host())
+assert s.param("VisionRun_Active") == 1 and type(s.param("VisionRun_DotCount")) is int
+first = state(280)
+try:
+    s.call(281, {}, Host())
+    raise AssertionError("M281 without K ran")
+except mach_vision.VisionError as e:
+    refusal = str(e)
+assert "K matrix is zero" in refusal and s.param("VisionLastStatus") in refusal, (refusal, s.param("VisionLastStatus"))
+second = state(281)
+assert second["seq"] > first["seq"], (first["seq"], second["seq"])
+assert second["last"]["ok"] is False and second["last"]["message"] == refusal, second["last"]
+assert second["telemetry"]["VisionLastStatus"] == s.param("VisionLastStatus")
+assert second["params"]["VisionEnabled"] is True
+try:
+    s.param("VisionNoSuch")
+    raise AssertionError("an unknown name was read")
+except mach_vision.VisionError as e:
+    assert "VisionNoSuch" in str(e), e
+"#,
+            "param",
         );
     }
 

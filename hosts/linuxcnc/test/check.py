@@ -354,6 +354,64 @@ def calibrations(check, rig, module):
     check.that(case, len(traverses(calls)) >= 3, "the axis detect moved (%d moves)" % len(traverses(calls)))
 
 
+def panel(check, rig, module):
+    """A session on a profile publishes beside it, for the panel beside a real controller:
+    after M283 P1 and example 4 through rs274, `P.panel/state.json` holds the fit, its status
+    and a sequence number that the next run raises; in process, `Session.param` reads the same
+    parameters and refuses an unknown name."""
+    with tempfile.TemporaryDirectory(prefix="lcnc-panel-") as tmp:
+        profile = os.path.join(tmp, "mill.toml")
+        with open(profile, "w") as f:
+            f.write('[vision]\nVisionEnabled = true\nVisionDriver = "Sim"\nVisionCameraToolNumber = %d\n'
+                    % rig.setup["camera_tool"])
+        lines = example_4().splitlines()
+        start = next(k for k, line in enumerate(lines) if line.startswith("M280"))
+        head = ["G90 G20 G17", "G54", "T98 M6 G43", "G0 X-2.5 Y-4.0", "M283 P1", "T98 M6 G43"]
+        program = "\n".join(head + lines[start:]) + "\n"
+        sim = {"profile": profile, "params": {"VisionTriggerSettleSec": 0}}
+        state_path = os.path.join(tmp, "mill.panel", "state.json")
+
+        def published(case, program):
+            """Runs `program` through rs274; the panel state it left, or None."""
+            status, calls, other = rig.run(program, sim)
+            check.that(case, status == 0, "rs274 exit status %d %s" % (status, other[-3:]))
+            try:
+                with open(state_path) as f:
+                    return json.load(f)
+            except (OSError, ValueError) as e:
+                check.that(case, False, "no panel state: %s" % e)
+                return None
+
+        state = published("panel-fit", program)
+        if state is None:
+            return
+        last, telemetry = state.get("last") or {}, state.get("telemetry", {})
+        check.that("panel-fit", last.get("mcode") == 282 and last.get("ok") is True,
+                   "the last call is M282's fit: %s" % {k: last.get(k) for k in ("mcode", "ok", "message")})
+        check.that("panel-fit", telemetry.get("VisionLastStatus") == "OK" and len(state.get("dots", [])) == 4,
+                   "status %r, %d dots" % (telemetry.get("VisionLastStatus"), len(state.get("dots", []))))
+        # The next session on the profile (a new rs274) goes on from the folder's number. (Only
+        # the number is checked: an M-code waits for the module's writer at most 50 ms, and rs274
+        # exits right after this M280.)
+        again = published("panel-seq", "G90 G20 G17\nG54\nT98 M6 G43\nM280\nG0 X1.0 Y1.0\nM2\n")
+        if again is not None:
+            seqs = (state.get("seq", 0), again.get("seq", 0))
+            check.that("panel-seq", seqs[1] > seqs[0] > 0, "the next run's sequence numbers: %s" % (seqs,))
+
+        session = module.Session.simulated(profile=profile)
+        k11 = session.param("visioncal_k11")
+        check.that("panel-param", k11 == state["params"].get("VisionCal_K11") and k11 != 0.0,
+                   "Session.param reads the calibration M283 saved: %r" % k11)
+        check.that("panel-param", session.param("VisionEnabled") is True and session.param("VisionDriver") == "Sim",
+                   "Session.param's types")
+        try:
+            session.param("VisionNoSuch")
+            message = None
+        except module.VisionError as e:
+            message = str(e)
+        check.that("panel-param", message is not None and "VisionNoSuch" in message, "an unknown name: %r" % message)
+
+
 def probes(check, rig):
     """What rs274 itself does, with no vision code."""
     # The canon order this check applies is LinuxCNC's: its interpreter turns a G53 (machine)
@@ -482,6 +540,7 @@ def main():
     module_errors(check, mach_vision)
     full_runs(check, rig, mach_vision)
     calibrations(check, rig, mach_vision)
+    panel(check, rig, mach_vision)
     print("%d failure(s)" % check.failures)
     return 1 if check.failures else 0
 

@@ -1,6 +1,8 @@
 -- Run by load-test.sh in the stock lua5.3: load mach_vision with a plain `require`, run the real
 -- m280.mcs (success: the cancel line reaches mcCntlGcodeExecuteWait) and m281.mcs (K not
--- calibrated: mcCntlSetLastError with the manual's message, then mcCntlCycleStop).
+-- calibrated: mcCntlSetLastError with the manual's message, then mcCntlCycleStop). After each,
+-- `mach_vision.get("VisionLastStatus")` and the panel folder beside the profile
+-- (MachVision.panel/state.json) show the call, with a sequence number that grows.
 -- With a third argument, the port of a Keyence emulator on 127.0.0.1 (`mach-vision emulate`), it
 -- also runs m284.mcs through the Keyence driver: `M284 P2` switches the camera's job and saves
 -- VisionActiveJob to the profile; the same call to a port nothing answers is refused with the
@@ -42,6 +44,23 @@ local function check(ok, what) if not ok then error("load test: " .. what, 2) en
 
 local vision = require("mach_vision")
 check(type(vision.mcode) == "function", "require('mach_vision') returned no mcode")
+
+-- The panel's state.json once it shows M-code `m`'s call (written by the module's own thread):
+-- its text and sequence number. Lua has no sleep: a bounded wait on the clock.
+local state_path = dir .. "/Profiles/LoadTest/MachVision.panel/state.json"
+local function panel_state(m)
+  local deadline = os.time() + 10
+  repeat
+    local f = io.open(state_path)
+    if f then
+      local text = f:read("a")
+      f:close()
+      local seq = tonumber(text:match('"seq": (%d+)'))
+      if seq and text:find('"mcode": ' .. m, 1, true) then return text, seq end
+    end
+  until os.time() > deadline
+  error("load test: " .. state_path .. " never showed M" .. m, 2)
+end
 dofile(macros .. "/m280.mcs")
 dofile(macros .. "/m281.mcs")
 
@@ -51,6 +70,8 @@ check(ok, "M280 P3 refused: " .. tostring(message))
 check(gcode[1] == "G69 G50 G52 X0 Y0", "M280 emitted " .. tostring(gcode[1]))
 check(log.executed[1] == "G69 G50 G52 X0 Y0", "M280's cancel line did not reach Mach4")
 check(not log.stopped, "M280 stopped the cycle")
+check(vision.get("VisionRun_Active") == 1 and vision.get("VisionRun_Mode") == 3, "get after M280 P3")
+local _, seq280 = panel_state(280)
 
 log.locals = {}
 ok, message = m281(7)
@@ -58,8 +79,15 @@ check(not ok and message:find("K matrix is zero", 1, true), "M281 without K: " .
 check(log.errors[#log.errors] == message, "M281's refusal did not reach mcCntlSetLastError")
 check(log.stopped, "M281's refusal did not stop the cycle")
 check(#log.executed == 1, "M281's refusal ran G-code")
+check(vision.get("VisionLastStatus") == message, "get(VisionLastStatus) after M281: " .. tostring(vision.get("VisionLastStatus")))
+local none, why = vision.get("VisionNoSuch")
+check(none == nil and tostring(why):find("VisionNoSuch", 1, true), "get of an unknown name: " .. tostring(why))
+check(math.type(vision.get("VisionRun_DotCount")) == "integer" and vision.get("VisionEnabled") == true, "get's types")
+local text, seq281 = panel_state(281)
+check(seq281 > seq280, "the panel's sequence number did not grow: " .. seq280 .. " then " .. seq281)
+check(text:find('"ok": false', 1, true) and text:find("K matrix is zero", 1, true), "state.json after M281:\n" .. text)
 
-local ran = "M280/M281"
+local ran = "M280/M281 (get and the panel folder checked)"
 if port then
     dofile(macros .. "/m284.mcs")
     local function keyence(path, at)

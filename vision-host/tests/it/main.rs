@@ -2,6 +2,7 @@
 //! `tests/` is one more binary to compile and link.
 
 mod linuxcnc;
+mod panel;
 mod program;
 mod recentre;
 mod session;
