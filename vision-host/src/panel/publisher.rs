@@ -160,11 +160,16 @@ impl Publisher {
         problem
     }
 
-    /// Waits up to [`SETTLE`] for the writer, at an M-code's end; once that runs out, never
-    /// again (a slow or stuck disk then costs the controller nothing).
+    /// Waits up to [`SETTLE`] for the writer, at an M-code's end; once that runs out, not
+    /// again until the writer has caught up by itself (a slow or stuck disk then costs the
+    /// controller nothing, and one busy moment does not leave the folder behind for good).
     pub fn settle(&self) {
         use std::sync::atomic::Ordering;
-        if !self.slow.load(Ordering::Relaxed) && !self.flush(SETTLE) {
+        if self.slow.load(Ordering::Relaxed) {
+            if self.flush(Duration::ZERO) {
+                self.slow.store(false, Ordering::Relaxed);
+            }
+        } else if !self.flush(SETTLE) {
             self.slow.store(true, Ordering::Relaxed);
         }
     }
