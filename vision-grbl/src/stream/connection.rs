@@ -20,12 +20,18 @@ pub(crate) enum Event {
 /// The writing half, shareable with another thread (feed hold from a Ctrl-C handler).
 pub(crate) type SharedWriter = Arc<Mutex<Box<dyn Write + Send>>>;
 
+/// The open link: the writing half, the reader thread's lines, and for TCP the socket, which
+/// closing must shut down (the reader thread holds a clone of it, which would keep it open).
+pub(crate) type Link = (SharedWriter, Receiver<Event>, Option<TcpStream>);
+
 /// Opens `port`: `tcp://HOST:PORT`, or a device path. `baud` applies to terminals only.
-pub(crate) fn open(port: &str, baud: Option<u32>) -> io::Result<(SharedWriter, Receiver<Event>)> {
+pub(crate) fn open(port: &str, baud: Option<u32>) -> io::Result<Link> {
+    let mut socket_kept = None;
     let (reader, writer): (Box<dyn Read + Send>, Box<dyn Write + Send>) =
         if let Some(addr) = port.strip_prefix("tcp://") {
             let socket = TcpStream::connect(addr)?;
             socket.set_nodelay(true)?;
+            socket_kept = Some(socket.try_clone()?);
             (Box::new(socket.try_clone()?), Box::new(socket))
         } else {
             let file = File::options().read(true).write(true).open(port)?;
@@ -62,7 +68,7 @@ pub(crate) fn open(port: &str, baud: Option<u32>) -> io::Result<(SharedWriter, R
             }
         }
     });
-    Ok((Arc::new(Mutex::new(writer)), rx))
+    Ok((Arc::new(Mutex::new(writer)), rx, socket_kept))
 }
 
 #[cfg(unix)]

@@ -210,6 +210,9 @@ fn code_words(upper: &str) -> Vec<String> {
 pub struct Sender {
     writer: SharedWriter,
     events: Receiver<Event>,
+    /// A TCP link's socket, shut down when the sender goes (the controller then sees the
+    /// client leave, as when a serial port closes).
+    socket: Option<std::net::TcpStream>,
     options: SenderOptions,
     rx_buffer: usize,
     planner_blocks: Option<u32>,
@@ -220,6 +223,14 @@ pub struct Sender {
     waiting_status: bool,
     last_alarm: Option<u8>,
     flight: Flight,
+}
+
+impl Drop for Sender {
+    fn drop(&mut self) {
+        if let Some(socket) = &self.socket {
+            let _ = socket.shutdown(std::net::Shutdown::Both);
+        }
+    }
 }
 
 impl std::fmt::Debug for Sender {
@@ -260,11 +271,12 @@ impl Control {
 impl Sender {
     /// Connects and asks `$I` for the receive buffer (128 bytes when the firmware does not say).
     pub fn connect(port: &str, options: &SenderOptions) -> Result<Self, StreamError> {
-        let (writer, events) = connection::open(port, options.baud)
+        let (writer, events, socket) = connection::open(port, options.baud)
             .map_err(|source| StreamError::Open { port: port.to_string(), source })?;
         let mut sender = Self {
             writer,
             events,
+            socket,
             options: SenderOptions { poll: options.poll.max(MIN_POLL), ..options.clone() },
             rx_buffer: 128,
             planner_blocks: None,

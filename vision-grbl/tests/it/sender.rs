@@ -188,3 +188,16 @@ fn a_dwell_mid_stream_counts_as_the_planner_running_dry() {
     assert_eq!(report.planner_dry, 1, "{report:?}");
     assert!(report.status_reports >= 2, "{report:?}");
 }
+
+/// A sender that goes leaves the controller free for the next one (the emulator serves one
+/// client at a time, as a serial port does): its socket is shut down, though its reader
+/// thread still holds a clone.
+#[test]
+fn a_dropped_sender_frees_the_controller_for_the_next() {
+    let grbl = emulator(Flavour::Grbl);
+    for _ in 0..3 {
+        let options = SenderOptions { timeout: Duration::from_secs(2), ..Default::default() };
+        let mut sender = Sender::connect(&format!("tcp://{}", grbl.addr()), &options).expect("connects again");
+        sender.stream(&["G1 X1 F6000"]).expect("streams");
+    }
+}
