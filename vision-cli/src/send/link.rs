@@ -264,15 +264,7 @@ impl Link {
     /// head placed where the controller reports it.
     fn before_trigger(&mut self) -> Result<(), String> {
         let mpos = self.settle()?;
-        let expected = self.emitter.machine_mm();
-        let off = (0..3).map(|i| (mpos[i] - expected[i]).abs()).fold(0.0, f64::max);
-        if (0..3).any(|i| (mpos[i] - expected[i]).abs() > self.units.tolerance[i]) {
-            return Err(format!(
-                "the controller reports the machine at X{:.3} Y{:.3} Z{:.3} mm, {off:.3} mm from where the program put \
-                 it (X{:.3} Y{:.3} Z{:.3}): something else moved it, so the camera would look at the wrong place",
-                mpos[0], mpos[1], mpos[2], expected[0], expected[1], expected[2]
-            ));
-        }
+        moved_elsewhere(mpos, self.emitter.machine_mm(), self.units.tolerance).map_or(Ok(()), Err)?;
         let u = self.units.mm_per_unit;
         self.sim.place_head(Point3::new(mpos[0] / u, mpos[1] / u, mpos[2] / u));
         Ok(())
@@ -281,6 +273,45 @@ impl Link {
     /// The streaming figures so far.
     pub(crate) fn figures(&self) -> StreamingReport {
         StreamingReport::new(&self.port, &self.sender, self.started.elapsed())
+    }
+}
+
+/// Why a capture must not trust the commanded position: the controller reports the machine
+/// (`mpos`, mm) farther from where the program put it (`expected`, mm) than an axis's
+/// `tolerance` (mm). `None` when it is there.
+pub(crate) fn moved_elsewhere(mpos: [f64; 3], expected: [f64; 3], tolerance: [f64; 3]) -> Option<String> {
+    let off: [f64; 3] = std::array::from_fn(|i| (mpos[i] - expected[i]).abs());
+    if (0..3).all(|i| off[i] <= tolerance[i]) {
+        return None;
+    }
+    let worst = off.into_iter().fold(0.0, f64::max);
+    Some(format!(
+        "the controller reports the machine at X{:.3} Y{:.3} Z{:.3} mm, {worst:.3} mm from where the program put it \
+         (X{:.3} Y{:.3} Z{:.3}): something else moved it, so the camera would look at the wrong place",
+        mpos[0], mpos[1], mpos[2], expected[0], expected[1], expected[2]
+    ))
+}
+
+/// How far (mm) each axis may stop from its target on a controller with `settings` (`$$`):
+/// half a step (`$100`–`$102`, steps/mm) and the reports' rounding; the rounding alone when
+/// the controller does not say.
+pub(crate) fn stop_tolerance(settings: &[(u16, f64)]) -> [f64; 3] {
+    std::array::from_fn(|axis| {
+        let steps = settings.iter().find(|&&(n, _)| usize::from(n) == 100 + axis).map_or(0.0, |&(_, v)| v);
+        if steps >= 1.0 {
+            0.5 / steps + POSITION_TOLERANCE_MM
+        } else {
+            POSITION_TOLERANCE_MM
+        }
+    })
+}
+
+/// Millimetres per unit of a controller's reports: 25.4 when `$13=1` (report inches).
+pub(crate) fn report_unit_mm(settings: &[(u16, f64)]) -> f64 {
+    if settings.iter().any(|&(n, v)| n == 13 && v != 0.0) {
+        vision_math::MM_PER_INCH
+    } else {
+        1.0
     }
 }
 
@@ -318,5 +349,40 @@ impl Drive for Shared {
 
     fn figures(&self) -> Option<StreamingReport> {
         self.lock().as_ref().map(Link::figures)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_machine_within_half_a_step_is_where_the_program_put_it() {
+        let tolerance = stop_tolerance(&[(100, 250.0), (101, 80.0), (13, 0.0)]);
+        let expected = [0.002 + POSITION_TOLERANCE_MM, 0.00625 + POSITION_TOLERANCE_MM, POSITION_TOLERANCE_MM];
+        assert!((0..3).all(|i| (tolerance[i] - expected[i]).abs() < 1e-12), "{tolerance:?}");
+        let coarse = stop_tolerance(&[(100, 0.5), (102, 1.0)]);
+        assert!((coarse[0] - POSITION_TOLERANCE_MM).abs() < 1e-12 && (coarse[2] - 0.502).abs() < 1e-12, "{coarse:?}");
+        let at = [10.0, 20.0, -1.0];
+        assert_eq!(moved_elsewhere(at, at, tolerance), None);
+        assert_eq!(moved_elsewhere([10.0039, 19.992, -1.0019], at, tolerance), None);
+        for (axis, by) in [(0, 0.0041), (1, 0.0083), (2, 0.0021)] {
+            let mut moved = at;
+            moved[axis] += by;
+            let why = moved_elsewhere(moved, at, tolerance).expect("refused");
+            assert!(why.contains(&format!("{by:.3} mm from where")), "{why}");
+            moved[axis] = at[axis] - by;
+            assert!(moved_elsewhere(moved, at, tolerance).is_some(), "axis {axis} below");
+        }
+        let why = moved_elsewhere([12.5, 20.0, -1.0], at, tolerance).expect("refused");
+        assert!(why.starts_with("the controller reports the machine at X12.500 Y20.000 Z-1.000 mm, 2.500 mm"), "{why}");
+        assert!(why.contains("(X10.000 Y20.000 Z-1.000)"), "{why}");
+    }
+
+    #[test]
+    fn reports_in_inches_are_read_as_inches() {
+        assert!((report_unit_mm(&[(13, 1.0)]) - 25.4).abs() < 1e-12);
+        assert!((report_unit_mm(&[(13, 0.0), (12, 1.0)]) - 1.0).abs() < 1e-12);
+        assert!((report_unit_mm(&[]) - 1.0).abs() < 1e-12);
     }
 }

@@ -13,12 +13,9 @@ use vision_grbl::response::MachineState;
 use vision_grbl::stream::Sender;
 use vision_math::LengthUnit;
 
-use super::link::{Link, Units, POSITION_TOLERANCE_MM};
+use super::link::{report_unit_mm, stop_tolerance, Link, Units};
 use crate::run::Runner;
 use crate::Failure;
-
-/// Grbl's `$13`: report in inches.
-const REPORT_INCHES: u16 = 13;
 
 /// Reads the controller behind `sender`, mirrors it into `session`'s interpreter and returns
 /// the link that streams to it.
@@ -49,18 +46,8 @@ pub(crate) fn connect(
         }
     }
     let settings = sender.settings().map_err(|e| refused("cannot read the settings ($$)", &e))?;
-    let inches = settings.iter().any(|&(n, v)| n == REPORT_INCHES && v != 0.0);
-    let mm_per_report_unit = if inches { LengthUnit::Inch.factor_to(LengthUnit::Millimetre) } else { 1.0 };
-    // The machine stops on whole steps ($100–$102, steps/mm): within half a step of a target,
-    // reported to 3 decimals.
-    let tolerance = std::array::from_fn(|axis| {
-        let steps = settings.iter().find(|&&(n, _)| usize::from(n) == 100 + axis).map_or(0.0, |&(_, v)| v);
-        if steps >= 1.0 {
-            0.5 / steps + POSITION_TOLERANCE_MM
-        } else {
-            POSITION_TOLERANCE_MM
-        }
-    });
+    let mm_per_report_unit = report_unit_mm(&settings);
+    let tolerance = stop_tolerance(&settings);
     let offsets = sender.offsets().map_err(|e| refused("cannot read the offsets ($#)", &e))?;
     let parser = sender.parser_state().map_err(|e| refused("cannot read the parser state ($G)", &e))?;
     if offsets.tlo != 0.0 {
@@ -74,6 +61,9 @@ pub(crate) fn connect(
     let mm_per_unit = session.sim.unit().factor_to(LengthUnit::Millimetre);
     let unit = |v: f64| mm(v) / mm_per_unit;
     let system = parser.work_system.clamp(1, 6);
+    // The work offset, report units: the active system's origin plus G92 (no G43.1, refused).
+    let active = offsets.work[usize::from(system - 1)];
+    let wco_report: [f64; 3] = std::array::from_fn(|i| active[i] + offsets.g92[i]);
     let machine = &mut session.machine;
     let mut mirror = || -> Result<(), vision_driver_sim::SimError> {
         for (s, offset) in (0u32..).zip(offsets.work.iter()) {
@@ -87,7 +77,11 @@ pub(crate) fn connect(
             machine.set_param(G28_POSITION + axis, unit(offsets.g28[i]))?;
             machine.set_param(G30_POSITION + axis, unit(offsets.g30[i]))?;
         }
-        let mpos = status.mpos.unwrap_or_default();
+        // `$10=0` reports WPos: the machine is there plus the work offset.
+        let mpos = status.mpos.unwrap_or_else(|| {
+            let w = status.wpos.unwrap_or_default();
+            std::array::from_fn(|i| w[i] + wco_report[i])
+        });
         machine.set_machine_position(Xyz::new(unit(mpos[0]), unit(mpos[1]), unit(mpos[2])))?;
         let mut ignore = |_: &vision_gcode::Event| {};
         machine
@@ -96,8 +90,7 @@ pub(crate) fn connect(
             .map_err(|e| vision_driver_sim::SimError::Machine { reason: e.to_string() })
     };
     mirror().map_err(|e| Failure::Input(format!("{port}: the controller's state cannot be mirrored: {e}")))?;
-    let active = offsets.work[usize::from(system - 1)];
-    let wco = std::array::from_fn(|i| mm(active[i] + offsets.g92[i]));
+    let wco = wco_report.map(mm);
     let start = session.machine.interpreter().machine_position();
     let frame = Frame { mm_per_unit, wco, work_system: system };
     let emitter = Emitter::new(frame, start).map_err(|e| refused("the machine's position cannot be sent", &e))?;

@@ -268,3 +268,18 @@ fn a_program_stop_without_a_terminal_stops_the_job_there() {
     assert!(err.contains("M0 at line 8") && err.contains("no terminal"), "{err}");
     assert_eq!(report(&out)["programs"][0]["outcome"], "failed at line 8");
 }
+
+/// A controller set to report work positions (`$10=0`: `WPos`, no `MPos`): the machine position
+/// is `WPos` + `WCO`, and the job lands as with `MPos`.
+#[test]
+fn work_position_reports_are_read_with_the_work_offset() {
+    // Powered up half a millimetre below the world's start: a Z the program leaves alone until
+    // its captures are done, so a start read wrongly would show as a refused capture.
+    let mut config = EmulatorConfig { settings: vec![(10, 0.0)], ..world_config() };
+    config.start[2] = -0.5;
+    let grbl = Emulator::bind("127.0.0.1:0", config).expect("emulator");
+    let out = send(&format!("tcp://{}", grbl.addr()), &example("04-rectangle-fit.nc"), &[]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let fit = step(&report(&out), "fit");
+    assert!(fit["cut_error"]["max"].as_f64().expect("the truth") < 0.0005, "{fit}");
+}
