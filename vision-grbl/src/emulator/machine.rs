@@ -129,7 +129,7 @@ impl Machine {
                 }
                 0x80..=0xFF => {} // Overrides and the rest of the extended set: not stored.
                 _ => {
-                    if self.rx.len() < self.config.rx_buffer() {
+                    if self.rx.len() < self.config.rx_capacity() {
                         self.rx.push_back(b);
                     }
                 }
@@ -391,7 +391,7 @@ impl Machine {
         }
         out.push_str(&report::axes(pos));
         if mask & 2 != 0 {
-            let rx_free = self.config.rx_buffer() - self.rx.len();
+            let rx_free = self.config.rx_capacity() - self.rx.len();
             out.push_str(&format!("|Bf:{},{}", self.motion.available(), rx_free));
         }
         let spindle = if self.gc.spindle == 5 { 0.0 } else { self.gc.speed };
