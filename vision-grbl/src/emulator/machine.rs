@@ -13,6 +13,9 @@ use super::{report, status as st, EmulatorConfig, Flavour};
 /// protocol.h: `LINE_BUFFER_SIZE`, the longest line is one less.
 const LINE_BUFFER_SIZE: usize = 80;
 
+/// grblHAL's protocol.h: `LINE_BUFFER_SIZE`; its line keeps comments and inner spaces.
+const HAL_LINE_BUFFER_SIZE: usize = 257;
+
 /// What the protocol still has to do for the line it read last, in order.
 #[derive(Debug)]
 pub(crate) enum Step {
@@ -33,6 +36,8 @@ pub struct Machine {
     pub(crate) motion: Motion,
     rx: VecDeque<u8>,
     line: Vec<u8>,
+    /// grblHAL: the characters its line buffer holds so far (comments and inner spaces too).
+    hal_len: usize,
     overflow: bool,
     comment_paren: bool,
     comment_semi: bool,
@@ -69,6 +74,7 @@ impl Machine {
             config,
             rx: VecDeque::new(),
             line: Vec::new(),
+            hal_len: 0,
             overflow: false,
             comment_paren: false,
             comment_semi: false,
@@ -123,7 +129,7 @@ impl Machine {
                 }
                 0x80..=0xFF => {} // Overrides and the rest of the extended set: not stored.
                 _ => {
-                    if self.rx.len() < self.config.rx_buffer() {
+                    if self.rx.len() < self.config.rx_capacity() {
                         self.rx.push_back(b);
                     }
                 }
@@ -148,14 +154,17 @@ impl Machine {
         std::mem::take(&mut self.out)
     }
 
-    /// Whether the machine is moving or holding motion (a reset now raises `ALARM:3`).
+    /// Whether the machine is moving or holding motion.
     pub fn in_motion(&self) -> bool {
         !self.motion.is_empty() || self.homing
     }
 
-    /// 0x18 (mc_reset, then main.c's re-initialisation).
+    /// 0x18 (mc_reset, then main.c's re-initialisation). A reset raises `ALARM:3` while the
+    /// steppers may be moving; once a feed hold has stopped them, Grbl and grblHAL clear the
+    /// hold's step control and keep the position.
     fn reset(&mut self) {
-        if self.in_motion() {
+        let stopped = self.hold && self.motion.hold_complete();
+        if self.homing || (!self.motion.is_empty() && !stopped) {
             self.alarm = true;
             self.out.extend_from_slice(format!("ALARM:{}\r\n", st::ALARM_ABORT_CYCLE).as_bytes());
         }
@@ -163,6 +172,7 @@ impl Machine {
         self.steps.clear();
         self.rx.clear();
         self.line.clear();
+        self.hal_len = 0;
         self.overflow = false;
         self.comment_paren = false;
         self.comment_semi = false;
@@ -272,11 +282,21 @@ impl Machine {
                 self.last_eol = Some(c);
             }
             let line = std::mem::take(&mut self.line);
+            self.hal_len = 0;
             let overflow = std::mem::replace(&mut self.overflow, false);
             self.comment_paren = false;
             self.comment_semi = false;
             self.execute_line(&line, overflow);
             return;
+        }
+        let hal = self.config.flavour == Flavour::GrblHal;
+        // grblHAL stores every character but control ones and leading spaces.
+        if hal && (c > b' ' || (c == b' ' && self.hal_len > 0)) {
+            if self.hal_len >= HAL_LINE_BUFFER_SIZE - 1 {
+                self.overflow = true;
+            } else {
+                self.hal_len += 1;
+            }
         }
         if self.overflow || self.comment_paren || self.comment_semi {
             if c == b')' {
@@ -288,7 +308,7 @@ impl Machine {
             0..=b' ' | b'/' => {}
             b'(' => self.comment_paren = true,
             b';' => self.comment_semi = true,
-            _ if self.line.len() >= LINE_BUFFER_SIZE - 1 => self.overflow = true,
+            _ if !hal && self.line.len() >= LINE_BUFFER_SIZE - 1 => self.overflow = true,
             _ => self.line.push(c.to_ascii_uppercase()),
         }
     }
@@ -371,7 +391,7 @@ impl Machine {
         }
         out.push_str(&report::axes(pos));
         if mask & 2 != 0 {
-            let rx_free = self.config.rx_buffer() - self.rx.len();
+            let rx_free = self.config.rx_capacity() - self.rx.len();
             out.push_str(&format!("|Bf:{},{}", self.motion.available(), rx_free));
         }
         let spindle = if self.gc.spindle == 5 { 0.0 } else { self.gc.speed };

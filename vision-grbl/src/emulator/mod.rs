@@ -105,6 +105,15 @@ impl EmulatorConfig {
         }
     }
 
+    /// The bytes the receive buffer holds: grblHAL's ring keeps one slot free, so one less
+    /// than [`rx_buffer`](Self::rx_buffer) (its `Bf:` shows 1023 when empty).
+    pub fn rx_capacity(&self) -> usize {
+        match self.flavour {
+            Flavour::Grbl => 128,
+            Flavour::GrblHal => 1023,
+        }
+    }
+
     /// The planner's blocks.
     pub fn planner_blocks(&self) -> usize {
         match self.flavour {

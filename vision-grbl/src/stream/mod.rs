@@ -314,10 +314,16 @@ impl Sender {
                 sender.grblhal = true;
             }
         }
+        if sender.grblhal {
+            // grblHAL's receive ring keeps one slot free: it holds one byte less than `$I`
+            // says (its `Bf:` shows 1023 of 1024), and a byte that finds it full is lost.
+            sender.rx_buffer -= 1;
+        }
         Ok(sender)
     }
 
-    /// The controller's receive buffer (bytes) used for character counting.
+    /// The controller's receive buffer (bytes) used for character counting: as `$I` reports
+    /// it, one less on grblHAL.
     pub fn rx_buffer(&self) -> usize {
         self.rx_buffer
     }

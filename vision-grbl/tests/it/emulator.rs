@@ -169,6 +169,53 @@ fn a_reset_in_motion_raises_alarm_3_and_locks_gcode() {
     assert_eq!(exchange(&mut m, &[0x18], 0.0), "\r\nGrbl 1.1h ['$' for help]\r\n");
 }
 
+/// Once a feed hold has stopped the machine, a reset keeps its position (the hold's step
+/// control is cleared when it completes): no `ALARM:3`, on Grbl as on grblHAL.
+#[test]
+fn a_reset_in_a_completed_feed_hold_keeps_the_position() {
+    for (flavour, welcome) in
+        [(Flavour::Grbl, "Grbl 1.1h ['$' for help]"), (Flavour::GrblHal, "GrblHAL 1.1f ['$' or '$HELP' for help]")]
+    {
+        let mut m = machine(flavour);
+        exchange(&mut m, b"G1 X50 F3000\n", 0.2);
+        assert_eq!(exchange(&mut m, b"!", 0.0), "");
+        let braking = exchange(&mut m, b"?", 0.0);
+        assert!(braking.starts_with("<Hold:1|"), "{braking}");
+        exchange(&mut m, b"", 1.0);
+        let held = exchange(&mut m, b"?", 0.0);
+        assert!(held.starts_with("<Hold:0|"), "{held}");
+        assert_eq!(exchange(&mut m, &[0x18], 0.0), format!("\r\n{welcome}\r\n"), "{flavour:?}");
+        let after = exchange(&mut m, b"?", 0.0);
+        assert!(after.starts_with("<Idle|"), "{after}");
+        assert_eq!(held.split('|').nth(1), after.split('|').nth(1), "the position is kept");
+        assert_eq!(answer(&mut m, "G0 X0"), "ok", "not locked");
+        // Still braking: the position is lost.
+        exchange(&mut m, b"G1 X50 F3000\n", 0.2);
+        exchange(&mut m, b"!", 0.0);
+        assert!(exchange(&mut m, &[0x18], 0.0).starts_with("ALARM:3\r\n"), "{flavour:?}");
+    }
+}
+
+/// grblHAL's line buffer holds 256 characters, comments and inner spaces included (leading
+/// spaces are dropped); the 257th is `error:11`. Grbl's holds 79 without them.
+#[test]
+fn grblhal_takes_lines_up_to_256_characters_comments_and_spaces_included() {
+    let mut m = machine(Flavour::GrblHal);
+    for (line, expected) in [
+        (format!("G21{}", " ".repeat(253)), "ok"),
+        (format!("G21{}", " ".repeat(254)), "error:11"),
+        (format!("G21({})", "c".repeat(251)), "ok"),
+        (format!("G21({})", "c".repeat(252)), "error:11"),
+        (format!("   G21{}", " ".repeat(253)), "ok"),
+        (format!("G0 X{}", "0".repeat(80)), "ok"),
+    ] {
+        assert_eq!(answer(&mut m, &line), expected, "{} characters", line.len());
+        assert_eq!(answer(&mut m, ""), "ok", "unlatched");
+    }
+    let mut g = machine(Flavour::Grbl);
+    assert_eq!(answer(&mut g, &format!("G0 X{}", "0".repeat(80))), "error:11");
+}
+
 #[test]
 fn grblhal_latches_errors_until_a_dollar_line_and_accepts_g51() {
     let mut m = machine(Flavour::GrblHal);
@@ -257,8 +304,11 @@ fn the_planner_holds_15_blocks_and_the_16th_line_waits_for_room() {
 }
 
 #[test]
-fn grblhal_keeps_1024_bytes_of_receive_buffer() {
+fn grblhal_keeps_1023_of_its_1024_bytes_of_receive_buffer() {
     let mut m = machine(Flavour::GrblHal);
+    assert_eq!(answer(&mut m, "$10=3"), "ok");
+    let idle = exchange(&mut m, b"?", 0.0);
+    assert!(idle.contains("|Bf:100,1023|"), "one slot of the ring stays free: {idle}");
     m.receive(b"G4 P10\n");
     m.advance(0.01);
     // 100 lines of 11 bytes arrive while the dwell keeps the controller from reading.
@@ -266,12 +316,12 @@ fn grblhal_keeps_1024_bytes_of_receive_buffer() {
     m.receive(b"?");
     m.advance(0.0);
     let report = String::from_utf8(m.take_output()).expect("utf8");
-    assert!(report.contains("<Idle|"), "{report}");
+    assert!(report.contains("<Idle|") && report.contains("|Bf:100,0|"), "{report}");
     m.advance(30.0);
     let out = String::from_utf8(m.take_output()).expect("utf8");
-    // 1024 bytes: 93 whole lines and `G1 X` of the 94th, which waits for its line end.
+    // 1023 bytes: 93 whole lines, nothing of the 94th.
     assert_eq!(out.matches("ok").count(), 1 + 93, "{out}");
-    assert_eq!(exchange(&mut m, b"\n", 1.0), "error:2\r\n", "`G1 X` has no number after X");
+    assert_eq!(exchange(&mut m, b"\n", 1.0), "ok\r\n", "an empty line");
 }
 
 #[test]

@@ -28,7 +28,7 @@ fn learns_the_buffer_from_dollar_i() {
     assert_eq!((s.rx_buffer(), s.planner_blocks(), s.is_grblhal()), (128, Some(15), false));
     let hal = emulator(Flavour::GrblHal);
     let s = connect(&hal);
-    assert_eq!((s.rx_buffer(), s.planner_blocks(), s.is_grblhal()), (1024, Some(100), true));
+    assert_eq!((s.rx_buffer(), s.planner_blocks(), s.is_grblhal()), (1023, Some(100), true), "one slot kept free");
 }
 
 #[test]
