@@ -184,21 +184,26 @@ fn a_line_the_firmware_refuses_stops_the_stream_at_that_line() {
     assert!(err.contains("a feed hold and a soft reset discarded the"), "{err}");
 }
 
-/// The cable pulled mid-job: the run stops with the line the controller reached.
-#[test]
-fn a_lost_connection_stops_the_run_with_the_line_reached() {
-    let dir = scratch("lost");
-    let program = moves_program(&dir, 400, 600.0, "");
+/// `send` started on a job of 400 moves at 600 mm/min (40 s) on a controller timing them in
+/// real time, to be stopped while it runs; the controller, and the child.
+fn slow_job(name: &str) -> (Emulator, Child) {
+    let program = moves_program(&scratch(name), 400, 600.0, "");
     let grbl = Emulator::bind("127.0.0.1:0", EmulatorConfig { time_scale: 1.0, ..world_config() }).expect("emulator");
-    let port = format!("tcp://{}", grbl.addr());
     let child = Command::new(env!("CARGO_BIN_EXE_mach-vision"))
-        .args(["send", "--json", "--port", &port])
+        .args(["send", "--json", "--port", &format!("tcp://{}", grbl.addr())])
         .arg(&program)
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .expect("spawn");
+    (grbl, child)
+}
+
+/// The cable pulled mid-job: the run stops with the line the controller reached.
+#[test]
+fn a_lost_connection_stops_the_run_with_the_line_reached() {
+    let (grbl, child) = slow_job("lost");
     std::thread::sleep(Duration::from_millis(1500));
     grbl.disconnect();
     let out = child.wait_with_output().expect("output");
@@ -214,18 +219,7 @@ fn a_lost_connection_stops_the_run_with_the_line_reached() {
 #[cfg(unix)]
 #[test]
 fn ctrl_c_holds_then_a_second_resets() {
-    let dir = scratch("ctrlc");
-    let program = moves_program(&dir, 400, 600.0, "");
-    let grbl = Emulator::bind("127.0.0.1:0", EmulatorConfig { time_scale: 1.0, ..world_config() }).expect("emulator");
-    let port = format!("tcp://{}", grbl.addr());
-    let child = Command::new(env!("CARGO_BIN_EXE_mach-vision"))
-        .args(["send", "--json", "--port", &port])
-        .arg(&program)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn");
+    let (_grbl, child) = slow_job("ctrlc");
     let pid = child.id().to_string();
     let interrupt = || {
         let status = Command::new("kill").args(["-INT", &pid]).status().expect("kill");

@@ -325,7 +325,9 @@ pub(crate) fn execute(
                         }
                         13
                     }
-                    // grblHAL (gcode.c): G50/G51 scaling, modal group G11.
+                    // grblHAL (gcode.c): G50/G51 scaling, modal group G11, as built without
+                    // MACH3_SCALING (`P` or `I`/`J`/`K` factors about the axis words); a
+                    // MACH3_SCALING build (grblHAL's simulator) takes the axis words as factors.
                     // grblHAL: the drilling cycles G81 (drill) and G82 (drill, dwell).
                     81 | 82 if flavour == Flavour::GrblHal => {
                         if axis_command != AxisCommand::None {
