@@ -248,6 +248,11 @@ impl<S: FrameSource> CameraDriver for FrameDriver<S> {
         self.source.select_job(job).map_err(DriverError::from)
     }
 
+    /// The frame the last trigger searched, a [`Frame`].
+    fn last_frame(&self) -> Option<&dyn std::any::Any> {
+        self.last_frame.as_ref().map(|f| f as &dyn std::any::Any)
+    }
+
     /// The shape and contrast searched for (the diameter is left out: unset, it follows K).
     fn mark_spec(&self) -> Option<String> {
         let mark = &self.config.mark;
