@@ -410,6 +410,16 @@ mod tests {
     }
 
     #[test]
+    fn the_frame_searched_is_handed_out_through_the_trait_as_a_frame() {
+        let mut d = driver(vec![(150.3, 110.7)]);
+        assert!(CameraDriver::last_frame(&d).is_none(), "no trigger yet");
+        d.trigger().expect("reading");
+        let boxed: Box<dyn CameraDriver> = Box::new(d);
+        let frame = boxed.last_frame().and_then(|f| f.downcast_ref::<Frame>()).expect("a Frame");
+        assert_eq!((frame.width(), frame.height()), (320, 240));
+    }
+
+    #[test]
     fn a_search_past_the_timeout_is_cut_off_never_a_mark() {
         // Issue 33: one M281 searched for 25.6 s under VisionCameraTimeout = 3. The search now
         // has the timeout as its deadline: 1 ns has passed before the search's first stage ends.
