@@ -220,6 +220,14 @@ pub trait CameraDriver: Send {
     fn timeout(&self) -> Duration {
         Duration::from_secs(3)
     }
+
+    /// The image the last trigger searched, for a host that shows it (the operator panel). The
+    /// core knows no image type, so the driver hands its own (`vision_driver_camera::Frame`)
+    /// for the host to downcast. The default, for a camera that sends only positions (Keyence,
+    /// the simulator), is `None`.
+    fn last_frame(&self) -> Option<&dyn std::any::Any> {
+        None
+    }
 }
 
 #[cfg(test)]

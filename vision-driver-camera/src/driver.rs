@@ -248,6 +248,11 @@ impl<S: FrameSource> CameraDriver for FrameDriver<S> {
         self.source.select_job(job).map_err(DriverError::from)
     }
 
+    /// The frame the last trigger searched, a [`Frame`].
+    fn last_frame(&self) -> Option<&dyn std::any::Any> {
+        self.last_frame.as_ref().map(|f| f as &dyn std::any::Any)
+    }
+
     /// The shape and contrast searched for (the diameter is left out: unset, it follows K).
     fn mark_spec(&self) -> Option<String> {
         let mark = &self.config.mark;
@@ -402,6 +407,16 @@ mod tests {
         let r = d.trigger().expect("reading");
         assert_eq!((r.judgment, r.count), (Judgment::Ng, Some(0)));
         assert!(d.last_miss().expect("a reason").reason.starts_with("no mark in view"));
+    }
+
+    #[test]
+    fn the_frame_searched_is_handed_out_through_the_trait_as_a_frame() {
+        let mut d = driver(vec![(150.3, 110.7)]);
+        assert!(CameraDriver::last_frame(&d).is_none(), "no trigger yet");
+        d.trigger().expect("reading");
+        let boxed: Box<dyn CameraDriver> = Box::new(d);
+        let frame = boxed.last_frame().and_then(|f| f.downcast_ref::<Frame>()).expect("a Frame");
+        assert_eq!((frame.width(), frame.height()), (320, 240));
     }
 
     #[test]

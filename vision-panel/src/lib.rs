@@ -11,6 +11,7 @@
 //! * [`Panel`]: the HTTP/1.1 server on `std::net` (routes in `routes`); [`Limits`] bounds it.
 //! * [`PanelHandle::publish`]: hands a [`View`] to every page; never waits on a browser.
 //! * [`observe`]: one trigger of a [`vision_driver_camera::FrameDriver`] as a [`View`].
+//! * [`Fit`]: a run's last fit or calibration beside the frame (`/fit.svg` its picture).
 //!
 //! Safe by default: loopback only unless a token is given ([`PanelError::TokenRequired`]), and
 //! then only for a request naming a loopback host (no DNS rebinding); the
@@ -43,9 +44,9 @@ mod view;
 
 pub use error::PanelError;
 pub use hub::PanelHandle;
-pub use live::observe;
+pub use live::{calibration, observe};
 pub use server::{Limits, Panel};
-pub use view::{MachineOffset, Mark, Spec, View};
+pub use view::{Fit, MachineOffset, Mark, Spec, View};
 
 #[cfg(test)]
 mod tests;

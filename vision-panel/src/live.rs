@@ -57,8 +57,10 @@ fn spec<S: FrameSource>(driver: &FrameDriver<S>) -> Option<Spec> {
     })
 }
 
-/// The calibration parameters, by name, as the profile writes them.
-fn calibration(params: &Params) -> Vec<(String, String)> {
+/// The calibration parameters (K, offset, centre, date, …), by name, as the profile writes
+/// them: the page's read-only calibration table.
+#[must_use]
+pub fn calibration(params: &Params) -> Vec<(String, String)> {
     Calibration::SPECS
         .iter()
         .filter_map(|s| {

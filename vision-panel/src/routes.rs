@@ -1,7 +1,8 @@
 //! The panel's routes, all read-only: `GET /` the page, `/frame.png` the frame it shows
-//! (`?seq=N`: view N's, while kept), `/state.json` the last view, `/events` the views as
-//! Server-Sent Events. Anything else is `404`; a method other than GET or HEAD is `405`. No
-//! route writes a parameter or moves the machine.
+//! (`?seq=N`: view N's, while kept), `/fit.svg` a run's last fit picture (same `?seq=N`),
+//! `/state.json` the last view, `/events` the views as Server-Sent Events. Anything else is
+//! `404`; a method other than GET or HEAD is `405`. No route writes a parameter or moves the
+//! machine.
 
 use std::io::{self, Write};
 use std::net::TcpStream;
@@ -57,6 +58,16 @@ pub(crate) fn answer(mut stream: TcpStream, shared: &Shared) -> io::Result<()> {
             match entry.and_then(|e| e.png()) {
                 Some(png) => reply(&mut stream, 200, "image/png", &png, head_only),
                 None => reply(&mut stream, 404, "text/plain", b"no such frame", head_only),
+            }
+        }
+        "/fit.svg" => {
+            let entry = match request.query_param("seq") {
+                Some(n) => n.parse().ok().and_then(|n| handle.get(n)),
+                None => handle.latest(),
+            };
+            match entry.and_then(|e| e.view.fit.as_ref().and_then(|f| f.svg.clone())) {
+                Some(svg) => reply(&mut stream, 200, "image/svg+xml", svg.as_bytes(), head_only),
+                None => reply(&mut stream, 404, "text/plain", b"no such fit", head_only),
             }
         }
         "/events" => events(stream, shared, head_only),

@@ -83,6 +83,32 @@ fn the_page_its_frame_and_its_state_are_served_and_nothing_else() {
 }
 
 #[test]
+fn a_runs_fit_is_in_the_state_and_its_picture_served_as_svg() {
+    let panel = panel(None, short());
+    let addr = panel.addr();
+    assert_eq!(get(addr, "/fit.svg").0, 404, "no fit yet");
+    let fit = crate::Fit {
+        title: "M282 rectangle fit, line 20".into(),
+        line: 20,
+        bound99: Some(0.002),
+        unit: "in".into(),
+        gcode: vec!["G68 X0 Y0 R0.1".into()],
+        svg: Some(Arc::new("<svg xmlns=\"http://www.w3.org/2000/svg\"/>".into())),
+        ..crate::Fit::default()
+    };
+    let seq = panel.handle().publish(View { fit: Some(fit), ..view_with_frame() });
+    let (status, svg) = get(addr, &format!("/fit.svg?seq={seq}"));
+    assert_eq!(status, 200);
+    assert!(svg.starts_with(b"<svg"));
+    let (_, state) = get(addr, "/state.json");
+    let state: serde_json::Value = serde_json::from_slice(&state).expect("JSON");
+    assert_eq!(state["fit"]["line"], 20);
+    assert_eq!(state["fit"]["svg"], true);
+    assert_eq!(state["fit"]["gcode"][0], "G68 X0 Y0 R0.1");
+    assert_eq!(get(addr, "/fit.svg?seq=99").0, 404, "a fit not kept");
+}
+
+#[test]
 fn with_a_token_only_the_token_opens_it() {
     let panel = panel(Some("s3cret"), short());
     let addr = panel.addr();

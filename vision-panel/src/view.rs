@@ -44,6 +44,26 @@ pub struct MachineOffset {
     pub unit: String,
 }
 
+/// The last fit or calibration of a run, as its report shows it.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Fit {
+    /// What it was (`M282 rectangle fit, line 20`).
+    pub title: String,
+    /// The program line of the M-code.
+    pub line: u32,
+    /// The figures under the title: transform, RMS, predicted error, K.
+    pub lines: Vec<String>,
+    /// The predicted 99 % bound of the error over the part, `unit`; `None` for a calibration.
+    pub bound99: Option<f64>,
+    /// The unit's short name (`in`, `mm`).
+    pub unit: String,
+    /// The G-code the fit emitted (none for a calibration).
+    pub gcode: Vec<String>,
+    /// The picture: marks with their residual arrows magnified by the factor its legend states
+    /// (SVG, served as `/fit.svg`).
+    pub svg: Option<Arc<String>>,
+}
+
 /// One look through the camera. Built by [`crate::observe`] for a live camera, or by any
 /// publisher (a run) from what it has; [`crate::PanelHandle::publish`] hands it to the page.
 #[derive(Debug, Clone, Default)]
@@ -68,6 +88,8 @@ pub struct View {
     pub params: Vec<(String, String)>,
     /// Telemetry shown read-only, name and value (a run's; empty otherwise).
     pub telemetry: Vec<(String, String)>,
+    /// A run's last fit or calibration.
+    pub fit: Option<Fit>,
 }
 
 impl View {
@@ -97,6 +119,10 @@ impl View {
             "source": self.source,
             "params": pairs(&self.params),
             "telemetry": pairs(&self.telemetry),
+            "fit": self.fit.as_ref().map(|f| json!({
+                "title": f.title, "line": f.line, "lines": f.lines, "bound99": f.bound99.map(finite),
+                "unit": f.unit, "gcode": f.gcode, "svg": f.svg.is_some(),
+            })),
         })
     }
 }

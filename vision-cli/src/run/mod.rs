@@ -3,6 +3,7 @@
 //! truth, how far the result is from it.
 
 mod kept;
+mod panel;
 mod pictures;
 mod report;
 mod setup;
@@ -91,6 +92,16 @@ pub(crate) struct RunArgs {
     /// same report; default: the system clock.
     #[arg(long, value_name = "UNIX_SECONDS", allow_negative_numbers = true, value_parser = unix_seconds)]
     pub(crate) clock: Option<u64>,
+    /// Serve the operator panel at this address while the run goes on (`127.0.0.1:0`: any
+    /// free port; the address is printed on standard error as `panel at http://…`): each
+    /// capture's frame and mark, each fit's picture and G-code, the calibration and telemetry,
+    /// read-only. An address other than loopback needs `--panel-token`. The panel ends with
+    /// the run.
+    #[arg(long, value_name = "ADDRESS:PORT")]
+    pub(crate) panel: Option<std::net::SocketAddr>,
+    /// A secret every panel request must give (`?token=…`): 1 to 256 of A-Z a-z 0-9 - . _ ~.
+    #[arg(long, value_name = "TOKEN")]
+    pub(crate) panel_token: Option<String>,
 }
 
 /// `--clock`'s value: whole seconds since 1970-01-01 00:00 UTC, not before it.
@@ -118,6 +129,8 @@ pub(crate) struct Runner {
     _emulator: Option<EmulatorHandle>,
     /// Keeps the loopback snapshot server alive for the session.
     _snapshots: Option<SnapshotServer>,
+    /// The operator panel (`--panel`).
+    panel: Option<panel::RunPanel>,
 }
 
 impl Runner {
@@ -149,7 +162,8 @@ impl Runner {
             drive.event(e);
         };
         let world_unit = self.sim.unit().short_name();
-        let mut streamed = Streamed { handler: &mut self.handler, progress, world_unit };
+        let panel = self.panel.as_ref();
+        let mut streamed = Streamed { handler: &mut self.handler, progress, world_unit, panel, program };
         let result = self.machine.run_program(text, Some(&mut streamed), &mut collect);
         let stopped = drive.finish();
         let cycle = planner.finish();
@@ -235,6 +249,8 @@ struct Streamed<'a> {
     handler: &'a mut ProgramHandler,
     progress: Progress,
     world_unit: &'static str,
+    panel: Option<&'a panel::RunPanel>,
+    program: &'a str,
 }
 
 impl vision_gcode::MCodeHandler for Streamed<'_> {
@@ -249,6 +265,12 @@ impl vision_gcode::MCodeHandler for Streamed<'_> {
             if let Some(record) = self.handler.records().last() {
                 self.progress.line(&text::progress_line(&report::step(record, None), self.world_unit));
             }
+        }
+        if let Some(panel) = self.panel {
+            let module = self.handler.session().module();
+            let records = self.handler.records();
+            let records = if records.len() > before { records } else { &[] };
+            panel.after_mcode(self.program, records, module.params(), module.telemetry(), self.world_unit);
         }
         result
     }

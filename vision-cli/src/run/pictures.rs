@@ -5,7 +5,7 @@ use std::path::Path;
 
 use vision_math::LengthUnit;
 
-use super::report::{ProgramReport, Report, Step};
+use super::report::{Report, Step};
 use crate::picture::{svg, MarkPair, Sheet};
 use crate::Failure;
 
@@ -18,15 +18,17 @@ pub(crate) fn sheets(report: &Report) -> Vec<(String, Sheet)> {
             Path::new(&p.program).file_stem().map_or_else(|| "program".into(), |s| s.to_string_lossy().into_owned());
         let name =
             Path::new(&p.program).file_name().map_or_else(|| "program".into(), |s| s.to_string_lossy().into_owned());
-        program(&mut out, &stem, &name, p, report.world_unit);
+        program(&mut out, &stem, &name, &p.steps, report.world_unit);
     }
     out
 }
 
-fn program(out: &mut Vec<(String, Sheet)>, stem: &str, name: &str, p: &ProgramReport, world_unit: &str) {
+/// The pictures of one program's `steps` (`stem`, `name`: its file's), each with its file name;
+/// the panel shows the last one as the program runs.
+pub(crate) fn program(out: &mut Vec<(String, Sheet)>, stem: &str, name: &str, steps: &[Step], world_unit: &str) {
     // The run's captures so far: (commanded, observed), in dot order.
     let mut captures: Vec<([f64; 2], [f64; 2])> = Vec::new();
-    for step in &p.steps {
+    for step in steps {
         match step {
             Step::Begin { .. } => captures.clear(),
             Step::Capture { report: c, .. } if c.dot_index.is_some() => {

@@ -8,6 +8,7 @@ use vision_driver_sim::{ControllerName, Sim, SimMachine};
 use vision_host::{fixed_clock, system_clock};
 use vision_host::{ProgramHandler, Session, SimFrames};
 
+use super::panel::RunPanel;
 use super::{kept, CameraWrap, RunArgs, Runner, CAMERA, KEYENCE};
 use crate::terminal::Progress;
 use crate::{world, Failure};
@@ -19,6 +20,16 @@ fn set(params: &mut Params, name: &str, value: impl Into<vision_core::ParamValue
 impl Runner {
     /// Sets up the world, the camera, the profile and the session `args` ask for.
     pub(crate) fn new(args: &RunArgs, progress: Progress, wrap: Option<CameraWrap>) -> Result<Runner, Failure> {
+        // The panel's address and token are checked first: a refusal costs no camera.
+        let panel = RunPanel::start(args)?;
+        let wrap = match (&panel, wrap) {
+            (None, wrap) => wrap,
+            (Some(p), None) => Some(p.wrap()),
+            (Some(p), Some(host)) => {
+                let published = p.wrap();
+                Some(Box::new(move |driver| published(host(driver))) as CameraWrap)
+            }
+        };
         let mut world = world::load(args.world.as_deref())?;
         if let Some(dialect) = args.dialect {
             world.machine.controller = ControllerName(dialect.0);
@@ -137,7 +148,10 @@ impl Runner {
         }
         let clock = args.clock.map_or_else(system_clock, |s| fixed_clock(vision_core::Timestamp::from_unix(s, 0)));
         let handler = ProgramHandler::new(Session::new(module), sim.world().machine.controller(), clock);
-        Ok(Runner { sim, machine, handler, camera, _emulator: emulator, _snapshots: snapshots })
+        if let Some(p) = &panel {
+            p.set_source(&camera);
+        }
+        Ok(Runner { sim, machine, handler, camera, _emulator: emulator, _snapshots: snapshots, panel })
     }
 }
 

@@ -90,6 +90,8 @@ impl SendArgs {
             report: self.report.clone(),
             dialect: Some(DialectArg(&vision_core::controller::Grbl)),
             clock: self.clock,
+            panel: None,
+            panel_token: None,
         }
     }
 }

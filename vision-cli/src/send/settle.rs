@@ -68,4 +68,8 @@ impl CameraDriver for Settled {
     fn timeout(&self) -> Duration {
         self.inner.timeout()
     }
+
+    fn last_frame(&self) -> Option<&dyn std::any::Any> {
+        self.inner.last_frame()
+    }
 }

@@ -1,11 +1,13 @@
 //! `mach-vision panel`: refused off loopback without a token (exit 2), and on loopback the mark
-//! it reports is the one `mach-vision locate` finds on the frame it serves. (The page itself is
+//! it reports is the one `mach-vision locate` finds on the frame it serves. `run --panel`:
+//! each capture and the fit are published while the run goes on. (The page itself is
 //! tested in Chromium by `scripts/browser-test`.)
 
 use std::io::{BufRead, BufReader, Read, Write};
-use std::net::TcpStream;
+use std::net::{TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
+use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
 use crate::common::bounded;
@@ -138,4 +140,127 @@ fn no_mark_shows_the_frame_and_the_finder_s_reason() {
     let seq = state["seq"].as_u64().expect("seq");
     assert_eq!(get(&running.1, &format!("/frame.png?seq={seq}")).0, 200);
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A 1776×1776 PNG (the simulated camera's size, the one the profile is calibrated at), white,
+/// with a dark 60 px dot at the centre.
+fn centred_dot() -> Vec<u8> {
+    let image = image::GrayImage::from_fn(1776, 1776, |x, y| {
+        let inside = (f64::from(x) + 0.5 - 888.0).hypot(f64::from(y) + 0.5 - 888.0) < 30.0;
+        image::Luma([if inside { 20 } else { 230 }])
+    });
+    let mut png = Vec::new();
+    image.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png).expect("encoded");
+    png
+}
+
+/// A calibrated profile for the camera driver in `dir`: the quick calibration on the simulated
+/// camera, then the camera driver's settings (60 px dots, no flushed frames).
+fn camera_profile(dir: &Path) -> PathBuf {
+    let profile = dir.join("profile.toml");
+    let program = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/programs/03-quick-diameter-cal.nc");
+    let out = Command::new(env!("CARGO_BIN_EXE_mach-vision"))
+        .args(["run", "--quiet", "--clock", "0", "--profile"])
+        .arg(&profile)
+        .arg(program)
+        .output()
+        .expect("run");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = std::fs::read_to_string(&profile)
+        .expect("profile")
+        .replace("VisionCal_Driver = \"Sim\"", "VisionCal_Driver = \"Camera\"")
+        .replace("VisionCameraMarkDiameterPx = 0.0", "VisionCameraMarkDiameterPx = 60.0")
+        .replace("VisionCameraFlushFrames = 2", "VisionCameraFlushFrames = 0");
+    std::fs::write(&profile, text).expect("written");
+    profile
+}
+
+/// Serves `png` to every request on `listener`, once `go` says so.
+fn serve_snapshots(listener: TcpListener, png: Vec<u8>, go: mpsc::Receiver<()>) {
+    std::thread::spawn(move || {
+        let _ = go.recv_timeout(Duration::from_secs(60));
+        for stream in listener.incoming() {
+            let Ok(mut stream) = stream else { return };
+            let mut head = Vec::new();
+            let mut byte = [0u8; 1];
+            while !head.ends_with(b"\r\n\r\n") && stream.read(&mut byte).is_ok_and(|n| n == 1) {
+                head.push(byte[0]);
+            }
+            let reply = format!(
+                "HTTP/1.1 200 OK\r\nContent-Type: image/png\r\nContent-Length: {}\r\nConnection: close\r\n\r\n",
+                png.len()
+            );
+            let _ = stream.write_all(reply.as_bytes()).and_then(|()| stream.write_all(&png));
+        }
+    });
+}
+
+/// `run --panel` on a camera whose frames the test serves, holding the first until the test
+/// reads the panel's event stream, so that no view is missed: each capture is published with
+/// its frame and mark, the fit with its G-code and picture, and the panel ends with the run.
+#[test]
+fn a_run_publishes_its_captures_and_its_fit_and_exits_with_its_panel() {
+    let dir = std::env::temp_dir().join(format!("mv-panel-run-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let profile = camera_profile(&dir);
+    let listener = TcpListener::bind("127.0.0.1:0").expect("bound");
+    let source = format!("http://{}/snapshot", listener.local_addr().expect("addr"));
+    let (go, wait) = mpsc::channel();
+    serve_snapshots(listener, centred_dot(), wait);
+    let program = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/programs/04-rectangle-fit.nc");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_mach-vision"))
+        .args(["run", "--quiet", "--clock", "0", "--panel", "127.0.0.1:0", "--camera", "camera", "--source", &source])
+        .arg("--profile")
+        .arg(&profile)
+        .arg(program)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    let mut stderr = BufReader::new(child.stderr.take().expect("stderr"));
+    let mut line = String::new();
+    while !line.contains("panel at ") {
+        line.clear();
+        assert!(stderr.read_line(&mut line).expect("stderr") > 0, "no panel address");
+    }
+    let addr = line.split("http://").nth(1).and_then(|r| r.split('/').next()).expect("address").to_string();
+    let mut events = TcpStream::connect(&addr).expect("connect");
+    events.set_read_timeout(Some(Duration::from_secs(60))).expect("timeout");
+    events.write_all(b"GET /events HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n").expect("sent");
+    go.send(()).expect("the snapshot server waits");
+    let views: Vec<serde_json::Value> = BufReader::new(events)
+        .lines()
+        .map_while(Result::ok)
+        .filter_map(|l| l.strip_prefix("data: ").and_then(|d| serde_json::from_str(d).ok()))
+        .collect();
+    let mut rest = String::new();
+    let _ = stderr.read_to_string(&mut rest);
+    assert!(child.wait().expect("exit").success(), "{rest}");
+    let capture = views.iter().find(|v| v["found"] == true && v["width"] == 1776).expect("a capture with its frame");
+    assert!((capture["mark"]["x"].as_f64().expect("x") - 887.5).abs() < 0.5, "{capture}");
+    let last = views.last().expect("views");
+    let fit = &last["fit"];
+    assert_eq!(fit["line"], 20, "{fit}");
+    assert_eq!(fit["svg"], true, "{fit}");
+    assert!(fit["gcode"].as_array().is_some_and(|g| !g.is_empty()), "{fit}");
+    assert!(fit["bound99"].as_f64().is_some(), "{fit}");
+    assert_eq!(last["found"], true, "the last capture stays beside the fit");
+    let names: Vec<&str> = last["params"].as_array().expect("params").iter().filter_map(|p| p[0].as_str()).collect();
+    assert!(names.contains(&"VisionCal_K11") && names.contains(&"VisionCameraMarkDiameterPx"), "{names:?}");
+    assert!(last["telemetry"].as_array().is_some_and(|t| !t.is_empty()), "{last}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn run_s_panel_is_refused_off_loopback_without_a_token_and_a_token_needs_it() {
+    for (args, says) in [
+        (&["run", "--panel", "0.0.0.0:0", "-"][..], "--token"),
+        (&["run", "--panel-token", "abc", "-"], "--panel-token needs --panel"),
+    ] {
+        let out = bounded(args, 1024, 30).unwrap_or_else(|| panic!("{args:?} did not exit"));
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(says), "{args:?}: {stderr}");
+    }
 }

@@ -1,0 +1,262 @@
+//! `run --panel`: the operator panel (`vision-panel`) served while the run goes on. The run's
+//! camera driver is wrapped so that each trigger publishes what it saw (the frame it searched,
+//! for a camera that has one, and the located mark); after each Vision M-code the run publishes
+//! the telemetry and calibration, and after a fit or sheet calibration its picture (the one
+//! `--report` writes). Publishing never waits on a browser; the panel ends with the process.
+
+use std::net::SocketAddr;
+use std::path::Path;
+use std::sync::{Arc, Mutex, PoisonError};
+use std::time::Duration;
+
+use vision_core::{CameraDriver, Capabilities, DriverError, ImageRequest, Params, Reading, Telemetry};
+use vision_driver_camera::Frame;
+use vision_host::Record;
+use vision_panel::{Fit, Mark, Panel, PanelHandle, View};
+
+use super::report::{step, Step};
+use super::{pictures, CameraWrap, RunArgs};
+use crate::picture::svg;
+use crate::Failure;
+
+/// The parameter the page's click suggests a value for.
+const DIAMETER_PARAM: &str = "VisionCameraMarkDiameterPx";
+
+/// The panel a run serves, and the view it shows: the last capture and the last fit.
+pub(crate) struct RunPanel {
+    /// Keeps the server up for the run.
+    _panel: Panel,
+    shared: Shared,
+}
+
+#[derive(Clone)]
+struct Shared {
+    handle: PanelHandle,
+    view: Arc<Mutex<View>>,
+}
+
+impl Shared {
+    /// Changes the view with `change` and publishes it whole (the lock is not held while
+    /// publishing).
+    fn update(&self, change: impl FnOnce(&mut View)) {
+        let mut view = self.view.lock().unwrap_or_else(PoisonError::into_inner);
+        change(&mut view);
+        let copy = view.clone();
+        drop(view);
+        self.handle.publish(copy);
+    }
+}
+
+impl RunPanel {
+    /// The panel `args` ask for (`--panel`, `--panel-token`), serving; its address is printed
+    /// on standard error (`panel at http://…`). `None` without `--panel`.
+    ///
+    /// # Errors
+    /// [`Failure::Input`] for a token without `--panel`, an address other than loopback without
+    /// a token, a bad token or an address that cannot be bound.
+    pub(crate) fn start(args: &RunArgs) -> Result<Option<RunPanel>, Failure> {
+        let Some(addr) = args.panel else {
+            return match args.panel_token {
+                Some(_) => Err(Failure::Input("--panel-token needs --panel ADDRESS:PORT".into())),
+                None => Ok(None),
+            };
+        };
+        let panel = bind(addr, args.panel_token.as_deref())?;
+        let page = match &args.panel_token {
+            Some(t) => format!("{}?token={t}", panel.url()),
+            None => panel.url(),
+        };
+        crate::terminal::show(&format!("panel at {page} (until the run ends)"));
+        let shared = Shared { handle: panel.handle(), view: Arc::new(Mutex::new(View::default())) };
+        Ok(Some(RunPanel { _panel: panel, shared }))
+    }
+
+    /// The wrapper that makes each camera driver the run builds publish its triggers.
+    pub(crate) fn wrap(&self) -> CameraWrap {
+        let shared = self.shared.clone();
+        Box::new(move |inner| Box::new(Published { inner, shared: shared.clone() }))
+    }
+
+    /// Names the camera on the page (the report's description of it).
+    pub(crate) fn set_source(&self, camera: &str) {
+        self.shared.view.lock().unwrap_or_else(PoisonError::into_inner).source = format!("run: {camera}");
+    }
+
+    /// After a Vision M-code of `program` (its `records` so far, the last one this M-code's):
+    /// publishes the telemetry and calibration, and the fit or calibration it made.
+    pub(crate) fn after_mcode(
+        &self,
+        program: &str,
+        records: &[Record],
+        params: &Params,
+        telemetry: &Telemetry,
+        world_unit: &str,
+    ) {
+        let fit = records.last().and_then(|r| fit(program, records, r, params, world_unit));
+        self.shared.update(|view| {
+            view.params = vision_panel::calibration(params);
+            if let Ok(d) = params.get(DIAMETER_PARAM) {
+                view.params.push((DIAMETER_PARAM.to_string(), d.to_string()));
+            }
+            view.telemetry = pairs(telemetry);
+            if fit.is_some() {
+                view.fit = fit;
+            }
+        });
+    }
+}
+
+fn bind(addr: SocketAddr, token: Option<&str>) -> Result<Panel, Failure> {
+    Panel::bind(addr, token).map_err(|e| Failure::Input(format!("--panel: {e}")))
+}
+
+/// The telemetry as the page's name–value rows (its JSON fields, in order).
+fn pairs(telemetry: &Telemetry) -> Vec<(String, String)> {
+    let Ok(serde_json::Value::Object(fields)) = serde_json::to_value(telemetry) else { return Vec::new() };
+    fields
+        .into_iter()
+        .map(|(name, value)| {
+            let text = match value {
+                serde_json::Value::String(s) => s,
+                serde_json::Value::Null => "—".to_string(),
+                other => other.to_string(),
+            };
+            (name, text)
+        })
+        .collect()
+}
+
+/// The fit or calibration record `last` made, as the page shows it; `None` for another M-code.
+fn fit(program: &str, records: &[Record], last: &Record, params: &Params, world_unit: &str) -> Option<Fit> {
+    let path = Path::new(program);
+    let name = path.file_name().map_or_else(|| program.to_string(), |s| s.to_string_lossy().into_owned());
+    match step(last, None) {
+        Step::Fit { gcode, .. } => Some(Fit { gcode, ..picture(&name, path, records, world_unit)? }),
+        Step::SheetCalibration { .. } => picture(&name, path, records, world_unit),
+        Step::QuickCalibration { line, report } => Some(Fit {
+            title: format!("{name}: M283 quick calibration, line {line}"),
+            line,
+            lines: vec![format!(
+                "K = [{:.8} {:.8}; {:.8} {:.8}] {}/px",
+                report.k[(0, 0)],
+                report.k[(0, 1)],
+                report.k[(1, 0)],
+                report.k[(1, 1)],
+                report.unit.short_name()
+            )],
+            unit: params.cal_units().short_name().to_string(),
+            ..Fit::default()
+        }),
+        _ => None,
+    }
+}
+
+/// The last picture `--report` would draw of `records`: the fit or sheet calibration just made.
+fn picture(name: &str, path: &Path, records: &[Record], world_unit: &str) -> Option<Fit> {
+    let stem = path.file_stem().map_or_else(|| "program".into(), |s| s.to_string_lossy().into_owned());
+    let steps: Vec<Step> = records.iter().map(|r| step(r, None)).collect();
+    let mut sheets = Vec::new();
+    pictures::program(&mut sheets, &stem, name, &steps, world_unit);
+    let (_, sheet) = sheets.pop()?;
+    let line = records.last().map_or(0, |r| r.line);
+    Some(Fit {
+        title: sheet.title.clone(),
+        line,
+        lines: sheet.lines.clone(),
+        bound99: sheet.band,
+        unit: sheet.unit.to_string(),
+        gcode: Vec::new(),
+        svg: Some(Arc::new(svg(&sheet))),
+    })
+}
+
+/// A camera driver whose every trigger is published.
+struct Published {
+    inner: Box<dyn CameraDriver>,
+    shared: Shared,
+}
+
+impl Published {
+    /// The capture `result` as the page shows it: the frame the driver searched (none for a
+    /// camera that sends only positions: then the reading alone) and the mark, or why none.
+    fn publish(&self, result: &Result<Reading, DriverError>) {
+        let frame = self.inner.last_frame().and_then(|f| f.downcast_ref::<Frame>()).map(|f| Arc::new(f.clone()));
+        let miss = self.inner.miss_reason();
+        let spec = self.inner.mark_spec();
+        self.shared.update(|view| {
+            view.offset_px = None;
+            view.mark = None;
+            view.why_ng = None;
+            match result {
+                Ok(r) if r.found() => {
+                    // The driver's native pixels (corner origin) → locate's pixel centres.
+                    view.mark = Some(Mark { x: r.x_px - 0.5, y: r.y_px - 0.5, diameter: r.width_px, score: r.score });
+                    view.offset_px = frame
+                        .as_ref()
+                        .map(|f| (r.x_px - f64::from(f.width()) / 2.0, r.y_px - f64::from(f.height()) / 2.0));
+                }
+                Ok(_) => view.why_ng = Some(miss.unwrap_or_else(|| "no mark".to_string())),
+                Err(e) => view.why_ng = Some(format!("the camera: {e}")),
+            }
+            view.frame = frame;
+            view.offset_machine = None;
+            view.spec = None;
+            view.search_radius_px = None;
+            if let Some(spec) = spec {
+                view.why_ng = view.why_ng.take().map(|w| format!("{w} (searched for: {spec})"));
+            }
+        });
+    }
+}
+
+impl CameraDriver for Published {
+    fn name(&self) -> &str {
+        self.inner.name()
+    }
+
+    fn capabilities(&self) -> Capabilities {
+        self.inner.capabilities()
+    }
+
+    fn trigger(&mut self) -> Result<Reading, DriverError> {
+        let result = self.inner.trigger();
+        self.publish(&result);
+        result
+    }
+
+    fn select_job(&mut self, job: u32) -> Result<(), DriverError> {
+        self.inner.select_job(job)
+    }
+
+    fn test_connection(&mut self) -> Result<String, DriverError> {
+        self.inner.test_connection()
+    }
+
+    fn reading_warning(&self, reading: &Reading) -> Option<String> {
+        self.inner.reading_warning(reading)
+    }
+
+    fn miss_reason(&self) -> Option<String> {
+        self.inner.miss_reason()
+    }
+
+    fn grab_image(&mut self, request: &ImageRequest<'_>) -> Result<std::path::PathBuf, DriverError> {
+        self.inner.grab_image(request)
+    }
+
+    fn mark_spec(&self) -> Option<String> {
+        self.inner.mark_spec()
+    }
+
+    fn frame_size(&mut self) -> Option<(u32, u32)> {
+        self.inner.frame_size()
+    }
+
+    fn timeout(&self) -> Duration {
+        self.inner.timeout()
+    }
+
+    fn last_frame(&self) -> Option<&dyn std::any::Any> {
+        self.inner.last_frame()
+    }
+}
