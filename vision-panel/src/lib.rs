@@ -45,7 +45,7 @@ pub use error::PanelError;
 pub use hub::PanelHandle;
 pub use live::observe;
 pub use server::{Limits, Panel};
-pub use view::{MachineOffset, Mark, Spec, View};
+pub use view::{Call, MachineOffset, Mark, Spec, View};
 
 #[cfg(test)]
 mod tests;
