@@ -30,7 +30,7 @@ pub(crate) struct PanelArgs {
     /// The camera: `simimage` (the frames the world's simulated camera sees, rendered) or
     /// `camera` (a USB, network or file camera: `--source`, or the profile's
     /// VisionCameraSource), in any case. Default: with `--profile`, what the controller's
-    /// session publishes in the profile's panel folder (`P.panel/`); without, `simimage`.
+    /// session publishes in the profile's panel folder (`P.panel`); without, `simimage`.
     #[arg(long, value_name = "NAME")]
     camera: Option<String>,
     /// Frame source for `--camera camera`: a V4L2 device, an `http://` snapshot URL, or an
@@ -76,7 +76,7 @@ pub(crate) fn run(args: &PanelArgs) -> Result<String, Failure> {
     }
 }
 
-/// `--profile P` without `--camera`: the session's panel folder, `P.panel/`.
+/// `--profile P` without `--camera`: the session's panel folder, `P.panel`.
 fn watch_folder(panel: &Panel, args: &PanelArgs, profile: &std::path::Path) -> Result<String, Failure> {
     let input = |e: &dyn std::fmt::Display| Failure::Input(e.to_string());
     if args.source.is_some() {

@@ -1,5 +1,5 @@
 //! `mach-vision panel --profile P` without `--camera`: the panel beside a real controller. It
-//! shows what the controller's session published in `P.panel/` (`vision_host::panel`): the
+//! shows what the controller's session published in `P.panel` (`vision_host::panel`): the
 //! state is polled, and each new `seq` becomes a new view — `frame.png` searched with the
 //! profile's mark settings as the live view searches a frame, the last call, why it was
 //! refused, and the parameters and telemetry, read-only. A folder without a readable state
