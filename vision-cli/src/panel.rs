@@ -1,8 +1,11 @@
 //! `mach-vision panel`: a local web page showing what the camera sees (`vision-panel`). Each
 //! look is one trigger of the camera driver, as M281 takes it: the frame, searched within the
 //! search radius with the profile's mark settings (or, for `simimage`, the ones the simulated
-//! operator sets); the page draws the located mark over it. Runs until Ctrl-C; the profile is
-//! read, never written.
+//! operator sets); the page draws the located mark over it. With `--profile` and no
+//! `--camera`, it shows the profile's panel folder instead ([`folder`]). Runs until Ctrl-C; the
+//! profile is read, never written.
+
+mod folder;
 
 use std::io::Write as _;
 use std::net::SocketAddr;
@@ -26,9 +29,10 @@ const LOOK_PERIOD: Duration = Duration::from_millis(200);
 pub(crate) struct PanelArgs {
     /// The camera: `simimage` (the frames the world's simulated camera sees, rendered) or
     /// `camera` (a USB, network or file camera: `--source`, or the profile's
-    /// VisionCameraSource), in any case.
-    #[arg(long, default_value = "simimage", value_name = "NAME")]
-    camera: String,
+    /// VisionCameraSource), in any case. Default: with `--profile`, what the controller's
+    /// session publishes in the profile's panel folder (`P.panel`); without, `simimage`.
+    #[arg(long, value_name = "NAME")]
+    camera: Option<String>,
     /// Frame source for `--camera camera`: a V4L2 device, an `http://` snapshot URL, or an
     /// image file or folder.
     #[arg(long, value_name = "DEVICE|URL|PATH")]
@@ -53,6 +57,9 @@ pub(crate) struct PanelArgs {
 pub(crate) fn run(args: &PanelArgs) -> Result<String, Failure> {
     // The address and token are checked first: a refusal costs no camera.
     let panel = Panel::bind(args.listen, args.token.as_deref()).map_err(|e| Failure::Input(e.to_string()))?;
+    if let (None, Some(profile)) = (&args.camera, &args.profile) {
+        return watch_folder(&panel, args, profile);
+    }
     let (mut driver, params) = camera(args)?;
     let page = match &args.token {
         Some(t) => format!("{}?token={t}", panel.url()),
@@ -69,12 +76,35 @@ pub(crate) fn run(args: &PanelArgs) -> Result<String, Failure> {
     }
 }
 
+/// `--profile P` without `--camera`: the session's panel folder, `P.panel`.
+fn watch_folder(panel: &Panel, args: &PanelArgs, profile: &std::path::Path) -> Result<String, Failure> {
+    let input = |e: &dyn std::fmt::Display| Failure::Input(e.to_string());
+    if args.source.is_some() {
+        return Err(Failure::Input("--source is for --camera camera".into()));
+    }
+    if !profile.is_file() {
+        return Err(Failure::Input(format!("no profile {}: the panel reads one", profile.display())));
+    }
+    let sim = Sim::new(world::load(args.world.as_deref())?).map_err(|e| input(&e))?;
+    let registry = vision_host::cameras(Some(&sim));
+    let params = ProfileStore::new(profile).with_defaults(registry.params()).load().map_err(|e| input(&e))?;
+    let dir = vision_host::panel::panel_dir(profile);
+    let page = match &args.token {
+        Some(t) => format!("{}?token={t}", panel.url()),
+        None => panel.url(),
+    };
+    let mut out = std::io::stdout();
+    let _ = writeln!(out, "panel at {page} (the panel folder {}); Ctrl-C stops", dir.display());
+    let _ = out.flush();
+    folder::watch(&panel.handle(), &dir, &params)
+}
+
 /// The driver `--camera` names, and the parameters its looks are described with.
 fn camera(args: &PanelArgs) -> Result<(FrameDriver, Params), Failure> {
     let input = |e: &dyn std::fmt::Display| Failure::Input(e.to_string());
     let sim = Sim::new(world::load(args.world.as_deref())?).map_err(|e| input(&e))?;
     let registry = vision_host::cameras(Some(&sim));
-    let name = crate::run::camera_name(&registry, &args.camera)?;
+    let name = crate::run::camera_name(&registry, args.camera.as_deref().unwrap_or(SIM_IMAGE))?;
     let mut params = match &args.profile {
         Some(path) if path.is_file() => {
             ProfileStore::new(path).with_defaults(registry.params()).load().map_err(|e| input(&e))?
@@ -97,7 +127,7 @@ fn camera(args: &PanelArgs) -> Result<(FrameDriver, Params), Failure> {
     } else {
         return Err(Failure::Input(format!(
             "--camera {}: the panel shows frames, from `simimage` or `camera` (with --source)",
-            vision_core::text::printable_line(&args.camera, 64)
+            vision_core::text::printable_line(args.camera.as_deref().unwrap_or(SIM_IMAGE), 64)
         )));
     };
     Ok((driver, params))

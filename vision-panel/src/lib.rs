@@ -46,7 +46,7 @@ pub use error::PanelError;
 pub use hub::PanelHandle;
 pub use live::{calibration, observe};
 pub use server::{Limits, Panel};
-pub use view::{Fit, MachineOffset, Mark, Spec, View};
+pub use view::{Call, Fit, MachineOffset, Mark, Spec, View};
 
 #[cfg(test)]
 mod tests;

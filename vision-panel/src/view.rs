@@ -20,6 +20,19 @@ pub struct Mark {
     pub score: f64,
 }
 
+/// The last Vision M-code a controller's session ran, as its panel folder tells it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Call {
+    /// The M number (280–284).
+    pub mcode: u32,
+    /// Whether it succeeded.
+    pub ok: bool,
+    /// The status line on success, the refusal's message otherwise.
+    pub message: String,
+    /// The G-code lines it ran (a record).
+    pub gcode: Vec<String>,
+}
+
 /// What the finder searched for, as `mach-vision locate`'s options say it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Spec {
@@ -74,6 +87,8 @@ pub struct View {
     pub mark: Option<Mark>,
     /// Why there is no mark (the finder's reason) or no frame (the camera's error).
     pub why_ng: Option<String>,
+    /// A controller's last call (`None` for a camera's live view).
+    pub call: Option<Call>,
     /// What was searched for.
     pub spec: Option<Spec>,
     /// The search radius about the image centre, pixels; `None`: the whole frame.
@@ -107,6 +122,9 @@ impl View {
                 "x": finite(m.x), "y": finite(m.y), "diameter": finite(m.diameter), "score": finite(m.score),
             })),
             "why_ng": self.why_ng,
+            "call": self.call.as_ref().map(|c| json!({
+                "mcode": c.mcode, "ok": c.ok, "message": c.message, "gcode": c.gcode,
+            })),
             "spec": self.spec.as_ref().map(|s| json!({
                 "kind": s.kind, "polarity": s.polarity,
                 "diameter_px": finite(s.diameter_px), "tolerance_pct": finite(s.tolerance_pct),

@@ -35,3 +35,12 @@ if nm -D --defined-only "$work/mach_vision.so" | grep -qw 'lua_newstate'; then
 fi
 
 lua5.3 "$root/hosts/mach4/test/load_test.lua" "$work" "$root/hosts/mach4/Macros"
+
+# The panel beside the controller: `mach-vision panel --profile` on the folder the module left
+# shows its last call (M281's refusal as Why NG?) and the folder's sequence number.
+cargo build --quiet --manifest-path "$root/Cargo.toml" -p vision-cli
+"$target/debug/mach-vision" panel --profile "$work/Profiles/LoadTest/MachVision.toml" --listen 127.0.0.1:0 \
+    >"$work/panel.out" 2>&1 &
+panel_pid=$!
+trap 'kill "$panel_pid" 2>/dev/null; rm -rf "$work"' EXIT
+python3 "$root/hosts/mach4/test/panel_check.py" "$work/panel.out" "$work/Profiles/LoadTest/MachVision.panel/state.json"

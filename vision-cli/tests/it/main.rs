@@ -19,6 +19,7 @@ mod locate;
 mod locate_bounds;
 mod option_props;
 mod panel;
+mod panel_folder;
 mod plan;
 mod run;
 mod send;

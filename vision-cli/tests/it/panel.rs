@@ -31,7 +31,7 @@ fn off_loopback_without_a_token_and_other_cameras_are_refused_with_exit_2() {
 }
 
 /// A panel process, killed when dropped.
-struct Running(Child, String);
+pub(crate) struct Running(pub(crate) Child, pub(crate) String);
 
 impl Drop for Running {
     fn drop(&mut self) {
@@ -40,7 +40,7 @@ impl Drop for Running {
     }
 }
 
-fn panel(args: &[&str]) -> Running {
+pub(crate) fn panel(args: &[&str]) -> Running {
     let child = Command::new(env!("CARGO_BIN_EXE_mach-vision"))
         .arg("panel")
         .args(["--listen", "127.0.0.1:0"])
@@ -59,7 +59,7 @@ fn panel(args: &[&str]) -> Running {
     running
 }
 
-fn get(addr: &str, path: &str) -> (u16, Vec<u8>) {
+pub(crate) fn get(addr: &str, path: &str) -> (u16, Vec<u8>) {
     let mut s = TcpStream::connect(addr).expect("connect");
     s.set_read_timeout(Some(Duration::from_secs(20))).expect("timeout");
     s.write_all(format!("GET {path} HTTP/1.1\r\n\r\n").as_bytes()).expect("send");
@@ -97,7 +97,7 @@ fn file_camera(name: &str, at: Option<(f64, f64)>) -> (PathBuf, Running) {
 }
 
 /// A 200×160 frame, white, with a dark 40 px dot centred at native pixel `at`, when given.
-fn frame(path: &Path, at: Option<(f64, f64)>) {
+pub(crate) fn frame(path: &Path, at: Option<(f64, f64)>) {
     let image = image::GrayImage::from_fn(200, 160, |x, y| {
         let inside = at.is_some_and(|(cx, cy)| (f64::from(x) + 0.5 - cx).hypot(f64::from(y) + 0.5 - cy) < 20.0);
         image::Luma([if inside { 20 } else { 230 }])
