@@ -18,6 +18,8 @@ import re
 import subprocess
 import sys
 import tempfile
+import time
+import urllib.request
 
 from canon import machine_xy
 
@@ -354,7 +356,29 @@ def calibrations(check, rig, module):
     check.that(case, len(traverses(calls)) >= 3, "the axis detect moved (%d moves)" % len(traverses(calls)))
 
 
-def panel(check, rig, module):
+def panel_page(cli, profile):
+    """What `mach-vision panel --profile PROFILE` serves as /state.json once it has read the
+    folder (its first line names the address), or {} when it shows nothing within 30 s."""
+    child = subprocess.Popen([cli, "panel", "--profile", profile, "--listen", "127.0.0.1:0"],
+                             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    try:
+        line = child.stdout.readline()
+        if "http://" not in line:
+            return {}
+        url = "http://" + line.split("http://")[1].split()[0].rstrip("/") + "/state.json"
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline:
+            page = json.load(urllib.request.urlopen(url, timeout=10))
+            if "(state " in page.get("source", ""):
+                return page
+            time.sleep(0.2)
+        return {}
+    finally:
+        child.kill()
+        child.wait()
+
+
+def panel(check, rig, module, cli):
     """A session on a profile publishes beside it, for the panel beside a real controller:
     after M283 P1 and example 4 through rs274, `P.panel/state.json` holds the fit, its status
     and a sequence number that the next run raises; in process, `Session.param` reads the same
@@ -387,6 +411,12 @@ def panel(check, rig, module):
         state = published("panel-fit", program)
         if state is None:
             return
+        page = panel_page(cli, profile)
+        check.that("panel-page", page.get("source", "").endswith("(state %d)" % state["seq"]),
+                   "`mach-vision panel --profile` shows the folder's state %d: %r" % (state["seq"], page.get("source")))
+        call = page.get("call") or {}
+        check.that("panel-page", call.get("mcode") == 282 and call.get("ok") is True and bool(call.get("gcode")),
+                   "the page's last call is the fit, with the G-code it ran: %s" % call)
         last, telemetry = state.get("last") or {}, state.get("telemetry", {})
         check.that("panel-fit", last.get("mcode") == 282 and last.get("ok") is True,
                    "the last call is M282's fit: %s" % {k: last.get(k) for k in ("mcode", "ok", "message")})
@@ -538,6 +568,7 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--rs274", required=True)
     ap.add_argument("--module", required=True, help="the folder holding mach_vision.abi3.so")
+    ap.add_argument("--cli", required=True, help="the mach-vision executable (its `panel --profile`)")
     args = ap.parse_args()
     sys.path.insert(0, args.module)
     import mach_vision
@@ -548,7 +579,7 @@ def main():
     module_errors(check, mach_vision)
     full_runs(check, rig, mach_vision)
     calibrations(check, rig, mach_vision)
-    panel(check, rig, mach_vision)
+    panel(check, rig, mach_vision, args.cli)
     print("%d failure(s)" % check.failures)
     return 1 if check.failures else 0
 

@@ -2,7 +2,8 @@
 # The LinuxCNC remap test: obtains rs274 (Debian's linuxcnc-uspace, unpacked by
 # tools/linuxcnc-oracle/setup.sh; needs apt and root once), builds the mach_vision module
 # (vision-py) as shipped, linking no libpython, plus the tests' simulated camera (feature
-# `sim`), and runs check.py against both.
+# `sim`), and runs check.py against both (and the CLI's `panel --profile` on the folder the
+# module publishes).
 set -eu
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../../.." && pwd)
@@ -18,4 +19,6 @@ if ldd "$module/mach_vision.abi3.so" | grep -q 'libpython'; then
     echo "run.sh: mach_vision.abi3.so links libpython; build it with PYO3_BUILD_EXTENSION_MODULE=1" >&2
     exit 1
 fi
-exec python3 "$here/check.py" --rs274 "$rs274" --module "$module"
+# The panel beside the controller: `mach-vision panel --profile` shows what the module published.
+cargo build --quiet --manifest-path "$root/Cargo.toml" -p vision-cli
+exec python3 "$here/check.py" --rs274 "$rs274" --module "$module" --cli "$target/debug/mach-vision"
