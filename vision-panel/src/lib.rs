@@ -44,7 +44,7 @@ mod view;
 
 pub use error::PanelError;
 pub use hub::PanelHandle;
-pub use live::{calibration, observe};
+pub use live::{calibration, calibration_line, observe};
 pub use server::{Limits, Panel};
 pub use view::{Call, Fit, MachineOffset, Mark, Spec, View};
 

@@ -73,6 +73,25 @@ pub fn calibration(params: &Params) -> Vec<(String, String)> {
         .collect()
 }
 
+/// One calibration as a line of the page's history: K, the camera tool's offset and the pixel
+/// centre, each value as `value` gives it by manual name (`?` for one it has not).
+#[must_use]
+pub fn calibration_line(value: &dyn Fn(&str) -> Option<String>) -> String {
+    let v = |name: &str| value(name).unwrap_or_else(|| "?".to_string());
+    format!(
+        "K {} {} {} {} {u}/px · tool offset X{} Y{} {u} · centre {} {} px",
+        v("VisionCal_K11"),
+        v("VisionCal_K12"),
+        v("VisionCal_K21"),
+        v("VisionCal_K22"),
+        v("VisionCal_ToolOffsetX"),
+        v("VisionCal_ToolOffsetY"),
+        v("VisionPxCenterOffsetX"),
+        v("VisionPxCenterOffsetY"),
+        u = v("VisionCal_Units"),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -122,5 +141,27 @@ mod tests {
         assert!(view.mark.is_none() && view.offset_machine.is_none());
         assert!(view.why_ng.expect("a reason").contains("no"), "the finder's reason");
         assert!(view.frame.is_some(), "the frame is shown even without a mark");
+    }
+}
+
+#[cfg(test)]
+mod history_tests {
+    use super::calibration_line;
+
+    #[test]
+    fn a_calibration_reads_as_one_line_with_what_it_lacks_marked() {
+        let value = |name: &str| match name {
+            "VisionCal_K11" | "VisionCal_K22" => Some("0.00203".to_string()),
+            "VisionCal_K12" | "VisionCal_K21" => Some("0".to_string()),
+            "VisionCal_ToolOffsetX" => Some("-3.25".to_string()),
+            "VisionCal_ToolOffsetY" => Some("1.75".to_string()),
+            "VisionCal_Units" => Some("in".to_string()),
+            "VisionPxCenterOffsetX" => Some("0.4".to_string()),
+            _ => None,
+        };
+        assert_eq!(
+            calibration_line(&value),
+            "K 0.00203 0 0 0.00203 in/px · tool offset X-3.25 Y1.75 in · centre 0.4 ? px"
+        );
     }
 }

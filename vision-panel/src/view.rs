@@ -105,6 +105,9 @@ pub struct View {
     pub telemetry: Vec<(String, String)>,
     /// A run's last fit or calibration.
     pub fit: Option<Fit>,
+    /// The calibrations seen, newest first: the date and K, the camera tool's offset and the
+    /// pixel centre, as one line each.
+    pub history: Vec<(String, String)>,
 }
 
 impl View {
@@ -137,6 +140,7 @@ impl View {
             "source": self.source,
             "params": pairs(&self.params),
             "telemetry": pairs(&self.telemetry),
+            "history": pairs(&self.history),
             "fit": self.fit.as_ref().map(|f| json!({
                 "title": f.title, "line": f.line, "lines": f.lines, "bound99": f.bound99.map(finite),
                 "unit": f.unit, "gcode": f.gcode, "svg": f.svg.is_some(),

@@ -61,6 +61,15 @@ fn view(dir: &Path, state: &PanelState, params: &Params) -> View {
     view.source = format!("{} (state {})", dir.display(), state.seq);
     view.params = pairs(&state.params);
     view.telemetry = pairs(&state.telemetry);
+    view.history = state
+        .calibrations
+        .iter()
+        .rev()
+        .map(|c| {
+            let text = |name: &str| c.values.get(name).map(panel_text);
+            (c.date.clone(), vision_panel::calibration_line(&text))
+        })
+        .collect();
     if let Some(last) = &state.last {
         if !last.ok {
             view.why_ng = Some(last.message.clone());
@@ -94,11 +103,15 @@ fn searched(frame: &Path, params: &Params) -> View {
 
 /// The values as the page's tables show them.
 fn pairs(values: &std::collections::BTreeMap<String, PanelValue>) -> Vec<(String, String)> {
-    let text = |v: &PanelValue| match v {
+    values.iter().map(|(name, v)| (name.clone(), panel_text(v))).collect()
+}
+
+/// A published value as the page shows it.
+fn panel_text(v: &PanelValue) -> String {
+    match v {
         PanelValue::Bool(b) => b.to_string(),
         PanelValue::Int(i) => i.to_string(),
         PanelValue::Number(x) => x.to_string(),
         PanelValue::Text(t) => t.clone(),
-    };
-    values.iter().map(|(name, v)| (name.clone(), text(v))).collect()
+    }
 }

@@ -93,7 +93,16 @@ impl RunPanel {
         world_unit: &str,
     ) {
         let fit = records.last().and_then(|r| fit(program, records, r, params, world_unit));
+        let plain = |name: &str| match params.get(name).ok()? {
+            vision_core::ParamValue::Text(t) => Some(t),
+            other => Some(other.to_string()),
+        };
+        let date = plain("VisionCal_Date").filter(|d| !d.is_empty());
         self.shared.update(|view| {
+            // A calibration not seen before (another date) heads the history.
+            if let Some(date) = date.filter(|d| view.history.first().is_none_or(|(seen, _)| seen != d)) {
+                view.history.insert(0, (date, vision_panel::calibration_line(&plain)));
+            }
             view.params = vision_panel::calibration(params);
             if let Ok(d) = params.get(DIAMETER_PARAM) {
                 view.params.push((DIAMETER_PARAM.to_string(), d.to_string()));

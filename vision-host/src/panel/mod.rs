@@ -2,8 +2,8 @@
 //! to show, without any server in the controller's process.
 //!
 //! For profile `P.toml` the folder is `P.panel/` beside it ([`panel_dir`]), holding
-//! `state.json` ([`PanelState`]: parameters, telemetry, the last call, the run's captures, a
-//! time and a sequence number) and `frame.png` (the last image M281 D1 kept, when the driver
+//! `state.json` ([`PanelState`]: parameters, telemetry, the last call, the run's captures, the
+//! calibrations seen, a time and a sequence number) and `frame.png` (the last image M281 D1 kept, when the driver
 //! keeps PNGs). Both are replaced atomically. [`Publisher`] writes them off the controller's
 //! thread; [`read`] reads the state back with typed errors.
 
@@ -12,6 +12,6 @@ mod state;
 
 pub use publisher::{Publisher, MAX_DOTS, SETTLE};
 pub use state::{
-    panel_dir, parse, read, LastCall, PanelDot, PanelReadError, PanelState, PanelUnit, PanelValue, FORMAT, FRAME_FILE,
-    MAX_STATE_BYTES, STATE_FILE,
+    panel_dir, parse, read, LastCall, PanelCalibration, PanelDot, PanelReadError, PanelState, PanelUnit, PanelValue,
+    CALIBRATION_PARAMS, FORMAT, FRAME_FILE, MAX_CALIBRATIONS, MAX_STATE_BYTES, STATE_FILE,
 };

@@ -16,7 +16,10 @@ use vision_core::{Dot, ParamValue, Telemetry, TelemetrySink, VisionModule};
 use vision_math::LengthUnit;
 use vision_mcode::Outcome;
 
-use super::state::{self, LastCall, PanelDot, PanelState, PanelUnit, PanelValue, FRAME_FILE, STATE_FILE};
+use super::state::{
+    self, LastCall, PanelCalibration, PanelDot, PanelState, PanelUnit, PanelValue, CALIBRATION_PARAMS, FRAME_FILE,
+    MAX_CALIBRATIONS, STATE_FILE,
+};
 
 /// The most run captures a state lists.
 pub const MAX_DOTS: usize = 1000;
@@ -58,6 +61,8 @@ struct Slot {
     /// The first write failure, until the session takes it; then `reported`.
     problem: Option<String>,
     reported: bool,
+    /// The calibrations seen, oldest first (carried on from the folder's last state).
+    history: Vec<PanelCalibration>,
 }
 
 struct Shared {
@@ -102,8 +107,8 @@ impl Publisher {
     /// or a writer thread that cannot start, is a [`Publisher::take_problem`], not an error.
     #[must_use]
     pub fn start(dir: PathBuf, profile: &Path) -> Publisher {
-        let seq = state::read(&dir).map_or(0, |s| s.seq);
-        let slot = Slot { submitted: seq, written: seq, ..Slot::default() };
+        let (seq, history) = state::read(&dir).map_or((0, Vec::new()), |s| (s.seq, s.calibrations));
+        let slot = Slot { submitted: seq, written: seq, history, ..Slot::default() };
         let shared = Arc::new(Shared { slot: Mutex::new(slot), wake: Condvar::new() });
         let writer = Writer { shared: Arc::clone(&shared), dir: dir.clone(), profile: profile.display().to_string() };
         let spawned = std::thread::Builder::new().name("vision-panel".to_string()).spawn(move || writer.run());
@@ -219,7 +224,10 @@ impl Writer {
                 }
                 let seq = slot.submitted;
                 let image = slot.snapshot.image.clone().filter(|i| framed.as_ref() != Some(i));
-                (seq, self.state(&slot.snapshot, seq), image)
+                let slot = &mut *slot;
+                note_calibration(&mut slot.history, &slot.snapshot.params);
+                let state = PanelState { calibrations: slot.history.clone(), ..self.state(&slot.snapshot, seq) };
+                (seq, state, image)
             };
             let mut result = std::fs::create_dir_all(&self.dir).map_err(|e| e.to_string());
             if let (Ok(()), Some(image)) = (&result, &image) {
@@ -263,6 +271,7 @@ impl Writer {
             last: snapshot.last.as_ref().map(|(mcode, result)| last_call(*mcode, result)),
             dots: snapshot.dots.iter().filter_map(panel_dot).collect(),
             frame: None,
+            calibrations: Vec::new(),
         }
     }
 
@@ -336,4 +345,24 @@ fn panel_dot(d: &Dot) -> Option<PanelDot> {
             LengthUnit::Millimetre => PanelUnit::Millimetre,
         },
     })
+}
+
+/// Adds the calibration `params` hold to `history` when it is a new one (another
+/// `VisionCal_Date`; none before the first M283), keeping the last [`MAX_CALIBRATIONS`].
+fn note_calibration(history: &mut Vec<PanelCalibration>, params: &[(&'static str, ParamValue)]) {
+    let date = match params.iter().find(|(n, _)| *n == "VisionCal_Date") {
+        Some((_, ParamValue::Text(d))) if !d.is_empty() => d.clone(),
+        _ => return,
+    };
+    if history.last().is_some_and(|c| c.date == date) {
+        return;
+    }
+    let values = params
+        .iter()
+        .filter(|(n, _)| CALIBRATION_PARAMS.contains(n))
+        .map(|(n, v)| ((*n).to_string(), PanelValue::from(v.clone())))
+        .collect();
+    history.push(PanelCalibration { date, values });
+    let excess = history.len().saturating_sub(MAX_CALIBRATIONS);
+    history.drain(..excess);
 }

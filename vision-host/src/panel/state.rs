@@ -20,6 +20,32 @@ pub const FRAME_FILE: &str = "frame.png";
 /// file is not one of ours.
 pub const MAX_STATE_BYTES: u64 = 4 << 20;
 
+/// The most calibrations a state lists: the newest are kept.
+pub const MAX_CALIBRATIONS: usize = 20;
+
+/// The parameters a calibration's history entry keeps: K, the camera tool's offset, the pixel
+/// centre and the units they are in.
+pub const CALIBRATION_PARAMS: [&str; 9] = [
+    "VisionCal_K11",
+    "VisionCal_K12",
+    "VisionCal_K21",
+    "VisionCal_K22",
+    "VisionCal_ToolOffsetX",
+    "VisionCal_ToolOffsetY",
+    "VisionPxCenterOffsetX",
+    "VisionPxCenterOffsetY",
+    "VisionCal_Units",
+];
+
+/// One calibration M283 saved, as the profile held it right after: for the panel's history.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PanelCalibration {
+    /// `VisionCal_Date`, as M283 stamped it.
+    pub date: String,
+    /// [`CALIBRATION_PARAMS`] by manual name.
+    pub values: BTreeMap<String, PanelValue>,
+}
+
 /// The panel folder of profile file `profile`: `P.toml` → `P.panel` beside it.
 #[must_use]
 pub fn panel_dir(profile: &Path) -> PathBuf {
@@ -113,6 +139,10 @@ pub struct PanelState {
     pub dots: Vec<PanelDot>,
     /// [`FRAME_FILE`] when the folder holds the last image, else `None`.
     pub frame: Option<String>,
+    /// The calibrations this folder has seen, oldest first (the last [`MAX_CALIBRATIONS`]),
+    /// across sessions; absent in a state written before there was a history.
+    #[serde(default)]
+    pub calibrations: Vec<PanelCalibration>,
 }
 
 /// Why a panel folder's state could not be read.
@@ -208,11 +238,15 @@ pub fn parse(bytes: &[u8], path: &str) -> Result<PanelState, PanelReadError> {
         return invalid("time_unix is not a time");
     }
     let finite = |v: &PanelValue| !matches!(v, PanelValue::Number(x) if !x.is_finite());
-    if !state.params.values().chain(state.telemetry.values()).all(finite) {
+    let history = state.calibrations.iter().flat_map(|c| c.values.values());
+    if !state.params.values().chain(state.telemetry.values()).chain(history).all(finite) {
         return invalid("a value is not a finite number");
     }
     if !state.dots.iter().flat_map(|d| d.commanded.iter().chain(&d.observed)).all(|x| x.is_finite()) {
         return invalid("a dot is not a finite position");
+    }
+    if state.calibrations.len() > MAX_CALIBRATIONS {
+        return invalid("more calibrations than a writer lists");
     }
     if state.frame.as_deref().is_some_and(|f| f != FRAME_FILE) {
         return invalid("frame names a file other than frame.png");

@@ -193,3 +193,46 @@ fn the_image_m281_d1_keeps_becomes_the_folders_frame() {
     assert!(frame.starts_with(b"\x89PNG"), "a PNG");
     let _ = std::fs::remove_dir_all(&tmp);
 }
+
+/// Each calibration (another `VisionCal_Date`) joins the folder's history, across sessions, the
+/// newest last and at most `MAX_CALIBRATIONS`; the same calibration published again does not.
+#[test]
+fn the_folder_keeps_the_calibrations_it_has_seen() {
+    let sim = sim();
+    let tmp = scratch("history");
+    let (path, dir) = (tmp.join("shop.toml"), tmp.join("shop.panel"));
+    let dated = |date: &str, k11: f64| {
+        let mut params = sim_params(&sim);
+        params.set("VisionCal_Date", date).expect("date");
+        params.set("VisionCal_K11", k11).expect("k11");
+        vision_core::VisionModule::new(params)
+    };
+    let publish = |module: &vision_core::VisionModule| {
+        let publisher = Publisher::start(dir.clone(), &path);
+        publisher.record(module, None);
+        publisher.record(module, None);
+        assert!(publisher.flush(Duration::from_secs(10)));
+        panel::read(&dir).expect("reads back")
+    };
+    let first = publish(&dated("2026-11-01 09:00:00+00:00", 0.002));
+    assert_eq!(first.calibrations.len(), 1, "{:?}", first.calibrations);
+    assert_eq!(first.calibrations[0].date, "2026-11-01 09:00:00+00:00");
+    assert_eq!(first.calibrations[0].values.get("VisionCal_K11"), Some(&PanelValue::Number(0.002)));
+    let second = publish(&dated("2026-11-02 09:00:00+00:00", 0.0021));
+    let dates: Vec<&str> = second.calibrations.iter().map(|c| c.date.as_str()).collect();
+    assert_eq!(dates, ["2026-11-01 09:00:00+00:00", "2026-11-02 09:00:00+00:00"]);
+    for day in 3..30 {
+        publish(&dated(&format!("2026-11-{day:02} 09:00:00+00:00"), 0.002));
+    }
+    let last = panel::read(&dir).expect("reads back");
+    assert_eq!(last.calibrations.len(), panel::MAX_CALIBRATIONS);
+    assert_eq!(last.calibrations.last().map(|c| c.date.as_str()), Some("2026-11-29 09:00:00+00:00"));
+    // A state listing more than a writer lists is not one of ours.
+    let mut text: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join(panel::STATE_FILE)).expect("read")).expect("json");
+    let extra = text["calibrations"][0].clone();
+    text["calibrations"].as_array_mut().expect("list").push(extra);
+    std::fs::write(dir.join(panel::STATE_FILE), text.to_string()).expect("write");
+    assert!(matches!(panel::read(&dir), Err(PanelReadError::Invalid { .. })));
+    let _ = std::fs::remove_dir_all(&tmp);
+}
