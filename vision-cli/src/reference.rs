@@ -454,6 +454,7 @@ mod tests {
         let mut world = World::default_world();
         world.camera.focus_z = Some(0.0);
         world.camera.reference_working_distance = Some(6.0);
+        world.camera.distortion = Some([-0.1, 0.0, 0.0, 0.0, 0.0]);
         world.camera.image = Some(ImageLook { focus_distance: Some(6.0), ..ImageLook::default() });
         for job in &mut world.camera.jobs {
             job.noise_px = Some(0.1);

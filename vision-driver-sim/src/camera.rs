@@ -55,7 +55,7 @@ impl CameraDriver for SimCamera {
         let seen: Vec<_> = st
             .marks
             .iter()
-            .map(|m| (m, optics.pixel(m.position - axis)))
+            .filter_map(|m| Some((m, optics.image(m.position - axis)?)))
             .filter(|(_, p)| optics.in_view(*p, margin))
             .collect();
         let Some((mark, p)) = seen.iter().min_by(|a, b| (a.1 - centre).norm().total_cmp(&(b.1 - centre).norm())) else {

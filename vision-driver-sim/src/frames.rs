@@ -3,11 +3,14 @@
 //! world's print, focus, light and sensor ([`crate::world::ImageLook`]) — so a driver that
 //! finds the mark itself can run on the simulated machine.
 //!
-//! Geometry: a mark whose centre images at native pixel `p` ([`crate::Optics::pixel`], origin
-//! at the top-left corner of the image) is drawn centred at `p − (½, ½)` in the renderer's
-//! pixel-centre coordinates, so a finder that reports pixel centres and a driver that adds ½
-//! back give exactly the reading-mode camera's native pixels. Its diameter in pixels is
-//! [`crate::Optics::size_px`] (the mean of width and height for non-square pixels).
+//! Geometry: a mark whose centre images at native pixel `p` ([`crate::Optics::image`], origin
+//! at the top-left corner of the image, lens distortion included) is drawn centred at
+//! `p − (½, ½)` in the renderer's pixel-centre coordinates, so a finder that reports pixel
+//! centres and a driver that adds ½ back give exactly the reading-mode camera's native pixels.
+//! Its diameter in pixels is [`crate::Optics::size_px`] (the mean of width and height for
+//! non-square pixels). Decision: the lens moves a mark's centre but does not reshape it (its
+//! few-percent squash near a corner would shift a real blob's centroid by a tenth of a pixel
+//! or so), so the finder and the reading-mode camera agree on where the mark is.
 //!
 //! Defocus: blur σ = `blur_px` + `defocus_px_per_pct` × |working distance − focus distance| /
 //! focus distance × 100.
@@ -129,10 +132,10 @@ fn scene(st: &State) -> (Scene, Vec<Point2<f64>>, f64) {
     let mut seen: Vec<(Point2<f64>, f64, f64)> = st
         .marks
         .iter()
-        .map(|m| {
+        .filter_map(|m| {
             let seen_deg =
                 if camera.mirror { -(m.angle_deg - camera.rotation_deg) } else { m.angle_deg - camera.rotation_deg };
-            (st.optics().pixel(m.position - axis), mean_size(st, m.diameter), seen_deg)
+            Some((st.optics().image(m.position - axis)?, mean_size(st, m.diameter), seen_deg))
         })
         // Anything that reaches into the frame (with its blur) is drawn, clipped or not.
         .filter(|(p, d, _)| {
@@ -193,6 +196,7 @@ mod tests {
     use super::*;
     use crate::World;
     use nalgebra::Point3;
+    use vision_math::Vector2;
 
     #[test]
     fn the_frame_shows_the_mark_where_the_reading_camera_reports_it() {
@@ -225,6 +229,55 @@ mod tests {
         let centroid = Point2::new(sx / n + 0.5, sy / n + 0.5);
         assert!((centroid - truth).norm() < 0.05, "{centroid} vs {truth}");
         assert!((frame.blur_px - 0.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn through_a_barrel_lens_the_frame_and_the_reading_agree_up_to_a_corner() {
+        let mut world = World::default_world();
+        world.camera.noise_px = 0.0;
+        world.camera.jobs.clear();
+        world.camera.distortion = Some([-0.10, 0.0, 0.0, 0.0, 0.0]);
+        world.camera.image =
+            Some(ImageLook { noise_grey: 0.0, light_gradient_pct: 0.0, blur_px: 0.0, ..ImageLook::default() });
+        world.fixtures.truncate(1);
+        world.fixtures[0].sheet = None;
+        world.fixtures[0].marks = vec![[0.0, 0.0]];
+        let sim = Sim::new(world).expect("sim");
+        let mark = sim.marks()[0].position;
+        let offset = Vector2::from(sim.world().camera.offset);
+        // Image offsets of the mark in inches: centre, sides, and 1.5 in (740 px) off both axes.
+        for v in [[0.0, 0.0], [1.2, 0.0], [0.0, -1.3], [-1.5, 1.5], [1.5, -1.45]] {
+            let axis = mark - Vector2::from(v);
+            sim.place_head(Point3::new(axis.x - offset.x, axis.y - offset.y, 0.0));
+            let frame = sim.render_frame().expect("frame");
+            let r = vision_core::CameraDriver::trigger(&mut sim.camera()).expect("reading");
+            let linear = sim.optics().pixel(Vector2::from(v));
+            assert!(r.found(), "{v:?}");
+            let reading = Point2::new(r.x_px, r.y_px);
+            assert!((frame.marks[0] - reading).norm() < 1e-9, "{v:?}");
+            let c = centroid(&frame);
+            assert!((c - reading).norm() < 0.05, "{v:?}: drawn at {c}, read at {reading}");
+            // The lens really moved it: barrel pulls a point 700 px off by about 5 px.
+            if v[0] != 0.0 && v[1] != 0.0 {
+                assert!((linear - reading).norm() > 5.0, "{v:?}: {linear} vs {reading}");
+            }
+        }
+    }
+
+    /// The dark-pixel centroid of a noiseless, evenly lit frame, native pixels.
+    fn centroid(frame: &SimFrame) -> Point2<f64> {
+        let (w, px) = (frame.image.width(), frame.gray8());
+        let (mut sx, mut sy, mut n) = (0.0, 0.0, 0.0);
+        for (i, &v) in px.iter().enumerate() {
+            let dark = (255.0 - f64::from(v)).max(0.0) - (255.0 - 0.85 * 0.9 * 255.0);
+            if dark > 1.0 {
+                let (x, y) = ((i % w) as f64, (i / w) as f64);
+                sx += dark * x;
+                sy += dark * y;
+                n += dark;
+            }
+        }
+        Point2::new(sx / n + 0.5, sy / n + 0.5)
     }
 
     #[test]

@@ -15,6 +15,7 @@
 
 use vision_math::{Matrix2, Point2, Vector2};
 
+use crate::lens::Lens;
 use crate::world::CameraMount;
 
 /// The true optics of a mounted camera.
@@ -26,6 +27,7 @@ pub struct Optics {
     bias: Vector2<f64>,
     /// Pixel width and height on the table, world unit.
     pixel: Vector2<f64>,
+    lens: Option<Lens>,
 }
 
 impl Optics {
@@ -41,6 +43,12 @@ impl Optics {
     /// that sees the same table point at every distance.
     #[must_use]
     pub fn at(mount: &CameraMount, working_distance: f64) -> Optics {
+        // A validated mount has a valid lens.
+        Optics::with_lens(mount, working_distance, Lens::new(mount).ok().flatten())
+    }
+
+    /// [`Optics::at`] with the mount's lens already built.
+    pub(crate) fn with_lens(mount: &CameraMount, working_distance: f64, lens: Option<Lens>) -> Optics {
         let reference = mount.reference_working_distance.unwrap_or(mount.working_distance);
         let s = mount.units_per_pixel * working_distance / reference;
         let m = if mount.mirror { -1.0 } else { 1.0 };
@@ -55,6 +63,7 @@ impl Optics {
             resolution: Vector2::new(f64::from(mount.resolution[0]), f64::from(mount.resolution[1])),
             bias: Vector2::from(mount.center_bias_px),
             pixel: Vector2::new(s * mount.pixel_aspect, s),
+            lens,
         }
     }
 
@@ -70,7 +79,20 @@ impl Optics {
         Point2::from(self.resolution * 0.5 + self.bias + self.kr_inv * v)
     }
 
-    /// The offset from the optical axis (world unit) of what images at native pixel `p`.
+    /// Where a point `v` away from the optical axis (world unit) images through the lens,
+    /// native pixels: [`Optics::pixel`] distorted by the world's lens, if any; `None` outside
+    /// the lens's field.
+    #[must_use]
+    pub fn image(&self, v: Vector2<f64>) -> Option<Point2<f64>> {
+        let p = self.pixel(v);
+        match &self.lens {
+            None => Some(p),
+            Some(lens) => lens.distort(p),
+        }
+    }
+
+    /// The offset from the optical axis (world unit) of what images at native pixel `p`
+    /// through the linear optics (the lens's distortion not undone).
     #[must_use]
     pub fn offset(&self, p: Point2<f64>) -> Vector2<f64> {
         self.kr * (p.coords - self.resolution * 0.5 - self.bias)

@@ -9,6 +9,7 @@ use vision_math::{LengthUnit, Point2, Vector2};
 
 use crate::error::SimError;
 use crate::fixture::TrueMark;
+use crate::lens::Lens;
 use crate::optics::Optics;
 use crate::rng::Rng;
 use crate::world::{Fixture, Job, World};
@@ -27,6 +28,8 @@ pub(crate) struct State {
     pub(crate) triggers: u64,
     /// Frames rendered by the image-mode camera (each seeds its own noise).
     pub(crate) frames: u64,
+    /// The camera's lens distortion, built once (the camera never changes).
+    pub(crate) lens: Option<Lens>,
 }
 
 /// Where the spindle is: at the world's start until a machine drives it, then wherever that
@@ -72,7 +75,7 @@ impl State {
 
     /// The true optics with the head where it is now.
     pub(crate) fn optics(&self) -> Optics {
-        Optics::at(&self.world.camera, self.working_distance())
+        Optics::with_lens(&self.world.camera, self.working_distance(), self.lens)
     }
 
     /// The optical axis, machine coordinates.
@@ -114,6 +117,7 @@ impl Sim {
             job: 0,
             triggers: 0,
             frames: 0,
+            lens: Lens::new(&world.camera)?,
             world,
         };
         Ok(Sim { shared: Arc::new(Mutex::new(state)) })

@@ -128,6 +128,11 @@ pub struct CameraMount {
     /// sensor).
     #[serde(default, deserialize_with = "exact::array")]
     pub center_bias_px: [f64; 2],
+    /// Lens distortion `[k1, k2, p1, p2, k3]`, OpenCV's Brown–Conrady model on coordinates
+    /// normalised by f = reference working distance / units per pixel (pixels), about the
+    /// optical centre ([`crate::Lens`]); absent: none.
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "exact::option")]
+    pub distortion: Option<[f64; 5]>,
     /// Lens-to-surface distance with the spindle at `focus_z`, world unit. The scale on the
     /// table is proportional to the distance, which grows one for one with the machine's Z (the
     /// camera rides on the head): `working_distance + (Z − focus_z)`.
@@ -435,6 +440,7 @@ impl World {
         if !margin_ok(c.margin_px) {
             return invalid("camera.margin_px", "must be ≥ 0 and less than half the smaller image side");
         }
+        crate::lens::Lens::new(c)?;
         if let Some(look) = &c.image {
             look.validate()?;
         }

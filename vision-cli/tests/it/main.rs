@@ -14,6 +14,7 @@ mod fit;
 mod grbl;
 mod hostile_input;
 mod image_camera;
+mod lens;
 mod linuxcnc;
 mod locate;
 mod locate_bounds;
