@@ -45,7 +45,7 @@ struct Snapshot {
     telemetry: Telemetry,
     last: Option<(u32, Result<Outcome, String>)>,
     dots: Vec<Dot>,
-    /// The last image M281 kept, to copy to `frame.png` (PNG only).
+    /// The last image M281 kept, to copy to `frame.png` (PNG; JPEG and BMP re-encoded).
     image: Option<PathBuf>,
 }
 
@@ -275,13 +275,13 @@ impl Writer {
         }
     }
 
-    /// Copies the PNG `image` to `frame.png`; `Ok(false)` for another format (left out).
+    /// Copies `image` to `frame.png` (re-encoded when it is not a PNG); `Ok(false)` for a file
+    /// that is no image the panel reads (left out).
     fn copy_frame(&self, image: &Path) -> Result<bool, String> {
-        if !image.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
-            return Ok(false);
+        match frame_png(image)? {
+            Some(bytes) => self.replace(FRAME_FILE, &bytes).map(|()| true),
+            None => Ok(false),
         }
-        let bytes = std::fs::read(image).map_err(|e| format!("{}: {e}", image.display()))?;
-        self.replace(FRAME_FILE, &bytes).map(|()| true)
     }
 
     /// Writes `bytes` to `name` in the folder atomically: a temp file beside it, then a rename.
@@ -365,4 +365,36 @@ fn note_calibration(history: &mut Vec<PanelCalibration>, params: &[(&'static str
     history.push(PanelCalibration { date, values });
     let excess = history.len().saturating_sub(MAX_CALIBRATIONS);
     history.drain(..excess);
+}
+
+/// The largest side (pixels) of an image the panel folder takes as its frame.
+pub const MAX_FRAME_SIDE: u32 = 16_384;
+
+/// The PNG bytes of the image a camera kept at `path`: a PNG as it is, a JPEG or BMP (a
+/// Keyence camera's) re-encoded; `None` for another format, or an image over
+/// [`MAX_FRAME_SIDE`] a side.
+///
+/// # Errors
+/// The file cannot be read, or is damaged.
+pub fn frame_png(path: &Path) -> Result<Option<Vec<u8>>, String> {
+    let failed = |e: &dyn std::fmt::Display| format!("{}: {e}", path.display());
+    let bytes = std::fs::read(path).map_err(|e| failed(&e))?;
+    let format = match image::guess_format(&bytes) {
+        Ok(image::ImageFormat::Png) => return Ok(Some(bytes)),
+        Ok(f @ (image::ImageFormat::Jpeg | image::ImageFormat::Bmp)) => f,
+        _ => return Ok(None),
+    };
+    let mut reader = image::ImageReader::with_format(std::io::Cursor::new(&bytes), format);
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(MAX_FRAME_SIDE);
+    limits.max_image_height = Some(MAX_FRAME_SIDE);
+    reader.limits(limits);
+    let decoded = match reader.decode() {
+        Ok(img) => img,
+        Err(image::ImageError::Limits(_)) => return Ok(None),
+        Err(e) => return Err(failed(&e)),
+    };
+    let mut png = std::io::Cursor::new(Vec::new());
+    decoded.write_to(&mut png, image::ImageFormat::Png).map_err(|e| failed(&e))?;
+    Ok(Some(png.into_inner()))
 }

@@ -236,3 +236,33 @@ fn the_folder_keeps_the_calibrations_it_has_seen() {
     assert!(matches!(panel::read(&dir), Err(PanelReadError::Invalid { .. })));
     let _ = std::fs::remove_dir_all(&tmp);
 }
+
+/// A camera's kept image becomes the folder's PNG frame: a PNG as it is, a JPEG or a BMP (a
+/// Keyence camera's) re-encoded with its pixels; anything else is left out, a damaged image is
+/// an error.
+#[test]
+fn a_kept_jpeg_or_bmp_becomes_a_png_frame() {
+    let tmp = scratch("formats");
+    let img = image::GrayImage::from_fn(40, 30, |x, y| image::Luma([u8::try_from((x * 6 + y) % 256).unwrap_or(0)]));
+    for (name, format) in [("a.png", image::ImageFormat::Png), ("a.bmp", image::ImageFormat::Bmp)] {
+        let path = tmp.join(name);
+        img.save_with_format(&path, format).expect("written");
+        let png = panel::frame_png(&path).expect("read").expect("an image");
+        assert!(png.starts_with(b"\x89PNG"), "{name}");
+        let back = image::load_from_memory(&png).expect("decodes").to_luma8();
+        assert_eq!(back, img, "{name}: the same pixels");
+    }
+    let jpeg = tmp.join("a.jpg");
+    img.save_with_format(&jpeg, image::ImageFormat::Jpeg).expect("written");
+    let png = panel::frame_png(&jpeg).expect("read").expect("an image");
+    assert_eq!(image::load_from_memory(&png).expect("decodes").to_luma8().dimensions(), (40, 30));
+    let text = tmp.join("a.txt");
+    std::fs::write(&text, "not an image").expect("written");
+    assert_eq!(panel::frame_png(&text), Ok(None));
+    let damaged = tmp.join("b.bmp");
+    let bytes = std::fs::read(tmp.join("a.bmp")).expect("read");
+    std::fs::write(&damaged, &bytes[..bytes.len() / 3]).expect("written");
+    assert!(panel::frame_png(&damaged).is_err());
+    assert!(panel::frame_png(&tmp.join("missing.png")).is_err());
+    let _ = std::fs::remove_dir_all(&tmp);
+}
