@@ -262,30 +262,14 @@ impl DialectRules {
     /// The firmware has no tool table: the host keeps it and, since M6 never reaches the firmware,
     /// applies the new tool's X/Y at M6 and its length at G43, as Mach4 does. Parameters go to
     /// 9999 (the host's table), no named predefined ones, F is zeroed only by a change of feed
-    /// mode, `A` is never an output.
+    /// mode, `A` is never an output: Mach4's rules but for the comments and the missing codes.
     pub const GRBL: DialectRules = DialectRules {
         comments: CommentRule::FirstClose,
-        last_parameter: 9999,
-        named_predefined_parameters: false,
         rotation_and_scale_codes: false,
         local_shift_code: false,
         missing_code_note:
             "codes Grbl does not have (error:20 on the firmware); M282 applies the alignment in the sender",
-        rotated_systems: false,
-        polar_words: false,
-        program_end_required: false,
-        percent_inside_refused: false,
-        g92_zeroes_unnamed_axes: false,
-        g52_shares_g92_offset: false,
-        carries_current_point: false,
-        origin_reloads_on_system_change: false,
-        home_axes_in_current_system: false,
-        feed_mode_always_zeroes_feed: false,
-        lone_a_selects_output: false,
-        tool_xy_offset_added: false,
-        tool_change_applies: OffsetParts::Xy,
-        tool_length_applies: OffsetParts::Length,
-        table_write_applies: OffsetParts::Xy,
+        ..DialectRules::MACH4
     };
 
     /// The tool offset the placement subtracts from a work point (X, Y) and adds (Z), from the
