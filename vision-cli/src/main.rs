@@ -5,6 +5,7 @@
 
 mod emulate;
 mod fit;
+mod hooked;
 mod image_size;
 mod locate;
 mod panel;

@@ -7,15 +7,15 @@
 use std::net::SocketAddr;
 use std::path::Path;
 use std::sync::{Arc, Mutex, PoisonError};
-use std::time::Duration;
 
-use vision_core::{CameraDriver, Capabilities, DriverError, ImageRequest, Params, Reading, Telemetry};
+use vision_core::{CameraDriver, DriverError, Params, Reading, Telemetry};
 use vision_driver_camera::Frame;
 use vision_host::Record;
 use vision_panel::{Fit, Mark, Panel, PanelHandle, View};
 
 use super::report::{step, Step};
 use super::{pictures, CameraWrap, RunArgs};
+use crate::hooked::Hooked;
 use crate::picture::svg;
 use crate::Failure;
 
@@ -74,7 +74,10 @@ impl RunPanel {
     /// The wrapper that makes each camera driver the run builds publish its triggers.
     pub(crate) fn wrap(&self) -> CameraWrap {
         let shared = self.shared.clone();
-        Box::new(move |inner| Box::new(Published { inner, shared: shared.clone() }))
+        Box::new(move |inner| {
+            let shared = shared.clone();
+            Box::new(Hooked::after(inner, Box::new(move |driver, result| publish(&shared, driver, result))))
+        })
     }
 
     /// Names the camera on the page (the report's description of it).
@@ -179,93 +182,32 @@ fn picture(name: &str, path: &Path, records: &[Record], world_unit: &str) -> Opt
     })
 }
 
-/// A camera driver whose every trigger is published.
-struct Published {
-    inner: Box<dyn CameraDriver>,
-    shared: Shared,
-}
-
-impl Published {
-    /// The capture `result` as the page shows it: the frame the driver searched (none for a
-    /// camera that sends only positions: then the reading alone) and the mark, or why none.
-    fn publish(&self, result: &Result<Reading, DriverError>) {
-        let frame = self.inner.last_frame().and_then(|f| f.downcast_ref::<Frame>()).map(|f| Arc::new(f.clone()));
-        let miss = self.inner.miss_reason();
-        let spec = self.inner.mark_spec();
-        self.shared.update(|view| {
-            view.offset_px = None;
-            view.mark = None;
-            view.why_ng = None;
-            match result {
-                Ok(r) if r.found() => {
-                    // The driver's native pixels (corner origin) → locate's pixel centres.
-                    view.mark = Some(Mark { x: r.x_px - 0.5, y: r.y_px - 0.5, diameter: r.width_px, score: r.score });
-                    view.offset_px = frame
-                        .as_ref()
-                        .map(|f| (r.x_px - f64::from(f.width()) / 2.0, r.y_px - f64::from(f.height()) / 2.0));
-                }
-                Ok(_) => view.why_ng = Some(miss.unwrap_or_else(|| "no mark".to_string())),
-                Err(e) => view.why_ng = Some(format!("the camera: {e}")),
+/// The capture `result` as the page shows it: the frame the driver searched (none for a
+/// camera that sends only positions: then the reading alone) and the mark, or why none.
+fn publish(shared: &Shared, driver: &dyn CameraDriver, result: &Result<Reading, DriverError>) {
+    let frame = driver.last_frame().and_then(|f| f.downcast_ref::<Frame>()).map(|f| Arc::new(f.clone()));
+    let miss = driver.miss_reason();
+    let spec = driver.mark_spec();
+    shared.update(|view| {
+        view.offset_px = None;
+        view.mark = None;
+        view.why_ng = None;
+        match result {
+            Ok(r) if r.found() => {
+                // The driver's native pixels (corner origin) → locate's pixel centres.
+                view.mark = Some(Mark { x: r.x_px - 0.5, y: r.y_px - 0.5, diameter: r.width_px, score: r.score });
+                view.offset_px =
+                    frame.as_ref().map(|f| (r.x_px - f64::from(f.width()) / 2.0, r.y_px - f64::from(f.height()) / 2.0));
             }
-            view.frame = frame;
-            view.offset_machine = None;
-            view.spec = None;
-            view.search_radius_px = None;
-            if let Some(spec) = spec {
-                view.why_ng = view.why_ng.take().map(|w| format!("{w} (searched for: {spec})"));
-            }
-        });
-    }
-}
-
-impl CameraDriver for Published {
-    fn name(&self) -> &str {
-        self.inner.name()
-    }
-
-    fn capabilities(&self) -> Capabilities {
-        self.inner.capabilities()
-    }
-
-    fn trigger(&mut self) -> Result<Reading, DriverError> {
-        let result = self.inner.trigger();
-        self.publish(&result);
-        result
-    }
-
-    fn select_job(&mut self, job: u32) -> Result<(), DriverError> {
-        self.inner.select_job(job)
-    }
-
-    fn test_connection(&mut self) -> Result<String, DriverError> {
-        self.inner.test_connection()
-    }
-
-    fn reading_warning(&self, reading: &Reading) -> Option<String> {
-        self.inner.reading_warning(reading)
-    }
-
-    fn miss_reason(&self) -> Option<String> {
-        self.inner.miss_reason()
-    }
-
-    fn grab_image(&mut self, request: &ImageRequest<'_>) -> Result<std::path::PathBuf, DriverError> {
-        self.inner.grab_image(request)
-    }
-
-    fn mark_spec(&self) -> Option<String> {
-        self.inner.mark_spec()
-    }
-
-    fn frame_size(&mut self) -> Option<(u32, u32)> {
-        self.inner.frame_size()
-    }
-
-    fn timeout(&self) -> Duration {
-        self.inner.timeout()
-    }
-
-    fn last_frame(&self) -> Option<&dyn std::any::Any> {
-        self.inner.last_frame()
-    }
+            Ok(_) => view.why_ng = Some(miss.unwrap_or_else(|| "no mark".to_string())),
+            Err(e) => view.why_ng = Some(format!("the camera: {e}")),
+        }
+        view.frame = frame;
+        view.offset_machine = None;
+        view.spec = None;
+        view.search_radius_px = None;
+        if let Some(spec) = spec {
+            view.why_ng = view.why_ng.take().map(|w| format!("{w} (searched for: {spec})"));
+        }
+    });
 }

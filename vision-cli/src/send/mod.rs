@@ -10,7 +10,6 @@
 mod interrupt;
 mod link;
 mod mirror;
-mod settle;
 
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
@@ -146,8 +145,10 @@ pub(crate) fn run(args: &SendArgs) -> Result<String, Failure> {
     let progress = Progress::new(args.quiet);
     let shared = Shared(Arc::new(Mutex::new(None)));
     let wrap_link = shared.clone();
-    let wrap: crate::run::CameraWrap =
-        Box::new(move |driver| Box::new(settle::Settled::new(driver, wrap_link.clone())));
+    let wrap: crate::run::CameraWrap = Box::new(move |driver| {
+        let link = wrap_link.clone();
+        Box::new(crate::hooked::Hooked::before(driver, Box::new(move || link.before_trigger())))
+    });
     let mut session = Runner::new(&run_args, progress, Some(wrap))?;
     let options = SenderOptions { baud: Some(args.baud), ..SenderOptions::default() };
     let sender = Sender::connect(&args.port, &options).map_err(|e| Failure::Input(e.to_string()))?;
