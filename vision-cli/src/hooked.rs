@@ -127,7 +127,22 @@ mod tests {
         fn timeout(&self) -> Duration {
             Duration::from_millis(1234)
         }
+        fn reading_warning(&self, _reading: &Reading) -> Option<String> {
+            Some("two marks".into())
+        }
+        fn grab_image(&mut self, request: &ImageRequest<'_>) -> Result<PathBuf, DriverError> {
+            Ok(request.dir.join("kept.png"))
+        }
+        fn frame_size(&mut self) -> Option<(u32, u32)> {
+            Some((640, 480))
+        }
+        fn last_frame(&self) -> Option<&dyn std::any::Any> {
+            Some(&FRAME)
+        }
     }
+
+    /// What [`Fixed::last_frame`] hands over.
+    static FRAME: u32 = 42;
 
     #[test]
     fn a_refusing_before_stops_the_trigger_and_says_why() {
@@ -156,7 +171,11 @@ mod tests {
         assert_eq!(camera.miss_reason().as_deref(), Some("none"));
         assert_eq!(camera.mark_spec().as_deref(), Some("dot"));
         assert_eq!(camera.timeout(), Duration::from_millis(1234));
-        assert!(camera.last_frame().is_none() && camera.frame_size().is_none());
-        assert!(camera.reading_warning(&Reading::position(0.0, 0.0)).is_none());
+        assert_eq!(camera.last_frame().and_then(|f| f.downcast_ref::<u32>()), Some(&42));
+        assert_eq!(camera.frame_size(), Some((640, 480)));
+        let request =
+            ImageRequest { dir: std::path::Path::new("/images"), since: std::time::SystemTime::UNIX_EPOCH, stamp: "x" };
+        assert_eq!(camera.grab_image(&request).expect("kept"), PathBuf::from("/images/kept.png"));
+        assert_eq!(camera.reading_warning(&Reading::position(0.0, 0.0)).as_deref(), Some("two marks"));
     }
 }
