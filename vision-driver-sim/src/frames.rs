@@ -214,19 +214,8 @@ mod tests {
         let truth = frame.marks[0];
         assert!((truth - Point2::new(reading.x_px, reading.y_px)).norm() < 1e-9, "{truth} vs {reading:?}");
         assert!((frame.diameter_px - reading.width_px).abs() < 1e-9);
-        // The drawn disc's dark-pixel centroid sits at the truth − ½ (pixel-centre coordinates).
-        let (w, px) = (frame.image.width(), frame.gray8());
-        let (mut sx, mut sy, mut n) = (0.0, 0.0, 0.0);
-        for (i, &v) in px.iter().enumerate() {
-            let dark = (255.0 - f64::from(v)).max(0.0) - (255.0 - 0.85 * 0.9 * 255.0);
-            if dark > 1.0 {
-                let (x, y) = ((i % w) as f64, (i / w) as f64);
-                sx += dark * x;
-                sy += dark * y;
-                n += dark;
-            }
-        }
-        let centroid = Point2::new(sx / n + 0.5, sy / n + 0.5);
+        // The drawn disc's dark-pixel centroid sits at the truth (native pixels).
+        let centroid = centroid(&frame);
         assert!((centroid - truth).norm() < 0.05, "{centroid} vs {truth}");
         assert!((frame.blur_px - 0.0).abs() < 1e-12);
     }
