@@ -29,3 +29,12 @@ pub(crate) fn bounded(args: &[&str], megabytes: u64, seconds: u64) -> Option<Out
     let _ = child.wait();
     None
 }
+
+/// A fresh scratch folder `mach-vision-MODULE-NAME-PID` under the system's temp folder: the
+/// test module's, for this test process.
+pub(crate) fn scratch(module: &str, name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("mach-vision-{module}-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("scratch dir");
+    d
+}

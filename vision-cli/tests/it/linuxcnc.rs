@@ -11,10 +11,7 @@ use serde_json::Value;
 
 /// A scratch folder of this test process.
 fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mach-vision-linuxcnc-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("scratch dir");
-    d
+    crate::common::scratch("linuxcnc", name)
 }
 
 fn example(name: &str) -> PathBuf {

@@ -16,10 +16,7 @@ fn example(name: &str) -> PathBuf {
 
 /// A scratch directory for this test process.
 fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mach-vision-run-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("scratch dir");
-    d
+    crate::common::scratch("run", name)
 }
 
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {

@@ -23,10 +23,7 @@ fn example(name: &str) -> PathBuf {
 
 /// A scratch folder of this test process.
 fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mach-vision-send-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("scratch dir");
-    d
+    crate::common::scratch("send", name)
 }
 
 /// The built-in world's machine as a Grbl controller (what `emulate grbl` serves): G54 and the

@@ -8,10 +8,7 @@ use vision_core::sheets::cal_sheet;
 use vision_locate::{locate, GrayImage, Located, MarkKind, MarkSpec, Pixels, Polarity};
 
 fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mach-vision-sheet-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("scratch dir");
-    d
+    crate::common::scratch("sheet", name)
 }
 
 fn sheet(args: &[&str]) -> std::process::Output {

@@ -15,10 +15,7 @@ fn example(name: &str) -> PathBuf {
 }
 
 fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mach-vision-trust-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("scratch dir");
-    d
+    crate::common::scratch("trust", name)
 }
 
 fn run(args: &[&str], programs: &[&Path]) -> Output {
