@@ -60,8 +60,9 @@ pub struct IntegratorsGuide;
 /// M283's modes and reports (the routine is in `module/m283/`), at the path they had.
 pub mod calibrate {
     pub use crate::module::m283::{
-        detect_remap, AxisReport, CalReport, Calibrate, CentreReport, DotVerify, KChange, QuickReport, SheetReport,
-        WalkTarget, BUMP_IN, LIFT_GRID, MAX_SHEET_SCALE_DEV, MIN_BUMP_PX, PROBE_FOV_FRACTION, QUICK_SCALE_TOLERANCE,
+        detect_remap, AxisReport, CalReport, Calibrate, CentreReport, DotVerify, KChange, LensReport, QuickReport,
+        SheetReport, WalkTarget, BUMP_IN, LENS_GRID_REACH, LIFT_GRID, MAX_SHEET_SCALE_DEV, MIN_BUMP_PX,
+        PROBE_FOV_FRACTION, QUICK_SCALE_TOLERANCE,
     };
 }
 pub mod command;
@@ -80,7 +81,8 @@ pub mod sheets;
 pub mod text;
 
 pub use calibrate::{
-    AxisReport, CalReport, Calibrate, CentreReport, DotVerify, KChange, QuickReport, SheetReport, WalkTarget,
+    AxisReport, CalReport, Calibrate, CentreReport, DotVerify, KChange, LensReport, QuickReport, SheetReport,
+    WalkTarget,
 };
 pub use command::MachineCommand;
 pub use controller::{Controller, CONTROLLERS};

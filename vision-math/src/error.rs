@@ -126,4 +126,15 @@ pub enum MathError {
         /// Resolution in Y, pixels.
         y: f64,
     },
+    /// The lens distortion folds the image (or cannot be undone) within the camera's field.
+    #[error(
+        "the lens distortion cannot be undone at centred pixel ({x:.0}, {y:.0}): it folds the image there; \
+         check VisionLensK1/K2/P1/P2 and VisionLensFocalPx, or re-run M283 C"
+    )]
+    LensFolds {
+        /// Centred pixel x where it fails, pixels.
+        x: f64,
+        /// Centred pixel y, pixels.
+        y: f64,
+    },
 }

@@ -5,6 +5,7 @@
 //! * [`fit`]: closed-form least-squares fits from commanded to observed points — rigid,
 //!   similarity, rectangle (the true 5-parameter minimum) and affine — and the 2×2 solve
 //!   calibration needs.
+//! * [`lens`]: lens distortion (Brown–Conrady) about the optical centre, and its inverse.
 //! * [`chain`]: the `G51 → G68 → G52` modal chain M282 emits, its exact `apply`, and the fixed
 //!   decimals its text is written with (`vision-mcode` writes the text).
 //! * [`linuxcnc`]: the same alignment as LinuxCNC executes it (a G5x rotation and a `G52`
@@ -33,6 +34,8 @@ pub mod centre;
 pub mod chain;
 mod error;
 pub mod fit;
+pub mod lens;
+pub mod lens_fit;
 pub mod linuxcnc;
 #[cfg(test)]
 mod normal;
@@ -48,6 +51,8 @@ pub use fit::{
     fit_affine, fit_piece, fit_rectangle, fit_rigid, fit_similarity, solve_linear, Fit, LinearFit, Model, PartialFit,
     Piece, Transform,
 };
+pub use lens::Lens;
+pub use lens_fit::{fit_lens, LensFit, LensFitStart, WalkReading};
 pub use nalgebra::{Matrix2, Point2, UnitComplex, Vector2};
 pub use pixel::{PixelChain, Remap};
 pub use scale::{image_turn, ImageTurn, ScaleEstimate, ScaleEvidence};

@@ -6,12 +6,15 @@
 //! * `R`: the discrete axis remap ([`Remap`]): swap, then invert X, then invert Y.
 //! * `K`: 2×2, machine units per pixel (inch or mm, whichever the calibration used).
 //!
+//! With a lens ([`PixelChain::with_lens`]) the centred pixel is undistorted before `R` and `K`:
+//! `O = C + K · R · D⁻¹(p − res/2 − PxCenterOffset)` ([`crate::lens`]).
+//!
 //! [`PixelChain`] folds `K · R` into one matrix when it is built, so a conversion costs four
 //! multiplications and six additions.
 
 use nalgebra::{Matrix2, Point2, Vector2};
 
-use crate::MathError;
+use crate::{Lens, MathError};
 
 /// The discrete axis remap applied after the centre shift (SPEC §2 step 3).
 ///
@@ -101,6 +104,8 @@ pub struct PixelChain {
     kr: Matrix2<f64>,
     /// `(K · R)⁻¹`.
     kr_inv: Matrix2<f64>,
+    /// The lens distortion undone before `K · R`; `None`: a linear chain.
+    lens: Option<Lens>,
 }
 
 /// Relative determinant below which K counts as singular (`|det K| < 1e-12 · ‖K‖²`).
@@ -143,7 +148,26 @@ impl PixelChain {
         let kr = k * remap.matrix();
         let kr_inv = kr.try_inverse().ok_or(MathError::SingularK)?;
         let origin = resolution * 0.5 + center_offset;
-        Ok(PixelChain { k, remap, resolution, center_offset, origin, kr, kr_inv })
+        Ok(PixelChain { k, remap, resolution, center_offset, origin, kr, kr_inv, lens: None })
+    }
+
+    /// The chain with `lens` undone before K (a lens that moves no pixel leaves it linear).
+    ///
+    /// # Errors
+    /// [`MathError::LensFolds`] when the lens cannot be undone over the image (with 10 %
+    /// margin): it folds there.
+    pub fn with_lens(self, lens: Lens) -> Result<Self, MathError> {
+        if lens.is_identity() {
+            return Ok(PixelChain { lens: None, ..self });
+        }
+        lens.check_field(-self.origin, self.resolution - self.origin)?;
+        Ok(PixelChain { lens: Some(lens), ..self })
+    }
+
+    /// The lens undone before K, if any.
+    #[must_use]
+    pub fn lens(&self) -> Option<&Lens> {
+        self.lens.as_ref()
     }
 
     /// K, machine units per pixel.
@@ -176,11 +200,24 @@ impl PixelChain {
         native.coords - self.origin
     }
 
-    /// Steps 2–4: native pixel → offset `d = K·R·c` from the camera position, machine units.
+    /// Step 2 with the lens undone: native pixel → the ideal (undistorted) offset from the
+    /// optical centre, pixels, native axes; [`PixelChain::centred`] without a lens.
+    #[inline]
+    #[must_use]
+    pub fn undistorted(&self, native: Point2<f64>) -> Vector2<f64> {
+        let c = native.coords - self.origin;
+        match &self.lens {
+            Some(lens) => lens.undistort(c),
+            None => c,
+        }
+    }
+
+    /// Steps 2–4: native pixel → offset `d = K·R·D⁻¹(c)` from the camera position, machine
+    /// units.
     #[inline]
     #[must_use]
     pub fn delta(&self, native: Point2<f64>) -> Vector2<f64> {
-        self.kr * (native.coords - self.origin)
+        self.kr * self.undistorted(native)
     }
 
     /// Step 5: the observed point `O = C + d`, with `commanded` the camera position `C` and the
@@ -196,7 +233,23 @@ impl PixelChain {
     #[inline]
     #[must_use]
     pub fn native_pixels(&self, delta: Vector2<f64>) -> Point2<f64> {
-        Point2::from(self.kr_inv * delta + self.origin)
+        let ideal = self.kr_inv * delta;
+        let c = match &self.lens {
+            Some(lens) => lens.distort(ideal),
+            None => ideal,
+        };
+        Point2::from(c + self.origin)
+    }
+
+    /// How [`PixelChain::delta`] at `native` moves per unit of each lens coefficient
+    /// `[k1, k2, p1, p2]`, machine units (zero without a lens): what an uncertain lens costs a
+    /// reading there.
+    #[must_use]
+    pub fn lens_sensitivity(&self, native: Point2<f64>) -> [Vector2<f64>; 4] {
+        match &self.lens {
+            Some(lens) => lens.sensitivity(native.coords - self.origin).map(|s| self.kr * s),
+            None => [Vector2::zeros(); 4],
+        }
     }
 
     /// Mark width and height in machine units from its size in pixels:
@@ -292,6 +345,32 @@ mod tests {
             PixelChain::new(Matrix2::identity(), Remap::IDENTITY, res, Vector2::new(f64::INFINITY, 0.0)),
             Err(MathError::NonFinite { .. })
         ));
+    }
+
+    #[test]
+    fn a_lens_is_undone_before_k_and_redone_by_the_inverse() {
+        let k = Matrix2::new(0.002, 0.0, 0.0, -0.002);
+        let linear =
+            PixelChain::new(k, Remap::IDENTITY, Vector2::new(1776.0, 1776.0), Vector2::new(3.0, -2.0)).expect("valid");
+        let lens = Lens::new([-0.1, 0.0, 0.002, -0.001], 3000.0).expect("lens");
+        let chain = linear.with_lens(lens).expect("does not fold");
+        assert_eq!(chain.lens(), Some(&lens));
+        let p = Point2::new(1500.0, 200.0);
+        let ideal = lens.undistort(p.coords - Vector2::new(891.0, 886.0));
+        assert_eq!(chain.undistorted(p), ideal);
+        assert_eq!(chain.delta(p), k * ideal);
+        assert!((chain.native_pixels(chain.delta(p)) - p).norm() < 1e-6);
+        // The optical centre does not move; a linear chain is unchanged.
+        assert_eq!(chain.delta(Point2::new(891.0, 886.0)), Vector2::zeros());
+        assert_eq!(linear.undistorted(p), linear.centred(p));
+        assert_eq!(linear.lens_sensitivity(p), [Vector2::zeros(); 4]);
+        let s = chain.lens_sensitivity(p);
+        assert!((s[0] - k * lens.sensitivity(p.coords - Vector2::new(891.0, 886.0))[0]).norm() < 1e-15);
+        // A lens that moves nothing stays out of the chain; one that folds is refused.
+        let none = Lens::new([0.0; 4], 3000.0).expect("lens");
+        assert_eq!(linear.with_lens(none).expect("identity").lens(), None);
+        let folding = Lens::new([-8.0, 0.0, 0.0, 0.0], 3000.0).expect("lens");
+        assert!(matches!(linear.with_lens(folding), Err(MathError::LensFolds { .. })));
     }
 
     fn well_conditioned_k() -> impl Strategy<Value = Matrix2<f64>> {

@@ -490,8 +490,9 @@ fn run_report_writes_a_picture_per_fit_and_calibration() {
         .filter(|n| n.attribute("class") == Some("residual"))
         .map(|a| (num(a, "x2") - num(a, "x1")).hypot(num(a, "y2") - num(a, "y1")))
         .fold(0.0, f64::max);
-    // The drawing: the 6 in part in 560 / 1.3 px.
-    assert!(longest > 430.0 / 16.0 && longest < 430.0 / 4.0, "the largest arrow is {longest} px");
+    // The drawing: the 6 in part in 560 / 1.3 px. The factor is set by the largest error
+    // length (the band's or a residual's): the residuals, noise, may be a few times shorter.
+    assert!(longest > 430.0 / 64.0 && longest < 430.0 / 4.0, "the largest arrow is {longest} px");
     // Standard error names the files written.
     let stderr = String::from_utf8_lossy(&out.stderr);
     for name in &names {
@@ -563,9 +564,10 @@ fn on_a_terminal_progress_shows_each_step_and_the_walk_in_order() {
     let lines: Vec<String> = stderr(&shown).lines().map(|l| l.trim().to_string()).collect();
     let mut want = vec![format!("== {}: running", cal.display())];
     want.extend((1..=5).map(|d| format!("M283: dot {d} of 5")));
+    want.push("M283: lens grid over the last dot (the lens distortion)".into());
     want.push("M283: lift over the last dot (the optical centre)".into());
     want.extend((1..=5).map(|d| format!("M283: verify dot {d} of 5")));
-    want.push("line   12  M283  calibration sheet 1: 83 triggers, 1970-01-01T00:00:00+00:00".into());
+    want.push("line   12  M283  calibration sheet 1: 108 triggers, 1970-01-01T00:00:00+00:00".into());
     want.push(format!("== {}: running", fit.display()));
     want.push("line   11  M280  begin a rectangle run".into());
     assert_eq!(lines[..want.len()], want[..], "{lines:#?}");

@@ -107,9 +107,13 @@ pub(crate) fn pixel_chain(params: &Params, unit: LengthUnit) -> Result<PixelChai
     chain_with(params, k_in(params, unit), params.remap())
 }
 
-/// A pixel chain with an explicit K (units per pixel) and remap.
+/// A pixel chain with an explicit K (units per pixel) and remap, and the profile's lens.
 pub(crate) fn chain_with(params: &Params, k: Matrix2<f64>, remap: Remap) -> Result<PixelChain, VisionError> {
-    Ok(PixelChain::new(k, remap, resolution(params), center_offset(params))?)
+    let chain = PixelChain::new(k, remap, resolution(params), center_offset(params))?;
+    Ok(match params.calibration.lens() {
+        Some(lens) => chain.with_lens(lens)?,
+        None => chain,
+    })
 }
 
 /// Mark size along the camera's native axes: `width_px · ‖(K·R) column 1‖`,

@@ -28,6 +28,8 @@ pub enum WalkProgress {
         /// The sheet's dots.
         dots: usize,
     },
+    /// The lens grid over the last dot (the lens distortion) starts.
+    Lens,
     /// The calibration lift over the last dot (the optical centre) starts.
     Lift,
     /// The verify pass moves to dot `dot` (1-based) of `dots`.
@@ -45,6 +47,7 @@ impl std::fmt::Display for WalkProgress {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             WalkProgress::SheetDot { dot, dots } => write!(f, "M283: dot {dot} of {dots}"),
+            WalkProgress::Lens => f.write_str("M283: lens grid over the last dot (the lens distortion)"),
             WalkProgress::Lift => f.write_str("M283: lift over the last dot (the optical centre)"),
             WalkProgress::Verify { dot, dots } => write!(f, "M283: verify dot {dot} of {dots}"),
         }

@@ -315,7 +315,8 @@ impl VisionModule {
         self.run.scale = self.run.scale.merged(mark_scale);
         if in_run {
             let mark_size = (width.abs() + height.abs()) / 2.0;
-            self.run.dots.push(Dot { commanded, observed, unit, reach: observed - camera, mark_size });
+            let lens_along = chain.lens_sensitivity(native);
+            self.run.dots.push(Dot { commanded, observed, unit, reach: observed - camera, mark_size, lens_along });
             self.publish_run();
         }
         let centred = chain.centred(native);

@@ -201,7 +201,19 @@ impl VisionModule {
         let full = fit.transform.chain().ok_or(VisionError::Math(vision_math::MathError::DegenerateObserved))?;
         controller.check_fit(&full, self.params.fit_max_scale_dev_pct())?;
         self.check_gates(&fit, &commanded, &observed, unit)?;
-        let predicted = predict(&fit, &commanded, camera_noise, &reach, [scale_sigma, shift_sigma])?;
+        // The lens's uncertainty: one shared error per coefficient, moving each capture by what
+        // that coefficient's 1σ moves the pixel it was read at.
+        let lens_sigma = self.params.calibration.lens_sigma();
+        let lens_along: Vec<[Vector2<f64>; 4]> = self
+            .run
+            .dots
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| dropped.is_none_or(|d| d.mark != i + 1))
+            .map(|(_, d)| d.lens_along_in(unit))
+            .collect();
+        let lens = Lens { along: &lens_along, sigma: lens_sigma };
+        let predicted = predict(&fit, &commanded, camera_noise, &reach, [scale_sigma, shift_sigma], &lens)?;
         let chain = match pieces {
             Pieces::All => {
                 fit.transform.chain().ok_or(VisionError::Math(vision_math::MathError::DegenerateObserved))?
@@ -372,12 +384,20 @@ fn axis_scale_miss(fit: &Fit, commanded: &[Point2<f64>], observed: &[Point2<f64>
 /// noise and the residuals' own σ, and two errors the marks share: a scale error of 1σ
 /// `scale_sigma` acting on each mark's `reach` (its offset from the camera), and a shift of 1σ
 /// `shift_sigma` (report unit) per axis.
+/// The lens's share of the prediction: per kept capture, what each coefficient moves it
+/// (program units per unit coefficient), and the coefficients' 1σ.
+struct Lens<'a> {
+    along: &'a [[Vector2<f64>; 4]],
+    sigma: [f64; 4],
+}
+
 fn predict(
     fit: &Fit,
     commanded: &[Point2<f64>],
     camera_noise: f64,
     reach: &[Vector2<f64>],
     [scale_sigma, shift_sigma]: [f64; 2],
+    lens: &Lens<'_>,
 ) -> Result<PredictedError, VisionError> {
     let model = fit.transform.model;
     let noise = residual_sigma(model, fit.len, fit.rms).map_or(camera_noise, |s| s.max(camera_noise));
@@ -387,11 +407,17 @@ fn predict(
     );
     let corners = [lo, Point2::new(hi.x, lo.y), hi, Point2::new(lo.x, hi.y)];
     let (x, y) = (vec![Vector2::x(); commanded.len()], vec![Vector2::y(); commanded.len()]);
-    let shared = [
+    let per_coefficient: Vec<Vec<Vector2<f64>>> = (0..4).map(|c| lens.along.iter().map(|a| a[c]).collect()).collect();
+    let mut shared = vec![
         Shared { along: reach, sigma: scale_sigma },
         Shared { along: &x, sigma: shift_sigma },
         Shared { along: &y, sigma: shift_sigma },
     ];
+    for (along, sigma) in per_coefficient.iter().zip(lens.sigma) {
+        if sigma > 0.0 && along.len() == commanded.len() {
+            shared.push(Shared { along, sigma });
+        }
+    }
     let p = fit.transform.predict_shared(commanded, noise, &corners, &shared)?;
     Ok(PredictedError { noise, camera_noise, sigma: p.sigma, bound99: p.bound99 })
 }

@@ -76,6 +76,9 @@ pub struct Dot {
     pub reach: Vector2<f64>,
     /// The mark's measured diameter, the mean of its width and height, `unit`.
     pub mark_size: f64,
+    /// How `observed` moves per unit of each lens coefficient `[k1, k2, p1, p2]` at the pixel
+    /// it was read at (`unit`; zero without a lens): what the lens's uncertainty costs it.
+    pub lens_along: [Vector2<f64>; 4],
 }
 
 impl Dot {
@@ -90,6 +93,13 @@ impl Dot {
     #[must_use]
     pub fn reach_in(&self, to: LengthUnit) -> Vector2<f64> {
         self.reach * self.unit.factor_to(to)
+    }
+
+    /// [`Dot::lens_along`] converted to `to`.
+    #[must_use]
+    pub fn lens_along_in(&self, to: LengthUnit) -> [Vector2<f64>; 4] {
+        let f = self.unit.factor_to(to);
+        self.lens_along.map(|v| v * f)
     }
 }
 

@@ -3,7 +3,10 @@
 
 use vision_math::{LengthUnit, Matrix2, Remap, Vector2};
 
-use super::checks::{Check, DRIVER_RECORD, FINITE, NOISE_PX_WIDE, PIXEL_OFFSET, RESOLUTION_RECORD, SHORT_TEXT, TOOL};
+use super::checks::{
+    Check, DRIVER_RECORD, FINITE, LENS_RADIAL, LENS_TANGENTIAL, NOISE_PX_WIDE, NON_NEGATIVE, PIXEL_OFFSET,
+    RESOLUTION_RECORD, SHORT_TEXT, TOOL,
+};
 use super::ParamValue;
 use crate::error::VisionError;
 
@@ -45,6 +48,28 @@ profile_part! {
         /// measured (the larger axis's), pixels; 0 = not measured (the offset was set by hand, or
         /// never measured), and M282 assumes `VisionCenterUncertaintyPx` instead.
         (Calibration, "px", "M283 C/P with VisionCalibrationLift > 0, or the operator") px_center_sigma_px: f64 => f64 = 0.0, "VisionPxCenterSigmaPx", NOISE_PX_WIDE;
+        /// `VisionLensK1`: the lens's first radial distortion coefficient (OpenCV's `k1`, on
+        /// coordinates normalised by `VisionLensFocalPx`; − barrel, + pincushion). The pixel chain
+        /// undoes the lens about the optical centre before K.
+        (Calibration, "", "M283 C/P") lens_k1: f64 => f64 = 0.0, "VisionLensK1", LENS_RADIAL;
+        /// `VisionLensK2`: the second radial coefficient (OpenCV's `k2`).
+        (Calibration, "", "M283 C/P") lens_k2: f64 => f64 = 0.0, "VisionLensK2", LENS_RADIAL;
+        /// `VisionLensP1`: the first tangential (decentring) coefficient (OpenCV's `p1`).
+        (Calibration, "", "M283 C/P") lens_p1: f64 => f64 = 0.0, "VisionLensP1", LENS_TANGENTIAL;
+        /// `VisionLensP2`: the second tangential coefficient (OpenCV's `p2`).
+        (Calibration, "", "M283 C/P") lens_p2: f64 => f64 = 0.0, "VisionLensP2", LENS_TANGENTIAL;
+        /// `VisionLensFocalPx`: the focal length the lens coefficients are normalised by, pixels
+        /// (working distance / length per pixel); 0 = no lens model (a linear chain).
+        (Calibration, "px", "M283 C/P") lens_focal_px: f64 => f64 = 0.0, "VisionLensFocalPx", NON_NEGATIVE;
+        /// `VisionLensK1Sigma`: the 1σ M283 measured `VisionLensK1` to (dimensionless); M282
+        /// widens its prediction by what it moves each capture. Likewise the three below.
+        (Calibration, "", "M283 C/P") lens_k1_sigma: f64 => f64 = 0.0, "VisionLensK1Sigma", NON_NEGATIVE;
+        /// `VisionLensK2Sigma`: the 1σ of `VisionLensK2`.
+        (Calibration, "", "M283 C/P") lens_k2_sigma: f64 => f64 = 0.0, "VisionLensK2Sigma", NON_NEGATIVE;
+        /// `VisionLensP1Sigma`: the 1σ of `VisionLensP1`.
+        (Calibration, "", "M283 C/P") lens_p1_sigma: f64 => f64 = 0.0, "VisionLensP1Sigma", NON_NEGATIVE;
+        /// `VisionLensP2Sigma`: the 1σ of `VisionLensP2`.
+        (Calibration, "", "M283 C/P") lens_p2_sigma: f64 => f64 = 0.0, "VisionLensP2Sigma", NON_NEGATIVE;
         /// `VisionCal_ResX`: the image width M283 calibrated at, pixels (0 = not recorded: a
         /// calibration made before the record existed). M280–M282 refuse while
         /// `VisionCameraResX` or the camera's frames differ.
@@ -183,6 +208,36 @@ impl Calibration {
         next.set_raw("VisionPxCenterOffsetX", &ParamValue::from(offset.x))?;
         next.set_raw("VisionPxCenterOffsetY", &ParamValue::from(offset.y))?;
         next.set_raw("VisionPxCenterSigmaPx", &ParamValue::from(sigma))?;
+        Ok(next)
+    }
+
+    /// The lens the pixel chain undoes, `None` without one (`VisionLensFocalPx` = 0).
+    #[must_use]
+    pub fn lens(&self) -> Option<vision_math::Lens> {
+        let k = [self.lens_k1, self.lens_k2, self.lens_p1, self.lens_p2];
+        vision_math::Lens::new(k, self.lens_focal_px).ok()
+    }
+
+    /// The 1σ of `[k1, k2, p1, p2]`.
+    #[must_use]
+    pub fn lens_sigma(&self) -> [f64; 4] {
+        [self.lens_k1_sigma, self.lens_k2_sigma, self.lens_p1_sigma, self.lens_p2_sigma]
+    }
+
+    /// This calibration with `lens` and the 1σ of its coefficients (`None`: no lens model).
+    ///
+    /// # Errors
+    /// [`VisionError::InvalidParam`] for a value out of its range; `self` is unchanged.
+    pub fn with_lens(&self, lens: Option<(vision_math::Lens, [f64; 4])>) -> Result<Calibration, VisionError> {
+        let mut next = self.clone();
+        let (k, focal, sigma) = lens.map_or(([0.0; 4], 0.0, [0.0; 4]), |(l, s)| (l.coefficients(), l.focal_px(), s));
+        let names = ["VisionLensK1", "VisionLensK2", "VisionLensP1", "VisionLensP2"];
+        let sigmas = ["VisionLensK1Sigma", "VisionLensK2Sigma", "VisionLensP1Sigma", "VisionLensP2Sigma"];
+        for i in 0..4 {
+            next.set_raw(names[i], &ParamValue::from(k[i]))?;
+            next.set_raw(sigmas[i], &ParamValue::from(sigma[i]))?;
+        }
+        next.set_raw("VisionLensFocalPx", &ParamValue::from(focal))?;
         Ok(next)
     }
 

@@ -117,6 +117,9 @@ pub(super) const PIXEL_OFFSET: Check<f64> =
 pub(super) const NOISE_PX: Check<f64> = Check::closed("between 0 and 10 pixels", 0.0, 10.0);
 pub(super) const NOISE_PX_WIDE: Check<f64> = Check::closed("between 0 and 1000 pixels", 0.0, 1000.0);
 pub(super) const LIFT_IN: Check<f64> = Check::closed("between 0 and 2 inches (0 = calibrate at one height)", 0.0, 2.0);
+pub(super) const LENS_RADIAL: Check<f64> = Check::closed("between -10 and 10", -10.0, 10.0);
+pub(super) const LENS_TANGENTIAL: Check<f64> = Check::closed("between -1 and 1", -1.0, 1.0);
+pub(super) const LENS_GRID: Check<i64> = Check::closed("0..15 positions per axis (0 = no lens grid)", 0, 15);
 pub(super) const PASSES: Check<i64> = Check::closed("0..10 passes (0 reads in one shot)", 0, 10);
 pub(super) const JOB: Check<i64> = Check::closed("a camera job 0..999 (0 = leave the camera's job)", 0, 999);
 pub(super) const RESOLUTION: Check<i64> = Check::closed("an image size of 2..100000 pixels", 2, 100_000);

@@ -1,7 +1,7 @@
 //! [`Config`]: the operator's settings.
 
 use super::checks::{
-    Check, DRIVER_NAME, JOB, LIFT_IN, NOISE_PX, NOISE_PX_WIDE, NON_NEGATIVE, PASSES, POUND_BASE, RESOLUTION,
+    Check, DRIVER_NAME, JOB, LENS_GRID, LIFT_IN, NOISE_PX, NOISE_PX_WIDE, NON_NEGATIVE, PASSES, POUND_BASE, RESOLUTION,
     SECONDS_60, TOOL,
 };
 
@@ -88,6 +88,13 @@ profile_part! {
         /// centre to ~0.7 px (without it a ±4 % height change cuts at up to 1.7× the floor); the
         /// camera rises, away from the part, and comes back before the verify walk.
         (Connection, "in", "operator") calibration_lift_in: f64 => f64 = 0.25, "VisionCalibrationLift", LIFT_IN;
+        /// `VisionCalibrationGrid`: positions per axis of the lens grid M283's sheet walk reads
+        /// the last dot from, putting it up to three quarters of the way to the image's edges,
+        /// where a lens's distortion shows (0 = no lens grid: the walk's probes alone cannot tell
+        /// the radial distortion from K, and M283 says so). Default 5: 25 readings measure a
+        /// k1 of −0.10 to about 3 % at 0.1 px; a camera that finds no mark out there skips
+        /// those positions.
+        (Connection, "", "operator") calibration_grid: i64 => i64 = 5, "VisionCalibrationGrid", LENS_GRID;
         /// `VisionWorkingDistance`: the lens-to-part distance at which K was calibrated, inches
         /// (25.4 mm per inch); it turns the measured relative change into a length in the
         /// reports (0 = report the percentage only). Default 6 in: the manual's "typical 6″

@@ -39,6 +39,8 @@ pub(super) struct Lifted {
     pub(super) report: CentreReport,
     /// Why a lift that was asked for did not measure the centre.
     pub(super) warning: Option<String>,
+    /// The lifted image scale over the calibration height's, when measured.
+    pub(super) ratio: Option<f64>,
 }
 
 /// The calibration lift (`docs/calibration-solve.md`): reads the mark of dot `dot` (its centre at
@@ -75,6 +77,7 @@ pub(super) fn lift_centre(
             note: Some(note.clone()),
         },
         warning: warn.then_some(note),
+        ratio: None,
     };
     if lift_in == 0.0 {
         return Ok(kept(false, "VisionCalibrationLift is 0: calibrated at one height".into(), false));
@@ -195,6 +198,7 @@ pub(super) fn lift_centre(
             note: None,
         },
         warning: None,
+        ratio: Some(fit.ratio),
     })
 }
 

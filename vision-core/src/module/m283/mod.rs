@@ -6,6 +6,7 @@
 //! tool offset, report) and [`VisionModule::m283`] applies it in one place, or nothing.
 
 mod axis;
+mod lens;
 mod lift;
 mod quick;
 mod report;
@@ -16,9 +17,10 @@ use vision_math::chain::fixed;
 use vision_math::{AlignmentChain, LengthUnit, Point2, Vector2};
 
 pub use axis::{detect_remap, BUMP_IN, MIN_BUMP_PX};
+pub use lens::LENS_GRID_REACH;
 pub use lift::LIFT_GRID;
 pub use quick::QUICK_SCALE_TOLERANCE;
-pub use report::{AxisReport, CalReport, CentreReport, DotVerify, KChange, QuickReport, SheetReport};
+pub use report::{AxisReport, CalReport, CentreReport, DotVerify, KChange, LensReport, QuickReport, SheetReport};
 pub use sheet::{MAX_SHEET_SCALE_DEV, PROBE_FOV_FRACTION};
 pub use walk::WalkTarget;
 pub(crate) use walk::{absolute_move, relative_move};
@@ -32,7 +34,7 @@ use crate::machine::{checked, Machine, MachineError};
 use crate::params::Params;
 use crate::sheets::{cal_sheet, known_sheets};
 use quick::quick;
-use report::Solution;
+use report::{LensUpdate, Solution};
 use sheet::sheet_walk;
 use walk::Walker;
 
@@ -371,6 +373,9 @@ impl VisionModule {
             self.params.calibration.solved(solution.k, solution.remap, machine.units()?, solution.report.date())?;
         if let Some((offset, sigma)) = solution.centre {
             calibration = calibration.with_centre(offset, sigma)?;
+        }
+        if let LensUpdate::Write(lens) = solution.lens {
+            calibration = calibration.with_lens(lens)?;
         }
         let restore = match solution.tool_offset {
             Some((tool, offset)) => {

@@ -5,7 +5,7 @@ use vision_math::{LengthUnit, Matrix2, Vector2, MM_PER_INCH};
 
 use super::axis::motion_pairs;
 use super::fail;
-use super::report::{k_change, resolution_warning, CalReport, QuickReport, Solution};
+use super::report::{k_change, resolution_warning, CalReport, LensUpdate, QuickReport, Solution};
 use super::walk::Walker;
 use crate::error::VisionError;
 use crate::module::capture::{chain_with, mark_size};
@@ -47,7 +47,7 @@ pub(super) fn quick(walker: &mut Walker<'_>, params: &Params, diameter: f64) -> 
         date: walker.machine.now().iso_local(),
         warning: resolution_warning(params, &walker.shots),
     };
-    Ok(Solution { k, remap, tool_offset: None, centre: None, report: CalReport::Quick(report) })
+    Ok(Solution { k, remap, tool_offset: None, centre: None, lens: LensUpdate::Keep, report: CalReport::Quick(report) })
 }
 
 /// How far (as a factor either way) the scale `Qd` implies may be from the scale the axis-detect

@@ -120,6 +120,8 @@ pub struct SheetReport {
     pub verify_max: f64,
     /// The optical centre: measured by the lift, or kept.
     pub centre: CentreReport,
+    /// The lens distortion measured with K.
+    pub lens: LensReport,
     /// The working-distance change the new K implies against the previous calibration's
     /// (`None`: there was none).
     pub k_change: Option<KChange>,
@@ -180,14 +182,81 @@ pub struct CentreReport {
     pub note: Option<String>,
 }
 
+/// The lens distortion the sheet walk measured with K (OpenCV's Brown–Conrady coefficients on
+/// coordinates normalised by `focal_px`), written to `VisionLensK1`..`P2`, their σ and
+/// `VisionLensFocalPx`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct LensReport {
+    /// Radial `k1` (− barrel, + pincushion).
+    pub k1: f64,
+    /// Radial `k2`.
+    pub k2: f64,
+    /// Tangential `p1`.
+    pub p1: f64,
+    /// Tangential `p2`.
+    pub p2: f64,
+    /// The 1σ of `[k1, k2, p1, p2]`.
+    pub sigma: [f64; 4],
+    /// Which of them the walk's readings determined; one that was not is kept near 0 with its
+    /// prior's σ (see `note`).
+    pub measured: [bool; 4],
+    /// The focal length the coefficients are normalised by, pixels.
+    pub focal_px: f64,
+    /// How far the lens moves the image's farthest corner, pixels.
+    pub corner_px: f64,
+    /// The farthest reading from the optical centre, pixels.
+    pub reach_px: f64,
+    /// RMS residual of the joint solve per pixel axis, pixels.
+    pub rms_px: f64,
+    /// Readings the solve used.
+    pub readings: usize,
+    /// Lens-grid positions where the camera found the mark, of `grid_asked`.
+    pub grid_found: usize,
+    /// Lens-grid positions read (`VisionCalibrationGrid`²).
+    pub grid_asked: usize,
+    /// What was not measured, or why there is no lens model, and what to do.
+    pub note: Option<String>,
+}
+
+impl LensReport {
+    /// No lens model: the chain stays linear, for `note`'s reason.
+    pub(super) fn none(focal_px: f64, grid: (usize, usize), readings: usize, note: String) -> LensReport {
+        LensReport {
+            k1: 0.0,
+            k2: 0.0,
+            p1: 0.0,
+            p2: 0.0,
+            sigma: [0.0; 4],
+            measured: [false; 4],
+            focal_px,
+            corner_px: 0.0,
+            reach_px: 0.0,
+            rms_px: 0.0,
+            readings,
+            grid_found: grid.0,
+            grid_asked: grid.1,
+            note: Some(note),
+        }
+    }
+}
+
 /// M283's report (JSON: the inner report with `"mode": "quick"` or `"sheet"`).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 #[serde(tag = "mode", rename_all = "lowercase")]
+#[expect(clippy::large_enum_variant, reason = "one report per calibration, moved once, never held in bulk")]
 pub enum CalReport {
     /// `Qd`.
     Quick(QuickReport),
     /// `Cn`.
     Sheet(SheetReport),
+}
+
+/// What a calibration does to the profile's lens.
+pub(crate) enum LensUpdate {
+    /// Leave it as it is.
+    Keep,
+    /// Write this one (`None`: no lens model).
+    Write(Option<(vision_math::Lens, [f64; 4])>),
 }
 
 /// What a successful calibration asks the module to write; nothing is written yet.
@@ -200,6 +269,9 @@ pub(crate) struct Solution {
     /// The measured `VisionPxCenterOffsetX/Y` (pixels) and its 1σ (pixels), or `None`: keep
     /// both as they are.
     pub(crate) centre: Option<(Vector2<f64>, f64)>,
+    /// The lens to write with its coefficients' 1σ (`None`: a linear chain); `Keep`: leave the
+    /// profile's (a quick calibration reads one position and cannot measure it).
+    pub(crate) lens: LensUpdate,
     pub(crate) report: CalReport,
 }
 

@@ -4,8 +4,11 @@ use vision_math::{fit_rectangle, Matrix2, PixelChain, Point2, Vector2};
 
 use super::axis::solve_k;
 use super::fail;
+use super::lens::{lens_grid, solve};
 use super::lift::lift_centre;
-use super::report::{k_change, resolution_warning, CalReport, DotVerify, SheetReport, Solution};
+use super::report::{
+    k_change, resolution_warning, CalReport, CentreReport, DotVerify, LensUpdate, SheetReport, Solution,
+};
 use super::walk::{Shot, Walker};
 use crate::controller::{program_to_machine, rotation};
 use crate::error::VisionError;
@@ -22,6 +25,10 @@ pub const MAX_SHEET_SCALE_DEV: f64 = 0.10;
 /// `M283 Cn`: walk, solve, verify (compensating for the offset not yet written); writes nothing.
 pub(super) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool: u32) -> Result<Solution, VisionError> {
     let sheet = cal_sheet(n).ok_or_else(|| VisionError::UnknownSheet { sheet: n, known: known_sheets() })?;
+    // The walk measures the lens afresh: until it has, its pixels go through a linear chain.
+    let mut linear = params.clone();
+    linear.calibration = linear.calibration.with_lens(None)?;
+    let params = &linear;
     let unit = walker.unit;
     let nominal = sheet.dots(unit);
     let offset_before = crate::controller::tool_offset(&*walker.machine, tool)?;
@@ -65,13 +72,21 @@ pub(super) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
     let (k, k_rms) = solve_k(&walker.shots, &pairs, remap)?;
     walker.known = Some((k, remap));
 
-    // 3b. The optical centre from the lift over the last dot; the offset below is solved at it.
+    // 3b. The lens grid and the lift over the last dot, then K, the lens and the optical
+    //     centre jointly from every reading; the offset below is solved at that centre.
+    let last = nominal.len() - 1;
+    walker.progress(WalkProgress::Lens);
+    let grid = lens_grid(walker, params, station, k * remap.matrix(), last)?;
     walker.progress(WalkProgress::Lift);
-    let lifted = lift_centre(walker, params, station, probe, nominal.len() - 1)?;
+    let lifted = lift_centre(walker, params, station, probe, last)?;
+    let joint = solve(walker, params, k, remap, &lifted, grid);
+    let k = joint.k;
+    walker.known = Some((k, remap));
     let mut solved = params.clone();
-    if let Some((offset, sigma)) = lifted.centre {
+    if let Some((offset, sigma)) = joint.centre {
         solved.calibration = solved.calibration.with_centre(offset, sigma)?;
     }
+    solved.calibration = solved.calibration.with_lens(joint.lens)?;
     let params = &solved;
     let chain: PixelChain = chain_with(params, k, remap)
         .map_err(|e| fail(format!("the solved K is unusable ({e}); check that the camera is rigidly mounted")))?;
@@ -133,12 +148,23 @@ pub(super) fn sheet_walk(walker: &mut Walker<'_>, params: &Params, n: u32, tool:
         verify,
         verify_rms,
         verify_max,
-        centre: lifted.report,
+        centre: CentreReport {
+            offset_px: solved.calibration.center_offset(),
+            sigma_px: solved.px_center_sigma_px(),
+            ..lifted.report
+        },
+        lens: joint.report.clone(),
         k_change: k_change(params, unit, k),
         triggers: walker.triggers,
         date: walker.machine.now().iso_local(),
-        warning: resolution_warning(params, &walker.shots).or(lifted.warning),
+        warning: resolution_warning(params, &walker.shots).or(lifted.warning).or(joint.warning()),
     };
-    let centre = lifted.centre;
-    Ok(Solution { k, remap, tool_offset: Some((tool, offset_written)), centre, report: CalReport::Sheet(report) })
+    Ok(Solution {
+        k,
+        remap,
+        tool_offset: Some((tool, offset_written)),
+        centre: joint.centre,
+        lens: LensUpdate::Write(joint.lens),
+        report: CalReport::Sheet(report),
+    })
 }

@@ -31,8 +31,11 @@ pub(super) struct Shot {
     pub(super) native: Point2<f64>,
     pub(super) reading: Reading,
     pub(super) dot: usize,
-    /// Taken by the sheet walk proper (at the calibration height), not by the lift.
+    /// Taken by the sheet walk proper (at the calibration height), not by the lift or the
+    /// lens grid.
     pub(super) in_fit: bool,
+    /// Taken with the head raised by the calibration lift.
+    pub(super) lifted: bool,
 }
 
 /// An incremental rapid by `d` (program frame), absolute again after it (the Vision M-codes
@@ -74,8 +77,11 @@ pub(crate) struct Walker<'a> {
     /// The best K (current units per pixel) and remap known so far, for the DRO: the module's
     /// calibration at the start, then each one the routine solves.
     pub(super) known: Option<(Matrix2<f64>, Remap)>,
-    /// True while the calibration lift reads: its shots stay out of the sheet fit.
+    /// True while the calibration lift or the lens grid reads: its shots stay out of the sheet
+    /// fit.
     pub(super) lifting: bool,
+    /// How far the walk's moves have raised the head above its start, current units.
+    raised: f64,
 }
 
 impl<'a> Walker<'a> {
@@ -131,6 +137,7 @@ impl<'a> Walker<'a> {
             last: None,
             known,
             lifting: false,
+            raised: 0.0,
         }
     }
 
@@ -142,10 +149,12 @@ impl<'a> Walker<'a> {
         if let Source::Replay { lift, .. } = &mut self.source {
             *lift += dz;
             self.ran.extend(self.machine.gcode(&command).map_err(|e| (false, e.into()))?);
+            self.raised += dz;
             return Ok(());
         }
         let lines = self.machine.command(&command).map_err(|e| (false, e.into()))?;
         self.ran.extend(lines);
+        self.raised += dz;
         self.machine.dwell(self.params.trigger_settle_s()).map_err(|e| (true, e.into()))
     }
 
@@ -198,6 +207,16 @@ impl<'a> Walker<'a> {
     /// Triggers and records a shot of walk dot `dot`; returns its index. The DRO shows the
     /// reading at once (through the best K known so far), or the failure.
     pub(super) fn shoot(&mut self, dot: usize) -> Result<usize, VisionError> {
+        self.take(dot, false).map(Option::unwrap_or_default)
+    }
+
+    /// [`Walker::shoot`] where a camera that finds no mark is an answer, not a failure (the
+    /// lens grid's far positions): `None` then, and nothing recorded but the trigger.
+    pub(super) fn try_shoot(&mut self, dot: usize) -> Result<Option<usize>, VisionError> {
+        self.take(dot, true)
+    }
+
+    fn take(&mut self, dot: usize, may_miss: bool) -> Result<Option<usize>, VisionError> {
         self.triggers += 1;
         let (reading, pos, newest) = match &mut self.source {
             Source::Live(driver) => match driver.trigger() {
@@ -218,6 +237,9 @@ impl<'a> Walker<'a> {
             }
         };
         self.last = Some(reading);
+        if !reading.found() && may_miss {
+            return Ok(None);
+        }
         if !reading.found() {
             let why = match &self.source {
                 Source::Live(driver) => driver.miss_reason().map(|r| format!(" ({r})")).unwrap_or_default(),
@@ -239,8 +261,8 @@ impl<'a> Walker<'a> {
             let chain = self.known.and_then(|(k, remap)| chain_with(self.params, k, remap).ok());
             self.dro.reading(chain.as_ref(), centred_px(self.params, native), &reading);
         }
-        self.shots.push(Shot { pos, native, reading, dot, in_fit: !self.lifting });
-        Ok(self.shots.len() - 1)
+        self.shots.push(Shot { pos, native, reading, dot, in_fit: !self.lifting, lifted: self.raised != 0.0 });
+        Ok(Some(self.shots.len() - 1))
     }
 
     /// Tells the host's progress sink where the walk is; a replay (the stepwise walk) tells

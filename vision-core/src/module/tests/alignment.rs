@@ -52,7 +52,8 @@ fn m280_starts_a_run_and_cancels_alignment() {
             observed: Point2::origin(),
             unit: LengthUnit::Inch,
             reach: vision_math::Vector2::zeros(),
-            mark_size: 0.0
+            mark_size: 0.0,
+            lens_along: [vision_math::Vector2::zeros(); 4],
         };
         7
     ];

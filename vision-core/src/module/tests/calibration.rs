@@ -488,16 +488,18 @@ fn every_calibration_trigger_reaches_the_dro_as_it_happens() {
         assert!(t.last_offset_px_x().hypot(t.last_offset_px_y()) > 50.0, "dot 1 sits off centre: {t:?}");
     }
     let offset = |t: &crate::params::Telemetry| t.last_offset_x().hypot(t.last_offset_y());
-    // The walk's shots, 5 per dot on sheet 1's five (the lift's 5 × 5 grid after them reaches
-    // the diagonals).
+    // The walk's shots, 5 per dot on sheet 1's five (the lens grid's and the lift's 5 × 5
+    // grids after them reach the diagonals).
     let walk_end = 3 + 5 * 5;
     let largest = at[3..walk_end].iter().map(|t| offset(t)).fold(0.0, f64::max);
     assert!((0.71..0.78).contains(&largest), "a probe shot is one probe move off: {largest}");
     // At the calibration height the dots measure their 0.5 in through K; lifted 0.25 in (over
     // a 6 in working distance) they look 4 % smaller.
-    let lift = walk_end..walk_end + 50;
+    let lift = walk_end + 25..walk_end + 75;
     let size = |range: std::ops::Range<usize>, d: f64| at[range].iter().all(|t| (t.last_width() - d).abs() < 0.01);
-    assert!(size(3..walk_end, 0.5) && size(lift.end..at.len(), 0.5), "the 0.5 in dots through K");
+    assert!(size(3..lift.start, 0.5) && size(lift.end..at.len(), 0.5), "the 0.5 in dots through K");
+    let grid = at[walk_end..lift.start].iter().map(|t| offset(t)).fold(0.0, f64::max);
+    assert!((1.8..1.95).contains(&grid), "the lens grid reads out to 0.75 of the half-image: {grid}");
     assert!(at[lift].iter().filter(|t| (t.last_width() - 0.5 * 6.0 / 6.25).abs() < 0.005).count() == 25, "lifted");
     let end = rig.module.telemetry();
     assert!(offset(end) < 1e-3 && end.last_status() == "OK", "{end:?}");
@@ -519,7 +521,7 @@ fn the_walk_tells_its_progress_dot_by_dot_as_it_goes() {
     let log = log.lock().expect("log").clone();
     let stages: Vec<WalkProgress> = log.iter().map(|(_, p)| *p).collect();
     let mut want: Vec<WalkProgress> = (1..=5).map(|dot| WalkProgress::SheetDot { dot, dots: 5 }).collect();
-    want.push(WalkProgress::Lift);
+    want.extend([WalkProgress::Lens, WalkProgress::Lift]);
     want.extend((1..=5).map(|dot| WalkProgress::Verify { dot, dots: 5 }));
     assert_eq!(stages, want);
     // Told before the dot's triggers: after the axis detect's 3, then 5 more per dot.
@@ -588,7 +590,12 @@ fn the_lift_reads_only_where_the_walks_probes_read() {
         sheet_rig(optics, LengthUnit::Inch, Vector2::new(3.0, -1.5), sheet_marks(0.3, Vector2::new(1.0, 1.0)));
     rig.world().window_px = Some(500.0);
     let rep = sheet_report(rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("calibrates").report);
-    assert!(rep.centre.measured && rep.centre.pairs == 25 && rep.warning.is_none(), "{:?}", rep.centre);
+    assert!(rep.centre.measured && rep.centre.pairs == 25, "{:?}", rep.centre);
+    // The lens grid's far positions find nothing there: skipped, and what they could not
+    // measure is said, with how to measure it.
+    assert!(rep.lens.grid_found < rep.lens.grid_asked && rep.lens.reach_px < 500.0, "{:?}", rep.lens);
+    assert!(rep.lens.note.as_deref().is_some_and(|n| n.contains("only 5 of the lens grid")), "{:?}", rep.lens);
+    assert!(rep.lens.measured[0] && rep.warning.is_none(), "k1 measured: no warning {:?}", rep.lens);
     let p = rig.module.params();
     assert!((p.calibration.center_offset() - Vector2::new(3.5, -4.0)).norm() < 1e-6, "{:?}", rep.centre);
     // Its σ grows by what the smaller spread of positions costs: still about a pixel.
@@ -637,7 +644,7 @@ fn no_lift_is_the_manuals_walk() {
     let r = rig.module.m283(&mut rig.machine, Calibrate::Sheet { n: 1 }).expect("calibrates");
     assert!(r.gcode.iter().all(|l| !l.contains('Z')), "{:?}", r.gcode);
     let rep = sheet_report(r.report);
-    assert!(!rep.centre.measured && rep.warning.is_none() && rep.triggers == 3 + 25 + 5, "{rep:?}");
+    assert!(!rep.centre.measured && rep.warning.is_none() && rep.triggers == 3 + 25 + 25 + 5, "{rep:?}");
     assert!(rig.module.params.set("VisionCalibrationLift", 2.5).is_err());
     assert!(rig.module.params.set("VisionCalibrationLift", f64::NAN).is_err());
     assert!(rig.module.params.set("VisionPxCenterSigmaPx", -1.0).is_err());
