@@ -64,6 +64,15 @@ impl Sim {
         p.set("VisionCal_Units", unit.short_name())?;
         p.set_remap(remap);
         p.set_cal_k(self.true_k(remap, unit))?;
+        // The world's lens as the profile holds one: k1, k2, p1, p2 on the focal length the
+        // simulator normalises by (its k3, and a non-square pixel's second focal length, have
+        // no place in the profile's model), with no uncertainty.
+        let camera = &self.world().camera;
+        if let Some([k1, k2, p1, p2, _]) = camera.distortion {
+            let reference = camera.reference_working_distance.unwrap_or(camera.working_distance);
+            let lens = vision_math::Lens::new([k1, k2, p1, p2], reference / camera.units_per_pixel)?;
+            p.calibration = p.calibration.with_lens(Some((lens, [0.0; 4])))?;
+        }
         Ok(p)
     }
 
@@ -119,6 +128,13 @@ mod tests {
         assert!((truth - Vector2::new(-3.25, 1.75)).norm() > 0.004);
         let e = sim.calibration_error(&p, truth, LengthUnit::Inch);
         assert!(e.k_relative < 1e-15 && e.offset < 1e-15 && e.remap_matches, "{e:?}");
+        assert_eq!(p.calibration.lens(), None, "the built-in world has no lens");
+        let mut w = World::default_world();
+        w.camera.distortion = Some([-0.1, 0.01, 0.002, -0.001, 0.0]);
+        let p = Sim::new(w).expect("sim").calibrated_params(&Params::default()).expect("params");
+        let lens = p.calibration.lens().expect("the world's lens");
+        assert!(lens.coefficients().iter().zip([-0.1, 0.01, 0.002, -0.001]).all(|(a, b)| (a - b).abs() < 1e-15));
+        assert!((lens.focal_px() - 6.0 / 0.00203).abs() < 1e-9);
         let mm = sim.calibration_error(&p, truth * 25.4, LengthUnit::Millimetre);
         assert!(mm.offset < 1e-12, "{mm:?}");
     }
