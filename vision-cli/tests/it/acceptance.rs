@@ -18,24 +18,24 @@ use vision_host::{ProgramHandler, Record, Session};
 use vision_math::{LengthUnit, Point2, Vector2};
 use vision_mcode::Outcome;
 
-const EX1: &str = include_str!("../../../examples/programs/01-calibrate-sheet.nc");
+pub(crate) const EX1: &str = include_str!("../../../examples/programs/01-calibrate-sheet.nc");
 const EX2: &str = include_str!("../../../examples/programs/02-verify-calibration.nc");
 const EX3: &str = include_str!("../../../examples/programs/03-quick-diameter-cal.nc");
-const EX4: &str = include_str!("../../../examples/programs/04-rectangle-fit.nc");
-const EX5: &str = include_str!("../../../examples/programs/05-similarity-fit.nc");
+pub(crate) const EX4: &str = include_str!("../../../examples/programs/04-rectangle-fit.nc");
+pub(crate) const EX5: &str = include_str!("../../../examples/programs/05-similarity-fit.nc");
 const EX6: &str = include_str!("../../../examples/programs/06-pound-variables.nc");
 const EX7: &str = include_str!("../../../examples/programs/07-switch-jobs.nc");
 
 /// A world, its machine, and the Vision session as the M-code handler (the path of
 /// `mach-vision run` and of every bridge).
-struct Rig {
-    sim: Sim,
-    machine: SimMachine,
-    handler: ProgramHandler,
+pub(crate) struct Rig {
+    pub(crate) sim: Sim,
+    pub(crate) machine: SimMachine,
+    pub(crate) handler: ProgramHandler,
 }
 
 impl Rig {
-    fn new(world: World, calibrated: bool) -> Rig {
+    pub(crate) fn new(world: World, calibrated: bool) -> Rig {
         let sim = Sim::new(world).expect("valid world");
         let clock = fixed_clock(Timestamp::from_unix(1_800_000_000, 0));
         let machine = SimMachine::new(&sim).expect("machine");
@@ -62,7 +62,7 @@ impl Rig {
     }
 
     /// Runs `program` from the start height; returns the Vision records it produced.
-    fn run(&mut self, program: &str) -> Vec<Record> {
+    pub(crate) fn run(&mut self, program: &str) -> Vec<Record> {
         self.back_to_start_height();
         let mut ignore = |_: &Event| {};
         if let Err(e) = self.machine.run_program(program, Some(&mut self.handler), &mut ignore) {
@@ -73,7 +73,7 @@ impl Rig {
 
     /// Runs `program` from the start height up to its end or its first refusal; returns the
     /// Vision records.
-    fn run_to_refusal(&mut self, program: &str) -> Vec<Record> {
+    pub(crate) fn run_to_refusal(&mut self, program: &str) -> Vec<Record> {
         self.back_to_start_height();
         let mut ignore = |_: &Event| {};
         let _ = self.machine.run_program(program, Some(&mut self.handler), &mut ignore);
@@ -89,13 +89,13 @@ impl Rig {
     }
 
     /// The worst cut error over `grid` (world unit) with the alignment the last M282 emitted.
-    fn max_cut_error(&self, records: &[Record], fixture: &str, grid: &[Point2<f64>]) -> f64 {
+    pub(crate) fn max_cut_error(&self, records: &[Record], fixture: &str, grid: &[Point2<f64>]) -> f64 {
         let setup = records.iter().rev().find_map(Record::applied_gcode).expect("an M282 ran").to_vec();
         grid.iter().map(|p| self.machine.cut_error(&setup, fixture, *p).expect("cut")).fold(0.0, f64::max)
     }
 }
 
-fn sheet_report(records: &[Record]) -> vision_core::SheetReport {
+pub(crate) fn sheet_report(records: &[Record]) -> vision_core::SheetReport {
     records
         .iter()
         .find_map(|r| match &r.result {
@@ -108,7 +108,7 @@ fn sheet_report(records: &[Record]) -> vision_core::SheetReport {
         .expect("M283 C ran")
 }
 
-fn grid(x: f64, y: f64) -> Vec<Point2<f64>> {
+pub(crate) fn grid(x: f64, y: f64) -> Vec<Point2<f64>> {
     (0..=6).flat_map(|i| (0..=4).map(move |j| Point2::new(x * f64::from(i) / 6.0, y * f64::from(j) / 4.0))).collect()
 }
 
@@ -189,7 +189,7 @@ fn part(name: &str, marks: &[[f64; 2]], rng: &mut Lcg, uniform: bool) -> Fixture
 /// A random world: camera orientation `case % 8`, up to ±3° more, σ = `sigma`; sheet 1 (print
 /// scale `print`) on the table, two parts waiting; the camera tool uncalibrated, dot 1 somewhere
 /// in view.
-fn random_world(case: u64, sigma: f64, print: f64) -> World {
+pub(crate) fn random_world(case: u64, sigma: f64, print: f64) -> World {
     let mut rng = Lcg(case.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0xD1B5_4A32_D192_ED03);
     let mut w = World::default_world();
     w.seed = case;
@@ -337,7 +337,7 @@ fn the_mm_conversion_scales_lengths_only() {
 // and camera offset), so what is measured is the alignment itself.
 
 /// The last M282's report, or its refusal.
-fn last_fit(records: &[Record]) -> Result<vision_core::AlignReport, String> {
+pub(crate) fn last_fit(records: &[Record]) -> Result<vision_core::AlignReport, String> {
     records
         .iter()
         .rev()
@@ -760,7 +760,7 @@ fn height_fits(
 }
 
 /// The 95th percentile of `v`.
-fn p95(v: impl Iterator<Item = f64>) -> f64 {
+pub(crate) fn p95(v: impl Iterator<Item = f64>) -> f64 {
     let mut v: Vec<f64> = v.collect();
     v.sort_by(f64::total_cmp);
     let i = ((v.len() as f64) * 0.95).ceil() as usize;
