@@ -63,6 +63,7 @@ mod optics;
 mod rng;
 mod sim;
 mod truth;
+pub use truth::PERFECT_CENTRE_SIGMA_PX;
 pub mod world;
 
 pub use camera::SimCamera;

@@ -66,7 +66,7 @@ impl SimMachine {
         let camera = world
             .machine
             .camera_table_offset
-            .map_or_else(|| sim.true_camera_offset(Vector2::zeros(), unit), Vector2::from);
+            .map_or_else(|| sim.calibrated_table_offset(unit), Vector2::from);
         let camera = Xyz::new(sign * camera.x, sign * camera.y, 0.0);
         config.tools.insert(world.machine.camera_tool, Tool { offset: camera, outputs: None });
         let mut interp = Interpreter::new(config);
@@ -240,7 +240,7 @@ impl SimMachine {
         let units = self.interp.units();
         let spindle = self.aligned_point_for(&setup, host, nominal * unit.factor_to(units))?;
         let tool_offset = if tool == world.machine.camera_tool {
-            self.sim.true_camera_offset(Vector2::zeros(), unit)
+            self.sim.calibrated_table_offset(unit)
         } else {
             world
                 .machine
@@ -282,8 +282,9 @@ mod tests {
     }
 
     /// The reading of a centred mark: the image centre, to half a pixel (noise).
+    /// The reading is at the optical centre (the reference pixel of a perfect calibration).
     fn centred(sim: &Sim, r: &Reading) -> bool {
-        let want = sim.optics().resolution() * 0.5;
+        let want = sim.optics().resolution() * 0.5 + sim.optics().bias();
         (r.x_px - want.x).abs() < 0.5 && (r.y_px - want.y).abs() < 0.5
     }
 
@@ -320,15 +321,15 @@ mod tests {
         // Spindle at (10.9, 2.15) machine = (0.9, −5.85) in G54 work (zero at (10, 8)).
         assert!((m.interpreter().program_position().xy() - Point2::new(0.9, -5.85)).norm() < 1e-12);
         execute(&mut m, "T98 M6\nG90 G0 X0 Y0");
-        // With the calibrated camera tool active, (0, 0) puts the camera's reference pixel over
-        // work zero: sheet dot 5 images at the image centre.
+        // With the calibrated camera tool active, (0, 0) puts the optical axis over work zero:
+        // sheet dot 5 images at the optical centre.
         let r = sim.camera().trigger().expect("reading");
         assert!(centred(&sim, &r), "{r:?}");
         assert_eq!(m.interpreter().units(), LengthUnit::Inch);
         execute(&mut m, "G21");
         assert!(m.interpreter().program_position().norm() < 1e-9);
         let camera = m.interpreter().tool_offset(98).expect("tool");
-        assert!((camera.x - sim.true_camera_offset(Vector2::zeros(), LengthUnit::Millimetre).x).abs() < 1e-9);
+        assert!((camera.x - sim.calibrated_table_offset(LengthUnit::Millimetre).x).abs() < 1e-9);
     }
 
     /// Moves the camera over work zero, then triggers: what a calibration does inside M283.

@@ -19,6 +19,10 @@ pub struct CalibrationError {
     pub remap_matches: bool,
 }
 
+/// The optical centre's 1σ a perfect calibration states, pixels: a hundredth of a pixel (0 would
+/// read as "never measured").
+pub const PERFECT_CENTRE_SIGMA_PX: f64 = 0.01;
+
 impl Sim {
     /// The remap the M283 axis detect finds for this camera (the signed permutation closest to
     /// the true image orientation).
@@ -49,8 +53,23 @@ impl Sim {
         v * st.world.length_unit().factor_to(unit)
     }
 
-    /// `base` with Vision enabled, driver `Sim`, the camera tool number, and K, the remap flags
-    /// and `Cal_Units` (the world unit) as a perfect calibration would leave them.
+    /// The camera tool's X/Y table offset a perfect calibration writes (`unit`): the optical
+    /// axis's, which [`Sim::calibrated_params`]' optical centre refers to; the simulated
+    /// machine's tool table holds it unless the world sets `camera_table_offset`.
+    #[must_use]
+    pub fn calibrated_table_offset(&self, unit: LengthUnit) -> Vector2<f64> {
+        let bias = self.lock().optics().bias();
+        self.true_camera_offset(bias, unit)
+    }
+
+    /// `base` with Vision enabled, driver `Sim`, the camera tool number, and K, the remap flags,
+    /// `Cal_Units` (the world unit), the optical centre and the lens as a perfect calibration
+    /// would leave them.
+    ///
+    /// Decision: perfect includes the optical centre (`VisionPxCenterOffsetX/Y` = the camera's
+    /// bias, 1σ [`PERFECT_CENTRE_SIGMA_PX`]), which the sheet walk's lift measures: a
+    /// calibration that took the centre at the image centre is exact only at its own height,
+    /// and at another every capture shifts by the height change × that error × K.
     ///
     /// # Errors
     /// Only if `base` holds a value the setters refuse (they do not for valid parameters).
@@ -64,6 +83,8 @@ impl Sim {
         p.set("VisionCal_Units", unit.short_name())?;
         p.set_remap(remap);
         p.set_cal_k(self.true_k(remap, unit))?;
+        let bias = self.lock().optics().bias();
+        p.calibration = p.calibration.with_centre(bias, PERFECT_CENTRE_SIGMA_PX)?;
         // The world's lens as the profile holds one: k1, k2, p1, p2 on the focal length the
         // simulator normalises by (its k3, and a non-square pixel's second focal length, have
         // no place in the profile's model), with no uncertainty.
@@ -123,9 +144,13 @@ mod tests {
         let sim = Sim::new(World::default_world()).expect("sim");
         let p = sim.calibrated_params(&Params::default()).expect("params");
         assert!(p.enabled());
-        let truth = sim.true_camera_offset(Vector2::zeros(), LengthUnit::Inch);
-        // The bias (3, −2) px moves the reference point off the optical axis.
-        assert!((truth - Vector2::new(-3.25, 1.75)).norm() > 0.004);
+        // A perfect calibration knows the optical centre, the bias (3, −2) px, and refers the
+        // camera offset to it: the optical axis's.
+        assert_eq!(p.calibration.center_offset(), Vector2::new(3.0, -2.0));
+        assert_eq!(p.calibration.center_sigma(), Some(PERFECT_CENTRE_SIGMA_PX));
+        let truth = sim.calibrated_table_offset(LengthUnit::Inch);
+        assert!((truth - Vector2::new(-3.25, 1.75)).norm() < 1e-12, "{truth}");
+        assert!((sim.true_camera_offset(Vector2::zeros(), LengthUnit::Inch) - truth).norm() > 0.004);
         let e = sim.calibration_error(&p, truth, LengthUnit::Inch);
         assert!(e.k_relative < 1e-15 && e.offset < 1e-15 && e.remap_matches, "{e:?}");
         assert_eq!(p.calibration.lens(), None, "the built-in world has no lens");

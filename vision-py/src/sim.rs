@@ -120,7 +120,7 @@ impl Simulated {
         let offset = world
             .machine
             .camera_table_offset
-            .map_or_else(|| self.rig.sim.true_camera_offset(Vector2::zeros(), unit), Vector2::from);
+            .map_or_else(|| self.rig.sim.calibrated_table_offset(unit), Vector2::from);
         let dict = PyDict::new(py);
         dict.set_item("work_offset", (world.machine.work_offset[0], world.machine.work_offset[1]))?;
         dict.set_item("camera_tool", world.machine.camera_tool)?;
