@@ -891,3 +891,222 @@ fn the_measured_height_change_is_unbiased_and_its_sigma_honest() {
     // 200 fits: the mean's own 1σ is 0.07, the spread's 0.05.
     assert!(mean.abs() < 0.25 && (spread - 1.0).abs() < 0.2, "mean {mean}, spread {spread}");
 }
+
+// Issue 38: example 5 run right after example 4 in one session. Example 4 ends its demo cut at
+// Z0.25, so example 5 captures its three marks with the camera 0.25 in higher (6.25 in over the
+// calibration's 6.00 in: +4.2 %) unless something moves it back.
+
+/// How the camera of a chained run was calibrated at 6.00 in: by the sheet walk (example 1 with
+/// its lift, as [`walked`]); perfectly (the true K, camera offset and optical centre, the pixel
+/// the image shrinks about); or `AtOneHeight`, as `Sim::calibrated_params` (the true K, the
+/// optical centre taken at the image centre and the camera offset absorbing it: exact at 6.00 in
+/// only, as a calibration without the lift).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Calibrated {
+    Walk,
+    Perfect,
+    AtOneHeight,
+}
+
+/// A random world of `case` calibrated as `how`, the head at its start height, both parts placed
+/// by `placement` and only `present` on the table.
+fn chained_rig(case: u64, how: Calibrated, placement: Placement, present: &str) -> Rig {
+    if how == Calibrated::Walk {
+        return walked_rig(&walked(case, Centre::Off), case, 1.0, placement, present, Settings::Default);
+    }
+    let mut w = random_world(case, 0.1, 1.0);
+    w.camera.working_distance = 6.0;
+    if placement == Placement::Near {
+        let mut rng = Lcg(case ^ 0x5DEE_CE66_D1CE_4E5B);
+        for f in w.fixtures.iter_mut().filter(|f| f.sheet.is_none()) {
+            f.shift = [rng.within(0.02), rng.within(0.02)];
+            f.rotation_deg = rng.within(0.1);
+        }
+    }
+    if how == Calibrated::AtOneHeight {
+        return rig_at(w, 1.0, present);
+    }
+    w.camera.reference_working_distance = Some(w.camera.working_distance);
+    let sim = Sim::new(w.clone()).expect("valid world");
+    let centre = sim.optics().bias();
+    let offset = sim.true_camera_offset(centre, LengthUnit::Inch);
+    w.machine.camera_table_offset = Some([offset.x, offset.y]);
+    w.fixtures.iter_mut().for_each(|f| f.present = f.name == present);
+    let mut rig = Rig::new(w, true);
+    let module = rig.handler.session_mut().module_mut();
+    module.set_param("VisionPxCenterOffsetX", centre.x).expect("set");
+    module.set_param("VisionPxCenterOffsetY", centre.y).expect("set");
+    rig
+}
+
+/// Runs `program` from wherever the head is (no move back to the start height, as one
+/// `mach-vision run` of several programs does); returns the Vision records.
+fn run_from_here(rig: &mut Rig, program: &str) -> Vec<Record> {
+    let mut ignore = |_: &Event| {};
+    if let Err(e) = rig.machine.run_program(program, Some(&mut rig.handler), &mut ignore) {
+        panic!("program failed: {e}\n{program}");
+    }
+    rig.handler.take_records()
+}
+
+/// The examples of a chained run: fixture, program, part size (inches).
+const CHAINED: [(&str, &str, (f64, f64)); 2] =
+    [("rectangle part", EX4, (6.0, 4.0)), ("similarity part", EX5, (8.0, 6.0))];
+
+/// One fit of a chained run: the true cut error and the predicted 99 % bound (inches), the true
+/// working-distance change (percent) and the z-score of the one M282 reported,
+/// `(reported − true) / reported 1σ`.
+#[derive(Debug, Clone, Copy)]
+struct ChainedFit {
+    cut: f64,
+    bound: f64,
+    true_pct: f64,
+    z: f64,
+}
+
+/// Over `worlds` calibrated as `how` with the parts placed by `placement`: per example (4, 5),
+/// its fits run first from the start height (its floor) and its fits run second, right after
+/// the other example, from Z0.25 where the other's demo cut left the head.
+fn chained_fits(
+    worlds: std::ops::Range<u64>,
+    how: Calibrated,
+    placement: Placement,
+) -> [(Vec<ChainedFit>, Vec<ChainedFit>); 2] {
+    let mut out: [(Vec<ChainedFit>, Vec<ChainedFit>); 2] = Default::default();
+    for case in worlds {
+        for first in 0..2 {
+            let second = 1 - first;
+            let mut rig = chained_rig(case, how, placement, CHAINED[first].0);
+            let mut fits = Vec::new();
+            for i in [first, second] {
+                let (fixture, program, size) = CHAINED[i];
+                for (name, _, _) in CHAINED {
+                    rig.sim.set_present(name, name == fixture).expect("fixture");
+                }
+                // Where the captures are made: a fresh rig starts at the calibration height.
+                let true_pct = (rig.sim.working_distance() / 6.0 - 1.0) * 100.0;
+                let records = if i == first { rig.run(program) } else { run_from_here(&mut rig, program) };
+                let fit = last_fit(&records).expect("accepted");
+                let h = fit.height.expect("measured");
+                fits.push(ChainedFit {
+                    cut: rig.max_cut_error(&records, fixture, &grid(size.0, size.1)),
+                    bound: fit.predicted.bound99,
+                    true_pct,
+                    z: (h.change_pct - true_pct) / h.sigma_pct,
+                });
+            }
+            // The first from the calibration height, the second from 0.25 in above it.
+            let (at, above) = (fits[0].true_pct, fits[1].true_pct);
+            assert!(at.abs() < 1e-9 && (above - 25.0 / 6.0).abs() < 1e-9, "case {case}: {fits:?}");
+            out[first].0.push(fits[0]);
+            out[second].1.push(fits[1]);
+        }
+    }
+    out
+}
+
+/// The median of `v`.
+fn median(v: impl Iterator<Item = f64>) -> f64 {
+    let mut v: Vec<f64> = v.collect();
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        (v[n / 2 - 1] + v[n / 2]) / 2.0
+    }
+}
+
+/// What one chained case measured: example 5 after example 4 calibrated by the walk or
+/// perfectly (`held`), its cut errors run second and their floor run first (inches), and the
+/// share of the second inside the predicted 99 % bound.
+struct ChainedCase {
+    name: String,
+    held: bool,
+    floor: Vec<f64>,
+    after: Vec<f64>,
+    covered: f64,
+}
+
+/// Example 5 right after example 4 (and example 4 right after example 5) in one session, over
+/// `worlds` per calibration and placement, printed. An example's floor is the p95 (and the
+/// median) of its cut errors over the same worlds, calibration and placement, run first, from
+/// the start height (the calibration's working distance). Example 5 after example 4 calibrated
+/// by the walk or perfectly is held to the floor; `AtOneHeight` is printed only: its optical
+/// centre is unknown, and at +4.2 % every capture shifts by 0.042 × the centre's distance from
+/// the image centre × K, which no camera move can tell from the part's own shift.
+fn chained_cases(worlds: std::ops::Range<u64>) -> Vec<ChainedCase> {
+    let mut cases = Vec::new();
+    for placement in [Placement::Near, Placement::Any] {
+        for how in [Calibrated::Walk, Calibrated::Perfect, Calibrated::AtOneHeight] {
+            let fits = chained_fits(worlds.clone(), how, placement);
+            for (example, (floor, after)) in ["example 4", "example 5"].into_iter().zip(&fits) {
+                let cuts = |v: &[ChainedFit]| v.iter().map(|f| f.cut).collect::<Vec<f64>>();
+                let (floor, cut) = (cuts(floor), cuts(after));
+                let (floor95, floor50) = (p95(floor.iter().copied()), median(floor.iter().copied()));
+                let covered = after.iter().filter(|f| f.cut <= f.bound).count() as f64 / after.len() as f64;
+                let n = after.len() as f64;
+                let z_mean = after.iter().map(|f| f.z).sum::<f64>() / n;
+                let z_spread = (after.iter().map(|f| (f.z - z_mean).powi(2)).sum::<f64>() / n).sqrt();
+                println!(
+                    "{example} after the other, part {placement:?}, calibrated {how:?}, {} fits: cut p95 {:.3} × \
+                     {floor95:.6} in, median {:.3} × {floor50:.6} in, covered {:.1} %; height z-scores mean \
+                     {z_mean:.2}, spread {z_spread:.2}",
+                    after.len(),
+                    p95(cut.iter().copied()) / floor95,
+                    median(cut.iter().copied()) / floor50,
+                    covered * 100.0
+                );
+                cases.push(ChainedCase {
+                    name: format!("{example} {placement:?} {how:?}"),
+                    held: example == "example 5" && how != Calibrated::AtOneHeight,
+                    floor,
+                    after: cut,
+                    covered,
+                });
+            }
+        }
+    }
+    cases
+}
+
+/// The root mean square of `v`.
+fn rms(v: &[f64]) -> f64 {
+    (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
+}
+
+/// The quick form, always run: 40 worlds per case. A p95 of 40, their second largest, moves by
+/// ±20 % between seed ranges; the root-mean-square cut of the 160 held fits over their floor's
+/// is held instead (1.08–1.15 per case over 200 worlds; without the height correction about 3,
+/// with the optical centre unknown about 1.7), and the coverage with two misses' slack.
+#[test]
+fn example_5_after_example_4_reaches_the_floor() {
+    let cases = chained_cases(3800..3840);
+    let held: Vec<&ChainedCase> = cases.iter().filter(|c| c.held).collect();
+    let pooled =
+        |f: fn(&ChainedCase) -> &Vec<f64>| rms(&held.iter().flat_map(|c| f(c).iter().copied()).collect::<Vec<_>>());
+    let ratio = pooled(|c| &c.after) / pooled(|c| &c.floor);
+    let fits: usize = held.iter().map(|c| c.after.len()).sum();
+    println!("example 5 after example 4, {fits} fits: rms cut over the floor's {ratio:.3}");
+    assert!(ratio <= 1.3, "rms cut ×{ratio:.3} of the floor");
+    for c in held {
+        assert!(c.covered >= 0.95, "{}: covered {}", c.name, c.covered);
+    }
+}
+
+/// The full form: 200 worlds per case (`cargo test --release -p vision-cli --test it
+/// acceptance::example_5_after_example_4 -- --ignored --nocapture`). The p95 of 40 worlds, the
+/// second largest cut, moves by ±20 % between seed ranges on its own; 200 hold it to a few.
+#[test]
+#[ignore = "about 2 s in a release build; the quick form runs always"]
+fn example_5_after_example_4_reaches_the_floor_over_many_worlds() {
+    let mut failures = Vec::new();
+    for c in chained_cases(3800..4000).iter().filter(|c| c.held) {
+        println!("{}: rms ×{:.3}", c.name, rms(&c.after) / rms(&c.floor));
+        let ratio = p95(c.after.iter().copied()) / p95(c.floor.iter().copied());
+        if ratio > 1.2 || c.covered < 0.98 {
+            failures.push(format!("{}: p95 ×{ratio:.3}, covered {:.3}", c.name, c.covered));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:?}");
+}

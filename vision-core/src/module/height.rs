@@ -61,6 +61,24 @@ pub(crate) fn noise_px(params: &Params) -> f64 {
     params.camera_noise_px().max(1e-3)
 }
 
+/// The shift a working-distance change `error` (ε) makes of every capture when the calibration
+/// never measured the optical centre, in `unit`: `|ε|` × `VisionCenterUncertaintyPx` × K's
+/// largest singular value. `None` when the centre was measured (`VisionPxCenterSigmaPx` > 0).
+///
+/// Decision: a note, not a correction. At one working distance a misplaced centre is absorbed
+/// into the camera offset exactly; at another it moves every capture by ε × its pixel error ×
+/// K, the same for every mark, as the part's own shift does — camera moves at one height cannot
+/// measure it, only a calibration that reads a mark from two heights (the lift) can. M282
+/// widens its prediction by it; this says where the error comes from and what removes it.
+pub(crate) fn unmeasured_centre_shift(params: &Params, error: f64, unit: LengthUnit) -> Option<f64> {
+    if params.calibration.center_sigma().is_some() {
+        return None;
+    }
+    let k = params.cal_k().singular_values().max() * params.cal_units().factor_to(unit);
+    let shift = error.abs() * params.center_uncertainty_px() * k;
+    (shift > 0.0 && shift.is_finite()).then_some(shift)
+}
+
 /// The working-distance change a run measured, with every fit (M282). Lengths in the report's
 /// unit.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -117,6 +135,14 @@ pub(crate) fn report(
                 "the captures were NOT corrected (VisionHeightCorrection off)"
             }
         ));
+        if let Some(shift) = unmeasured_centre_shift(params, estimate.error, unit) {
+            notes.push(format!(
+                "the optical centre was never measured (VisionPxCenterSigmaPx 0): away from the calibration height \
+                 every capture may be shifted alike by about {shift:.4} {u} (the change × VisionCenterUncertaintyPx × \
+                 K), which no camera move can tell from the part's own shift — {sheet} with VisionCalibrationLift > \
+                 0 measures it"
+            ));
+        }
     }
     let diameter = LengthUnit::Inch.convert(params.mark_diameter_in(), unit);
     let measured: Vec<f64> = mark_sizes.iter().copied().filter(|m| *m > 0.0 && m.is_finite()).collect();
@@ -156,6 +182,35 @@ mod tests {
         let mut p = Params::default();
         f(&mut p);
         p
+    }
+
+    /// K = 0.002 in/px on both axes, the optical centre measured to `centre_sigma` px (0: never).
+    fn calibrated(centre_sigma: f64) -> Params {
+        params(|p| {
+            p.set("VisionCal_Units", "in").expect("set");
+            p.set_cal_k(vision_math::Matrix2::new(0.002, 0.0, 0.0, 0.002)).expect("set");
+            p.set("VisionPxCenterSigmaPx", centre_sigma).expect("set");
+        })
+    }
+
+    #[test]
+    fn an_unmeasured_centre_shifts_every_capture_by_the_change_times_its_allowance() {
+        // 4.17 % × 3 px × 0.002 in/px = 0.00025 in, either way round; 25.4 × that in mm.
+        let p = calibrated(0.0);
+        let shift = unmeasured_centre_shift(&p, 0.0417, LengthUnit::Inch).expect("unmeasured");
+        assert!((shift - 2.502e-4).abs() < 1e-12, "{shift}");
+        let mm = unmeasured_centre_shift(&p, -0.0417, LengthUnit::Millimetre).expect("unmeasured");
+        assert!((mm - 2.502e-4 * 25.4).abs() < 1e-12, "{mm}");
+        let wide = params(|q| {
+            *q = p.clone();
+            q.set("VisionCenterUncertaintyPx", 6.0).expect("set");
+        });
+        assert!(
+            (unmeasured_centre_shift(&wide, 0.0417, LengthUnit::Inch).expect("unmeasured") - 5.004e-4).abs() < 1e-12
+        );
+        assert_eq!(unmeasured_centre_shift(&calibrated(0.7), 0.0417, LengthUnit::Inch), None, "the lift measured it");
+        assert_eq!(unmeasured_centre_shift(&p, 0.0, LengthUnit::Inch), None, "no change, no shift");
+        assert_eq!(unmeasured_centre_shift(&Params::default(), 0.0417, LengthUnit::Inch), None, "no K yet");
     }
 
     #[test]
@@ -203,6 +258,15 @@ mod tests {
         let r = report(&wrong, est(0.0), LengthUnit::Inch, &[0.24], "M283 C1");
         let w = r.warning.expect("disagreement");
         assert!(w.contains("disagree") && w.contains("VisionMarkDiameter") && !w.contains("re-run"), "{w}");
+        // The default profile never measured the optical centre: a warning says so only once
+        // calibrated (K set), and not after a lift measured it.
+        assert!(!report(&p, est(0.0417), LengthUnit::Inch, &[], "M283 C1").warning.expect("warns").contains("never"));
+        let r = report(&calibrated(0.0), est(0.0417), LengthUnit::Millimetre, &[], "M283 C1");
+        let w = r.warning.expect("above 1 %");
+        assert!(w.contains("never measured") && w.contains("0.0064 mm") && w.contains("M283 C1 with"), "{w}");
+        assert_eq!(report(&calibrated(0.0), est(0.0004), LengthUnit::Inch, &[], "M283 C1").warning, None);
+        let w = report(&calibrated(0.7), est(0.0417), LengthUnit::Inch, &[], "M283 C1").warning.expect("warns");
+        assert!(!w.contains("never"), "{w}");
         let off = params(|p| p.set("VisionHeightCorrection", false).expect("set"));
         assert!(report(&off, est(-0.03), LengthUnit::Inch, &[], "M283 C1")
             .warning
