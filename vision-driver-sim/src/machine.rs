@@ -63,10 +63,7 @@ impl SimMachine {
             let offset = Xyz::new(sign * t.offset[0], sign * t.offset[1], t.offset[2]);
             config.tools.insert(t.number, Tool { offset, outputs: None });
         }
-        let camera = world
-            .machine
-            .camera_table_offset
-            .map_or_else(|| sim.calibrated_table_offset(unit), Vector2::from);
+        let camera = world.machine.camera_table_offset.map_or_else(|| sim.calibrated_table_offset(unit), Vector2::from);
         let camera = Xyz::new(sign * camera.x, sign * camera.y, 0.0);
         config.tools.insert(world.machine.camera_tool, Tool { offset: camera, outputs: None });
         let mut interp = Interpreter::new(config);

@@ -117,10 +117,8 @@ impl Simulated {
         let unit = world.length_unit();
         // The module's offset is where the camera's reference point lies from the spindle;
         // LinuxCNC adds its table offset to a programmed point, so its table holds the negation.
-        let offset = world
-            .machine
-            .camera_table_offset
-            .map_or_else(|| self.rig.sim.calibrated_table_offset(unit), Vector2::from);
+        let offset =
+            world.machine.camera_table_offset.map_or_else(|| self.rig.sim.calibrated_table_offset(unit), Vector2::from);
         let dict = PyDict::new(py);
         dict.set_item("work_offset", (world.machine.work_offset[0], world.machine.work_offset[1]))?;
         dict.set_item("camera_tool", world.machine.camera_tool)?;

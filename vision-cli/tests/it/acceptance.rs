@@ -897,8 +897,8 @@ fn the_measured_height_change_is_unbiased_and_its_sigma_honest() {
 // calibration's 6.00 in: +4.2 %) unless something moves it back.
 
 /// How the camera of a chained run was calibrated at 6.00 in: by the sheet walk (example 1 with
-/// its lift, as [`walked`]); perfectly (the true K, camera offset and optical centre, the pixel
-/// the image shrinks about); or `AtOneHeight`, as `Sim::calibrated_params` (the true K, the
+/// its lift, as [`walked`]); perfectly (`Sim::calibrated_params`: the true K, camera offset and
+/// optical centre, the pixel the image shrinks about); or `AtOneHeight` (the true K, the
 /// optical centre taken at the image centre and the camera offset absorbing it: exact at 6.00 in
 /// only, as a calibration without the lift).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -923,19 +923,19 @@ fn chained_rig(case: u64, how: Calibrated, placement: Placement, present: &str) 
             f.rotation_deg = rng.within(0.1);
         }
     }
-    if how == Calibrated::AtOneHeight {
+    if how == Calibrated::Perfect {
         return rig_at(w, 1.0, present);
     }
+    // At one height: the centre taken at the image centre, the camera offset solved there.
     w.camera.reference_working_distance = Some(w.camera.working_distance);
-    let sim = Sim::new(w.clone()).expect("valid world");
-    let centre = sim.optics().bias();
-    let offset = sim.true_camera_offset(centre, LengthUnit::Inch);
+    let offset = Sim::new(w.clone()).expect("valid world").true_camera_offset(Vector2::zeros(), LengthUnit::Inch);
     w.machine.camera_table_offset = Some([offset.x, offset.y]);
     w.fixtures.iter_mut().for_each(|f| f.present = f.name == present);
     let mut rig = Rig::new(w, true);
     let module = rig.handler.session_mut().module_mut();
-    module.set_param("VisionPxCenterOffsetX", centre.x).expect("set");
-    module.set_param("VisionPxCenterOffsetY", centre.y).expect("set");
+    for name in ["VisionPxCenterOffsetX", "VisionPxCenterOffsetY", "VisionPxCenterSigmaPx"] {
+        module.set_param(name, 0.0).expect("set");
+    }
     rig
 }
 

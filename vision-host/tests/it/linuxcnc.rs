@@ -431,7 +431,7 @@ fn walk_stepwise(
         host.execute(&format!("G0 X{} Y{}", t.at.x, t.at.y))?;
         session.walk_capture(host)?;
         captures += 1;
-        assert!(captures < 100, "the walk does not end");
+        assert!(captures < 200, "the walk does not end");
     }
     session.walk_finish(host)
 }
