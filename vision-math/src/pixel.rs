@@ -151,15 +151,13 @@ impl PixelChain {
         Ok(PixelChain { k, remap, resolution, center_offset, origin, kr, kr_inv, lens: None })
     }
 
-    /// The chain with `lens` undone before K (a lens that moves no pixel leaves it linear).
+    /// The chain with `lens` undone before K (kept even when it moves no pixel: its
+    /// coefficients' uncertainty still reaches [`PixelChain::lens_sensitivity`]).
     ///
     /// # Errors
     /// [`MathError::LensFolds`] when the lens cannot be undone over the image (with 10 %
     /// margin): it folds there.
     pub fn with_lens(self, lens: Lens) -> Result<Self, MathError> {
-        if lens.is_identity() {
-            return Ok(PixelChain { lens: None, ..self });
-        }
         lens.check_field(-self.origin, self.resolution - self.origin)?;
         Ok(PixelChain { lens: Some(lens), ..self })
     }
@@ -366,9 +364,12 @@ mod tests {
         assert_eq!(linear.lens_sensitivity(p), [Vector2::zeros(); 4]);
         let s = chain.lens_sensitivity(p);
         assert!((s[0] - k * lens.sensitivity(p.coords - Vector2::new(891.0, 886.0))[0]).norm() < 1e-15);
-        // A lens that moves nothing stays out of the chain; one that folds is refused.
+        // A lens that moves nothing moves nothing, but says what its coefficients would; one
+        // that folds is refused.
         let none = Lens::new([0.0; 4], 3000.0).expect("lens");
-        assert_eq!(linear.with_lens(none).expect("identity").lens(), None);
+        let flat = linear.with_lens(none).expect("identity");
+        assert_eq!(flat.delta(p), linear.delta(p));
+        assert!(flat.lens_sensitivity(p)[0].norm() > 1e-3, "{:?}", flat.lens_sensitivity(p));
         let folding = Lens::new([-8.0, 0.0, 0.0, 0.0], 3000.0).expect("lens");
         assert!(matches!(linear.with_lens(folding), Err(MathError::LensFolds { .. })));
     }

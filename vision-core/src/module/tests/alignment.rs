@@ -379,6 +379,28 @@ fn every_fit_predicts_its_error_from_the_camera_noise_and_the_residuals() {
     assert!((q.bound99 / p.bound99 - 2.0).abs() < 1e-9, "{p:?} {q:?}");
 }
 
+/// The lens's uncertainty widens the prediction by what it moves each capture: nothing at the
+/// optical centre, more the farther out the marks were read.
+#[test]
+fn the_lens_uncertainty_widens_the_prediction_of_marks_read_off_centre() {
+    let predicted = |focal: f64, sigma: f64, at: Vector2<f64>| {
+        let mut rig = Rig::new();
+        rig.module.set_param("VisionRecenterPasses", 0).expect("set");
+        rig.module.set_param("VisionLensFocalPx", focal).expect("set");
+        rig.module.set_param("VisionLensK1Sigma", sigma).expect("set");
+        rig.world().marks = PART.iter().map(|(x, y)| Point2::new(*x, *y) + at).collect();
+        rig.module.m280(&mut rig.machine, RunMode::Rectangle).expect("m280");
+        capture_all(&mut rig, &PART);
+        rig.module.m282(&mut rig.machine, Pieces::All).expect("m282").report.predicted.bound99
+    };
+    let off = Vector2::new(0.6, 0.4);
+    let (plain, lens) = (predicted(0.0, 0.0, off), predicted(3000.0, 0.05, off));
+    assert!(lens > 1.1 * plain, "{lens} vs {plain}");
+    assert!(predicted(3000.0, 0.0, off) == plain, "no σ, no widening");
+    let centred = predicted(3000.0, 0.05, Vector2::zeros());
+    assert!((centred - predicted(0.0, 0.0, Vector2::zeros())).abs() < 1e-12, "nothing at the centre");
+}
+
 #[test]
 fn k_in_inches_reports_millimetres_under_g21() {
     let mut rig = Rig::new();
