@@ -74,12 +74,28 @@ pub fn calibration(params: &Params) -> Vec<(String, String)> {
 }
 
 /// One calibration as a line of the page's history: K, the camera tool's offset and the pixel
-/// centre, each value as `value` gives it by manual name (`?` for one it has not).
+/// centre, each value as `value` gives it by manual name (`?` for one it has not), and the lens
+/// when it has one (`VisionLensFocalPx` above 0): each coefficient ± its 1σ, 5 decimals.
 #[must_use]
 pub fn calibration_line(value: &dyn Fn(&str) -> Option<String>) -> String {
     let v = |name: &str| value(name).unwrap_or_else(|| "?".to_string());
+    let number = |name: &str| value(name).and_then(|t| t.parse::<f64>().ok()).filter(|x| x.is_finite());
+    let lens = match number("VisionLensFocalPx").filter(|f| *f > 0.0) {
+        Some(focal) => {
+            let each: Vec<String> = ["K1", "K2", "P1", "P2"]
+                .iter()
+                .map(|c| {
+                    let shown = |n: Option<f64>| n.map_or_else(|| "?".to_string(), |x| format!("{x:.5}"));
+                    let (k, sigma) = (number(&format!("VisionLens{c}")), number(&format!("VisionLens{c}Sigma")));
+                    format!("{} {} ± {}", c.to_lowercase(), shown(k), shown(sigma))
+                })
+                .collect();
+            format!(" · lens {} (f {focal:.0} px)", each.join(", "))
+        }
+        None => String::new(),
+    };
     format!(
-        "K {} {} {} {} {u}/px · tool offset X{} Y{} {u} · centre {} {} px",
+        "K {} {} {} {} {u}/px · tool offset X{} Y{} {u} · centre {} {} px{lens}",
         v("VisionCal_K11"),
         v("VisionCal_K12"),
         v("VisionCal_K21"),
@@ -163,5 +179,22 @@ mod history_tests {
             calibration_line(&value),
             "K 0.00203 0 0 0.00203 in/px · tool offset X-3.25 Y1.75 in · centre 0.4 ? px"
         );
+        let lens = |name: &str| match name {
+            "VisionLensFocalPx" => Some("2956.2".to_string()),
+            "VisionLensK1" => Some("-0.100213".to_string()),
+            "VisionLensK1Sigma" => Some("0.0012".to_string()),
+            "VisionLensP2" => Some("-0.001".to_string()),
+            other => value(other),
+        };
+        assert!(
+            calibration_line(&lens).ends_with(
+                "centre 0.4 ? px · lens k1 -0.10021 ± 0.00120, k2 ? ± ?, p1 ? ± ?, p2 -0.00100 ± ? (f 2956 px)"
+            ),
+            "{}",
+            calibration_line(&lens)
+        );
+        // No lens (a focal length of 0): nothing added.
+        let none = |name: &str| if name == "VisionLensFocalPx" { Some("0".to_string()) } else { lens(name) };
+        assert!(calibration_line(&none).ends_with("centre 0.4 ? px"));
     }
 }

@@ -94,7 +94,7 @@ pub(crate) fn program(out: &mut Vec<(String, Sheet)>, stem: &str, name: &str, st
                         dropped: false,
                     })
                     .collect();
-                let lines = vec![
+                let mut lines = vec![
                     format!(
                         "K = [{:.8} {:.8}; {:.8} {:.8}] {unit}/px, camera rotation {:.4} deg",
                         r.k[(0, 0)],
@@ -108,6 +108,18 @@ pub(crate) fn program(out: &mut Vec<(String, Sheet)>, stem: &str, name: &str, st
                         r.sheet_scale.x, r.sheet_scale.y, r.verify_rms, r.verify_max
                     ),
                 ];
+                // The lens in two short lines (the text report has the whole note).
+                match super::text::lens_coefficients(&r.lens) {
+                    Some(c) => {
+                        lines.push(format!("lens {c}"));
+                        let note = if r.lens.note.is_some() { "; see the report's note" } else { "" };
+                        lines.push(format!(
+                            "lens moves the farthest corner {:.2} px (f {:.0} px){note}",
+                            r.lens.corner_px, r.lens.focal_px
+                        ));
+                    }
+                    None => lines.push("lens not measured: see the report's note".to_string()),
+                }
                 out.push((
                     format!("{stem}-line{line}-calibration.svg"),
                     Sheet {
