@@ -35,7 +35,10 @@ pub fn observe<S: FrameSource>(driver: &mut FrameDriver<S>, params: &Params) -> 
         });
         view.offset_px = Some((reading.x_px - w / 2.0, reading.y_px - h / 2.0));
         let centre = Vector2::new(params.px_center_offset_x(), params.px_center_offset_y());
-        if let Ok(chain) = PixelChain::new(params.cal_k(), params.remap(), Vector2::new(w, h), centre) {
+        // The lens undone before K, as M281 does (a lens that folds over the frame: no offset).
+        let chain = PixelChain::new(params.cal_k(), params.remap(), Vector2::new(w, h), centre)
+            .and_then(|c| params.calibration.lens().map_or(Ok(c), |lens| c.with_lens(lens)));
+        if let Ok(chain) = chain {
             let d = chain.delta(vision_math::Point2::new(reading.x_px, reading.y_px));
             let unit = params.cal_units().short_name().to_string();
             view.offset_machine = Some(MachineOffset { x: d.x, y: d.y, unit });
@@ -149,6 +152,20 @@ mod tests {
         assert!((m.x - 0.21).abs() < 1e-3 && (m.y - 0.19).abs() < 1e-3, "{m:?}");
         assert_eq!(view.frame.map(|f| f.width()), Some(200));
         assert!(view.why_ng.is_none());
+    }
+
+    #[test]
+    fn the_offset_in_machine_units_undoes_the_profiles_lens() {
+        let mut params = Params::default();
+        params.set_cal_k(vision_math::Matrix2::new(0.01, 0.0, 0.0, -0.01)).expect("K");
+        let lens = vision_math::Lens::new([-0.1, 0.01, 0.002, -0.001], 150.0).expect("lens");
+        params.calibration = params.calibration.with_lens(Some((lens, [0.0; 4]))).expect("lens");
+        let view = observe(&mut driver(Some((160.5, 40.5))), &params);
+        let (mark, m) = (view.mark.expect("found"), view.offset_machine.expect("K is set"));
+        let centred = vision_math::Vector2::new(mark.x + 0.5 - 100.0, mark.y + 0.5 - 80.0);
+        let want = vision_math::Matrix2::new(0.01, 0.0, 0.0, -0.01) * lens.undistort(centred);
+        assert!((m.x - want.x).abs() < 1e-12 && (m.y - want.y).abs() < 1e-12, "{m:?} vs {want}");
+        assert!((m.x - 0.01 * centred.x).abs() > 0.005, "the lens moves this mark by over half a pixel");
     }
 
     #[test]
