@@ -108,10 +108,10 @@ fn walked_rig(walk: &Walk, height: f64, present: &str) -> Rig {
 }
 
 /// The k1 the sheet walk estimated, read from the walk's M283 report (`records` are the
-/// walk's); `None` while the report carries no lens estimate.
+/// walk's); `None` when the walk could not measure it.
 fn estimated_k1(records: &[Record]) -> Option<f64> {
-    let _report = sheet_report(records);
-    None
+    let lens = sheet_report(records).lens;
+    lens.measured[0].then_some(lens.k1)
 }
 
 /// One alignment: the true cut error over the part grid and M282's predicted 99 % bound, inches.
@@ -345,12 +345,16 @@ fn lens_gate(worlds: Range<u64>, exact_worlds: Range<u64>, limits: &Limits) {
 }
 
 /// The quick form, always run: 16 worlds (16 fits per case and example, so the p95 is the
-/// largest), 4 without noise, every lens printed; gated is only what the linear chain reaches,
-/// the perfect lens, with room for the p95 of 16. Add lenses to its limits as the chain learns
-/// them.
+/// largest), 4 without noise, every lens gated with room for the p95 of 16.
 #[test]
 fn a_distorting_lens_is_measured() {
-    let limits = Limits { lenses: vec!["none"], p95_ratio: 1.5, coverage: 0.9, exact_in: 1e-6, k1: false };
+    let limits = Limits {
+        lenses: LENSES.map(|(name, _)| name).to_vec(),
+        p95_ratio: 1.5,
+        coverage: 0.9,
+        exact_in: 1e-6,
+        k1: true,
+    };
     lens_gate(7000..7016, 7000..7004, &limits);
 }
 
