@@ -6,7 +6,7 @@ use std::path::Path;
 use vision_math::LengthUnit;
 
 use super::report::{Report, Step};
-use crate::picture::{svg, MarkPair, Sheet};
+use crate::picture::{svg, LensField, MarkPair, Sheet};
 use crate::Failure;
 
 /// The pictures of `report`, each with its file name (`<program>-line<N>-fit.svg`,
@@ -78,6 +78,7 @@ pub(crate) fn program(out: &mut Vec<(String, Sheet)>, stem: &str, name: &str, st
                         outline: Vec::new(),
                         band: Some(a.predicted.bound99),
                         truth,
+                        lens: None,
                     },
                 ));
             }
@@ -130,6 +131,7 @@ pub(crate) fn program(out: &mut Vec<(String, Sheet)>, stem: &str, name: &str, st
                         outline: Vec::new(),
                         band: None,
                         truth: None,
+                        lens: lens_field(&r.lens),
                     },
                 ));
             }
@@ -150,4 +152,24 @@ pub(crate) fn write(report: &Report, dir: &Path) -> Result<Vec<std::path::PathBu
         written.push(path);
     }
     Ok(written)
+}
+
+/// The lens a calibration measured as a 5 × 5 grid of arrows out to the farthest reading (its
+/// corners there); `None` when it measured no coefficient.
+fn lens_field(report: &vision_core::LensReport) -> Option<LensField> {
+    let k = [report.k1, report.k2, report.p1, report.p2];
+    let lens = vision_math::Lens::new(k, report.focal_px).ok()?;
+    let half_px = report.reach_px / std::f64::consts::SQRT_2;
+    if !(report.measured.contains(&true) && half_px > 0.0) {
+        return None;
+    }
+    let at = |i: usize| half_px * (i as f64 / 2.0 - 1.0);
+    let arrows = (0..25)
+        .map(|i| {
+            let c = vision_math::Vector2::new(at(i % 5), at(i / 5));
+            let d = lens.distort(c) - c;
+            ([c.x, c.y], [d.x, d.y])
+        })
+        .collect();
+    Some(LensField { half_px, arrows })
 }
