@@ -9,7 +9,7 @@ use faer::linalg::solvers::SolveLstsq;
 use nalgebra::{Matrix2, Point2, Vector2};
 use vision_benches::marks;
 use vision_math::{
-    fit_affine, fit_rectangle, fit_rigid, fit_similarity, MathError, Model, PixelChain, Remap, Transform,
+    fit_affine, fit_rectangle, fit_rigid, fit_similarity, Lens, MathError, Model, PixelChain, Remap, Transform,
 };
 
 const SIZES: [usize; 4] = [3, 4, 16, 1000];
@@ -142,6 +142,13 @@ fn pixel_chain(c: &mut Criterion) {
     let px = Point2::new(912.25, 801.5);
     let at = Point2::new(6.0, 4.0);
     c.bench_function("pixel_chain/observed", |b| run(b, || chain.observed(black_box(at), black_box(px))));
+    c.bench_function("pixel_chain/delta", |b| run(b, || chain.delta(black_box(px))));
+    // The same chain with a barrel lens on the built-in camera (f = 6 in / 0.00203 in/px): the
+    // undistortion's Newton steps are the whole difference.
+    let lens = Lens::new([-0.10, 0.01, 0.002, -0.001], 2956.0).expect("valid lens");
+    let lensed = chain.with_lens(lens).expect("the lens does not fold over the image");
+    c.bench_function("pixel_chain/delta_lens", |b| run(b, || lensed.delta(black_box(px))));
+    c.bench_function("pixel_chain/observed_lens", |b| run(b, || lensed.observed(black_box(at), black_box(px))));
     c.bench_function("pixel_chain/native_pixels", |b| {
         run(b, || chain.native_pixels(black_box(Vector2::new(0.1, -0.2))));
     });

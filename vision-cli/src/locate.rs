@@ -10,21 +10,31 @@
 //! search would take more than the finder's 1 GiB ([`vision_locate::MAX_SEARCH_BYTES`]: a
 //! small `--diameter` on a large image searches it in small blocks), is refused before any is
 //! decoded (exit 2). The images are then decoded, searched and dropped one at a time.
+//!
+//! With `--profile`, each found mark is also given undistorted: the profile's lens
+//! (`VisionLensK1`…`VisionLensFocalPx`, about the optical centre `res/2 + PxCenterOffset`)
+//! undone as M281's pixel chain undoes it, still in locate's pixels. A profile that cannot be
+//! read, or whose lens folds over its image, is refused (exit 2); with a lens, so is an image
+//! whose size is not the profile's `VisionCameraResX` × `VisionCameraResY` (the lens is
+//! centred on that image).
 
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, ValueEnum};
 use serde_json::json;
+use vision_core::{Params, ProfileStore};
 use vision_driver_camera::decode::{decode_grey, DecodeError, GreySamples};
 use vision_driver_camera::file::open_regular;
+use vision_driver_sim::Sim;
 use vision_locate::{
     locate, GrayImage, Located, MarkKind, MarkSpec, NotFoundReason, Pixels, Polarity, SpecError, MIN_DIAMETER_PX,
 };
 use vision_math::show::number;
+use vision_math::{Matrix2, PixelChain, Point2, Remap, Vector2};
 
-use crate::{image_size, Failure};
+use crate::{image_size, world, Failure};
 
 /// Arguments of `mach-vision locate`.
 #[derive(Debug, Args)]
@@ -44,6 +54,11 @@ pub(crate) struct LocateArgs {
     /// One JSON object per image (one per line) instead of the readable lines.
     #[arg(long)]
     json: bool,
+    /// A Vision profile whose lens (and optical centre and resolution) undistorts each found
+    /// mark: JSON gains `distorted` and `undistorted`, a text line ` undistorted (x, y)` when
+    /// the profile has a lens. Read only.
+    #[arg(long, value_name = "P.toml")]
+    profile: Option<PathBuf>,
     /// Image files.
     #[arg(required = true)]
     images: Vec<PathBuf>,
@@ -135,7 +150,42 @@ fn spec_of(args: &LocateArgs, kind: MarkKind, polarity: Polarity) -> Result<Mark
     })
 }
 
+/// The pixel chain of `profile` that undoes its lens, K and the remap left out (locate has no
+/// machine units): `None` without `--profile`.
+fn lens_chain(profile: Option<&Path>) -> Result<Option<PixelChain>, Failure> {
+    let Some(path) = profile else { return Ok(None) };
+    let name = shown(path);
+    if !path.is_file() {
+        return Err(Failure::Input(format!("no profile {name}: --profile reads one")));
+    }
+    let input = |e: &dyn std::fmt::Display| Failure::Input(format!("profile {name}: {e}"));
+    // Loaded as `run` and `panel` load one: the registry's drivers (the simulated camera's
+    // among them) give the defaults, so any profile they save reads here.
+    let sim = Sim::new(world::load(None)?).map_err(|e| input(&e))?;
+    let registry = vision_host::cameras(Some(&sim));
+    // The store's errors name the file themselves.
+    let params: Params =
+        ProfileStore::new(path).with_defaults(registry.params()).load().map_err(|e| Failure::Input(e.to_string()))?;
+    let resolution = Vector2::new(params.camera_res_x() as f64, params.camera_res_y() as f64);
+    let centre = Vector2::new(params.px_center_offset_x(), params.px_center_offset_y());
+    let chain = PixelChain::new(Matrix2::identity(), Remap::IDENTITY, resolution, centre).map_err(|e| input(&e))?;
+    match params.calibration.lens() {
+        Some(lens) => chain.with_lens(lens).map(Some).map_err(|e| input(&e)),
+        None => Ok(Some(chain)),
+    }
+}
+
+/// The mark at locate's pixel (`x`, `y`) with `chain`'s lens undone, in locate's pixels. The
+/// chain's native pixels have their origin at the top-left pixel's corner, locate's at its
+/// centre: half a pixel apart.
+fn undistorted(chain: &PixelChain, x: f64, y: f64) -> (f64, f64) {
+    let native = Point2::new(x + 0.5, y + 0.5);
+    let ideal = chain.undistorted(native) - chain.centred(Point2::origin());
+    (ideal.x - 0.5, ideal.y - 0.5)
+}
+
 pub(crate) fn run(args: &LocateArgs) -> Result<String, Failure> {
+    let chain = lens_chain(args.profile.as_deref())?;
     let kind = args.mark;
     let polarity = match args.polarity {
         PolarityArg::Dark => Polarity::DarkOnLight,
@@ -157,6 +207,18 @@ pub(crate) fn run(args: &LocateArgs) -> Result<String, Failure> {
             Samples::Sixteen(p) => Pixels::Gray16(p),
         };
         let view = GrayImage::new(w, h, pixels).map_err(|e| Failure::Input(format!("image {}: {e}", shown(path))))?;
+        if let Some(c) = chain.as_ref().filter(|c| c.lens().is_some()) {
+            let res = c.resolution();
+            if (w as f64, h as f64) != (res.x, res.y) {
+                return Err(Failure::Input(format!(
+                    "image {} is {w} x {h} px, but the profile's camera is {} x {} px (VisionCameraResX/ResY): \
+                     its lens is centred on that image",
+                    shown(path),
+                    res.x,
+                    res.y
+                )));
+            }
+        }
         let located = locate(&view, &spec).map_err(|e| Failure::Input(e.to_string()))?;
         // JSON escapes the name itself; the text lines quote it when it could be mistaken.
         let name = path.display().to_string();
@@ -168,12 +230,24 @@ pub(crate) fn run(args: &LocateArgs) -> Result<String, Failure> {
                     if let Some(a) = m.angle {
                         o["angle_deg"] = json!(a.to_degrees());
                     }
+                    if let Some(c) = &chain {
+                        let (ux, uy) = undistorted(c, m.x, m.y);
+                        o["distorted"] = json!({"x": m.x, "y": m.y});
+                        o["undistorted"] = json!({"x": ux, "y": uy});
+                    }
                     writeln!(out, "{o}").expect("writing to a String");
                 } else {
                     let angle = m.angle.map(|a| format!(" angle={:.3}°", a.to_degrees())).unwrap_or_default();
+                    let ideal = match chain.as_ref().filter(|c| c.lens().is_some()) {
+                        Some(c) => {
+                            let (ux, uy) = undistorted(c, m.x, m.y);
+                            format!(" undistorted ({ux:.4}, {uy:.4})")
+                        }
+                        None => String::new(),
+                    };
                     writeln!(
                         out,
-                        "{text_name}: found x={:.4} y={:.4} diameter={:.3}{angle} score={:.4}",
+                        "{text_name}: found x={:.4} y={:.4} diameter={:.3}{angle} score={:.4}{ideal}",
                         m.x, m.y, m.diameter, m.score
                     )
                     .expect("writing to a String");

@@ -45,7 +45,24 @@ pub(crate) struct Sheet {
     pub band: Option<f64>,
     /// The true largest error (simulator only).
     pub truth: Option<f64>,
+    /// A calibration's lens, drawn small beside the plot.
+    pub lens: Option<LensField>,
 }
+
+/// How a lens moves the image, as arrows on a grid: drawn in a small square to the right of the
+/// plot, the image as the camera sees it (y down), the arrows magnified by a stated factor.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct LensField {
+    /// Half the side of the square shown, pixels from the optical centre.
+    pub half_px: f64,
+    /// Each grid point (pixels from the optical centre, y down) and how far the lens moves it
+    /// (pixels).
+    pub arrows: Vec<([f64; 2], [f64; 2])>,
+}
+
+/// The inset's side, and the share of it the grid spans.
+const INSET: f64 = 150.0;
+const INSET_SPAN: f64 = 0.8;
 
 const WIDTH: f64 = 800.0;
 const PLOT: f64 = 560.0;
@@ -213,6 +230,9 @@ pub(crate) fn svg(sheet: &Sheet) -> String {
         }
     }
     axes(&mut s, sheet.unit, span, scale);
+    if let Some(field) = &sheet.lens {
+        lens_inset(&mut s, field);
+    }
     legend(&mut s, sheet, Magnified { k, seen: seen_k, band_narrowed }, scale, TOP + PLOT + 20.0);
     let _ = writeln!(
         s,
@@ -220,6 +240,40 @@ pub(crate) fn svg(sheet: &Sheet) -> String {
     );
     s.push_str("</svg>\n");
     s
+}
+
+/// [`LensField`] in the plot's upper right corner.
+fn lens_inset(s: &mut String, field: &LensField) {
+    let (x0, y0) = (WIDTH - INSET - 20.0, TOP + 20.0);
+    let px = INSET * INSET_SPAN / 2.0 / field.half_px.max(1e-9);
+    let steps = (field.arrows.len() as f64).sqrt().max(2.0) - 1.0;
+    let largest = field.arrows.iter().map(|(_, d)| length(*d) * px).fold(0.0, f64::max);
+    let k = magnification(largest, INSET * INSET_SPAN / steps * 0.8);
+    let _ = writeln!(
+        s,
+        r##"<g class="lens-field"><rect x="{}" y="{}" width="{INSET}" height="{INSET}" fill="none" stroke="#999"/>"##,
+        n(x0),
+        n(y0)
+    );
+    for (p, d) in &field.arrows {
+        let (x, y) = (x0 + INSET / 2.0 + p[0] * px, y0 + INSET / 2.0 + p[1] * px);
+        let _ = writeln!(
+            s,
+            r##"<line x1="{}" y1="{}" x2="{}" y2="{}" stroke="#8250df" stroke-width="1.5" marker-end="url(#lens-tip)"/>"##,
+            n(x),
+            n(y),
+            n(x + d[0] * px * k),
+            n(y + d[1] * px * k)
+        );
+    }
+    let label = format!("the lens as the camera sees it, arrows ×{}", magnification_text(k));
+    let _ = writeln!(
+        s,
+        r##"<text x="{}" y="{}">{}</text><defs><marker id="lens-tip" viewBox="0 0 10 10" refX="9" refY="5" markerWidth="4" markerHeight="4" orient="auto"><path d="M0 0 L10 5 L0 10 z" fill="#8250df"/></marker></defs></g>"##,
+        n(WIDTH - 20.0 - text_width(&label, FONT)),
+        n(y0 - 6.0),
+        xml(&label)
+    );
 }
 
 /// The X and Y directions in the plot's lower left corner, and a scale bar of a round length
@@ -421,6 +475,7 @@ mod tests {
             outline: Vec::new(),
             band: Some(0.0004),
             truth: Some(0.0002),
+            lens: None,
         }
     }
 
@@ -527,5 +582,25 @@ mod tests {
         roxmltree::Document::parse(&text).expect("well-formed");
         let empty = Sheet { marks: Vec::new(), ..fit_sheet() };
         roxmltree::Document::parse(&svg(&empty)).expect("well-formed without marks");
+    }
+
+    #[test]
+    fn a_lens_is_drawn_as_arrows_in_its_own_square_with_their_factor() {
+        // Barrel: every point moves towards the centre, the corners by 2 px.
+        let arrows = [[-100.0, -100.0], [0.0, 0.0], [100.0, 100.0], [100.0, -100.0]]
+            .map(|p: [f64; 2]| (p, [-p[0] * 0.02, -p[1] * 0.02]))
+            .to_vec();
+        let sheet = Sheet { lens: Some(LensField { half_px: 100.0, arrows }), ..fit_sheet() };
+        let text = svg(&sheet);
+        let doc = roxmltree::Document::parse(&text).expect("well-formed");
+        let group = doc.descendants().find(|n| n.attribute("class") == Some("lens-field")).expect("the inset");
+        let lines: Vec<_> = group.descendants().filter(|n| n.has_tag_name("line")).collect();
+        assert_eq!(lines.len(), 4);
+        // The corner arrow points inwards (+x from the left), its 2 px along x drawn ×50 at the
+        // inset's 0.6 px per image pixel (the grid's 100 px are 60 px): 60 px long.
+        let (x1, x2) = (attr(lines[0], "x1"), attr(lines[0], "x2"));
+        assert!((x2 - x1 - 60.0).abs() < 1e-9, "{x1} {x2}");
+        assert!(text.contains("arrows ×50"), "{text}");
+        assert!(!svg(&fit_sheet()).contains("lens-field"), "a fit has no lens");
     }
 }

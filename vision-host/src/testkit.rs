@@ -109,7 +109,16 @@ impl Rig {
     /// When the loopback emulator cannot start or `params` name another driver (test bugs).
     #[must_use]
     pub fn new(params: Option<Params>, camera: Camera) -> (Rig, VisionModule) {
-        let sim = sim();
+        Rig::with_sim(sim(), params, camera)
+    }
+
+    /// [`Rig::new`] on `sim`'s world instead of the built-in one (a lens, another camera):
+    /// `None` for `params` is [`sim_params`] of that world.
+    ///
+    /// # Panics
+    /// As [`Rig::new`], and when `sim`'s world does not calibrate (a test bug).
+    #[must_use]
+    pub fn with_sim(sim: Sim, params: Option<Params>, camera: Camera) -> (Rig, VisionModule) {
         let registry = crate::cameras(Some(&sim));
         let mut params = params.unwrap_or_else(|| sim_params(&sim));
         let emulator = match camera {

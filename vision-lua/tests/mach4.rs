@@ -7,10 +7,12 @@ use std::path::Path;
 
 use mlua::{Function, Lua, Table, Value};
 use vision_core::Params;
+use vision_driver_sim::{Sim, World};
 use vision_gcode::{Context, HandlerError, MCodeHandler, UserMCode};
 use vision_host::panel::{self, PanelValue};
-use vision_host::testkit::{example, reference, Call, Camera, Rig, Trace, REFUSALS};
+use vision_host::testkit::{example, reference, sim_params, Call, Camera, Rig, Trace, REFUSALS};
 use vision_host::Session;
+use vision_math::{Point2, Vector2};
 use vision_mcode::VISION_MCODES;
 
 const NO_ERROR: i64 = 0;
@@ -163,6 +165,11 @@ impl MCodeHandler for MacroHandler {
 /// `program` through the Mach4 macros on a fresh [`Rig`].
 fn through_lua(program: &str, params: Option<Params>, camera: Camera) -> (Trace, MacroHandler) {
     let (rig, module) = Rig::new(params, camera);
+    run_on(&rig, module, program)
+}
+
+/// `program` through the Mach4 macros on `rig`, the session on `module`.
+fn run_on(rig: &Rig, module: vision_core::VisionModule, program: &str) -> (Trace, MacroHandler) {
     let lua = mach4_lua();
     mach_vision::install(&lua, Session::new(module));
     let mut handler = MacroHandler { lua, calls: Vec::new(), executed: Vec::new() };
@@ -200,6 +207,40 @@ fn rectangle_and_similarity_fits_through_the_macros_match_the_cli() {
         let status: Vec<String> = fake(&handler.lua).get("errors").expect("errors");
         assert_eq!(status.last().map(String::as_str), Some("M282: alignment applied"));
     }
+}
+
+/// M281 through the macros undoes the profile's lens: with a simulated lens (k1 −0.10, k2 0.01,
+/// p1 0.002, p2 −0.001) and the perfect calibration that carries it, a mark read about 710 px
+/// from the image centre, where the lens moves it some 4 px (0.008 in), lands within 0.0005 in
+/// of where the simulator put it; with the lens parameters zeroed it misses by more.
+#[test]
+fn a_capture_through_the_macros_undoes_the_lens() {
+    let mut world = World::default_world();
+    world.camera.distortion = Some([-0.10, 0.01, 0.002, -0.001, 0.0]);
+    // The camera 1.2 in left of and 0.8 in below fid 1 (nominal X0 Y0 of the part).
+    let program = "G90 G20 G54\nT98 M6\nG0 X-1.2 Y-0.8\nM281\nM30\n";
+    let miss = |lens: bool| {
+        let sim = Sim::new(world.clone()).expect("the world with a lens");
+        let mut params = sim_params(&sim);
+        assert!(params.calibration.lens().is_some(), "the perfect calibration carries the lens");
+        // One reading where the camera is: re-centring would read the mark at the centre.
+        params.set("VisionRecenterPasses", 0_i64).expect("passes");
+        if !lens {
+            for name in ["VisionLensK1", "VisionLensK2", "VisionLensP1", "VisionLensP2", "VisionLensFocalPx"] {
+                params.set(name, 0.0).expect("a lens parameter");
+            }
+        }
+        let world = sim.world();
+        let part = world.fixtures.iter().find(|f| f.name == "demo target").expect("the part");
+        let truth = part.true_point(Point2::origin(), world.length_unit());
+        let (rig, module) = Rig::with_sim(sim, Some(params), Camera::Sim);
+        let (trace, _) = run_on(&rig, module, program);
+        assert_eq!(trace.end, Ok("ended"), "{trace:?}");
+        // Slot 0 (#500, #501): the observed mark, program frame (G54, so the part's frame).
+        (Vector2::new(trace.pound[0], trace.pound[1]) - truth.coords).norm()
+    };
+    let (with, zeroed) = (miss(true), miss(false));
+    assert!(with < 5e-4 && zeroed > 2e-3, "off by {with} in with the lens, {zeroed} in with it zeroed");
 }
 
 #[test]

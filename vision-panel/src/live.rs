@@ -35,7 +35,10 @@ pub fn observe<S: FrameSource>(driver: &mut FrameDriver<S>, params: &Params) -> 
         });
         view.offset_px = Some((reading.x_px - w / 2.0, reading.y_px - h / 2.0));
         let centre = Vector2::new(params.px_center_offset_x(), params.px_center_offset_y());
-        if let Ok(chain) = PixelChain::new(params.cal_k(), params.remap(), Vector2::new(w, h), centre) {
+        // The lens undone before K, as M281 does (a lens that folds over the frame: no offset).
+        let chain = PixelChain::new(params.cal_k(), params.remap(), Vector2::new(w, h), centre)
+            .and_then(|c| params.calibration.lens().map_or(Ok(c), |lens| c.with_lens(lens)));
+        if let Ok(chain) = chain {
             let d = chain.delta(vision_math::Point2::new(reading.x_px, reading.y_px));
             let unit = params.cal_units().short_name().to_string();
             view.offset_machine = Some(MachineOffset { x: d.x, y: d.y, unit });
@@ -74,12 +77,28 @@ pub fn calibration(params: &Params) -> Vec<(String, String)> {
 }
 
 /// One calibration as a line of the page's history: K, the camera tool's offset and the pixel
-/// centre, each value as `value` gives it by manual name (`?` for one it has not).
+/// centre, each value as `value` gives it by manual name (`?` for one it has not), and the lens
+/// when it has one (`VisionLensFocalPx` above 0): each coefficient ± its 1σ, 5 decimals.
 #[must_use]
 pub fn calibration_line(value: &dyn Fn(&str) -> Option<String>) -> String {
     let v = |name: &str| value(name).unwrap_or_else(|| "?".to_string());
+    let number = |name: &str| value(name).and_then(|t| t.parse::<f64>().ok()).filter(|x| x.is_finite());
+    let lens = match number("VisionLensFocalPx").filter(|f| *f > 0.0) {
+        Some(focal) => {
+            let each: Vec<String> = ["K1", "K2", "P1", "P2"]
+                .iter()
+                .map(|c| {
+                    let shown = |n: Option<f64>| n.map_or_else(|| "?".to_string(), |x| format!("{x:.5}"));
+                    let (k, sigma) = (number(&format!("VisionLens{c}")), number(&format!("VisionLens{c}Sigma")));
+                    format!("{} {} ± {}", c.to_lowercase(), shown(k), shown(sigma))
+                })
+                .collect();
+            format!(" · lens {} (f {focal:.0} px)", each.join(", "))
+        }
+        None => String::new(),
+    };
     format!(
-        "K {} {} {} {} {u}/px · tool offset X{} Y{} {u} · centre {} {} px",
+        "K {} {} {} {} {u}/px · tool offset X{} Y{} {u} · centre {} {} px{lens}",
         v("VisionCal_K11"),
         v("VisionCal_K12"),
         v("VisionCal_K21"),
@@ -136,6 +155,20 @@ mod tests {
     }
 
     #[test]
+    fn the_offset_in_machine_units_undoes_the_profiles_lens() {
+        let mut params = Params::default();
+        params.set_cal_k(vision_math::Matrix2::new(0.01, 0.0, 0.0, -0.01)).expect("K");
+        let lens = vision_math::Lens::new([-0.1, 0.01, 0.002, -0.001], 150.0).expect("lens");
+        params.calibration = params.calibration.with_lens(Some((lens, [0.0; 4]))).expect("lens");
+        let view = observe(&mut driver(Some((160.5, 40.5))), &params);
+        let (mark, m) = (view.mark.expect("found"), view.offset_machine.expect("K is set"));
+        let centred = vision_math::Vector2::new(mark.x + 0.5 - 100.0, mark.y + 0.5 - 80.0);
+        let want = vision_math::Matrix2::new(0.01, 0.0, 0.0, -0.01) * lens.undistort(centred);
+        assert!((m.x - want.x).abs() < 1e-12 && (m.y - want.y).abs() < 1e-12, "{m:?} vs {want}");
+        assert!((m.x - 0.01 * centred.x).abs() > 0.005, "the lens moves this mark by over half a pixel");
+    }
+
+    #[test]
     fn no_mark_says_why_and_no_k_gives_no_machine_offset() {
         let view = observe(&mut driver(None), &Params::default());
         assert!(view.mark.is_none() && view.offset_machine.is_none());
@@ -163,5 +196,22 @@ mod history_tests {
             calibration_line(&value),
             "K 0.00203 0 0 0.00203 in/px · tool offset X-3.25 Y1.75 in · centre 0.4 ? px"
         );
+        let lens = |name: &str| match name {
+            "VisionLensFocalPx" => Some("2956.2".to_string()),
+            "VisionLensK1" => Some("-0.100213".to_string()),
+            "VisionLensK1Sigma" => Some("0.0012".to_string()),
+            "VisionLensP2" => Some("-0.001".to_string()),
+            other => value(other),
+        };
+        assert!(
+            calibration_line(&lens).ends_with(
+                "centre 0.4 ? px · lens k1 -0.10021 ± 0.00120, k2 ? ± ?, p1 ? ± ?, p2 -0.00100 ± ? (f 2956 px)"
+            ),
+            "{}",
+            calibration_line(&lens)
+        );
+        // No lens (a focal length of 0): nothing added.
+        let none = |name: &str| if name == "VisionLensFocalPx" { Some("0".to_string()) } else { lens(name) };
+        assert!(calibration_line(&none).ends_with("centre 0.4 ? px"));
     }
 }

@@ -248,7 +248,8 @@ impl PySession {
     /// calibrated perfectly, directly (`camera="sim"`) or through the Keyence driver and its
     /// emulator on loopback (`camera="keyence"`). The part ("demo target") is placed with the
     /// given rotation (degrees counter-clockwise about its centre), shift (X, Y, inches) and
-    /// scale (X, Y) instead of the world's; `calibrated=False` starts with K never calibrated
+    /// scale (X, Y) instead of the world's; `distortion` (k1, k2, p1, p2, k3) gives the camera
+    /// that lens (the perfect calibration carries it); `calibrated=False` starts with K never calibrated
     /// (for M283); `params` sets numeric Vision parameters (`{"VisionFitMaxScaleDev": 0.05}`).
     /// `profile` opens the session from that profile file instead, as `Session(profile)` does
     /// (publishing beside it)
@@ -259,13 +260,16 @@ impl PySession {
     #[cfg(any(test, feature = "sim"))]
     #[staticmethod]
     #[pyo3(signature = (
-        camera="sim", rotation_deg=None, shift=None, scale=None, calibrated=true, params=None, profile=None
+        camera="sim", rotation_deg=None, shift=None, scale=None, distortion=None, calibrated=true, params=None,
+        profile=None
     ))]
+    #[expect(clippy::too_many_arguments, reason = "Python's keyword arguments, each optional")]
     fn simulated(
         camera: &str,
         rotation_deg: Option<f64>,
         shift: Option<(f64, f64)>,
         scale: Option<(f64, f64)>,
+        distortion: Option<[f64; 5]>,
         calibrated: bool,
         params: Option<std::collections::BTreeMap<String, f64>>,
         profile: Option<PathBuf>,
@@ -273,7 +277,8 @@ impl PySession {
         let pose = sim::Pose { rotation_deg, shift, scale };
         let params = params.unwrap_or_default();
         let (simulated, mut session) =
-            sim::Simulated::new(camera, pose, calibrated, &params, profile.as_deref()).map_err(|e| vision_error(&e))?;
+            sim::Simulated::new(camera, pose, distortion, calibrated, &params, profile.as_deref())
+                .map_err(|e| vision_error(&e))?;
         session.publish();
         Ok(PySession::from_inner(Inner { session, sim: Some(simulated) }))
     }
@@ -620,6 +625,69 @@ except mach_vision.VisionError as e:
     assert "VisionNoSuch" in str(e), e
 "#,
             "param",
+        );
+    }
+
+    /// M281 through the bridge undoes the profile's lens: with a simulated lens (k1 −0.10,
+    /// k2 0.01, p1 0.002, p2 −0.001) and the perfect calibration that carries it, a mark read
+    /// about 710 px from the image centre, where the lens moves it some 4 px (0.008 in), lands
+    /// within 0.0005 in of where the simulator put it; with the lens parameters zeroed it misses
+    /// by more.
+    #[test]
+    fn a_capture_undoes_the_lens() {
+        run(
+            cr#"
+import math
+
+setup = mach_vision.Session.simulated().setup()
+TOOL = setup["camera_tool"]
+WX, WY = setup["work_offset"]
+
+
+class Host:
+    """LinuxCNC in G20 G54 with the camera tool loaded, 1.2 in left of and 0.8 in below the
+    part's first fiducial (nominal X0 Y0)."""
+
+    def __init__(self):
+        self.x, self.y = -1.2, -0.8
+        self.pounds = {5220: 1.0, 5221: WX, 5222: WY}
+
+    def program_position(self): return (self.x, self.y)
+    def machine_position(self):
+        tx, ty = setup["camera_table_offset"]
+        return (WX + self.x + tx, WY + self.y + ty, 0.0)
+    def xy_rotation_deg(self): return 0.0
+    def g92_offset(self): return (0.0, 0.0)
+    def metric(self): return False
+    def execute(self, line): raise AssertionError("no G-code expected: %r" % line)
+    def save_modal_state(self): pass
+    def restore_modal_state(self): pass
+    def tool(self): return TOOL
+    def tool_offset(self, tool): return tuple(setup["camera_table_offset"])
+    def set_tool_offset(self, tool, x, y): raise AssertionError("M281 sets no tool offset")
+    def pound(self, n): return self.pounds.get(n, 0.0)
+    def set_pound(self, n, value): self.pounds[n] = value
+    def dwell(self, seconds): pass
+    def message(self, text): pass
+
+
+def miss(params):
+    """How far M281's observed point (#500, #501, program frame) is from the fiducial's truth."""
+    # One reading where the camera is: re-centring would read the mark at the image centre.
+    s = mach_vision.Session.simulated(
+        distortion=(-0.10, 0.01, 0.002, -0.001, 0.0), params=dict(params, VisionRecenterPasses=0))
+    assert s.param("VisionLensFocalPx") > 0 or params, "the perfect calibration carries the lens"
+    host = Host()
+    s.call(281, {}, host)
+    tx, ty = s.true_point(0.0, 0.0)
+    return math.hypot(host.pounds[500] - (tx - WX), host.pounds[501] - (ty - WY))
+
+
+with_lens = miss({})
+zeroed = miss({n: 0.0 for n in ("VisionLensK1", "VisionLensK2", "VisionLensP1", "VisionLensP2", "VisionLensFocalPx")})
+assert with_lens < 5e-4 and zeroed > 2e-3, "off by %g in with the lens, %g in zeroed" % (with_lens, zeroed)
+"#,
+            "lens",
         );
     }
 

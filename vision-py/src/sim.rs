@@ -39,12 +39,13 @@ pub(crate) struct Simulated {
 const PART: &str = "demo target";
 
 impl Simulated {
-    /// The rig for `camera` (`"sim"` or `"keyence"`) with the part at `pose`, and a session on
-    /// it: without `profile`, no profile file, perfectly calibrated, or with K never calibrated
-    /// when not `calibrated`; with `profile`, the session of that file as `Session(profile)`
-    /// opens it (M283 and M284 save to it; `calibrated` has no effect), its `VisionDriver`
-    /// naming the simulated camera (`Sim`) or a real driver. Then the numeric parameters
-    /// `params` are set.
+    /// The rig for `camera` (`"sim"` or `"keyence"`) with the part at `pose` and the camera's
+    /// lens `distortion` (`[k1, k2, p1, p2, k3]`, none when `None`), and a session on it:
+    /// without `profile`, no profile file, perfectly calibrated (the lens included), or with K
+    /// never calibrated when not `calibrated`; with `profile`, the session of that file as
+    /// `Session(profile)` opens it (M283 and M284 save to it; `calibrated` has no effect), its
+    /// `VisionDriver` naming the simulated camera (`Sim`) or a real driver. Then the numeric
+    /// parameters `params` are set.
     ///
     /// # Errors
     /// An unknown camera name, a pose the world refuses or a parameter the module refuses, as a
@@ -52,6 +53,7 @@ impl Simulated {
     pub(crate) fn new(
         camera: &str,
         pose: Pose,
+        distortion: Option<[f64; 5]>,
         calibrated: bool,
         params: &BTreeMap<String, f64>,
         profile: Option<&Path>,
@@ -61,8 +63,11 @@ impl Simulated {
             "keyence" => Camera::Keyence,
             other => return Err(format!("camera {other:?} is not simulated: use \"sim\" or \"keyence\"")),
         };
-        let base = (!calibrated).then(|| testkit::uncalibrated_params(&testkit::sim()));
-        let (rig, module) = Rig::new(base, camera);
+        let mut world = vision_driver_sim::World::default_world();
+        world.camera.distortion = distortion;
+        let sim = vision_driver_sim::Sim::new(world).map_err(|e| e.to_string())?;
+        let base = (!calibrated).then(|| testkit::uncalibrated_params(&sim));
+        let (rig, module) = Rig::with_sim(sim, base, camera);
         let mut session = match profile {
             None => Session::new(module),
             Some(path) => Session::open(path, &vision_host::cameras(Some(&rig.sim))).map_err(|e| e.to_string())?,

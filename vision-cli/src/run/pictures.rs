@@ -6,7 +6,7 @@ use std::path::Path;
 use vision_math::LengthUnit;
 
 use super::report::{Report, Step};
-use crate::picture::{svg, MarkPair, Sheet};
+use crate::picture::{svg, LensField, MarkPair, Sheet};
 use crate::Failure;
 
 /// The pictures of `report`, each with its file name (`<program>-line<N>-fit.svg`,
@@ -78,6 +78,7 @@ pub(crate) fn program(out: &mut Vec<(String, Sheet)>, stem: &str, name: &str, st
                         outline: Vec::new(),
                         band: Some(a.predicted.bound99),
                         truth,
+                        lens: None,
                     },
                 ));
             }
@@ -94,7 +95,7 @@ pub(crate) fn program(out: &mut Vec<(String, Sheet)>, stem: &str, name: &str, st
                         dropped: false,
                     })
                     .collect();
-                let lines = vec![
+                let mut lines = vec![
                     format!(
                         "K = [{:.8} {:.8}; {:.8} {:.8}] {unit}/px, camera rotation {:.4} deg",
                         r.k[(0, 0)],
@@ -108,6 +109,18 @@ pub(crate) fn program(out: &mut Vec<(String, Sheet)>, stem: &str, name: &str, st
                         r.sheet_scale.x, r.sheet_scale.y, r.verify_rms, r.verify_max
                     ),
                 ];
+                // The lens in two short lines (the text report has the whole note).
+                match super::text::lens_coefficients(&r.lens) {
+                    Some(c) => {
+                        lines.push(format!("lens {c}"));
+                        let note = if r.lens.note.is_some() { "; see the report's note" } else { "" };
+                        lines.push(format!(
+                            "lens moves the farthest corner {:.2} px (f {:.0} px){note}",
+                            r.lens.corner_px, r.lens.focal_px
+                        ));
+                    }
+                    None => lines.push("lens not measured: see the report's note".to_string()),
+                }
                 out.push((
                     format!("{stem}-line{line}-calibration.svg"),
                     Sheet {
@@ -118,6 +131,7 @@ pub(crate) fn program(out: &mut Vec<(String, Sheet)>, stem: &str, name: &str, st
                         outline: Vec::new(),
                         band: None,
                         truth: None,
+                        lens: lens_field(&r.lens),
                     },
                 ));
             }
@@ -138,4 +152,24 @@ pub(crate) fn write(report: &Report, dir: &Path) -> Result<Vec<std::path::PathBu
         written.push(path);
     }
     Ok(written)
+}
+
+/// The lens a calibration measured as a 5 × 5 grid of arrows out to the farthest reading (its
+/// corners there); `None` when it measured no coefficient.
+fn lens_field(report: &vision_core::LensReport) -> Option<LensField> {
+    let k = [report.k1, report.k2, report.p1, report.p2];
+    let lens = vision_math::Lens::new(k, report.focal_px).ok()?;
+    let half_px = report.reach_px / std::f64::consts::SQRT_2;
+    if !(report.measured.contains(&true) && half_px > 0.0) {
+        return None;
+    }
+    let at = |i: usize| half_px * (i as f64 / 2.0 - 1.0);
+    let arrows = (0..25)
+        .map(|i| {
+            let c = vision_math::Vector2::new(at(i % 5), at(i / 5));
+            let d = lens.distort(c) - c;
+            ([c.x, c.y], [d.x, d.y])
+        })
+        .collect();
+    Some(LensField { half_px, arrows })
 }

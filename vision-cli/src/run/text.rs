@@ -23,6 +23,50 @@ fn l(v: f64) -> String {
     vision_math::chain::fixed(v, 5)
 }
 
+/// The lens M283 measured with K, as the report's lines (without their indent): the four
+/// coefficients with their 1σ, "(not measured)" for one the walk could not tell from K, how far
+/// the lens moves the image's farthest corner, and the note.
+fn lens_lines(lens: &vision_core::LensReport) -> Vec<String> {
+    let Some(coefficients) = lens_coefficients(lens) else {
+        return vec![format!("lens not measured: {}", lens.note.as_deref().unwrap_or("no lens grid was read"))];
+    };
+    let grid = match (lens.grid_found, lens.grid_asked) {
+        (_, 0) => "no lens grid".to_string(),
+        (found, asked) => format!("lens grid {found} of {asked}"),
+    };
+    let mut lines = vec![
+        format!("lens {coefficients} (f {:.0} px)", lens.focal_px),
+        format!(
+            "lens moves the farthest corner {:.2} px; {} readings out to {:.0} px from the centre, rms {:.3} px, {grid}",
+            lens.corner_px, lens.readings, lens.reach_px, lens.rms_px
+        ),
+    ];
+    if let Some(note) = &lens.note {
+        lines.push(format!("lens: {note}"));
+    }
+    lines
+}
+
+/// `k1 … ± …, k2 … ± …, p1 …, p2 …` with "(not measured)" for a coefficient the walk could not
+/// tell from K; `None` when it measured none (no lens model: the report's note says why).
+pub(crate) fn lens_coefficients(lens: &vision_core::LensReport) -> Option<String> {
+    const NAMES: [&str; 4] = ["k1", "k2", "p1", "p2"];
+    if !lens.measured.contains(&true) {
+        return None;
+    }
+    let values = [lens.k1, lens.k2, lens.p1, lens.p2];
+    let each: Vec<String> = (0..4)
+        .map(|i| {
+            if lens.measured[i] {
+                format!("{} {} ± {}", NAMES[i], l(values[i]), l(lens.sigma[i]))
+            } else {
+                format!("{} (not measured)", NAMES[i])
+            }
+        })
+        .collect();
+    Some(each.join(", "))
+}
+
 /// `X… Y…` of a point or a vector.
 fn xy(x: f64, y: f64) -> String {
     format!("X{} Y{}", l(x), l(y))
@@ -318,6 +362,9 @@ fn step(s: &mut String, step: &Step, world_unit: &str) {
                     c.note.as_deref().unwrap_or("no lift")
                 );
             }
+            for line in lens_lines(&r.lens) {
+                let _ = writeln!(s, "              {line}");
+            }
             for v in &r.verify {
                 let _ = writeln!(
                     s,
@@ -379,4 +426,46 @@ fn axes(s: &mut String, r: Remap) {
 /// `K11 K12; K21 K22` to 8 decimals.
 fn k_text(k: &Matrix2<f64>) -> String {
     format!("{:.8} {:.8}; {:.8} {:.8}", k[(0, 0)], k[(0, 1)], k[(1, 0)], k[(1, 1)])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::lens_lines;
+    use vision_core::LensReport;
+
+    fn lens(measured: [bool; 4], note: Option<&str>) -> LensReport {
+        LensReport {
+            k1: -0.100_21,
+            k2: 0.0102,
+            p1: 0.002,
+            p2: -0.001,
+            sigma: [0.0012, 0.003, 0.000_05, 0.000_05],
+            measured,
+            focal_px: 2956.2,
+            corner_px: 12.345,
+            reach_px: 1100.4,
+            rms_px: 0.0812,
+            readings: 103,
+            grid_found: 24,
+            grid_asked: 25,
+            note: note.map(str::to_string),
+        }
+    }
+
+    #[test]
+    fn the_lens_reads_with_its_sigmas_what_was_not_measured_and_the_note() {
+        assert_eq!(
+            lens_lines(&lens([true; 4], None)),
+            [
+                "lens k1 -0.10021 ± 0.00120, k2 0.01020 ± 0.00300, p1 0.00200 ± 0.00005, p2 -0.00100 ± 0.00005 (f 2956 px)",
+                "lens moves the farthest corner 12.35 px; 103 readings out to 1100 px from the centre, rms 0.081 px, \
+                 lens grid 24 of 25",
+            ]
+        );
+        let lines = lens_lines(&lens([true, false, true, true], Some("the lens's k2 (±0.510) could not be told")));
+        assert!(lines[0].starts_with("lens k1 -0.10021 ± 0.00120, k2 (not measured), p1 0.00200"), "{lines:?}");
+        assert_eq!(lines[2], "lens: the lens's k2 (±0.510) could not be told");
+        let none = LensReport { grid_asked: 0, ..lens([false; 4], Some("set VisionCalibrationGrid")) };
+        assert_eq!(lens_lines(&none), ["lens not measured: set VisionCalibrationGrid"]);
+    }
 }

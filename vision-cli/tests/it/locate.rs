@@ -84,6 +84,82 @@ fn finds_the_dot_in_png_jpeg_pgm_bmp_16_bit_and_colour() {
     assert!(text.contains("found x=101.3") && text.contains("y=70.6"), "{text}");
 }
 
+/// A profile for the 200 × 150 images of [`save`], its optical centre (3, −2) px off the
+/// image's, with `lens` (the `[vision]` lines) added.
+fn lens_profile(name: &str, lens: &str) -> PathBuf {
+    let path = dir().join(name);
+    let text = format!(
+        "[vision]\nVisionCameraResX = 200\nVisionCameraResY = 150\nVisionPxCenterOffsetX = 3.0\n\
+         VisionPxCenterOffsetY = -2.0\n{lens}"
+    );
+    std::fs::write(&path, text).expect("write profile");
+    path
+}
+
+#[test]
+fn with_a_profile_each_mark_is_also_given_with_the_lens_undone() {
+    let image = save("lens.png", Some((160.3, 40.6)), Depth::Eight, false);
+    let lens = "VisionLensK1 = -0.1\nVisionLensK2 = 0.01\nVisionLensP1 = 0.002\nVisionLensP2 = -0.001\n\
+                VisionLensFocalPx = 150.0\n";
+    let with_lens = lens_profile("lens.toml", lens);
+    let without = lens_profile("no-lens.toml", "VisionLensK1 = -0.1\n");
+    let i = image.to_str().unwrap();
+    let json = |profile: &PathBuf| {
+        let out = run(&["--diameter", "40", "--json", "--profile", profile.to_str().unwrap(), i]);
+        assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+        json_lines(&out).remove(0)
+    };
+    let xy = |v: &serde_json::Value| (v["x"].as_f64().unwrap(), v["y"].as_f64().unwrap());
+
+    // The reading's native pixel (corner origin, half a pixel from locate's) less the optical
+    // centre, undone through the lens and put back.
+    let o = json(&with_lens);
+    let (x, y) = xy(&o);
+    assert_eq!(xy(&o["distorted"]), (x, y), "{o}");
+    let l = vision_math::Lens::new([-0.1, 0.01, 0.002, -0.001], 150.0).unwrap();
+    let origin = vision_math::Vector2::new(103.0, 73.0);
+    let want = l.undistort(vision_math::Vector2::new(x + 0.5, y + 0.5) - origin) + origin;
+    let (ux, uy) = xy(&o["undistorted"]);
+    assert!((ux + 0.5 - want.x).abs() < 1e-9 && (uy + 0.5 - want.y).abs() < 1e-9, "{o} vs {want}");
+    assert!((ux - x).hypot(uy - y) > 0.5, "the lens moves this mark by more than half a pixel: {o}");
+
+    // VisionLensFocalPx 0 is no lens: the same pixel twice, and no text added.
+    let o = json(&without);
+    assert_eq!((xy(&o["distorted"]), xy(&o["undistorted"])), (xy(&o), xy(&o)), "{o}");
+    let text = |profile: &PathBuf| {
+        let out = run(&["--diameter", "40", "--profile", profile.to_str().unwrap(), i]);
+        String::from_utf8(out.stdout).unwrap()
+    };
+    assert!(!text(&without).contains("undistorted"), "{}", text(&without));
+    let t = text(&with_lens);
+    assert!(t.trim_end().ends_with(&format!(" undistorted ({ux:.4}, {uy:.4})")), "{t}");
+
+    // Without --profile the JSON is as before.
+    let out = run(&["--diameter", "40", "--json", i]);
+    assert!(json_lines(&out)[0].get("undistorted").is_none());
+}
+
+#[test]
+fn a_bad_profile_or_an_image_of_another_size_exits_2() {
+    let image = save("lens-bad.png", Some((100.0, 75.0)), Depth::Eight, false);
+    let folds = lens_profile("folds.toml", "VisionLensK1 = -3.0\nVisionLensFocalPx = 150.0\n");
+    let garbled = dir().join("garbled.toml");
+    std::fs::write(&garbled, "[vision]\nVisionLensK1 = \"barrel\"\n").unwrap();
+    let other_size = dir().join("other-size.toml");
+    std::fs::write(&other_size, "[vision]\nVisionLensK1 = -0.1\nVisionLensFocalPx = 2956.0\n").unwrap();
+    for (profile, says) in [
+        (dir().join("absent.toml"), "no profile"),
+        (garbled, "VisionLensK1"),
+        (folds, "fold"),
+        (other_size, "1776 x 1776"),
+    ] {
+        let out = run(&["--diameter", "40", "--profile", profile.to_str().unwrap(), image.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{profile:?}: {err}");
+        assert!(out.stdout.is_empty() && err.contains(says), "{profile:?}: {err}");
+    }
+}
+
 #[test]
 fn an_image_without_the_mark_exits_1_with_the_reason() {
     let good = save("good.png", Some((100.0, 75.0)), Depth::Eight, false);

@@ -484,6 +484,15 @@ fn run_report_writes_a_picture_per_fit_and_calibration() {
     // misplacement is exaggerated by a stated factor, and there are axes and a scale bar.
     assert!(text.contains("its offset from ○ ×") && text.contains("every error length below, ×"), "{text}");
     assert_eq!((class("axis"), class("scale-bar")), (2, 1));
+    // The calibration's picture carries the lens M283 measured (issue 38).
+    let cal = std::fs::read_to_string(dir.join(&names[0])).expect("svg");
+    let cal_text: String = roxmltree::Document::parse(&cal)
+        .expect("the SVG parses")
+        .descendants()
+        .filter(roxmltree::Node::is_text)
+        .map(|n| n.text().unwrap_or(""))
+        .collect();
+    assert!(cal_text.contains("lens k1 ") && cal_text.contains("lens moves the farthest corner"), "{cal_text}");
     let num = |n: roxmltree::Node<'_, '_>, a: &str| n.attribute(a).and_then(|v| v.parse::<f64>().ok()).expect("number");
     let longest = doc
         .descendants()

@@ -24,8 +24,8 @@ pub const MAX_STATE_BYTES: u64 = 4 << 20;
 pub const MAX_CALIBRATIONS: usize = 20;
 
 /// The parameters a calibration's history entry keeps: K, the camera tool's offset, the pixel
-/// centre and the units they are in.
-pub const CALIBRATION_PARAMS: [&str; 9] = [
+/// centre, the units they are in, and the lens with its 1σ.
+pub const CALIBRATION_PARAMS: [&str; 18] = [
     "VisionCal_K11",
     "VisionCal_K12",
     "VisionCal_K21",
@@ -35,6 +35,15 @@ pub const CALIBRATION_PARAMS: [&str; 9] = [
     "VisionPxCenterOffsetX",
     "VisionPxCenterOffsetY",
     "VisionCal_Units",
+    "VisionLensK1",
+    "VisionLensK2",
+    "VisionLensP1",
+    "VisionLensP2",
+    "VisionLensK1Sigma",
+    "VisionLensK2Sigma",
+    "VisionLensP1Sigma",
+    "VisionLensP2Sigma",
+    "VisionLensFocalPx",
 ];
 
 /// One calibration M283 saved, as the profile held it right after: for the panel's history.
