@@ -17,7 +17,7 @@
 //! ones the readings determined. The covariance is the normal matrix's inverse, scaled by the
 //! residuals' χ² when they show more than the camera's noise.
 
-use nalgebra::{DMatrix, DVector, Matrix2, Point2, Vector2};
+use nalgebra::{Cholesky, DMatrix, DVector, Dyn, Matrix2, Point2, Vector2};
 
 use crate::lens::{coefficient_derivatives, jacobian, map};
 use crate::{Lens, MathError};
@@ -259,20 +259,24 @@ fn normal_equations(
     Ok((jt_j, jt_r, chi2))
 }
 
-/// Solves `N·x = b` with `N` scaled to a unit diagonal (the unknowns' units differ by 10⁶).
-fn solve_scaled(normal: &DMatrix<f64>, b: &DVector<f64>) -> Result<DVector<f64>, MathError> {
+/// `N` scaled to a unit diagonal (the unknowns' units differ by 10⁶), its Cholesky factor, and
+/// the scale `d` (`N = D⁻¹·S·D⁻¹`, `D = diag(d)`).
+fn scaled_cholesky(normal: &DMatrix<f64>) -> Result<(Cholesky<f64, Dyn>, DVector<f64>), MathError> {
     let d = DVector::from_iterator(normal.nrows(), normal.diagonal().iter().map(|v| 1.0 / v.max(1e-300).sqrt()));
     let scaled = DMatrix::from_fn(normal.nrows(), normal.ncols(), |i, j| normal[(i, j)] * d[i] * d[j]);
-    let chol = scaled.cholesky().ok_or(MathError::SingularK)?;
-    let x = chol.solve(&b.component_mul(&d));
-    Ok(x.component_mul(&d))
+    Ok((scaled.cholesky().ok_or(MathError::SingularK)?, d))
 }
 
-/// `N⁻¹` by the same scaling.
+/// Solves `N·x = b`.
+fn solve_scaled(normal: &DMatrix<f64>, b: &DVector<f64>) -> Result<DVector<f64>, MathError> {
+    let (chol, d) = scaled_cholesky(normal)?;
+    Ok(chol.solve(&b.component_mul(&d)).component_mul(&d))
+}
+
+/// `N⁻¹`.
 fn invert_scaled(normal: &DMatrix<f64>) -> Result<DMatrix<f64>, MathError> {
-    let d = DVector::from_iterator(normal.nrows(), normal.diagonal().iter().map(|v| 1.0 / v.max(1e-300).sqrt()));
-    let scaled = DMatrix::from_fn(normal.nrows(), normal.ncols(), |i, j| normal[(i, j)] * d[i] * d[j]);
-    let inv = scaled.cholesky().ok_or(MathError::SingularK)?.inverse();
+    let (chol, d) = scaled_cholesky(normal)?;
+    let inv = chol.inverse();
     Ok(DMatrix::from_fn(inv.nrows(), inv.ncols(), |i, j| inv[(i, j)] * d[i] * d[j]))
 }
 

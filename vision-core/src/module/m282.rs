@@ -7,7 +7,7 @@ use vision_math::{
 
 use super::height::{self, HeightReport};
 use super::m280::RunMode;
-use super::{Reply, VisionModule};
+use super::{Dot, Reply, VisionModule};
 use crate::controller::{Applied, HowApplied};
 use crate::error::VisionError;
 use crate::machine::Machine;
@@ -182,16 +182,14 @@ impl VisionModule {
         };
         let camera_noise = self.camera_noise(unit);
         let dropped = self.find_dropped(model, &all_commanded, &all_observed, camera_noise)?;
+        let kept_mark = |i: usize| dropped.is_none_or(|d| d.mark != i + 1);
         let kept = |v: &[Point2<f64>]| -> Vec<Point2<f64>> {
-            v.iter().enumerate().filter(|(i, _)| dropped.is_none_or(|d| d.mark != i + 1)).map(|(_, p)| *p).collect()
+            v.iter().enumerate().filter(|(i, _)| kept_mark(*i)).map(|(_, p)| *p).collect()
         };
         let (commanded, observed) = (kept(&all_commanded), kept(&all_observed));
-        let reach: Vec<Vector2<f64>> = all_reach
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| dropped.is_none_or(|d| d.mark != i + 1))
-            .map(|(_, r)| *r)
-            .collect();
+        let kept_dots: Vec<&Dot> =
+            self.run.dots.iter().enumerate().filter(|(i, _)| kept_mark(*i)).map(|(_, d)| d).collect();
+        let reach: Vec<Vector2<f64>> = kept_dots.iter().map(|d| d.reach_in(unit)).collect();
         let fit = match mode {
             RunMode::Rectangle => fit_rectangle(&commanded, &observed)?,
             RunMode::Similarity => fit_similarity(&commanded, &observed)?,
@@ -204,14 +202,7 @@ impl VisionModule {
         // The lens's uncertainty: one shared error per coefficient, moving each capture by what
         // that coefficient's 1σ moves the pixel it was read at.
         let lens_sigma = self.params.calibration.lens_sigma();
-        let lens_along: Vec<[Vector2<f64>; 4]> = self
-            .run
-            .dots
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| dropped.is_none_or(|d| d.mark != i + 1))
-            .map(|(_, d)| d.lens_along_in(unit))
-            .collect();
+        let lens_along: Vec<[Vector2<f64>; 4]> = kept_dots.iter().map(|d| d.lens_along_in(unit)).collect();
         let lens = Lens { along: &lens_along, sigma: lens_sigma };
         let predicted = predict(&fit, &commanded, camera_noise, &reach, [scale_sigma, shift_sigma], &lens)?;
         let chain = match pieces {
@@ -414,9 +405,7 @@ fn predict(
         Shared { along: &y, sigma: shift_sigma },
     ];
     for (along, sigma) in per_coefficient.iter().zip(lens.sigma) {
-        if sigma > 0.0 && along.len() == commanded.len() {
-            shared.push(Shared { along, sigma });
-        }
+        shared.push(Shared { along, sigma });
     }
     let p = fit.transform.predict_shared(commanded, noise, &corners, &shared)?;
     Ok(PredictedError { noise, camera_noise, sigma: p.sigma, bound99: p.bound99 })

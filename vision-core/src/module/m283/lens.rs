@@ -30,30 +30,60 @@ pub(super) fn lens_grid(
     dot: usize,
 ) -> Result<(usize, usize), VisionError> {
     let n = usize::try_from(params.calibration_grid()).unwrap_or(0);
-    if n < 2 {
-        return Ok((0, 0));
-    }
-    let half = resolution(params) * 0.5 * LENS_GRID_REACH;
-    let t = |i: usize| -1.0 + 2.0 * i as f64 / (n - 1) as f64;
+    let pixels = grid_pixels(n, resolution(params) * 0.5 * LENS_GRID_REACH);
     walker.lifting = true;
     let mut found = 0;
-    for i in 0..n {
-        for j in 0..n {
-            let j = if i % 2 == 0 { j } else { n - 1 - j };
-            let pixel = Vector2::new(t(i) * half.x, t(j) * half.y);
-            let read = walker.move_abs(around - kr * pixel).and_then(|()| walker.try_shoot(dot));
-            match read {
-                Ok(Some(_)) => found += 1,
-                Ok(None) => {}
-                Err(e) => {
-                    walker.lifting = false;
-                    return Err(e);
-                }
+    for pixel in &pixels {
+        let read = walker.move_abs(around - kr * pixel).and_then(|()| walker.try_shoot(dot));
+        match read {
+            Ok(Some(_)) => found += 1,
+            Ok(None) => {}
+            Err(e) => {
+                walker.lifting = false;
+                return Err(e);
             }
         }
     }
     walker.lifting = false;
-    Ok((found, n * n))
+    Ok((found, pixels.len()))
+}
+
+/// Where the lens grid puts the mark, centred pixels: an `n` × `n` grid reaching `half` along
+/// each axis, serpentine so each move is one grid step; none for `n` < 2 (one position says
+/// nothing of the lens).
+fn grid_pixels(n: usize, half: Vector2<f64>) -> Vec<Vector2<f64>> {
+    if n < 2 {
+        return Vec::new();
+    }
+    let t = |i: usize| -1.0 + 2.0 * i as f64 / (n - 1) as f64;
+    (0..n)
+        .flat_map(|i| (0..n).map(move |j| (i, if i % 2 == 0 { j } else { n - 1 - j })))
+        .map(|(i, j)| Vector2::new(t(i) * half.x, t(j) * half.y))
+        .collect()
+}
+
+/// The focal length the lens is normalised by, pixels: the working distance (the lift's
+/// measured one when > 0, else the configured one, both in the unit of `pixel`) over the pixel
+/// size `pixel` (units per pixel); the image's half-diagonal `res` when neither is known.
+fn focal_length(measured_wd: f64, configured_wd: f64, pixel: f64, res: Vector2<f64>) -> f64 {
+    let wd = if measured_wd > 0.0 { measured_wd } else { configured_wd };
+    if wd > 0.0 && pixel > 0.0 {
+        wd / pixel
+    } else {
+        res.norm() / 2.0
+    }
+}
+
+/// How far `lens` moves the farthest of the image's corners (`res`, the optical centre at
+/// native pixel `origin`), pixels.
+fn corner_displacement(lens: &Lens, origin: Vector2<f64>, res: Vector2<f64>) -> f64 {
+    [Vector2::zeros(), Vector2::new(res.x, 0.0), Vector2::new(0.0, res.y), res]
+        .iter()
+        .map(|c| {
+            let centred = c - origin;
+            (lens.undistort(centred) - centred).norm()
+        })
+        .fold(0.0, f64::max)
 }
 
 /// What the joint solve gives the walk.
@@ -88,10 +118,8 @@ pub(super) fn solve(
         .collect();
     let offset = lifted.centre.map_or(params.calibration.center_offset(), |(o, _)| o);
     let ratio = lifted.centre.and(lifted.ratio);
-    let measured_wd = lifted.report.working_distance;
-    let wd = if measured_wd > 0.0 { measured_wd } else { LengthUnit::Inch.convert(params.working_distance_in(), unit) };
-    let pixel = k.determinant().abs().sqrt();
-    let focal_px = if wd > 0.0 { wd / pixel } else { res.norm() / 2.0 };
+    let configured_wd = LengthUnit::Inch.convert(params.working_distance_in(), unit);
+    let focal_px = focal_length(lifted.report.working_distance, configured_wd, k.determinant().abs().sqrt(), res);
     let kr = k * remap.matrix();
     let start = LensFitStart {
         kr,
@@ -120,13 +148,7 @@ pub(super) fn solve(
         Some(_) => Some((fit.origin.coords - res * 0.5, fit.origin_sigma.x.max(fit.origin_sigma.y))),
         None => lifted.centre,
     };
-    let corner = [Vector2::zeros(), Vector2::new(res.x, 0.0), Vector2::new(0.0, res.y), res]
-        .iter()
-        .map(|c| {
-            let centred = c - fit.origin.coords;
-            (fit.lens.undistort(centred) - centred).norm()
-        })
-        .fold(0.0, f64::max);
+    let corner = corner_displacement(&fit.lens, fit.origin.coords, res);
     let note = unmeasured_note(fit.measured, &fit.sigma, fit.reach_px, params.calibration_grid(), grid);
     let report = LensReport {
         k1: fit.lens.coefficients()[0],
@@ -194,8 +216,55 @@ fn unmeasured_note(
 }
 
 #[cfg(test)]
+#[expect(clippy::float_cmp, reason = "tests compare exact values")]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_grid_is_serpentine_and_reaches_its_half_width() {
+        let half = Vector2::new(600.0, 400.0);
+        let g = grid_pixels(5, half);
+        assert_eq!(g.len(), 25);
+        assert_eq!((g[0], g[4], g[5], g[24]), (-half, Vector2::new(-600.0, 400.0), Vector2::new(-300.0, 400.0), half));
+        assert!(g.windows(2).all(|w| (w[1] - w[0]).abs().iter().zip([300.0, 200.0]).all(|(d, s)| *d <= s + 1e-9)));
+        assert!(grid_pixels(1, half).is_empty() && grid_pixels(0, half).is_empty());
+        assert_eq!(grid_pixels(2, half), vec![-half, Vector2::new(-600.0, 400.0), half, Vector2::new(600.0, -400.0)]);
+    }
+
+    #[test]
+    fn the_focal_length_is_the_measured_working_distance_over_the_pixel() {
+        let res = Vector2::new(600.0, 800.0);
+        assert!((focal_length(6.0, 10.0, 0.002, res) - 3000.0).abs() < 1e-9, "the lift's");
+        assert!((focal_length(0.0, 10.0, 0.002, res) - 5000.0).abs() < 1e-9, "the configured");
+        assert_eq!(focal_length(0.0, 0.0, 0.002, res), 500.0, "the half-diagonal");
+        assert_eq!(focal_length(6.0, 10.0, 0.0, res), 500.0);
+    }
+
+    #[test]
+    fn the_corner_displacement_is_the_farthest_corners() {
+        let lens = Lens::new([-0.1, 0.0, 0.0, 0.0], 1000.0).expect("lens");
+        // Centre at (100, 100) of a 400 × 300 image: the far corner (400, 300) is (300, 200)
+        // out, r² = 0.13, moved by k1·r² of its length.
+        let d = corner_displacement(&lens, Vector2::new(100.0, 100.0), Vector2::new(400.0, 300.0));
+        let far = Vector2::new(300.0, 200.0);
+        let want = (lens.undistort(far) - far).norm();
+        assert!((d - want).abs() < 1e-12 && (d - 0.1 * 0.13 * far.norm()).abs() < 0.2, "{d} vs {want}");
+        let none = Lens::new([0.0; 4], 1000.0).expect("lens");
+        assert_eq!(corner_displacement(&none, Vector2::new(100.0, 100.0), Vector2::new(400.0, 300.0)), 0.0);
+    }
+
+    #[test]
+    fn only_an_unmeasured_k1_or_a_failed_solve_warns() {
+        let lens = Lens::new([-0.1, 0.0, 0.0, 0.0], 1000.0).expect("lens");
+        let solved = |measured: [bool; 4], with_lens: bool| {
+            let mut report = LensReport::none(1000.0, (25, 25), 80, "the note".into());
+            report.measured = measured;
+            Solved { k: Matrix2::identity(), centre: None, lens: with_lens.then_some((lens, [0.0; 4])), report }
+        };
+        assert_eq!(solved([true, false, true, true], true).warning(), None);
+        assert_eq!(solved([false, true, true, true], true).warning().as_deref(), Some("the note"));
+        assert_eq!(solved([true; 4], false).warning().as_deref(), Some("the note"));
+    }
 
     #[test]
     fn the_note_names_what_was_not_measured_and_how_to_measure_it() {
