@@ -277,6 +277,8 @@ mod tests {
         let note =
             unmeasured_note([false, true, true, true], &[0.3, 0.01, 1e-4, 1e-4], 360.0, 5, (25, 25)).expect("k1");
         assert!(note.contains("raise VisionCalibrationGrid (now 5)"), "{note}");
+        let note = unmeasured_note([false, true, true, true], &[0.3, 0.01, 1e-4, 1e-4], 360.0, 2, (4, 4)).expect("k1");
+        assert!(note.contains("raise VisionCalibrationGrid (now 2)"), "a 2 × 2 grid is a grid: {note}");
         let note = unmeasured_note([true, false, true, true], &[0.3, 0.3, 1e-4, 1e-4], 97.0, 5, (5, 25)).expect("k2");
         assert!(note.contains("only 5 of the lens grid's 25") && note.contains("VisionCameraSearchRadius"), "{note}");
     }
