@@ -418,8 +418,105 @@ mod tests {
             fit_lens(&readings, &LensFitStart { kr: Matrix2::zeros(), ..start(kr) }),
             Err(MathError::SingularK)
         ));
+        for bad in [
+            LensFitStart { focal_px: f64::NAN, ..start(kr) },
+            LensFitStart { focal_px: 0.0, ..start(kr) },
+            LensFitStart { focal_px: -F, ..start(kr) },
+            LensFitStart { noise_px: f64::INFINITY, ..start(kr) },
+            LensFitStart { ratio: Some(f64::NAN), ..start(kr) },
+            LensFitStart { ratio: Some(0.0), ..start(kr) },
+            LensFitStart { ratio: Some(-0.96), ..start(kr) },
+            LensFitStart { origin: Point2::new(f64::NAN, 0.0), ..start(kr) },
+        ] {
+            assert!(matches!(fit_lens(&readings, &bad), Err(MathError::NonFinite { .. })), "{bad:?}");
+        }
+        // One dot at one height: K (4), the lens (4) and the dot (2) want 11 coordinates.
+        let one: Vec<WalkReading> = readings.iter().filter(|r| r.mark == 0 && !r.lifted).copied().collect();
+        assert!(matches!(
+            fit_lens(&one[..5], &LensFitStart { ratio: None, ..start(kr) }),
+            Err(MathError::TooFewPoints { needed: 6, got: 5, .. })
+        ));
+        // Six are enough (the priors hold the lens), and a ratio without lifted readings keeps the
+        // centre.
+        let last: Vec<WalkReading> = readings
+            .iter()
+            .filter(|r| r.mark == 5 && !r.lifted)
+            .take(6)
+            .map(|r| WalkReading { mark: 0, ..*r })
+            .collect();
+        let six = fit_lens(&last, &LensFitStart { ratio: None, ..start(kr) });
+        assert!(six.is_ok(), "{six:?}");
+        let level: Vec<WalkReading> = readings.iter().filter(|r| !r.lifted).copied().collect();
+        let kept = fit_lens(&level, &start(kr)).expect("solves");
+        assert_eq!((kept.ratio, kept.origin), (None, start(kr).origin));
         readings[3].native.x = f64::NAN;
         assert!(matches!(fit_lens(&readings, &start(kr)), Err(MathError::NonFinite { .. })));
+    }
+
+    /// The normal equations' `Jᵀr` is minus half the gradient of their χ² (priors included), by
+    /// central differences over every unknown: the analytic Jacobian is the model's.
+    #[test]
+    fn the_jacobian_is_the_models() {
+        let truth = Lens::new([-0.1, 0.01, 0.002, -0.001], F).expect("lens");
+        let kr = kr(20.0, true);
+        let readings = walk(kr, truth, 0.1, 5);
+        let layout = Layout { lifted: true, marks: 6 };
+        let state = State {
+            a: kr.try_inverse().expect("invertible") * 1.001,
+            lens: [-0.09, 0.02, 0.001, -0.002],
+            origin: Vector2::new(890.0, 887.0),
+            ratio: 0.955,
+            marks: (0..6).map(|i| Vector2::new(0.3 + f64::from(i % 3) * 2.0, 0.2 + f64::from(i / 3) * 2.0)).collect(),
+        };
+        // The priors alone: a residual θ/σ per coefficient.
+        let (_, prior_r, prior_chi2) = normal_equations(&[], &state, &layout, F, 0.1).expect("finite");
+        let want: f64 = state.lens.iter().zip(LENS_PRIOR).map(|(t, p)| (t / p).powi(2)).sum();
+        assert!((prior_chi2 - want).abs() < 1e-15, "{prior_chi2} vs {want}");
+        for (i, p) in LENS_PRIOR.iter().enumerate() {
+            assert!((prior_r[Layout::LENS + i] + state.lens[i] / (p * p)).abs() < 1e-12, "coefficient {i}");
+        }
+        let (_, jt_r, _) = normal_equations(&readings, &state, &layout, F, 0.1).expect("finite");
+        let chi2 = |step: &DVector<f64>| {
+            let mut moved = State { marks: state.marks.clone(), ..state };
+            apply(&mut moved, step, &layout);
+            normal_equations(&readings, &moved, &layout, F, 0.1).expect("finite").2
+        };
+        for i in 0..layout.len() {
+            let h = if i < 4 {
+                1e-3
+            } else if i < 8 {
+                1e-7
+            } else {
+                1e-6
+            };
+            let mut e = DVector::zeros(layout.len());
+            e[i] = h;
+            let gradient = (chi2(&e) - chi2(&-e.clone())) / (2.0 * h);
+            assert!(
+                (gradient + 2.0 * jt_r[i]).abs() <= 1e-4 * gradient.abs().max(1.0),
+                "unknown {i}: {gradient} vs {}",
+                -2.0 * jt_r[i]
+            );
+        }
+    }
+
+    /// The σ follows the residuals when they show more noise than the camera was said to have,
+    /// and the rms is the noise.
+    #[test]
+    fn the_sigma_is_inflated_by_noise_the_camera_did_not_declare() {
+        let truth = Lens::new([-0.1, 0.0, 0.002, -0.001], F).expect("lens");
+        let kr = kr(30.0, false);
+        let readings = walk(kr, truth, 0.1, 9);
+        let told = fit_lens(&readings, &start(kr)).expect("solves");
+        let understated = fit_lens(&readings, &LensFitStart { noise_px: 0.01, ..start(kr) }).expect("solves");
+        assert!((told.rms_px - 0.1).abs() < 0.015 && (understated.rms_px - 0.1).abs() < 0.015, "{told:?}");
+        for sigma in [told.origin_sigma.x, told.origin_sigma.y] {
+            assert!((0.3..1.5).contains(&sigma), "the lift's centre to about 0.6 px: {:?}", told.origin_sigma);
+        }
+        // The built-in camera's walk measures k1 to about 0.003.
+        assert!((0.0025..0.004).contains(&told.sigma[0]), "σ(k1) {}", told.sigma[0]);
+        let ratio = understated.sigma[0] / told.sigma[0];
+        assert!((0.8..1.25).contains(&ratio), "σ(k1) {} vs {}", understated.sigma[0], told.sigma[0]);
     }
 
     /// k1 = −0.10 at 0.1 px noise over 40 seeded walks (the camera turned and mirrored as each
