@@ -126,10 +126,11 @@ pub enum MathError {
         /// Resolution in Y, pixels.
         y: f64,
     },
-    /// The lens distortion folds the image (or cannot be undone) within the camera's field.
+    /// The lens distortion folds the image, or bends it beyond what the chain undoes to its
+    /// tolerance, within the camera's field.
     #[error(
-        "the lens distortion cannot be undone at centred pixel ({x:.0}, {y:.0}): it folds the image there; \
-         check VisionLensK1/K2/P1/P2 and VisionLensFocalPx, or re-run M283 C"
+        "the lens distortion cannot be undone at centred pixel ({x:.0}, {y:.0}): it folds the image there, or \
+         bends it too far to undo; check VisionLensK1/K2/P1/P2 and VisionLensFocalPx, or re-run M283 C"
     )]
     LensFolds {
         /// Centred pixel x where it fails, pixels.

@@ -294,6 +294,20 @@ mod tests {
         assert_eq!(wider.steps, 2);
         let wide = lens([-0.4, 0.1, 0.0, 0.0]).fitted_to_field(-half, half).expect("fits");
         assert!(wide.steps > mild.steps, "{wide:?}");
+        // Every pixel of a field off its centre is undone, not only the grid's.
+        let (lo, hi) = (Vector2::new(-0.05 * F, -0.1 * F), Vector2::new(0.4 * F, 0.3 * F));
+        let skewed = lens([-0.2, 0.05, 0.002, -0.001]).fitted_to_field(lo, hi).expect("fits");
+        for i in 0..=50 {
+            for j in 0..=50 {
+                let c = lo + (hi - lo).component_mul(&Vector2::new(f64::from(i), f64::from(j))) / 50.0;
+                let back = skewed.distort(skewed.undistort(c));
+                assert!((back - c).norm() <= FIELD_TOLERANCE_PX, "{c}: {back}");
+            }
+        }
+        // Where the map folds, the first-order guess, in pixels.
+        let far = Vector2::new(0.6 * F, 0.0);
+        let guess = l.undistort(far);
+        assert!(guess.x.is_finite() && guess.norm() > 0.1 * far.norm(), "{guess}");
     }
 
     proptest! {

@@ -386,6 +386,12 @@ mod tests {
         assert!(flat.lens_sensitivity(p)[0].norm() > 1e-3, "{:?}", flat.lens_sensitivity(p));
         let folding = Lens::new([-8.0, 0.0, 0.0, 0.0], 3000.0).expect("lens");
         assert!(matches!(linear.with_lens(folding), Err(MathError::LensFolds { .. })));
+        // The whole image is checked about its own centre: a k1 of −0.1 on f = 2000 px is undone
+        // over a centred 1776 px image, not out to the far corner of one centred 600 px off.
+        let barrel = Lens::new([-0.1, 0.0, 0.0, 0.0], 2000.0).expect("lens");
+        let at = |off: f64| PixelChain::new(k, Remap::IDENTITY, Vector2::new(1776.0, 1776.0), Vector2::new(off, off));
+        assert!(at(0.0).expect("valid").with_lens(barrel).is_ok());
+        assert!(matches!(at(600.0).expect("valid").with_lens(barrel), Err(MathError::LensFolds { .. })));
     }
 
     fn well_conditioned_k() -> impl Strategy<Value = Matrix2<f64>> {
