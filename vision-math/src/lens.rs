@@ -77,12 +77,6 @@ impl Lens {
         self.focal_px
     }
 
-    /// True when every coefficient is zero (the lens moves no pixel).
-    #[must_use]
-    pub fn is_identity(&self) -> bool {
-        self.coefficients().iter().all(|k| *k == 0.0)
-    }
-
     /// Where the ideal centred pixel `c` images, centred pixels.
     #[inline]
     #[must_use]
@@ -110,14 +104,20 @@ impl Lens {
     /// [`Lens::distort`] in pixels).
     #[inline]
     fn jacobian(&self, n: Vector2<f64>) -> Matrix2<f64> {
-        let (x, y) = (n.x, n.y);
+        let (a, cross, d) = self.jacobian_terms(n.x, n.y);
+        Matrix2::new(a, cross, cross, d)
+    }
+
+    /// The Jacobian of `D` at `(x, y)` as its three distinct entries `(∂x/∂x, ∂x/∂y, ∂y/∂y)`
+    /// (it is symmetric).
+    #[inline]
+    fn jacobian_terms(&self, x: f64, y: f64) -> (f64, f64, f64) {
         let r2 = x * x + y * y;
         let l = 1.0 + r2 * (self.k1 + self.k2 * r2);
         let dl = 2.0 * (self.k1 + 2.0 * self.k2 * r2);
-        let cross = x * y * dl + 2.0 * self.p1 * x + 2.0 * self.p2 * y;
-        Matrix2::new(
+        let cross = x * y * dl + 2.0 * (self.p1 * x + self.p2 * y);
+        (
             l + x * x * dl + 2.0 * self.p1 * y + 6.0 * self.p2 * x,
-            cross,
             cross,
             l + y * y * dl + 6.0 * self.p1 * y + 2.0 * self.p2 * x,
         )
@@ -136,12 +136,7 @@ impl Lens {
         let (dx, dy) = self.map_xy(tx, ty);
         let (mut x, mut y) = (2.0 * tx - dx, 2.0 * ty - dy);
         // The Jacobian there (symmetric), inverted once.
-        let r2 = x * x + y * y;
-        let l = 1.0 + r2 * (self.k1 + self.k2 * r2);
-        let dl = 2.0 * (self.k1 + 2.0 * self.k2 * r2);
-        let cross = x * y * dl + 2.0 * (self.p1 * x + self.p2 * y);
-        let a = l + x * x * dl + 2.0 * self.p1 * y + 6.0 * self.p2 * x;
-        let d = l + y * y * dl + 6.0 * self.p1 * y + 2.0 * self.p2 * x;
+        let (a, cross, d) = self.jacobian_terms(x, y);
         let det = a * d - cross * cross;
         if !(det > 0.0) {
             return Vector2::new(x, y) * self.focal_px;
@@ -244,7 +239,6 @@ mod tests {
         let x = 0.2 * 0.995_025 + 2.0 * 0.002 * 0.02 - 0.001 * (0.05 + 0.08);
         let y = 0.1 * 0.995_025 + 0.002 * (0.05 + 0.02) - 2.0 * 0.001 * 0.02;
         assert!((d.x - x).abs() < 1e-15 && (d.y - y).abs() < 1e-15, "{d:?}");
-        assert!(lens([0.0; 4]).is_identity() && !l.is_identity());
         assert_eq!(l.coefficients(), [-0.1, 0.01, 0.002, -0.001]);
         assert_eq!(l.focal_px(), F);
     }

@@ -2,7 +2,7 @@
 //! optical centre solved jointly from every reading of the walk ([`vision_math::fit_lens`];
 //! `docs/calibration-solve.md`).
 
-use vision_math::{fit_lens, LengthUnit, Lens, LensFitStart, Matrix2, PixelChain, Point2, Remap, Vector2, WalkReading};
+use vision_math::{fit_lens, LengthUnit, Lens, LensFitStart, Matrix2, Point2, Remap, Vector2, WalkReading};
 
 use super::lift::Lifted;
 use super::report::LensReport;
@@ -139,8 +139,7 @@ pub(super) fn solve(
         Err(e) => return linear(format!("the lens was not measured ({e}); the chain stays linear")),
     };
     // A lens the chain cannot undo over the image is not written.
-    let chain = PixelChain::new(fit.kr, Remap::IDENTITY, res, fit.origin.coords - res * 0.5);
-    if let Err(e) = chain.and_then(|c| c.with_lens(fit.lens)) {
+    if let Err(e) = fit.lens.fitted_to_field(-fit.origin.coords, res - fit.origin.coords) {
         return linear(format!("the lens was not measured ({e}); the chain stays linear"));
     }
     let k = fit.kr * remap.matrix().transpose();
